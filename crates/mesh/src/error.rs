@@ -1,0 +1,63 @@
+//! One error type for everything that reads, writes or validates geometry.
+//!
+//! Every message names the file it is about and what is wrong, on one line,
+//! so the CLI can print it verbatim: `bunny.ply: face 12 has index 99999 but
+//! the mesh has 35947 vertices`.
+
+use std::path::{Path, PathBuf};
+
+/// A format-level problem found while decoding bytes (no path attached yet).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct ParseError(pub String);
+
+impl ParseError {
+    pub fn new(msg: impl Into<String>) -> Self {
+        ParseError(msg.into())
+    }
+}
+
+/// Shorthand for returning a [`ParseError`] from a decoder.
+#[macro_export]
+macro_rules! parse_err {
+    ($($arg:tt)*) => { $crate::error::ParseError(format!($($arg)*)) };
+}
+
+/// Errors from lodkit's mesh layer. `Display` is always a single line.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{}: {message}", path.display())]
+    Parse { path: PathBuf, message: String },
+    #[error("{}: {message}", path.display())]
+    Unsupported { path: PathBuf, message: String },
+    #[error("{0}")]
+    Invalid(String),
+}
+
+impl Error {
+    pub fn io(path: &Path, source: std::io::Error) -> Self {
+        Error::Io {
+            path: path.to_path_buf(),
+            source,
+        }
+    }
+    pub fn parse(path: &Path, e: ParseError) -> Self {
+        Error::Parse {
+            path: path.to_path_buf(),
+            message: e.0,
+        }
+    }
+    pub fn unsupported(path: &Path, message: impl Into<String>) -> Self {
+        Error::Unsupported {
+            path: path.to_path_buf(),
+            message: message.into(),
+        }
+    }
+}
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -1,0 +1,229 @@
+//! File formats: detection, loading and atomic saving.
+//!
+//! Every reader takes the whole file as bytes (`&[u8]`) and returns a
+//! [`ParseError`] on bad input; [`load`] attaches the path. No reader
+//! allocates from an unchecked header count: counts are first checked
+//! against the bytes that remain. Every writer produces bytes that
+//! [`write_atomic`] puts in place with a temp file + rename, so a failed run
+//! never leaves a half-written file, and the same model always produces the
+//! same bytes.
+
+pub mod conf;
+pub mod gltf;
+pub mod obj;
+pub mod ply;
+pub mod stl;
+pub mod xyz;
+
+use std::io::Write;
+use std::path::Path;
+
+use crate::error::{Error, ParseError, Result};
+use crate::mesh::{Model, PointCloud, TriMesh};
+
+/// The formats lodkit reads and writes, chosen by file extension.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Format {
+    Ply,
+    Obj,
+    Stl,
+    /// glTF 2.0 JSON (`.gltf`, buffers embedded as data URIs or beside it).
+    Gltf,
+    /// Binary glTF 2.0 (`.glb`).
+    Glb,
+    /// `x y z [nx ny nz] [r g b]` text points (`.xyz`).
+    Xyz,
+    /// Leica-style `.pts`: optional count line, then `x y z [intensity] [r g b]`.
+    Pts,
+}
+
+impl Format {
+    pub fn from_path(path: &Path) -> Option<Format> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        Some(match ext.as_str() {
+            "ply" => Format::Ply,
+            "obj" => Format::Obj,
+            "stl" => Format::Stl,
+            "gltf" => Format::Gltf,
+            "glb" => Format::Glb,
+            "xyz" | "txt" => Format::Xyz,
+            "pts" => Format::Pts,
+            _ => return None,
+        })
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            Format::Ply => "PLY",
+            Format::Obj => "OBJ",
+            Format::Stl => "STL",
+            Format::Gltf => "glTF",
+            Format::Glb => "GLB",
+            Format::Xyz => "XYZ",
+            Format::Pts => "PTS",
+        }
+    }
+}
+
+/// Options for writing; the defaults are what `lodkit convert` uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct WriteOptions {
+    /// PLY and STL: binary (default) or ASCII.
+    pub ascii: bool,
+}
+
+impl Default for WriteOptions {
+    fn default() -> Self {
+        WriteOptions { ascii: false }
+    }
+}
+
+/// Files larger than this are refused before reading (a guard against
+/// reading a device or a runaway file into memory).
+pub const MAX_FILE_BYTES: u64 = 16 << 30;
+
+/// Reads a geometry file of any supported format.
+pub fn load(path: &Path) -> Result<Model> {
+    let format = Format::from_path(path).ok_or_else(|| {
+        Error::unsupported(
+            path,
+            "unknown file extension (expected .ply, .obj, .stl, .gltf, .glb, .xyz or .pts)",
+        )
+    })?;
+    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    if meta.is_dir() {
+        return Err(Error::unsupported(path, "is a directory"));
+    }
+    if meta.len() > MAX_FILE_BYTES {
+        return Err(Error::unsupported(
+            path,
+            format!(
+                "file is {} bytes, over the {MAX_FILE_BYTES}-byte limit",
+                meta.len()
+            ),
+        ));
+    }
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    decode(format, &bytes, path.parent()).map_err(|e| Error::parse(path, e))
+}
+
+/// Decodes bytes of a known format. `base_dir` resolves external glTF
+/// buffers; `None` refuses them.
+pub fn decode(format: Format, bytes: &[u8], base_dir: Option<&Path>) -> Result<Model, ParseError> {
+    let model = match format {
+        Format::Ply => ply::read(bytes)?,
+        Format::Obj => Model::Mesh(obj::read(bytes)?),
+        Format::Stl => Model::Mesh(stl::read(bytes)?),
+        Format::Gltf | Format::Glb => Model::Mesh(gltf::read(bytes, base_dir)?),
+        Format::Xyz => Model::Points(xyz::read_xyz(bytes)?),
+        Format::Pts => Model::Points(xyz::read_pts(bytes)?),
+    };
+    match &model {
+        Model::Mesh(m) => m.validate()?,
+        Model::Points(p) => p.validate()?,
+        Model::Range(r) => r.validate()?,
+    }
+    Ok(model)
+}
+
+/// Reads a file that must hold a triangle mesh.
+pub fn load_mesh(path: &Path) -> Result<TriMesh> {
+    match load(path)? {
+        Model::Mesh(m) => Ok(m),
+        other => Err(Error::unsupported(
+            path,
+            format!("holds a {} with no faces, a mesh is needed", other.kind()),
+        )),
+    }
+}
+
+/// Encodes a model in `format`. Point clouds and range images written to a
+/// mesh-only format are refused with a clear message.
+pub fn encode(format: Format, model: &Model, opts: WriteOptions) -> Result<Vec<u8>, ParseError> {
+    let mut out = Vec::new();
+    match (format, model) {
+        (Format::Ply, Model::Mesh(m)) => ply::write_mesh(&mut out, m, opts.ascii),
+        (Format::Ply, Model::Points(p)) => ply::write_points(&mut out, p, opts.ascii),
+        (Format::Ply, Model::Range(r)) => {
+            ply::write_points(&mut out, &r.to_point_cloud(), opts.ascii)
+        }
+        (Format::Obj, Model::Mesh(m)) => obj::write(&mut out, m),
+        (Format::Stl, Model::Mesh(m)) => stl::write(&mut out, m, opts.ascii),
+        (Format::Glb, Model::Mesh(m)) => {
+            out = gltf::write_glb(&[("mesh", m)])?;
+            Ok(())
+        }
+        (Format::Xyz, m) => xyz::write_xyz(&mut out, &as_points(m)),
+        (Format::Pts, m) => xyz::write_pts(&mut out, &as_points(m)),
+        (Format::Gltf, _) => {
+            return Err(ParseError::new(
+                "writing .gltf is not supported; write .glb",
+            ));
+        }
+        (f, m) => {
+            return Err(crate::parse_err!(
+                "cannot write a {} as {}: the format holds meshes only",
+                m.kind(),
+                f.name()
+            ));
+        }
+    }
+    .map_err(|e| ParseError(e.to_string()))?;
+    Ok(out)
+}
+
+fn as_points(m: &Model) -> PointCloud {
+    match m {
+        Model::Mesh(m) => PointCloud {
+            positions: m.positions.clone(),
+            normals: m.normals.clone(),
+            colors: m.colors.clone(),
+        },
+        Model::Points(p) => p.clone(),
+        Model::Range(r) => r.to_point_cloud(),
+    }
+}
+
+/// Writes a model to `path` (format from the extension), atomically.
+pub fn save(path: &Path, model: &Model, opts: WriteOptions) -> Result<()> {
+    let format = Format::from_path(path).ok_or_else(|| {
+        Error::unsupported(
+            path,
+            "unknown output extension (expected .ply, .obj, .stl, .glb, .xyz or .pts)",
+        )
+    })?;
+    let bytes = encode(format, model, opts).map_err(|e| Error::unsupported(path, e.0))?;
+    write_atomic(path, &bytes)
+}
+
+/// Writes a mesh to `path`, atomically.
+pub fn save_mesh(path: &Path, mesh: &TriMesh, opts: WriteOptions) -> Result<()> {
+    save(path, &Model::Mesh(mesh.clone()), opts)
+}
+
+/// Writes `bytes` to a temp file beside `path`, syncs it and renames it
+/// over `path`: readers see either the old file or the whole new one.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let name = path
+        .file_name()
+        .ok_or_else(|| Error::unsupported(path, "output path has no file name"))?;
+    let tmp = dir.join(format!(
+        ".{}.{}.tmp",
+        name.to_string_lossy(),
+        std::process::id()
+    ));
+    let result = (|| {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if let Err(e) = result {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(Error::io(path, e));
+    }
+    Ok(())
+}

@@ -1,0 +1,1 @@
+//! Error metrics between surfaces (Metro-style `compare`).

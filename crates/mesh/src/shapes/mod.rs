@@ -1,0 +1,1 @@
+//! Synthetic shapes for tests and benchmarks.
