@@ -1,1 +1,105 @@
-fn main() {}
+//! `lodkit` — every level of detail from dense 3D scans.
+//!
+//! Exit codes: 0 success, 1 bad input or failure (one line on stderr naming
+//! the file and the problem), 2 usage error (from clap).
+
+mod commands;
+mod ui;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Args, Parser, Subcommand};
+
+use crate::ui::Ui;
+
+#[derive(Parser)]
+#[command(
+    name = "lodkit",
+    version,
+    about = "Every level of detail from dense 3D scans: meshes, point clouds and range images",
+    after_help = "Examples:\n  lodkit build --out out/                 # the built-in Stanford bunny\n  lodkit info scan.ply --json\n  lodkit convert scan.ply scan.glb\n  lodkit compare original.ply simplified.ply"
+)]
+struct Cli {
+    #[command(flatten)]
+    global: Global,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Args, Clone, Copy)]
+struct Global {
+    /// Print nothing but errors (and the requested output file contents).
+    #[arg(short, long, global = true, conflicts_with = "verbose")]
+    quiet: bool,
+    /// Print more detail (timings of each stage).
+    #[arg(short, long, global = true)]
+    verbose: bool,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Describe a mesh, point cloud or range image: counts, bbox, topology, defects.
+    #[command(after_help = "Examples:\n  lodkit info bunny.ply\n  lodkit info scan.glb --json")]
+    Info {
+        /// Input file (.ply, .obj, .stl, .gltf, .glb, .xyz, .pts).
+        file: PathBuf,
+        /// Print the report as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Convert between formats, keeping every attribute the target can hold.
+    #[command(
+        after_help = "Examples:\n  lodkit convert bunny.ply bunny.glb\n  lodkit convert part.stl part.obj\n  lodkit convert scan.ply scan.ply --ascii"
+    )]
+    Convert {
+        input: PathBuf,
+        /// Output file; the format follows its extension (.ply, .obj, .stl, .glb, .xyz, .pts).
+        output: PathBuf,
+        /// Write ASCII PLY/STL instead of binary.
+        #[arg(long)]
+        ascii: bool,
+        /// Weld vertices closer than this distance (object units) before writing.
+        #[arg(long, value_name = "DIST")]
+        weld: Option<f32>,
+    },
+    /// Metro-style surface distance between two meshes (Hausdorff, mean, RMS).
+    #[command(
+        after_help = "Examples:\n  lodkit compare bunny.ply bunny_lod2.ply\n  lodkit compare a.obj b.glb --samples 2000000 --json"
+    )]
+    Compare(commands::compare::CompareArgs),
+    /// The main job: every level of detail of a model, with a report.
+    #[command(
+        after_help = "Examples:\n  lodkit build --out out/              # the built-in Stanford bunny\n  lodkit build scan.ply --out out/scan"
+    )]
+    Build {
+        /// Input model; the built-in Stanford bunny when omitted.
+        input: Option<PathBuf>,
+        /// Output directory (created if missing).
+        #[arg(long, short, default_value = "lodkit-out")]
+        out: PathBuf,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let ui = Ui::new(cli.global.quiet, cli.global.verbose);
+    let result = match cli.command {
+        Command::Info { file, json } => commands::info::run(&ui, &file, json),
+        Command::Convert {
+            input,
+            output,
+            ascii,
+            weld,
+        } => commands::convert::run(&ui, &input, &output, ascii, weld),
+        Command::Compare(args) => commands::compare::run(&ui, &args),
+        Command::Build { input, out } => commands::build::run(&ui, input.as_deref(), &out),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            ui.error(&e);
+            ExitCode::from(1)
+        }
+    }
+}

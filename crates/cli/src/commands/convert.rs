@@ -1,0 +1,28 @@
+//! `lodkit convert IN OUT`.
+use std::path::Path;
+
+use anyhow::Result;
+use lodkit_mesh::Model;
+use lodkit_mesh::io::{WriteOptions, save};
+
+use crate::ui::Ui;
+
+pub fn run(ui: &Ui, input: &Path, output: &Path, ascii: bool, weld: Option<f32>) -> Result<()> {
+    let mut model = super::load(ui, input)?;
+    if let (Some(tol), Model::Mesh(m)) = (weld, &mut model) {
+        let before = m.positions.len();
+        let (welded, dropped) = lodkit_mesh::weld::weld(m, tol);
+        ui.status(format!(
+            "welded {} vertices into {} ({} degenerate faces dropped)",
+            before,
+            welded.positions.len(),
+            dropped
+        ));
+        *m = welded;
+    }
+    let step = ui.spinner(&format!("writing {}", output.display()));
+    save(output, &model, WriteOptions { ascii })?;
+    step.finish();
+    ui.status(format!("wrote {} ({})", output.display(), model.kind()));
+    Ok(())
+}

@@ -1,0 +1,38 @@
+//! One file per subcommand.
+pub mod build;
+pub mod compare;
+pub mod convert;
+pub mod info;
+
+use std::path::Path;
+
+use anyhow::Result;
+use lodkit_mesh::Model;
+
+use crate::ui::Ui;
+
+/// Loads any supported file behind a spinner.
+pub fn load(ui: &Ui, path: &Path) -> Result<Model> {
+    let step = ui.spinner(&format!("reading {}", path.display()));
+    let model = lodkit_mesh::io::load(path)?;
+    step.finish();
+    Ok(model)
+}
+
+/// Loads a file that must be a triangle mesh.
+pub fn load_mesh(ui: &Ui, path: &Path) -> Result<lodkit_mesh::TriMesh> {
+    match load(ui, path)? {
+        Model::Mesh(m) => Ok(m),
+        other => anyhow::bail!(
+            "{}: holds a {} with no faces, a mesh is needed",
+            path.display(),
+            other.kind()
+        ),
+    }
+}
+
+/// Pretty JSON on stdout.
+pub fn print_json(value: &impl serde::Serialize) -> Result<()> {
+    println!("{}", serde_json::to_string_pretty(value)?);
+    Ok(())
+}

@@ -1,0 +1,152 @@
+//! End-to-end tests of the `lodkit` binary: exit codes, messages, outputs.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn lodkit(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lodkit"))
+        .args(args)
+        .output()
+        .expect("run lodkit")
+}
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn bunny() -> String {
+    repo()
+        .join("data/models/stanford_bunny.ply")
+        .display()
+        .to_string()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn build_without_input_writes_the_bunny_deterministically() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    for out in [&a, &b] {
+        let o = lodkit(&["-q", "build", "--out", out.to_str().unwrap()]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    for file in ["stanford_bunny.glb", "stanford_bunny.ply", "report.md"] {
+        let x = std::fs::read(a.join(file)).unwrap();
+        let y = std::fs::read(b.join(file)).unwrap();
+        assert!(!x.is_empty(), "{file} is empty");
+        assert_eq!(x, y, "{file} differs between two runs");
+    }
+    let report = std::fs::read_to_string(a.join("report.md")).unwrap();
+    assert!(report.contains("vertices: 35947"), "{report}");
+    assert!(report.contains("faces: 69451"), "{report}");
+    // Nothing but the outputs: no temp files left behind.
+    let mut names: Vec<_> = std::fs::read_dir(&a)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        ["report.md", "stanford_bunny.glb", "stanford_bunny.ply"]
+    );
+    // The GLB reads back as the same mesh.
+    let o = lodkit(&[
+        "info",
+        "--json",
+        a.join("stanford_bunny.glb").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["faces"], 69451);
+}
+
+#[test]
+fn info_reports_the_bunny_topology_as_json() {
+    let o = lodkit(&["info", "--json", &bunny()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["kind"], "mesh");
+    assert_eq!(v["vertices"], 35947);
+    assert_eq!(v["faces"], 69451);
+    // The values the shared data README lists for this file.
+    assert_eq!(v["boundary_edges"], 223);
+    assert_eq!(v["boundary_loops"], 5);
+    assert_eq!(v["non_manifold_edges"], 0);
+    assert_eq!(v["unreferenced_vertices"], 1113);
+}
+
+#[test]
+fn usage_errors_exit_2_and_bad_input_exits_1() {
+    assert_eq!(lodkit(&["info"]).status.code(), Some(2));
+    assert_eq!(lodkit(&["frobnicate"]).status.code(), Some(2));
+    let o = lodkit(&["info", "/nonexistent/file.ply"]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    assert!(
+        e.contains("/nonexistent/file.ply") && e.lines().count() == 1,
+        "{e}"
+    );
+    let o = lodkit(&["info", "notes.docx"]);
+    assert_eq!(o.status.code(), Some(1));
+}
+
+#[test]
+fn every_malformed_file_exits_1_with_one_line_and_no_panic() {
+    let dir = repo().join("tests/malformed");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e != "md"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 30, "corpus has only {} files", files.len());
+    for f in files {
+        let o = lodkit(&["info", f.to_str().unwrap()]);
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{}: {e}", f.display());
+        assert!(!e.contains("panicked"), "{}: {e}", f.display());
+        assert_eq!(e.trim_end().lines().count(), 1, "{}: {e}", f.display());
+        let name = f.file_name().unwrap().to_str().unwrap();
+        assert!(
+            e.contains(name),
+            "{}: message does not name the file: {e}",
+            f.display()
+        );
+    }
+}
+
+#[test]
+fn convert_keeps_the_mesh_across_formats() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut last = bunny();
+    for ext in ["obj", "stl", "glb", "ply"] {
+        let out = dir
+            .path()
+            .join(format!("bunny.{ext}"))
+            .display()
+            .to_string();
+        let o = lodkit(&["-q", "convert", &last, &out]);
+        assert!(o.status.success(), "{ext}: {}", stderr(&o));
+        let o = lodkit(&["info", "--json", &out]);
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(v["faces"], 69451, "{ext}");
+        last = out;
+    }
+    // Writing a point cloud to a mesh-only format is refused, not faked.
+    let cloud = dir.path().join("bunny.xyz").display().to_string();
+    assert!(
+        lodkit(&["-q", "convert", &bunny(), &cloud])
+            .status
+            .success()
+    );
+    let o = lodkit(&[
+        "convert",
+        &cloud,
+        dir.path().join("x.stl").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("x.stl"), "{}", stderr(&o));
+}
