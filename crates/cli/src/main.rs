@@ -78,6 +78,9 @@ enum Command {
         /// Output directory (created if missing).
         #[arg(long, short, default_value = "lodkit-out")]
         out: PathBuf,
+        /// Print the list of outputs as JSON.
+        #[arg(long)]
+        json: bool,
     },
 }
 
@@ -93,7 +96,7 @@ fn main() -> ExitCode {
             weld,
         } => commands::convert::run(&ui, &input, &output, ascii, weld),
         Command::Compare(args) => commands::compare::run(&ui, &args),
-        Command::Build { input, out } => commands::build::run(&ui, input.as_deref(), &out),
+        Command::Build { input, out, json } => commands::build::run(&ui, input.as_deref(), &out, json),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

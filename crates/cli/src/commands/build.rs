@@ -20,7 +20,7 @@ use crate::ui::Ui;
 const BUILTIN_BUNNY: &[u8] = include_bytes!("../../../../data/models/stanford_bunny.ply");
 const BUILTIN_NAME: &str = "stanford_bunny";
 
-pub fn run(ui: &Ui, input: Option<&Path>, out: &Path) -> Result<()> {
+pub fn run(ui: &Ui, input: Option<&Path>, out: &Path, json: bool) -> Result<()> {
     let (name, model) = match input {
         Some(path) => {
             let stem = path
