@@ -258,6 +258,9 @@ fn empty_meshes_and_empty_sampling_are_errors() {
     };
     assert!(compare(&g, &g, &none).is_err());
     assert!(compare(&g, &g, &opts(0)).is_err());
+    // Absurd counts are refused up front rather than overflowing.
+    let err = compare(&g, &g, &opts(usize::MAX)).unwrap_err();
+    assert!(err.to_string().contains("over the limit"), "{err}");
 }
 
 #[test]

@@ -38,8 +38,9 @@
 //!   vertices' box too.
 //! - Face samples are allocated to faces systematically rather than by
 //!   independent draws (same expectation, lower variance; see [`sample`]).
-//! - No maximum-distance cut-off: MeshLab ignores samples farther than
-//!   `maxdist` (default 5% of the diagonal); lodkit counts them all.
+//! - No maximum-distance cut-off: MeshLab ignores samples farther than its
+//!   `maxdist` parameter (pymeshlab 2025.7 lists 50% of the bounding-box
+//!   diagonal as the default); lodkit counts them all.
 //! - Results do not depend on the thread count: chunked seeded RNG streams
 //!   and in-order reductions.
 
@@ -63,6 +64,10 @@ pub const DEFAULT_SAMPLES_PER_FACE: usize = 10;
 pub const DEFAULT_MIN_SAMPLES: usize = 1_000_000;
 /// Default RNG seed (the year Metro was published).
 pub const DEFAULT_SEED: u64 = 1998;
+/// Largest per-kind sample count accepted (2³² − 1, about 4.3 billion): a
+/// guard against counts whose sums would overflow, far beyond any useful
+/// measurement.
+pub const MAX_SAMPLES_PER_KIND: usize = u32::MAX as usize;
 
 /// Options of [`compare`] and [`one_sided`]. See the [module
 /// docs](self#defaults-all-in-one-place) for the defaults.
@@ -127,8 +132,9 @@ impl CompareOptions {
 /// Errors ([`Error::Invalid`]) if either mesh has no faces or is malformed
 /// (index out of range, non-finite referenced vertex), or if the options
 /// produce no sample at all on one of them (every kind disabled,
-/// `samples == Some(0)`, or nothing to sample of the enabled kinds).
-/// Degenerate (zero-area) faces are fine.
+/// `samples == Some(0)`, or nothing to sample of the enabled kinds), or
+/// if the per-kind count exceeds [`MAX_SAMPLES_PER_KIND`]. Degenerate
+/// (zero-area) faces are fine.
 pub fn compare(a: &TriMesh, b: &TriMesh, opts: &CompareOptions) -> Result<CompareReport> {
     let ia = SurfaceIndex::new(a).map_err(|e| name_err("A", e))?;
     let ib = SurfaceIndex::new(b).map_err(|e| name_err("B", e))?;
@@ -164,6 +170,11 @@ pub fn one_sided(
 ) -> Result<DirectionStats> {
     distance::check_surface(sampled)?;
     let n = opts.resolved_samples(sampled.faces.len(), target.face_count());
+    if n > MAX_SAMPLES_PER_KIND {
+        return Err(Error::Invalid(format!(
+            "{n} samples per kind is over the limit of {MAX_SAMPLES_PER_KIND}"
+        )));
+    }
     let sampler = SurfaceSampler::new(sampled, &opts.plan(n));
     if sampler.is_empty() {
         return Err(Error::Invalid(
