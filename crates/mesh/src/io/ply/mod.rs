@@ -33,11 +33,11 @@
 //! checked here.
 //!
 //! # Writing ([`write_mesh`], [`write_points`])
-//! Binary little-endian unless ASCII is asked for; see [`write`] for the
+//! Binary little-endian unless ASCII is asked for; see [`write`](mod@write) for the
 //! layout. Output is deterministic.
 //!
 //! Stages, one file each: [`header`] (text header → element list),
-//! [`read`](mod@read) (body → model), [`write`] (model → bytes).
+//! `read` (body → model), [`write`](mod@write) (model → bytes).
 
 pub mod header;
 mod read;
