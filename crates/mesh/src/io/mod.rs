@@ -65,16 +65,10 @@ impl Format {
 }
 
 /// Options for writing; the defaults are what `lodkit convert` uses.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct WriteOptions {
     /// PLY and STL: binary (default) or ASCII.
     pub ascii: bool,
-}
-
-impl Default for WriteOptions {
-    fn default() -> Self {
-        WriteOptions { ascii: false }
-    }
 }
 
 /// Files larger than this are refused before reading (a guard against

@@ -244,7 +244,6 @@ pub fn read(bytes: &[u8]) -> Result<TriMesh, ParseError> {
         single_index: true,
         ignore_points: true,
         ignore_lines: true,
-        ..Default::default()
     };
     let (models, _materials) = tobj::load_obj_buf(&mut text.as_bytes(), &opts, |_| {
         Err(tobj::LoadError::OpenFileFailed)
