@@ -1,0 +1,339 @@
+//! The `.pop` container: a versioned header, then one chunk per octree
+//! level (structure, then attributes) and per precision layer, each with
+//! its length and a CRC-32, so a reader can stop after any chunk and
+//! detects truncation and corruption. Byte layout: `docs/formats/pop.md`.
+//!
+//! Every count is checked against the bytes that remain before anything is
+//! allocated; nothing here panics on hostile input.
+use glam::Vec3;
+
+use crate::error::{Result, stream_err};
+use crate::octree::{Frame, MAX_DEPTH, QBITS};
+
+/// First eight bytes of every `.pop` file.
+pub const MAGIC: [u8; 8] = *b"LKPOP\r\n\x1a";
+/// Container version this crate writes and reads.
+pub const VERSION: u16 = 1;
+/// Header size in bytes.
+pub const HEADER_LEN: usize = 40;
+/// Chunk header size in bytes.
+pub const CHUNK_HEADER_LEN: usize = 16;
+
+/// How chunk payloads are coded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mode {
+    /// §7.1/§7.2 raw bits, as the paper.
+    Baseline,
+    /// Context-adaptive range coding (beyond the paper).
+    Entropy,
+}
+
+impl Mode {
+    pub fn name(self) -> &'static str {
+        match self {
+            Mode::Baseline => "baseline",
+            Mode::Entropy => "entropy",
+        }
+    }
+}
+
+/// The stream header.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Header {
+    pub mode: Mode,
+    /// Octree resolution `R`.
+    pub depth: u8,
+    /// Highest precision `N` the stream carries (`R ≤ N ≤ 16`).
+    pub precision: u8,
+    pub colours: bool,
+    pub normals: bool,
+    pub frame: Frame,
+    /// Number of particles (ON leaves at level `R`).
+    pub particles: u32,
+}
+
+/// What a chunk carries.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ChunkKind {
+    /// Octree level `index` (§7.1): `count` nodes.
+    Level,
+    /// Attributes of level `index` (§5.5): `count` kept nodes.
+    Attributes,
+    /// Precision bit `index` (§7.2, `R < index ≤ N`): `count` particles.
+    Precision,
+}
+
+/// One chunk, borrowed from the stream.
+#[derive(Debug, Clone, Copy)]
+pub struct Chunk<'a> {
+    pub kind: ChunkKind,
+    pub index: u8,
+    pub count: u32,
+    pub payload: &'a [u8],
+    /// Offset of the chunk's end in the stream (bytes so far).
+    pub end: usize,
+}
+
+const CRC_TABLE: [u32; 256] = {
+    let mut t = [0u32; 256];
+    let mut i = 0;
+    while i < 256 {
+        let mut c = i as u32;
+        let mut k = 0;
+        while k < 8 {
+            c = if c & 1 != 0 {
+                0xedb8_8320 ^ (c >> 1)
+            } else {
+                c >> 1
+            };
+            k += 1;
+        }
+        t[i] = c;
+        i += 1;
+    }
+    t
+};
+
+/// CRC-32 (IEEE 802.3, as zlib and PNG) of the concatenation of `parts`.
+pub fn crc32(parts: &[&[u8]]) -> u32 {
+    let mut c = !0u32;
+    for part in parts {
+        for &b in *part {
+            c = CRC_TABLE[((c ^ u32::from(b)) & 0xff) as usize] ^ (c >> 8);
+        }
+    }
+    !c
+}
+
+/// Appends the header.
+pub fn write_header(h: &Header, out: &mut Vec<u8>) {
+    let start = out.len();
+    out.extend_from_slice(&MAGIC);
+    out.extend_from_slice(&VERSION.to_le_bytes());
+    out.push(match h.mode {
+        Mode::Baseline => 0,
+        Mode::Entropy => 1,
+    });
+    out.push(h.depth);
+    out.push(h.precision);
+    out.push(u8::from(h.colours) | (u8::from(h.normals) << 1));
+    out.extend_from_slice(&[0, 0]);
+    for v in h.frame.origin.to_array() {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    out.extend_from_slice(&h.frame.size.to_le_bytes());
+    out.extend_from_slice(&h.particles.to_le_bytes());
+    let crc = crc32(&[&out[start..]]);
+    out.extend_from_slice(&crc.to_le_bytes());
+}
+
+fn u32_at(b: &[u8], i: usize) -> u32 {
+    u32::from_le_bytes([b[i], b[i + 1], b[i + 2], b[i + 3]])
+}
+
+fn f32_at(b: &[u8], i: usize) -> f32 {
+    f32::from_le_bytes([b[i], b[i + 1], b[i + 2], b[i + 3]])
+}
+
+/// Parses and checks the header.
+pub fn read_header(bytes: &[u8]) -> Result<Header> {
+    if bytes.len() < MAGIC.len() || bytes[..MAGIC.len()] != MAGIC {
+        return stream_err("not a .pop stream (bad magic)");
+    }
+    if bytes.len() < HEADER_LEN {
+        return stream_err(format!(
+            "header truncated ({} of {HEADER_LEN} bytes)",
+            bytes.len()
+        ));
+    }
+    let version = u16::from_le_bytes([bytes[8], bytes[9]]);
+    if version != VERSION {
+        return stream_err(format!(
+            "version {version} is not supported (this reader knows {VERSION})"
+        ));
+    }
+    if crc32(&[&bytes[..36]]) != u32_at(bytes, 36) {
+        return stream_err("header checksum mismatch");
+    }
+    let mode = match bytes[10] {
+        0 => Mode::Baseline,
+        1 => Mode::Entropy,
+        m => return stream_err(format!("unknown coding mode {m}")),
+    };
+    let depth = bytes[11];
+    let precision = bytes[12];
+    if !(1..=MAX_DEPTH).contains(&depth) {
+        return stream_err(format!("depth {depth} outside 1..={MAX_DEPTH}"));
+    }
+    if precision < depth || u32::from(precision) > QBITS {
+        return stream_err(format!("precision {precision} outside {depth}..={QBITS}"));
+    }
+    let flags = bytes[13];
+    if flags > 3 || bytes[14] != 0 || bytes[15] != 0 {
+        return stream_err("unknown header flags");
+    }
+    let origin = Vec3::new(f32_at(bytes, 16), f32_at(bytes, 20), f32_at(bytes, 24));
+    let size = f32_at(bytes, 28);
+    if !origin.is_finite() || !size.is_finite() || size <= 0.0 {
+        return stream_err("header frame is not finite and positive");
+    }
+    Ok(Header {
+        mode,
+        depth,
+        precision,
+        colours: flags & 1 != 0,
+        normals: flags & 2 != 0,
+        frame: Frame { origin, size },
+        particles: u32_at(bytes, 32),
+    })
+}
+
+/// Appends one chunk.
+pub fn write_chunk(kind: ChunkKind, index: u8, count: u32, payload: &[u8], out: &mut Vec<u8>) {
+    let mut head = [0u8; 12];
+    head[0] = match kind {
+        ChunkKind::Level => 0,
+        ChunkKind::Attributes => 1,
+        ChunkKind::Precision => 2,
+    };
+    head[1] = index;
+    head[4..8].copy_from_slice(&count.to_le_bytes());
+    head[8..12].copy_from_slice(&(payload.len() as u32).to_le_bytes());
+    let crc = crc32(&[&head, payload]);
+    out.extend_from_slice(&head);
+    out.extend_from_slice(&crc.to_le_bytes());
+    out.extend_from_slice(payload);
+}
+
+/// Iterates the chunks after the header; yields an error (then stops) on a
+/// truncated or corrupted chunk.
+pub struct ChunkReader<'a> {
+    bytes: &'a [u8],
+    pos: usize,
+    number: usize,
+    failed: bool,
+}
+
+impl<'a> ChunkReader<'a> {
+    /// Chunks of a stream whose header has been read.
+    pub fn new(bytes: &'a [u8]) -> Self {
+        ChunkReader {
+            bytes,
+            pos: HEADER_LEN.min(bytes.len()),
+            number: 0,
+            failed: false,
+        }
+    }
+}
+
+impl<'a> Iterator for ChunkReader<'a> {
+    type Item = Result<Chunk<'a>>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.failed || self.pos >= self.bytes.len() {
+            return None;
+        }
+        let n = self.number;
+        self.number += 1;
+        let rest = &self.bytes[self.pos..];
+        let fail = |this: &mut Self, msg: String| {
+            this.failed = true;
+            Some(stream_err(msg))
+        };
+        if rest.len() < CHUNK_HEADER_LEN {
+            return fail(
+                self,
+                format!(
+                    "chunk {n} truncated in its header ({} bytes left)",
+                    rest.len()
+                ),
+            );
+        }
+        let kind = match rest[0] {
+            0 => ChunkKind::Level,
+            1 => ChunkKind::Attributes,
+            2 => ChunkKind::Precision,
+            k => return fail(self, format!("chunk {n} has unknown kind {k}")),
+        };
+        let len = u32_at(rest, 8) as usize;
+        if rest.len() - CHUNK_HEADER_LEN < len {
+            return fail(
+                self,
+                format!(
+                    "chunk {n} truncated: {len} payload bytes declared, {} present",
+                    rest.len() - CHUNK_HEADER_LEN
+                ),
+            );
+        }
+        let payload = &rest[CHUNK_HEADER_LEN..CHUNK_HEADER_LEN + len];
+        if crc32(&[&rest[..12], payload]) != u32_at(rest, 12) {
+            return fail(self, format!("chunk {n} checksum mismatch (corrupted)"));
+        }
+        if rest[2] != 0 || rest[3] != 0 {
+            return fail(self, format!("chunk {n} has unknown flags"));
+        }
+        self.pos += CHUNK_HEADER_LEN + len;
+        Some(Ok(Chunk {
+            kind,
+            index: rest[1],
+            count: u32_at(rest, 4),
+            payload,
+            end: self.pos,
+        }))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn crc32_matches_the_check_value() {
+        assert_eq!(crc32(&[b"123456789"]), 0xcbf4_3926);
+        assert_eq!(crc32(&[b"1234", b"56789"]), 0xcbf4_3926);
+    }
+
+    #[test]
+    fn header_round_trips_and_rejects_damage() {
+        let h = Header {
+            mode: Mode::Entropy,
+            depth: 7,
+            precision: 12,
+            colours: true,
+            normals: false,
+            frame: Frame {
+                origin: Vec3::new(-1.0, 0.5, 2.0),
+                size: 3.0,
+            },
+            particles: 1234,
+        };
+        let mut b = Vec::new();
+        write_header(&h, &mut b);
+        assert_eq!(b.len(), HEADER_LEN);
+        assert_eq!(read_header(&b).unwrap(), h);
+        for i in 8..HEADER_LEN {
+            let mut d = b.clone();
+            d[i] ^= 0x10;
+            assert!(read_header(&d).is_err(), "byte {i}");
+        }
+        assert!(read_header(&b[..20]).is_err());
+        assert!(read_header(b"PLY").is_err());
+    }
+
+    #[test]
+    fn chunks_stop_cleanly_on_truncation() {
+        let mut b = vec![0u8; HEADER_LEN];
+        write_chunk(ChunkKind::Level, 0, 1, &[1, 2, 3], &mut b);
+        write_chunk(ChunkKind::Level, 1, 5, &[9; 10], &mut b);
+        let all: Vec<_> = ChunkReader::new(&b).collect();
+        assert_eq!(all.len(), 2);
+        assert!(all.iter().all(|c| c.is_ok()));
+        for cut in HEADER_LEN + 1..b.len() {
+            let got: Vec<_> = ChunkReader::new(&b[..cut]).collect();
+            let ok = got.iter().filter(|c| c.is_ok()).count();
+            let boundary = cut == HEADER_LEN + CHUNK_HEADER_LEN + 3;
+            assert_eq!(got.last().unwrap().is_err(), !boundary, "cut {cut}");
+            assert!(ok <= 1);
+        }
+    }
+}

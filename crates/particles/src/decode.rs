@@ -1,0 +1,331 @@
+//! Progressive decoding — §5.4 of Yemez & Schmitt.
+//!
+//! Any prefix of whole chunks decodes: the structure chunk of level `r`
+//! rebuilds `S^r` (kept and phantom nodes, the particles of `P^r` with
+//! their leaves, so vertices at precision `N = R`), the attribute chunk
+//! recovers colours and normals exactly (eq. 4), and each precision layer
+//! adds one bit to every vertex coordinate (§7.2). A reader may stop after
+//! any chunk ([`DecodeOptions`]); a damaged or cut chunk is an error that
+//! says which.
+use glam::Vec3;
+use lodkit_mesh::{PointCloud, TriMesh};
+
+use crate::attributes::{self, Channel};
+use crate::container::{ChunkKind, ChunkReader, Header, Mode, read_header};
+use crate::encode_baseline::BitReader;
+use crate::encode_entropy::EntropyReader;
+use crate::error::{Result, stream_err};
+use crate::hierarchical_coding::{self as hc, BitCoder, LevelInput};
+use crate::octree::{Frame, MortonMap, QBITS};
+use crate::ordering::HLevel;
+
+/// Where to stop reading.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct DecodeOptions {
+    /// Last octree level to decode (`None`: all present).
+    pub max_level: Option<u8>,
+    /// Highest vertex precision to decode (`None`: all present).
+    pub max_precision: Option<u8>,
+}
+
+/// What a prefix of a stream holds.
+#[derive(Debug, Clone)]
+pub struct Decoded {
+    pub header: Header,
+    /// Levels `0..levels.len()` decoded.
+    pub levels: Vec<HLevel>,
+    /// 16-bit grid coordinates of the particles known so far (low bits
+    /// beyond `precision` are zero).
+    pub q: Vec<[u32; 3]>,
+    /// Bits of `q` that are known.
+    pub precision: u8,
+    /// Colours per level per node (phantoms: zero), if coded and decoded.
+    pub colours: Option<Vec<Vec<[u32; 3]>>>,
+    /// Quantised normals per level per node.
+    pub normals: Option<Vec<Vec<[u32; 3]>>>,
+    /// Stream bytes needed for each level (and its attributes).
+    pub bytes_per_level: Vec<usize>,
+    /// Stream bytes read in all.
+    pub bytes_read: usize,
+}
+
+/// One decoded octree surface `S^r` ready for triangulation or display.
+#[derive(Debug, Clone)]
+pub struct LevelSurface {
+    pub level: u8,
+    pub frame: Frame,
+    /// Kept cells, sorted Morton codes.
+    pub cells: Vec<u64>,
+    pub positions: Vec<Vec3>,
+    pub colours: Option<Vec<[u8; 4]>>,
+    pub normals: Option<Vec<Vec3>>,
+}
+
+impl LevelSurface {
+    /// The particles as a point cloud.
+    pub fn to_point_cloud(&self) -> PointCloud {
+        PointCloud {
+            positions: self.positions.clone(),
+            normals: self.normals.clone(),
+            colors: self.colours.clone(),
+        }
+    }
+
+    /// Empty mesh carrying the particles as vertices (faces added by
+    /// triangulation).
+    pub fn vertices_only(&self) -> TriMesh {
+        TriMesh {
+            positions: self.positions.clone(),
+            normals: self.normals.clone(),
+            colors: self.colours.clone(),
+            uvs: None,
+            faces: Vec::new(),
+        }
+    }
+}
+
+trait ChunkRead<'a>: BitCoder + Sized {
+    fn open(payload: &'a [u8]) -> Result<Self>;
+}
+
+impl<'a> ChunkRead<'a> for BitReader<'a> {
+    fn open(payload: &'a [u8]) -> Result<Self> {
+        Ok(BitReader::new(payload))
+    }
+}
+
+impl<'a> ChunkRead<'a> for EntropyReader {
+    fn open(payload: &'a [u8]) -> Result<Self> {
+        EntropyReader::new(payload)
+    }
+}
+
+/// Decodes the chunks of `bytes` up to the limits of `opts`.
+pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
+    let header = read_header(bytes)?;
+    match header.mode {
+        Mode::Baseline => decode_with::<BitReader>(bytes, header, opts),
+        Mode::Entropy => decode_with::<EntropyReader>(bytes, header, opts),
+    }
+}
+
+fn decode_with<'a, R: ChunkRead<'a>>(
+    bytes: &'a [u8],
+    header: Header,
+    opts: &DecodeOptions,
+) -> Result<Decoded> {
+    let depth = header.depth;
+    let max_level = opts.max_level.unwrap_or(depth).min(depth);
+    let max_precision = opts
+        .max_precision
+        .unwrap_or(header.precision)
+        .min(header.precision);
+    let entropy = header.mode == Mode::Entropy;
+    let mut channels = Vec::new();
+    if header.colours {
+        channels.push(Channel::Colour);
+    }
+    if header.normals {
+        channels.push(Channel::Normal);
+    }
+    let mut d = Decoded {
+        header,
+        levels: Vec::new(),
+        q: Vec::new(),
+        precision: depth,
+        colours: header.colours.then(Vec::new),
+        normals: header.normals.then(Vec::new),
+        bytes_per_level: Vec::new(),
+        bytes_read: crate::container::HEADER_LEN,
+    };
+    let mut leaves: Vec<[u32; 3]> = Vec::new();
+    // The chunk expected next: (kind, index).
+    let mut expect = (ChunkKind::Level, 0u8);
+    for chunk in ChunkReader::new(bytes) {
+        let chunk = chunk?;
+        if (chunk.kind, chunk.index) != expect {
+            return stream_err(format!(
+                "chunk {:?} {} found where {:?} {} was expected",
+                chunk.kind, chunk.index, expect.0, expect.1
+            ));
+        }
+        match chunk.kind {
+            ChunkKind::Level => {
+                let r = chunk.index;
+                if r > max_level {
+                    break;
+                }
+                let mut c = R::open(chunk.payload)?;
+                let level = if r == 0 {
+                    if chunk.count != 1 {
+                        return stream_err("level 0 must hold the root alone");
+                    }
+                    leaves.push(hc::code_root(&mut c, depth, None)?);
+                    HLevel {
+                        cells: vec![0],
+                        phantom: vec![false],
+                        particle: vec![0],
+                    }
+                } else {
+                    let parents = &d.levels[r as usize - 1];
+                    let parent_index = if entropy {
+                        hc::index_of(parents)
+                    } else {
+                        MortonMap::default()
+                    };
+                    let inp = LevelInput {
+                        depth,
+                        r,
+                        entropy,
+                        parents,
+                        parent_index: &parent_index,
+                        max_nodes: chunk.count as usize,
+                    };
+                    let lv = hc::code_level(&mut c, &inp, &mut leaves, None)?;
+                    if lv.cells.len() != chunk.count as usize {
+                        return stream_err(format!(
+                            "level {r} decodes to {} nodes, its chunk declares {}",
+                            lv.cells.len(),
+                            chunk.count
+                        ));
+                    }
+                    lv
+                };
+                if leaves.len() > header.particles as usize {
+                    return stream_err("more particles than the header declares");
+                }
+                d.levels.push(level);
+                d.bytes_per_level.push(chunk.end);
+                expect = if channels.is_empty() {
+                    next_structure(r, depth)
+                } else {
+                    (ChunkKind::Attributes, r)
+                };
+            }
+            ChunkKind::Attributes => {
+                let r = chunk.index as usize;
+                let mut c = R::open(chunk.payload)?;
+                for &ch in &channels {
+                    let store = match ch {
+                        Channel::Colour => d.colours.as_mut(),
+                        Channel::Normal => d.normals.as_mut(),
+                    }
+                    .expect("channel declared in the header");
+                    let lv = &d.levels[r];
+                    let mut v = vec![[0u32; 3]; lv.cells.len()];
+                    if r == 0 {
+                        attributes::code_root(&mut c, ch, &mut v[0])?;
+                    } else {
+                        attributes::code_level(
+                            &mut c,
+                            ch,
+                            &d.levels[r - 1],
+                            &store[r - 1],
+                            lv,
+                            &mut v,
+                            None,
+                        )?;
+                    }
+                    store.push(v);
+                }
+                d.bytes_per_level[r] = chunk.end;
+                expect = next_structure(r as u8, depth);
+            }
+            ChunkKind::Precision => {
+                let b = chunk.index;
+                if b > max_precision {
+                    break;
+                }
+                if d.q.is_empty() {
+                    d.q = leaves
+                        .iter()
+                        .map(|l| l.map(|v| v << (QBITS - u32::from(depth))))
+                        .collect();
+                }
+                if chunk.count as usize != d.q.len() {
+                    return stream_err(format!(
+                        "precision layer {b} declares {} particles",
+                        chunk.count
+                    ));
+                }
+                let mut c = R::open(chunk.payload)?;
+                hc::code_precision(&mut c, u32::from(b), &mut d.q)?;
+                d.precision = b;
+                expect = (ChunkKind::Precision, b.saturating_add(1));
+            }
+        }
+        d.bytes_read = chunk.end;
+    }
+    if d.levels.is_empty() {
+        return stream_err("the stream holds no level");
+    }
+    if d.q.is_empty() {
+        d.q = leaves
+            .iter()
+            .map(|l| l.map(|v| v << (QBITS - u32::from(depth))))
+            .collect();
+    }
+    // The last level's attribute chunk may be missing from a prefix:
+    // `surface` then returns that level without attributes.
+    Ok(d)
+}
+
+fn next_structure(r: u8, depth: u8) -> (ChunkKind, u8) {
+    if r < depth {
+        (ChunkKind::Level, r + 1)
+    } else {
+        (ChunkKind::Precision, depth + 1)
+    }
+}
+
+impl Decoded {
+    /// Number of levels decoded (`r` runs over `0..levels()`).
+    pub fn level_count(&self) -> usize {
+        self.levels.len()
+    }
+
+    /// The octree surface `S^r` with its particles.
+    pub fn surface(&self, r: u8) -> Result<LevelSurface> {
+        let Some(lv) = self.levels.get(r as usize) else {
+            return stream_err(format!(
+                "level {r} is not in the decoded prefix ({} levels)",
+                self.levels.len()
+            ));
+        };
+        let shift = QBITS - u32::from(self.precision);
+        let mut cells = Vec::with_capacity(lv.cells.len());
+        let mut positions = Vec::with_capacity(lv.cells.len());
+        let mut kept_idx = Vec::with_capacity(lv.cells.len());
+        for (i, &c) in lv.cells.iter().enumerate() {
+            if lv.phantom[i] {
+                continue;
+            }
+            cells.push(c);
+            let q = self.q[lv.particle[i] as usize].map(|v| v >> shift);
+            positions.push(self.header.frame.cell_centre(q, u32::from(self.precision)));
+            kept_idx.push(i);
+        }
+        let pick = |store: &Option<Vec<Vec<[u32; 3]>>>| -> Option<Vec<[u32; 3]>> {
+            let lvl = store.as_ref()?.get(r as usize)?;
+            Some(kept_idx.iter().map(|&i| lvl[i]).collect())
+        };
+        let colours = pick(&self.colours).map(|v| {
+            v.iter()
+                .map(|c| [c[0] as u8, c[1] as u8, c[2] as u8, 255])
+                .collect()
+        });
+        let normals = pick(&self.normals).map(|v| {
+            v.iter()
+                .map(|&n| attributes::dequantise_normal(n))
+                .collect()
+        });
+        Ok(LevelSurface {
+            level: r,
+            frame: self.header.frame,
+            cells,
+            positions,
+            colours,
+            normals,
+        })
+    }
+}

@@ -1,0 +1,50 @@
+//! # lodkit-particles
+//!
+//! Progressive octree particles after Yemez & Schmitt, "Multilevel
+//! representation and transmission of real objects with progressive octree
+//! particles" (IEEE TVCG 2003): a dense surface becomes an octree (§4),
+//! thinned (§4.3) and ordered so that each level adds one difference set
+//! of ON leaves (§4.4); each leaf is a particle with a vertex and averaged
+//! attributes (§5); the octree is coded hierarchically with scalable vertex
+//! precision (§7), and a viewer triangulates each decoded level directly
+//! from a 256-case table (§6).
+//!
+//! The pipeline reads top to bottom in the file names:
+//! [`octree`] → [`thinning`] → [`ordering`] → [`attributes`] →
+//! [`hierarchical_coding`] over [`encode_baseline`] or [`encode_entropy`] →
+//! [`container`]; and back: [`decode`] → [`triangulate`] (with
+//! [`triangulation_table`]) → [`stats`].
+//!
+//! ```no_run
+//! use lodkit_particles::{encode, EncodeOptions, decode, DecodeOptions, triangulate, TriangulateOptions};
+//! let bunny = lodkit_mesh::io::load(std::path::Path::new("bunny.ply")).unwrap();
+//! let pop = encode(&bunny, &EncodeOptions::DEFAULT).unwrap();
+//! let dec = decode(&pop.bytes, &DecodeOptions::default()).unwrap();
+//! let level = dec.surface(6).unwrap();
+//! let mesh = triangulate(&level, &TriangulateOptions::DEFAULT).mesh;
+//! ```
+// Octree code walks parallel per-node arrays (cells, labels, particles)
+// by index; iterator chains over three of them read worse.
+#![allow(clippy::needless_range_loop)]
+
+pub mod attributes;
+pub mod container;
+pub mod decode;
+pub mod encode;
+pub mod encode_baseline;
+pub mod encode_entropy;
+pub mod error;
+pub mod hierarchical_coding;
+pub mod octree;
+pub mod ordering;
+pub mod thinning;
+pub mod triangulate;
+pub mod triangulation_table;
+
+pub use container::Mode;
+pub use decode::{DecodeOptions, Decoded, LevelSurface, decode};
+pub use encode::{EncodeOptions, EncodeReport, Encoded, LevelReport, encode};
+pub use error::{Error, Result};
+pub use octree::Sidedness;
+pub use thinning::ThinningOptions;
+pub use triangulate::{TriangulateOptions, Triangulation, TriangulationStats, triangulate};

@@ -1,0 +1,293 @@
+//! Octree surface thinning — §4.3 of Yemez & Schmitt.
+//!
+//! Levels are processed from `R` up to 1. At each level every ON cube is
+//! tested in lexicographic (Morton) order, sequentially, and the pass is
+//! repeated until nothing changes:
+//!
+//! * **inner thinning** (always): a cube with no OUT face neighbour is
+//!   occluded and relabelled IN;
+//! * **outer thinning** (optional, only at levels `r ≥ relax_below`): a
+//!   cube with no IN face neighbour is relabelled OUT, unless the
+//!   3×3×3 test says its removal would join two OUT regions that are
+//!   separate (six-connected, inside the 26-neighbourhood) — the
+//!   artificial hole of Fig. 4.
+//!
+//! After each elimination the ancestors are relabelled: a parent left with
+//! no ON child is eliminated too (the dotted crosses of Fig. 3). Departure:
+//! the paper relabels such a parent IN; when outer thinning emptied it (all
+//! its children OUT) we relabel it OUT, which is what the flood fill would
+//! have said and keeps the next level's occlusion test honest.
+//!
+//! Eliminated nodes that still have ON descendants are the phantom nodes of
+//! §4.3/§7.1; see [`crate::ordering`].
+use crate::octree::{FACES, Label, Octree, offset, unmorton};
+
+/// Options of [`thin`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ThinningOptions {
+    /// Also thin the outer boundary (with the hole-preventing topology test).
+    pub outer: bool,
+    /// Outer thinning is relaxed (not applied) below this level — the
+    /// paper relaxed it at `r = 4` for its objects.
+    pub relax_below: u8,
+}
+
+impl ThinningOptions {
+    /// Inner thinning only.
+    pub const DEFAULT: ThinningOptions = ThinningOptions {
+        outer: false,
+        relax_below: 5,
+    };
+}
+
+impl Default for ThinningOptions {
+    fn default() -> Self {
+        ThinningOptions::DEFAULT
+    }
+}
+
+/// Counts of eliminated cubes per level (Table 1's "eliminated nodes"):
+/// cubes relabelled by their own occlusion test, plus parents relabelled
+/// because they lost every ON child.
+pub fn thin(tree: &mut Octree, opts: &ThinningOptions) -> Vec<usize> {
+    let depth = tree.depth as usize;
+    let mut eliminated = vec![0usize; depth + 1];
+    // ON children left under every node of levels 0..R-1.
+    let mut on_children: Vec<Vec<u8>> = (0..depth)
+        .map(|r| vec![0u8; tree.levels[r].cells.len()])
+        .collect();
+    for r in 1..=depth {
+        for &c in &tree.levels[r].cells {
+            let p = tree.levels[r - 1].find(c >> 3).expect("parent is ON");
+            on_children[r - 1][p] += 1;
+        }
+    }
+    for r in (1..=depth).rev() {
+        let n = tree.levels[r].cells.len();
+        loop {
+            let mut changed = false;
+            for i in 0..n {
+                if tree.levels[r].label[i] != Label::On {
+                    continue;
+                }
+                let c = unmorton(tree.levels[r].cells[i]);
+                let (mut outs, mut ins) = (0, 0);
+                for d in FACES {
+                    match tree.neighbour_label(r as u8, c, d) {
+                        Label::Out => outs += 1,
+                        Label::In => ins += 1,
+                        Label::On => {}
+                    }
+                }
+                let new = if outs == 0 {
+                    Label::In
+                } else if opts.outer
+                    && r >= opts.relax_below as usize
+                    && ins == 0
+                    && !would_open_hole(tree, r as u8, c)
+                {
+                    Label::Out
+                } else {
+                    continue;
+                };
+                tree.levels[r].label[i] = new;
+                eliminated[r] += 1;
+                changed = true;
+                relabel_ancestors(tree, &mut on_children, &mut eliminated, r, i);
+            }
+            if !changed {
+                break;
+            }
+        }
+    }
+    eliminated
+}
+
+/// A parent whose last ON child went is eliminated too, up to level 1.
+fn relabel_ancestors(
+    tree: &mut Octree,
+    on_children: &mut [Vec<u8>],
+    eliminated: &mut [usize],
+    mut r: usize,
+    mut i: usize,
+) {
+    while r > 1 {
+        let c = tree.levels[r].cells[i];
+        let p = tree.levels[r - 1].find(c >> 3).expect("parent is ON");
+        on_children[r - 1][p] -= 1;
+        if on_children[r - 1][p] > 0 || tree.levels[r - 1].label[p] != Label::On {
+            return;
+        }
+        let first = (c >> 3) << 3;
+        let any_in = (0..8).any(|k| {
+            tree.levels[r]
+                .find(first | k)
+                .is_some_and(|j| tree.levels[r].label[j] == Label::In)
+        });
+        tree.levels[r - 1].label[p] = if any_in { Label::In } else { Label::Out };
+        eliminated[r - 1] += 1;
+        r -= 1;
+        i = p;
+    }
+}
+
+/// The topology test of §4.3 (Fig. 4): label the six-connected OUT regions
+/// of the 26-neighbourhood (centre excluded); removing the centre makes it
+/// OUT and joins every region touching one of its faces, so it opens a
+/// hole when its OUT face neighbours lie in two or more regions.
+pub fn would_open_hole(tree: &Octree, r: u8, c: [u32; 3]) -> bool {
+    let side = 1u32 << r;
+    let idx = |x: usize, y: usize, z: usize| x + 3 * y + 9 * z;
+    let mut out = [false; 27];
+    for z in 0..3 {
+        for y in 0..3 {
+            for x in 0..3 {
+                if (x, y, z) == (1, 1, 1) {
+                    continue;
+                }
+                let d = [x as i32 - 1, y as i32 - 1, z as i32 - 1];
+                out[idx(x, y, z)] = match offset(c, d, side) {
+                    Some(n) => tree.label(r, n) == Label::Out,
+                    None => true,
+                };
+            }
+        }
+    }
+    let mut region = [u8::MAX; 27];
+    let mut next = 0u8;
+    let mut stack = Vec::with_capacity(27);
+    for s in 0..27 {
+        if !out[s] || region[s] != u8::MAX {
+            continue;
+        }
+        region[s] = next;
+        stack.push(s);
+        while let Some(k) = stack.pop() {
+            let (x, y, z) = (k % 3, (k / 3) % 3, k / 9);
+            for d in FACES {
+                let (nx, ny, nz) = (x as i32 + d[0], y as i32 + d[1], z as i32 + d[2]);
+                if !(0..3).contains(&nx) || !(0..3).contains(&ny) || !(0..3).contains(&nz) {
+                    continue;
+                }
+                let nk = idx(nx as usize, ny as usize, nz as usize);
+                if out[nk] && region[nk] == u8::MAX {
+                    region[nk] = next;
+                    stack.push(nk);
+                }
+            }
+        }
+        next += 1;
+    }
+    let mut first = None;
+    for d in FACES {
+        let k = idx(
+            (d[0] + 1) as usize,
+            (d[1] + 1) as usize,
+            (d[2] + 1) as usize,
+        );
+        if out[k] {
+            match first {
+                None => first = Some(region[k]),
+                Some(f) if f != region[k] => return true,
+                _ => {}
+            }
+        }
+    }
+    false
+}
+
+#[cfg(test)]
+fn m(c: [u32; 3]) -> u64 {
+    crate::octree::morton(c)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::octree::{BuildOptions, Octree};
+
+    fn sphere_tree(depth: u8) -> Octree {
+        let mesh = lodkit_mesh::shapes::icosphere(4);
+        Octree::from_mesh(
+            &mesh,
+            &BuildOptions {
+                depth: Some(depth),
+                sidedness: None,
+            },
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn inner_thinning_leaves_every_kept_cube_facing_outside() {
+        let mut t = sphere_tree(6);
+        let before = t.levels[6].cells.len();
+        let elim = thin(&mut t, &ThinningOptions::DEFAULT);
+        assert!(
+            elim[6] > 0,
+            "a sampled sphere shell is more than one cube thick"
+        );
+        let kept: Vec<usize> = (0..before)
+            .filter(|&i| t.levels[6].label[i] == Label::On)
+            .collect();
+        assert!(kept.len() < before);
+        for &i in &kept {
+            let c = unmorton(t.levels[6].cells[i]);
+            assert!(
+                FACES
+                    .iter()
+                    .any(|&d| t.neighbour_label(6, c, d) == Label::Out)
+            );
+        }
+        // Ancestors of kept leaves keep a kept child or are eliminated.
+        for r in 1..6usize {
+            for (p, &pc) in t.levels[r].cells.iter().enumerate() {
+                if t.levels[r].label[p] != Label::On {
+                    continue;
+                }
+                let has = (0..8).any(|k| {
+                    t.levels[r + 1]
+                        .find((pc << 3) | k)
+                        .is_some_and(|j| t.levels[r + 1].label[j] == Label::On)
+                });
+                assert!(has, "kept node without kept child at level {r}");
+            }
+        }
+    }
+
+    #[test]
+    fn topology_test_refuses_to_cut_a_one_cube_wall() {
+        // A plane of points splits the cube into two OUT half-spaces; every
+        // wall cube has no IN neighbour, yet removing one would join them.
+        let mut pts = Vec::new();
+        for y in 0..=64 {
+            for z in 0..=64 {
+                pts.push(glam::Vec3::new(0.5, y as f32 / 64.0, z as f32 / 64.0));
+            }
+        }
+        let pc = lodkit_mesh::PointCloud {
+            positions: pts,
+            ..Default::default()
+        };
+        let opts = BuildOptions {
+            depth: Some(3),
+            sidedness: Some(crate::octree::Sidedness::FloodFill),
+        };
+        let mut t = Octree::from_points(&pc, &opts).unwrap();
+        assert_eq!(t.levels[3].cells.len(), 64);
+        assert!(would_open_hole(&t, 3, [4, 4, 4]));
+        // At the wall's rim the two sides meet around it (outside the grid
+        // is OUT), so the local test lets that cube go: sequential outer
+        // thinning erodes open sheets from their border, as in the paper.
+        assert!(!would_open_hole(&t, 3, [4, 0, 0]));
+        let elim = thin(
+            &mut t,
+            &ThinningOptions {
+                outer: false,
+                relax_below: 1,
+            },
+        );
+        assert_eq!(elim[3], 0, "inner thinning keeps cubes that face OUT");
+        assert_eq!(m([4, 4, 4]) >> 3, m([2, 2, 2]));
+    }
+}
