@@ -68,6 +68,9 @@ enum Command {
         after_help = "Examples:\n  lodkit compare bunny.ply bunny_lod2.ply\n  lodkit compare a.obj b.glb --samples 2000000 --json"
     )]
     Compare(commands::compare::CompareArgs),
+    /// Progressive octree particle streams (.pop): encode, decode a level, stats.
+    #[command(subcommand)]
+    Pop(commands::pop::PopCommand),
     /// The main job: every level of detail of a model, with a report.
     #[command(
         after_help = "Examples:\n  lodkit build --out out/              # the built-in Stanford bunny\n  lodkit build scan.ply --out out/scan"
@@ -96,6 +99,7 @@ fn main() -> ExitCode {
             weld,
         } => commands::convert::run(&ui, &input, &output, ascii, weld),
         Command::Compare(args) => commands::compare::run(&ui, &args),
+        Command::Pop(cmd) => commands::pop::run(&ui, &cmd),
         Command::Build { input, out, json } => {
             commands::build::run(&ui, input.as_deref(), &out, json)
         }

@@ -17,7 +17,7 @@ pub const VERSION: u16 = 1;
 /// Header size in bytes.
 pub const HEADER_LEN: usize = 40;
 /// Chunk header size in bytes.
-pub const CHUNK_HEADER_LEN: usize = 16;
+pub const CHUNK_HEADER_LEN: usize = 20;
 
 /// How chunk payloads are coded.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -69,6 +69,9 @@ pub struct Chunk<'a> {
     pub kind: ChunkKind,
     pub index: u8,
     pub count: u32,
+    /// Level chunks: cubes eliminated by thinning at this level (Table 1,
+    /// informative); 0 elsewhere.
+    pub aux: u32,
     pub payload: &'a [u8],
     /// Offset of the chunk's end in the stream (bytes so far).
     pub end: usize,
@@ -189,8 +192,15 @@ pub fn read_header(bytes: &[u8]) -> Result<Header> {
 }
 
 /// Appends one chunk.
-pub fn write_chunk(kind: ChunkKind, index: u8, count: u32, payload: &[u8], out: &mut Vec<u8>) {
-    let mut head = [0u8; 12];
+pub fn write_chunk(
+    kind: ChunkKind,
+    index: u8,
+    count: u32,
+    aux: u32,
+    payload: &[u8],
+    out: &mut Vec<u8>,
+) {
+    let mut head = [0u8; 16];
     head[0] = match kind {
         ChunkKind::Level => 0,
         ChunkKind::Attributes => 1,
@@ -198,7 +208,8 @@ pub fn write_chunk(kind: ChunkKind, index: u8, count: u32, payload: &[u8], out: 
     };
     head[1] = index;
     head[4..8].copy_from_slice(&count.to_le_bytes());
-    head[8..12].copy_from_slice(&(payload.len() as u32).to_le_bytes());
+    head[8..12].copy_from_slice(&aux.to_le_bytes());
+    head[12..16].copy_from_slice(&(payload.len() as u32).to_le_bytes());
     let crc = crc32(&[&head, payload]);
     out.extend_from_slice(&head);
     out.extend_from_slice(&crc.to_le_bytes());
@@ -255,7 +266,7 @@ impl<'a> Iterator for ChunkReader<'a> {
             2 => ChunkKind::Precision,
             k => return fail(self, format!("chunk {n} has unknown kind {k}")),
         };
-        let len = u32_at(rest, 8) as usize;
+        let len = u32_at(rest, 12) as usize;
         if rest.len() - CHUNK_HEADER_LEN < len {
             return fail(
                 self,
@@ -266,7 +277,7 @@ impl<'a> Iterator for ChunkReader<'a> {
             );
         }
         let payload = &rest[CHUNK_HEADER_LEN..CHUNK_HEADER_LEN + len];
-        if crc32(&[&rest[..12], payload]) != u32_at(rest, 12) {
+        if crc32(&[&rest[..16], payload]) != u32_at(rest, 16) {
             return fail(self, format!("chunk {n} checksum mismatch (corrupted)"));
         }
         if rest[2] != 0 || rest[3] != 0 {
@@ -277,6 +288,7 @@ impl<'a> Iterator for ChunkReader<'a> {
             kind,
             index: rest[1],
             count: u32_at(rest, 4),
+            aux: u32_at(rest, 8),
             payload,
             end: self.pos,
         }))
@@ -323,8 +335,8 @@ mod tests {
     #[test]
     fn chunks_stop_cleanly_on_truncation() {
         let mut b = vec![0u8; HEADER_LEN];
-        write_chunk(ChunkKind::Level, 0, 1, &[1, 2, 3], &mut b);
-        write_chunk(ChunkKind::Level, 1, 5, &[9; 10], &mut b);
+        write_chunk(ChunkKind::Level, 0, 1, 0, &[1, 2, 3], &mut b);
+        write_chunk(ChunkKind::Level, 1, 5, 7, &[9; 10], &mut b);
         let all: Vec<_> = ChunkReader::new(&b).collect();
         assert_eq!(all.len(), 2);
         assert!(all.iter().all(|c| c.is_ok()));

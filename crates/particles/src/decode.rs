@@ -45,6 +45,10 @@ pub struct Decoded {
     pub normals: Option<Vec<Vec<[u32; 3]>>>,
     /// Stream bytes needed for each level (and its attributes).
     pub bytes_per_level: Vec<usize>,
+    /// Cubes thinning eliminated at each level (from the level chunks).
+    pub eliminated: Vec<u32>,
+    /// Bytes of each level's structure chunk payload.
+    pub structure_bytes: Vec<usize>,
     /// Stream bytes read in all.
     pub bytes_read: usize,
 }
@@ -136,6 +140,8 @@ fn decode_with<'a, R: ChunkRead<'a>>(
         colours: header.colours.then(Vec::new),
         normals: header.normals.then(Vec::new),
         bytes_per_level: Vec::new(),
+        eliminated: Vec::new(),
+        structure_bytes: Vec::new(),
         bytes_read: crate::container::HEADER_LEN,
     };
     let mut leaves: Vec<[u32; 3]> = Vec::new();
@@ -196,6 +202,8 @@ fn decode_with<'a, R: ChunkRead<'a>>(
                 }
                 d.levels.push(level);
                 d.bytes_per_level.push(chunk.end);
+                d.eliminated.push(chunk.aux);
+                d.structure_bytes.push(chunk.payload.len());
                 expect = if channels.is_empty() {
                     next_structure(r, depth)
                 } else {

@@ -249,6 +249,7 @@ fn encode_with<W: ChunkWriter>(
             ChunkKind::Level,
             r as u8,
             lv.cells.len() as u32,
+            eliminated.get(r).copied().unwrap_or(0) as u32,
             &payload,
             &mut out,
         );
@@ -279,6 +280,7 @@ fn encode_with<W: ChunkWriter>(
                 ChunkKind::Attributes,
                 r as u8,
                 lv.kept() as u32,
+                0,
                 &payload,
                 &mut out,
             );
@@ -308,6 +310,7 @@ fn encode_with<W: ChunkWriter>(
             ChunkKind::Precision,
             b as u8,
             q.len() as u32,
+            0,
             &payload,
             &mut out,
         );

@@ -54,9 +54,9 @@ const OCC: usize = 0;
 const FLAG: usize = OCC + OCC_STATES;
 const FLAG_STATES: usize = 2 * 8 * 4;
 const PATH: usize = FLAG + FLAG_STATES;
-const PATH_STATES: usize = 3 * 8;
+const PATH_STATES: usize = 3 * 3 * 3 * 2;
 const PREC: usize = PATH + PATH_STATES;
-const PREC_STATES: usize = 3 * 16;
+const PREC_STATES: usize = 3 * 16 * 4;
 /// First context of the attribute bits (see [`crate::attributes`]).
 pub const ATTR: usize = PREC + PREC_STATES;
 /// Contexts reserved for attributes: channel × component × 16 bit places,
@@ -116,7 +116,6 @@ pub fn code_level<C: BitCoder>(
     // Level-r nodes coded so far (value: phantom), for neighbour contexts.
     let mut fine: MortonMap<bool> = MortonMap::default();
     let side_parent = 1i64 << (r - 1);
-    let side = 1i64 << r;
     let mut t = 0usize;
     for p in 0..parents.cells.len() {
         let pc = parents.cells[p];
@@ -189,7 +188,6 @@ pub fn code_level<C: BitCoder>(
                             coarse_bits |= 1 << a;
                         }
                     }
-                    let _ = side;
                     OCC + (((state * 8 + k) * 8 + fine_bits) * 8 + coarse_bits) * 3 + count.min(2)
                 } else {
                     OCC
@@ -253,14 +251,32 @@ pub fn code_level<C: BitCoder>(
                 let want = truth.map(|tr| tr.leaves[id]).unwrap_or([0; 3]);
                 let c = unmorton(cell);
                 let mut leaf = c.map(|v| v << (depth - r));
+                // Context: the surface's extent along each axis (how many
+                // of the parent's two neighbours on that axis are present)
+                // predicts which path bits the lexicographic rule fixes.
+                let mut ext = [0usize; 3];
+                let mut back = [0usize; 3];
+                if inp.entropy {
+                    for a in 0..3 {
+                        ext[a] = ((coarse >> (2 * a)) & 1) + ((coarse >> (2 * a + 1)) & 1);
+                        if c[a] > 0 {
+                            let mut n = c;
+                            n[a] -= 1;
+                            back[a] = usize::from(fine.contains_key(&morton(n)));
+                        }
+                    }
+                }
                 for d in (r + 1)..=depth {
                     let s = depth - d;
-                    let mut node = 1usize;
+                    let step = (d - r).min(3) as usize - 1;
                     for (a, l) in leaf.iter_mut().enumerate() {
                         let mut b = (want[a] >> s) & 1 == 1;
-                        let ctx = PATH + ((d - r).min(3) as usize - 1) * 8 + node;
+                        let ctx = if inp.entropy {
+                            PATH + ((step * 3 + a) * 3 + ext[a]) * 2 + back[a]
+                        } else {
+                            PATH
+                        };
                         coder.bit(&mut b, ctx)?;
-                        node = (node << 1 | usize::from(b)) & 7;
                         *l |= u32::from(b) << s;
                     }
                 }
@@ -289,7 +305,10 @@ pub fn code_precision<C: BitCoder>(coder: &mut C, b: u32, q: &mut [[u32; 3]]) ->
     for v in q.iter_mut() {
         for (a, c) in v.iter_mut().enumerate() {
             let mut bit = (*c >> shift) & 1 == 1;
-            coder.bit(&mut bit, PREC + a * 16 + layer)?;
+            // The two bits above: a centroid near the middle of its cube
+            // reads 0111… or 1000…, so they predict this one.
+            let above = ((*c >> (shift + 1)) & 3) as usize;
+            coder.bit(&mut bit, PREC + (a * 16 + layer) * 4 + above)?;
             *c = (*c & !(1 << shift)) | (u32::from(bit) << shift);
         }
     }

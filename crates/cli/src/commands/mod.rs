@@ -3,6 +3,7 @@ pub mod build;
 pub mod compare;
 pub mod convert;
 pub mod info;
+pub mod pop;
 
 use std::path::Path;
 
