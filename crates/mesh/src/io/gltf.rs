@@ -288,10 +288,12 @@ fn parse_document(bytes: &[u8]) -> Result<(gltf::Document, Option<&[u8]>), Parse
     if bytes.is_empty() {
         return Err(ParseError::new("empty file"));
     }
+    // A UTF-8 byte-order mark is not allowed by the spec but is tolerated.
+    let unbom = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     let (json_bytes, bin) = if bytes.starts_with(GLB_MAGIC) {
         split_glb(bytes)?
-    } else if bytes.trim_ascii_start().starts_with(b"{") {
-        (bytes, None)
+    } else if unbom.trim_ascii_start().starts_with(b"{") {
+        (unbom, None)
     } else {
         let head = &bytes[..bytes.len().min(4)];
         return Err(parse_err!(
@@ -1298,6 +1300,12 @@ mod tests {
         );
         let e = read(d.as_bytes(), None).unwrap_err().to_string();
         assert!(e.contains("index 7 out of range (4 vertices)"), "{e}");
+    }
+
+    #[test]
+    fn json_with_a_byte_order_mark_is_read() {
+        let with_bom = [b"\xEF\xBB\xBF".as_slice(), doc(BODY).as_bytes()].concat();
+        assert_eq!(read(&with_bom, None).unwrap().faces.len(), 2);
     }
 
     #[test]
