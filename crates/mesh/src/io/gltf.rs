@@ -128,43 +128,16 @@ fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), ParseError> {
     Ok((json_chunk, bin))
 }
 
-/// Decodes standard base64 (`+/`, optional `=` padding, no whitespace).
+/// Decodes standard base64 (`+/`, `=` padding optional, no whitespace),
+/// as glTF data URIs use it.
 fn decode_base64(s: &str) -> Result<Vec<u8>, String> {
-    fn val(c: u8) -> Option<u32> {
-        Some(match c {
-            b'A'..=b'Z' => c - b'A',
-            b'a'..=b'z' => c - b'a' + 26,
-            b'0'..=b'9' => c - b'0' + 52,
-            b'+' | b'-' => 62,
-            b'/' | b'_' => 63,
-            _ => return None,
-        } as u32)
-    }
-    let b = s.as_bytes();
-    let trimmed = b
-        .strip_suffix(b"==")
-        .or_else(|| b.strip_suffix(b"="))
-        .unwrap_or(b);
-    if trimmed.len() % 4 == 1 || (trimmed.len() != b.len() && !b.len().is_multiple_of(4)) {
-        return Err(format!("base64 length {} is impossible", b.len()));
-    }
-    let mut out = Vec::with_capacity(trimmed.len() / 4 * 3 + 2);
-    for chunk in trimmed.chunks(4) {
-        let mut acc = 0u32;
-        for (k, &c) in chunk.iter().enumerate() {
-            let v = val(c).ok_or_else(|| {
-                format!(
-                    "'{}' at offset {} is not a base64 character",
-                    c.escape_ascii(),
-                    (chunk.as_ptr() as usize - b.as_ptr() as usize) + k
-                )
-            })?;
-            acc |= v << (18 - 6 * k);
-        }
-        let bytes = acc.to_be_bytes();
-        out.extend_from_slice(&bytes[1..chunk.len()]);
-    }
-    Ok(out)
+    use base64::Engine as _;
+    use base64::engine::{DecodePaddingMode, GeneralPurpose, GeneralPurposeConfig};
+    const ENGINE: GeneralPurpose = GeneralPurpose::new(
+        &base64::alphabet::STANDARD,
+        GeneralPurposeConfig::new().with_decode_padding_mode(DecodePaddingMode::Indifferent),
+    );
+    ENGINE.decode(s).map_err(|e| e.to_string())
 }
 
 /// Decodes `%XX` escapes in a relative URI.
@@ -288,10 +261,12 @@ fn parse_document(bytes: &[u8]) -> Result<(gltf::Document, Option<&[u8]>), Parse
     if bytes.is_empty() {
         return Err(ParseError::new("empty file"));
     }
+    // A UTF-8 byte-order mark is not allowed by the spec but is tolerated.
+    let unbom = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     let (json_bytes, bin) = if bytes.starts_with(GLB_MAGIC) {
         split_glb(bytes)?
-    } else if bytes.trim_ascii_start().starts_with(b"{") {
-        (bytes, None)
+    } else if unbom.trim_ascii_start().starts_with(b"{") {
+        (unbom, None)
     } else {
         let head = &bytes[..bytes.len().min(4)];
         return Err(parse_err!(
@@ -988,21 +963,8 @@ mod tests {
     use super::*;
 
     fn b64(data: &[u8]) -> String {
-        const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-        let mut s = String::new();
-        for c in data.chunks(3) {
-            let n = (c[0] as u32) << 16
-                | (*c.get(1).unwrap_or(&0) as u32) << 8
-                | *c.get(2).unwrap_or(&0) as u32;
-            for k in 0..4 {
-                if k <= c.len() {
-                    s.push(A[(n >> (18 - 6 * k) & 63) as usize] as char);
-                } else {
-                    s.push('=');
-                }
-            }
-        }
-        s
+        use base64::Engine as _;
+        base64::engine::general_purpose::STANDARD.encode(data)
     }
 
     /// The bytes behind [`BODY`]: a unit quad's positions (0..48), u8
@@ -1298,6 +1260,12 @@ mod tests {
         );
         let e = read(d.as_bytes(), None).unwrap_err().to_string();
         assert!(e.contains("index 7 out of range (4 vertices)"), "{e}");
+    }
+
+    #[test]
+    fn json_with_a_byte_order_mark_is_read() {
+        let with_bom = [b"\xEF\xBB\xBF".as_slice(), doc(BODY).as_bytes()].concat();
+        assert_eq!(read(&with_bom, None).unwrap().faces.len(), 2);
     }
 
     #[test]

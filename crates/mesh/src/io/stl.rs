@@ -130,16 +130,17 @@ impl<'a> Tokens<'a> {
     fn skip_line(&mut self) {
         self.words = "".split_whitespace();
     }
-    fn expect(&mut self, word: &str, context: &str) -> Result<(), ParseError> {
+    /// Consumes `word`, the next keyword of facet `facet`.
+    fn expect(&mut self, word: &str, facet: usize) -> Result<(), ParseError> {
         match self.next() {
             Some(w) if w == word => Ok(()),
             Some(w) => Err(parse_err!(
-                "line {}: expected '{word}' {context}, found '{}'",
+                "line {}: expected '{word}' in facet {facet}, found '{}'",
                 self.line,
                 clip(w)
             )),
             None => Err(parse_err!(
-                "unexpected end of file: expected '{word}' {context}"
+                "unexpected end of file: expected '{word}' in facet {facet}"
             )),
         }
     }
@@ -212,11 +213,10 @@ fn read_ascii(bytes: &[u8]) -> Result<Vec<[Vec3; 3]>, ParseError> {
                 }
             }
             let facet = out.len();
-            let ctx = format!("in facet {facet}");
-            t.expect("normal", &ctx)?;
+            t.expect("normal", facet)?;
             t.vec3("normal component")?;
-            t.expect("outer", &ctx)?;
-            t.expect("loop", &ctx)?;
+            t.expect("outer", facet)?;
+            t.expect("loop", facet)?;
             let mut corners = [Vec3::ZERO; 3];
             let mut n = 0usize;
             loop {
@@ -231,14 +231,14 @@ fn read_ascii(bytes: &[u8]) -> Result<Vec<[Vec3; 3]>, ParseError> {
                     Some("endloop") => break,
                     Some(w) => {
                         return Err(parse_err!(
-                            "line {}: expected 'vertex' or 'endloop' {ctx}, found '{}'",
+                            "line {}: expected 'vertex' or 'endloop' in facet {facet}, found '{}'",
                             t.line,
                             clip(w)
                         ));
                     }
                     None => {
                         return Err(parse_err!(
-                            "unexpected end of file {ctx}: missing 'endloop'"
+                            "unexpected end of file in facet {facet}: missing 'endloop'"
                         ));
                     }
                 }
@@ -249,7 +249,7 @@ fn read_ascii(bytes: &[u8]) -> Result<Vec<[Vec3; 3]>, ParseError> {
                     t.line
                 ));
             }
-            t.expect("endfacet", &ctx)?;
+            t.expect("endfacet", facet)?;
             out.push(corners);
         }
     }
