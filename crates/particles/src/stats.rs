@@ -64,6 +64,10 @@ pub struct LevelStats {
     pub non_manifold_triangles: usize,
     /// Percentages of `C_1–3`, `C_4–5`, `C_6`, `C_>6`.
     pub distribution: [f64; 4],
+    /// Neighbourhoods of each class `C_1..C_17` (index 0 unused).
+    pub configurations: Vec<u64>,
+    /// Ambiguous neighbourhoods resolved by a unique Hamiltonian cycle.
+    pub disambiguated: u64,
     /// Seconds to triangulate this level.
     pub triangulate_seconds: f64,
     /// Bytes of this level's structure chunk payload.
@@ -136,8 +140,10 @@ pub fn stream_stats(bytes: &[u8], opts: &TriangulateOptions) -> Result<StreamSta
             new_particles,
             triangles: t.stats.triangles,
             non_manifold_configurations: t.stats.fallbacks,
-            non_manifold_triangles: t.stats.non_manifold_triangles,
+            non_manifold_triangles: crate::triangulate::non_manifold_triangles(&t.mesh),
             distribution: t.stats.distribution(),
+            configurations: t.stats.configurations.clone(),
+            disambiguated: t.stats.disambiguated,
             triangulate_seconds: t.stats.seconds,
             structure_bytes: d.structure_bytes[r],
             bytes_so_far: d.bytes_per_level[r],
@@ -180,13 +186,14 @@ impl std::fmt::Display for StreamStats {
         )?;
         writeln!(
             f,
-            "{:>3} {:>9} {:>10} {:>8} {:>10} {:>8} {:>7} {:>7} {:>7} {:>7} {:>8} {:>10} {:>8}",
+            "{:>3} {:>9} {:>10} {:>8} {:>10} {:>8} {:>8} {:>7} {:>7} {:>7} {:>7} {:>8} {:>10} {:>8}",
             "r",
             "ON k_r",
             "eliminated",
             "phantoms",
             "triangles",
             "non-man",
+            "nm-tris",
             "C1-3%",
             "C4-5%",
             "C6%",
@@ -198,13 +205,14 @@ impl std::fmt::Display for StreamStats {
         for l in &self.levels {
             writeln!(
                 f,
-                "{:>3} {:>9} {:>10} {:>8} {:>10} {:>8} {:>7.2} {:>7.2} {:>7.2} {:>7.2} {:>8.3} {:>10} {:>8.2}",
+                "{:>3} {:>9} {:>10} {:>8} {:>10} {:>8} {:>8} {:>7.2} {:>7.2} {:>7.2} {:>7.2} {:>8.3} {:>10} {:>8.2}",
                 l.level,
                 l.on_nodes,
                 l.eliminated,
                 l.phantoms,
                 l.triangles,
                 l.non_manifold_configurations,
+                l.non_manifold_triangles,
                 l.distribution[0],
                 l.distribution[1],
                 l.distribution[2],

@@ -79,8 +79,6 @@ pub struct TriangulationStats {
     /// Ambiguous neighbourhoods triangulated whole (the non-manifold local
     /// triangulations of Table 1).
     pub fallbacks: u64,
-    /// Triangles incident to an edge used by more than two triangles.
-    pub non_manifold_triangles: usize,
     pub seconds: f64,
 }
 
@@ -304,7 +302,6 @@ pub fn triangulate(s: &LevelSurface, opts: &TriangulateOptions) -> Triangulation
         orient(&mut mesh);
     }
     stats.triangles = mesh.faces.len();
-    stats.non_manifold_triangles = non_manifold_triangles(&mesh);
     stats.seconds = start.elapsed().as_secs_f64();
     Triangulation { mesh, stats }
 }
@@ -515,16 +512,26 @@ fn decimate_merge(mesh: &mut TriMesh, faces: &mut Vec<[u32; 3]>, merges: &[(u32,
 }
 
 fn dedupe_face_triangles(cells: &[u64], faces: &mut Vec<[u32; 3]>) {
-    let mut seen: std::collections::HashSet<[u32; 3]> = std::collections::HashSet::new();
-    faces.retain(|f| {
+    let mut keyed: Vec<([u32; 3], u32)> = Vec::new();
+    for (i, f) in faces.iter().enumerate() {
         let c = f.map(|v| unmorton(cells[v as usize]));
-        let on_face = (0..3).any(|a| c[0][a] == c[1][a] && c[1][a] == c[2][a]);
-        if !on_face {
-            return true;
+        if (0..3).any(|a| c[0][a] == c[1][a] && c[1][a] == c[2][a]) {
+            let mut k = *f;
+            k.sort_unstable();
+            keyed.push((k, i as u32));
         }
-        let mut k = *f;
-        k.sort_unstable();
-        seen.insert(k)
+    }
+    keyed.sort_unstable();
+    let mut drop = vec![false; faces.len()];
+    for w in keyed.windows(2) {
+        if w[0].0 == w[1].0 {
+            drop[w[1].1 as usize] = true;
+        }
+    }
+    let mut i = 0;
+    faces.retain(|_| {
+        i += 1;
+        !drop[i - 1]
     });
 }
 
@@ -532,17 +539,38 @@ fn edge_key(a: u32, b: u32) -> u64 {
     (u64::from(a.min(b)) << 32) | u64::from(a.max(b))
 }
 
-fn non_manifold_triangles(mesh: &TriMesh) -> usize {
-    let mut uses: MortonMap<u32> = MortonMap::default();
-    for f in &mesh.faces {
+/// Sorted `(edge key, triangle)` pairs of every triangle side.
+fn sorted_sides(faces: &[[u32; 3]]) -> Vec<(u64, u32)> {
+    let mut sides: Vec<(u64, u32)> = Vec::with_capacity(faces.len() * 3);
+    for (i, f) in faces.iter().enumerate() {
         for k in 0..3 {
-            *uses.entry(edge_key(f[k], f[(k + 1) % 3])).or_default() += 1;
+            sides.push((edge_key(f[k], f[(k + 1) % 3]), i as u32));
         }
     }
-    mesh.faces
-        .iter()
-        .filter(|f| (0..3).any(|k| uses[&edge_key(f[k], f[(k + 1) % 3])] > 2))
-        .count()
+    sides.sort_unstable();
+    sides
+}
+
+/// Triangles incident to an edge that more than two triangles use (the
+/// strict count; Table 1 counts non-manifold *local triangulations*, see
+/// [`TriangulationStats::fallbacks`]).
+pub fn non_manifold_triangles(mesh: &TriMesh) -> usize {
+    let sides = sorted_sides(&mesh.faces);
+    let mut bad = vec![false; mesh.faces.len()];
+    let mut i = 0;
+    while i < sides.len() {
+        let mut j = i;
+        while j < sides.len() && sides[j].0 == sides[i].0 {
+            j += 1;
+        }
+        if j - i > 2 {
+            for s in &sides[i..j] {
+                bad[s.1 as usize] = true;
+            }
+        }
+        i = j;
+    }
+    bad.iter().filter(|b| **b).count()
 }
 
 /// See the module docs, "Orientation".
@@ -558,46 +586,49 @@ fn orient(mesh: &mut TriMesh) {
         }
         return;
     }
-    // Edge → triangles using it.
-    let mut by_edge: MortonMap<Vec<u32>> = MortonMap::default();
-    for (i, f) in mesh.faces.iter().enumerate() {
-        for k in 0..3 {
-            by_edge
-                .entry(edge_key(f[k], f[(k + 1) % 3]))
-                .or_default()
-                .push(i as u32);
-        }
-    }
+    // Triangle → its neighbours across manifold edges.
+    let sides = sorted_sides(&mesh.faces);
     let nf = mesh.faces.len();
+    let mut across = vec![[u32::MAX; 3]; nf];
+    let mut i = 0;
+    while i < sides.len() {
+        let mut j = i;
+        while j < sides.len() && sides[j].0 == sides[i].0 {
+            j += 1;
+        }
+        if j - i == 2 {
+            let (t1, t2) = (sides[i].1, sides[i + 1].1);
+            for (t, o) in [(t1, t2), (t2, t1)] {
+                if let Some(slot) = across[t as usize].iter_mut().find(|x| **x == u32::MAX) {
+                    *slot = o;
+                }
+            }
+        }
+        i = j;
+    }
     let mut done = vec![false; nf];
     let mut stack = Vec::new();
+    let mut component = Vec::new();
     for seed in 0..nf {
         if done[seed] {
             continue;
         }
         done[seed] = true;
         stack.push(seed);
-        let mut component = Vec::new();
+        component.clear();
         while let Some(i) = stack.pop() {
             component.push(i);
             let f = mesh.faces[i];
-            for k in 0..3 {
-                let (a, b) = (f[k], f[(k + 1) % 3]);
-                let users = &by_edge[&edge_key(a, b)];
-                if users.len() != 2 {
+            for &j in &across[i] {
+                if j == u32::MAX || done[j as usize] {
                     continue;
                 }
-                let j = if users[0] as usize == i {
-                    users[1]
-                } else {
-                    users[0]
-                } as usize;
-                if done[j] {
-                    continue;
-                }
-                // Consistent neighbours traverse the shared edge b → a.
+                let j = j as usize;
+                // Consistent neighbours traverse their shared edge in
+                // opposite directions.
                 let g = mesh.faces[j];
-                let same_dir = (0..3).any(|m| g[m] == a && g[(m + 1) % 3] == b);
+                let same_dir = (0..3)
+                    .any(|k| (0..3).any(|m| g[m] == f[k] && g[(m + 1) % 3] == f[(k + 1) % 3]));
                 if same_dir {
                     mesh.faces[j].swap(1, 2);
                 }
