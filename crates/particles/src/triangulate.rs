@@ -28,7 +28,9 @@
 //!
 //! **Decimation (§6.3, optional).** A triangle with an edge shorter than a
 //! fraction of the cube size is not built and its two cubes are merged
-//! (attributes averaged).
+//! (positions and colours averaged). Departure: a cube merges at most once
+//! per level, so merges pair cubes instead of chaining across the surface;
+//! a short edge whose cubes are already taken is kept.
 //!
 //! **Orientation** (not in the paper, which renders without culling):
 //! triangles are turned to agree with the particle normals when there are
@@ -140,6 +142,16 @@ pub fn triangulate(s: &LevelSurface, opts: &TriangulateOptions) -> Triangulation
     };
     let mut faces: Vec<[u32; 3]> = Vec::with_capacity(s.cells.len() * 2);
     let mut merges: Vec<(u32, u32)> = Vec::new();
+    // Cubes already merged (§6.3 merges pairs of nodes; chains of merges
+    // would drift by more than a cube).
+    let mut merged = vec![
+        false;
+        if opts.decimate.is_some() {
+            s.cells.len()
+        } else {
+            0
+        }
+    ];
     let cube = s.frame.cube(s.level);
     let min_edge = opts.decimate.map(|f| f * cube);
     if s.level >= 1 {
@@ -234,7 +246,11 @@ pub fn triangulate(s: &LevelSurface, opts: &TriangulateOptions) -> Triangulation
                                     let (a, b) = (f[e], f[(e + 1) % 3]);
                                     if s.positions[a as usize].distance(s.positions[b as usize])
                                         < min
+                                        && !merged[a as usize]
+                                        && !merged[b as usize]
                                     {
+                                        merged[a as usize] = true;
+                                        merged[b as usize] = true;
                                         merges.push((a, b));
                                         return;
                                     }

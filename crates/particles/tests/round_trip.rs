@@ -93,3 +93,61 @@ fn with_outer_thinning_non_manifold_local_triangulations_stay_under_one_percent(
         assert!(t.stats.disambiguated >= c6 * 9 / 10, "level {r}");
     }
 }
+
+#[test]
+fn progressive_levels_report_growing_bytes_and_meshes_for_lodkit_build() {
+    use lodkit_particles::{TriangulateOptions, progressive_levels};
+    let e = encode(
+        &sphere(),
+        &EncodeOptions {
+            depth: Some(6),
+            ..EncodeOptions::DEFAULT
+        },
+    )
+    .unwrap();
+    let levels = progressive_levels(&e.bytes, &TriangulateOptions::DEFAULT).unwrap();
+    assert_eq!(levels.len(), 7);
+    for w in levels.windows(2) {
+        assert!(w[1].bytes_so_far > w[0].bytes_so_far);
+        assert!(w[1].particles > w[0].particles);
+        assert!(w[1].mesh.faces.len() > w[0].mesh.faces.len());
+    }
+    assert_eq!(levels[6].particles, e.report.particles);
+    assert!(levels[6].bytes_so_far <= e.bytes.len());
+}
+
+#[test]
+fn decimation_during_triangulation_merges_close_particles() {
+    // §6.3: triangles with an edge under the threshold are not built and
+    // their two cubes merge; fewer triangles, no vertex moves more than a
+    // half the threshold.
+    use lodkit_particles::{TriangulateOptions, triangulate};
+    let e = encode(
+        &sphere(),
+        &EncodeOptions {
+            depth: Some(6),
+            ..EncodeOptions::DEFAULT
+        },
+    )
+    .unwrap();
+    let d = decode(&e.bytes, &DecodeOptions::default()).unwrap();
+    let s = d.surface(6).unwrap();
+    let full = triangulate(&s, &TriangulateOptions::DEFAULT);
+    let dec = triangulate(
+        &s,
+        &TriangulateOptions {
+            decimate: Some(0.9),
+            ..TriangulateOptions::DEFAULT
+        },
+    );
+    assert!(
+        dec.stats.triangles < full.stats.triangles * 9 / 10,
+        "{} vs {}",
+        dec.stats.triangles,
+        full.stats.triangles
+    );
+    let cube = s.frame.cube(6);
+    for (a, b) in dec.mesh.positions.iter().zip(&s.positions) {
+        assert!(a.distance(*b) <= cube * 0.5, "merged pairs meet half way");
+    }
+}
