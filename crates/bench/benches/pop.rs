@@ -2,7 +2,7 @@
 //! Schmitt): the whole stream is decoded and its finest level triangulated
 //! per iteration; throughput is the triangles produced, so criterion
 //! reports triangles per second. Inputs: an icosphere (level 6, 81,920
-//! triangles) encoded at R = 7, 8 and 9, in both coding modes; labels give
+//! triangles) encoded at R = 7 and 8, in both coding modes; labels give
 //! the triangle count. Run with `cargo bench -p lodkit-bench --bench pop`.
 //! Orientation (not in the paper) is measured separately.
 
@@ -25,7 +25,7 @@ fn bench(c: &mut Criterion) {
     let sphere = Model::Mesh(lodkit_mesh::shapes::icosphere(6));
     let mut g = c.benchmark_group("pop_decode_triangulate");
     g.sample_size(10).measurement_time(Duration::from_secs(4));
-    for depth in [7u8, 8, 9] {
+    for depth in [7u8, 8] {
         for mode in [Mode::Baseline, Mode::Entropy] {
             let opts = EncodeOptions {
                 depth: Some(depth),
