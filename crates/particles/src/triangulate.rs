@@ -340,8 +340,9 @@ fn choose_quad(q: [u8; 4], p: [Vec3; 4], n: Option<[Vec3; 4]>) -> ([u8; 3], [u8;
                 let s2: f32 = t.1.iter().map(|&i| 1.0 - n2.dot(vn[i]).abs()).sum();
                 s1 + s2
             }
-            // Dihedral angle between the two triangles.
-            None => n1.dot(n2).clamp(-1.0, 1.0).acos(),
+            // Dihedral angle between the two triangles (its cosine,
+            // negated: same order, no acos).
+            None => -n1.dot(n2),
         }
     };
     let s_ac = score(([0, 1, 2], [0, 2, 3]));
