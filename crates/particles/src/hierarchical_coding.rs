@@ -196,7 +196,9 @@ pub fn code_level<C: BitCoder>(
             }
             if present[k] {
                 count += 1;
-                fine.insert(cell, false);
+                if inp.entropy {
+                    fine.insert(cell, false);
+                }
             }
         }
         if count == 0 {
@@ -232,7 +234,7 @@ pub fn code_level<C: BitCoder>(
                 };
                 coder.bit(&mut phantom[k], ctx)?;
             }
-            if phantom[k] {
+            if phantom[k] && inp.entropy {
                 fine.insert((pc << 3) | k as u64, true);
             }
         }

@@ -145,6 +145,9 @@ pub fn triangulate(s: &LevelSurface, opts: &TriangulateOptions) -> Triangulation
     };
     let mut faces: Vec<[u32; 3]> = Vec::with_capacity(s.cells.len() * 2);
     let mut merges: Vec<(u32, u32)> = Vec::new();
+    // Triangles built by solid configurations: the only ones two
+    // neighbourhoods can both build (planar faces have one owner).
+    let mut from_solids: Vec<u32> = Vec::new();
     // Cubes already merged (§6.3 merges pairs of nodes; chains of merges
     // would drift by more than a cube).
     let mut merged = vec![
@@ -291,15 +294,19 @@ pub fn triangulate(s: &LevelSurface, opts: &TriangulateOptions) -> Triangulation
                                             } else {
                                                 b
                                             };
+                                        let first = faces.len();
                                         for tri in pick {
                                             emit(tri, &mut faces);
                                         }
+                                        from_solids.extend(first as u32..faces.len() as u32);
                                     }
                                     None => {
                                         stats.fallbacks += 1;
+                                        let first = faces.len();
                                         for &tri in tris {
                                             emit(tri, &mut faces);
                                         }
+                                        from_solids.extend(first as u32..faces.len() as u32);
                                     }
                                 }
                             }
@@ -310,8 +317,9 @@ pub fn triangulate(s: &LevelSurface, opts: &TriangulateOptions) -> Triangulation
         }
     }
     // A triangle whose three cubes share a coordinate lies on the face
-    // between two neighbourhoods and both may have built it: keep one.
-    dedupe_face_triangles(&s.cells, &mut faces);
+    // between two neighbourhoods; two solid ones may both have built it:
+    // keep one.
+    dedupe_face_triangles(&s.cells, &mut faces, &from_solids);
     let mut mesh = s.vertices_only();
     if !merges.is_empty() {
         decimate_merge(&mut mesh, &mut faces, &merges);
@@ -551,14 +559,15 @@ fn decimate_merge(mesh: &mut TriMesh, faces: &mut Vec<[u32; 3]>, merges: &[(u32,
     faces.retain(|f| f[0] != f[1] && f[1] != f[2] && f[0] != f[2]);
 }
 
-fn dedupe_face_triangles(cells: &[u64], faces: &mut Vec<[u32; 3]>) {
+fn dedupe_face_triangles(cells: &[u64], faces: &mut Vec<[u32; 3]>, candidates: &[u32]) {
     let mut keyed: Vec<([u32; 3], u32)> = Vec::new();
-    for (i, f) in faces.iter().enumerate() {
+    for &i in candidates {
+        let f = &faces[i as usize];
         let c = f.map(|v| unmorton(cells[v as usize]));
         if (0..3).any(|a| c[0][a] == c[1][a] && c[1][a] == c[2][a]) {
             let mut k = *f;
             k.sort_unstable();
-            keyed.push((k, i as u32));
+            keyed.push((k, i));
         }
     }
     keyed.sort_unstable();
