@@ -170,11 +170,15 @@ pub fn triangulate(s: &LevelSurface, opts: &TriangulateOptions) -> Triangulation
                 _ => parents.push((p, 1 << (c & 7), i as u32)),
             }
         }
-        let mut index: MortonMap<u32> = MortonMap::default();
-        index.reserve(parents.len());
+        // Parents grouped by their own parent (a 2×2×2 block of parents):
+        // the 3×3×3 window spans at most 2×2×2 such blocks, so 8 look-ups
+        // fetch its 27 parents instead of 27.
+        let mut index: MortonMap<[u32; 8]> = MortonMap::default();
+        index.reserve(parents.len() / 2);
         for (i, p) in parents.iter().enumerate() {
-            index.insert(p.0, i as u32);
+            index.entry(p.0 >> 3).or_insert([NONE; 8])[(p.0 & 7) as usize] = i as u32;
         }
+        let mut blocks: [Option<[u32; 8]>; 8] = [None; 8];
         let side = 1i64 << (s.level - 1);
         let t = table();
         let mut w = Window {
@@ -185,6 +189,22 @@ pub fn triangulate(s: &LevelSurface, opts: &TriangulateOptions) -> Triangulation
             let pc = unmorton(pm);
             w.cell = [NONE; 216];
             w.parent = [false; 27];
+            // Block coordinates of the window's lowest parent (may be -1).
+            let base = pc.map(|v| (v as i64 - 1).div_euclid(2));
+            for (b, slot) in blocks.iter_mut().enumerate() {
+                let g = [
+                    base[0] + (b & 1) as i64,
+                    base[1] + ((b >> 1) & 1) as i64,
+                    base[2] + (b >> 2) as i64,
+                ];
+                *slot = if g.iter().all(|&v| v >= 0 && v < (side + 1) / 2) {
+                    index
+                        .get(&morton([g[0] as u32, g[1] as u32, g[2] as u32]))
+                        .copied()
+                } else {
+                    None
+                };
+            }
             for dz in 0..3usize {
                 for dy in 0..3usize {
                     for dx in 0..3usize {
@@ -196,10 +216,17 @@ pub fn triangulate(s: &LevelSurface, opts: &TriangulateOptions) -> Triangulation
                         if q.iter().any(|&v| v < 0 || v >= side) {
                             continue;
                         }
-                        let Some(&pi) = index.get(&morton([q[0] as u32, q[1] as u32, q[2] as u32]))
-                        else {
+                        let b = (q[0].div_euclid(2) - base[0])
+                            | ((q[1].div_euclid(2) - base[1]) << 1)
+                            | ((q[2].div_euclid(2) - base[2]) << 2);
+                        let Some(block) = blocks[b as usize] else {
                             continue;
                         };
+                        let pi =
+                            block[((q[0] & 1) | ((q[1] & 1) << 1) | ((q[2] & 1) << 2)) as usize];
+                        if pi == NONE {
+                            continue;
+                        }
                         let (_, mask, first) = parents[pi as usize];
                         w.parent[dx + 3 * dy + 9 * dz] = true;
                         let mut next = first;
@@ -223,16 +250,14 @@ pub fn triangulate(s: &LevelSurface, opts: &TriangulateOptions) -> Triangulation
                     for ox in 1..4usize {
                         let o = [ox, oy, oz];
                         // Owner: parent of the first cube whose parent has ON children.
-                        let owner = (0..8u8).find_map(|j| {
-                            let c = corner(j);
-                            let pp = [
-                                (ox + c[0] as usize) / 2,
-                                (oy + c[1] as usize) / 2,
-                                (oz + c[2] as usize) / 2,
-                            ];
-                            w.parent[pp[0] + 3 * pp[1] + 9 * pp[2]].then_some(pp)
+                        let owner = (0..8usize).find_map(|j| {
+                            let k = ((ox + (j & 1)) / 2)
+                                + 3 * ((oy + ((j >> 1) & 1)) / 2)
+                                + 9 * ((oz + (j >> 2)) / 2);
+                            w.parent[k].then_some(k)
                         });
-                        if owner != Some([1, 1, 1]) {
+                        // 13 is the window's centre parent.
+                        if owner != Some(13) {
                             continue;
                         }
                         let mask = w.mask(o);
