@@ -9,7 +9,7 @@
 //! `constriction`'s range coder; the adaptive binary model is ours: counts
 //! `(n0, n1)` with a Krichevsky–Trofimov estimate, halved at
 //! [`COUNT_LIMIT`], probabilities clamped so no symbol costs more than
-//! [`PRECISION`] bits and none less than about 0.0007 bits.
+//! 9 bits and none less than about 0.0028 bits.
 //!
 //! Each chunk restarts from fresh models so chunks decode independently.
 use std::num::NonZeroU32;
@@ -24,16 +24,18 @@ use crate::hierarchical_coding::{BitCoder, NUM_CONTEXTS};
 /// Fixed-point precision of the binary model.
 pub const PRECISION: usize = 16;
 const ONE: u32 = 1 << PRECISION;
-/// Smallest probability of either symbol (32 / 65536).
-const MIN_P: u32 = 32;
+/// Smallest probability of either symbol (128 / 65536): with counts
+/// halved at 256 the estimate never goes below ≈ 1/514 anyway, and the
+/// floor bounds how many symbols a hostile payload can expand to.
+const MIN_P: u32 = 128;
 /// Counts are halved when their sum passes this: old statistics fade,
 /// and fast adaptation pays on the path bits (measured: 256 beats
 /// 1024 and 4096 on a sphere by 0.05 bits per particle).
 pub const COUNT_LIMIT: u32 = 256;
 /// Most symbols one payload bit can carry: each costs at least
-/// `-log2(1 - MIN_P / 2^16)` ≈ 0.0007 bits, so 1500 per bit is a hard
+/// `-log2(1 - MIN_P / 2^16)` ≈ 0.00282 bits, so 360 per bit is a hard
 /// bound a decoder can enforce on hostile input.
-pub const MAX_SYMBOLS_PER_BIT: u64 = 1500;
+pub const MAX_SYMBOLS_PER_BIT: u64 = 360;
 
 #[derive(Clone, Copy)]
 struct Counts {
