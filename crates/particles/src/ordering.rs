@@ -13,7 +13,11 @@
 //!
 //! Phantom nodes carry no particle (§5.2) and never pass their leaf on, so
 //! the path rule only walks through kept nodes; relabelling in
-//! [`crate::thinning`] guarantees every kept node has a kept child.
+//! [`crate::thinning`] guarantees every kept node but the root has a kept
+//! child. Departure: the root is never relabelled (§4.3 stops at level 1),
+//! so when outer thinning eliminates all of level 1 the first phantom
+//! below the root is kept again (and so on down), keeping the stream's
+//! root particle well defined.
 use crate::error::{Error, Result};
 use crate::octree::{Label, Octree};
 
@@ -98,6 +102,24 @@ impl Hierarchy {
         }
         if levels[depth].cells.is_empty() {
             return Err(Error::Input("thinning left no ON leaf".into()));
+        }
+        // Thinning never relabels the root, so when it eliminates every cube
+        // of level 1 the root is a kept node without a kept child. Promote
+        // the first present child back to kept, down the levels until a
+        // kept child exists (phantoms always have kept leaves below).
+        for r in 0..depth {
+            let (upper, lower) = levels.split_at_mut(r + 1);
+            let (parents, kids) = (&upper[r], &mut lower[0]);
+            let mut j = 0usize;
+            for p in 0..parents.cells.len() {
+                let start = j;
+                while j < kids.cells.len() && kids.cells[j] >> 3 == parents.cells[p] {
+                    j += 1;
+                }
+                if !parents.phantom[p] && (start..j).all(|i| kids.phantom[i]) && start < j {
+                    kids.phantom[start] = false;
+                }
+            }
         }
         // Representative leaf of every kept node, bottom-up (path rule).
         let mut rep: Vec<Vec<u32>> = vec![Vec::new(); depth + 1];

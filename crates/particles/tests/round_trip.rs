@@ -158,3 +158,88 @@ fn decimation_during_triangulation_merges_close_particles() {
         assert!(a.distance(*b) <= cube * 0.5, "merged pairs meet half way");
     }
 }
+
+#[test]
+fn baseline_structure_bits_are_exactly_eq5_of_the_paper() {
+    // B_r = 7 k_{r-1} + 8 m_{r-1} + n_r + m_r + 3 (R - r) n_r (no flags at
+    // r = R), B_0 = 3 R n_0, with k the kept nodes, m the phantoms and n
+    // the new particles, at N = R. (Outer thinning from level 3 also
+    // empties level 1 here: the case where the root must keep a child.)
+    let torus = Model::Mesh(lodkit_mesh::shapes::torus(1.0, 0.3, 64, 32));
+    for outer in [false, true] {
+        let thinning = lodkit_particles::ThinningOptions {
+            outer,
+            relax_below: 3,
+        };
+        let opts = EncodeOptions {
+            depth: Some(6),
+            mode: Mode::Baseline,
+            thinning,
+            ..EncodeOptions::DEFAULT
+        };
+        let rep = encode(&torus, &opts).unwrap().report;
+        let depth = u64::from(rep.depth);
+        assert!(
+            rep.levels.iter().any(|l| l.phantoms > 0),
+            "the case must exercise phantoms"
+        );
+        for (r, l) in rep.levels.iter().enumerate() {
+            let r64 = r as u64;
+            let n = l.new_particles as u64;
+            let want = if r == 0 {
+                3 * depth * n
+            } else {
+                let p = &rep.levels[r - 1];
+                let flags = if r64 < depth {
+                    n + l.phantoms as u64
+                } else {
+                    0
+                };
+                7 * p.kept as u64 + 8 * p.phantoms as u64 + flags + 3 * (depth - r64) * n
+            };
+            assert_eq!(l.structure_bits, want, "outer={outer} level {r}");
+        }
+    }
+}
+
+#[test]
+fn point_clouds_with_normals_encode_and_decode() {
+    // An open hemisphere of points with outward normals: IN/OUT from the
+    // normals (§8.1.2's second option).
+    let mut positions = Vec::new();
+    let mut normals = Vec::new();
+    for i in 0..200 {
+        for j in 0..100 {
+            let (th, ph) = (
+                i as f32 / 200.0 * std::f32::consts::TAU,
+                j as f32 / 100.0 * std::f32::consts::FRAC_PI_2,
+            );
+            let n = glam::Vec3::new(th.cos() * ph.cos(), th.sin() * ph.cos(), ph.sin());
+            positions.push(n);
+            normals.push(n);
+        }
+    }
+    let pc = lodkit_mesh::PointCloud {
+        positions,
+        normals: Some(normals),
+        colors: None,
+    };
+    let e = encode(
+        &Model::Points(pc),
+        &EncodeOptions {
+            depth: Some(5),
+            ..EncodeOptions::DEFAULT
+        },
+    )
+    .unwrap();
+    let d = decode(&e.bytes, &DecodeOptions::default()).unwrap();
+    assert_eq!(d.levels.len(), 6);
+    let s = d.surface(5).unwrap();
+    assert_eq!(s.cells.len(), e.report.particles);
+    let t = lodkit_particles::triangulate(&s, &lodkit_particles::TriangulateOptions::DEFAULT);
+    assert!(
+        t.stats.triangles > s.cells.len(),
+        "{} triangles",
+        t.stats.triangles
+    );
+}
