@@ -19,9 +19,9 @@
 //!
 //! | input | R | particles | baseline structure bits/particle (paper: 5.1) | entropy structure | all bits/particle at N = 12, entropy |
 //! |---|---|---|---|---|---|
-//! | Stanford bunny (35,947 vertices) | 7 | 33,712 | 4.72 | 2.09 | 15.93 |
-//! | Armadillo (CGAL 26k) | 7 | 23,353 | 4.82 | 2.41 | 16.68 |
-//! | Stanford bunny, R = 9 | 9 | 530,720 | 4.78 | 1.72 | — |
+//! | Stanford bunny (35,947 vertices) | 7 | 33,712 | 4.72 | 2.08 | 15.73 |
+//! | Armadillo (CGAL 26k) | 7 | 23,353 | 4.82 | 2.41 | 16.58 |
+//! | Stanford bunny, dense, R = N = 10 | 10 | 2,118,241 | 4.78 | 1.49 | 1.49 |
 //!
 //! Triangles ≈ 2.0–2.1 × particles per level; decode + triangulate of the
 //! finest level ≈ 4.5 M triangles/s (baseline) and 2.2 M/s (entropy) on
