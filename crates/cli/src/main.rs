@@ -96,7 +96,9 @@ fn main() -> ExitCode {
             weld,
         } => commands::convert::run(&ui, &input, &output, ascii, weld),
         Command::Compare(args) => commands::compare::run(&ui, &args),
-        Command::Build { input, out, json } => commands::build::run(&ui, input.as_deref(), &out, json),
+        Command::Build { input, out, json } => {
+            commands::build::run(&ui, input.as_deref(), &out, json)
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,335 @@
+//! The full edge collapse (HQMS §3.3 and §4.3.3, procedure `EdgeCollapse`)
+//! with the dependency check of §4.3.1 (Strategy I) and two-stage
+//! placement.
+//!
+//! `collapse(s → t)`: `I = r_s ∩ r_t` is deleted, `s` is replaced by `t` in
+//! `S = r_s − I`, both rings become dirty, and `t` moves to the optimum of
+//! the memoryless `Q_s + Q_t` (eq. 5) — solved only now that the collapse
+//! is chosen — unless eq. (9) says the optimum lies outside the ball on
+//! `v_s v_t` (numerical garbage), in which case the paper falls back to
+//! `v_t`.
+//!
+//! Departures, and why (the paper has no validity tests at all):
+//! - Fall-back placement: when the system is singular (flat or ridge
+//!   neighbourhoods) or eq. (9) rejects the optimum, we minimise the quadric
+//!   on the segment `v_s v_t` (a 1-D problem that always has a solution and
+//!   contains `v_t`) instead of taking `v_t` outright; `v_t` stays the last
+//!   resort.
+//! - A placement is rejected if it flips the normal of any surviving face
+//!   of `r_s ∪ r_t` or makes one degenerate; if every placement is rejected
+//!   the collapse is refused (no fold-overs).
+//! - Link condition: a collapse that would give an edge more than two faces
+//!   (where it had at most two), merge two faces into duplicates, pinch two
+//!   border vertices across an interior edge, or erase a whole component is
+//!   refused. Two border edges may merge into one interior edge only with
+//!   hole filling on (that is how holes close).
+//! - Wedges (seams): each attribute wedge of `s` next to the edge is merged
+//!   into the wedge of `t` across the same face of `I`. The collapse is
+//!   refused when that mapping is ambiguous (a seam crossing the edge at
+//!   `t`) or when `s` has a wedge away from the edge (a seam through `s`
+//!   that does not follow the edge): seams then only shorten along
+//!   themselves and both sides always stay welded.
+//! - The object-space error of the new vertex is the larger of the two
+//!   endpoints' accumulated errors plus the largest distance from the new
+//!   position to the planes of the old faces of both rings; `max_error`
+//!   refuses collapses above the bound.
+
+use glam::DVec3;
+
+use crate::cost::{Scratch, add_ring_quadric, dpos};
+use crate::options::Options;
+use crate::quadric::{Quadric, triangle_plane};
+use crate::ring_table::{DEAD, Flag, RingTable, gather_links, multiplicity};
+use crate::work_mesh::WorkMesh;
+
+/// Why a record was not collapsed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Reject {
+    /// A ring is dirty or gone (Strategy I), or the edge no longer exists.
+    Dependency,
+    /// Link condition, border rules or duplicate faces.
+    Topology,
+    /// Every placement flips or degenerates a face.
+    Flip,
+    /// Seam rules.
+    Seam,
+    /// Over `max_error`.
+    MaxError,
+}
+
+/// Performs the collapse of `s` onto `t` if it is valid. Returns the number
+/// of faces removed.
+pub fn collapse(
+    m: &mut WorkMesh,
+    rings: &RingTable,
+    opts: &Options,
+    s: u32,
+    t: u32,
+    sc: &mut Scratch,
+) -> Result<usize, Reject> {
+    // Dependency check (Strategy I): dirty rings are not contracted.
+    if m.flags[s as usize] != Flag::Valid
+        || matches!(m.flags[t as usize], Flag::Dirty | Flag::Removed)
+    {
+        return Err(Reject::Dependency);
+    }
+    let (rs, rt) = (rings.ring(s), rings.ring(t));
+    gather_links(s, rs, &m.faces, &mut sc.links_s);
+    gather_links(t, rt, &m.faces, &mut sc.links_t);
+    let m_st = multiplicity(&sc.links_s, t);
+    if m_st == 0 {
+        return Err(Reject::Dependency);
+    }
+
+    // Border rules.
+    let s_border = sc.links_s.iter().any(|l| l.m == 1);
+    let t_border = sc.links_t.iter().any(|l| l.m == 1);
+    if s_border && (opts.lock_border || m_st != 1) {
+        return Err(Reject::Topology);
+    }
+
+    // I = r_s ∩ r_t.
+    sc.shared.clear();
+    for &f in rs {
+        let tri = m.faces[f as usize];
+        if tri[0] != DEAD && tri.contains(&t) {
+            sc.shared.push(f);
+        }
+    }
+
+    // Link condition on every other neighbour of s.
+    for l in &sc.links_s {
+        if l.v == t {
+            continue;
+        }
+        let mt = multiplicity(&sc.links_t, l.v);
+        if mt == 0 {
+            continue;
+        }
+        let c = sc
+            .shared
+            .iter()
+            .filter(|&&f| m.faces[f as usize].contains(&l.v))
+            .count() as u32;
+        let new_m = l.m + mt - 2 * c;
+        if c == 0 {
+            // Two separate edges (s, w) and (t, w) would become one.
+            let closes_hole = l.m == 1 && mt == 1;
+            if !(closes_hole && opts.fill_holes) {
+                return Err(Reject::Topology);
+            }
+        }
+        if new_m > 2 && new_m > l.m.max(mt) {
+            return Err(Reject::Topology);
+        }
+    }
+
+    // Something must survive, and no two survivors may coincide.
+    let mut survivors = 0usize;
+    for &f in rs.iter().chain(rt) {
+        let tri = m.faces[f as usize];
+        if tri[0] != DEAD && !(tri.contains(&s) && tri.contains(&t)) {
+            survivors += 1;
+        }
+    }
+    if survivors == 0 {
+        return Err(Reject::Topology);
+    }
+    for &f in rs {
+        let a = m.faces[f as usize];
+        if a[0] == DEAD || a.contains(&t) {
+            continue;
+        }
+        let a = a.map(|v| if v == s { t } else { v });
+        for &g in rt {
+            let b = m.faces[g as usize];
+            if b[0] == DEAD || b.contains(&s) {
+                continue;
+            }
+            if a.iter().all(|v| b.contains(v)) {
+                return Err(Reject::Topology);
+            }
+        }
+    }
+
+    // Wedge mapping (seams).
+    if m.has_wedges() && !wedge_map(m, rs, s, t, sc) {
+        return Err(Reject::Seam);
+    }
+
+    // Second stage of the two-stage optimisation: placement.
+    let (ps, pt) = (dpos(m, s), dpos(m, t));
+    let mut q = Quadric::ZERO;
+    add_ring_quadric(m, rs, s, &sc.links_s, pt, &mut q);
+    add_ring_quadric(m, rt, t, &sc.links_t, pt, &mut q);
+    let (ls, lt) = (ps - pt, DVec3::ZERO); // local frame: t at the origin
+    let mut candidates = [DVec3::ZERO; 2];
+    let mut n_cand = 0;
+    // Border placement: a border edge's vertex stays on the old border
+    // polyline (the segment); an interior vertex collapsing onto a border
+    // vertex leaves it where it is. Otherwise the free optimum.
+    let t_fixed = t_border && (opts.lock_border || !s_border);
+    if s_border && !t_fixed {
+        candidates[n_cand] = q.segment_minimum(ls, lt).0;
+        n_cand += 1;
+    } else if !t_fixed {
+        let opt = q.optimum().filter(|&o| {
+            // Eq. (9): keep the optimum only inside the ball on v_s v_t.
+            (ls - o).length_squared() + (o - lt).length_squared() < (ls - lt).length_squared()
+        });
+        candidates[n_cand] = match opt {
+            Some(o) => o,
+            None => q.segment_minimum(ls, lt).0,
+        };
+        n_cand += 1;
+    }
+    if n_cand == 0 || candidates[0] != lt {
+        candidates[n_cand] = lt;
+        n_cand += 1;
+    }
+    let chosen = candidates[..n_cand]
+        .iter()
+        .copied()
+        .find(|&v| !flips(m, rs, rt, s, t, v + pt));
+    let Some(local) = chosen else {
+        return Err(Reject::Flip);
+    };
+    let vn = local + pt;
+
+    // Error estimate: distance from the new vertex to the old local surface.
+    let mut d = 0.0f64;
+    for &f in rs.iter().chain(rt) {
+        let tri = m.faces[f as usize];
+        if tri[0] == DEAD {
+            continue;
+        }
+        let p = tri.map(|v| dpos(m, v));
+        if let Some((n, off, _)) = triangle_plane(p[0], p[1], p[2]) {
+            d = d.max((n.dot(vn) + off).abs());
+        }
+    }
+    let new_err = m.err[s as usize].max(m.err[t as usize]) + d as f32;
+    if opts.max_error.is_some_and(|e| new_err > e) {
+        return Err(Reject::MaxError);
+    }
+
+    // Attributes: interpolate along the edge at the projection of v_n.
+    let st = pt - ps;
+    let lambda = if st.length_squared() > 0.0 {
+        ((vn - ps).dot(st) / st.length_squared()).clamp(0.0, 1.0)
+    } else {
+        1.0
+    } as f32;
+    let k = m.layout.k;
+    if k > 0 {
+        let lerp = |attr: &mut Vec<f32>, a: u32, b: u32| {
+            for i in 0..k {
+                let (x, y) = (attr[a as usize * k + i], attr[b as usize * k + i]);
+                attr[b as usize * k + i] = x + (y - x) * lambda;
+            }
+        };
+        if m.has_wedges() {
+            for &(a, b) in &sc.wedge_map {
+                lerp(&mut m.attr, a, b);
+            }
+        } else {
+            lerp(&mut m.attr, s, t);
+        }
+    }
+
+    // Apply: delete I, re-point S at t, move t, flag both rings.
+    let mut removed = 0;
+    for &f in rs {
+        let fi = f as usize;
+        let tri = m.faces[fi];
+        if tri[0] == DEAD {
+            continue;
+        }
+        if tri.contains(&t) {
+            m.faces[fi] = [DEAD; 3];
+            removed += 1;
+            continue;
+        }
+        let c = tri.iter().position(|&v| v == s).unwrap_or(0);
+        m.faces[fi][c] = t;
+        if m.has_wedges() {
+            let a = m.wedges[fi][c];
+            if let Some(&(_, b)) = sc.wedge_map.iter().find(|(x, _)| *x == a) {
+                m.wedges[fi][c] = b;
+            }
+        }
+    }
+    m.live_faces -= removed;
+    m.pos[t as usize] = vn.as_vec3();
+    m.err[t as usize] = new_err;
+    m.flags[s as usize] = Flag::Removed;
+    m.flags[t as usize] = Flag::Dirty;
+    Ok(removed)
+}
+
+/// Whether moving `s` and `t` to `vn` flips or degenerates a surviving
+/// face of `r_s ∪ r_t`.
+fn flips(m: &WorkMesh, rs: &[u32], rt: &[u32], s: u32, t: u32, vn: DVec3) -> bool {
+    for &f in rs.iter().chain(rt) {
+        let tri = m.faces[f as usize];
+        if tri[0] == DEAD || (tri.contains(&s) && tri.contains(&t)) {
+            continue;
+        }
+        let old = tri.map(|v| dpos(m, v));
+        let new = std::array::from_fn::<DVec3, 3, _>(|c| {
+            if tri[c] == s || tri[c] == t {
+                vn
+            } else {
+                old[c]
+            }
+        });
+        let n0 = (old[1] - old[0]).cross(old[2] - old[0]);
+        let n1 = (new[1] - new[0]).cross(new[2] - new[0]);
+        let l0 = n0.length_squared();
+        if !(l0 > 0.0) {
+            // Already degenerate: only refuse if it stays exactly so.
+            continue;
+        }
+        if n0.dot(n1) <= 0.0 || n1.length_squared() <= 1e-12 * l0 {
+            return true;
+        }
+    }
+    false
+}
+
+/// Builds `sc.wedge_map` (wedge of `s` → wedge of `t`) from the faces of
+/// `I`; false when the seam rules refuse the collapse.
+fn wedge_map(m: &WorkMesh, rs: &[u32], s: u32, t: u32, sc: &mut Scratch) -> bool {
+    sc.wedge_map.clear();
+    for &f in &sc.shared {
+        let fi = f as usize;
+        let tri = m.faces[fi];
+        let cs = tri.iter().position(|&v| v == s).unwrap_or(0);
+        let ct = tri.iter().position(|&v| v == t).unwrap_or(0);
+        let (a, b) = (m.wedges[fi][cs], m.wedges[fi][ct]);
+        match sc.wedge_map.iter().find(|(x, _)| *x == a) {
+            Some(&(_, y)) if y != b => return false, // seam crosses at t
+            Some(_) => {}
+            None => {
+                if sc.wedge_map.iter().any(|&(_, y)| y == b) {
+                    return false; // two wedges of s would merge
+                }
+                sc.wedge_map.push((a, b));
+            }
+        }
+    }
+    // Every wedge of s must be next to the edge.
+    for &f in rs {
+        let fi = f as usize;
+        let tri = m.faces[fi];
+        if tri[0] == DEAD {
+            continue;
+        }
+        let c = tri.iter().position(|&v| v == s).unwrap_or(0);
+        let a = m.wedges[fi][c];
+        if !sc.wedge_map.iter().any(|(x, _)| *x == a) {
+            return false;
+        }
+    }
+    true
+}
