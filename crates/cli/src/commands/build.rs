@@ -84,6 +84,13 @@ pub fn run(ui: &Ui, input: Option<&Path>, out: &Path, json: bool) -> Result<()> 
     write_atomic(&out.join("report.md"), report.as_bytes())?;
     outputs.push(("report.md".into(), report.len()));
 
+    if json {
+        let list: Vec<_> = outputs
+            .iter()
+            .map(|(file, bytes)| serde_json::json!({ "path": out.join(file), "bytes": bytes }))
+            .collect();
+        return super::print_json(&serde_json::json!({ "model": name, "outputs": list }));
+    }
     for (file, bytes) in &outputs {
         ui.status(format!(
             "wrote {} ({bytes} bytes)",
