@@ -1,0 +1,228 @@
+#!/usr/bin/env python3
+"""Writes lodkit's malformed-input corpus into tests/malformed/.
+
+Every file is a small, deliberately broken PLY, OBJ, STL, glTF/GLB, XYZ or
+PTS file whose name says what is wrong with it. `lodkit_mesh::io::load` must
+return an error for each one, without panicking and without allocating from
+an unchecked count; crates/mesh/tests/malformed.rs checks exactly that.
+
+Standard library only; the output is byte-for-byte deterministic, so running
+it again on an unchanged script changes nothing in git.
+
+Usage: python3 scripts/make_malformed_corpus.py [OUTPUT_DIR]
+"""
+
+import base64
+import json
+import os
+import struct
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+OUT = sys.argv[1] if len(sys.argv) > 1 else os.path.join(ROOT, "tests", "malformed")
+
+FILES = {}
+
+
+def add(name, data):
+    if isinstance(data, str):
+        data = data.encode()
+    assert name not in FILES, name
+    FILES[name] = data
+
+
+# ------------------------------------------------------------------ PLY
+
+def ply_header(fmt, vertices, faces, vprops=("float x", "float y", "float z"),
+               face_prop="property list uchar int vertex_indices"):
+    lines = ["ply", f"format {fmt} 1.0", f"element vertex {vertices}"]
+    lines += [f"property {p}" for p in vprops]
+    if faces is not None:
+        lines += [f"element face {faces}", face_prop]
+    lines.append("end_header")
+    return "\n".join(lines) + "\n"
+
+
+TRI_ASCII_BODY = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"
+
+
+def ply_bin_tri(faces=((0, 1, 2),), verts=((0, 0, 0), (1, 0, 0), (0, 1, 0))):
+    b = b"".join(struct.pack("<3f", *v) for v in verts)
+    for f in faces:
+        b += struct.pack("<B", len(f)) + struct.pack(f"<{len(f)}i", *f)
+    return b
+
+
+add("ply_wrong_magic.ply", "plx\n" + ply_header("ascii", 3, 1)[4:] + TRI_ASCII_BODY)
+add("ply_missing_end_header.ply",
+    ply_header("ascii", 3, 1).replace("end_header\n", "") + TRI_ASCII_BODY)
+add("ply_bad_format_line.ply", ply_header("ebcdic", 3, 1) + TRI_ASCII_BODY)
+add("ply_vertex_count_huge.ply",
+    ply_header("binary_little_endian", 4000000000, 1).encode() + ply_bin_tri())
+add("ply_face_count_huge.ply",
+    ply_header("binary_little_endian", 3, 4000000000).encode() + ply_bin_tri())
+add("ply_truncated_body.ply",
+    ply_header("binary_little_endian", 3, 1).encode() + ply_bin_tri()[:30])
+add("ply_header_only.ply", ply_header("binary_little_endian", 3, 1))
+add("ply_index_out_of_range.ply", ply_header("ascii", 3, 1) + "0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n")
+add("ply_index_out_of_range_binary.ply",
+    ply_header("binary_little_endian", 3, 1).encode() + ply_bin_tri(faces=((0, 1, 3),)))
+add("ply_negative_index.ply", ply_header("ascii", 3, 1) + "0 0 0\n1 0 0\n0 1 0\n3 0 -1 2\n")
+add("ply_nan_coordinate.ply", ply_header("ascii", 3, 1) + "0 0 0\nnan 0 0\n0 1 0\n3 0 1 2\n")
+add("ply_inf_coordinate.ply",
+    ply_header("binary_little_endian", 3, 1).encode()
+    + ply_bin_tri(verts=((0, 0, 0), (float("inf"), 0, 0), (0, 1, 0))))
+add("ply_list_count_overrun.ply",
+    ply_header("binary_little_endian", 3, 1).encode()
+    + ply_bin_tri()[:36] + struct.pack("<B3i", 255, 0, 1, 2))
+add("ply_unknown_property_type.ply",
+    ply_header("ascii", 3, 1, vprops=("float x", "float y", "quaternion z")) + TRI_ASCII_BODY)
+add("ply_negative_count.ply", ply_header("ascii", -3, 1) + TRI_ASCII_BODY)
+add("ply_repeated_face_index.ply", ply_header("ascii", 3, 1) + "0 0 0\n1 0 0\n0 1 0\n3 0 1 1\n")
+add("ply_face_float_indices.ply",
+    ply_header("ascii", 3, 1, face_prop="property list uchar float vertex_indices")
+    + "0 0 0\n1 0 0\n0 1 0\n3 0.5 1.5 2\n")
+add("ply_ascii_not_a_number.ply", ply_header("ascii", 3, 1) + "0 0 0\n1 zero 0\n0 1 0\n3 0 1 2\n")
+add("ply_empty.ply", b"")
+
+# ------------------------------------------------------------------ OBJ
+
+TRI_V = "v 0 0 0\nv 1 0 0\nv 0 1 0\n"
+add("obj_empty.obj", b"")
+add("obj_no_faces.obj", TRI_V)
+add("obj_index_out_of_range.obj", TRI_V + "f 1 2 4\n")
+add("obj_index_zero.obj", TRI_V + "f 0 1 2\n")
+add("obj_negative_index_before_start.obj", TRI_V + "f -1 -2 -4\n")
+# tobj 4.0 computes vt * 2 + 1 unchecked: this index overflows it.
+add("obj_texcoord_index_overflow.obj", TRI_V + "vt 0 0\nf 1/1 2/-9223372036854775807 3/1\n")
+add("obj_nan_coordinate.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n")
+add("obj_inf_coordinate.obj", "v 0 0 0\nv 1 inf 0\nv 0 1 0\nf 1 2 3\n")
+add("obj_garbage_tokens.obj", TRI_V + "v 1 @ 1\nf 1 2 3\n")
+add("obj_face_one_vertex.obj", TRI_V + "f 1\n")
+add("obj_face_two_vertices.obj", TRI_V + "f 1 2\n")
+add("obj_face_repeated_index.obj", TRI_V + "f 1 2 2\n")
+add("obj_mixed_vertex_colors.obj", TRI_V + "v 1 1 1 0.5 0.5 0.5\nf 1 2 4\n")
+add("obj_invalid_utf8.obj", TRI_V.encode() + b"f 1 2 3\n\xff\xfe\n")
+
+# ------------------------------------------------------------------ STL
+
+def stl_bin(count, facets):
+    header = b"malformed corpus".ljust(80, b"\0")
+    body = b"".join(struct.pack("<12fH", *f, 0) for f in facets)
+    return header + struct.pack("<I", count) + body
+
+
+FACET = (0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0)
+ASCII_TRI = ("solid t\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n"
+             "   vertex 1 0 0\n   vertex 0 1 0\n  endloop\n endfacet\n")
+add("stl_empty.stl", b"")
+add("stl_header_only_80_bytes.stl", b"binary header".ljust(80, b"\0"))
+add("stl_binary_count_mismatch.stl", stl_bin(3, [FACET, FACET]))
+add("stl_binary_count_huge.stl", stl_bin(4000000000, [FACET]))
+add("stl_binary_truncated.stl", stl_bin(2, [FACET, FACET])[:-20])
+add("stl_binary_nan.stl", stl_bin(1, [(0, 0, 1, float("nan"), 0, 0, 1, 0, 0, 0, 1, 0)]))
+add("stl_binary_zero_triangles.stl", stl_bin(0, []))
+add("stl_ascii_unterminated.stl", ASCII_TRI)
+add("stl_ascii_missing_endloop.stl", ASCII_TRI.replace("  endloop\n", "") + "endsolid t\n")
+add("stl_ascii_not_a_number.stl", ASCII_TRI.replace("vertex 1 0 0", "vertex 1 O 0") + "endsolid t\n")
+add("stl_ascii_facet_four_vertices.stl",
+    ASCII_TRI.replace("   vertex 0 1 0\n", "   vertex 0 1 0\n   vertex 1 1 0\n") + "endsolid t\n")
+add("stl_ascii_nan.stl", ASCII_TRI.replace("vertex 0 0 0", "vertex nan 0 0") + "endsolid t\n")
+
+# ------------------------------------------------------------------ glTF / GLB
+
+QUAD = struct.pack("<9f", 0, 0, 0, 1, 0, 0, 0, 1, 0) + struct.pack("<3H", 0, 1, 2) + b"\0\0"
+
+
+def gltf_doc(bin_bytes=QUAD, uri=None, pos_accessor=0, index_count=3, pos_count=3,
+             extra_index=None, index_view_len=6, sparse=False, nodes=None):
+    if uri is None:
+        uri = "data:application/octet-stream;base64," + base64.b64encode(bin_bytes).decode()
+    buf = {"byteLength": len(bin_bytes)}
+    if uri is not False:
+        buf["uri"] = uri
+    idx_acc = {"bufferView": 1, "componentType": 5123, "count": index_count, "type": "SCALAR"}
+    if sparse:
+        idx_acc["sparse"] = {"count": 1, "indices": {"bufferView": 1, "componentType": 5123},
+                             "values": {"bufferView": 1}}
+    doc = {
+        "asset": {"version": "2.0"},
+        "buffers": [buf],
+        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36},
+                        {"buffer": 0, "byteOffset": 36, "byteLength": index_view_len}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": pos_count,
+                       "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}, idx_acc],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": pos_accessor}, "indices": 1}]}],
+        "nodes": nodes if nodes is not None else [{"mesh": 0}],
+        "scenes": [{"nodes": [0]}],
+        "scene": 0,
+    }
+    return json.dumps(doc, sort_keys=True)
+
+
+def glb(json_text, bin_bytes=QUAD, json_len=None, bin_len=None, total=None):
+    js = json_text.encode()
+    js += b" " * (-len(js) % 4)
+    out = struct.pack("<I4s", len(js) if json_len is None else json_len, b"JSON") + js
+    if bin_bytes is not None:
+        b = bin_bytes + b"\0" * (-len(bin_bytes) % 4)
+        out += struct.pack("<I4s", len(b) if bin_len is None else bin_len, b"BIN\0") + b
+    length = 12 + len(out) if total is None else total
+    return struct.pack("<4sII", b"glTF", 2, length) + out
+
+
+GLB_JSON = gltf_doc(uri=False)
+add("glb_bad_magic.glb", b"gLTF" + glb(GLB_JSON)[4:])
+add("glb_truncated_header.glb", glb(GLB_JSON)[:10])
+add("glb_header_length_under_12.glb", glb(GLB_JSON, total=4))
+add("glb_header_length_beyond_file.glb", glb(GLB_JSON, total=100000))
+add("glb_chunk_length_beyond_file.glb", glb(GLB_JSON, bin_len=4000000000))
+add("glb_json_chunk_length_beyond_file.glb", glb(GLB_JSON, json_len=4000000000))
+add("glb_missing_bin_chunk.glb", glb(GLB_JSON, bin_bytes=None))
+add("glb_version_1.glb", b"glTF" + struct.pack("<I", 1) + glb(GLB_JSON)[8:])
+add("gltf_json_garbage.gltf", '{"asset": {"version": "2.0"}, "meshes": [ {,,, ]')
+add("gltf_not_json.gltf", "this is not a glTF file\n")
+add("gltf_empty.gltf", b"")
+add("gltf_accessor_out_of_buffer_range.gltf", gltf_doc(pos_count=1000))
+add("gltf_view_beyond_buffer.gltf", gltf_doc(index_view_len=4000, index_count=3))
+add("gltf_index_out_of_range.gltf",
+    gltf_doc(bin_bytes=struct.pack("<9f", 0, 0, 0, 1, 0, 0, 0, 1, 0) + struct.pack("<3H", 0, 1, 9) + b"\0\0"))
+add("gltf_missing_buffer_file.gltf", gltf_doc(uri="no_such_buffer.bin"))
+add("gltf_http_buffer.gltf", gltf_doc(uri="http://example.invalid/buffer.bin"))
+add("gltf_data_uri_not_base64.gltf", gltf_doc(uri="data:application/octet-stream,AAAA"))
+add("gltf_data_uri_bad_base64.gltf", gltf_doc(uri="data:application/octet-stream;base64,AA*A!"))
+add("gltf_position_accessor_index_invalid.gltf", gltf_doc(pos_accessor=7))
+add("gltf_sparse_accessor.gltf", gltf_doc(sparse=True))
+add("gltf_node_cycle.gltf", gltf_doc(nodes=[{"mesh": 0, "children": [1]}, {"children": [0]}]))
+add("gltf_zero_count_accessor.gltf", gltf_doc(index_count=0))
+
+# ------------------------------------------------------------------ XYZ / PTS
+
+add("xyz_empty.xyz", b"")
+add("xyz_non_numeric.xyz", "0 0 0\n1 one 1\n")
+add("xyz_two_columns.xyz", "0 0\n1 1\n")
+add("xyz_ragged_columns.xyz", "0 0 0\n1 1 1 1 1 1\n")
+add("xyz_nan.xyz", "0 0 0\nnan 1 1\n")
+add("xyz_inf.xyz", "0 0 0\n1 -inf 1\n")
+add("xyz_colour_out_of_range.xyz", "0 0 0 0 0 1 255 256 0\n")
+add("pts_count_mismatch.pts", "5\n0 0 0\n1 1 1\n")
+add("pts_count_huge.pts", "4000000000\n0 0 0\n")
+add("pts_nan.pts", "2\n0 0 0 10 1 2 3\nNaN 1 1 10 1 2 3\n")
+add("pts_non_numeric.pts", "1\n0 0 zero\n")
+add("pts_count_only.pts", "3\n")
+
+
+def main():
+    os.makedirs(OUT, exist_ok=True)
+    # Remove corpus files this script no longer makes (keep the README).
+    for name in os.listdir(OUT):
+        if name != "README.md" and name not in FILES:
+            os.remove(os.path.join(OUT, name))
+    for name, data in sorted(FILES.items()):
+        with open(os.path.join(OUT, name), "wb") as f:
+            f.write(data)
+    print(f"wrote {len(FILES)} files to {OUT}")
+
+
+if __name__ == "__main__":
+    main()
