@@ -13,6 +13,10 @@ use clap::{Args, Parser, Subcommand};
 
 use crate::ui::Ui;
 
+/// Counts live bytes for `lodkit bench`'s memory columns.
+#[global_allocator]
+static ALLOC: lodkit_bench::simplify::CountingAlloc = lodkit_bench::simplify::CountingAlloc;
+
 #[derive(Parser)]
 #[command(
     name = "lodkit",
@@ -39,6 +43,21 @@ struct Global {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Simplify one mesh to a triangle budget or an error bound (HQMS).
+    #[command(
+        after_help = "Examples:\n  lodkit simplify bunny.ply -o bunny_10k.ply --target 10000\n  lodkit simplify scan.ply -o lod.glb --ratio 0.1 --lock-border"
+    )]
+    Simplify(commands::simplify::SimplifyArgs),
+    /// A discrete LOD chain: PLY per level, one GLB, lods.json.
+    #[command(
+        after_help = "Examples:\n  lodkit lods bunny.ply --out lods/\n  lodkit lods scan.ply --out lods/ --ratios 0.5,0.2,0.05,0.01"
+    )]
+    Lods(commands::lods::LodsArgs),
+    /// In-process comparisons with peer libraries (simplify: meshoptimizer).
+    #[command(
+        after_help = "Examples:\n  lodkit bench simplify\n  lodkit bench simplify scan.ply --json"
+    )]
+    Bench(commands::bench::BenchArgs),
     /// Describe a mesh, point cloud or range image: counts, bbox, topology, defects.
     #[command(after_help = "Examples:\n  lodkit info bunny.ply\n  lodkit info scan.glb --json")]
     Info {
@@ -96,6 +115,9 @@ fn main() -> ExitCode {
             weld,
         } => commands::convert::run(&ui, &input, &output, ascii, weld),
         Command::Compare(args) => commands::compare::run(&ui, &args),
+        Command::Simplify(args) => commands::simplify::run(&ui, &args),
+        Command::Lods(args) => commands::lods::run(&ui, &args),
+        Command::Bench(args) => commands::bench::run(&ui, &args),
         Command::Build { input, out, json } => {
             commands::build::run(&ui, input.as_deref(), &out, json)
         }

@@ -1,8 +1,11 @@
 //! One file per subcommand.
+pub mod bench;
 pub mod build;
 pub mod compare;
 pub mod convert;
 pub mod info;
+pub mod lods;
+pub mod simplify;
 
 use std::path::Path;
 
