@@ -36,10 +36,10 @@
 
 use glam::DVec3;
 
-use crate::cost::{Scratch, add_ring_quadric, dpos};
+use crate::cost::{RingScan, Scratch, dpos};
 use crate::options::Options;
-use crate::quadric::{Quadric, triangle_plane};
-use crate::ring_table::{DEAD, Flag, RingTable, gather_links, multiplicity};
+use crate::quadric::Quadric;
+use crate::ring_table::{DEAD, Flag, RingTable};
 use crate::work_mesh::WorkMesh;
 
 /// Why a record was not collapsed.
@@ -73,43 +73,37 @@ pub fn collapse(
     {
         return Err(Reject::Dependency);
     }
-    let (rs, rt) = (rings.ring(s), rings.ring(t));
-    gather_links(s, rs, &m.faces, &mut sc.links_s);
-    gather_links(t, rt, &m.faces, &mut sc.links_t);
-    let m_st = multiplicity(&sc.links_s, t);
+    // Both rings read once, in a frame centred on v_t.
+    let (ps, pt) = (dpos(m, s), dpos(m, t));
+    sc.scan_s.scan(m, rings.ring(s), s, pt);
+    let m_st = sc.scan_s.m(t);
     if m_st == 0 {
         return Err(Reject::Dependency);
     }
+    sc.scan_t.scan(m, rings.ring(t), t, pt);
+    let (ss, st) = (&sc.scan_s, &sc.scan_t);
 
     // Border rules.
-    let s_border = sc.links_s.iter().any(|l| l.m == 1);
-    let t_border = sc.links_t.iter().any(|l| l.m == 1);
+    let s_border = ss.border();
+    let t_border = st.border();
     if s_border && (opts.lock_border || m_st != 1) {
         return Err(Reject::Topology);
     }
 
-    // I = r_s ∩ r_t.
-    sc.shared.clear();
-    for &f in rs {
-        let tri = m.faces[f as usize];
-        if tri[0] != DEAD && tri.contains(&t) {
-            sc.shared.push(f);
-        }
-    }
-
-    // Link condition on every other neighbour of s.
-    for l in &sc.links_s {
+    // Link condition on every other neighbour w of s: c = faces of
+    // I = r_s ∩ r_t that contain w.
+    for l in &ss.links {
         if l.v == t {
             continue;
         }
-        let mt = multiplicity(&sc.links_t, l.v);
+        let mt = st.m(l.v);
         if mt == 0 {
             continue;
         }
-        let c = sc
-            .shared
+        let c = ss
+            .faces
             .iter()
-            .filter(|&&f| m.faces[f as usize].contains(&l.v))
+            .filter(|rf| (rf.a == t && rf.b == l.v) || (rf.b == t && rf.a == l.v))
             .count() as u32;
         let new_m = l.m + mt - 2 * c;
         if c == 0 {
@@ -125,44 +119,29 @@ pub fn collapse(
     }
 
     // Something must survive, and no two survivors may coincide.
-    let mut survivors = 0usize;
-    for &f in rs.iter().chain(rt) {
-        let tri = m.faces[f as usize];
-        if tri[0] != DEAD && !(tri.contains(&s) && tri.contains(&t)) {
-            survivors += 1;
-        }
-    }
-    if survivors == 0 {
+    let s_keep = ss.faces.iter().filter(|rf| rf.a != t && rf.b != t);
+    let t_keep = || st.faces.iter().filter(|rf| rf.a != s && rf.b != s);
+    if s_keep.clone().count() + t_keep().count() == 0 {
         return Err(Reject::Topology);
     }
-    for &f in rs {
-        let a = m.faces[f as usize];
-        if a[0] == DEAD || a.contains(&t) {
-            continue;
-        }
-        let a = a.map(|v| if v == s { t } else { v });
-        for &g in rt {
-            let b = m.faces[g as usize];
-            if b[0] == DEAD || b.contains(&s) {
-                continue;
-            }
-            if a.iter().all(|v| b.contains(v)) {
-                return Err(Reject::Topology);
-            }
+    for x in s_keep.clone() {
+        if t_keep().any(|y| (y.a == x.a && y.b == x.b) || (y.a == x.b && y.b == x.a)) {
+            return Err(Reject::Topology);
         }
     }
 
     // Wedge mapping (seams).
-    if m.has_wedges() && !wedge_map(m, rs, s, t, sc) {
+    if m.has_wedges() && !wedge_map(m, t, sc) {
         return Err(Reject::Seam);
     }
+    let (ss, st) = (&sc.scan_s, &sc.scan_t);
 
-    // Second stage of the two-stage optimisation: placement.
-    let (ps, pt) = (dpos(m, s), dpos(m, t));
+    // Second stage of the two-stage optimisation: placement, in the frame
+    // of v_t (so v_t is the origin).
     let mut q = Quadric::ZERO;
-    add_ring_quadric(m, rs, s, &sc.links_s, pt, &mut q);
-    add_ring_quadric(m, rt, t, &sc.links_t, pt, &mut q);
-    let (ls, lt) = (ps - pt, DVec3::ZERO); // local frame: t at the origin
+    ss.add_quadric(m, &mut q);
+    st.add_quadric(m, &mut q);
+    let (ls, lt) = (ps - pt, DVec3::ZERO);
     let mut candidates = [DVec3::ZERO; 2];
     let mut n_cand = 0;
     // Border placement: a border edge's vertex stays on the old border
@@ -187,36 +166,31 @@ pub fn collapse(
         candidates[n_cand] = lt;
         n_cand += 1;
     }
-    let chosen = candidates[..n_cand]
+    let Some(local) = candidates[..n_cand]
         .iter()
         .copied()
-        .find(|&v| !flips(m, rs, rt, s, t, v + pt));
-    let Some(local) = chosen else {
+        .find(|&v| !flips(ss, t, v) && !flips(st, s, v))
+    else {
         return Err(Reject::Flip);
     };
-    let vn = local + pt;
 
-    // Error estimate: distance from the new vertex to the old local surface.
+    // Error estimate: distance from the new vertex to the old planes.
     let mut d = 0.0f64;
-    for &f in rs.iter().chain(rt) {
-        let tri = m.faces[f as usize];
-        if tri[0] == DEAD {
-            continue;
-        }
-        let p = tri.map(|v| dpos(m, v));
-        if let Some((n, off, _)) = triangle_plane(p[0], p[1], p[2]) {
-            d = d.max((n.dot(vn) + off).abs());
+    for rf in ss.faces.iter().chain(&st.faces) {
+        if rf.area > 0.0 {
+            d = d.max((rf.n.dot(local) + rf.d).abs());
         }
     }
     let new_err = m.err[s as usize].max(m.err[t as usize]) + d as f32;
     if opts.max_error.is_some_and(|e| new_err > e) {
         return Err(Reject::MaxError);
     }
+    let vn = local + pt;
 
     // Attributes: interpolate along the edge at the projection of v_n.
-    let st = pt - ps;
-    let lambda = if st.length_squared() > 0.0 {
-        ((vn - ps).dot(st) / st.length_squared()).clamp(0.0, 1.0)
+    let e = pt - ps;
+    let lambda = if e.length_squared() > 0.0 {
+        ((vn - ps).dot(e) / e.length_squared()).clamp(0.0, 1.0)
     } else {
         1.0
     } as f32;
@@ -239,18 +213,14 @@ pub fn collapse(
 
     // Apply: delete I, re-point S at t, move t, flag both rings.
     let mut removed = 0;
-    for &f in rs {
-        let fi = f as usize;
-        let tri = m.faces[fi];
-        if tri[0] == DEAD {
-            continue;
-        }
-        if tri.contains(&t) {
+    for rf in &sc.scan_s.faces {
+        let fi = rf.f as usize;
+        if rf.a == t || rf.b == t {
             m.faces[fi] = [DEAD; 3];
             removed += 1;
             continue;
         }
-        let c = tri.iter().position(|&v| v == s).unwrap_or(0);
+        let c = rf.corner as usize;
         m.faces[fi][c] = t;
         if m.has_wedges() {
             let a = m.wedges[fi][c];
@@ -267,30 +237,19 @@ pub fn collapse(
     Ok(removed)
 }
 
-/// Whether moving `s` and `t` to `vn` flips or degenerates a surviving
-/// face of `r_s ∪ r_t`.
-fn flips(m: &WorkMesh, rs: &[u32], rt: &[u32], s: u32, t: u32, vn: DVec3) -> bool {
-    for &f in rs.iter().chain(rt) {
-        let tri = m.faces[f as usize];
-        if tri[0] == DEAD || (tri.contains(&s) && tri.contains(&t)) {
+/// Whether moving the centre of `scan` to `v` (scan frame) flips or
+/// degenerates one of its faces that survive the collapse (those not
+/// containing `other`, the edge's other end).
+fn flips(scan: &RingScan, other: u32, v: DVec3) -> bool {
+    for rf in &scan.faces {
+        if rf.a == other || rf.b == other || rf.area <= 0.0 {
+            // Deleted by the collapse, or already degenerate.
             continue;
         }
-        let old = tri.map(|v| dpos(m, v));
-        let new = std::array::from_fn::<DVec3, 3, _>(|c| {
-            if tri[c] == s || tri[c] == t {
-                vn
-            } else {
-                old[c]
-            }
-        });
-        let n0 = (old[1] - old[0]).cross(old[2] - old[0]);
-        let n1 = (new[1] - new[0]).cross(new[2] - new[0]);
-        let l0 = n0.length_squared();
-        if !(l0 > 0.0) {
-            // Already degenerate: only refuse if it stays exactly so.
-            continue;
-        }
-        if n0.dot(n1) <= 0.0 || n1.length_squared() <= 1e-12 * l0 {
+        let n1 = (rf.pa - v).cross(rf.pb - v);
+        // rf.n is unit and rf.area = |n0| / 2.
+        let dot = rf.n.dot(n1);
+        if dot <= 0.0 || n1.length_squared() <= 1e-12 * (4.0 * rf.area * rf.area) {
             return true;
         }
     }
@@ -299,13 +258,19 @@ fn flips(m: &WorkMesh, rs: &[u32], rt: &[u32], s: u32, t: u32, vn: DVec3) -> boo
 
 /// Builds `sc.wedge_map` (wedge of `s` → wedge of `t`) from the faces of
 /// `I`; false when the seam rules refuse the collapse.
-fn wedge_map(m: &WorkMesh, rs: &[u32], s: u32, t: u32, sc: &mut Scratch) -> bool {
+fn wedge_map(m: &WorkMesh, t: u32, sc: &mut Scratch) -> bool {
     sc.wedge_map.clear();
-    for &f in &sc.shared {
-        let fi = f as usize;
-        let tri = m.faces[fi];
-        let cs = tri.iter().position(|&v| v == s).unwrap_or(0);
-        let ct = tri.iter().position(|&v| v == t).unwrap_or(0);
+    for rf in &sc.scan_s.faces {
+        if rf.a != t && rf.b != t {
+            continue;
+        }
+        let fi = rf.f as usize;
+        let cs = rf.corner as usize;
+        let ct = if rf.a == t {
+            (cs + 1) % 3
+        } else {
+            (cs + 2) % 3
+        };
         let (a, b) = (m.wedges[fi][cs], m.wedges[fi][ct]);
         match sc.wedge_map.iter().find(|(x, _)| *x == a) {
             Some(&(_, y)) if y != b => return false, // seam crosses at t
@@ -319,14 +284,8 @@ fn wedge_map(m: &WorkMesh, rs: &[u32], s: u32, t: u32, sc: &mut Scratch) -> bool
         }
     }
     // Every wedge of s must be next to the edge.
-    for &f in rs {
-        let fi = f as usize;
-        let tri = m.faces[fi];
-        if tri[0] == DEAD {
-            continue;
-        }
-        let c = tri.iter().position(|&v| v == s).unwrap_or(0);
-        let a = m.wedges[fi][c];
+    for rf in &sc.scan_s.faces {
+        let a = m.wedges[rf.f as usize][rf.corner as usize];
         if !sc.wedge_map.iter().any(|(x, _)| *x == a) {
             return false;
         }

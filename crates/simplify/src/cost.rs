@@ -25,8 +25,8 @@
 use glam::DVec3;
 
 use crate::options::Options;
-use crate::quadric::{ExtendedFace, MAX_DIM, Quadric, add_border_plane, triangle_plane};
-use crate::ring_table::{DEAD, Link, RingTable, gather_links, multiplicity};
+use crate::quadric::{ExtendedFace, MAX_DIM, Quadric, add_border_plane};
+use crate::ring_table::{DEAD, Flag, Link, RingTable, multiplicity};
 use crate::rs_heap::Keyed;
 use crate::work_mesh::WorkMesh;
 
@@ -45,13 +45,129 @@ impl Keyed for Record {
     }
 }
 
+/// One live face of a scanned ring: the face, the centre's corner, the two
+/// other vertices in winding order with their positions, and the face's
+/// plane (unit normal `n`, offset `d`, area; area 0 = degenerate), all in
+/// the scan's frame.
+#[derive(Debug, Clone, Copy)]
+pub struct RingFace {
+    pub f: u32,
+    pub corner: u8,
+    pub a: u32,
+    pub b: u32,
+    pub pa: DVec3,
+    pub pb: DVec3,
+    pub n: DVec3,
+    pub d: f64,
+    pub area: f64,
+}
+
+/// A ring read once: its link with edge multiplicities and its live faces
+/// with their planes, in a frame centred on a chosen origin. Every stage
+/// that needs a ring (cost, collapse checks, placement, error) reads this
+/// instead of walking the face table again.
+#[derive(Debug, Default)]
+pub struct RingScan {
+    pub center: u32,
+    /// Centre position in the frame.
+    pub pc: DVec3,
+    pub links: Vec<Link>,
+    pub faces: Vec<RingFace>,
+}
+
+impl RingScan {
+    /// Reads the ring of `center` (face list `ring`) in the frame centred
+    /// on `origin`. Returns false when the ring has no live face.
+    pub fn scan(&mut self, m: &WorkMesh, ring: &[u32], center: u32, origin: DVec3) -> bool {
+        self.links.clear();
+        self.faces.clear();
+        self.center = center;
+        let pc = dpos(m, center) - origin;
+        self.pc = pc;
+        for &f in ring {
+            let tri = m.faces[f as usize];
+            if tri[0] == DEAD {
+                continue;
+            }
+            let corner = if tri[0] == center {
+                0
+            } else if tri[1] == center {
+                1
+            } else {
+                2
+            };
+            let a = tri[(corner + 1) % 3];
+            let b = tri[(corner + 2) % 3];
+            for w in [a, b] {
+                match self.links.iter_mut().find(|l| l.v == w) {
+                    Some(l) => l.m += 1,
+                    None => self.links.push(Link { v: w, m: 1 }),
+                }
+            }
+            let pa = dpos(m, a) - origin;
+            let pb = dpos(m, b) - origin;
+            let nn = (pa - pc).cross(pb - pc);
+            let len = nn.length();
+            let (n, d, area) = if len > 0.0 {
+                let n = nn / len;
+                (n, -n.dot(pc), 0.5 * len)
+            } else {
+                (DVec3::ZERO, 0.0, 0.0)
+            };
+            self.faces.push(RingFace {
+                f,
+                corner: corner as u8,
+                a,
+                b,
+                pa,
+                pb,
+                n,
+                d,
+                area,
+            });
+        }
+        !self.links.is_empty()
+    }
+
+    /// Whether the ring has an internal edge of multiplicity 1 (the vertex
+    /// is on a border of the mesh).
+    pub fn border(&self) -> bool {
+        self.links.iter().any(|l| l.m == 1)
+    }
+
+    /// Multiplicity of the internal edge to `w` (0 = not a neighbour).
+    #[inline]
+    pub fn m(&self, w: u32) -> u32 {
+        multiplicity(&self.links, w)
+    }
+
+    /// Adds the ring's memoryless vertex quadric (eq. 4: area-weighted face
+    /// planes) and its border planes to `q`.
+    pub fn add_quadric(&self, m: &WorkMesh, q: &mut Quadric) {
+        let border = self.border();
+        for rf in &self.faces {
+            if rf.area <= 0.0 {
+                continue;
+            }
+            q.add_plane(rf.n, rf.d, rf.area);
+            if border {
+                if self.m(rf.a) == 1 {
+                    add_border_plane(q, self.pc, rf.pa, rf.n, m.border_weight);
+                }
+                if self.m(rf.b) == 1 {
+                    add_border_plane(q, self.pc, rf.pb, rf.n, m.border_weight);
+                }
+            }
+        }
+    }
+}
+
 /// Reusable buffers of the cost and collapse stages (no allocation per
 /// ring once they have grown to the largest ring).
 #[derive(Debug, Default)]
 pub struct Scratch {
-    pub links_s: Vec<Link>,
-    pub links_t: Vec<Link>,
-    pub shared: Vec<u32>,
+    pub scan_s: RingScan,
+    pub scan_t: RingScan,
     pub ext: Vec<ExtendedFace>,
     pub wedge_map: Vec<(u32, u32)>,
     pub samples: Vec<f32>,
@@ -60,43 +176,6 @@ pub struct Scratch {
 #[inline]
 pub fn dpos(m: &WorkMesh, v: u32) -> DVec3 {
     m.pos[v as usize].as_dvec3()
-}
-
-/// Adds the area-weighted planes of the live faces of `ring` (around
-/// `center`, whose link is `links`) and the border planes of its border
-/// edges to `q`, in a frame centred on `origin`. Returns the ring's area.
-pub fn add_ring_quadric(
-    m: &WorkMesh,
-    ring: &[u32],
-    center: u32,
-    links: &[Link],
-    origin: DVec3,
-    q: &mut Quadric,
-) -> f64 {
-    let border = links.iter().any(|l| l.m == 1);
-    let mut area = 0.0;
-    for &f in ring {
-        let tri = m.faces[f as usize];
-        if tri[0] == DEAD {
-            continue;
-        }
-        let p = tri.map(|v| dpos(m, v) - origin);
-        let Some((n, d, a)) = triangle_plane(p[0], p[1], p[2]) else {
-            continue;
-        };
-        q.add_plane(n, d, a);
-        area += a;
-        if border {
-            let c = tri.iter().position(|&v| v == center).unwrap_or(0);
-            for k in [1, 2] {
-                let x = tri[(c + k) % 3];
-                if multiplicity(links, x) == 1 {
-                    add_border_plane(q, p[c], p[(c + k) % 3], n);
-                }
-            }
-        }
-    }
-    area
 }
 
 /// Whether any attribute takes part in the cost.
@@ -129,18 +208,21 @@ pub fn best_contraction(
     s: u32,
     sc: &mut Scratch,
 ) -> Option<Record> {
-    let ring = rings.ring(s);
-    if !gather_links(s, ring, &m.faces, &mut sc.links_s) {
+    let ps = dpos(m, s);
+    let scan = &mut sc.scan_s;
+    if !scan.scan(m, rings.ring(s), s, ps) {
         return None;
     }
-    let border = sc.links_s.iter().any(|l| l.m == 1);
+    let border = scan.border();
     if border && opts.lock_border {
         return None;
     }
-    let ps = dpos(m, s);
-    let links = &sc.links_s;
-    let candidate = |l: &Link| !border || l.m == 1;
-
+    // Only edges the collapse stage could accept: border rings along border
+    // edges, never onto a ring that is already dirty or gone (Strategy I
+    // would refuse it; a cheaper-but-dead target would waste the record).
+    let candidate = |l: &Link| {
+        (!border || l.m == 1) && !matches!(m.flags[l.v as usize], Flag::Dirty | Flag::Removed)
+    };
     let mut best: Option<(f64, u32)> = None;
     let mut consider = |cost: f64, t: u32| {
         if best.is_none_or(|(c, _)| cost < c) {
@@ -149,8 +231,8 @@ pub fn best_contraction(
     };
     if !attribute_cost_on(m) {
         let mut q = Quadric::ZERO;
-        add_ring_quadric(m, ring, s, links, ps, &mut q);
-        for l in links.iter().filter(|l| candidate(l)) {
+        scan.add_quadric(m, &mut q);
+        for l in scan.links.iter().filter(|l| candidate(l)) {
             consider(q.eval(dpos(m, l.v) - ps), l.v);
         }
     } else {
@@ -159,32 +241,32 @@ pub fn best_contraction(
         let dim = 3 + m.layout.k;
         sc.ext.clear();
         let mut qb = Quadric::ZERO;
-        for &f in ring {
-            let tri = m.faces[f as usize];
-            if tri[0] == DEAD {
+        for rf in &scan.faces {
+            if rf.area <= 0.0 {
                 continue;
             }
-            let p = tri.map(|v| dpos(m, v) - ps);
-            let Some((n, _, a)) = triangle_plane(p[0], p[1], p[2]) else {
-                continue;
-            };
-            let x: [[f64; MAX_DIM]; 3] =
-                std::array::from_fn(|c| joint_point(m, p[c], m.wedge(f as usize, c)));
-            if let Some(e) = ExtendedFace::new([&x[0], &x[1], &x[2]], dim, a) {
+            let c = rf.corner as usize;
+            let f = rf.f as usize;
+            let x = [
+                joint_point(m, scan.pc, m.wedge(f, c)),
+                joint_point(m, rf.pa, m.wedge(f, (c + 1) % 3)),
+                joint_point(m, rf.pb, m.wedge(f, (c + 2) % 3)),
+            ];
+            if let Some(e) = ExtendedFace::new([&x[0], &x[1], &x[2]], dim, rf.area) {
                 sc.ext.push(e);
             }
             if border {
-                let c = tri.iter().position(|&v| v == s).unwrap_or(0);
-                for k in [1, 2] {
-                    if multiplicity(links, tri[(c + k) % 3]) == 1 {
-                        add_border_plane(&mut qb, p[c], p[(c + k) % 3], n);
-                    }
+                if scan.m(rf.a) == 1 {
+                    add_border_plane(&mut qb, scan.pc, rf.pa, rf.n, m.border_weight);
+                }
+                if scan.m(rf.b) == 1 {
+                    add_border_plane(&mut qb, scan.pc, rf.pb, rf.n, m.border_weight);
                 }
             }
         }
-        for l in links.iter().filter(|l| candidate(l)) {
+        for l in scan.links.iter().filter(|l| candidate(l)) {
             let pt = dpos(m, l.v) - ps;
-            let w = wedge_of_vertex_in_ring(m, ring, l.v);
+            let w = wedge_of_vertex_in_ring(m, rings.ring(s), l.v);
             let x = joint_point(m, pt, w);
             let c: f64 = sc.ext.iter().map(|e| e.cost(&x, dim)).sum::<f64>() + qb.eval(pt);
             consider(c, l.v);
@@ -213,4 +295,36 @@ pub fn wedge_of_vertex_in_ring(m: &WorkMesh, ring: &[u32], v: u32) -> u32 {
         }
     }
     v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    #[test]
+    fn ring_scan_counts_internal_edge_multiplicity_and_planes() {
+        // A fan of two faces around 0: edge 0-2 inner (m = 2), 0-1 and 0-3 border.
+        let m = WorkMesh {
+            pos: vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y],
+            faces: vec![[0, 1, 2], [0, 2, 3]],
+            live_faces: 2,
+            flags: vec![Flag::Valid; 4],
+            err: vec![0.0; 4],
+            border_weight: 1.0,
+            ..Default::default()
+        };
+        let mut scan = RingScan::default();
+        assert!(scan.scan(&m, &[0, 1], 0, DVec3::ZERO));
+        assert_eq!((scan.m(2), scan.m(1), scan.m(3), scan.m(9)), (2, 1, 1, 0));
+        assert!(scan.border());
+        for rf in &scan.faces {
+            assert!((rf.n - DVec3::Z).length() < 1e-12 && (rf.area - 0.5).abs() < 1e-12);
+        }
+        // The quadric vanishes on the plane, away from the border lines.
+        let mut q = Quadric::ZERO;
+        scan.add_quadric(&m, &mut q);
+        assert!(q.eval(DVec3::new(0.0, 0.0, 0.0)) < 1e-12);
+        assert!(q.eval(DVec3::new(0.0, 0.0, 1.0)) > 0.9);
+    }
 }

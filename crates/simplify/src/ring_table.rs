@@ -92,34 +92,12 @@ impl RingTable {
 }
 
 /// A vertex of a ring's boundary (`b_i` of §4.3.2) and the multiplicity of
-/// the internal edge to it: how many of the ring's live faces contain it.
+/// the internal edge to it: how many of the ring's live faces contain it
+/// (collected by `cost::RingScan`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Link {
     pub v: u32,
     pub m: u32,
-}
-
-/// Collects the link of `center` (the other vertices of its live faces)
-/// with each internal edge's multiplicity into `out` (cleared first),
-/// in first-seen order. Returns false if the ring has no live face.
-pub fn gather_links(center: u32, ring: &[u32], faces: &[[u32; 3]], out: &mut Vec<Link>) -> bool {
-    out.clear();
-    for &f in ring {
-        let tri = faces[f as usize];
-        if tri[0] == DEAD {
-            continue;
-        }
-        for &w in &tri {
-            if w == center {
-                continue;
-            }
-            match out.iter_mut().find(|l| l.v == w) {
-                Some(l) => l.m += 1,
-                None => out.push(Link { v: w, m: 1 }),
-            }
-        }
-    }
-    !out.is_empty()
 }
 
 /// Multiplicity of the edge `(center, w)` in a link list (0 = no edge).
@@ -145,17 +123,5 @@ mod tests {
         t.rebuild(3, &faces[..1]);
         assert_eq!(t.ring(1), &[0]);
         assert_eq!(t.off.len(), 4);
-    }
-
-    #[test]
-    fn links_count_internal_edge_multiplicity() {
-        // A fan of two faces around 0: edges 0-2 inner (m = 2), 0-1 and 0-3 border.
-        let faces = [[0, 1, 2], [0, 2, 3]];
-        let mut links = Vec::new();
-        assert!(gather_links(0, &[0, 1], &faces, &mut links));
-        assert_eq!(multiplicity(&links, 2), 2);
-        assert_eq!(multiplicity(&links, 1), 1);
-        assert_eq!(multiplicity(&links, 3), 1);
-        assert_eq!(multiplicity(&links, 9), 0);
     }
 }

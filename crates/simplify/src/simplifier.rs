@@ -27,7 +27,6 @@ pub struct Simplifier {
     pub(crate) rings: RingTable,
     pub(crate) heap: RsHeap<Record>,
     pub(crate) sc: Scratch,
-    pub(crate) index: Vec<u32>,
     pub(crate) input_faces: usize,
     pub(crate) passes: u32,
     pub(crate) collapses: usize,
@@ -49,7 +48,6 @@ impl Simplifier {
             rings: RingTable::default(),
             heap: RsHeap::new(Options::DEFAULT_HEAP_SIZE),
             sc: Scratch::default(),
-            index: Vec::new(),
             input_faces: 0,
             passes: 0,
             collapses: 0,
@@ -83,19 +81,22 @@ impl Simplifier {
         self.collapses = 0;
         self.success = 0.5;
         self.input_faces = mesh.faces.len();
-        self.m.load(mesh, &opts.weights, &mut self.index)?;
+        // The ring table's offset array is free until the first pass: it
+        // serves as the weld map here and as the vertex index table of
+        // every compaction (it is rebuilt at the start of each pass).
+        self.m.load(mesh, &opts.weights, &mut self.rings.off)?;
+        self.m.border_weight = crate::quadric::BORDER_WEIGHT;
         self.note_memory();
         if let Some(p) = opts.prune {
             prune_small_components(&mut self.m, p);
         }
-        compact(&mut self.m, &mut self.index);
+        compact(&mut self.m, &mut self.rings.off);
         Ok(())
     }
 
     fn note_memory(&mut self) {
         let b = self.m.heap_bytes()
             + self.rings.heap_bytes()
-            + self.index.capacity() * 4
             + self.sc.samples.capacity() * 4
             + self.heap.capacity() * std::mem::size_of::<Option<Record>>();
         self.peak_bytes = self.peak_bytes.max(b);
@@ -129,7 +130,7 @@ impl Simplifier {
                 tau,
                 &mut self.sc,
             );
-            compact(&mut self.m, &mut self.index);
+            compact(&mut self.m, &mut self.rings.off);
             self.passes += 1;
             passes_here += 1;
             self.collapses += st.collapses;

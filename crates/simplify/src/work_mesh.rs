@@ -56,6 +56,8 @@ pub struct WorkMesh {
     /// Corner wedges, parallel to `faces`; empty when every vertex is its
     /// own only wedge.
     pub wedges: Vec<[u32; 3]>,
+    /// Weight of border planes (see `quadric::BORDER_WEIGHT`).
+    pub border_weight: f64,
 }
 
 impl WorkMesh {
@@ -139,7 +141,10 @@ impl WorkMesh {
         self.wedges.clear();
         self.attr.clear();
         self.pos.clear();
+        // Exact capacities: the working arrays are most of the peak memory.
+        self.faces.reserve_exact(mesh.faces.len());
         if !has_dups {
+            self.pos.reserve_exact(n);
             self.pos.extend_from_slice(&mesh.positions);
             self.faces.extend(
                 mesh.faces
@@ -147,12 +152,13 @@ impl WorkMesh {
                     .filter(|f| f[0] != f[1] && f[1] != f[2] && f[0] != f[2]),
             );
             if layout.k > 0 {
-                self.attr.reserve(n * layout.k);
+                self.attr.reserve_exact(n * layout.k);
                 for v in 0..n {
                     push_attrs(mesh, v, &mut self.attr);
                 }
             }
         } else {
+            self.pos.reserve_exact(welded);
             self.pos.resize(welded, Vec3::ZERO);
             for (v, &w) in remap.iter().enumerate() {
                 self.pos[w as usize] = mesh.positions[v];
@@ -198,8 +204,10 @@ impl WorkMesh {
         let nv = self.pos.len();
         self.live_faces = self.faces.len();
         self.flags.clear();
+        self.flags.reserve_exact(nv);
         self.flags.resize(nv, Flag::Valid);
         self.err.clear();
+        self.err.reserve_exact(nv);
         self.err.resize(nv, 0.0);
         Ok(())
     }
