@@ -39,6 +39,11 @@ pub struct Record {
 }
 
 impl Keyed for Record {
+    const NULL: Record = Record {
+        cost: f32::INFINITY,
+        s: u32::MAX,
+        t: u32::MAX,
+    };
     #[inline]
     fn key(&self) -> f32 {
         self.cost
@@ -98,18 +103,17 @@ impl RingScan {
             };
             let a = tri[(corner + 1) % 3];
             let b = tri[(corner + 2) % 3];
-            for w in [a, b] {
-                match self.links.iter_mut().find(|l| l.v == w) {
-                    Some(l) => l.m += 1,
-                    None => self.links.push(Link { v: w, m: 1 }),
-                }
-            }
+            add_link(&mut self.links, a);
+            add_link(&mut self.links, b);
             let pa = dpos(m, a) - origin;
             let pb = dpos(m, b) - origin;
             let nn = (pa - pc).cross(pb - pc);
-            let len = nn.length();
-            let (n, d, area) = if len > 0.0 {
-                let n = nn / len;
+            let len2 = nn.length_squared();
+            // One square root and one division per face (the hot spot of
+            // the whole simplifier): normalise by multiplying.
+            let (n, d, area) = if len2 > 0.0 {
+                let len = len2.sqrt();
+                let n = nn * (1.0 / len);
                 (n, -n.dot(pc), 0.5 * len)
             } else {
                 (DVec3::ZERO, 0.0, 0.0)
@@ -162,6 +166,87 @@ impl RingScan {
     }
 }
 
+/// Counts one more face on the internal edge to `w`.
+#[inline]
+fn add_link(links: &mut Vec<Link>, w: u32) {
+    for l in links.iter_mut() {
+        if l.v == w {
+            l.m += 1;
+            return;
+        }
+    }
+    links.push(Link { v: w, m: 1 });
+}
+
+/// The cost stage's read of a ring: the link with multiplicities and the
+/// memoryless vertex quadric (face planes, then border planes), without
+/// keeping per-face data — the cheaper sibling of [`RingScan::scan`] for
+/// the one read every ring gets each pass. Returns whether the ring is on a
+/// border; `links` is empty for a ring with no live face.
+pub fn scan_quadric(
+    m: &WorkMesh,
+    ring: &[u32],
+    center: u32,
+    origin: DVec3,
+    links: &mut Vec<Link>,
+    q: &mut Quadric,
+) -> bool {
+    links.clear();
+    let pc = dpos(m, center) - origin;
+    for &f in ring {
+        let tri = m.faces[f as usize];
+        if tri[0] == DEAD {
+            continue;
+        }
+        let (a, b) = if tri[0] == center {
+            (tri[1], tri[2])
+        } else if tri[1] == center {
+            (tri[2], tri[0])
+        } else {
+            (tri[0], tri[1])
+        };
+        add_link(links, a);
+        add_link(links, b);
+        let pa = dpos(m, a) - origin;
+        let pb = dpos(m, b) - origin;
+        let nn = (pa - pc).cross(pb - pc);
+        let len2 = nn.length_squared();
+        if len2 > 0.0 {
+            let len = len2.sqrt();
+            let n = nn * (1.0 / len);
+            q.add_plane(n, -n.dot(pc), 0.5 * len);
+        }
+    }
+    let border = links.iter().any(|l| l.m == 1);
+    if border {
+        for &f in ring {
+            let tri = m.faces[f as usize];
+            if tri[0] == DEAD {
+                continue;
+            }
+            let c = tri.iter().position(|&v| v == center).unwrap_or(0);
+            let (a, b) = (tri[(c + 1) % 3], tri[(c + 2) % 3]);
+            let (ma, mb) = (multiplicity(links, a) == 1, multiplicity(links, b) == 1);
+            if !(ma || mb) {
+                continue;
+            }
+            let pa = dpos(m, a) - origin;
+            let pb = dpos(m, b) - origin;
+            let nn = (pa - pc).cross(pb - pc);
+            let Some(n) = nn.try_normalize() else {
+                continue;
+            };
+            if ma {
+                add_border_plane(q, pc, pa, n, m.border_weight);
+            }
+            if mb {
+                add_border_plane(q, pc, pb, n, m.border_weight);
+            }
+        }
+    }
+    border
+}
+
 /// Reusable buffers of the cost and collapse stages (no allocation per
 /// ring once they have grown to the largest ring).
 #[derive(Debug, Default)]
@@ -209,14 +294,24 @@ pub fn best_contraction(
     sc: &mut Scratch,
 ) -> Option<Record> {
     let ps = dpos(m, s);
-    let scan = &mut sc.scan_s;
-    if !scan.scan(m, rings.ring(s), s, ps) {
-        return None;
-    }
-    let border = scan.border();
+    let attributes = attribute_cost_on(m);
+    let mut q = Quadric::ZERO;
+    let border = if attributes {
+        if !sc.scan_s.scan(m, rings.ring(s), s, ps) {
+            return None;
+        }
+        sc.scan_s.border()
+    } else {
+        let b = scan_quadric(m, rings.ring(s), s, ps, &mut sc.scan_s.links, &mut q);
+        if sc.scan_s.links.is_empty() {
+            return None;
+        }
+        b
+    };
     if border && opts.lock_border {
         return None;
     }
+    let scan = &sc.scan_s;
     // Only edges the collapse stage could accept: border rings along border
     // edges, never onto a ring that is already dirty or gone (Strategy I
     // would refuse it; a cheaper-but-dead target would waste the record).
@@ -229,9 +324,7 @@ pub fn best_contraction(
             best = Some((cost, t));
         }
     };
-    if !attribute_cost_on(m) {
-        let mut q = Quadric::ZERO;
-        scan.add_quadric(m, &mut q);
+    if !attributes {
         for l in scan.links.iter().filter(|l| candidate(l)) {
             consider(q.eval(dpos(m, l.v) - ps), l.v);
         }
@@ -273,8 +366,9 @@ pub fn best_contraction(
         }
     }
     let (cost, t) = best?;
+    // Finite keys only: +∞ is the heap's null record.
     Some(Record {
-        cost: cost as f32,
+        cost: (cost as f32).min(f32::MAX),
         s,
         t,
     })

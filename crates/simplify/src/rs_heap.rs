@@ -28,14 +28,21 @@
 //! Every operation is O(log capacity): O(1) for the constant capacity.
 
 /// A heap record: a key and a payload. Records are compared by key only.
+/// Valid records have keys below +∞; [`Keyed::NULL`] is the null record
+/// (key +∞) that fills empty slots, so a slot costs no more than a record.
 pub trait Keyed: Copy {
+    const NULL: Self;
     fn key(&self) -> f32;
+    #[inline]
+    fn is_null(&self) -> bool {
+        self.key() == f32::INFINITY
+    }
 }
 
 /// The replacement-selection heap.
 #[derive(Debug, Clone)]
 pub struct RsHeap<T: Keyed> {
-    slots: Vec<Option<T>>,
+    slots: Vec<T>,
     /// Index of the last current-run record; `capacity - 1` when the whole
     /// array is one heap.
     tcr: usize,
@@ -45,21 +52,8 @@ pub struct RsHeap<T: Keyed> {
 }
 
 #[inline]
-fn key<T: Keyed>(r: &Option<T>) -> f32 {
-    match r {
-        Some(r) => r.key(),
-        None => f32::INFINITY,
-    }
-}
-
-/// Null records sort after every valid record, valid records by key.
-#[inline]
-fn less<T: Keyed>(a: &Option<T>, b: &Option<T>) -> bool {
-    match (a, b) {
-        (Some(a), Some(b)) => a.key() < b.key(),
-        (Some(_), None) => true,
-        _ => false,
-    }
+fn less<T: Keyed>(a: &T, b: &T) -> bool {
+    a.key() < b.key()
 }
 
 impl<T: Keyed> RsHeap<T> {
@@ -67,7 +61,7 @@ impl<T: Keyed> RsHeap<T> {
     pub fn new(capacity: usize) -> Self {
         let capacity = capacity.max(1);
         RsHeap {
-            slots: vec![None; capacity],
+            slots: vec![T::NULL; capacity],
             tcr: capacity - 1,
             last: f32::INFINITY,
             valid: 0,
@@ -79,7 +73,7 @@ impl<T: Keyed> RsHeap<T> {
     pub fn reset(&mut self, capacity: usize) {
         let capacity = capacity.max(1);
         self.slots.clear();
-        self.slots.resize(capacity, None);
+        self.slots.resize(capacity, T::NULL);
         self.tcr = capacity - 1;
         self.last = f32::INFINITY;
         self.valid = 0;
@@ -102,19 +96,21 @@ impl<T: Keyed> RsHeap<T> {
     /// `HeapInsert`). Returns the deleted root; `None` while the initial
     /// stage is still removing null records.
     pub fn replace(&mut self, rec: T) -> Option<T> {
-        let out = self.slots[0].take();
+        debug_assert!(rec.key() < f32::INFINITY, "valid keys are finite");
+        let out = std::mem::replace(&mut self.slots[0], T::NULL);
+        let out = (!out.is_null()).then_some(out);
         if let Some(o) = &out {
             self.last = o.key();
             self.valid -= 1;
         }
         self.valid += 1;
-        // A NaN key would break the order: it goes last, like a null.
+        // A NaN key would break the order: it goes to the next run.
         let k = rec.key();
         if k >= self.last && !k.is_nan() {
-            self.slots[0] = Some(rec);
+            self.slots[0] = rec;
             self.sift_down(0, self.tcr);
         } else {
-            self.insert_next_run(Some(rec));
+            self.insert_next_run(rec);
         }
         out
     }
@@ -128,20 +124,21 @@ impl<T: Keyed> RsHeap<T> {
         // A null root with valid records left means the current part holds
         // only nulls (the initial stage was cut short): push nulls into the
         // next-run part until the run changes and a valid record rises.
-        while self.slots[0].is_none() {
-            self.insert_next_run(None);
+        while self.slots[0].is_null() {
+            self.slots[0] = T::NULL;
+            self.insert_next_run(T::NULL);
         }
-        let out = self.slots[0].take()?;
+        let out = std::mem::replace(&mut self.slots[0], T::NULL);
         self.last = out.key();
         self.valid -= 1;
-        self.insert_next_run(None);
+        self.insert_next_run(T::NULL);
         Some(out)
     }
 
     /// The paper's next-run insertion: move the TCR record to the (empty)
     /// root, put the new record where it was, shrink the current part,
     /// restore both parts' heap order.
-    fn insert_next_run(&mut self, rec: Option<T>) {
+    fn insert_next_run(&mut self, rec: T) {
         let t = self.tcr;
         if t == 0 {
             // The current part was only the (deleted) root: the new record
@@ -152,7 +149,7 @@ impl<T: Keyed> RsHeap<T> {
             self.sift_down(0, self.tcr);
             return;
         }
-        self.slots[0] = self.slots[t].take();
+        self.slots[0] = self.slots[t];
         self.slots[t] = rec;
         self.tcr = t - 1;
         let end = self.slots.len() - 1;
@@ -182,7 +179,7 @@ impl<T: Keyed> RsHeap<T> {
 
     /// Key of the root (+∞ for a null root).
     pub fn peek_key(&self) -> f32 {
-        key(&self.slots[0])
+        self.slots[0].key()
     }
 }
 
@@ -194,6 +191,7 @@ mod tests {
     #[derive(Debug, Clone, Copy, PartialEq)]
     struct R(f32, u32);
     impl Keyed for R {
+        const NULL: R = R(f32::INFINITY, u32::MAX);
         fn key(&self) -> f32 {
             self.0
         }

@@ -98,7 +98,7 @@ impl Simplifier {
         let b = self.m.heap_bytes()
             + self.rings.heap_bytes()
             + self.sc.samples.capacity() * 4
-            + self.heap.capacity() * std::mem::size_of::<Option<Record>>();
+            + self.heap.capacity() * std::mem::size_of::<Record>();
         self.peak_bytes = self.peak_bytes.max(b);
     }
 

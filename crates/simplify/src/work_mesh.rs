@@ -134,6 +134,10 @@ impl WorkMesh {
 
         // Exact position weld: remap[v] = welded id (first occurrence wins).
         let remap = scratch;
+        // n + 1: the same buffer becomes the ring offsets (one per vertex
+        // plus one) without growing.
+        remap.clear();
+        remap.reserve_exact(n + 1);
         let welded = weld_exact(&mesh.positions, remap);
         let has_dups = welded < n;
 
