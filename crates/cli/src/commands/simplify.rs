@@ -62,6 +62,12 @@ impl SimplifyOpts {
 }
 
 #[derive(Args, Debug)]
+#[command(group(
+    clap::ArgGroup::new("budget")
+        .required(true)
+        .multiple(true)
+        .args(["target", "ratio", "max_error"])
+))]
 pub struct SimplifyArgs {
     /// Input mesh (.ply, .obj, .stl, .gltf, .glb).
     pub input: PathBuf,
