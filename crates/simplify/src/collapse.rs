@@ -34,9 +34,9 @@
 //!   position to the planes of the old faces of both rings; `max_error`
 //!   refuses collapses above the bound.
 
-use glam::DVec3;
+use glam::{DVec3, Vec3A};
 
-use crate::cost::{RingScan, Scratch, dpos};
+use crate::cost::{RingScan, Scratch, dpos, fpos};
 use crate::options::Options;
 use crate::quadric::Quadric;
 use crate::ring_table::{DEAD, Flag, RingTable};
@@ -75,12 +75,13 @@ pub fn collapse(
     }
     // Both rings read once, in a frame centred on v_t.
     let (ps, pt) = (dpos(m, s), dpos(m, t));
-    sc.scan_s.scan(m, rings.ring(s), s, pt);
+    let ptf = fpos(m, t);
+    sc.scan_s.scan(m, rings.ring(s), s, ptf);
     let m_st = sc.scan_s.m(t);
     if m_st == 0 {
         return Err(Reject::Dependency);
     }
-    sc.scan_t.scan(m, rings.ring(t), t, pt);
+    sc.scan_t.scan(m, rings.ring(t), t, ptf);
     let (ss, st) = (&sc.scan_s, &sc.scan_t);
 
     // Border rules.
@@ -141,7 +142,8 @@ pub fn collapse(
     let mut q = Quadric::ZERO;
     ss.add_quadric(m, &mut q);
     st.add_quadric(m, &mut q);
-    let (ls, lt) = (ps - pt, DVec3::ZERO);
+    // v_s in the frame, from the same f32 difference the scans used.
+    let (ls, lt) = ((fpos(m, s) - ptf).as_dvec3(), DVec3::ZERO);
     let mut candidates = [DVec3::ZERO; 2];
     let mut n_cand = 0;
     // Border placement: a border edge's vertex stays on the old border
@@ -166,22 +168,22 @@ pub fn collapse(
         candidates[n_cand] = lt;
         n_cand += 1;
     }
-    let Some(local) = candidates[..n_cand]
-        .iter()
-        .copied()
-        .find(|&v| !flips(ss, t, v) && !flips(st, s, v))
-    else {
+    let Some(local) = candidates[..n_cand].iter().copied().find(|&v| {
+        let v = v.as_vec3a();
+        !flips(ss, t, v) && !flips(st, s, v)
+    }) else {
         return Err(Reject::Flip);
     };
 
     // Error estimate: distance from the new vertex to the old planes.
-    let mut d = 0.0f64;
+    let mut d = 0.0f32;
+    let lf = local.as_vec3a();
     for rf in ss.faces.iter().chain(&st.faces) {
         if rf.area > 0.0 {
-            d = d.max((rf.n.dot(local) + rf.d).abs());
+            d = d.max((rf.n.dot(lf) + rf.d).abs());
         }
     }
-    let new_err = m.err[s as usize].max(m.err[t as usize]) + d as f32;
+    let new_err = m.err[s as usize].max(m.err[t as usize]) + d;
     if opts.max_error.is_some_and(|e| new_err > e) {
         return Err(Reject::MaxError);
     }
@@ -240,7 +242,7 @@ pub fn collapse(
 /// Whether moving the centre of `scan` to `v` (scan frame) flips or
 /// degenerates one of its faces that survive the collapse (those not
 /// containing `other`, the edge's other end).
-fn flips(scan: &RingScan, other: u32, v: DVec3) -> bool {
+fn flips(scan: &RingScan, other: u32, v: Vec3A) -> bool {
     for rf in &scan.faces {
         if rf.a == other || rf.b == other || rf.area <= 0.0 {
             // Deleted by the collapse, or already degenerate.
@@ -249,7 +251,7 @@ fn flips(scan: &RingScan, other: u32, v: DVec3) -> bool {
         let n1 = (rf.pa - v).cross(rf.pb - v);
         // rf.n is unit and rf.area = |n0| / 2.
         let dot = rf.n.dot(n1);
-        if dot <= 0.0 || n1.length_squared() <= 1e-12 * (4.0 * rf.area * rf.area) {
+        if dot <= 0.0 || n1.length_squared() <= 1e-10 * (4.0 * rf.area * rf.area) {
             return true;
         }
     }

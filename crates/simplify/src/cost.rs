@@ -22,7 +22,7 @@
 //!   `quadric.rs`), the neighbour's attributes taken from its wedge in the
 //!   first ring face that contains it.
 
-use glam::DVec3;
+use glam::{DVec3, Vec3A};
 
 use crate::options::Options;
 use crate::quadric::{ExtendedFace, MAX_DIM, Quadric, add_border_plane};
@@ -53,18 +53,20 @@ impl Keyed for Record {
 /// One live face of a scanned ring: the face, the centre's corner, the two
 /// other vertices in winding order with their positions, and the face's
 /// plane (unit normal `n`, offset `d`, area; area 0 = degenerate), all in
-/// the scan's frame.
+/// the scan's frame. Single precision: coordinates are relative to a
+/// vertex of the ring, so they are small and exact differences of the
+/// stored `f32` positions; quadrics are summed in `f64`.
 #[derive(Debug, Clone, Copy)]
 pub struct RingFace {
     pub f: u32,
     pub corner: u8,
     pub a: u32,
     pub b: u32,
-    pub pa: DVec3,
-    pub pb: DVec3,
-    pub n: DVec3,
-    pub d: f64,
-    pub area: f64,
+    pub pa: Vec3A,
+    pub pb: Vec3A,
+    pub n: Vec3A,
+    pub d: f32,
+    pub area: f32,
 }
 
 /// A ring read once: its link with edge multiplicities and its live faces
@@ -75,7 +77,7 @@ pub struct RingFace {
 pub struct RingScan {
     pub center: u32,
     /// Centre position in the frame.
-    pub pc: DVec3,
+    pub pc: Vec3A,
     pub links: Vec<Link>,
     pub faces: Vec<RingFace>,
 }
@@ -83,11 +85,11 @@ pub struct RingScan {
 impl RingScan {
     /// Reads the ring of `center` (face list `ring`) in the frame centred
     /// on `origin`. Returns false when the ring has no live face.
-    pub fn scan(&mut self, m: &WorkMesh, ring: &[u32], center: u32, origin: DVec3) -> bool {
+    pub fn scan(&mut self, m: &WorkMesh, ring: &[u32], center: u32, origin: Vec3A) -> bool {
         self.links.clear();
         self.faces.clear();
         self.center = center;
-        let pc = dpos(m, center) - origin;
+        let pc = fpos(m, center) - origin;
         self.pc = pc;
         for &f in ring {
             let tri = m.faces[f as usize];
@@ -105,19 +107,9 @@ impl RingScan {
             let b = tri[(corner + 2) % 3];
             add_link(&mut self.links, a);
             add_link(&mut self.links, b);
-            let pa = dpos(m, a) - origin;
-            let pb = dpos(m, b) - origin;
-            let nn = (pa - pc).cross(pb - pc);
-            let len2 = nn.length_squared();
-            // One square root and one division per face (the hot spot of
-            // the whole simplifier): normalise by multiplying.
-            let (n, d, area) = if len2 > 0.0 {
-                let len = len2.sqrt();
-                let n = nn * (1.0 / len);
-                (n, -n.dot(pc), 0.5 * len)
-            } else {
-                (DVec3::ZERO, 0.0, 0.0)
-            };
+            let pa = fpos(m, a) - origin;
+            let pb = fpos(m, b) - origin;
+            let (n, d, area) = plane(pc, pa, pb);
             self.faces.push(RingFace {
                 f,
                 corner: corner as u8,
@@ -149,20 +141,38 @@ impl RingScan {
     /// planes) and its border planes to `q`.
     pub fn add_quadric(&self, m: &WorkMesh, q: &mut Quadric) {
         let border = self.border();
+        let pc = self.pc.as_dvec3();
         for rf in &self.faces {
             if rf.area <= 0.0 {
                 continue;
             }
-            q.add_plane(rf.n, rf.d, rf.area);
+            let n = rf.n.as_dvec3();
+            q.add_plane(n, rf.d as f64, rf.area as f64);
             if border {
                 if self.m(rf.a) == 1 {
-                    add_border_plane(q, self.pc, rf.pa, rf.n, m.border_weight);
+                    add_border_plane(q, pc, rf.pa.as_dvec3(), n, m.border_weight);
                 }
                 if self.m(rf.b) == 1 {
-                    add_border_plane(q, self.pc, rf.pb, rf.n, m.border_weight);
+                    add_border_plane(q, pc, rf.pb.as_dvec3(), n, m.border_weight);
                 }
             }
         }
+    }
+}
+
+/// Unit normal, offset and area of the triangle `(c, a, b)` in its frame
+/// (zeros for a degenerate one). One square root and one division: the
+/// hot spot of the whole simplifier.
+#[inline]
+pub fn plane(c: Vec3A, a: Vec3A, b: Vec3A) -> (Vec3A, f32, f32) {
+    let nn = (a - c).cross(b - c);
+    let len2 = nn.length_squared();
+    if len2 > 0.0 {
+        let len = len2.sqrt();
+        let n = nn * (1.0 / len);
+        (n, -n.dot(c), 0.5 * len)
+    } else {
+        (Vec3A::ZERO, 0.0, 0.0)
     }
 }
 
@@ -187,12 +197,12 @@ pub fn scan_quadric(
     m: &WorkMesh,
     ring: &[u32],
     center: u32,
-    origin: DVec3,
+    origin: Vec3A,
     links: &mut Vec<Link>,
     q: &mut Quadric,
 ) -> bool {
     links.clear();
-    let pc = dpos(m, center) - origin;
+    let pc = fpos(m, center) - origin;
     for &f in ring {
         let tri = m.faces[f as usize];
         if tri[0] == DEAD {
@@ -207,18 +217,14 @@ pub fn scan_quadric(
         };
         add_link(links, a);
         add_link(links, b);
-        let pa = dpos(m, a) - origin;
-        let pb = dpos(m, b) - origin;
-        let nn = (pa - pc).cross(pb - pc);
-        let len2 = nn.length_squared();
-        if len2 > 0.0 {
-            let len = len2.sqrt();
-            let n = nn * (1.0 / len);
-            q.add_plane(n, -n.dot(pc), 0.5 * len);
+        let (n, d, area) = plane(pc, fpos(m, a) - origin, fpos(m, b) - origin);
+        if area > 0.0 {
+            q.add_plane(n.as_dvec3(), d as f64, area as f64);
         }
     }
     let border = links.iter().any(|l| l.m == 1);
     if border {
+        let pcd = pc.as_dvec3();
         for &f in ring {
             let tri = m.faces[f as usize];
             if tri[0] == DEAD {
@@ -230,17 +236,18 @@ pub fn scan_quadric(
             if !(ma || mb) {
                 continue;
             }
-            let pa = dpos(m, a) - origin;
-            let pb = dpos(m, b) - origin;
-            let nn = (pa - pc).cross(pb - pc);
-            let Some(n) = nn.try_normalize() else {
+            let pa = fpos(m, a) - origin;
+            let pb = fpos(m, b) - origin;
+            let (n, _, area) = plane(pc, pa, pb);
+            if area <= 0.0 {
                 continue;
-            };
+            }
+            let n = n.as_dvec3();
             if ma {
-                add_border_plane(q, pc, pa, n, m.border_weight);
+                add_border_plane(q, pcd, pa.as_dvec3(), n, m.border_weight);
             }
             if mb {
-                add_border_plane(q, pc, pb, n, m.border_weight);
+                add_border_plane(q, pcd, pb.as_dvec3(), n, m.border_weight);
             }
         }
     }
@@ -261,6 +268,11 @@ pub struct Scratch {
 #[inline]
 pub fn dpos(m: &WorkMesh, v: u32) -> DVec3 {
     m.pos[v as usize].as_dvec3()
+}
+
+#[inline]
+pub fn fpos(m: &WorkMesh, v: u32) -> Vec3A {
+    Vec3A::from(m.pos[v as usize])
 }
 
 /// Whether any attribute takes part in the cost.
@@ -294,15 +306,16 @@ pub fn best_contraction(
     sc: &mut Scratch,
 ) -> Option<Record> {
     let ps = dpos(m, s);
+    let psf = fpos(m, s);
     let attributes = attribute_cost_on(m);
     let mut q = Quadric::ZERO;
     let border = if attributes {
-        if !sc.scan_s.scan(m, rings.ring(s), s, ps) {
+        if !sc.scan_s.scan(m, rings.ring(s), s, psf) {
             return None;
         }
         sc.scan_s.border()
     } else {
-        let b = scan_quadric(m, rings.ring(s), s, ps, &mut sc.scan_s.links, &mut q);
+        let b = scan_quadric(m, rings.ring(s), s, psf, &mut sc.scan_s.links, &mut q);
         if sc.scan_s.links.is_empty() {
             return None;
         }
@@ -341,19 +354,20 @@ pub fn best_contraction(
             let c = rf.corner as usize;
             let f = rf.f as usize;
             let x = [
-                joint_point(m, scan.pc, m.wedge(f, c)),
-                joint_point(m, rf.pa, m.wedge(f, (c + 1) % 3)),
-                joint_point(m, rf.pb, m.wedge(f, (c + 2) % 3)),
+                joint_point(m, scan.pc.as_dvec3(), m.wedge(f, c)),
+                joint_point(m, rf.pa.as_dvec3(), m.wedge(f, (c + 1) % 3)),
+                joint_point(m, rf.pb.as_dvec3(), m.wedge(f, (c + 2) % 3)),
             ];
-            if let Some(e) = ExtendedFace::new([&x[0], &x[1], &x[2]], dim, rf.area) {
+            if let Some(e) = ExtendedFace::new([&x[0], &x[1], &x[2]], dim, rf.area as f64) {
                 sc.ext.push(e);
             }
             if border {
+                let (pc, n) = (scan.pc.as_dvec3(), rf.n.as_dvec3());
                 if scan.m(rf.a) == 1 {
-                    add_border_plane(&mut qb, scan.pc, rf.pa, rf.n, m.border_weight);
+                    add_border_plane(&mut qb, pc, rf.pa.as_dvec3(), n, m.border_weight);
                 }
                 if scan.m(rf.b) == 1 {
-                    add_border_plane(&mut qb, scan.pc, rf.pb, rf.n, m.border_weight);
+                    add_border_plane(&mut qb, pc, rf.pb.as_dvec3(), n, m.border_weight);
                 }
             }
         }
@@ -409,11 +423,11 @@ mod tests {
             ..Default::default()
         };
         let mut scan = RingScan::default();
-        assert!(scan.scan(&m, &[0, 1], 0, DVec3::ZERO));
+        assert!(scan.scan(&m, &[0, 1], 0, Vec3A::ZERO));
         assert_eq!((scan.m(2), scan.m(1), scan.m(3), scan.m(9)), (2, 1, 1, 0));
         assert!(scan.border());
         for rf in &scan.faces {
-            assert!((rf.n - DVec3::Z).length() < 1e-12 && (rf.area - 0.5).abs() < 1e-12);
+            assert!((rf.n - Vec3A::Z).length() < 1e-6 && (rf.area - 0.5).abs() < 1e-6);
         }
         // The quadric vanishes on the plane, away from the border lines.
         let mut q = Quadric::ZERO;
