@@ -203,6 +203,14 @@ pub fn scan_quadric(
 ) -> bool {
     links.clear();
     let pc = fpos(m, center) - origin;
+    // Fast path for the common closed fan, where every neighbour is the
+    // first other corner of exactly one face and the second of another:
+    // the candidates are the first corners, and the two corner multisets
+    // agree (checked by sum and xor). Anything else — a border, a
+    // non-manifold fan, or the rare sum/xor collision — takes the exact
+    // link count below; a collision only costs a record that the collapse
+    // stage's exact checks then refuse.
+    let (mut sum_a, mut sum_b, mut xor_a, mut xor_b) = (0u64, 0u64, 0u32, 0u32);
     for &f in ring {
         let tri = m.faces[f as usize];
         if tri[0] == DEAD {
@@ -215,11 +223,28 @@ pub fn scan_quadric(
         } else {
             (tri[0], tri[1])
         };
-        add_link(links, a);
-        add_link(links, b);
+        sum_a += a as u64;
+        sum_b += b as u64;
+        xor_a ^= a;
+        xor_b ^= b;
+        links.push(Link { v: a, m: 2 });
         let (n, d, area) = plane(pc, fpos(m, a) - origin, fpos(m, b) - origin);
         if area > 0.0 {
             q.add_plane(n.as_dvec3(), d as f64, area as f64);
+        }
+    }
+    if links.is_empty() || (sum_a == sum_b && xor_a == xor_b) {
+        return false;
+    }
+    links.clear();
+    for &f in ring {
+        let tri = m.faces[f as usize];
+        if tri[0] != DEAD {
+            for &w in &tri {
+                if w != center {
+                    add_link(links, w);
+                }
+            }
         }
     }
     let border = links.iter().any(|l| l.m == 1);
