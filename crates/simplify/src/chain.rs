@@ -25,6 +25,7 @@ impl Simplifier {
         opts: &Options,
         targets: &[Target],
     ) -> Result<Vec<Simplified>, Error> {
+        let mut t0 = std::time::Instant::now();
         self.start(mesh, opts)?;
         let mut out = Vec::with_capacity(targets.len());
         for &t in targets {
@@ -32,10 +33,18 @@ impl Simplifier {
             let stop = self.run_to(goal, opts);
             let level = export(&self.m);
             let estimated_error = self.m.max_error();
+            let level_done = std::time::Instant::now();
             out.push(Simplified {
-                report: self.report(goal, &level, estimated_error, stop),
+                report: self.report(
+                    goal,
+                    &level,
+                    estimated_error,
+                    stop,
+                    t0.elapsed().as_secs_f64(),
+                ),
                 mesh: level,
             });
+            t0 = level_done;
         }
         Ok(out)
     }

@@ -128,6 +128,10 @@ pub struct LevelReport {
     /// Edge collapses performed since the input (cumulative).
     pub collapses: usize,
     pub stop: StopReason,
+    /// Wall time of this level: the whole call for `simplify`; for a chain
+    /// level, from the previous level's end (the first level includes
+    /// loading the input into the workspace).
+    pub seconds: f64,
 }
 
 /// A simplified mesh and its report.

@@ -58,13 +58,20 @@ impl Simplifier {
 
     /// Simplifies `mesh` to `opts.target` (and `opts.max_error`).
     pub fn simplify(&mut self, mesh: &TriMesh, opts: &Options) -> Result<Simplified, Error> {
+        let t0 = std::time::Instant::now();
         self.start(mesh, opts)?;
         let goal = opts.target.faces(self.input_faces);
         let stop = self.run_to(goal, opts);
         let estimated_error = self.m.max_error();
         let mesh = take(&mut self.m);
         Ok(Simplified {
-            report: self.report(goal, &mesh, estimated_error, stop),
+            report: self.report(
+                goal,
+                &mesh,
+                estimated_error,
+                stop,
+                t0.elapsed().as_secs_f64(),
+            ),
             mesh,
         })
     }
@@ -168,6 +175,7 @@ impl Simplifier {
         mesh: &TriMesh,
         estimated_error: f32,
         stop: StopReason,
+        seconds: f64,
     ) -> LevelReport {
         LevelReport {
             target_faces: goal,
@@ -177,6 +185,7 @@ impl Simplifier {
             passes: self.passes,
             collapses: self.collapses,
             stop,
+            seconds,
         }
     }
 }

@@ -90,11 +90,10 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
         .unwrap_or("mesh")
         .to_string();
 
-    // One chain, timed level by level (each level continues the previous).
+    // One chain; each level is timed inside it (from the previous level).
     let mut ws = Simplifier::new();
     let mut levels = Vec::new();
     let mut meshes: Vec<(String, TriMesh)> = Vec::new();
-    let mut prev_time = 0.0;
     let start = Instant::now();
     let step = ui.spinner("simplifying");
     let chain = ws
@@ -102,20 +101,6 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
         .map_err(|e| anyhow::anyhow!("{}: {e}", a.input.display()))?;
     let total = start.elapsed().as_secs_f64();
     step.finish();
-    // Per-level time is not separable inside one chain call; report the
-    // chain's time split by the faces each level removed.
-    let removed: Vec<usize> = {
-        let mut prev = mesh.faces.len();
-        chain
-            .iter()
-            .map(|l| {
-                let r = prev.saturating_sub(l.mesh.faces.len());
-                prev = l.mesh.faces.len();
-                r
-            })
-            .collect()
-    };
-    let all_removed: usize = removed.iter().sum::<usize>().max(1);
     let copts = CompareOptions {
         samples: Some(a.samples),
         ..CompareOptions::default()
@@ -138,8 +123,7 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
         )
         .map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
         write_atomic(&a.out.join(&file), &bytes)?;
-        let seconds = total * removed[i] as f64 / all_removed as f64;
-        prev_time += seconds;
+        let seconds = l.report.seconds;
         levels.push(Level {
             level: i + 1,
             file,
@@ -154,7 +138,6 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
         });
         meshes.push((name, l.mesh));
     }
-    let _ = prev_time;
     let glb_name = format!("{stem}_lods.glb");
     let named: Vec<(&str, &TriMesh)> = meshes
         .iter()
