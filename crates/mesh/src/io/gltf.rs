@@ -67,6 +67,7 @@ use gltf::mesh::util::{ReadColors, ReadTexCoords};
 use gltf::{Accessor, Semantic};
 
 use crate::error::ParseError;
+use crate::error::clip;
 use crate::mesh::TriMesh;
 use crate::parse_err;
 
@@ -128,43 +129,16 @@ fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), ParseError> {
     Ok((json_chunk, bin))
 }
 
-/// Decodes standard base64 (`+/`, optional `=` padding, no whitespace).
+/// Decodes standard base64 (`+/`, `=` padding optional, no whitespace),
+/// as glTF data URIs use it.
 fn decode_base64(s: &str) -> Result<Vec<u8>, String> {
-    fn val(c: u8) -> Option<u32> {
-        Some(match c {
-            b'A'..=b'Z' => c - b'A',
-            b'a'..=b'z' => c - b'a' + 26,
-            b'0'..=b'9' => c - b'0' + 52,
-            b'+' | b'-' => 62,
-            b'/' | b'_' => 63,
-            _ => return None,
-        } as u32)
-    }
-    let b = s.as_bytes();
-    let trimmed = b
-        .strip_suffix(b"==")
-        .or_else(|| b.strip_suffix(b"="))
-        .unwrap_or(b);
-    if trimmed.len() % 4 == 1 || (trimmed.len() != b.len() && !b.len().is_multiple_of(4)) {
-        return Err(format!("base64 length {} is impossible", b.len()));
-    }
-    let mut out = Vec::with_capacity(trimmed.len() / 4 * 3 + 2);
-    for chunk in trimmed.chunks(4) {
-        let mut acc = 0u32;
-        for (k, &c) in chunk.iter().enumerate() {
-            let v = val(c).ok_or_else(|| {
-                format!(
-                    "'{}' at offset {} is not a base64 character",
-                    c.escape_ascii(),
-                    (chunk.as_ptr() as usize - b.as_ptr() as usize) + k
-                )
-            })?;
-            acc |= v << (18 - 6 * k);
-        }
-        let bytes = acc.to_be_bytes();
-        out.extend_from_slice(&bytes[1..chunk.len()]);
-    }
-    Ok(out)
+    use base64::Engine as _;
+    use base64::engine::{DecodePaddingMode, GeneralPurpose, GeneralPurposeConfig};
+    const ENGINE: GeneralPurpose = GeneralPurpose::new(
+        &base64::alphabet::STANDARD,
+        GeneralPurposeConfig::new().with_decode_padding_mode(DecodePaddingMode::Indifferent),
+    );
+    ENGINE.decode(s).map_err(|e| e.to_string())
 }
 
 /// Decodes `%XX` escapes in a relative URI.
@@ -178,7 +152,7 @@ fn percent_decode(s: &str) -> Result<String, ParseError> {
                 .get(i + 1..i + 3)
                 .and_then(|h| std::str::from_utf8(h).ok())
                 .and_then(|h| u8::from_str_radix(h, 16).ok())
-                .ok_or_else(|| parse_err!("buffer URI '{}' has a bad %-escape", clip(s)))?;
+                .ok_or_else(|| parse_err!("buffer URI '{}' has a bad %-escape", clip(s, 48)))?;
             out.push(hex);
             i += 3;
         } else {
@@ -186,19 +160,7 @@ fn percent_decode(s: &str) -> Result<String, ParseError> {
             i += 1;
         }
     }
-    String::from_utf8(out).map_err(|_| parse_err!("buffer URI '{}' is not UTF-8", clip(s)))
-}
-
-fn clip(s: &str) -> String {
-    let mut end = s.len().min(48);
-    while !s.is_char_boundary(end) {
-        end -= 1;
-    }
-    if end < s.len() {
-        format!("{}…", &s[..end])
-    } else {
-        s.to_string()
-    }
+    String::from_utf8(out).map_err(|_| parse_err!("buffer URI '{}' is not UTF-8", clip(s, 48)))
 }
 
 /// The bytes of buffer `buffer` (see the module docs for what is accepted).
@@ -223,7 +185,7 @@ fn load_buffer<'a>(
         if !meta.ends_with(";base64") {
             return Err(parse_err!(
                 "buffer {i}: data URI is not base64 ('{}')",
-                clip(meta)
+                clip(meta, 48)
             ));
         }
         return decode_base64(data)
@@ -238,28 +200,28 @@ fn load_buffer<'a>(
     if has_scheme || uri.starts_with('/') || uri.starts_with('\\') {
         return Err(parse_err!(
             "buffer {i}: '{}' is not a relative path (URLs and absolute paths are refused)",
-            clip(uri)
+            clip(uri, 48)
         ));
     }
     let rel = percent_decode(uri)?;
     let dir = base_dir.ok_or_else(|| {
         parse_err!(
             "buffer {i}: external file '{}' but no directory to resolve it against",
-            clip(&rel)
+            clip(&rel, 48)
         )
     })?;
     let path = dir.join(&rel);
     let meta = std::fs::metadata(&path)
-        .map_err(|e| parse_err!("buffer {i}: cannot open '{}': {e}", clip(&rel)))?;
+        .map_err(|e| parse_err!("buffer {i}: cannot open '{}': {e}", clip(&rel, 48)))?;
     if !meta.is_file() || meta.len() > super::MAX_FILE_BYTES {
         return Err(parse_err!(
             "buffer {i}: '{}' is not a regular file within the size limit",
-            clip(&rel)
+            clip(&rel, 48)
         ));
     }
     std::fs::read(&path)
         .map(Cow::Owned)
-        .map_err(|e| parse_err!("buffer {i}: cannot read '{}': {e}", clip(&rel)))
+        .map_err(|e| parse_err!("buffer {i}: cannot read '{}': {e}", clip(&rel, 48)))
 }
 
 /// Checks what gltf-json's validation indexes without checking.
@@ -288,10 +250,12 @@ fn parse_document(bytes: &[u8]) -> Result<(gltf::Document, Option<&[u8]>), Parse
     if bytes.is_empty() {
         return Err(ParseError::new("empty file"));
     }
+    // A UTF-8 byte-order mark is not allowed by the spec but is tolerated.
+    let unbom = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     let (json_bytes, bin) = if bytes.starts_with(GLB_MAGIC) {
         split_glb(bytes)?
-    } else if bytes.trim_ascii_start().starts_with(b"{") {
-        (bytes, None)
+    } else if unbom.trim_ascii_start().starts_with(b"{") {
+        (unbom, None)
     } else {
         let head = &bytes[..bytes.len().min(4)];
         return Err(parse_err!(
@@ -988,21 +952,8 @@ mod tests {
     use super::*;
 
     fn b64(data: &[u8]) -> String {
-        const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-        let mut s = String::new();
-        for c in data.chunks(3) {
-            let n = (c[0] as u32) << 16
-                | (*c.get(1).unwrap_or(&0) as u32) << 8
-                | *c.get(2).unwrap_or(&0) as u32;
-            for k in 0..4 {
-                if k <= c.len() {
-                    s.push(A[(n >> (18 - 6 * k) & 63) as usize] as char);
-                } else {
-                    s.push('=');
-                }
-            }
-        }
-        s
+        use base64::Engine as _;
+        base64::engine::general_purpose::STANDARD.encode(data)
     }
 
     /// The bytes behind [`BODY`]: a unit quad's positions (0..48), u8
@@ -1298,6 +1249,12 @@ mod tests {
         );
         let e = read(d.as_bytes(), None).unwrap_err().to_string();
         assert!(e.contains("index 7 out of range (4 vertices)"), "{e}");
+    }
+
+    #[test]
+    fn json_with_a_byte_order_mark_is_read() {
+        let with_bom = [b"\xEF\xBB\xBF".as_slice(), doc(BODY).as_bytes()].concat();
+        assert_eq!(read(&with_bom, None).unwrap().faces.len(), 2);
     }
 
     #[test]

@@ -32,6 +32,7 @@ use std::str::SplitWhitespace;
 use glam::Vec3;
 
 use crate::error::ParseError;
+use crate::error::clip;
 use crate::mesh::TriMesh;
 use crate::parse_err;
 
@@ -130,23 +131,28 @@ impl<'a> Tokens<'a> {
     fn skip_line(&mut self) {
         self.words = "".split_whitespace();
     }
-    fn expect(&mut self, word: &str, context: &str) -> Result<(), ParseError> {
+    /// Consumes `word`, the next keyword of facet `facet`.
+    fn expect(&mut self, word: &str, facet: usize) -> Result<(), ParseError> {
         match self.next() {
             Some(w) if w == word => Ok(()),
             Some(w) => Err(parse_err!(
-                "line {}: expected '{word}' {context}, found '{}'",
+                "line {}: expected '{word}' in facet {facet}, found '{}'",
                 self.line,
-                clip(w)
+                clip(w, 32)
             )),
             None => Err(parse_err!(
-                "unexpected end of file: expected '{word}' {context}"
+                "unexpected end of file: expected '{word}' in facet {facet}"
             )),
         }
     }
     fn float(&mut self, what: &str) -> Result<f32, ParseError> {
         match self.next() {
             Some(w) => w.parse().map_err(|_| {
-                parse_err!("line {}: {what} '{}' is not a number", self.line, clip(w))
+                parse_err!(
+                    "line {}: {what} '{}' is not a number",
+                    self.line,
+                    clip(w, 32)
+                )
             }),
             None => Err(parse_err!("unexpected end of file: expected a {what}")),
         }
@@ -157,18 +163,6 @@ impl<'a> Tokens<'a> {
             self.float(what)?,
             self.float(what)?,
         ))
-    }
-}
-
-fn clip(tok: &str) -> String {
-    let mut end = tok.len().min(32);
-    while !tok.is_char_boundary(end) {
-        end -= 1;
-    }
-    if end < tok.len() {
-        format!("{}…", &tok[..end])
-    } else {
-        tok.to_string()
     }
 }
 
@@ -187,7 +181,7 @@ fn read_ascii(bytes: &[u8]) -> Result<Vec<[Vec3; 3]>, ParseError> {
             return Err(parse_err!(
                 "line {}: expected 'solid', found '{}'",
                 t.line,
-                clip(w)
+                clip(w, 32)
             ));
         }
         t.skip_line();
@@ -202,7 +196,7 @@ fn read_ascii(bytes: &[u8]) -> Result<Vec<[Vec3; 3]>, ParseError> {
                     return Err(parse_err!(
                         "line {}: expected 'facet' or 'endsolid', found '{}'",
                         t.line,
-                        clip(w)
+                        clip(w, 32)
                     ));
                 }
                 None => {
@@ -212,11 +206,10 @@ fn read_ascii(bytes: &[u8]) -> Result<Vec<[Vec3; 3]>, ParseError> {
                 }
             }
             let facet = out.len();
-            let ctx = format!("in facet {facet}");
-            t.expect("normal", &ctx)?;
+            t.expect("normal", facet)?;
             t.vec3("normal component")?;
-            t.expect("outer", &ctx)?;
-            t.expect("loop", &ctx)?;
+            t.expect("outer", facet)?;
+            t.expect("loop", facet)?;
             let mut corners = [Vec3::ZERO; 3];
             let mut n = 0usize;
             loop {
@@ -231,14 +224,14 @@ fn read_ascii(bytes: &[u8]) -> Result<Vec<[Vec3; 3]>, ParseError> {
                     Some("endloop") => break,
                     Some(w) => {
                         return Err(parse_err!(
-                            "line {}: expected 'vertex' or 'endloop' {ctx}, found '{}'",
+                            "line {}: expected 'vertex' or 'endloop' in facet {facet}, found '{}'",
                             t.line,
-                            clip(w)
+                            clip(w, 32)
                         ));
                     }
                     None => {
                         return Err(parse_err!(
-                            "unexpected end of file {ctx}: missing 'endloop'"
+                            "unexpected end of file in facet {facet}: missing 'endloop'"
                         ));
                     }
                 }
@@ -249,7 +242,7 @@ fn read_ascii(bytes: &[u8]) -> Result<Vec<[Vec3; 3]>, ParseError> {
                     t.line
                 ));
             }
-            t.expect("endfacet", &ctx)?;
+            t.expect("endfacet", facet)?;
             out.push(corners);
         }
     }

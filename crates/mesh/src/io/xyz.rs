@@ -31,43 +31,64 @@ use std::io::Write;
 use glam::Vec3;
 
 use crate::error::ParseError;
+use crate::error::clip;
 use crate::mesh::PointCloud;
 use crate::parse_err;
 
-/// One non-blank, non-comment line: its 1-based number and its tokens.
+/// The most columns any layout uses; longer lines are only counted.
+const MAX_COLS: usize = 9;
+
+/// One non-blank, non-comment line: its 1-based number, its column count
+/// and its first [`MAX_COLS`] tokens (no per-line allocation, so a
+/// multi-gigabyte file costs only its points).
 struct DataLine<'a> {
     number: usize,
-    tokens: Vec<&'a str>,
+    count: usize,
+    buf: [&'a str; MAX_COLS],
 }
 
-/// Splits `bytes` into data lines (UTF-8 required; blank and `#` lines
-/// skipped).
-fn data_lines(bytes: &[u8]) -> Result<Vec<DataLine<'_>>, ParseError> {
-    let text = std::str::from_utf8(bytes)
-        .map_err(|e| parse_err!("not a text file: invalid UTF-8 at byte {}", e.valid_up_to()))?;
-    let mut out = Vec::new();
-    for (i, line) in text.split('\n').enumerate() {
+impl<'a> DataLine<'a> {
+    fn t(&self) -> &[&'a str] {
+        &self.buf[..self.count.min(MAX_COLS)]
+    }
+}
+
+fn as_text(bytes: &[u8]) -> Result<&str, ParseError> {
+    std::str::from_utf8(bytes)
+        .map_err(|e| parse_err!("not a text file: invalid UTF-8 at byte {}", e.valid_up_to()))
+}
+
+/// The data lines of `text` (blank and `#` lines skipped).
+fn data_lines(text: &str) -> impl Iterator<Item = DataLine<'_>> {
+    text.split('\n').enumerate().filter_map(|(i, line)| {
         let line = line.trim();
         if line.is_empty() || line.starts_with('#') {
-            continue;
+            return None;
         }
-        out.push(DataLine {
+        let mut l = DataLine {
             number: i + 1,
-            tokens: line.split_whitespace().collect(),
-        });
-    }
-    Ok(out)
+            count: 0,
+            buf: [""; MAX_COLS],
+        };
+        for w in line.split_whitespace() {
+            if l.count < MAX_COLS {
+                l.buf[l.count] = w;
+            }
+            l.count += 1;
+        }
+        Some(l)
+    })
 }
 
 /// Parses a coordinate token; names the line and column on failure.
 fn float(tok: &str, line: usize, what: &str) -> Result<f32, ParseError> {
     let v: f32 = tok
         .parse()
-        .map_err(|_| parse_err!("line {line}: {what} '{}' is not a number", clip(tok)))?;
+        .map_err(|_| parse_err!("line {line}: {what} '{}' is not a number", clip(tok, 32)))?;
     if !v.is_finite() {
         return Err(parse_err!(
             "line {line}: {what} '{}' is not finite",
-            clip(tok)
+            clip(tok, 32)
         ));
     }
     Ok(v)
@@ -92,25 +113,12 @@ fn rgb(t: &[&str], line: usize) -> Result<[u8; 4], ParseError> {
         if !is_u8_literal(t[k]) {
             return Err(parse_err!(
                 "line {line}: colour '{}' is not an integer 0..255",
-                clip(t[k])
+                clip(t[k], 32)
             ));
         }
         c[k] = t[k].parse().unwrap_or(0);
     }
     Ok(c)
-}
-
-/// Shortens a token quoted in an error, so one garbage line cannot make a
-/// megabyte-long message.
-fn clip(tok: &str) -> String {
-    if tok.len() <= 32 {
-        return tok.to_string();
-    }
-    let mut end = 32;
-    while !tok.is_char_boundary(end) {
-        end -= 1;
-    }
-    format!("{}…", &tok[..end])
 }
 
 /// Reads an XYZ file (layout chosen as described in the module docs).
@@ -119,44 +127,48 @@ fn clip(tok: &str) -> String {
 /// count differs from the first, a token that is not a finite number, a
 /// colour that is not an integer `0..=255`.
 pub fn read_xyz(bytes: &[u8]) -> Result<PointCloud, ParseError> {
-    let lines = data_lines(bytes)?;
-    let first = lines
-        .first()
+    let text = as_text(bytes)?;
+    // Pass 1: layout and line count, nothing stored.
+    let first = data_lines(text)
+        .next()
         .ok_or_else(|| ParseError::new("no points: the file has no data lines"))?;
-    let cols = first.tokens.len();
+    let cols = first.count;
     if !matches!(cols, 3 | 6 | 9) {
         return Err(parse_err!(
             "line {}: {cols} columns; XYZ needs 3 (x y z), 6 (x y z + normal or rgb) or 9 (x y z nx ny nz r g b)",
             first.number
         ));
     }
-    if let Some(l) = lines.iter().find(|l| l.tokens.len() != cols) {
-        return Err(parse_err!(
-            "line {}: {} columns, but the first data line (line {}) has {cols}",
-            l.number,
-            l.tokens.len(),
-            first.number
-        ));
+    let mut n = 0usize;
+    let mut six_is_rgb = cols == 6;
+    for l in data_lines(text) {
+        if l.count != cols {
+            return Err(parse_err!(
+                "line {}: {} columns, but the first data line (line {}) has {cols}",
+                l.number,
+                l.count,
+                first.number
+            ));
+        }
+        six_is_rgb = six_is_rgb && l.t()[3..6].iter().all(|t| is_u8_literal(t));
+        n += 1;
     }
-    let six_is_rgb = cols == 6
-        && lines
-            .iter()
-            .all(|l| l.tokens[3..6].iter().all(|t| is_u8_literal(t)));
     let has_normals = cols == 9 || (cols == 6 && !six_is_rgb);
     let has_colors = cols == 9 || six_is_rgb;
 
+    // Pass 2: parse.
     let mut cloud = PointCloud {
-        positions: Vec::with_capacity(lines.len()),
-        normals: has_normals.then(|| Vec::with_capacity(lines.len())),
-        colors: has_colors.then(|| Vec::with_capacity(lines.len())),
+        positions: Vec::with_capacity(n),
+        normals: has_normals.then(|| Vec::with_capacity(n)),
+        colors: has_colors.then(|| Vec::with_capacity(n)),
     };
-    for l in &lines {
-        let t = &l.tokens;
+    for l in data_lines(text) {
+        let t = l.t();
         cloud
             .positions
             .push(vec3(&t[0..3], l.number, "coordinate")?);
-        if let Some(n) = cloud.normals.as_mut() {
-            n.push(vec3(&t[3..6], l.number, "normal")?);
+        if let Some(nv) = cloud.normals.as_mut() {
+            nv.push(vec3(&t[3..6], l.number, "normal")?);
         }
         if let Some(c) = cloud.colors.as_mut() {
             c.push(rgb(&t[cols - 3..cols], l.number)?);
@@ -171,8 +183,8 @@ pub fn read_xyz(bytes: &[u8]) -> Result<PointCloud, ParseError> {
 /// its section, a column count other than 3, 4, 6 or 7 (or one that changes
 /// between lines), non-numbers, non-finite coordinates, bad colours.
 pub fn read_pts(bytes: &[u8]) -> Result<PointCloud, ParseError> {
-    let lines = data_lines(bytes)?;
-    let mut positions = Vec::with_capacity(lines.len());
+    let text = as_text(bytes)?;
+    let mut positions = Vec::new();
     let mut colors: Vec<[u8; 4]> = Vec::new();
     let mut layout: Option<(usize, usize)> = None; // (columns, first line)
     // The open section: (declared count, line of the count, points seen).
@@ -185,21 +197,21 @@ pub fn read_pts(bytes: &[u8]) -> Result<PointCloud, ParseError> {
             _ => Ok(()),
         }
     };
-    for l in &lines {
-        let t = &l.tokens;
-        if t.len() == 1 {
+    for l in data_lines(text) {
+        let t = l.t();
+        if l.count == 1 {
             let n: u64 = t[0].parse().map_err(|_| {
                 parse_err!(
                     "line {}: '{}' is not a point count (one column)",
                     l.number,
-                    clip(t[0])
+                    clip(t[0], 32)
                 )
             })?;
             close(section.take())?;
             section = Some((n, l.number, 0));
             continue;
         }
-        let cols = t.len();
+        let cols = l.count;
         match layout {
             None => {
                 if !matches!(cols, 3 | 4 | 6 | 7) {

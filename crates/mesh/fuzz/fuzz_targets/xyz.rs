@@ -1,0 +1,12 @@
+//! Fuzzes `io::decode(Format::Xyz, ..)`: any bytes must give `Ok` or a
+//! `ParseError`, never a panic, an abort or a runaway allocation.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use lodkit_mesh::io::{Format, decode};
+
+fuzz_target!(|data: &[u8]| {
+    let _ = decode(Format::Xyz, data, None);
+    // The same bytes as PTS: both text point-cloud readers share the target.
+    let _ = decode(Format::Pts, data, None);
+});
