@@ -3,6 +3,7 @@
 //! Exit codes: 0 success, 1 bad input or failure (one line on stderr naming
 //! the file and the problem), 2 usage error (from clap).
 
+mod chart;
 mod commands;
 mod ui;
 
@@ -91,16 +92,7 @@ enum Command {
     #[command(
         after_help = "Examples:\n  lodkit build --out out/              # the built-in Stanford bunny\n  lodkit build scan.ply --out out/scan"
     )]
-    Build {
-        /// Input model; the built-in Stanford bunny when omitted.
-        input: Option<PathBuf>,
-        /// Output directory (created if missing).
-        #[arg(long, short, default_value = "lodkit-out")]
-        out: PathBuf,
-        /// Print the list of outputs as JSON.
-        #[arg(long)]
-        json: bool,
-    },
+    Build(commands::build::BuildArgs),
 }
 
 fn main() -> ExitCode {
@@ -118,9 +110,7 @@ fn main() -> ExitCode {
         Command::Simplify(args) => commands::simplify::run(&ui, &args),
         Command::Lods(args) => commands::lods::run(&ui, &args),
         Command::Bench(args) => commands::bench::run(&ui, &args),
-        Command::Build { input, out, json } => {
-            commands::build::run(&ui, input.as_deref(), &out, json)
-        }
+        Command::Build(args) => commands::build::run(&ui, &args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,18 +1,26 @@
 //! `lodkit build [INPUT] --out DIR`: the main job.
 //!
-//! Today it loads the model (the built-in Stanford bunny when no input is
-//! given), writes it as GLB and PLY, and writes `report.md` with `info`.
-//! Each capability (discrete LOD chains, continuous LOD, progressive
+//! Loads the model (the built-in Stanford bunny when no input is given),
+//! writes it as GLB and PLY, builds the discrete LOD chain (HQMS, each level
+//! half the previous one) with its measured errors and an error chart, and
+//! writes `report.md`. Each capability (continuous LOD, progressive
 //! streams) adds its outputs and its section of the report here.
+//!
+//! Everything written is byte-identical from run to run, except the
+//! per-level wall times in `lods/lods.json`.
 
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::PathBuf;
 
 use anyhow::{Context, Result};
+use clap::Args;
 use lodkit_mesh::info::model_info;
 use lodkit_mesh::io::{Format, WriteOptions, encode, write_atomic};
 use lodkit_mesh::{Model, TriMesh};
+use lodkit_simplify::{Options, Target, halving_targets};
+use plotters::style::{BLUE, RED, RGBColor};
 
+use crate::chart::{Series, error_chart};
 use crate::ui::Ui;
 
 /// The Stanford bunny (`data/models/stanford_bunny.ply`), built in so
@@ -20,8 +28,27 @@ use crate::ui::Ui;
 const BUILTIN_BUNNY: &[u8] = include_bytes!("../../../../data/models/stanford_bunny.ply");
 const BUILTIN_NAME: &str = "stanford_bunny";
 
-pub fn run(ui: &Ui, input: Option<&Path>, out: &Path, json: bool) -> Result<()> {
-    let (name, model) = match input {
+#[derive(Args)]
+pub struct BuildArgs {
+    /// Input mesh; the built-in Stanford bunny when omitted.
+    pub input: Option<PathBuf>,
+    /// Output directory (created if missing).
+    #[arg(long, short, default_value = "lodkit-out")]
+    pub out: PathBuf,
+    /// Levels of the discrete LOD chain, each half the previous one.
+    #[arg(long, default_value_t = 6)]
+    pub levels: usize,
+    /// Samples per kind for the measured errors (`compare`).
+    #[arg(long, default_value_t = 1_000_000)]
+    pub samples: usize,
+    /// Print the list of outputs as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(ui: &Ui, args: &BuildArgs) -> Result<()> {
+    let out = args.out.as_path();
+    let (name, model) = match &args.input {
         Some(path) => {
             let stem = path
                 .file_stem()
@@ -57,34 +84,127 @@ pub fn run(ui: &Ui, input: Option<&Path>, out: &Path, json: bool) -> Result<()> 
         outputs.push((file, bytes.len()));
     }
 
-    let info = model_info(&model);
     let mut report = String::new();
     writeln!(report, "# lodkit build report: {name}\n")?;
-    if input.is_none() {
-        writeln!(
+    match &args.input {
+        None => writeln!(
             report,
             "Input: the built-in Stanford Bunny (Stanford 3D Scanning Repository, Stanford University \
              Computer Graphics Laboratory).\n"
-        )?;
-    } else {
-        writeln!(
-            report,
-            "Input: `{}`\n",
-            input.map(|p| p.display().to_string()).unwrap_or_default()
-        )?;
+        )?,
+        Some(p) => writeln!(report, "Input: `{}`\n", p.display())?,
     }
-    writeln!(report, "## Input\n\n```text\n{}```\n", info.to_text())?;
     writeln!(
         report,
-        "## Outputs\n\n| file | bytes | triangles |\n|---|---:|---:|"
+        "## Input\n\n```text\n{}```\n",
+        model_info(&model).to_text()
     )?;
-    for (file, bytes) in &outputs {
-        writeln!(report, "| `{file}` | {bytes} | {} |", mesh.faces.len())?;
+
+    // Discrete LOD chain (HQMS).
+    let lods_dir = out.join("lods");
+    let chain = super::lods::write_chain(
+        ui,
+        mesh,
+        &name,
+        &name,
+        &lods_dir,
+        &halving_targets(args.levels),
+        &Options {
+            target: Target::Ratio(1.0),
+            ..Options::DEFAULT
+        },
+        args.samples,
+    )?;
+    writeln!(
+        report,
+        "## Discrete LOD chain (HQMS)\n\nEach level is simplified from the previous one; errors are measured \
+         against the input with `lodkit compare` ({} samples of each kind), symmetric, in object units \
+         (bounding-box diagonal {:.6}).\n",
+        args.samples,
+        mesh.bbox().diagonal()
+    )?;
+    writeln!(
+        report,
+        "| level | file | triangles | vertices | estimated error | measured mean | measured max | stopped |\n\
+         |---:|---|---:|---:|---:|---:|---:|---|"
+    )?;
+    writeln!(
+        report,
+        "| 0 | `{name}.ply` | {} | {} | 0 | 0 | 0 | input |",
+        mesh.faces.len(),
+        mesh.positions.len()
+    )?;
+    for l in &chain.levels {
+        writeln!(
+            report,
+            "| {} | `lods/{}` | {} | {} | {:.3e} | {:.3e} | {:.3e} | {} |",
+            l.level,
+            l.file,
+            l.triangles,
+            l.vertices,
+            l.estimated_error,
+            l.measured_mean_error,
+            l.measured_max_error,
+            l.stop
+        )?;
+    }
+    writeln!(
+        report,
+        "\nAll levels in one file: `lods/{}` (one node per level); per-level data and times: `lods/lods.json`.\n",
+        chain.glb
+    )?;
+    let curve = |f: fn(&super::lods::Level) -> f64| -> Vec<(f64, f64)> {
+        chain
+            .levels
+            .iter()
+            .map(|l| (l.triangles as f64, f(l)))
+            .collect()
+    };
+    let svg = error_chart(
+        &format!("{name}: error against triangle count"),
+        &[
+            Series {
+                name: "measured max (Hausdorff)",
+                points: curve(|l| l.measured_max_error),
+                color: RED,
+            },
+            Series {
+                name: "measured mean",
+                points: curve(|l| l.measured_mean_error),
+                color: BLUE,
+            },
+            Series {
+                name: "estimated (quadric)",
+                points: curve(|l| l.estimated_error as f64),
+                color: RGBColor(120, 120, 120),
+            },
+        ],
+    )?;
+    write_atomic(&out.join("lod_error.svg"), svg.as_bytes())?;
+    writeln!(report, "![error against triangle count](lod_error.svg)\n")?;
+    for l in &chain.levels {
+        outputs.push((format!("lods/{}", l.file), 0));
+    }
+    outputs.push((format!("lods/{}", chain.glb), 0));
+    outputs.push(("lods/lods.json".into(), 0));
+    outputs.push(("lod_error.svg".into(), svg.len()));
+
+    writeln!(report, "## Outputs\n\n| file | bytes |\n|---|---:|")?;
+    for (file, _) in outputs.iter_mut() {
+        let bytes = std::fs::metadata(out.join(&*file))
+            .map(|m| m.len())
+            .unwrap_or(0);
+        writeln!(report, "| `{file}` | {bytes} |")?;
     }
     write_atomic(&out.join("report.md"), report.as_bytes())?;
     outputs.push(("report.md".into(), report.len()));
+    for (file, bytes) in outputs.iter_mut() {
+        *bytes = std::fs::metadata(out.join(&*file))
+            .map(|m| m.len() as usize)
+            .unwrap_or(0);
+    }
 
-    if json {
+    if args.json {
         let list: Vec<_> = outputs
             .iter()
             .map(|(file, bytes)| serde_json::json!({ "path": out.join(file), "bytes": bytes }))

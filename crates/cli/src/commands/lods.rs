@@ -10,7 +10,7 @@ use clap::Args;
 use lodkit_mesh::io::{Format, WriteOptions, encode, gltf::write_glb, write_atomic};
 use lodkit_mesh::metrics::{CompareOptions, compare};
 use lodkit_mesh::{Model, TriMesh};
-use lodkit_simplify::{Simplifier, Target, halving_targets};
+use lodkit_simplify::{Options, Simplifier, Target, halving_targets};
 
 use super::simplify::SimplifyOpts;
 use crate::ui::Ui;
@@ -44,26 +44,26 @@ pub struct LodsArgs {
 }
 
 #[derive(serde::Serialize)]
-struct Level {
-    level: usize,
-    file: String,
-    target_triangles: usize,
-    triangles: usize,
-    vertices: usize,
-    estimated_error: f32,
-    measured_mean_error: f64,
-    measured_max_error: f64,
-    seconds: f64,
-    stop: String,
+pub struct Level {
+    pub level: usize,
+    pub file: String,
+    pub target_triangles: usize,
+    pub triangles: usize,
+    pub vertices: usize,
+    pub estimated_error: f32,
+    pub measured_mean_error: f64,
+    pub measured_max_error: f64,
+    pub seconds: f64,
+    pub stop: String,
 }
 
 #[derive(serde::Serialize)]
-struct Lods {
-    input: String,
-    input_triangles: usize,
-    input_vertices: usize,
-    glb: String,
-    levels: Vec<Level>,
+pub struct Lods {
+    pub input: String,
+    pub input_triangles: usize,
+    pub input_vertices: usize,
+    pub glb: String,
+    pub levels: Vec<Level>,
 }
 
 pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
@@ -82,79 +82,25 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
     }
     let opts = a.opts.options(Target::Ratio(1.0))?;
     let mesh: TriMesh = super::load_mesh(ui, &a.input)?;
-    std::fs::create_dir_all(&a.out).with_context(|| format!("{}", a.out.display()))?;
     let stem = a
         .input
         .file_stem()
         .and_then(|s| s.to_str())
         .unwrap_or("mesh")
         .to_string();
-
-    // One chain; each level is timed inside it (from the previous level).
-    let mut ws = Simplifier::new();
-    let mut levels = Vec::new();
-    let mut meshes: Vec<(String, TriMesh)> = Vec::new();
     let start = Instant::now();
-    let step = ui.spinner("simplifying");
-    let chain = ws
-        .lod_chain(&mesh, &opts, &targets)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", a.input.display()))?;
+    let report = write_chain(
+        ui,
+        &mesh,
+        &a.input.display().to_string(),
+        &stem,
+        &a.out,
+        &targets,
+        &opts,
+        a.samples,
+    )?;
     let total = start.elapsed().as_secs_f64();
-    step.finish();
-    let copts = CompareOptions {
-        samples: Some(a.samples),
-        ..CompareOptions::default()
-    };
-    for (i, l) in chain.into_iter().enumerate() {
-        let name = format!("{stem}_lod{}", i + 1);
-        let file = format!("{name}.ply");
-        let step = ui.spinner(&format!("measuring level {}", i + 1));
-        let (mean, max) = if l.mesh.faces.is_empty() {
-            (f64::NAN, f64::NAN)
-        } else {
-            let c = compare(&mesh, &l.mesh, &copts)?;
-            (c.symmetric.mean, c.symmetric.max)
-        };
-        step.finish();
-        let bytes = encode(
-            Format::Ply,
-            &Model::Mesh(l.mesh.clone()),
-            WriteOptions::default(),
-        )
-        .map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
-        write_atomic(&a.out.join(&file), &bytes)?;
-        let seconds = l.report.seconds;
-        levels.push(Level {
-            level: i + 1,
-            file,
-            target_triangles: l.report.target_faces,
-            triangles: l.report.triangles,
-            vertices: l.report.vertices,
-            estimated_error: l.report.estimated_error,
-            measured_mean_error: mean,
-            measured_max_error: max,
-            seconds,
-            stop: l.report.stop.to_string(),
-        });
-        meshes.push((name, l.mesh));
-    }
-    let glb_name = format!("{stem}_lods.glb");
-    let named: Vec<(&str, &TriMesh)> = meshes
-        .iter()
-        .filter(|(_, m)| !m.faces.is_empty())
-        .map(|(n, m)| (n.as_str(), m))
-        .collect();
-    let glb = write_glb(&named).map_err(|e| anyhow::anyhow!("{glb_name}: {e}"))?;
-    write_atomic(&a.out.join(&glb_name), &glb)?;
-    let report = Lods {
-        input: a.input.display().to_string(),
-        input_triangles: mesh.faces.len(),
-        input_vertices: mesh.positions.len(),
-        glb: glb_name.clone(),
-        levels,
-    };
     let json = serde_json::to_string_pretty(&report)? + "\n";
-    write_atomic(&a.out.join("lods.json"), json.as_bytes())?;
     if a.json {
         print!("{json}");
         return Ok(());
@@ -168,13 +114,90 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
     ui.status(format!(
         "wrote {} levels, {} and lods.json to {} ({:.3} s)",
         report.levels.len(),
-        glb_name,
-        display(&a.out),
+        report.glb,
+        a.out.display(),
         total
     ));
     Ok(())
 }
 
-fn display(p: &Path) -> String {
-    p.display().to_string()
+/// Simplifies `mesh` into one level per target (each from the previous
+/// level), measures each level against `mesh` with `compare` (`samples` per
+/// kind), and writes `<stem>_lodN.ply`, `<stem>_lods.glb` and `lods.json`
+/// into `out`. Shared by `lodkit lods` and `lodkit build`.
+#[allow(clippy::too_many_arguments)]
+pub fn write_chain(
+    ui: &Ui,
+    mesh: &TriMesh,
+    input_label: &str,
+    stem: &str,
+    out: &Path,
+    targets: &[Target],
+    opts: &Options,
+    samples: usize,
+) -> Result<Lods> {
+    std::fs::create_dir_all(out)
+        .with_context(|| format!("{}: cannot create output directory", out.display()))?;
+    let mut ws = Simplifier::new();
+    let mut levels = Vec::new();
+    let mut meshes: Vec<(String, TriMesh)> = Vec::new();
+    let step = ui.spinner("simplifying");
+    let chain = ws
+        .lod_chain(mesh, opts, targets)
+        .map_err(|e| anyhow::anyhow!("{input_label}: {e}"))?;
+    step.finish();
+    let copts = CompareOptions {
+        samples: Some(samples),
+        ..CompareOptions::default()
+    };
+    for (i, l) in chain.into_iter().enumerate() {
+        let name = format!("{stem}_lod{}", i + 1);
+        let file = format!("{name}.ply");
+        let step = ui.spinner(&format!("measuring level {}", i + 1));
+        let (mean, max) = if l.mesh.faces.is_empty() {
+            (f64::NAN, f64::NAN)
+        } else {
+            let c = compare(mesh, &l.mesh, &copts)?;
+            (c.symmetric.mean, c.symmetric.max)
+        };
+        step.finish();
+        let bytes = encode(
+            Format::Ply,
+            &Model::Mesh(l.mesh.clone()),
+            WriteOptions::default(),
+        )
+        .map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
+        write_atomic(&out.join(&file), &bytes)?;
+        levels.push(Level {
+            level: i + 1,
+            file,
+            target_triangles: l.report.target_faces,
+            triangles: l.report.triangles,
+            vertices: l.report.vertices,
+            estimated_error: l.report.estimated_error,
+            measured_mean_error: mean,
+            measured_max_error: max,
+            seconds: l.report.seconds,
+            stop: l.report.stop.to_string(),
+        });
+        meshes.push((name, l.mesh));
+    }
+    let glb_name = format!("{stem}_lods.glb");
+    let named: Vec<(&str, &TriMesh)> = meshes
+        .iter()
+        .filter(|(_, m)| !m.faces.is_empty())
+        .map(|(n, m)| (n.as_str(), m))
+        .collect();
+    let glb = write_glb(&named).map_err(|e| anyhow::anyhow!("{glb_name}: {e}"))?;
+    write_atomic(&out.join(&glb_name), &glb)?;
+    let report = Lods {
+        input: input_label.to_string(),
+        input_triangles: mesh.faces.len(),
+        input_vertices: mesh.positions.len(),
+        glb: glb_name,
+        levels,
+    };
+    let json = serde_json::to_string_pretty(&report)? + "\n";
+    write_atomic(&out.join("lods.json"), json.as_bytes())?;
+    Ok(report)
 }
