@@ -45,6 +45,9 @@ pub fn error_chart(title: &str, series: &[Series]) -> anyhow::Result<String> {
             .map_err(|e| anyhow::anyhow!("chart: {e}"))?;
         chart
             .configure_mesh()
+            .x_labels(6)
+            .y_labels(6)
+            .light_line_style(RGBColor(235, 235, 235))
             .x_desc("triangles")
             .y_desc("error (object units)")
             .y_label_formatter(&|v| format!("{v:.1e}"))
@@ -67,6 +70,7 @@ pub fn error_chart(title: &str, series: &[Series]) -> anyhow::Result<String> {
         }
         chart
             .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
             .background_style(WHITE.mix(0.8))
             .border_style(BLACK)
             .draw()
