@@ -62,6 +62,98 @@ fn edge_vertex(tree: &Tree, l: usize, cube: [u32; 3], e: u8) -> u32 {
     tree.levels[l].edges[&edge_key(corner_key(cube, l as u32, a), e / 4)]
 }
 
+/// Face crossings of a configuration on face `f`: true if any.
+fn face_crossed(cfg: u8, f: Face) -> bool {
+    face_edges(f).iter().any(|&e| {
+        let [x, y] = EDGES[e as usize];
+        (cfg >> x & 1) != (cfg >> y & 1)
+    })
+}
+
+/// Same-level node pairs whose shared face the coarse level does not cross
+/// but the level below does: they must expand in the same LOD step (see
+/// [`crate::priority`]). Call after [`crate::octree_build::assemble`].
+pub fn expand_together(tree: &Tree) -> Vec<(u32, u32)> {
+    let mut out = Vec::new();
+    for l in 1..tree.levels.len() {
+        let lv = &tree.levels[l];
+        let below = &tree.levels[l - 1];
+        for (i, &k) in lv.keys.iter().enumerate() {
+            let pc = unpack(k);
+            for axis in 0..3u8 {
+                let f = Face { axis, side: 1 };
+                if face_crossed(lv.configs[i], f) {
+                    continue;
+                }
+                let mut mc = pc;
+                mc[axis as usize] += 1;
+                let Some(&j) = lv.index.get(&pack(mc[0], mc[1], mc[2])) else {
+                    continue;
+                };
+                // Children of p on its high face, children of m on its low face.
+                let fine = (0..8u32).any(|oct| {
+                    let bit = oct >> axis & 1;
+                    let (base, face) = if bit == 1 {
+                        (pc, f)
+                    } else {
+                        (mc, Face { axis, side: 0 })
+                    };
+                    let c = [
+                        base[0] * 2 + (oct & 1),
+                        base[1] * 2 + (oct >> 1 & 1),
+                        base[2] * 2 + (oct >> 2 & 1),
+                    ];
+                    below
+                        .index
+                        .get(&pack(c[0], c[1], c[2]))
+                        .is_some_and(|&ci| face_crossed(below.configs[ci as usize], face))
+                });
+                if fine {
+                    out.push((tree.node_id[l][i], tree.node_id[l][j as usize]));
+                }
+            }
+            // Edges whose fine crossings are not exactly the coarse one (two
+            // fine crossings and none coarse, or a coarse fallback vertex):
+            // every node around the edge expands together.
+            for (e, [a, _]) in EDGES.iter().enumerate() {
+                let axis = e / 4;
+                let va = corner_key(pc, l as u32, *a);
+                let coarse = lv.edges.get(&edge_key(va, axis as u8)).copied();
+                let [x, y, z] = unpack(va);
+                let mut vm = [x, y, z];
+                vm[axis] += 1 << (l - 1);
+                let fine: Vec<u32> = [va, pack(vm[0], vm[1], vm[2])]
+                    .iter()
+                    .filter_map(|&h| below.edges.get(&edge_key(h, axis as u8)).copied())
+                    .collect();
+                if fine.is_empty() || (fine.len() == 1 && Some(fine[0]) == coarse) {
+                    continue;
+                }
+                let (u, w) = ((axis + 1) % 3, (axis + 2) % 3);
+                let base = [x >> l, y >> l, z >> l];
+                let mut around = Vec::new();
+                for du in 0..2u32 {
+                    for dw in 0..2u32 {
+                        let mut c = base;
+                        if c[u] < du || c[w] < dw {
+                            continue;
+                        }
+                        c[u] -= du;
+                        c[w] -= dw;
+                        if let Some(&j) = lv.index.get(&pack(c[0], c[1], c[2])) {
+                            around.push(tree.node_id[l][j as usize]);
+                        }
+                    }
+                }
+                for pair in around.windows(2) {
+                    out.push((pair[0], pair[1]));
+                }
+            }
+        }
+    }
+    out
+}
+
 /// Computes every node's crack patches and appends the compensation points
 /// to the tree's vertex buffer. Call after [`crate::octree_build::assemble`].
 pub fn patch(tree: &mut Tree, model: &mut McoModel) {

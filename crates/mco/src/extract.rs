@@ -56,7 +56,7 @@ impl McoModel {
         if self.nodes.is_empty() {
             return;
         }
-        let k = k.min(self.lod.len());
+        let k = k.min(self.max_lod());
         out.reserve(3 * self.acc[k] as usize);
         let kk = k as u32;
         let expanded = |n: u32| self.prio[n as usize] <= kk;
@@ -64,7 +64,7 @@ impl McoModel {
             self.emit(0, out, &expanded);
             return;
         }
-        for &n in self.lod[..k].iter().rev() {
+        for &n in self.lod[..self.groups[k] as usize].iter().rev() {
             for c in self.children(n) {
                 if self.prio[c as usize] > kk {
                     self.emit(c, out, &expanded);

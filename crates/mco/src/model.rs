@@ -7,8 +7,10 @@
 //!   contiguous (`first_child .. first_child + child_count`);
 //! - `tris`: each node's triangles as 3 vertex indices each, at
 //!   `tri_start .. tri_start + 3 * tri_count`;
-//! - `lod`: the LOD array (§5.2): `lod[i]` is the node expanded at step
-//!   `i + 1`; `prio[n]` is `n`'s position there plus one (`u32::MAX` for
+//! - `lod`: the LOD array (§5.2), nodes in expansion order; LOD number `k`
+//!   has expanded `lod[..groups[k]]` — one node per LOD number, except the
+//!   few nodes that must expand together (see [`crate::priority`]);
+//!   `prio[n]` is the LOD number that expands `n` (`u32::MAX` for
 //!   leaves); `acc[k]` is the accumulation table (§6.1): triangles emitted
 //!   at LOD number `k`;
 //! - `patches` / `subs`: crack patching (§5.3): when node `n` is drawn
@@ -72,6 +74,8 @@ pub struct McoModel {
     pub metric: Vec<f32>,
     pub prio: Vec<u32>,
     pub lod: Vec<u32>,
+    /// LOD number `k` expands `lod[..groups[k]]` (`groups[0] == 0`).
+    pub groups: Vec<u32>,
     pub acc: Vec<u32>,
     pub patches: Vec<Patch>,
     pub subs: Vec<[u32; 2]>,
@@ -107,7 +111,12 @@ impl McoModel {
 
     /// The highest LOD number (every leaf drawn).
     pub fn max_lod(&self) -> usize {
-        self.lod.len()
+        self.groups.len().saturating_sub(1)
+    }
+
+    /// The nodes LOD number `k` (1-based) expands.
+    pub fn group(&self, k: usize) -> &[u32] {
+        &self.lod[self.groups[k - 1] as usize..self.groups[k] as usize]
     }
 
     /// Triangles at full resolution.

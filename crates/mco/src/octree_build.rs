@@ -288,6 +288,11 @@ fn rule_value(
     None
 }
 
+/// A configuration that draws nothing (all corners on one side).
+pub fn is_null(cfg: u8) -> bool {
+    cfg == 0 || cfg == 255
+}
+
 /// Numbers the nodes breadth-first from the root (children contiguous) and
 /// fills the model's node, triangle, metric and balance arrays. The LOD
 /// array and crack patches are filled by [`crate::priority`] and
@@ -386,19 +391,27 @@ pub fn assemble(tree: &mut Tree) -> McoModel {
             }
         })
         .collect();
-    // Balance dependencies: parents of same-level neighbours.
+    // Balance dependencies: for each of the 26 same-level neighbour cubes,
+    // the lowest existing node above that level covering it.
     let nbr: Vec<[i32; 3]> = rule_offsets().concat();
     for (id, &(l, i)) in order.iter().enumerate() {
         let start = model.deps.len();
         if l > 0 && id > 0 {
-            let lv = &tree.levels[l];
             let own_parent = model.nodes[id].parent;
-            let k = lv.keys[i as usize];
+            let k = tree.levels[l].keys[i as usize];
             let mut deps: Vec<u32> = nbr
                 .iter()
                 .filter_map(|&d| offset_key(k, d, 1))
-                .filter_map(|nk| lv.index.get(&nk))
-                .map(|&j| model.nodes[tree.node_id[l][j as usize] as usize].parent)
+                .filter_map(|nk| {
+                    let [mut x, mut y, mut z] = unpack(nk);
+                    for up in l + 1..=depth {
+                        (x, y, z) = (x >> 1, y >> 1, z >> 1);
+                        if let Some(&j) = tree.levels[up].index.get(&pack(x, y, z)) {
+                            return Some(tree.node_id[up][j as usize]);
+                        }
+                    }
+                    None
+                })
                 .filter(|&p| p != own_parent)
                 .collect();
             deps.sort_unstable();

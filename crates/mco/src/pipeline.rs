@@ -222,7 +222,8 @@ impl IncrementalBuilder {
         let leaves = self.leaves();
         let mut tree = crate::octree_build::build_levels(&self.field, &leaves)?;
         let mut model = crate::octree_build::assemble(&mut tree);
-        crate::priority::number(&mut model);
+        let together = crate::crack_patch::expand_together(&tree);
+        crate::priority::number(&mut model, &together);
         crate::crack_patch::patch(&mut tree, &mut model);
         model.vertices = tree.vertices;
         model.has_colors = self.has_colors.unwrap_or(false);

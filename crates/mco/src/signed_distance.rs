@@ -231,12 +231,13 @@ impl SignedDistanceField {
             }
             let color = samples.colors.as_ref().map_or(NO_COLOR, |c| c[i]);
             let [cx, cy, cz] = g.cell_of(p);
-            for corner in 0..8u32 {
-                let key = pack(
-                    cx + (corner & 1),
-                    cy + (corner >> 1 & 1),
-                    cz + (corner >> 2),
-                );
+            // The 4×4×4 vertices of the sample's cube and its 26 neighbours.
+            for corner in 0..64u32 {
+                let (dx, dy, dz) = (corner & 3, corner >> 2 & 3, corner >> 4);
+                if cx + dx < 1 || cy + dy < 1 || cz + dz < 1 {
+                    continue;
+                }
+                let key = pack(cx + dx - 1, cy + dy - 1, cz + dz - 1);
                 let v = g.position(key);
                 let d2 = v.distance_squared(p);
                 let fv = FieldVertex {

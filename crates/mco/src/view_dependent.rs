@@ -112,6 +112,11 @@ pub fn select(model: &McoModel, camera: &Camera, tolerance_px: f32) -> Vec<bool>
             stack.push(nd.parent);
         }
         stack.extend_from_slice(&model.deps[nd.deps_start as usize..][..nd.deps_count as usize]);
+        // Nodes that expand together (crack-free only as a group).
+        let k = model.prio[i as usize];
+        if k != u32::MAX {
+            stack.extend_from_slice(model.group(k as usize));
+        }
     }
     expanded
 }
