@@ -57,7 +57,7 @@ impl McoModel {
             return;
         }
         let k = k.min(self.max_lod());
-        out.reserve(3 * self.acc[k] as usize);
+        out.reserve((3 * self.acc[k] as usize).min(self.tris.len()));
         let kk = k as u32;
         let expanded = |n: u32| self.prio[n as usize] <= kk;
         if k == 0 {
