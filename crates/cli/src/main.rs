@@ -82,6 +82,13 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Virtual range scanner: range-grid PLY files and a .conf from N views of a mesh.
+    Scan(commands::scan::ScanArgs),
+    /// Continuous LOD (marching cube octree): build, extract, info.
+    #[command(subcommand)]
+    Mco(commands::mco::McoCommand),
+    /// Continuous-LOD extraction speed next to memcpy (to move under `bench mco`).
+    BenchMco(commands::bench_mco::BenchMcoArgs),
 }
 
 fn main() -> ExitCode {
@@ -99,6 +106,9 @@ fn main() -> ExitCode {
         Command::Build { input, out, json } => {
             commands::build::run(&ui, input.as_deref(), &out, json)
         }
+        Command::Scan(args) => commands::scan::run(&ui, &args),
+        Command::Mco(cmd) => commands::mco::run(&ui, &cmd),
+        Command::BenchMco(args) => commands::bench_mco::run(&ui, &args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

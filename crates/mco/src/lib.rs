@@ -14,6 +14,7 @@
 //! | priority numbering, LOD array, accumulation table | `priority.rs` | §5.2, §5.4.3, §6.1 |
 //! | crack patching | `crack_patch.rs` | §5.3, Fig. 5.6, §5.4.4 |
 //! | extraction by referencing | `extract.rs` | §6.1, §6.2.1 |
+//! | extraction timing next to memcpy | `extraction_bench.rs` | — (the benchmark) |
 //! | view-dependent extraction | `view_dependent.rs` | §8.2 (future work) |
 //! | virtual range scanner | `scanner.rs` | §4.4 (the experiment) |
 //! | `.mco` files | `model_file.rs` | — (`docs/formats/mco.md`) |
@@ -30,6 +31,7 @@
 
 pub mod crack_patch;
 pub mod extract;
+pub mod extraction_bench;
 pub mod marching_cubes;
 pub mod mc_table;
 pub mod model;

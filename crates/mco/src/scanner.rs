@@ -5,7 +5,7 @@
 //! Each view is an orthographic scanner (a laser-stripe scanner's parallel
 //! rays) on a circle around the mesh's vertical (+y) axis: view `i` of `N`
 //! looks at the bounding-box centre from azimuth `360° · i / N`, optionally
-//! tilted by an elevation. The image plane is a square as wide as the
+//! tilted by an elevation (alternately up and down with `alternate`). The image plane is a square as wide as the
 //! bounding-box diagonal, so every view sees the whole model; rays are
 //! cast through a `parry3d` BVH (the same kept crate `compare` uses).
 //!
@@ -39,6 +39,9 @@ pub struct ScanOptions {
     pub height: usize,
     /// Elevation of every view above the horizontal plane, degrees.
     pub elevation_deg: f32,
+    /// Odd views look from below (−elevation) instead, so the views see
+    /// both the top and the bottom of the model.
+    pub alternate: bool,
     /// Standard deviation of the range noise (object units); 0 = none.
     pub noise: f32,
     /// Seed of the noise.
@@ -52,6 +55,7 @@ impl Default for ScanOptions {
             width: 256,
             height: 256,
             elevation_deg: 0.0,
+            alternate: false,
             noise: 0.0,
             seed: 1,
         }
@@ -64,7 +68,12 @@ pub const MAX_SIDE: usize = 8192;
 /// The sensor-to-world pose of view `i`.
 pub fn view_pose(mesh_center: Vec3, i: usize, opts: &ScanOptions) -> Pose {
     let az = (i as f32 / opts.views.max(1) as f32) * std::f32::consts::TAU;
-    let el = opts.elevation_deg.to_radians();
+    let sign = if opts.alternate && i % 2 == 1 {
+        -1.0
+    } else {
+        1.0
+    };
+    let el = sign * opts.elevation_deg.to_radians();
     // Direction from the centre towards the sensor = sensor +z.
     let z = Vec3::new(az.sin() * el.cos(), el.sin(), az.cos() * el.cos()).normalize();
     let up = if z.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };

@@ -1,8 +1,11 @@
 //! One file per subcommand.
+pub mod bench_mco;
 pub mod build;
 pub mod compare;
 pub mod convert;
 pub mod info;
+pub mod mco;
+pub mod scan;
 
 use std::path::Path;
 
