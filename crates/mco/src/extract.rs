@@ -15,6 +15,26 @@
 //! gets a few indices swapped for the neighbour-specific compensation
 //! points (§5.3). No floating-point operation happens here.
 //!
+//! **Memory layout for speed (a departure in representation only).** The
+//! thesis follows pointers from each LOD-array entry to its children. Here
+//! [`McoModel::prepare_extraction`] lays the children of each LOD step out
+//! once, in LOD-array order:
+//!
+//! - *Leaf* children (never expanded) go to one block, step after step.
+//!   LOD `k` draws every leaf child of steps `1..=k`, which is a prefix of
+//!   that block: one `memcpy`. Their crack patches become a list, in step
+//!   order, of "while the coarse neighbour's priority number is above `k`,
+//!   write vertex `v` at output position `p`" records, applied after the
+//!   copy.
+//! - *Inner* children go to a stream of records (priority number, triangle
+//!   indices inline, crack patches with the coarse neighbour's *priority
+//!   number* inline), walked in the thesis's reverse order, steps `k..1`:
+//!   one contiguous prefix read backwards by step, no pointer chasing.
+//!
+//! The "`prio > k` ⇒ not expanded" test and the reverse traversal are the
+//! thesis's; only the pointer chasing and cache misses are gone. Children
+//! with no triangles are left out.
+//!
 //! By triangle count, the accumulation table gives the LOD number first
 //! ([`crate::priority::lod_for_triangles`]).
 
@@ -22,7 +42,109 @@ use lodkit_mesh::TriMesh;
 
 use crate::model::McoModel;
 
+/// Record header: `meta = ntri | npatch << 8 | len << 16` (`len` in words,
+/// header included).
+const NTRI_MASK: u32 = 0xFF;
+
 impl McoModel {
+    /// Builds the extraction stream from the nodes, LOD array, priorities
+    /// and patches (`O(n)`, a handful of allocations). Called after
+    /// building and after loading.
+    pub fn prepare_extraction(&mut self) {
+        let mut stream = Vec::with_capacity(self.tris.len() / 4 + 2 * self.nodes.len());
+        let mut step_start = Vec::with_capacity(self.groups.len());
+        let mut leaf_block = Vec::with_capacity(self.tris.len());
+        let mut leaf_end = Vec::with_capacity(self.groups.len());
+        let mut leaf_patches = Vec::new();
+        let mut leaf_patch_end = Vec::with_capacity(self.groups.len());
+        let mut leaf_pairs = Vec::new();
+        let mut inner: Vec<u32> = Vec::new();
+        step_start.push(0u32);
+        leaf_end.push(0u32);
+        leaf_patch_end.push(0u32);
+        for k in 1..self.groups.len() {
+            for &n in self.group(k) {
+                for c in self.children(n) {
+                    let nd = self.nodes[c as usize];
+                    if nd.tri_count == 0 {
+                        continue;
+                    }
+                    let patches =
+                        &self.patches[nd.patch_start as usize..][..nd.patch_count as usize];
+                    if nd.child_count == 0 {
+                        // A leaf: drawn from its parent's step on, for good.
+                        let base = leaf_block.len();
+                        leaf_block.extend_from_slice(self.node_tris(c));
+                        for p in patches {
+                            let start = leaf_pairs.len() as u32;
+                            for s in &self.subs[p.subs_start as usize..][..p.subs_count as usize] {
+                                for (i, &v) in leaf_block[base..].iter().enumerate() {
+                                    if v == s[0] {
+                                        leaf_pairs.push([(base + i) as u32, s[1]]);
+                                    }
+                                }
+                            }
+                            let count = leaf_pairs.len() as u32 - start;
+                            if count > 0 {
+                                leaf_patches.push([self.prio[p.coarse as usize], start, count]);
+                            }
+                        }
+                        continue;
+                    }
+                    inner.push(c);
+                }
+            }
+            // Inner children by decreasing priority number: at LOD k the
+            // drawn ones (prio > k) come first, so a step stops at the
+            // first expanded child.
+            inner.sort_by_key(|&c| std::cmp::Reverse(self.prio[c as usize]));
+            for c in inner.drain(..) {
+                let nd = self.nodes[c as usize];
+                let patches = &self.patches[nd.patch_start as usize..][..nd.patch_count as usize];
+                {
+                    let head = stream.len();
+                    stream.push(self.prio[c as usize]);
+                    stream.push(0);
+                    stream.extend_from_slice(self.node_tris(c));
+                    for p in patches {
+                        stream.push(self.prio[p.coarse as usize]);
+                        stream.push(p.subs_count);
+                        for s in &self.subs[p.subs_start as usize..][..p.subs_count as usize] {
+                            stream.extend_from_slice(s);
+                        }
+                    }
+                    let len = (stream.len() - head) as u32;
+                    debug_assert!(nd.tri_count as u32 <= NTRI_MASK && len < 1 << 16);
+                    stream[head + 1] =
+                        nd.tri_count as u32 | (nd.patch_count as u32) << 8 | len << 16;
+                }
+            }
+            step_start.push(stream.len() as u32);
+            leaf_end.push(leaf_block.len() as u32);
+            leaf_patch_end.push(leaf_patches.len() as u32);
+        }
+        self.stream = stream;
+        self.step_start = step_start;
+        self.leaf_block = leaf_block;
+        self.leaf_end = leaf_end;
+        self.leaf_patches = leaf_patches;
+        self.leaf_patch_end = leaf_patch_end;
+        self.leaf_pairs = leaf_pairs;
+        let mut by_coarse: Vec<[u32; 4]> = Vec::with_capacity(self.leaf_patches.len());
+        for k in 1..self.leaf_patch_end.len() {
+            let range = self.leaf_patch_end[k - 1] as usize..self.leaf_patch_end[k] as usize;
+            for &[coarse, start, count] in &self.leaf_patches[range] {
+                by_coarse.push([coarse, k as u32, start, count]);
+            }
+        }
+        by_coarse.sort_by(|a, b| b[0].cmp(&a[0]).then(a[1..].cmp(&b[1..])));
+        self.leaf_patches_by_coarse = by_coarse;
+        self.inner_steps = (1..self.step_start.len())
+            .filter(|&k| self.step_start[k] > self.step_start[k - 1])
+            .map(|k| k as u32)
+            .collect();
+    }
+
     /// Appends node `n`'s triangles to `out`, crack-patched against every
     /// coarse neighbour that `expanded` says is drawn unexpanded.
     #[inline(always)]
@@ -64,11 +186,76 @@ impl McoModel {
             self.emit(0, out, &expanded);
             return;
         }
-        for &n in self.lod[..self.groups[k] as usize].iter().rev() {
-            for c in self.children(n) {
-                if self.prio[c as usize] > kk {
-                    self.emit(c, out, &expanded);
+        if self.step_start.len() != self.groups.len() {
+            // Not prepared (a hand-made model): follow the nodes instead.
+            for &n in self.lod[..self.groups[k] as usize].iter().rev() {
+                for c in self.children(n) {
+                    if self.prio[c as usize] > kk {
+                        self.emit(c, out, &expanded);
+                    }
                 }
+            }
+            return;
+        }
+        // Leaves: every leaf child of steps 1..=k, in one copy, then the
+        // crack patches whose coarse neighbour is still drawn coarse.
+        out.extend_from_slice(&self.leaf_block[..self.leaf_end[k] as usize]);
+        let by_step = &self.leaf_patches[..self.leaf_patch_end[k] as usize];
+        let active = self.leaf_patches_by_coarse.partition_point(|p| p[0] > kk);
+        if active < by_step.len() {
+            for &[_, step, start, count] in &self.leaf_patches_by_coarse[..active] {
+                if step <= kk {
+                    for &[pos, v] in &self.leaf_pairs[start as usize..][..count as usize] {
+                        out[pos as usize] = v;
+                    }
+                }
+            }
+        } else {
+            for &[coarse, start, count] in by_step {
+                if coarse > kk {
+                    for &[pos, v] in &self.leaf_pairs[start as usize..][..count as usize] {
+                        out[pos as usize] = v;
+                    }
+                }
+            }
+        }
+        // Inner children: the reverse-order traversal of §6.1.
+        let st = &self.stream[..];
+        let steps = self.inner_steps.partition_point(|&s| s <= kk);
+        for &step in self.inner_steps[..steps].iter().rev() {
+            let step = step as usize;
+            let mut p = self.step_start[step - 1] as usize;
+            let end = self.step_start[step] as usize;
+            while p < end {
+                let prio = st[p];
+                let meta = st[p + 1];
+                let len = (meta >> 16) as usize;
+                if prio > kk {
+                    let ntri = (meta & NTRI_MASK) as usize;
+                    let npatch = (meta >> 8 & 0xFF) as usize;
+                    let o = out.len();
+                    let tri_end = p + 2 + 3 * ntri;
+                    out.extend_from_slice(&st[p + 2..tri_end]);
+                    let mut q = tri_end;
+                    for _ in 0..npatch {
+                        let coarse = st[q];
+                        let ns = st[q + 1] as usize;
+                        if coarse > kk {
+                            let subs = &st[q + 2..q + 2 + 2 * ns];
+                            for idx in &mut out[o..] {
+                                for s in subs.chunks_exact(2) {
+                                    if *idx == s[0] {
+                                        *idx = s[1];
+                                    }
+                                }
+                            }
+                        }
+                        q += 2 + 2 * ns;
+                    }
+                } else {
+                    break; // the rest of this step is expanded
+                }
+                p += len;
             }
         }
     }

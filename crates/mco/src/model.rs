@@ -81,6 +81,28 @@ pub struct McoModel {
     pub subs: Vec<[u32; 2]>,
     pub deps: Vec<u32>,
     pub stats: BuildStats,
+    /// The extraction stream (derived, not saved; see
+    /// [`McoModel::prepare_extraction`]).
+    pub stream: Vec<u32>,
+    /// LOD number `k`'s records are `stream[step_start[k-1]..step_start[k]]`.
+    pub step_start: Vec<u32>,
+    /// Leaf children's triangles in LOD-step order (derived).
+    pub leaf_block: Vec<u32>,
+    /// LOD number `k` draws `leaf_block[..leaf_end[k]]` (derived).
+    pub leaf_end: Vec<u32>,
+    /// Leaf crack patches in LOD-step order: `[coarse prio, pairs start,
+    /// pairs count]` (derived).
+    pub leaf_patches: Vec<[u32; 3]>,
+    /// LOD number `k`'s leaves have `leaf_patches[..leaf_patch_end[k]]`.
+    pub leaf_patch_end: Vec<u32>,
+    /// `[position in leaf_block, compensation vertex]` (derived).
+    pub leaf_pairs: Vec<[u32; 2]>,
+    /// The leaf patches again as `[coarse prio, step, pairs start, pairs
+    /// count]`, by decreasing coarse priority (derived): for a high `k` the
+    /// active ones are a short prefix.
+    pub leaf_patches_by_coarse: Vec<[u32; 4]>,
+    /// LOD steps that have inner-child records, increasing (derived).
+    pub inner_steps: Vec<u32>,
 }
 
 impl Default for Grid {

@@ -26,6 +26,12 @@ pub const VERSION: u32 = 1;
 pub const HEADER_BYTES: usize = 8 + 4 + 4 + 12 + 4 + 4 + 4 + 8 + 8 + 8 + 9 * 4;
 /// Bytes per node record.
 pub const NODE_BYTES: usize = 40;
+/// Most triangles a node can have (the table's maximum is 12; the margin
+/// keeps extraction records far below their 16-bit length field).
+pub const MAX_NODE_TRIANGLES: usize = 16;
+/// Most substitutions one patch can hold (a face has at most 4 crossing
+/// edges per fine node).
+pub const MAX_PATCH_SUBS: usize = 16;
 /// Files larger than this are refused before reading.
 pub const MAX_FILE_BYTES: u64 = 16 << 30;
 
@@ -295,8 +301,11 @@ pub fn decode(bytes: &[u8]) -> std::result::Result<McoModel, String> {
         subs,
         deps,
         stats,
+        ..Default::default()
     };
     validate(&m)?;
+    let mut m = m;
+    m.prepare_extraction();
     Ok(m)
 }
 
@@ -322,10 +331,14 @@ fn validate(m: &McoModel) -> std::result::Result<(), String> {
         {
             return bad("children");
         }
-        if nd.tri_start as u64 + 3 * nd.tri_count as u64 > m.tris.len() as u64 {
+        if nd.tri_start as u64 + 3 * nd.tri_count as u64 > m.tris.len() as u64
+            || nd.tri_count as usize > MAX_NODE_TRIANGLES
+        {
             return bad("triangles");
         }
-        if nd.patch_start as u64 + nd.patch_count as u64 > m.patches.len() as u64 {
+        if nd.patch_start as u64 + nd.patch_count as u64 > m.patches.len() as u64
+            || nd.patch_count > 6
+        {
             return bad("patches");
         }
         if nd.deps_start as u64 + nd.deps_count as u64 > m.deps.len() as u64 {
@@ -336,7 +349,10 @@ fn validate(m: &McoModel) -> std::result::Result<(), String> {
         }
     }
     for (i, p) in m.patches.iter().enumerate() {
-        if p.coarse as u64 >= n || p.subs_start as u64 + p.subs_count as u64 > m.subs.len() as u64 {
+        if p.coarse as u64 >= n
+            || p.subs_start as u64 + p.subs_count as u64 > m.subs.len() as u64
+            || p.subs_count as usize > MAX_PATCH_SUBS
+        {
             return Err(format!("patch {i} out of range"));
         }
     }

@@ -226,6 +226,7 @@ impl IncrementalBuilder {
         crate::priority::number(&mut model, &together);
         crate::crack_patch::patch(&mut tree, &mut model);
         model.vertices = tree.vertices;
+        model.prepare_extraction();
         model.has_colors = self.has_colors.unwrap_or(false);
         model.stats.input_samples = self.samples;
         model.stats.build_seconds = t0.elapsed().as_secs_f64();

@@ -176,3 +176,28 @@ fn view_dependent_extraction_refines_near_the_camera_without_cracks() {
     let (_, gaps) = support::gap_edges(&mesh, tol);
     assert_eq!(gaps, 0);
 }
+
+#[test]
+fn the_extraction_stream_draws_what_following_the_nodes_draws() {
+    let m = build_from_mesh(
+        &shapes::blob(20_000),
+        &Options {
+            resolution: Some(32),
+        },
+    )
+    .unwrap();
+    let mut plain = m.clone();
+    plain.stream.clear();
+    plain.step_start.clear();
+    let (mut a, mut b) = (Vec::new(), Vec::new());
+    for k in [1, 3, m.max_lod() / 4, m.max_lod() / 2, m.max_lod()] {
+        m.extract_lod(k, &mut a);
+        plain.extract_lod(k, &mut b);
+        let sorted = |v: &[u32]| {
+            let mut t: Vec<[u32; 3]> = v.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
+            t.sort_unstable();
+            t
+        };
+        assert_eq!(sorted(&a), sorted(&b), "lod {k}");
+    }
+}

@@ -68,7 +68,7 @@ pub fn run(ui: &Ui, args: &BenchMcoArgs) -> Result<()> {
         let m = build_from_mesh(
             &blob,
             &Options {
-                resolution: Some(560),
+                resolution: Some(350),
             },
         )?;
         step.finish();
