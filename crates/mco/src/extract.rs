@@ -106,12 +106,21 @@ impl McoModel {
                     stream.push(self.prio[c as usize]);
                     stream.push(0);
                     stream.extend_from_slice(self.node_tris(c));
+                    // Patches resolved to positions in the record's output:
+                    // [coarse prio, pairs, (offset, vertex)…].
+                    let tris = self.node_tris(c);
                     for p in patches {
                         stream.push(self.prio[p.coarse as usize]);
-                        stream.push(p.subs_count);
+                        let count_at = stream.len();
+                        stream.push(0);
                         for s in &self.subs[p.subs_start as usize..][..p.subs_count as usize] {
-                            stream.extend_from_slice(s);
+                            for (i, &v) in tris.iter().enumerate() {
+                                if v == s[0] {
+                                    stream.extend_from_slice(&[i as u32, s[1]]);
+                                }
+                            }
                         }
+                        stream[count_at] = ((stream.len() - count_at - 1) / 2) as u32;
                     }
                     let len = (stream.len() - head) as u32;
                     debug_assert!(nd.tri_count as u32 <= NTRI_MASK && len < 1 << 16);
@@ -235,19 +244,18 @@ impl McoModel {
                     let npatch = (meta >> 8 & 0xFF) as usize;
                     let o = out.len();
                     let tri_end = p + 2 + 3 * ntri;
-                    out.extend_from_slice(&st[p + 2..tri_end]);
+                    // Records hold a few triangles: an inline copy beats a
+                    // memcpy call.
+                    for &x in &st[p + 2..tri_end] {
+                        out.push(x);
+                    }
                     let mut q = tri_end;
                     for _ in 0..npatch {
                         let coarse = st[q];
                         let ns = st[q + 1] as usize;
                         if coarse > kk {
-                            let subs = &st[q + 2..q + 2 + 2 * ns];
-                            for idx in &mut out[o..] {
-                                for s in subs.chunks_exact(2) {
-                                    if *idx == s[0] {
-                                        *idx = s[1];
-                                    }
-                                }
+                            for pair in st[q + 2..q + 2 + 2 * ns].chunks_exact(2) {
+                                out[o + pair[0] as usize] = pair[1];
                             }
                         }
                         q += 2 + 2 * ns;

@@ -19,6 +19,7 @@
 //! | virtual range scanner | `scanner.rs` | §4.4 (the experiment) |
 //! | `.mco` files | `model_file.rs` | — (`docs/formats/mco.md`) |
 //! | entry points, incremental builder | `pipeline.rs` | §4.4 |
+//! | `lodkit build`'s continuous-LOD section | `evaluate.rs` | §4.4, §6.3 |
 //!
 //! ```no_run
 //! use lodkit_mco::pipeline::{Options, build_from_mesh};
@@ -30,6 +31,7 @@
 //! ```
 
 pub mod crack_patch;
+pub mod evaluate;
 pub mod extract;
 pub mod extraction_bench;
 pub mod marching_cubes;
