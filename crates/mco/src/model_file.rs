@@ -490,6 +490,8 @@ mod tests {
                     back.extract_lod(k, &mut idx);
                 }
                 back.extract_triangles(100, &mut idx);
+                let cam = crate::Camera::looking_at(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO);
+                back.extract_view(&cam, 1.0, &mut idx);
             }
         }
     }
