@@ -59,10 +59,15 @@ pub struct ExtractArgs {
     #[arg(long)]
     pub triangles: Option<usize>,
     /// View-dependent: camera position X,Y,Z.
-    #[arg(long, value_name = "X,Y,Z")]
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
     pub view: Option<String>,
     /// Point the camera looks at (default: the model's centre).
-    #[arg(long, value_name = "X,Y,Z", requires = "view")]
+    #[arg(
+        long,
+        value_name = "X,Y,Z",
+        requires = "view",
+        allow_hyphen_values = true
+    )]
     pub look_at: Option<String>,
     /// Vertical field of view, degrees.
     #[arg(long, default_value_t = 60.0, requires = "view")]
