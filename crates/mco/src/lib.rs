@@ -21,6 +21,12 @@
 //! | entry points, incremental builder | `pipeline.rs` | §4.4 |
 //! | `lodkit build`'s continuous-LOD section | `evaluate.rs` | §4.4, §6.3 |
 //!
+//! Measured (2-core shared Xeon, release): the bunny from its 10 real
+//! scans builds in 1.4 s (362k samples, resolution 140) with a symmetric
+//! mean error of 0.18 mm against the reference (half a cube is 0.56 mm);
+//! extraction at full size runs at 1.3–1.5× the time of a `memcpy` of its
+//! index buffer (`lodkit bench-mco`, see `crates/mco/README.md`).
+//!
 //! ```no_run
 //! use lodkit_mco::pipeline::{Options, build_from_mesh};
 //! let bunny = lodkit_mesh::io::load_mesh("bunny.ply".as_ref()).unwrap();
