@@ -28,10 +28,12 @@
 //! fine triangles meet at `R`. Without a coarse triangle (none holds both
 //! segment ends) the fine mean is used.
 //!
-//! Not patched (counted in `BuildStats::unpatched`): fine crossings on a
-//! face where the coarse side draws nothing (the fine surface makes a small
-//! loop the coarse level cannot see). The balance constraint keeps these
-//! rare.
+//! Not patchable this way: a face the coarse side crosses nowhere while the
+//! fine side does, and a coarse edge whose fine crossings are not its own
+//! crossing. [`expand_together`] finds the nodes around such faces and
+//! edges and the priority numbering expands them in one LOD step, so these
+//! interfaces never appear in an extraction (fine vertices met there are
+//! only counted, in `BuildStats::unpatched`).
 
 use std::collections::HashMap;
 

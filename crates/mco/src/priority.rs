@@ -5,8 +5,13 @@
 //! (the area difference between a node's triangles and its children's) is
 //! expanded next and appended to the LOD array. A node is expandable only
 //! when every same-level neighbour is already *marked* (its parent has been
-//! expanded) or does not exist, so neighbouring drawn nodes never differ by
-//! two levels or more.
+//! expanded), so neighbouring drawn nodes never differ by two levels or
+//! more. The thesis also allows a neighbour that "is none"; here a missing
+//! neighbour cube still requires the lowest existing node covering it to be
+//! expanded, because a coarse node can draw surface into an octant where it
+//! has no child (its corner signs come from the Fig. 5.2 rule), and that
+//! surface would meet a finer neighbour two levels down. Nodes that draw
+//! nothing but have children (all corners on one side) go first.
 //!
 //! The thesis scans a sorted list for the first expandable node. Here a
 //! binary heap holds the candidates; a candidate found blocked waits on the

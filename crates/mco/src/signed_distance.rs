@@ -8,15 +8,17 @@
 //! - **Sign convention.** The thesis calls inside `+1`; here a vertex is
 //!   *inside* when `f(v) < 0` (normals point outwards, the usual convention
 //!   of meshes and scanners). Only the naming differs.
-//! - **Sparse band, no search structure.** Only the 8 corners of the cube
-//!   that contains a sample get a value, so the field is a band one cube
-//!   wide around the data (never a dense n³ grid). Each sample *stamps* its
-//!   cube's corners and a corner keeps the closest sample seen. Every sample
-//!   within one cube size of a vertex along each axis is a candidate, which
-//!   contains all samples within one cube size in distance — the only ones
+//! - **Sparse band, no search structure.** Each sample *stamps* the 4×4×4
+//!   lattice vertices of its cube and the 26 cubes around it, and a vertex
+//!   keeps the closest sample seen, so the field is a band about two cubes
+//!   wide around the data (never a dense n³ grid). Stamping only the
+//!   sample's own cube (8 corners) was tried first: a cube the surface
+//!   merely clips often holds no sample, misses a corner and leaves a hole
+//!   (half the edges of a sphere at resolution 24 were on holes). Every
+//!   sample within one cube size of a vertex is a candidate — the only ones
 //!   the thesis's "closest range point" can sensibly be for a vertex that
 //!   marching cubes will use. Stamping needs no kd-tree and makes adding a
-//!   new range image touch only the cubes its samples fall into (the
+//!   new range image touch only the cubes around its samples (the
 //!   incremental API).
 //! - **Ties** (two samples at exactly the same distance) keep the sample
 //!   added first, so the field does not depend on hash order and adding
