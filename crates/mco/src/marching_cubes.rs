@@ -108,7 +108,7 @@ pub fn corner_key(cube: [u32; 3], level: u32, c: u8) -> u64 {
 pub fn leaf_config(field: &SignedDistanceField, cube: [u32; 3]) -> Option<u8> {
     let mut cfg = 0u8;
     for c in 0..8u8 {
-        let v = field.values.get(&corner_key(cube, 0, c))?;
+        let v = field.get(corner_key(cube, 0, c))?;
         if v.distance < 0.0 {
             cfg |= 1 << c;
         }

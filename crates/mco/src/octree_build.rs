@@ -73,7 +73,7 @@ pub struct Tree<'f> {
 impl Tree<'_> {
     /// The value of lattice vertex `v` as level `level` sees it.
     pub fn corner(&self, level: usize, v: u64) -> Option<Corner> {
-        if let Some(f) = self.field.values.get(&v) {
+        if let Some(f) = self.field.get(v) {
             return Some(f.into());
         }
         self.levels.get(level)?.corners.get(&v).copied()
@@ -164,7 +164,7 @@ pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) ->
             let cube = unpack(k);
             for c in 0..8u8 {
                 let v = corner_key(cube, l as u32, c);
-                if field.values.contains_key(&v) || level.corners.contains_key(&v) {
+                if field.get(v).is_some() || level.corners.contains_key(&v) {
                     continue;
                 }
                 let value = match tree.corner(l - 1, v) {
@@ -177,8 +177,7 @@ pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) ->
         }
         let corner_at = |v: u64| -> Corner {
             field
-                .values
-                .get(&v)
+                .get(v)
                 .map(Corner::from)
                 .or_else(|| level.corners.get(&v).copied())
                 .expect("every node corner is set above")

@@ -144,6 +144,14 @@ pub struct IncrementalBuilder {
 }
 
 impl IncrementalBuilder {
+    /// Turns on Hoppe's tangential rule ([`crate::signed_distance::TANGENTIAL_LIMIT`]
+    /// cubes), for scan data with edges. Call before adding samples.
+    pub fn with_tangential_rule(mut self) -> Self {
+        self.field.tangential_limit =
+            crate::signed_distance::TANGENTIAL_LIMIT * self.field.grid.cube;
+        self
+    }
+
     pub fn new(grid: Grid) -> Self {
         IncrementalBuilder {
             field: SignedDistanceField::new(grid),
@@ -258,6 +266,9 @@ pub fn build_from_models(models: &[Model], opts: &Options) -> Result<McoModel> {
     }
     let grid = grid_for(models, &samples, opts)?;
     let mut b = IncrementalBuilder::new(grid);
+    if models.iter().any(|m| !matches!(m, Model::Mesh(_))) {
+        b = b.with_tangential_rule();
+    }
     for s in &samples {
         b.add(s);
     }

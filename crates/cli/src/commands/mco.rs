@@ -129,6 +129,10 @@ fn build(ui: &Ui, inputs: &[PathBuf], output: &Path, resolution: Option<u32>) ->
         grid.resolution, grid.cube, grid.depth
     ));
     let mut builder = IncrementalBuilder::new(grid);
+    // Scan data has edges: Hoppe's tangential rule (meshes build without it).
+    if plain.iter().any(|m| !matches!(m, Model::Mesh(_))) {
+        builder = builder.with_tangential_rule();
+    }
     for ((name, _), s) in models.iter().zip(&samples) {
         let r = builder.add(s);
         ui.status(format!(
