@@ -42,6 +42,24 @@ use lodkit_mesh::TriMesh;
 
 use crate::model::McoModel;
 
+/// True when two of node `n`'s patches substitute the same vertex (a vertex
+/// on the edge between two patched faces): the first patch must win, which
+/// the leaf block's unordered patch lists cannot express, so such leaves go
+/// through the ordered stream.
+fn patches_overlap(m: &McoModel, n: u32) -> bool {
+    let nd = &m.nodes[n as usize];
+    let patches = &m.patches[nd.patch_start as usize..][..nd.patch_count as usize];
+    let mut seen: Vec<u32> = Vec::new();
+    for p in patches {
+        let subs = &m.subs[p.subs_start as usize..][..p.subs_count as usize];
+        if subs.iter().any(|s| seen.contains(&s[0])) {
+            return true;
+        }
+        seen.extend(subs.iter().map(|s| s[0]));
+    }
+    false
+}
+
 /// Record header: `meta = ntri | npatch << 8 | len << 16` (`len` in words,
 /// header included).
 const NTRI_MASK: u32 = 0xFF;
@@ -71,7 +89,7 @@ impl McoModel {
                     }
                     let patches =
                         &self.patches[nd.patch_start as usize..][..nd.patch_count as usize];
-                    if nd.child_count == 0 {
+                    if nd.child_count == 0 && !patches_overlap(self, c) {
                         // A leaf: drawn from its parent's step on, for good.
                         let base = leaf_block.len();
                         leaf_block.extend_from_slice(self.node_tris(c));
@@ -107,9 +125,12 @@ impl McoModel {
                     stream.push(0);
                     stream.extend_from_slice(self.node_tris(c));
                     // Patches resolved to positions in the record's output:
-                    // [coarse prio, pairs, (offset, vertex)…].
+                    // [coarse prio, pairs, (offset, vertex)…], stored last
+                    // patch first so that, applied in stream order, an
+                    // earlier patch overrides a later one on a shared vertex
+                    // (as sequential substitution in `emit` does).
                     let tris = self.node_tris(c);
-                    for p in patches {
+                    for p in patches.iter().rev() {
                         stream.push(self.prio[p.coarse as usize]);
                         let count_at = stream.len();
                         stream.push(0);
