@@ -256,6 +256,20 @@ pub fn grid_for(models: &[Model], samples: &[Samples], opts: &Options) -> Result
     Grid::new(bbox, resolution)
 }
 
+/// Mesh samples made dense enough for `grid` (see
+/// [`crate::normals_estimation::mesh_samples_for_cube`]); other inputs'
+/// samples are kept.
+pub fn densify_meshes(models: &[Model], samples: Vec<Samples>, grid: &Grid) -> Vec<Samples> {
+    models
+        .iter()
+        .zip(samples)
+        .map(|(m, s)| match m {
+            Model::Mesh(mesh) => crate::normals_estimation::mesh_samples_for_cube(mesh, grid.cube),
+            _ => s,
+        })
+        .collect()
+}
+
 /// Builds from several models (range images, meshes, point clouds), adding
 /// them one at a time.
 pub fn build_from_models(models: &[Model], opts: &Options) -> Result<McoModel> {
@@ -265,6 +279,7 @@ pub fn build_from_models(models: &[Model], opts: &Options) -> Result<McoModel> {
         return Err(Error::Input("the input has no usable samples".into()));
     }
     let grid = grid_for(models, &samples, opts)?;
+    let samples = densify_meshes(models, samples, &grid);
     let mut b = IncrementalBuilder::new(grid);
     if models.iter().any(|m| !matches!(m, Model::Mesh(_))) {
         b = b.with_tangential_rule();

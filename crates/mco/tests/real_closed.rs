@@ -1,10 +1,6 @@
-//! The no-crack claim on real closed meshes (`../shared/data/meshes`):
-//! every boundary edge of an extraction lies on another face, at 10
-//! budgets. Known to fail today, so ignored: at the default resolution the
-//! closed bunny leaves 14 gap edges (holes already in the full-resolution
-//! reconstruction, where the vertex samples are sparser than the cubes)
-//! and the armadillo 4 (at the two coarsest budgets). Run with
-//! `cargo test -p lodkit-mco --test real_closed -- --ignored --nocapture`.
+//! The no-crack claim on real closed meshes (`../shared/data/meshes`,
+//! skipped when absent): every boundary edge of an extraction lies on
+//! another face (within 1e-5 of the diagonal), at 10 budgets.
 
 mod support;
 
@@ -12,33 +8,43 @@ use std::path::Path;
 
 use lodkit_mco::pipeline::{Options, build_from_mesh};
 
+/// Worst gap-edge count over 10 budgets, or `None` without the data.
+fn worst_gaps(file: &str) -> Option<usize> {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data/meshes")
+        .join(file);
+    if !p.exists() {
+        eprintln!("skipped: {} is absent", p.display());
+        return None;
+    }
+    let mesh = lodkit_mesh::io::load_mesh(&p).unwrap();
+    let m = build_from_mesh(&mesh, &Options::default()).unwrap();
+    let full = m.full_triangles();
+    let tol = 1e-5 * m.mesh_at_lod(m.max_lod()).bbox().diagonal();
+    let worst = (1..=10)
+        .map(|i| support::gap_edges(&m.mesh_with_triangles(full * i / 10), tol).1)
+        .max()
+        .unwrap();
+    eprintln!(
+        "{file}: resolution {}, {full} triangles, worst gap edges {worst}",
+        m.grid.resolution
+    );
+    Some(worst)
+}
+
 #[test]
-#[ignore = "known gaps on real closed meshes (see the file's doc)"]
-fn no_cracks_on_the_closed_bunny_and_armadillo() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/meshes");
-    for f in [
-        "stanford_bunny_closed_glmark2.ply",
-        "stanford_armadillo_cgal26k.ply",
-    ] {
-        let p = dir.join(f);
-        if !p.exists() {
-            eprintln!("skipped: {} is absent", p.display());
-            continue;
-        }
-        let mesh = lodkit_mesh::io::load_mesh(&p).unwrap();
-        let m = build_from_mesh(&mesh, &Options::default()).unwrap();
-        let full = m.full_triangles();
-        let tol = 1e-5 * m.mesh_at_lod(m.max_lod()).bbox().diagonal();
-        let mut worst = 0;
-        for i in 1..=10 {
-            let lod = m.mesh_with_triangles(full * i / 10);
-            let (_, gaps) = support::gap_edges(&lod, tol);
-            worst = worst.max(gaps);
-        }
-        eprintln!(
-            "{f}: resolution {}, {full} triangles, worst gap edges {worst}",
-            m.grid.resolution
-        );
-        assert_eq!(worst, 0, "{f}");
+fn no_cracks_on_the_closed_bunny() {
+    if let Some(w) = worst_gaps("stanford_bunny_closed_glmark2.ply") {
+        assert_eq!(w, 0);
+    }
+}
+
+/// Known to fail: 4 gap edges at the two coarsest budgets (10 % and 20 %).
+/// Run with `-- --ignored`.
+#[test]
+#[ignore = "known: 4 gap edges on the armadillo at the coarsest budgets"]
+fn no_cracks_on_the_closed_armadillo() {
+    if let Some(w) = worst_gaps("stanford_armadillo_cgal26k.ply") {
+        assert_eq!(w, 0);
     }
 }

@@ -124,6 +124,7 @@ fn build(ui: &Ui, inputs: &[PathBuf], output: &Path, resolution: Option<u32>) ->
     }
     let plain: Vec<Model> = models.iter().map(|(_, m)| m.clone()).collect();
     let grid = grid_for(&plain, &samples, &Options { resolution })?;
+    let samples = lodkit_mco::pipeline::densify_meshes(&plain, samples, &grid);
     ui.status(format!(
         "lattice: resolution {}, cube {:.6}, octree depth {}",
         grid.resolution, grid.cube, grid.depth
