@@ -93,6 +93,11 @@ enum Command {
         after_help = "Examples:\n  lodkit build --out out/              # the built-in Stanford bunny\n  lodkit build scan.ply --out out/scan"
     )]
     Build(commands::build::BuildArgs),
+    /// Virtual range scanner: range-grid PLY files and a .conf from N views of a mesh.
+    Scan(commands::scan::ScanArgs),
+    /// Continuous LOD (marching cube octree): build, extract, info.
+    #[command(subcommand)]
+    Mco(commands::mco::McoCommand),
 }
 
 fn main() -> ExitCode {
@@ -111,6 +116,8 @@ fn main() -> ExitCode {
         Command::Lods(args) => commands::lods::run(&ui, &args),
         Command::Bench(args) => commands::bench::run(&ui, &args),
         Command::Build(args) => commands::build::run(&ui, &args),
+        Command::Scan(args) => commands::scan::run(&ui, &args),
+        Command::Mco(cmd) => commands::mco::run(&ui, &cmd),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

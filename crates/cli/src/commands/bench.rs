@@ -1,5 +1,7 @@
 //! `lodkit bench simplify [MESH...]`: lodkit's simplifier against
-//! meshoptimizer in this process (see `lodkit_bench::simplify`).
+//! meshoptimizer in this process (see `lodkit_bench::simplify`);
+//! `lodkit bench mco [MODEL...]`: continuous-LOD extraction next to a
+//! memcpy of the same index buffer (see `bench_mco.rs`).
 use std::path::PathBuf;
 
 use anyhow::Result;
@@ -34,16 +36,21 @@ pub enum BenchWhat {
         #[arg(long)]
         json: bool,
     },
+    /// Marching-cube-octree extraction time next to memcpy of the same index buffer.
+    Mco(super::bench_mco::BenchMcoArgs),
 }
 
 pub fn run(ui: &Ui, a: &BenchArgs) -> Result<()> {
-    let BenchWhat::Simplify {
-        meshes,
-        runs,
-        samples,
-        blob,
-        json,
-    } = &a.what;
+    let (meshes, runs, samples, blob, json) = match &a.what {
+        BenchWhat::Simplify {
+            meshes,
+            runs,
+            samples,
+            blob,
+            json,
+        } => (meshes, runs, samples, blob, json),
+        BenchWhat::Mco(args) => return super::bench_mco::run(ui, args),
+    };
     let mut inputs: Vec<(String, TriMesh)> = Vec::new();
     if meshes.is_empty() {
         let local = PathBuf::from("data/models/stanford_bunny.ply");

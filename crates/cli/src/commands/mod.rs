@@ -1,10 +1,13 @@
 //! One file per subcommand.
 pub mod bench;
+pub mod bench_mco;
 pub mod build;
 pub mod compare;
 pub mod convert;
 pub mod info;
 pub mod lods;
+pub mod mco;
+pub mod scan;
 pub mod simplify;
 
 use std::path::Path;
