@@ -53,16 +53,7 @@ pub fn run(ui: &Ui, a: &BenchArgs) -> Result<()> {
     };
     let mut inputs: Vec<(String, TriMesh)> = Vec::new();
     if meshes.is_empty() {
-        let local = PathBuf::from("data/models/stanford_bunny.ply");
-        let bunny = if local.exists() {
-            local
-        } else {
-            PathBuf::from(concat!(
-                env!("CARGO_MANIFEST_DIR"),
-                "/../../data/models/stanford_bunny.ply"
-            ))
-        };
-        inputs.push(("bunny".into(), super::load_mesh(ui, &bunny)?));
+        inputs.push(("bunny".into(), super::builtin_bunny()?));
         inputs.push((format!("blob {}", blob), lodkit_mesh::shapes::blob(*blob)));
     } else {
         for p in meshes {
@@ -99,6 +90,6 @@ pub fn run(ui: &Ui, a: &BenchArgs) -> Result<()> {
     if *json {
         return super::print_json(&rows);
     }
-    println!("{}", format_table(&rows));
+    crate::outln!("{}", format_table(&rows))?;
     Ok(())
 }

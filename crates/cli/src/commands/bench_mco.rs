@@ -7,7 +7,6 @@ use clap::Args;
 use lodkit_mco::extraction_bench::{default_targets, time_extraction};
 use lodkit_mco::pipeline::{Options, build_from_mesh};
 use lodkit_mco::{McoModel, model_file};
-use lodkit_mesh::io::Format;
 
 use crate::ui::Ui;
 
@@ -24,19 +23,17 @@ pub struct BenchMcoArgs {
     pub budget: f64,
 }
 
-const BUNNY: &[u8] = include_bytes!("../../../../data/models/stanford_bunny.ply");
-
-fn table(ui: &Ui, name: &str, m: &McoModel, budget: f64) {
+fn table(ui: &Ui, name: &str, m: &McoModel, budget: f64) -> Result<()> {
     ui.status(format!(
         "{name}: {} nodes, {} triangles at full resolution, built in {:.2} s",
         m.nodes.len(),
         m.full_triangles(),
         m.stats.build_seconds
     ));
-    println!("| model | target | triangles | extract (µs) | memcpy (µs) | ratio | Mtris/s |");
-    println!("|---|---:|---:|---:|---:|---:|---:|");
+    crate::outln!("| model | target | triangles | extract (µs) | memcpy (µs) | ratio | Mtris/s |")?;
+    crate::outln!("|---|---:|---:|---:|---:|---:|---:|")?;
     for r in time_extraction(m, &default_targets(m.full_triangles()), budget) {
-        println!(
+        crate::outln!(
             "| {name} | {} | {} | {:.1} | {:.1} | {:.2} | {:.0} |",
             r.target,
             r.triangles,
@@ -44,8 +41,9 @@ fn table(ui: &Ui, name: &str, m: &McoModel, budget: f64) {
             r.memcpy_s * 1e6,
             r.ratio(),
             r.mtris_per_s()
-        );
+        )?;
     }
+    Ok(())
 }
 
 pub fn run(ui: &Ui, args: &BenchMcoArgs) -> Result<()> {
@@ -54,15 +52,10 @@ pub fn run(ui: &Ui, args: &BenchMcoArgs) -> Result<()> {
     };
     if args.inputs.is_empty() {
         let step = ui.spinner("building the bunny model");
-        let bunny = match lodkit_mesh::io::decode(Format::Ply, BUNNY, None)
-            .map_err(|e| anyhow::anyhow!("built-in bunny: {e}"))?
-        {
-            lodkit_mesh::Model::Mesh(m) => m,
-            _ => anyhow::bail!("built-in bunny is not a mesh"),
-        };
+        let bunny = super::builtin_bunny()?;
         let m = build_from_mesh(&bunny, &opts)?;
         step.finish();
-        table(ui, "bunny", &m, args.budget);
+        table(ui, "bunny", &m, args.budget)?;
         let step = ui.spinner("building the 1M-triangle blob model");
         let blob = lodkit_mesh::shapes::blob(1_200_000);
         let m = build_from_mesh(
@@ -72,7 +65,7 @@ pub fn run(ui: &Ui, args: &BenchMcoArgs) -> Result<()> {
             },
         )?;
         step.finish();
-        table(ui, "blob-1M", &m, args.budget);
+        table(ui, "blob-1M", &m, args.budget)?;
         return Ok(());
     }
     for p in &args.inputs {
@@ -82,7 +75,7 @@ pub fn run(ui: &Ui, args: &BenchMcoArgs) -> Result<()> {
         } else {
             build_from_mesh(&super::load_mesh(ui, p)?, &opts)?
         };
-        table(ui, &name, &m, args.budget);
+        table(ui, &name, &m, args.budget)?;
     }
     Ok(())
 }

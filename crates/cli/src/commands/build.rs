@@ -23,9 +23,6 @@ use plotters::style::{BLUE, RED, RGBColor};
 use crate::chart::{Series, error_chart};
 use crate::ui::Ui;
 
-/// The Stanford bunny (`data/models/stanford_bunny.ply`), built in so
-/// `lodkit build` works from any directory with no input.
-const BUILTIN_BUNNY: &[u8] = include_bytes!("../../../../data/models/stanford_bunny.ply");
 const BUILTIN_NAME: &str = "stanford_bunny";
 
 #[derive(Args)]
@@ -58,9 +55,10 @@ pub fn run(ui: &Ui, args: &BuildArgs) -> Result<()> {
         }
         None => {
             ui.status("no input given: building the built-in Stanford bunny (Stanford 3D Scanning Repository)");
-            let model = lodkit_mesh::io::decode(Format::Ply, BUILTIN_BUNNY, None)
-                .map_err(|e| anyhow::anyhow!("built-in bunny: {e}"))?;
-            (BUILTIN_NAME.to_string(), model)
+            (
+                BUILTIN_NAME.to_string(),
+                Model::Mesh(super::builtin_bunny()?),
+            )
         }
     };
     let mesh: &TriMesh = match &model {

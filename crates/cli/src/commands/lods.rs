@@ -102,7 +102,7 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
     let total = start.elapsed().as_secs_f64();
     let json = serde_json::to_string_pretty(&report)? + "\n";
     if a.json {
-        print!("{json}");
+        crate::out!("{json}")?;
         return Ok(());
     }
     for l in &report.levels {

@@ -269,27 +269,33 @@ fn info(_ui: &Ui, path: &Path, json: bool) -> Result<()> {
     if json {
         return super::print_json(&info);
     }
-    println!("file: {}", info.file);
-    println!(
+    crate::outln!("file: {}", info.file)?;
+    crate::outln!(
         "lattice: resolution {}, cube {:.6}, octree depth {}",
-        info.resolution, info.cube, info.depth
-    );
-    println!(
+        info.resolution,
+        info.cube,
+        info.depth
+    )?;
+    crate::outln!(
         "vertices: {} (every level, {} crack-patch substitutions)",
-        info.vertices, info.crack_patches
-    );
-    println!(
+        info.vertices,
+        info.crack_patches
+    )?;
+    crate::outln!(
         "nodes: {}; LOD array: {} nodes in {} LOD numbers",
-        info.nodes, info.lod_array, info.lod_numbers
-    );
-    println!("triangles at full resolution: {}", info.full_triangles);
-    println!(
+        info.nodes,
+        info.lod_array,
+        info.lod_numbers
+    )?;
+    crate::outln!("triangles at full resolution: {}", info.full_triangles)?;
+    crate::outln!(
         "built from {} samples in {:.3} s",
-        info.input_samples, info.build_seconds
-    );
-    println!("level  nodes  triangles (0 = leaf cubes)");
+        info.input_samples,
+        info.build_seconds
+    )?;
+    crate::outln!("level  nodes  triangles (0 = leaf cubes)")?;
     for r in &info.levels {
-        println!("{:>5}  {:>5}  {:>9}", r.level, r.nodes, r.triangles);
+        crate::outln!("{:>5}  {:>5}  {:>9}", r.level, r.nodes, r.triangles)?;
     }
     Ok(())
 }
