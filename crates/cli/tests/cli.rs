@@ -95,7 +95,13 @@ fn build_without_input_writes_the_bunny_and_its_lod_chain_deterministically() {
                 "{file} differs between two runs"
             );
         } else {
-            assert_eq!(x, y, "{file} differs between two runs");
+            // Compare as text where it is text, so a failure is readable.
+            assert!(
+                x == y,
+                "{file} differs between two runs:\n{}\n---\n{}",
+                String::from_utf8_lossy(&x),
+                String::from_utf8_lossy(&y)
+            );
         }
     }
     let report = std::fs::read_to_string(a.join("report.md")).unwrap();
