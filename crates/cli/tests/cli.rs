@@ -114,6 +114,10 @@ fn build_without_input_writes_the_bunny_and_its_lod_chain_deterministically() {
         report.contains("## Discrete LOD chain (HQMS)") && report.contains("lod_error.svg"),
         "{report}"
     );
+    assert!(
+        report.contains("## Continuous LOD (marching cube octree)") && report.contains("| 10 |"),
+        "{report}"
+    );
     // The chain halves the bunny three times, each level measured.
     let lods = without_times(&std::fs::read(a.join("lods/lods.json")).unwrap());
     let levels = lods["levels"].as_array().unwrap();
