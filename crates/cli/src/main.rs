@@ -3,6 +3,7 @@
 //! Exit codes: 0 success, 1 bad input or failure (one line on stderr naming
 //! the file and the problem), 2 usage error (from clap).
 
+mod chart;
 mod commands;
 mod ui;
 
@@ -12,6 +13,10 @@ use std::process::ExitCode;
 use clap::{Args, Parser, Subcommand};
 
 use crate::ui::Ui;
+
+/// Counts live bytes for `lodkit bench`'s memory columns.
+#[global_allocator]
+static ALLOC: lodkit_bench::simplify::CountingAlloc = lodkit_bench::simplify::CountingAlloc;
 
 #[derive(Parser)]
 #[command(
@@ -39,6 +44,21 @@ struct Global {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Simplify one mesh to a triangle budget or an error bound (HQMS).
+    #[command(
+        after_help = "Examples:\n  lodkit simplify bunny.ply -o bunny_10k.ply --target 10000\n  lodkit simplify scan.ply -o lod.glb --ratio 0.1 --lock-border"
+    )]
+    Simplify(commands::simplify::SimplifyArgs),
+    /// A discrete LOD chain: PLY per level, one GLB, lods.json.
+    #[command(
+        after_help = "Examples:\n  lodkit lods bunny.ply --out lods/\n  lodkit lods scan.ply --out lods/ --ratios 0.5,0.2,0.05,0.01"
+    )]
+    Lods(commands::lods::LodsArgs),
+    /// In-process comparisons with peer libraries (simplify: meshoptimizer).
+    #[command(
+        after_help = "Examples:\n  lodkit bench simplify\n  lodkit bench simplify scan.ply --json"
+    )]
+    Bench(commands::bench::BenchArgs),
     /// Describe a mesh, point cloud or range image: counts, bbox, topology, defects.
     #[command(after_help = "Examples:\n  lodkit info bunny.ply\n  lodkit info scan.glb --json")]
     Info {
@@ -75,16 +95,12 @@ enum Command {
     #[command(
         after_help = "Examples:\n  lodkit build --out out/              # the built-in Stanford bunny\n  lodkit build scan.ply --out out/scan"
     )]
-    Build {
-        /// Input model; the built-in Stanford bunny when omitted.
-        input: Option<PathBuf>,
-        /// Output directory (created if missing).
-        #[arg(long, short, default_value = "lodkit-out")]
-        out: PathBuf,
-        /// Print the list of outputs as JSON.
-        #[arg(long)]
-        json: bool,
-    },
+    Build(commands::build::BuildArgs),
+    /// Virtual range scanner: range-grid PLY files and a .conf from N views of a mesh.
+    Scan(commands::scan::ScanArgs),
+    /// Continuous LOD (marching cube octree): build, extract, info.
+    #[command(subcommand)]
+    Mco(commands::mco::McoCommand),
 }
 
 fn main() -> ExitCode {
@@ -99,13 +115,18 @@ fn main() -> ExitCode {
             weld,
         } => commands::convert::run(&ui, &input, &output, ascii, weld),
         Command::Compare(args) => commands::compare::run(&ui, &args),
+        Command::Simplify(args) => commands::simplify::run(&ui, &args),
+        Command::Lods(args) => commands::lods::run(&ui, &args),
+        Command::Bench(args) => commands::bench::run(&ui, &args),
+        Command::Build(args) => commands::build::run(&ui, &args),
+        Command::Scan(args) => commands::scan::run(&ui, &args),
+        Command::Mco(cmd) => commands::mco::run(&ui, &cmd),
         Command::Pop(cmd) => commands::pop::run(&ui, &cmd),
-        Command::Build { input, out, json } => {
-            commands::build::run(&ui, input.as_deref(), &out, json)
-        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        // The reader of our stdout went away (`| head`): nothing to report.
+        Err(e) if ui::is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
             ui.error(&e);
             ExitCode::from(1)

@@ -32,8 +32,13 @@ impl Ui {
     pub fn error(&self, e: &anyhow::Error) {
         let mut line = e.to_string();
         for cause in e.chain().skip(1) {
-            line.push_str(": ");
-            line.push_str(&cause.to_string());
+            // Library errors already quote their source (`x.ply: No such
+            // file`); don't say it twice.
+            let cause = cause.to_string();
+            if !line.contains(&cause) {
+                line.push_str(": ");
+                line.push_str(&cause);
+            }
         }
         eprintln!("lodkit: error: {}", line.replace('\n', " "));
     }
@@ -78,4 +83,32 @@ impl Step {
         }
         t
     }
+}
+
+/// `println!` that returns the write error instead of panicking, so
+/// `lodkit info x.ply | head -1` ends quietly (see `main`'s broken-pipe
+/// handling) rather than with a panic message.
+#[macro_export]
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        writeln!(std::io::stdout().lock(), $($arg)*)
+    }};
+}
+
+/// `print!` counterpart of [`outln!`].
+#[macro_export]
+macro_rules! out {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        write!(std::io::stdout().lock(), $($arg)*)
+    }};
+}
+
+/// Whether an error is stdout being closed by the reader (`| head`).
+pub fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
 }

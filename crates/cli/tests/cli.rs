@@ -25,38 +25,117 @@ fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
+/// Every file under `dir`, relative, sorted.
+fn tree(dir: &Path) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                out.push(p.strip_prefix(dir).unwrap().display().to_string());
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// `lods.json` without its wall times (the only field allowed to differ).
+fn without_times(bytes: &[u8]) -> serde_json::Value {
+    let mut v: serde_json::Value = serde_json::from_slice(bytes).unwrap();
+    for l in v["levels"].as_array_mut().unwrap() {
+        l.as_object_mut().unwrap().remove("seconds");
+    }
+    v
+}
+
 #[test]
-fn build_without_input_writes_the_bunny_deterministically() {
+fn build_without_input_writes_the_bunny_and_its_lod_chain_deterministically() {
     let dir = tempfile::tempdir().unwrap();
     let (a, b) = (dir.path().join("a"), dir.path().join("b"));
     for out in [&a, &b] {
-        let o = lodkit(&["-q", "build", "--out", out.to_str().unwrap()]);
+        let o = lodkit(&[
+            "-q",
+            "build",
+            "--levels",
+            "3",
+            "--samples",
+            "100000",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
         assert!(o.status.success(), "{}", stderr(&o));
     }
-    for file in ["stanford_bunny.glb", "stanford_bunny.ply", "report.md"] {
+    let n = "stanford_bunny";
+    let mut expected: Vec<String> = vec![
+        format!("{n}.glb"),
+        format!("{n}.ply"),
+        "lod_error.svg".into(),
+        format!("lods/{n}_lod1.ply"),
+        format!("lods/{n}_lod2.ply"),
+        format!("lods/{n}_lod3.ply"),
+        format!("lods/{n}_lods.glb"),
+        "lods/lods.json".into(),
+        "report.md".into(),
+        format!("{n}.mco"),
+        format!("scans/{n}.conf"),
+    ];
+    expected.extend((0..8).map(|i| format!("scans/{n}_{i:03}.ply")));
+    expected.sort();
+    // Nothing but the outputs: no temp files left behind.
+    assert_eq!(tree(&a), expected);
+    for file in &expected {
         let x = std::fs::read(a.join(file)).unwrap();
         let y = std::fs::read(b.join(file)).unwrap();
         assert!(!x.is_empty(), "{file} is empty");
-        assert_eq!(x, y, "{file} differs between two runs");
+        if file.ends_with(".json") {
+            assert_eq!(
+                without_times(&x),
+                without_times(&y),
+                "{file} differs between two runs"
+            );
+        } else {
+            // Compare as text where it is text, so a failure is readable.
+            assert!(
+                x == y,
+                "{file} differs between two runs:\n{}\n---\n{}",
+                String::from_utf8_lossy(&x),
+                String::from_utf8_lossy(&y)
+            );
+        }
     }
     let report = std::fs::read_to_string(a.join("report.md")).unwrap();
     assert!(report.contains("vertices: 35947"), "{report}");
     assert!(report.contains("faces: 69451"), "{report}");
-    // Nothing but the outputs: no temp files left behind.
-    let mut names: Vec<_> = std::fs::read_dir(&a)
-        .unwrap()
-        .map(|e| e.unwrap().file_name())
-        .collect();
-    names.sort();
-    assert_eq!(
-        names,
-        ["report.md", "stanford_bunny.glb", "stanford_bunny.ply"]
+    assert!(
+        report.contains("## Discrete LOD chain (HQMS)") && report.contains("lod_error.svg"),
+        "{report}"
     );
+    assert!(
+        report.contains("## Continuous LOD (marching cube octree)") && report.contains("| 10 |"),
+        "{report}"
+    );
+    // The chain halves the bunny three times, each level measured.
+    let lods = without_times(&std::fs::read(a.join("lods/lods.json")).unwrap());
+    let levels = lods["levels"].as_array().unwrap();
+    assert_eq!(levels.len(), 3);
+    for (i, l) in levels.iter().enumerate() {
+        let target = (69451usize >> (i + 1)) as f64;
+        let tris = l["triangles"].as_f64().unwrap();
+        assert!(
+            tris <= target + 1.0 && tris >= target * 0.995,
+            "level {i}: {tris} for {target}"
+        );
+        assert!(l["measured_max_error"].as_f64().unwrap() > 0.0);
+    }
     // The GLB reads back as the same mesh.
     let o = lodkit(&[
         "info",
         "--json",
-        a.join("stanford_bunny.glb").to_str().unwrap(),
+        a.join(format!("{n}.glb")).to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();

@@ -17,6 +17,21 @@ impl ParseError {
     }
 }
 
+/// `s` cut to at most `max` bytes (on a character boundary) with `…`
+/// appended when cut: quotes a piece of a bad file in a one-line message
+/// without pasting megabytes of it.
+pub(crate) fn clip(s: &str, max: usize) -> String {
+    let mut end = s.len().min(max);
+    while !s.is_char_boundary(end) {
+        end -= 1;
+    }
+    if end < s.len() {
+        format!("{}…", &s[..end])
+    } else {
+        s.to_string()
+    }
+}
+
 /// Shorthand for returning a [`ParseError`] from a decoder.
 #[macro_export]
 macro_rules! parse_err {

@@ -3,7 +3,7 @@
 use serde::Serialize;
 
 use crate::mesh::{Aabb, Model, PointCloud, RangeImage, TriMesh};
-use crate::topology::topology_stats;
+use crate::topology::{TopologyStats, topology_stats};
 use crate::weld::duplicate_positions;
 
 /// Bounding box as serialised in reports.
@@ -39,18 +39,15 @@ pub struct MeshInfo {
     pub faces: usize,
     pub bbox: BoxInfo,
     pub area: f64,
-    pub edges: usize,
-    pub boundary_edges: usize,
-    pub boundary_loops: usize,
-    pub non_manifold_edges: usize,
-    pub non_manifold_vertices: usize,
-    pub components: usize,
+    /// Edges, boundary, non-manifold elements, components, unreferenced
+    /// vertices (flattened into the JSON object).
+    #[serde(flatten)]
+    pub topology: TopologyStats,
     /// Faces whose corners are collinear to within f32 precision
     /// (`|AB × AC| ≤ ε · max(|AB|², |AC|²)`).
     pub degenerate_faces: usize,
     /// Vertices whose position exactly repeats an earlier vertex's.
     pub duplicate_positions: usize,
-    pub unreferenced_vertices: usize,
     pub attributes: Vec<&'static str>,
     /// V − E + F over the referenced vertices.
     pub euler_characteristic: i64,
@@ -115,15 +112,9 @@ pub fn mesh_info(m: &TriMesh) -> MeshInfo {
         faces: m.faces.len(),
         bbox: m.bbox().into(),
         area: m.area(),
-        edges: t.edges,
-        boundary_edges: t.boundary_edges,
-        boundary_loops: t.boundary_loops,
-        non_manifold_edges: t.non_manifold_edges,
-        non_manifold_vertices: t.non_manifold_vertices,
-        components: t.components,
+        topology: t,
         degenerate_faces,
         duplicate_positions: duplicate_positions(&m.positions),
-        unreferenced_vertices: t.unreferenced_vertices,
         attributes: m.attribute_names(),
         euler_characteristic: euler,
         genus: closed.then(|| (2 * t.components as i64 - euler) / 2),
@@ -188,15 +179,15 @@ impl Info {
                      components: {}\ndegenerate faces: {}\nduplicate positions: {}\nunreferenced vertices: {}\n\
                      attributes: {}\neuler characteristic: {}\n",
                     m.area,
-                    m.edges,
-                    m.boundary_edges,
-                    m.boundary_loops,
-                    m.non_manifold_edges,
-                    m.non_manifold_vertices,
-                    m.components,
+                    m.topology.edges,
+                    m.topology.boundary_edges,
+                    m.topology.boundary_loops,
+                    m.topology.non_manifold_edges,
+                    m.topology.non_manifold_vertices,
+                    m.topology.components,
                     m.degenerate_faces,
                     m.duplicate_positions,
-                    m.unreferenced_vertices,
+                    m.topology.unreferenced_vertices,
                     attrs(&m.attributes),
                     m.euler_characteristic
                 ));
@@ -259,9 +250,9 @@ mod tests {
         m.faces.push([n, n + 1, n + 2]);
         let i = mesh_info(&m);
         assert_eq!(i.duplicate_positions, 2); // the copy, and ZERO (= terrain corner 0)
-        assert_eq!(i.unreferenced_vertices, 2);
+        assert_eq!(i.topology.unreferenced_vertices, 2);
         assert_eq!(i.degenerate_faces, 1);
-        assert_eq!(i.components, 2);
+        assert_eq!(i.topology.components, 2);
         assert_eq!(i.genus, None);
         assert_eq!(i.attributes, vec!["uvs"]);
         let text = Info::Mesh(i).to_text();

@@ -111,7 +111,7 @@ impl UnionFind {
 }
 
 /// Summary of a mesh's connectivity.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
 pub struct TopologyStats {
     pub edges: usize,
     pub boundary_edges: usize,

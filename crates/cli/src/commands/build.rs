@@ -1,27 +1,52 @@
 //! `lodkit build [INPUT] --out DIR`: the main job.
 //!
-//! Today it loads the model (the built-in Stanford bunny when no input is
-//! given), writes it as GLB and PLY, and writes `report.md` with `info`.
-//! Each capability (discrete LOD chains, continuous LOD, progressive
+//! Loads the model (the built-in Stanford bunny when no input is given),
+//! writes it as GLB and PLY, builds the discrete LOD chain (HQMS, each level
+//! half the previous one) with its measured errors and an error chart, and
+//! writes `report.md`. Each capability (continuous LOD, progressive
 //! streams) adds its outputs and its section of the report here.
+//!
+//! Everything written is byte-identical from run to run, except the
+//! per-level wall times in `lods/lods.json`.
 
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::PathBuf;
 
 use anyhow::{Context, Result};
+use clap::Args;
 use lodkit_mesh::info::model_info;
 use lodkit_mesh::io::{Format, WriteOptions, encode, write_atomic};
+use lodkit_mesh::metrics::{CompareOptions, compare};
 use lodkit_mesh::{Model, TriMesh};
+use lodkit_simplify::{Options, Target, halving_targets};
+use plotters::style::{BLUE, RED, RGBColor};
 
+use crate::chart::{Series, error_chart};
 use crate::ui::Ui;
 
-/// The Stanford bunny (`data/models/stanford_bunny.ply`), built in so
-/// `lodkit build` works from any directory with no input.
-const BUILTIN_BUNNY: &[u8] = include_bytes!("../../../../data/models/stanford_bunny.ply");
 const BUILTIN_NAME: &str = "stanford_bunny";
 
-pub fn run(ui: &Ui, input: Option<&Path>, out: &Path, json: bool) -> Result<()> {
-    let (name, model) = match input {
+#[derive(Args)]
+pub struct BuildArgs {
+    /// Input mesh; the built-in Stanford bunny when omitted.
+    pub input: Option<PathBuf>,
+    /// Output directory (created if missing).
+    #[arg(long, short, default_value = "lodkit-out")]
+    pub out: PathBuf,
+    /// Levels of the discrete LOD chain, each half the previous one.
+    #[arg(long, default_value_t = 6)]
+    pub levels: usize,
+    /// Samples per kind for the measured errors (`compare`).
+    #[arg(long, default_value_t = 1_000_000)]
+    pub samples: usize,
+    /// Print the list of outputs as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(ui: &Ui, args: &BuildArgs) -> Result<()> {
+    let out = args.out.as_path();
+    let (name, model) = match &args.input {
         Some(path) => {
             let stem = path
                 .file_stem()
@@ -31,9 +56,10 @@ pub fn run(ui: &Ui, input: Option<&Path>, out: &Path, json: bool) -> Result<()> 
         }
         None => {
             ui.status("no input given: building the built-in Stanford bunny (Stanford 3D Scanning Repository)");
-            let model = lodkit_mesh::io::decode(Format::Ply, BUILTIN_BUNNY, None)
-                .map_err(|e| anyhow::anyhow!("built-in bunny: {e}"))?;
-            (BUILTIN_NAME.to_string(), model)
+            (
+                BUILTIN_NAME.to_string(),
+                Model::Mesh(super::builtin_bunny()?),
+            )
         }
     };
     let mesh: &TriMesh = match &model {
@@ -57,34 +83,145 @@ pub fn run(ui: &Ui, input: Option<&Path>, out: &Path, json: bool) -> Result<()> 
         outputs.push((file, bytes.len()));
     }
 
-    let info = model_info(&model);
     let mut report = String::new();
     writeln!(report, "# lodkit build report: {name}\n")?;
-    if input.is_none() {
-        writeln!(
+    match &args.input {
+        None => writeln!(
             report,
             "Input: the built-in Stanford Bunny (Stanford 3D Scanning Repository, Stanford University \
              Computer Graphics Laboratory).\n"
-        )?;
-    } else {
-        writeln!(
-            report,
-            "Input: `{}`\n",
-            input.map(|p| p.display().to_string()).unwrap_or_default()
-        )?;
+        )?,
+        Some(p) => writeln!(report, "Input: `{}`\n", p.display())?,
     }
-    writeln!(report, "## Input\n\n```text\n{}```\n", info.to_text())?;
     writeln!(
         report,
-        "## Outputs\n\n| file | bytes | triangles |\n|---|---:|---:|"
+        "## Input\n\n```text\n{}```\n",
+        model_info(&model).to_text()
     )?;
-    for (file, bytes) in &outputs {
-        writeln!(report, "| `{file}` | {bytes} | {} |", mesh.faces.len())?;
+
+    // Discrete LOD chain (HQMS).
+    let lods_dir = out.join("lods");
+    let chain = super::lods::write_chain(
+        ui,
+        mesh,
+        &name,
+        &name,
+        &lods_dir,
+        &halving_targets(args.levels),
+        &Options {
+            target: Target::Ratio(1.0),
+            ..Options::DEFAULT
+        },
+        args.samples,
+    )?;
+    writeln!(
+        report,
+        "## Discrete LOD chain (HQMS)\n\nEach level is simplified from the previous one; errors are measured \
+         against the input with `lodkit compare` ({} samples of each kind), symmetric, in object units \
+         (bounding-box diagonal {:.6}).\n",
+        args.samples,
+        mesh.bbox().diagonal()
+    )?;
+    writeln!(
+        report,
+        "| level | file | triangles | vertices | estimated error | measured mean | measured max | stopped |\n\
+         |---:|---|---:|---:|---:|---:|---:|---|"
+    )?;
+    writeln!(
+        report,
+        "| 0 | `{name}.ply` | {} | {} | 0 | 0 | 0 | input |",
+        mesh.faces.len(),
+        mesh.positions.len()
+    )?;
+    for l in &chain.levels {
+        writeln!(
+            report,
+            "| {} | `lods/{}` | {} | {} | {:.3e} | {:.3e} | {:.3e} | {} |",
+            l.level,
+            l.file,
+            l.triangles,
+            l.vertices,
+            l.estimated_error,
+            l.measured_mean_error,
+            l.measured_max_error,
+            l.stop
+        )?;
+    }
+    writeln!(
+        report,
+        "\nAll levels in one file: `lods/{}` (one node per level); per-level data and times: `lods/lods.json`.\n",
+        chain.glb
+    )?;
+    let curve = |f: fn(&super::lods::Level) -> f64| -> Vec<(f64, f64)> {
+        chain
+            .levels
+            .iter()
+            .map(|l| (l.triangles as f64, f(l)))
+            .collect()
+    };
+    let svg = error_chart(
+        &format!("{name}: error against triangle count"),
+        &[
+            Series {
+                name: "measured max (Hausdorff)",
+                points: curve(|l| l.measured_max_error),
+                color: RED,
+            },
+            Series {
+                name: "measured mean",
+                points: curve(|l| l.measured_mean_error),
+                color: BLUE,
+            },
+            Series {
+                name: "estimated (quadric)",
+                points: curve(|l| l.estimated_error as f64),
+                color: RGBColor(120, 120, 120),
+            },
+        ],
+    )?;
+    write_atomic(&out.join("lod_error.svg"), svg.as_bytes())?;
+    writeln!(report, "![error against triangle count](lod_error.svg)\n")?;
+    for l in &chain.levels {
+        outputs.push((format!("lods/{}", l.file), 0));
+    }
+    outputs.push((format!("lods/{}", chain.glb), 0));
+    outputs.push(("lods/lods.json".into(), 0));
+    outputs.push(("lod_error.svg".into(), svg.len()));
+
+    // Continuous LOD: the marching cube octree built from virtual scans.
+    continuous_lod(
+        ui,
+        mesh,
+        &name,
+        out,
+        args.samples,
+        &mut report,
+        &mut outputs,
+    )?;
+
+    writeln!(report, "## Outputs\n\n| file | bytes |\n|---|---:|")?;
+    for (file, _) in &outputs {
+        // lods.json holds wall times, so its size may change between runs;
+        // the report stays byte-identical by not quoting it.
+        let path = out.join(file);
+        let len = std::fs::metadata(&path)
+            .with_context(|| format!("{}", path.display()))?
+            .len();
+        if file.ends_with(".json") {
+            writeln!(report, "| `{file}` | (varies: holds timings) |")?;
+        } else {
+            writeln!(report, "| `{file}` | {len} |")?;
+        }
     }
     write_atomic(&out.join("report.md"), report.as_bytes())?;
     outputs.push(("report.md".into(), report.len()));
+    for (file, bytes) in outputs.iter_mut() {
+        *bytes = std::fs::metadata(out.join(&*file))
+            .map(|m| m.len() as usize)
+            .unwrap_or(0);
+    }
 
-    if json {
+    if args.json {
         let list: Vec<_> = outputs
             .iter()
             .map(|(file, bytes)| serde_json::json!({ "path": out.join(file), "bytes": bytes }))
@@ -97,5 +234,84 @@ pub fn run(ui: &Ui, input: Option<&Path>, out: &Path, json: bool) -> Result<()> 
             out.join(file).display()
         ));
     }
+    Ok(())
+}
+
+/// The thesis's experiment on the input: 8 virtual range scans
+/// (`scans/`), the marching cube octree built from them (`NAME.mco`), and
+/// extractions at 50 / 10 / 1 % of its full size, each measured against
+/// the input next to an HQMS simplification of the input to the same
+/// triangle count.
+fn continuous_lod(
+    ui: &Ui,
+    mesh: &TriMesh,
+    name: &str,
+    out: &std::path::Path,
+    samples: usize,
+    report: &mut String,
+    outputs: &mut Vec<(String, usize)>,
+) -> Result<()> {
+    use lodkit_mco::evaluate::{BUILD_SCANS, extraction_errors};
+    let step = ui.spinner("scanning the input from 8 virtual views");
+    let scans = lodkit_mco::scanner::scan_mesh(mesh, &BUILD_SCANS)?;
+    let written = lodkit_mco::scanner::write_scans(&out.join("scans"), name, &scans)?;
+    step.finish();
+    let step = ui.spinner("building the marching cube octree");
+    let mut model = lodkit_mco::build_from_range_images(&scans, &lodkit_mco::Options::default())?;
+    // The build time is the model file's one varying field: zero it so
+    // `build` stays byte-identical (`lodkit mco build` keeps it).
+    model.stats.build_seconds = 0.0;
+    let mco_file = format!("{name}.mco");
+    lodkit_mco::model_file::save(&out.join(&mco_file), &model)?;
+    step.finish();
+    let step = ui.spinner("measuring extractions");
+    let rows = extraction_errors(&model, mesh, &[50.0, 10.0, 1.0], Some(samples))?;
+    let copts = CompareOptions {
+        samples: Some(samples),
+        ..CompareOptions::default()
+    };
+    let mut hqms = Vec::with_capacity(rows.len());
+    for r in &rows {
+        let s = lodkit_simplify::simplify(
+            mesh,
+            &Options {
+                target: Target::Faces(r.triangles),
+                ..Options::DEFAULT
+            },
+        )
+        .map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+        hqms.push(compare(&s.mesh, mesh, &copts)?.symmetric);
+    }
+    step.finish();
+    writeln!(
+        report,
+        "## Continuous LOD (marching cube octree)\n\n{} virtual range scans of the input ({}×{}, \
+         `scans/`, with `{name}.conf`) rebuilt as a marching cube octree (`{mco_file}`: {} triangles \
+         at full resolution, LOD numbers 0..={}). Any triangle budget is cut from it by referencing only; \
+         below, extractions at fractions of full size against the input, next to HQMS simplifying \
+         the input to the same count ({samples} samples of each kind, symmetric).\n",
+        scans.len(),
+        BUILD_SCANS.width,
+        BUILD_SCANS.height,
+        model.full_triangles(),
+        model.max_lod(),
+    )?;
+    writeln!(
+        report,
+        "| % of full | LOD | triangles | MCO mean | MCO max | HQMS mean | HQMS max |\n|---:|---:|---:|---:|---:|---:|---:|"
+    )?;
+    for (r, h) in rows.iter().zip(&hqms) {
+        writeln!(
+            report,
+            "| {} | {} | {} | {:.3e} | {:.3e} | {:.3e} | {:.3e} |",
+            r.percent, r.lod, r.triangles, r.mean, r.max, h.mean, h.max
+        )?;
+    }
+    writeln!(report)?;
+    for p in written {
+        let rel = p.strip_prefix(out).unwrap_or(&p).display().to_string();
+        outputs.push((rel, 0));
+    }
+    outputs.push((mco_file, 0));
     Ok(())
 }

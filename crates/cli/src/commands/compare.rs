@@ -52,7 +52,7 @@ pub fn run(ui: &Ui, args: &CompareArgs) -> Result<()> {
     if args.json {
         return super::print_json(&report);
     }
-    println!("A: {}\nB: {}", args.a.display(), args.b.display());
-    println!("{report}");
+    crate::outln!("A: {}\nB: {}", args.a.display(), args.b.display())?;
+    crate::outln!("{report}")?;
     Ok(())
 }

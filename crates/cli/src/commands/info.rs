@@ -12,8 +12,8 @@ pub fn run(ui: &Ui, file: &Path, json: bool) -> Result<()> {
     if json {
         super::print_json(&info)
     } else {
-        println!("file: {}", file.display());
-        print!("{}", info.to_text());
+        crate::outln!("file: {}", file.display())?;
+        crate::out!("{}", info.to_text())?;
         Ok(())
     }
 }

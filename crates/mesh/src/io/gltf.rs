@@ -67,6 +67,7 @@ use gltf::mesh::util::{ReadColors, ReadTexCoords};
 use gltf::{Accessor, Semantic};
 
 use crate::error::ParseError;
+use crate::error::clip;
 use crate::mesh::TriMesh;
 use crate::parse_err;
 
@@ -151,7 +152,7 @@ fn percent_decode(s: &str) -> Result<String, ParseError> {
                 .get(i + 1..i + 3)
                 .and_then(|h| std::str::from_utf8(h).ok())
                 .and_then(|h| u8::from_str_radix(h, 16).ok())
-                .ok_or_else(|| parse_err!("buffer URI '{}' has a bad %-escape", clip(s)))?;
+                .ok_or_else(|| parse_err!("buffer URI '{}' has a bad %-escape", clip(s, 48)))?;
             out.push(hex);
             i += 3;
         } else {
@@ -159,19 +160,7 @@ fn percent_decode(s: &str) -> Result<String, ParseError> {
             i += 1;
         }
     }
-    String::from_utf8(out).map_err(|_| parse_err!("buffer URI '{}' is not UTF-8", clip(s)))
-}
-
-fn clip(s: &str) -> String {
-    let mut end = s.len().min(48);
-    while !s.is_char_boundary(end) {
-        end -= 1;
-    }
-    if end < s.len() {
-        format!("{}…", &s[..end])
-    } else {
-        s.to_string()
-    }
+    String::from_utf8(out).map_err(|_| parse_err!("buffer URI '{}' is not UTF-8", clip(s, 48)))
 }
 
 /// The bytes of buffer `buffer` (see the module docs for what is accepted).
@@ -196,7 +185,7 @@ fn load_buffer<'a>(
         if !meta.ends_with(";base64") {
             return Err(parse_err!(
                 "buffer {i}: data URI is not base64 ('{}')",
-                clip(meta)
+                clip(meta, 48)
             ));
         }
         return decode_base64(data)
@@ -211,28 +200,28 @@ fn load_buffer<'a>(
     if has_scheme || uri.starts_with('/') || uri.starts_with('\\') {
         return Err(parse_err!(
             "buffer {i}: '{}' is not a relative path (URLs and absolute paths are refused)",
-            clip(uri)
+            clip(uri, 48)
         ));
     }
     let rel = percent_decode(uri)?;
     let dir = base_dir.ok_or_else(|| {
         parse_err!(
             "buffer {i}: external file '{}' but no directory to resolve it against",
-            clip(&rel)
+            clip(&rel, 48)
         )
     })?;
     let path = dir.join(&rel);
     let meta = std::fs::metadata(&path)
-        .map_err(|e| parse_err!("buffer {i}: cannot open '{}': {e}", clip(&rel)))?;
+        .map_err(|e| parse_err!("buffer {i}: cannot open '{}': {e}", clip(&rel, 48)))?;
     if !meta.is_file() || meta.len() > super::MAX_FILE_BYTES {
         return Err(parse_err!(
             "buffer {i}: '{}' is not a regular file within the size limit",
-            clip(&rel)
+            clip(&rel, 48)
         ));
     }
     std::fs::read(&path)
         .map(Cow::Owned)
-        .map_err(|e| parse_err!("buffer {i}: cannot read '{}': {e}", clip(&rel)))
+        .map_err(|e| parse_err!("buffer {i}: cannot read '{}': {e}", clip(&rel, 48)))
 }
 
 /// Checks what gltf-json's validation indexes without checking.

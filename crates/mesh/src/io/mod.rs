@@ -221,3 +221,72 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shapes;
+
+    fn names(dir: &Path) -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    }
+
+    #[test]
+    fn save_replaces_the_target_whole_and_leaves_no_temp_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.ply");
+        std::fs::write(&path, b"old contents").unwrap();
+        save_mesh(&path, &shapes::icosphere(1), WriteOptions::default()).unwrap();
+        assert_eq!(names(dir.path()), ["m.ply"]);
+        let back = load_mesh(&path).unwrap();
+        assert_eq!(back.faces.len(), 80);
+    }
+
+    #[test]
+    fn a_failed_save_leaves_the_old_file_and_nothing_else() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("cloud.stl");
+        std::fs::write(&path, b"old contents").unwrap();
+        let cloud = Model::Points(PointCloud {
+            positions: vec![glam::Vec3::ZERO],
+            ..Default::default()
+        });
+        let err = save(&path, &cloud, WriteOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("cloud.stl") && err.contains("meshes only"),
+            "{err}"
+        );
+        assert_eq!(std::fs::read(&path).unwrap(), b"old contents");
+        assert_eq!(names(dir.path()), ["cloud.stl"]);
+        // A missing directory is an I/O error naming the path, not a panic.
+        let missing = dir.path().join("no/such/dir/m.ply");
+        let err = save_mesh(&missing, &shapes::icosphere(0), WriteOptions::default()).unwrap_err();
+        assert!(err.to_string().contains("no/such/dir/m.ply"), "{err}");
+    }
+
+    #[test]
+    fn same_model_same_bytes_in_every_format() {
+        let m = Model::Mesh(shapes::torus(1.0, 0.3, 12, 8));
+        for f in [
+            Format::Ply,
+            Format::Obj,
+            Format::Stl,
+            Format::Glb,
+            Format::Xyz,
+            Format::Pts,
+        ] {
+            for ascii in [false, true] {
+                let a = encode(f, &m, WriteOptions { ascii }).unwrap();
+                let b = encode(f, &m, WriteOptions { ascii }).unwrap();
+                assert_eq!(a, b, "{f:?}");
+            }
+        }
+    }
+}

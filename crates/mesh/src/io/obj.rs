@@ -43,6 +43,7 @@ use std::io::Write;
 use glam::{Vec2, Vec3};
 
 use crate::error::ParseError;
+use crate::error::clip;
 use crate::mesh::TriMesh;
 use crate::parse_err;
 
@@ -54,18 +55,6 @@ struct Scan {
     has_polylines: bool,
 }
 
-fn clip(tok: &str) -> String {
-    let mut end = tok.len().min(32);
-    while !tok.is_char_boundary(end) {
-        end -= 1;
-    }
-    if end < tok.len() {
-        format!("{}…", &tok[..end])
-    } else {
-        tok.to_string()
-    }
-}
-
 fn check_floats<'a>(
     words: impl Iterator<Item = &'a str>,
     line: usize,
@@ -75,7 +64,7 @@ fn check_floats<'a>(
         if w.parse::<f32>().is_err() {
             return Err(parse_err!(
                 "line {line}: {what} '{}' is not a number",
-                clip(w)
+                clip(w, 32)
             ));
         }
     }
@@ -88,7 +77,7 @@ fn resolve(tok: &str, count: usize, what: &str, line: usize) -> Result<usize, Pa
     let x: i64 = tok.parse().map_err(|_| {
         parse_err!(
             "line {line}: face {what} index '{}' is not an integer",
-            clip(tok)
+            clip(tok, 32)
         )
     })?;
     let count_i = count as i64;
@@ -178,7 +167,7 @@ fn prescan(text: &str) -> Result<Scan, ParseError> {
                     if v.is_empty() {
                         return Err(parse_err!(
                             "line {line}: face corner '{}' has no vertex index",
-                            clip(w)
+                            clip(w, 32)
                         ));
                     }
                     resolve(v, nv, "vertex", line)?;
@@ -191,7 +180,7 @@ fn prescan(text: &str) -> Result<Scan, ParseError> {
                     if parts.next().is_some() {
                         return Err(parse_err!(
                             "line {line}: face corner '{}' has more than v/vt/vn",
-                            clip(w)
+                            clip(w, 32)
                         ));
                     }
                 }

@@ -32,6 +32,7 @@ use std::str::SplitWhitespace;
 use glam::Vec3;
 
 use crate::error::ParseError;
+use crate::error::clip;
 use crate::mesh::TriMesh;
 use crate::parse_err;
 
@@ -137,7 +138,7 @@ impl<'a> Tokens<'a> {
             Some(w) => Err(parse_err!(
                 "line {}: expected '{word}' in facet {facet}, found '{}'",
                 self.line,
-                clip(w)
+                clip(w, 32)
             )),
             None => Err(parse_err!(
                 "unexpected end of file: expected '{word}' in facet {facet}"
@@ -147,7 +148,11 @@ impl<'a> Tokens<'a> {
     fn float(&mut self, what: &str) -> Result<f32, ParseError> {
         match self.next() {
             Some(w) => w.parse().map_err(|_| {
-                parse_err!("line {}: {what} '{}' is not a number", self.line, clip(w))
+                parse_err!(
+                    "line {}: {what} '{}' is not a number",
+                    self.line,
+                    clip(w, 32)
+                )
             }),
             None => Err(parse_err!("unexpected end of file: expected a {what}")),
         }
@@ -158,18 +163,6 @@ impl<'a> Tokens<'a> {
             self.float(what)?,
             self.float(what)?,
         ))
-    }
-}
-
-fn clip(tok: &str) -> String {
-    let mut end = tok.len().min(32);
-    while !tok.is_char_boundary(end) {
-        end -= 1;
-    }
-    if end < tok.len() {
-        format!("{}…", &tok[..end])
-    } else {
-        tok.to_string()
     }
 }
 
@@ -188,7 +181,7 @@ fn read_ascii(bytes: &[u8]) -> Result<Vec<[Vec3; 3]>, ParseError> {
             return Err(parse_err!(
                 "line {}: expected 'solid', found '{}'",
                 t.line,
-                clip(w)
+                clip(w, 32)
             ));
         }
         t.skip_line();
@@ -203,7 +196,7 @@ fn read_ascii(bytes: &[u8]) -> Result<Vec<[Vec3; 3]>, ParseError> {
                     return Err(parse_err!(
                         "line {}: expected 'facet' or 'endsolid', found '{}'",
                         t.line,
-                        clip(w)
+                        clip(w, 32)
                     ));
                 }
                 None => {
@@ -233,7 +226,7 @@ fn read_ascii(bytes: &[u8]) -> Result<Vec<[Vec3; 3]>, ParseError> {
                         return Err(parse_err!(
                             "line {}: expected 'vertex' or 'endloop' in facet {facet}, found '{}'",
                             t.line,
-                            clip(w)
+                            clip(w, 32)
                         ));
                     }
                     None => {

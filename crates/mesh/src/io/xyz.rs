@@ -31,6 +31,7 @@ use std::io::Write;
 use glam::Vec3;
 
 use crate::error::ParseError;
+use crate::error::clip;
 use crate::mesh::PointCloud;
 use crate::parse_err;
 
@@ -83,11 +84,11 @@ fn data_lines(text: &str) -> impl Iterator<Item = DataLine<'_>> {
 fn float(tok: &str, line: usize, what: &str) -> Result<f32, ParseError> {
     let v: f32 = tok
         .parse()
-        .map_err(|_| parse_err!("line {line}: {what} '{}' is not a number", clip(tok)))?;
+        .map_err(|_| parse_err!("line {line}: {what} '{}' is not a number", clip(tok, 32)))?;
     if !v.is_finite() {
         return Err(parse_err!(
             "line {line}: {what} '{}' is not finite",
-            clip(tok)
+            clip(tok, 32)
         ));
     }
     Ok(v)
@@ -112,25 +113,12 @@ fn rgb(t: &[&str], line: usize) -> Result<[u8; 4], ParseError> {
         if !is_u8_literal(t[k]) {
             return Err(parse_err!(
                 "line {line}: colour '{}' is not an integer 0..255",
-                clip(t[k])
+                clip(t[k], 32)
             ));
         }
         c[k] = t[k].parse().unwrap_or(0);
     }
     Ok(c)
-}
-
-/// Shortens a token quoted in an error, so one garbage line cannot make a
-/// megabyte-long message.
-fn clip(tok: &str) -> String {
-    if tok.len() <= 32 {
-        return tok.to_string();
-    }
-    let mut end = 32;
-    while !tok.is_char_boundary(end) {
-        end -= 1;
-    }
-    format!("{}…", &tok[..end])
 }
 
 /// Reads an XYZ file (layout chosen as described in the module docs).
@@ -216,7 +204,7 @@ pub fn read_pts(bytes: &[u8]) -> Result<PointCloud, ParseError> {
                 parse_err!(
                     "line {}: '{}' is not a point count (one column)",
                     l.number,
-                    clip(t[0])
+                    clip(t[0], 32)
                 )
             })?;
             close(section.take())?;

@@ -1,0 +1,336 @@
+//! `lodkit bench simplify`: lodkit's HQMS simplifier next to
+//! meshoptimizer's `meshopt_simplify`, on the same mesh and target, one
+//! thread each, in one process.
+//!
+//! Per case: input / output triangles, the best wall time of each over a
+//! few runs, the time ratio (lodkit / meshopt; ≤ 1 means lodkit is
+//! faster), peak extra memory per input vertex, and both outputs'
+//! symmetric mean and max distance to the input from
+//! [`lodkit_mesh::metrics::compare`].
+//!
+//! Memory is measured with [`CountingAlloc`]: the binary that runs the bench
+//! installs it as its global allocator, and meshoptimizer's temporary
+//! allocations are routed through Rust's allocator with
+//! `meshopt_setAllocator`, so both sides are counted the same way: the peak
+//! of live bytes during the call minus the live bytes before it (the
+//! output included, the loaded input not). Without the counting allocator
+//! installed, memory columns are `None`.
+//!
+//! meshopt is called with `target_error = 1` (relative to the mesh extent:
+//! no error bound, the triangle count decides) and no options, the same
+//! contract as lodkit's `--target`.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::{Duration, Instant};
+
+use lodkit_mesh::TriMesh;
+use lodkit_mesh::metrics::{CompareOptions, compare};
+use lodkit_simplify::{Options, Simplifier, Target};
+
+static LIVE: AtomicUsize = AtomicUsize::new(0);
+static PEAK: AtomicUsize = AtomicUsize::new(0);
+
+/// A global allocator that counts live bytes and their peak. Install it in
+/// a binary with `#[global_allocator] static A: CountingAlloc = CountingAlloc;`.
+pub struct CountingAlloc;
+
+// SAFETY: every method forwards to the system allocator with the caller's
+// layout unchanged; the counters are plain atomics and never affect the
+// returned pointers.
+unsafe impl GlobalAlloc for CountingAlloc {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        // SAFETY: forwarded contract (non-zero size is the caller's duty).
+        let p = unsafe { System.alloc(layout) };
+        if !p.is_null() {
+            count_alloc(layout.size());
+        }
+        p
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        // SAFETY: as above.
+        let p = unsafe { System.alloc_zeroed(layout) };
+        if !p.is_null() {
+            count_alloc(layout.size());
+        }
+        p
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: `ptr` was allocated by `System` with `layout` (we only
+        // ever hand out System pointers).
+        unsafe { System.dealloc(ptr, layout) };
+        LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        // SAFETY: forwarded contract.
+        let p = unsafe { System.realloc(ptr, layout, new_size) };
+        if !p.is_null() {
+            LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
+            count_alloc(new_size);
+        }
+        p
+    }
+}
+
+#[inline]
+fn count_alloc(size: usize) {
+    let now = LIVE.fetch_add(size, Ordering::Relaxed) + size;
+    PEAK.fetch_max(now, Ordering::Relaxed);
+}
+
+/// Whether [`CountingAlloc`] is the global allocator of this process.
+pub fn counting_active() -> bool {
+    let before = LIVE.load(Ordering::Relaxed);
+    let probe = std::hint::black_box(vec![0u8; 4096]);
+    let active = LIVE.load(Ordering::Relaxed) >= before + 4096;
+    drop(probe);
+    active
+}
+
+/// Runs `f` and returns its result and the peak live bytes above the
+/// live bytes at the start (`None` without the counting allocator).
+pub fn measure_peak<R>(f: impl FnOnce() -> R) -> (R, Option<usize>) {
+    let active = counting_active();
+    let base = LIVE.load(Ordering::Relaxed);
+    PEAK.store(base, Ordering::Relaxed);
+    let r = f();
+    let peak = PEAK.load(Ordering::Relaxed);
+    (r, active.then(|| peak.saturating_sub(base)))
+}
+
+// meshoptimizer's temporary allocations, routed through Rust's global
+// allocator (so `CountingAlloc` sees them). A 16-byte header keeps the size
+// for `dealloc`.
+const HEADER: usize = 16;
+
+unsafe extern "C" fn meshopt_alloc(size: usize) -> *mut std::ffi::c_void {
+    let Ok(layout) = Layout::from_size_align(size + HEADER, HEADER) else {
+        return std::ptr::null_mut();
+    };
+    // SAFETY: the layout has a non-zero size (≥ HEADER).
+    let base = unsafe { std::alloc::alloc(layout) };
+    if base.is_null() {
+        return std::ptr::null_mut();
+    }
+    // SAFETY: `base` is valid for `size + HEADER` bytes and 16-aligned, so
+    // the header write and the offset pointer stay inside the block.
+    unsafe {
+        (base as *mut usize).write(size);
+        base.add(HEADER) as *mut std::ffi::c_void
+    }
+}
+
+unsafe extern "C" fn meshopt_dealloc(p: *mut std::ffi::c_void) {
+    if p.is_null() {
+        return;
+    }
+    // SAFETY: `p` came from `meshopt_alloc`, so the block starts HEADER
+    // bytes earlier and holds its size there, and was allocated with this
+    // layout.
+    unsafe {
+        let base = (p as *mut u8).sub(HEADER);
+        let size = (base as *const usize).read();
+        std::alloc::dealloc(
+            base,
+            Layout::from_size_align_unchecked(size + HEADER, HEADER),
+        );
+    }
+}
+
+fn route_meshopt_allocations() {
+    // SAFETY: called before any other meshopt function in this process
+    // (and again only with the same callbacks); the callbacks follow the
+    // malloc/free contract meshopt expects.
+    unsafe { meshopt::ffi::meshopt_setAllocator(Some(meshopt_alloc), Some(meshopt_dealloc)) };
+}
+
+/// meshopt_simplify on a `TriMesh`: returns the output as a `TriMesh` over
+/// the input's vertices (the vertex array is shared, not simplified —
+/// meshopt returns indices only).
+pub fn meshopt_simplify(mesh: &TriMesh, positions_bytes: &[u8], target_faces: usize) -> Vec<u32> {
+    let adapter = meshopt::VertexDataAdapter::new(positions_bytes, 12, 0)
+        .expect("12-byte stride over 12-byte positions");
+    let indices: &[u32] = mesh.faces.as_flattened();
+    meshopt::simplify(
+        indices,
+        &adapter,
+        target_faces * 3,
+        1.0,
+        meshopt::SimplifyOptions::None,
+        None,
+    )
+}
+
+/// One row of the table.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Row {
+    pub mesh: String,
+    pub target: String,
+    pub input_triangles: usize,
+    pub input_vertices: usize,
+    pub target_triangles: usize,
+    pub lodkit_triangles: usize,
+    pub meshopt_triangles: usize,
+    /// Fresh workspace (every buffer allocated in the call).
+    pub lodkit_ms: f64,
+    /// Reused workspace.
+    pub lodkit_reused_ms: f64,
+    pub meshopt_ms: f64,
+    /// lodkit time (fresh workspace) / meshopt time.
+    pub time_ratio: f64,
+    pub lodkit_bytes_per_vertex: Option<f64>,
+    pub meshopt_bytes_per_vertex: Option<f64>,
+    /// lodkit's exact workspace accounting (arrays' capacities at the peak).
+    pub lodkit_workspace_bytes_per_vertex: f64,
+    pub lodkit_mean: f64,
+    pub lodkit_max: f64,
+    pub meshopt_mean: f64,
+    pub meshopt_max: f64,
+    pub lodkit_estimated_error: f32,
+}
+
+/// How to run the cases.
+#[derive(Debug, Clone, Copy)]
+pub struct BenchConfig {
+    /// Timed runs per side (the best is kept).
+    pub runs: usize,
+    /// Samples per kind for `compare`.
+    pub samples: usize,
+}
+
+impl Default for BenchConfig {
+    fn default() -> Self {
+        BenchConfig {
+            runs: 3,
+            samples: 1_000_000,
+        }
+    }
+}
+
+/// The targets: 50%, 10%, 1% and 1,000 triangles.
+pub fn standard_targets() -> Vec<(String, Target)> {
+    vec![
+        ("50%".into(), Target::Ratio(0.5)),
+        ("10%".into(), Target::Ratio(0.1)),
+        ("1%".into(), Target::Ratio(0.01)),
+        ("1000".into(), Target::Faces(1000)),
+    ]
+}
+
+/// Runs one mesh at one target.
+pub fn run_case(
+    name: &str,
+    mesh: &TriMesh,
+    label: &str,
+    target: Target,
+    cfg: &BenchConfig,
+) -> Result<Row, String> {
+    route_meshopt_allocations();
+    let goal = target.faces(mesh.faces.len());
+    let opts = Options {
+        target,
+        ..Options::DEFAULT
+    };
+    let bytes: Vec<u8> = mesh
+        .positions
+        .iter()
+        .flat_map(|p| p.to_array())
+        .flat_map(f32::to_le_bytes)
+        .collect();
+
+    // Memory: one measured call each (outside the timed runs).
+    let mut ws = Simplifier::new();
+    let (lk, lk_peak) = measure_peak(|| Simplifier::new().simplify(mesh, &opts));
+    let lk = lk.map_err(|e| e.to_string())?;
+    let (mo, mo_peak) = measure_peak(|| meshopt_simplify(mesh, &bytes, goal));
+
+    // Time: best of `runs`, alternating sides. lodkit is timed both with a
+    // fresh workspace (allocating everything, as meshopt does each call:
+    // this is the ratio) and with a reused one (its intended use in a
+    // pipeline).
+    let mut lk_best = Duration::MAX;
+    let mut lk_reused = Duration::MAX;
+    let mut mo_best = Duration::MAX;
+    for _ in 0..cfg.runs.max(1) {
+        let t = Instant::now();
+        let r = Simplifier::new()
+            .simplify(mesh, &opts)
+            .map_err(|e| e.to_string())?;
+        lk_best = lk_best.min(t.elapsed());
+        drop(std::hint::black_box(r));
+        let t = Instant::now();
+        let r = ws.simplify(mesh, &opts).map_err(|e| e.to_string())?;
+        lk_reused = lk_reused.min(t.elapsed());
+        drop(std::hint::black_box(r));
+        let t = Instant::now();
+        let r = meshopt_simplify(mesh, &bytes, goal);
+        mo_best = mo_best.min(t.elapsed());
+        drop(std::hint::black_box(r));
+    }
+    let workspace = ws.peak_bytes();
+
+    let mo_mesh = TriMesh::new(
+        mesh.positions.clone(),
+        mo.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+    );
+    let copts = CompareOptions {
+        samples: Some(cfg.samples),
+        ..CompareOptions::default()
+    };
+    let lk_cmp = compare(mesh, &lk.mesh, &copts).map_err(|e| e.to_string())?;
+    let mo_cmp = compare(mesh, &mo_mesh, &copts).map_err(|e| e.to_string())?;
+    let nv = mesh.positions.len().max(1) as f64;
+    Ok(Row {
+        mesh: name.to_string(),
+        target: label.to_string(),
+        input_triangles: mesh.faces.len(),
+        input_vertices: mesh.positions.len(),
+        target_triangles: goal,
+        lodkit_triangles: lk.mesh.faces.len(),
+        meshopt_triangles: mo_mesh.faces.len(),
+        lodkit_ms: lk_best.as_secs_f64() * 1e3,
+        lodkit_reused_ms: lk_reused.as_secs_f64() * 1e3,
+        meshopt_ms: mo_best.as_secs_f64() * 1e3,
+        time_ratio: lk_best.as_secs_f64() / mo_best.as_secs_f64().max(1e-9),
+        lodkit_bytes_per_vertex: lk_peak.map(|b| b as f64 / nv),
+        meshopt_bytes_per_vertex: mo_peak.map(|b| b as f64 / nv),
+        lodkit_workspace_bytes_per_vertex: workspace as f64 / nv,
+        lodkit_mean: lk_cmp.symmetric.mean,
+        lodkit_max: lk_cmp.symmetric.max,
+        meshopt_mean: mo_cmp.symmetric.mean,
+        meshopt_max: mo_cmp.symmetric.max,
+        lodkit_estimated_error: lk.report.estimated_error,
+    })
+}
+
+/// The table as aligned text.
+pub fn format_table(rows: &[Row]) -> String {
+    let mut s = String::new();
+    s.push_str(&format!(
+        "{:<16} {:>6} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>6} {:>7} {:>7} {:>10} {:>10} {:>10} {:>10}\n",
+        "mesh", "target", "in tris", "lk tris", "mo tris", "lk ms", "lk re ms", "mo ms", "ratio",
+        "lk B/v", "mo B/v", "lk mean", "mo mean", "lk max", "mo max"
+    ));
+    let b = |x: Option<f64>| x.map_or("n/a".to_string(), |v| format!("{v:.1}"));
+    for r in rows {
+        s.push_str(&format!(
+            "{:<16} {:>6} {:>9} {:>9} {:>9} {:>9.2} {:>9.2} {:>9.2} {:>6.2} {:>7} {:>7} {:>10.3e} {:>10.3e} {:>10.3e} {:>10.3e}\n",
+            r.mesh,
+            r.target,
+            r.input_triangles,
+            r.lodkit_triangles,
+            r.meshopt_triangles,
+            r.lodkit_ms,
+            r.lodkit_reused_ms,
+            r.meshopt_ms,
+            r.time_ratio,
+            b(r.lodkit_bytes_per_vertex),
+            b(r.meshopt_bytes_per_vertex),
+            r.lodkit_mean,
+            r.meshopt_mean,
+            r.lodkit_max,
+            r.meshopt_max,
+        ));
+    }
+    s
+}

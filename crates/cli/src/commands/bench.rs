@@ -1,0 +1,95 @@
+//! `lodkit bench simplify [MESH...]`: lodkit's simplifier against
+//! meshoptimizer in this process (see `lodkit_bench::simplify`);
+//! `lodkit bench mco [MODEL...]`: continuous-LOD extraction next to a
+//! memcpy of the same index buffer (see `bench_mco.rs`).
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::{Args, Subcommand};
+use lodkit_bench::simplify::{BenchConfig, format_table, run_case, standard_targets};
+use lodkit_mesh::TriMesh;
+
+use crate::ui::Ui;
+
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    #[command(subcommand)]
+    pub what: BenchWhat,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum BenchWhat {
+    /// HQMS vs meshopt_simplify at 50%, 10%, 1% and 1,000 triangles.
+    Simplify {
+        /// Meshes to run (default: the bunny and a 1M-triangle blob).
+        meshes: Vec<PathBuf>,
+        /// Timed runs per side (the best is kept).
+        #[arg(long, default_value_t = 3)]
+        runs: usize,
+        /// Samples per kind for the error measurement.
+        #[arg(long, default_value_t = 1_000_000)]
+        samples: usize,
+        /// Size of the synthetic blob when no mesh is given.
+        #[arg(long, default_value_t = 1_000_000)]
+        blob: usize,
+        /// Print the rows as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Marching-cube-octree extraction time next to memcpy of the same index buffer.
+    Mco(super::bench_mco::BenchMcoArgs),
+}
+
+pub fn run(ui: &Ui, a: &BenchArgs) -> Result<()> {
+    let (meshes, runs, samples, blob, json) = match &a.what {
+        BenchWhat::Simplify {
+            meshes,
+            runs,
+            samples,
+            blob,
+            json,
+        } => (meshes, runs, samples, blob, json),
+        BenchWhat::Mco(args) => return super::bench_mco::run(ui, args),
+    };
+    let mut inputs: Vec<(String, TriMesh)> = Vec::new();
+    if meshes.is_empty() {
+        inputs.push(("bunny".into(), super::builtin_bunny()?));
+        inputs.push((format!("blob {}", blob), lodkit_mesh::shapes::blob(*blob)));
+    } else {
+        for p in meshes {
+            let name = p
+                .file_stem()
+                .and_then(|s| s.to_str())
+                .unwrap_or("mesh")
+                .to_string();
+            inputs.push((name, super::load_mesh(ui, p)?));
+        }
+    }
+    let cfg = BenchConfig {
+        runs: *runs,
+        samples: *samples,
+    };
+    let mut rows = Vec::new();
+    for (name, mesh) in &inputs {
+        for (label, target) in standard_targets() {
+            let step = ui.spinner(&format!("{name} at {label}"));
+            let row = run_case(name, mesh, &label, target, &cfg)
+                .map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+            step.finish();
+            if !json {
+                ui.status(
+                    format_table(std::slice::from_ref(&row))
+                        .lines()
+                        .nth(1)
+                        .unwrap_or(""),
+                );
+            }
+            rows.push(row);
+        }
+    }
+    if *json {
+        return super::print_json(&rows);
+    }
+    crate::outln!("{}", format_table(&rows))?;
+    Ok(())
+}

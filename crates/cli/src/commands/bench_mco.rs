@@ -1,0 +1,81 @@
+//! `lodkit bench mco`: extraction time next to a memcpy of the same index
+//! buffer, in one run (meant to hang under `lodkit bench mco`).
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::Args;
+use lodkit_mco::extraction_bench::{default_targets, time_extraction};
+use lodkit_mco::pipeline::{Options, build_from_mesh};
+use lodkit_mco::{McoModel, model_file};
+
+use crate::ui::Ui;
+
+#[derive(Args, Debug)]
+pub struct BenchMcoArgs {
+    /// Models to measure (.mco, or a mesh to build first); default: the
+    /// built-in bunny and a 1M-triangle synthetic blob.
+    pub inputs: Vec<PathBuf>,
+    /// Resolution for meshes built here (default: from the sampling).
+    #[arg(long)]
+    pub resolution: Option<u32>,
+    /// Seconds spent per measured size (roughly).
+    #[arg(long, default_value_t = 0.5)]
+    pub budget: f64,
+}
+
+fn table(ui: &Ui, name: &str, m: &McoModel, budget: f64) -> Result<()> {
+    ui.status(format!(
+        "{name}: {} nodes, {} triangles at full resolution, built in {:.2} s",
+        m.nodes.len(),
+        m.full_triangles(),
+        m.stats.build_seconds
+    ));
+    crate::outln!("| model | target | triangles | extract (µs) | memcpy (µs) | ratio | Mtris/s |")?;
+    crate::outln!("|---|---:|---:|---:|---:|---:|---:|")?;
+    for r in time_extraction(m, &default_targets(m.full_triangles()), budget) {
+        crate::outln!(
+            "| {name} | {} | {} | {:.1} | {:.1} | {:.2} | {:.0} |",
+            r.target,
+            r.triangles,
+            r.extract_s * 1e6,
+            r.memcpy_s * 1e6,
+            r.ratio(),
+            r.mtris_per_s()
+        )?;
+    }
+    Ok(())
+}
+
+pub fn run(ui: &Ui, args: &BenchMcoArgs) -> Result<()> {
+    let opts = Options {
+        resolution: args.resolution,
+    };
+    if args.inputs.is_empty() {
+        let step = ui.spinner("building the bunny model");
+        let bunny = super::builtin_bunny()?;
+        let m = build_from_mesh(&bunny, &opts)?;
+        step.finish();
+        table(ui, "bunny", &m, args.budget)?;
+        let step = ui.spinner("building the 1M-triangle blob model");
+        let blob = lodkit_mesh::shapes::blob(1_200_000);
+        let m = build_from_mesh(
+            &blob,
+            &Options {
+                resolution: Some(350),
+            },
+        )?;
+        step.finish();
+        table(ui, "blob-1M", &m, args.budget)?;
+        return Ok(());
+    }
+    for p in &args.inputs {
+        let name = p.display().to_string();
+        let m = if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("mco")) {
+            model_file::load(p)?
+        } else {
+            build_from_mesh(&super::load_mesh(ui, p)?, &opts)?
+        };
+        table(ui, &name, &m, args.budget)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,301 @@
+//! `lodkit mco build|extract|info`: the continuous-LOD model (marching cube
+//! octree).
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use clap::{Args, Subcommand};
+use lodkit_mco::pipeline::{IncrementalBuilder, Options, grid_for, samples_of};
+use lodkit_mco::{Camera, McoModel, model_file};
+use lodkit_mesh::glam::Vec3;
+use lodkit_mesh::io::{WriteOptions, save_mesh};
+use lodkit_mesh::{Model, RangeImage};
+use serde::Serialize;
+
+use crate::ui::Ui;
+
+#[derive(Subcommand)]
+pub enum McoCommand {
+    /// Build a model from range scans (.ply range grids, .conf alignments), meshes or point clouds.
+    #[command(
+        after_help = "Examples:\n  lodkit mco build bun.conf -o bunny.mco\n  lodkit mco build scan1.ply scan2.ply -o part.mco --resolution 200\n  lodkit mco build bunny.ply -o bunny.mco"
+    )]
+    Build {
+        /// Inputs, added one at a time (a .conf adds each scan it lists, posed).
+        #[arg(required = true)]
+        inputs: Vec<PathBuf>,
+        /// Output .mco file.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Leaf cubes along the longest axis (default: cube = twice the sample spacing).
+        #[arg(long)]
+        resolution: Option<u32>,
+    },
+    /// Write the mesh of one level of detail.
+    #[command(
+        after_help = "Examples:\n  lodkit mco extract bunny.mco --triangles 10000 -o bunny_10k.ply\n  lodkit mco extract bunny.mco --lod 500 -o lod500.ply\n  lodkit mco extract bunny.mco --view 0,0.1,0.4 --look-at 0,0.1,0 --tolerance 1 -o near.ply"
+    )]
+    Extract(ExtractArgs),
+    /// Nodes and triangles per level, LOD-array length, build time.
+    Info {
+        model: PathBuf,
+        /// Print as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+#[derive(Args)]
+#[command(group = clap::ArgGroup::new("select").required(true).args(["lod", "triangles", "view"]))]
+pub struct ExtractArgs {
+    /// The .mco model.
+    pub model: PathBuf,
+    /// Output mesh (.ply, .obj, .stl, .glb).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// LOD number (0 = root only; `mco info` prints the highest).
+    #[arg(long)]
+    pub lod: Option<usize>,
+    /// Triangle budget (the closest LOD number is used).
+    #[arg(long)]
+    pub triangles: Option<usize>,
+    /// View-dependent: camera position X,Y,Z.
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    pub view: Option<String>,
+    /// Point the camera looks at (default: the model's centre).
+    #[arg(
+        long,
+        value_name = "X,Y,Z",
+        requires = "view",
+        allow_hyphen_values = true
+    )]
+    pub look_at: Option<String>,
+    /// Vertical field of view, degrees.
+    #[arg(long, default_value_t = 60.0, requires = "view")]
+    pub fov: f32,
+    /// Viewport height, pixels.
+    #[arg(long, default_value_t = 1080.0, requires = "view")]
+    pub viewport: f32,
+    /// Largest projected error allowed, pixels.
+    #[arg(long, default_value_t = 1.0, requires = "view")]
+    pub tolerance: f32,
+}
+
+pub fn run(ui: &Ui, cmd: &McoCommand) -> Result<()> {
+    match cmd {
+        McoCommand::Build {
+            inputs,
+            output,
+            resolution,
+        } => build(ui, inputs, output, *resolution),
+        McoCommand::Extract(args) => extract(ui, args),
+        McoCommand::Info { model, json } => info(ui, model, *json),
+    }
+}
+
+/// Loads an input: a `.conf` expands to its posed scans.
+fn load_inputs(ui: &Ui, path: &Path) -> Result<Vec<(String, Model)>> {
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("conf"))
+    {
+        let step = ui.spinner(&format!("reading {}", path.display()));
+        let scans = lodkit_mesh::io::conf::load_scans(path)?;
+        step.finish();
+        return Ok(scans
+            .into_iter()
+            .map(|(p, r): (PathBuf, RangeImage)| (p.display().to_string(), Model::Range(r)))
+            .collect());
+    }
+    Ok(vec![(path.display().to_string(), super::load(ui, path)?)])
+}
+
+fn build(ui: &Ui, inputs: &[PathBuf], output: &Path, resolution: Option<u32>) -> Result<()> {
+    let t0 = std::time::Instant::now();
+    let mut models = Vec::new();
+    for p in inputs {
+        models.extend(load_inputs(ui, p)?);
+    }
+    let samples = models
+        .iter()
+        .map(|(name, m)| samples_of(m).with_context(|| name.clone()))
+        .collect::<Result<Vec<_>>>()?;
+    if samples.iter().all(|s| s.is_empty()) {
+        bail!("the inputs hold no usable samples");
+    }
+    let plain: Vec<Model> = models.iter().map(|(_, m)| m.clone()).collect();
+    let grid = grid_for(&plain, &samples, &Options { resolution })?;
+    let samples = lodkit_mco::pipeline::densify_meshes(&plain, samples, &grid);
+    ui.status(format!(
+        "lattice: resolution {}, cube {:.6}, octree depth {}",
+        grid.resolution, grid.cube, grid.depth
+    ));
+    let mut builder = IncrementalBuilder::new(grid);
+    // Scan data has edges: Hoppe's tangential rule (meshes build without it).
+    if plain.iter().any(|m| !matches!(m, Model::Mesh(_))) {
+        builder = builder.with_tangential_rule();
+    }
+    for ((name, _), s) in models.iter().zip(&samples) {
+        let r = builder.add(s);
+        ui.status(format!(
+            "added {name}: {} samples, {} cubes recomputed, {} surface cubes",
+            r.samples, r.cubes_recomputed, r.surface_cubes
+        ));
+    }
+    let step = ui.spinner("building the octree");
+    let mut model = builder.build()?;
+    step.finish();
+    model.stats.build_seconds = t0.elapsed().as_secs_f64();
+    model_file::save(output, &model)?;
+    ui.status(format!(
+        "wrote {} ({} nodes, {} LOD numbers, {} triangles at full resolution)",
+        output.display(),
+        model.nodes.len(),
+        model.max_lod(),
+        model.full_triangles()
+    ));
+    Ok(())
+}
+
+fn parse_vec3(s: &str, what: &str) -> Result<Vec3> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .with_context(|| format!("{what} '{s}': expected X,Y,Z"))?;
+    match v.as_slice() {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(Vec3::new(*x, *y, *z)),
+        _ => bail!("{what} '{s}': expected three finite numbers X,Y,Z"),
+    }
+}
+
+fn extract(ui: &Ui, a: &ExtractArgs) -> Result<()> {
+    let model: McoModel = model_file::load(&a.model)?;
+    let mut idx = Vec::new();
+    let step = ui.spinner("extracting");
+    let what = if let Some(k) = a.lod {
+        if k > model.max_lod() {
+            bail!(
+                "{}: --lod {k} is past the highest LOD number {}",
+                a.model.display(),
+                model.max_lod()
+            );
+        }
+        model.extract_lod(k, &mut idx);
+        format!("LOD {k}")
+    } else if let Some(n) = a.triangles {
+        let k = model.extract_triangles(n, &mut idx);
+        format!("LOD {k} for a budget of {n} triangles")
+    } else {
+        let view = a.view.as_deref().expect("clap requires one of the three");
+        let position = parse_vec3(view, "--view")?;
+        let (lo, hi) = model.node_box(0);
+        let target = match &a.look_at {
+            Some(s) => parse_vec3(s, "--look-at")?,
+            None => (lo + hi) * 0.5,
+        };
+        if !(a.fov > 0.0 && a.fov < 180.0 && a.viewport > 0.0 && a.tolerance > 0.0) {
+            bail!("--fov must be in (0, 180), --viewport and --tolerance positive");
+        }
+        let cam = Camera {
+            vfov_deg: a.fov,
+            viewport_height: a.viewport,
+            ..Camera::looking_at(position, target)
+        };
+        let n = model.extract_view(&cam, a.tolerance, &mut idx);
+        format!("view-dependent cut ({n} nodes expanded)")
+    };
+    step.finish();
+    let mesh = model.mesh_from_indices(&idx);
+    save_mesh(&a.output, &mesh, WriteOptions::default())?;
+    ui.status(format!(
+        "wrote {} ({what}: {} triangles, {} vertices)",
+        a.output.display(),
+        mesh.faces.len(),
+        mesh.positions.len()
+    ));
+    Ok(())
+}
+
+#[derive(Serialize)]
+struct LevelRow {
+    level: usize,
+    nodes: usize,
+    triangles: usize,
+}
+
+#[derive(Serialize)]
+struct Info {
+    file: String,
+    resolution: u32,
+    cube: f32,
+    depth: u32,
+    vertices: usize,
+    nodes: usize,
+    lod_array: usize,
+    lod_numbers: usize,
+    full_triangles: usize,
+    crack_patches: usize,
+    input_samples: u64,
+    build_seconds: f64,
+    levels: Vec<LevelRow>,
+}
+
+fn info(_ui: &Ui, path: &Path, json: bool) -> Result<()> {
+    let m = model_file::load(path)?;
+    let info = Info {
+        file: path.display().to_string(),
+        resolution: m.grid.resolution,
+        cube: m.grid.cube,
+        depth: m.grid.depth,
+        vertices: m.vertices.len(),
+        nodes: m.nodes.len(),
+        lod_array: m.lod.len(),
+        lod_numbers: m.max_lod(),
+        full_triangles: m.full_triangles(),
+        crack_patches: m.subs.len(),
+        input_samples: m.stats.input_samples,
+        build_seconds: m.stats.build_seconds,
+        levels: m
+            .level_table()
+            .into_iter()
+            .enumerate()
+            .map(|(level, (nodes, triangles))| LevelRow {
+                level,
+                nodes,
+                triangles,
+            })
+            .collect(),
+    };
+    if json {
+        return super::print_json(&info);
+    }
+    crate::outln!("file: {}", info.file)?;
+    crate::outln!(
+        "lattice: resolution {}, cube {:.6}, octree depth {}",
+        info.resolution,
+        info.cube,
+        info.depth
+    )?;
+    crate::outln!(
+        "vertices: {} (every level, {} crack-patch substitutions)",
+        info.vertices,
+        info.crack_patches
+    )?;
+    crate::outln!(
+        "nodes: {}; LOD array: {} nodes in {} LOD numbers",
+        info.nodes,
+        info.lod_array,
+        info.lod_numbers
+    )?;
+    crate::outln!("triangles at full resolution: {}", info.full_triangles)?;
+    crate::outln!(
+        "built from {} samples in {:.3} s",
+        info.input_samples,
+        info.build_seconds
+    )?;
+    crate::outln!("level  nodes  triangles (0 = leaf cubes)")?;
+    for r in &info.levels {
+        crate::outln!("{:>5}  {:>5}  {:>9}", r.level, r.nodes, r.triangles)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,160 @@
+//! `lodkit simplify IN -o OUT`: one mesh to one budget with the HQMS
+//! simplifier (`lodkit-simplify`).
+use std::path::{Path, PathBuf};
+
+use anyhow::{Result, bail};
+use clap::Args;
+use lodkit_mesh::io::{Format, WriteOptions, encode, write_atomic};
+use lodkit_mesh::{Model, TriMesh};
+use lodkit_simplify::{AttributeWeights, Options, Simplifier, Target};
+
+use crate::ui::Ui;
+
+/// Options shared by `simplify` and `lods`.
+#[derive(Args, Debug, Clone)]
+pub struct SimplifyOpts {
+    /// Stop before any collapse whose estimated object-space error (input units) would exceed E.
+    #[arg(long, value_name = "E")]
+    pub max_error: Option<f32>,
+    /// Keep border vertices (edges with one face) in place.
+    #[arg(long)]
+    pub lock_border: bool,
+    /// Keep every hole and open rim (the paper's hole filling is on by default).
+    #[arg(long)]
+    pub no_fill_holes: bool,
+    /// Records in the replacement-selection heap.
+    #[arg(long, default_value_t = Options::DEFAULT_HEAP_SIZE, value_name = "N")]
+    pub heap_size: usize,
+    /// Weight of normals in the cost (relative to the bounding-box extent).
+    #[arg(long, default_value_t = AttributeWeights::DEFAULT.normal, value_name = "W")]
+    pub normal_weight: f32,
+    /// Weight of colours in the cost.
+    #[arg(long, default_value_t = AttributeWeights::DEFAULT.color, value_name = "W")]
+    pub color_weight: f32,
+    /// Weight of UVs in the cost.
+    #[arg(long, default_value_t = AttributeWeights::DEFAULT.uv, value_name = "W")]
+    pub uv_weight: f32,
+    /// Remove components smaller than this fraction of the bounding-box diagonal first.
+    #[arg(long, value_name = "FRACTION")]
+    pub prune: Option<f32>,
+}
+
+impl SimplifyOpts {
+    pub fn options(&self, target: Target) -> Result<Options> {
+        if self.heap_size == 0 {
+            bail!("--heap-size must be at least 1");
+        }
+        Ok(Options {
+            target,
+            max_error: self.max_error,
+            lock_border: self.lock_border,
+            fill_holes: !self.no_fill_holes,
+            heap_size: self.heap_size,
+            weights: AttributeWeights {
+                normal: self.normal_weight,
+                color: self.color_weight,
+                uv: self.uv_weight,
+            },
+            prune: self.prune,
+            ..Options::DEFAULT
+        })
+    }
+}
+
+#[derive(Args, Debug)]
+#[command(group(
+    clap::ArgGroup::new("budget")
+        .required(true)
+        .multiple(true)
+        .args(["target", "ratio", "max_error"])
+))]
+pub struct SimplifyArgs {
+    /// Input mesh (.ply, .obj, .stl, .gltf, .glb).
+    pub input: PathBuf,
+    /// Output mesh; the format follows the extension.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Triangle budget.
+    #[arg(long, value_name = "FACES", conflicts_with = "ratio")]
+    pub target: Option<usize>,
+    /// Fraction of the input's triangles to keep (0..1).
+    #[arg(long, value_name = "R")]
+    pub ratio: Option<f32>,
+    #[command(flatten)]
+    pub opts: SimplifyOpts,
+    /// Print the report as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(serde::Serialize)]
+struct Report<'a> {
+    input: &'a Path,
+    output: &'a Path,
+    input_triangles: usize,
+    target_triangles: usize,
+    triangles: usize,
+    vertices: usize,
+    estimated_error: f32,
+    passes: u32,
+    stop: String,
+    seconds: f64,
+}
+
+/// The target from `--target` / `--ratio` / `--max-error` (error alone: no face budget).
+pub fn target_of(
+    target: Option<usize>,
+    ratio: Option<f32>,
+    max_error: Option<f32>,
+) -> Result<Target> {
+    Ok(match (target, ratio) {
+        (Some(n), _) => Target::Faces(n),
+        (None, Some(r)) if (0.0..=1.0).contains(&r) => Target::Ratio(r),
+        (None, Some(r)) => bail!("--ratio must be within 0..1, got {r}"),
+        (None, None) if max_error.is_some() => Target::Faces(0),
+        (None, None) => bail!("give --target FACES, --ratio R or --max-error E"),
+    })
+}
+
+pub fn run(ui: &Ui, a: &SimplifyArgs) -> Result<()> {
+    let format = Format::from_path(&a.output)
+        .ok_or_else(|| anyhow::anyhow!("{}: unknown output extension", a.output.display()))?;
+    let target = target_of(a.target, a.ratio, a.opts.max_error)?;
+    let opts = a.opts.options(target)?;
+    let mesh: TriMesh = super::load_mesh(ui, &a.input)?;
+    let step = ui.spinner("simplifying");
+    let out = Simplifier::new()
+        .simplify(&mesh, &opts)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", a.input.display()))?;
+    let t = step.finish();
+    let r = out.report;
+    let bytes = encode(format, &Model::Mesh(out.mesh), WriteOptions::default())
+        .map_err(|e| anyhow::anyhow!("{}: {e}", a.output.display()))?;
+    write_atomic(&a.output, &bytes)?;
+    if a.json {
+        return super::print_json(&Report {
+            input: &a.input,
+            output: &a.output,
+            input_triangles: mesh.faces.len(),
+            target_triangles: r.target_faces,
+            triangles: r.triangles,
+            vertices: r.vertices,
+            estimated_error: r.estimated_error,
+            passes: r.passes,
+            stop: r.stop.to_string(),
+            seconds: t.as_secs_f64(),
+        });
+    }
+    ui.status(format!(
+        "wrote {} ({} → {} triangles, {} vertices, estimated error {:.3e}, {} passes, {:.3} s): {}",
+        a.output.display(),
+        mesh.faces.len(),
+        r.triangles,
+        r.vertices,
+        r.estimated_error,
+        r.passes,
+        t.as_secs_f64(),
+        r.stop
+    ));
+    Ok(())
+}

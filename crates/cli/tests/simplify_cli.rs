@@ -1,0 +1,158 @@
+//! End-to-end tests of `lodkit simplify`, `lodkit lods` and
+//! `lodkit bench simplify`.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use lodkit_mesh::io::{WriteOptions, save_mesh};
+use lodkit_mesh::{Model, TriMesh};
+
+fn lodkit(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lodkit"))
+        .args(args)
+        .output()
+        .expect("run lodkit")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn mesh_at(p: &Path) -> TriMesh {
+    match lodkit_mesh::io::load(p).unwrap() {
+        Model::Mesh(m) => m,
+        other => panic!("{}", other.kind()),
+    }
+}
+
+fn blob_file(dir: &Path, n: usize) -> String {
+    let p = dir.join("blob.ply");
+    save_mesh(&p, &lodkit_mesh::shapes::blob(n), WriteOptions::default()).unwrap();
+    p.display().to_string()
+}
+
+#[test]
+fn simplify_writes_the_target_face_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = blob_file(dir.path(), 20_000);
+    let out = dir.path().join("lod.ply");
+    let o = lodkit(&[
+        "simplify",
+        &input,
+        "-o",
+        out.to_str().unwrap(),
+        "--target",
+        "2000",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let m = mesh_at(&out);
+    assert!(
+        m.faces.len() <= 2000 && m.faces.len() >= 1990,
+        "{}",
+        m.faces.len()
+    );
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["triangles"], m.faces.len());
+    assert_eq!(j["stop"], "reached the target");
+    assert!(j["estimated_error"].as_f64().unwrap() > 0.0);
+}
+
+#[test]
+fn simplify_by_max_error_says_why_it_stopped() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = blob_file(dir.path(), 20_000);
+    let out = dir.path().join("lod.obj");
+    let o = lodkit(&[
+        "simplify",
+        &input,
+        "-o",
+        out.to_str().unwrap(),
+        "--max-error",
+        "0.01",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--max-error"), "{}", stderr(&o));
+    assert!(mesh_at(&out).faces.len() < 20_000);
+}
+
+#[test]
+fn simplify_without_a_budget_is_a_usage_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = blob_file(dir.path(), 2_000);
+    let out = dir.path().join("lod.ply");
+    let o = lodkit(&["simplify", &input, "-o", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let o = lodkit(&[
+        "simplify",
+        &input,
+        "-o",
+        out.to_str().unwrap(),
+        "--ratio",
+        "3",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--ratio"));
+}
+
+#[test]
+fn lods_writes_every_level_a_glb_and_lods_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = blob_file(dir.path(), 20_000);
+    let out = dir.path().join("lods");
+    let o = lodkit(&[
+        "-q",
+        "lods",
+        &input,
+        "--out",
+        out.to_str().unwrap(),
+        "--ratios",
+        "0.5,0.1,0.02",
+        "--samples",
+        "20000",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let j: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("lods.json")).unwrap()).unwrap();
+    let levels = j["levels"].as_array().unwrap();
+    assert_eq!(levels.len(), 3);
+    let mut prev = usize::MAX;
+    for l in levels {
+        let m = mesh_at(&out.join(l["file"].as_str().unwrap()));
+        assert_eq!(l["triangles"], m.faces.len());
+        assert!(m.faces.len() < prev);
+        prev = m.faces.len();
+        assert!(l["measured_mean_error"].as_f64().unwrap() > 0.0);
+        assert!(
+            l["measured_max_error"].as_f64().unwrap() >= l["measured_mean_error"].as_f64().unwrap()
+        );
+    }
+    let glb = mesh_at(&out.join(j["glb"].as_str().unwrap()));
+    assert!(!glb.faces.is_empty());
+}
+
+#[test]
+fn bench_simplify_prints_both_sides() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = blob_file(dir.path(), 10_000);
+    let o = lodkit(&[
+        "bench",
+        "simplify",
+        &input,
+        "--runs",
+        "1",
+        "--samples",
+        "20000",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rows: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let rows = rows.as_array().unwrap();
+    assert_eq!(rows.len(), 4);
+    for r in rows {
+        assert!(r["lodkit_ms"].as_f64().unwrap() > 0.0 && r["meshopt_ms"].as_f64().unwrap() > 0.0);
+        // The counting allocator is installed in the binary.
+        assert!(r["lodkit_bytes_per_vertex"].as_f64().unwrap() > 0.0);
+        assert!(r["lodkit_triangles"].as_u64() <= r["target_triangles"].as_u64());
+    }
+}

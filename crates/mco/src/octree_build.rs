@@ -1,0 +1,424 @@
+//! The marching cube octree, configured bottom-up (thesis §5.1, Fig. 5.1,
+//! Fig. 5.2, §5.4.1–5.4.2).
+//!
+//! Leaves are the leaf marching cubes ([`crate::marching_cubes`]). A node at
+//! level `L + 1` exists when one of its 8 octants holds a level-`L` node;
+//! nodes with no surface below them (the thesis's null nodes) never exist.
+//! A node's 8 corner signs follow the four cases of Fig. 5.2:
+//!
+//! 1. *corresponding vertex*: the corner's own value when it is known one
+//!    level down (a band vertex, or a corner of a child-level node);
+//! 2. else an *adjacent* vertex one child-size away along an axis;
+//! 3. else a *diagonal* (face-diagonal) vertex;
+//! 4. else the *centre* (body-diagonal) vertex — always known, since it is
+//!    a corner of every child.
+//!
+//! Colours and normals are copied in the same manner. Edge crossings use the
+//! ratio extension of Fig. 5.2: a parent edge `A–B` with midpoint `M` takes
+//! the crossing of the half that changes sign, `a / 2(a+b)` on `A–M` or
+//! `(2a+b) / 2(a+b)` on `M–B`. Here that extension is done by *reference*:
+//! the parent edge's vertex **is** the child half-edge's vertex (same index
+//! in the vertex buffer, hence exactly the same point), which is what the
+//! thesis relies on when it says the ratio "simplifies crack patch problems
+//! by sharing the same vertex of triangle generated from the different level
+//! marching cube node".
+//!
+//! Departures, and why:
+//! - **Cases 2–4 look at the level's lattice, not only at this node's
+//!   children.** The thesis picks the adjacent/diagonal/centre vertex among
+//!   the node's own children. Evaluated per node, two nodes sharing a
+//!   corner could then give it different signs (each sees different
+//!   children), and their shared face would disagree — a crack no patch can
+//!   close. Evaluating the rule once per lattice vertex (all known vertices
+//!   one child-size away, the majority sign within the first non-empty
+//!   case, ties to the first in a fixed order) makes every corner's sign a
+//!   function of the vertex alone, so neighbouring nodes always agree.
+//! - **Fallback crossings.** When the sign-changing half has no child vertex
+//!   (its signs came from cases 2–4), a new vertex is made at that half's
+//!   midpoint (or the edge's midpoint when the midpoint's sign is unknown),
+//!   the original algorithm's choice.
+
+use crate::marching_cubes::{
+    Corner, VertexBuffer, blend, corner_key, cube_triangles, edge_key, leaf_vertices,
+};
+use crate::mc_table::EDGES;
+use crate::model::{McoModel, Node};
+use crate::signed_distance::{KeyMap, SignedDistanceField, pack, unpack};
+use crate::{Error, Result};
+
+/// One level of the octree under construction.
+#[derive(Debug, Default)]
+pub struct Level {
+    /// Node cube keys (level units), sorted.
+    pub keys: Vec<u64>,
+    pub configs: Vec<u8>,
+    /// Key → position in `keys`.
+    pub index: KeyMap<u32>,
+    /// Corner values of this level not in the band (leaf-unit keys).
+    pub corners: KeyMap<Corner>,
+    /// Crossing edge (leaf-unit [`edge_key`]) → vertex index.
+    pub edges: KeyMap<u32>,
+}
+
+/// All levels plus the vertex buffer; `node_id[L][i]` is the model node of
+/// level `L`'s `i`-th key once [`assemble`] has numbered them.
+#[derive(Debug)]
+pub struct Tree<'f> {
+    pub field: &'f SignedDistanceField,
+    pub levels: Vec<Level>,
+    pub vertices: VertexBuffer,
+    pub node_id: Vec<Vec<u32>>,
+}
+
+impl Tree<'_> {
+    /// The value of lattice vertex `v` as level `level` sees it.
+    pub fn corner(&self, level: usize, v: u64) -> Option<Corner> {
+        if let Some(f) = self.field.get(v) {
+            return Some(f.into());
+        }
+        self.levels.get(level)?.corners.get(&v).copied()
+    }
+}
+
+/// Neighbour offsets of the sign rule, grouped as Fig. 5.2's cases 2, 3, 4.
+fn rule_offsets() -> [Vec<[i32; 3]>; 3] {
+    let mut out: [Vec<[i32; 3]>; 3] = Default::default();
+    for dz in -1..=1 {
+        for dy in -1..=1 {
+            for dx in -1..=1 {
+                let nz = (dx != 0) as usize + (dy != 0) as usize + (dz != 0) as usize;
+                if nz > 0 {
+                    out[nz - 1].push([dx, dy, dz]);
+                }
+            }
+        }
+    }
+    out
+}
+
+fn offset_key(v: u64, d: [i32; 3], step: u32) -> Option<u64> {
+    let c = unpack(v);
+    let mut o = [0u32; 3];
+    for i in 0..3 {
+        let x = c[i] as i64 + d[i] as i64 * step as i64;
+        if !(0..1 << crate::signed_distance::KEY_BITS).contains(&x) {
+            return None;
+        }
+        o[i] = x as u32;
+    }
+    Some(pack(o[0], o[1], o[2]))
+}
+
+/// Builds every level from the leaf cubes up to the single root.
+pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) -> Result<Tree<'f>> {
+    if leaves.is_empty() {
+        return Err(Error::Input(
+            "no surface found: the samples produce no sign change at this resolution".into(),
+        ));
+    }
+    let depth = field.grid.depth as usize;
+    let mut vertices = VertexBuffer::default();
+    let edges = leaf_vertices(field, leaves, &mut vertices);
+    let mut level0 = Level {
+        keys: leaves.iter().map(|l| l.0).collect(),
+        configs: leaves.iter().map(|l| l.1).collect(),
+        edges,
+        ..Default::default()
+    };
+    level0.index = level0
+        .keys
+        .iter()
+        .enumerate()
+        .map(|(i, &k)| (k, i as u32))
+        .collect();
+    let mut tree = Tree {
+        field,
+        levels: vec![level0],
+        vertices,
+        node_id: Vec::new(),
+    };
+    let offsets = rule_offsets();
+    for l in 1..=depth {
+        let below = &tree.levels[l - 1];
+        let mut keys: Vec<u64> = below
+            .keys
+            .iter()
+            .map(|&k| {
+                let [x, y, z] = unpack(k);
+                pack(x >> 1, y >> 1, z >> 1)
+            })
+            .collect();
+        keys.sort_unstable();
+        keys.dedup();
+        let step = 1u32 << (l - 1);
+        let mut level = Level {
+            index: keys
+                .iter()
+                .enumerate()
+                .map(|(i, &k)| (k, i as u32))
+                .collect(),
+            ..Default::default()
+        };
+        // Corner signs: Fig. 5.2's four cases on the lattice.
+        for &k in &keys {
+            let cube = unpack(k);
+            for c in 0..8u8 {
+                let v = corner_key(cube, l as u32, c);
+                if field.get(v).is_some() || level.corners.contains_key(&v) {
+                    continue;
+                }
+                let value = match tree.corner(l - 1, v) {
+                    Some(cv) => cv,
+                    None => rule_value(&tree, l - 1, v, step, &offsets)
+                        .expect("a node's centre is a corner of each of its children"),
+                };
+                level.corners.insert(v, value);
+            }
+        }
+        let corner_at = |v: u64| -> Corner {
+            field
+                .get(v)
+                .map(Corner::from)
+                .or_else(|| level.corners.get(&v).copied())
+                .expect("every node corner is set above")
+        };
+        let mut configs = Vec::with_capacity(keys.len());
+        for &k in &keys {
+            let cube = unpack(k);
+            let mut cfg = 0u8;
+            for c in 0..8u8 {
+                if corner_at(corner_key(cube, l as u32, c)).inside {
+                    cfg |= 1 << c;
+                }
+            }
+            configs.push(cfg);
+        }
+        // Crossing vertices: the ratio extension, by reference.
+        let mut edges: KeyMap<u32> = KeyMap::default();
+        for (i, &k) in keys.iter().enumerate() {
+            let cfg = configs[i];
+            let cube = unpack(k);
+            for (e, [a, b]) in EDGES.iter().enumerate() {
+                if (cfg >> a & 1) == (cfg >> b & 1) {
+                    continue;
+                }
+                let axis = (e / 4) as u8;
+                let va = corner_key(cube, l as u32, *a);
+                let vb = corner_key(cube, l as u32, *b);
+                let ek = edge_key(va, axis);
+                if edges.contains_key(&ek) {
+                    continue;
+                }
+                let mut d = [0i32; 3];
+                d[axis as usize] = 1;
+                let vm = offset_key(va, d, step).expect("midpoint inside the lattice");
+                let (ca, cb) = (corner_at(va), corner_at(vb));
+                let below = &tree.levels[l - 1];
+                let id = match tree.corner(l - 1, vm) {
+                    Some(cm) => {
+                        let (h0, c0, c1) = if ca.inside != cm.inside {
+                            (va, ca, cm)
+                        } else {
+                            (vm, cm, cb)
+                        };
+                        match below.edges.get(&edge_key(h0, axis)) {
+                            Some(&id) => id,
+                            None => {
+                                let g = field.grid;
+                                let p0 = g.position(h0);
+                                let p = p0.lerp(g.position(offset_key(h0, d, step).unwrap()), 0.5);
+                                let (n, col) = blend(&c0, &c1, 0.5);
+                                tree.vertices.push(p, n, col)
+                            }
+                        }
+                    }
+                    None => {
+                        let g = field.grid;
+                        let p = g.position(va).lerp(g.position(vb), 0.5);
+                        let (n, col) = blend(&ca, &cb, 0.5);
+                        tree.vertices.push(p, n, col)
+                    }
+                };
+                edges.insert(ek, id);
+            }
+        }
+        level.keys = keys;
+        level.configs = configs;
+        level.edges = edges;
+        tree.levels.push(level);
+    }
+    debug_assert_eq!(tree.levels[depth].keys.len(), 1, "a single root");
+    Ok(tree)
+}
+
+/// Cases 2–4 of Fig. 5.2 for vertex `v`, looking at level `below`'s known
+/// vertices `step` leaf cubes away.
+fn rule_value(
+    tree: &Tree,
+    below: usize,
+    v: u64,
+    step: u32,
+    offsets: &[Vec<[i32; 3]>; 3],
+) -> Option<Corner> {
+    for class in offsets {
+        let known: Vec<Corner> = class
+            .iter()
+            .filter_map(|&d| offset_key(v, d, step))
+            .filter_map(|k| tree.corner(below, k))
+            .collect();
+        if known.is_empty() {
+            continue;
+        }
+        let inside = known.iter().filter(|c| c.inside).count();
+        let majority = match (inside * 2).cmp(&known.len()) {
+            std::cmp::Ordering::Greater => true,
+            std::cmp::Ordering::Less => false,
+            std::cmp::Ordering::Equal => known[0].inside,
+        };
+        let pick = *known
+            .iter()
+            .find(|c| c.inside == majority)
+            .expect("the majority side has a member");
+        return Some(Corner {
+            distance: f32::NAN,
+            ..pick
+        });
+    }
+    None
+}
+
+/// A configuration that draws nothing (all corners on one side).
+pub fn is_null(cfg: u8) -> bool {
+    cfg == 0 || cfg == 255
+}
+
+/// Numbers the nodes breadth-first from the root (children contiguous) and
+/// fills the model's node, triangle, metric and balance arrays. The LOD
+/// array and crack patches are filled by [`crate::priority`] and
+/// [`crate::crack_patch`].
+pub fn assemble(tree: &mut Tree) -> McoModel {
+    let depth = tree.levels.len() - 1;
+    // children[L][i]: level L-1 indices under level L's node i.
+    let mut children: Vec<Vec<Vec<u32>>> = vec![Vec::new(); depth + 1];
+    for (l, slot) in children.iter_mut().enumerate().skip(1) {
+        let mut ch = vec![Vec::new(); tree.levels[l].keys.len()];
+        for (i, &k) in tree.levels[l - 1].keys.iter().enumerate() {
+            let [x, y, z] = unpack(k);
+            let p = tree.levels[l].index[&pack(x >> 1, y >> 1, z >> 1)];
+            ch[p as usize].push(i as u32);
+        }
+        *slot = ch;
+    }
+    let mut order: Vec<(usize, u32)> = vec![(depth, 0)];
+    let mut first_child = Vec::new();
+    let mut head = 0;
+    while head < order.len() {
+        let (l, i) = order[head];
+        head += 1;
+        first_child.push(order.len() as u32);
+        if l > 0 {
+            for &c in &children[l][i as usize] {
+                order.push((l - 1, c));
+            }
+        }
+    }
+    tree.node_id = tree
+        .levels
+        .iter()
+        .map(|lv| vec![0; lv.keys.len()])
+        .collect();
+    for (id, &(l, i)) in order.iter().enumerate() {
+        tree.node_id[l][i as usize] = id as u32;
+    }
+    let mut model = McoModel {
+        grid: tree.field.grid,
+        ..Default::default()
+    };
+    let mut areas = Vec::with_capacity(order.len());
+    for (id, &(l, i)) in order.iter().enumerate() {
+        let lv = &tree.levels[l];
+        let cube = unpack(lv.keys[i as usize]);
+        let start = model.tris.len();
+        cube_triangles(
+            cube,
+            l as u32,
+            lv.configs[i as usize],
+            &lv.edges,
+            &mut model.tris,
+        );
+        let count = (model.tris.len() - start) / 3;
+        let area: f64 = model.tris[start..]
+            .chunks_exact(3)
+            .map(|t| {
+                let p = |k: usize| tree.vertices.positions[t[k] as usize];
+                0.5 * (p(1) - p(0)).cross(p(2) - p(0)).length() as f64
+            })
+            .sum();
+        areas.push(area);
+        let parent = if id == 0 {
+            u32::MAX
+        } else {
+            let [x, y, z] = cube;
+            let pl = &tree.levels[l + 1];
+            tree.node_id[l + 1][pl.index[&pack(x >> 1, y >> 1, z >> 1)] as usize]
+        };
+        model.nodes.push(Node {
+            coord: cube,
+            parent,
+            first_child: first_child[id],
+            tri_start: start as u32,
+            tri_count: count as u16,
+            child_count: if l > 0 {
+                children[l][i as usize].len() as u8
+            } else {
+                0
+            },
+            level: l as u8,
+            config: lv.configs[i as usize],
+            ..Default::default()
+        });
+    }
+    // The LOD metric (§5.2): |area(F(n)) − Σ area(F(children))|.
+    model.metric = (0..model.nodes.len() as u32)
+        .map(|n| {
+            let ch = model.children(n);
+            if ch.is_empty() {
+                0.0
+            } else {
+                let below: f64 = ch.map(|c| areas[c as usize]).sum();
+                (areas[n as usize] - below).abs() as f32
+            }
+        })
+        .collect();
+    // Balance dependencies: for each of the 26 same-level neighbour cubes,
+    // the lowest existing node above that level covering it.
+    let nbr: Vec<[i32; 3]> = rule_offsets().concat();
+    for (id, &(l, i)) in order.iter().enumerate() {
+        let start = model.deps.len();
+        if l > 0 && id > 0 {
+            let own_parent = model.nodes[id].parent;
+            let k = tree.levels[l].keys[i as usize];
+            let mut deps: Vec<u32> = nbr
+                .iter()
+                .filter_map(|&d| offset_key(k, d, 1))
+                .filter_map(|nk| {
+                    let [mut x, mut y, mut z] = unpack(nk);
+                    for up in l + 1..=depth {
+                        (x, y, z) = (x >> 1, y >> 1, z >> 1);
+                        if let Some(&j) = tree.levels[up].index.get(&pack(x, y, z)) {
+                            return Some(tree.node_id[up][j as usize]);
+                        }
+                    }
+                    None
+                })
+                .filter(|&p| p != own_parent)
+                .collect();
+            deps.sort_unstable();
+            deps.dedup();
+            model.deps.extend(deps);
+        }
+        model.nodes[id].deps_start = start as u32;
+        model.nodes[id].deps_count = (model.deps.len() - start) as u16;
+    }
+    model
+}

@@ -1,0 +1,463 @@
+//! Cost computation and hole filling (HQMS §4.3.2, procedure
+//! `CostComputation`).
+//!
+//! For the ring `r_i` of vertex `v_i` the memoryless vertex quadric `Q_i` is
+//! summed from the ring's current faces, and every internal edge
+//! `(v_i, v_j)` is rated by `Q_i(v_j)` — the cost of moving `v_i` onto its
+//! neighbour. The cheapest edge becomes the ring's contraction record. The
+//! optimal position is *not* solved here (two-stage optimisation: only the
+//! records that are actually collapsed pay for it, in `collapse.rs`).
+//!
+//! Hole filling: when an internal edge has multiplicity 1 (a border edge of
+//! the mesh), the ring is forced to collapse along one of those edges, as in
+//! the paper's pseudo-code.
+//!
+//! Departures, and why:
+//! - Rings on a border are restricted to border edges whether or not hole
+//!   filling is on; with `fill_holes = false` the collapse stage then
+//!   refuses to merge two border edges, so every hole survives. Without the
+//!   restriction an open rim would be pulled inward.
+//! - `lock_border` makes every border ring null (never contracted).
+//! - With attributes the cost is the extended-quadric cost (see
+//!   `quadric.rs`), the neighbour's attributes taken from its wedge in the
+//!   first ring face that contains it.
+
+use glam::{DVec3, Vec3A};
+
+use crate::options::Options;
+use crate::quadric::{ExtendedFace, MAX_DIM, Quadric, add_border_plane};
+use crate::ring_table::{DEAD, Flag, Link, RingTable, multiplicity};
+use crate::rs_heap::Keyed;
+use crate::work_mesh::WorkMesh;
+
+/// A contraction record `(e_st, Q_s(v_t))`: collapse `s` onto `t`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Record {
+    pub cost: f32,
+    pub s: u32,
+    pub t: u32,
+}
+
+impl Keyed for Record {
+    const NULL: Record = Record {
+        cost: f32::INFINITY,
+        s: u32::MAX,
+        t: u32::MAX,
+    };
+    #[inline]
+    fn key(&self) -> f32 {
+        self.cost
+    }
+}
+
+/// One live face of a scanned ring: the face, the centre's corner, the two
+/// other vertices in winding order with their positions, and the face's
+/// plane (unit normal `n`, offset `d`, area; area 0 = degenerate), all in
+/// the scan's frame. Single precision: coordinates are relative to a
+/// vertex of the ring, so they are small and exact differences of the
+/// stored `f32` positions; quadrics are summed in `f64`.
+#[derive(Debug, Clone, Copy)]
+pub struct RingFace {
+    pub f: u32,
+    pub corner: u8,
+    pub a: u32,
+    pub b: u32,
+    pub pa: Vec3A,
+    pub pb: Vec3A,
+    pub n: Vec3A,
+    pub d: f32,
+    pub area: f32,
+}
+
+/// A ring read once: its link with edge multiplicities and its live faces
+/// with their planes, in a frame centred on a chosen origin. Every stage
+/// that needs a ring (cost, collapse checks, placement, error) reads this
+/// instead of walking the face table again.
+#[derive(Debug, Default)]
+pub struct RingScan {
+    pub center: u32,
+    /// Centre position in the frame.
+    pub pc: Vec3A,
+    pub links: Vec<Link>,
+    pub faces: Vec<RingFace>,
+}
+
+impl RingScan {
+    /// Reads the ring of `center` (face list `ring`) in the frame centred
+    /// on `origin`. Returns false when the ring has no live face.
+    pub fn scan(&mut self, m: &WorkMesh, ring: &[u32], center: u32, origin: Vec3A) -> bool {
+        self.links.clear();
+        self.faces.clear();
+        self.center = center;
+        let pc = fpos(m, center) - origin;
+        self.pc = pc;
+        for &f in ring {
+            let tri = m.faces[f as usize];
+            if tri[0] == DEAD {
+                continue;
+            }
+            let corner = if tri[0] == center {
+                0
+            } else if tri[1] == center {
+                1
+            } else {
+                2
+            };
+            let a = tri[(corner + 1) % 3];
+            let b = tri[(corner + 2) % 3];
+            add_link(&mut self.links, a);
+            add_link(&mut self.links, b);
+            let pa = fpos(m, a) - origin;
+            let pb = fpos(m, b) - origin;
+            let (n, d, area) = plane(pc, pa, pb);
+            self.faces.push(RingFace {
+                f,
+                corner: corner as u8,
+                a,
+                b,
+                pa,
+                pb,
+                n,
+                d,
+                area,
+            });
+        }
+        !self.links.is_empty()
+    }
+
+    /// Whether the ring has an internal edge of multiplicity 1 (the vertex
+    /// is on a border of the mesh).
+    pub fn border(&self) -> bool {
+        self.links.iter().any(|l| l.m == 1)
+    }
+
+    /// Multiplicity of the internal edge to `w` (0 = not a neighbour).
+    #[inline]
+    pub fn m(&self, w: u32) -> u32 {
+        multiplicity(&self.links, w)
+    }
+
+    /// Adds the ring's memoryless vertex quadric (eq. 4: area-weighted face
+    /// planes) and its border planes to `q`.
+    pub fn add_quadric(&self, m: &WorkMesh, q: &mut Quadric) {
+        let border = self.border();
+        let pc = self.pc.as_dvec3();
+        for rf in &self.faces {
+            if rf.area <= 0.0 {
+                continue;
+            }
+            let n = rf.n.as_dvec3();
+            q.add_plane(n, rf.d as f64, rf.area as f64);
+            if border {
+                if self.m(rf.a) == 1 {
+                    add_border_plane(q, pc, rf.pa.as_dvec3(), n, m.border_weight);
+                }
+                if self.m(rf.b) == 1 {
+                    add_border_plane(q, pc, rf.pb.as_dvec3(), n, m.border_weight);
+                }
+            }
+        }
+    }
+}
+
+/// Unit normal, offset and area of the triangle `(c, a, b)` in its frame
+/// (zeros for a degenerate one). One square root and one division: the
+/// hot spot of the whole simplifier.
+#[inline]
+pub fn plane(c: Vec3A, a: Vec3A, b: Vec3A) -> (Vec3A, f32, f32) {
+    let nn = (a - c).cross(b - c);
+    let len2 = nn.length_squared();
+    if len2 > 0.0 {
+        let len = len2.sqrt();
+        let n = nn * (1.0 / len);
+        (n, -n.dot(c), 0.5 * len)
+    } else {
+        (Vec3A::ZERO, 0.0, 0.0)
+    }
+}
+
+/// Counts one more face on the internal edge to `w`.
+#[inline]
+fn add_link(links: &mut Vec<Link>, w: u32) {
+    for l in links.iter_mut() {
+        if l.v == w {
+            l.m += 1;
+            return;
+        }
+    }
+    links.push(Link { v: w, m: 1 });
+}
+
+/// The cost stage's read of a ring: the link with multiplicities and the
+/// memoryless vertex quadric (face planes, then border planes), without
+/// keeping per-face data — the cheaper sibling of [`RingScan::scan`] for
+/// the one read every ring gets each pass. Returns whether the ring is on a
+/// border; `links` is empty for a ring with no live face.
+pub fn scan_quadric(
+    m: &WorkMesh,
+    ring: &[u32],
+    center: u32,
+    origin: Vec3A,
+    links: &mut Vec<Link>,
+    q: &mut Quadric,
+) -> bool {
+    links.clear();
+    let pc = fpos(m, center) - origin;
+    // Fast path for the common closed fan, where every neighbour is the
+    // first other corner of exactly one face and the second of another:
+    // the candidates are the first corners, and the two corner multisets
+    // agree (checked by sum and xor). Anything else — a border, a
+    // non-manifold fan, or the rare sum/xor collision — takes the exact
+    // link count below; a collision only costs a record that the collapse
+    // stage's exact checks then refuse.
+    let (mut sum_a, mut sum_b, mut xor_a, mut xor_b) = (0u64, 0u64, 0u32, 0u32);
+    for &f in ring {
+        let tri = m.faces[f as usize];
+        if tri[0] == DEAD {
+            continue;
+        }
+        let (a, b) = if tri[0] == center {
+            (tri[1], tri[2])
+        } else if tri[1] == center {
+            (tri[2], tri[0])
+        } else {
+            (tri[0], tri[1])
+        };
+        sum_a += a as u64;
+        sum_b += b as u64;
+        xor_a ^= a;
+        xor_b ^= b;
+        links.push(Link { v: a, m: 2 });
+        let (n, d, area) = plane(pc, fpos(m, a) - origin, fpos(m, b) - origin);
+        if area > 0.0 {
+            q.add_plane(n.as_dvec3(), d as f64, area as f64);
+        }
+    }
+    if links.is_empty() || (sum_a == sum_b && xor_a == xor_b) {
+        return false;
+    }
+    links.clear();
+    for &f in ring {
+        let tri = m.faces[f as usize];
+        if tri[0] != DEAD {
+            for &w in &tri {
+                if w != center {
+                    add_link(links, w);
+                }
+            }
+        }
+    }
+    let border = links.iter().any(|l| l.m == 1);
+    if border {
+        let pcd = pc.as_dvec3();
+        for &f in ring {
+            let tri = m.faces[f as usize];
+            if tri[0] == DEAD {
+                continue;
+            }
+            let c = tri.iter().position(|&v| v == center).unwrap_or(0);
+            let (a, b) = (tri[(c + 1) % 3], tri[(c + 2) % 3]);
+            let (ma, mb) = (multiplicity(links, a) == 1, multiplicity(links, b) == 1);
+            if !(ma || mb) {
+                continue;
+            }
+            let pa = fpos(m, a) - origin;
+            let pb = fpos(m, b) - origin;
+            let (n, _, area) = plane(pc, pa, pb);
+            if area <= 0.0 {
+                continue;
+            }
+            let n = n.as_dvec3();
+            if ma {
+                add_border_plane(q, pcd, pa.as_dvec3(), n, m.border_weight);
+            }
+            if mb {
+                add_border_plane(q, pcd, pb.as_dvec3(), n, m.border_weight);
+            }
+        }
+    }
+    border
+}
+
+/// Reusable buffers of the cost and collapse stages (no allocation per
+/// ring once they have grown to the largest ring).
+#[derive(Debug, Default)]
+pub struct Scratch {
+    pub scan_s: RingScan,
+    pub scan_t: RingScan,
+    pub ext: Vec<ExtendedFace>,
+    pub wedge_map: Vec<(u32, u32)>,
+    pub samples: Vec<f32>,
+}
+
+#[inline]
+pub fn dpos(m: &WorkMesh, v: u32) -> DVec3 {
+    m.pos[v as usize].as_dvec3()
+}
+
+#[inline]
+pub fn fpos(m: &WorkMesh, v: u32) -> Vec3A {
+    Vec3A::from(m.pos[v as usize])
+}
+
+/// Whether any attribute takes part in the cost.
+#[inline]
+pub fn attribute_cost_on(m: &WorkMesh) -> bool {
+    m.layout.k > 0 && m.attr_scale[..m.layout.k].iter().any(|&s| s > 0.0)
+}
+
+/// The joint-space point of wedge `w` at position `p` (already relative).
+#[inline]
+pub fn joint_point(m: &WorkMesh, p: DVec3, w: u32) -> [f64; MAX_DIM] {
+    let mut x = [0.0; MAX_DIM];
+    x[0] = p.x;
+    x[1] = p.y;
+    x[2] = p.z;
+    let k = m.layout.k;
+    let a = &m.attr[w as usize * k..w as usize * k + k];
+    for i in 0..k {
+        x[3 + i] = a[i] as f64 * m.attr_scale[i] as f64;
+    }
+    x
+}
+
+/// `ComputeContractionCost(r_s)`: the cheapest valid contraction of the
+/// ring of `s`, or `None` when the ring has none (null flag).
+pub fn best_contraction(
+    m: &WorkMesh,
+    rings: &RingTable,
+    opts: &Options,
+    s: u32,
+    sc: &mut Scratch,
+) -> Option<Record> {
+    let ps = dpos(m, s);
+    let psf = fpos(m, s);
+    let attributes = attribute_cost_on(m);
+    let mut q = Quadric::ZERO;
+    let border = if attributes {
+        if !sc.scan_s.scan(m, rings.ring(s), s, psf) {
+            return None;
+        }
+        sc.scan_s.border()
+    } else {
+        let b = scan_quadric(m, rings.ring(s), s, psf, &mut sc.scan_s.links, &mut q);
+        if sc.scan_s.links.is_empty() {
+            return None;
+        }
+        b
+    };
+    if border && opts.lock_border {
+        return None;
+    }
+    let scan = &sc.scan_s;
+    // Only edges the collapse stage could accept: border rings along border
+    // edges, never onto a ring that is already dirty or gone (Strategy I
+    // would refuse it; a cheaper-but-dead target would waste the record).
+    let candidate = |l: &Link| {
+        (!border || l.m == 1) && !matches!(m.flags[l.v as usize], Flag::Dirty | Flag::Removed)
+    };
+    let mut best: Option<(f64, u32)> = None;
+    let mut consider = |cost: f64, t: u32| {
+        if best.is_none_or(|(c, _)| cost < c) {
+            best = Some((cost, t));
+        }
+    };
+    if !attributes {
+        for l in scan.links.iter().filter(|l| candidate(l)) {
+            consider(q.eval(dpos(m, l.v) - ps), l.v);
+        }
+    } else {
+        // Geometry + attributes: one extended frame per face, border planes
+        // as a plain quadric on top.
+        let dim = 3 + m.layout.k;
+        sc.ext.clear();
+        let mut qb = Quadric::ZERO;
+        for rf in &scan.faces {
+            if rf.area <= 0.0 {
+                continue;
+            }
+            let c = rf.corner as usize;
+            let f = rf.f as usize;
+            let x = [
+                joint_point(m, scan.pc.as_dvec3(), m.wedge(f, c)),
+                joint_point(m, rf.pa.as_dvec3(), m.wedge(f, (c + 1) % 3)),
+                joint_point(m, rf.pb.as_dvec3(), m.wedge(f, (c + 2) % 3)),
+            ];
+            if let Some(e) = ExtendedFace::new([&x[0], &x[1], &x[2]], dim, rf.area as f64) {
+                sc.ext.push(e);
+            }
+            if border {
+                let (pc, n) = (scan.pc.as_dvec3(), rf.n.as_dvec3());
+                if scan.m(rf.a) == 1 {
+                    add_border_plane(&mut qb, pc, rf.pa.as_dvec3(), n, m.border_weight);
+                }
+                if scan.m(rf.b) == 1 {
+                    add_border_plane(&mut qb, pc, rf.pb.as_dvec3(), n, m.border_weight);
+                }
+            }
+        }
+        for l in scan.links.iter().filter(|l| candidate(l)) {
+            let pt = dpos(m, l.v) - ps;
+            let w = wedge_of_vertex_in_ring(m, rings.ring(s), l.v);
+            let x = joint_point(m, pt, w);
+            let c: f64 = sc.ext.iter().map(|e| e.cost(&x, dim)).sum::<f64>() + qb.eval(pt);
+            consider(c, l.v);
+        }
+    }
+    let (cost, t) = best?;
+    // Finite keys only: +∞ is the heap's null record.
+    Some(Record {
+        cost: (cost as f32).min(f32::MAX),
+        s,
+        t,
+    })
+}
+
+/// The wedge of vertex `v` in the first live face of `ring` containing it.
+pub fn wedge_of_vertex_in_ring(m: &WorkMesh, ring: &[u32], v: u32) -> u32 {
+    if !m.has_wedges() {
+        return v;
+    }
+    for &f in ring {
+        let tri = m.faces[f as usize];
+        if tri[0] == DEAD {
+            continue;
+        }
+        if let Some(c) = tri.iter().position(|&x| x == v) {
+            return m.wedges[f as usize][c];
+        }
+    }
+    v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    #[test]
+    fn ring_scan_counts_internal_edge_multiplicity_and_planes() {
+        // A fan of two faces around 0: edge 0-2 inner (m = 2), 0-1 and 0-3 border.
+        let m = WorkMesh {
+            pos: vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y],
+            faces: vec![[0, 1, 2], [0, 2, 3]],
+            live_faces: 2,
+            flags: vec![Flag::Valid; 4],
+            err: vec![0.0; 4],
+            border_weight: 1.0,
+            ..Default::default()
+        };
+        let mut scan = RingScan::default();
+        assert!(scan.scan(&m, &[0, 1], 0, Vec3A::ZERO));
+        assert_eq!((scan.m(2), scan.m(1), scan.m(3), scan.m(9)), (2, 1, 1, 0));
+        assert!(scan.border());
+        for rf in &scan.faces {
+            assert!((rf.n - Vec3A::Z).length() < 1e-6 && (rf.area - 0.5).abs() < 1e-6);
+        }
+        // The quadric vanishes on the plane, away from the border lines.
+        let mut q = Quadric::ZERO;
+        scan.add_quadric(&m, &mut q);
+        assert!(q.eval(DVec3::new(0.0, 0.0, 0.0)) < 1e-12);
+        assert!(q.eval(DVec3::new(0.0, 0.0, 1.0)) > 0.9);
+    }
+}

@@ -1,0 +1,173 @@
+//! The output stage (HQMS §4.4, `OutputLOD`): compaction of the surviving
+//! vertices and faces through the vertex index table `V^i`, and export of a
+//! level as a `TriMesh`.
+//!
+//! As in the paper, the compacted mesh is both the level's output and the
+//! next pass's input. We compact in place (no second mesh in memory): the
+//! index table is a scratch `u32` per vertex, reused for the wedges.
+//! Unreferenced input vertices disappear at the first compaction.
+
+use glam::{Vec2, Vec3};
+use lodkit_mesh::TriMesh;
+
+use crate::ring_table::{DEAD, Flag};
+use crate::work_mesh::WorkMesh;
+
+const NONE: u32 = u32::MAX;
+
+/// Drops deleted faces and vertices, renumbers in the old order, resets
+/// every contraction flag to valid for the next pass.
+#[allow(clippy::needless_range_loop)] // one index drives several arrays
+pub fn compact(m: &mut WorkMesh, index: &mut Vec<u32>) {
+    // Faces (and their corner wedges) in place.
+    let has_wedges = m.has_wedges();
+    let mut w = 0;
+    for r in 0..m.faces.len() {
+        if m.faces[r][0] == DEAD {
+            continue;
+        }
+        m.faces[w] = m.faces[r];
+        if has_wedges {
+            m.wedges[w] = m.wedges[r];
+        }
+        w += 1;
+    }
+    m.faces.truncate(w);
+    if has_wedges {
+        m.wedges.truncate(w);
+    }
+    m.live_faces = w;
+
+    // Vertex index table V^i.
+    let n = m.pos.len();
+    index.clear();
+    index.resize(n, NONE);
+    for f in &m.faces {
+        for &v in f {
+            index[v as usize] = 0;
+        }
+    }
+    let mut next = 0u32;
+    for v in 0..n {
+        if index[v] != NONE {
+            index[v] = next;
+            m.pos[next as usize] = m.pos[v];
+            m.err[next as usize] = m.err[v];
+            next += 1;
+        }
+    }
+    let k = m.layout.k;
+    if k > 0 && !has_wedges {
+        for v in 0..n {
+            let i = index[v];
+            if i != NONE && i as usize != v {
+                m.attr.copy_within(v * k..v * k + k, i as usize * k);
+            }
+        }
+        m.attr.truncate(next as usize * k);
+    }
+    for f in &mut m.faces {
+        for v in f.iter_mut() {
+            *v = index[*v as usize];
+        }
+    }
+    m.pos.truncate(next as usize);
+    m.err.truncate(next as usize);
+    m.flags.clear();
+    m.flags.resize(next as usize, Flag::Valid);
+
+    // Wedge index table.
+    if has_wedges {
+        let nw = m.wedge_count();
+        index.clear();
+        index.resize(nw, NONE);
+        for f in &m.wedges {
+            for &x in f {
+                index[x as usize] = 0;
+            }
+        }
+        let mut next = 0u32;
+        for x in 0..nw {
+            if index[x] != NONE {
+                index[x] = next;
+                if next as usize != x {
+                    m.attr.copy_within(x * k..x * k + k, next as usize * k);
+                }
+                next += 1;
+            }
+        }
+        m.attr.truncate(next as usize * k);
+        for f in &mut m.wedges {
+            for x in f.iter_mut() {
+                *x = index[*x as usize];
+            }
+        }
+    }
+}
+
+/// The compacted working mesh as a `TriMesh` (copies).
+pub fn export(m: &WorkMesh) -> TriMesh {
+    if !m.has_wedges() {
+        let mut out = TriMesh::new(m.pos.clone(), m.faces.clone());
+        write_attrs(m, m.pos.len(), &mut out);
+        return out;
+    }
+    let nw = m.wedge_count();
+    let mut positions = vec![Vec3::ZERO; nw];
+    for (f, wf) in m.faces.iter().zip(&m.wedges) {
+        for c in 0..3 {
+            positions[wf[c] as usize] = m.pos[f[c] as usize];
+        }
+    }
+    let mut out = TriMesh::new(positions, m.wedges.clone());
+    write_attrs(m, nw, &mut out);
+    out
+}
+
+/// Moves the compacted working mesh out as a `TriMesh` without copying the
+/// vertex and face arrays when there are no wedges (the working mesh is
+/// left empty).
+pub fn take(m: &mut WorkMesh) -> TriMesh {
+    if m.has_wedges() {
+        return export(m);
+    }
+    let mut pos = std::mem::take(&mut m.pos);
+    let mut faces = std::mem::take(&mut m.faces);
+    pos.shrink_to_fit();
+    faces.shrink_to_fit();
+    let n = pos.len();
+    let mut out = TriMesh::new(pos, faces);
+    write_attrs(m, n, &mut out);
+    m.live_faces = 0;
+    out
+}
+
+fn write_attrs(m: &WorkMesh, n: usize, out: &mut TriMesh) {
+    let k = m.layout.k;
+    if k == 0 {
+        return;
+    }
+    let a = |i: usize, o: usize| m.attr[i * k + o];
+    if let Some(o) = m.layout.normal {
+        out.normals = Some(
+            (0..n)
+                .map(|i| {
+                    let v = Vec3::new(a(i, o), a(i, o + 1), a(i, o + 2));
+                    v.try_normalize().unwrap_or(v)
+                })
+                .collect(),
+        );
+    }
+    if let Some(o) = m.layout.color {
+        out.colors = Some(
+            (0..n)
+                .map(|i| {
+                    std::array::from_fn(|c| (a(i, o + c).clamp(0.0, 1.0) * 255.0).round() as u8)
+                })
+                .collect(),
+        );
+    }
+    if let Some(o) = m.layout.uv {
+        out.uvs = Some((0..n).map(|i| Vec2::new(a(i, o), a(i, o + 1))).collect());
+    }
+}

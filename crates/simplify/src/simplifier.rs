@@ -1,0 +1,191 @@
+//! The reusable workspace and the pass loop (HQMS §4.1,
+//! `HighQualityMeshSimplification`): ring construction → simplification
+//! pass → output, repeated until the goal.
+//!
+//! A [`Simplifier`] keeps every buffer between calls — ring table, flags,
+//! errors, heap, scratch — so simplifying many meshes allocates only when
+//! a mesh is larger than any before it. The one exception is the final
+//! mesh of [`Simplifier::simplify`], which takes the working vertex and face
+//! arrays instead of copying them (that copy would be the peak).
+
+use lodkit_mesh::TriMesh;
+
+use crate::cost::{Record, Scratch};
+use crate::options::Options;
+use crate::output::{compact, take};
+use crate::pass::{pass_threshold, run_pass};
+use crate::prune::prune_small_components;
+use crate::ring_table::RingTable;
+use crate::rs_heap::RsHeap;
+use crate::work_mesh::WorkMesh;
+use crate::{Error, LevelReport, Simplified, StopReason};
+
+/// Reusable simplification workspace.
+#[derive(Debug)]
+pub struct Simplifier {
+    pub(crate) m: WorkMesh,
+    pub(crate) rings: RingTable,
+    pub(crate) heap: RsHeap<Record>,
+    pub(crate) sc: Scratch,
+    pub(crate) input_faces: usize,
+    pub(crate) passes: u32,
+    pub(crate) collapses: usize,
+    pub(crate) peak_bytes: usize,
+    /// Fraction of admitted records that collapsed in the last pass.
+    pub(crate) success: f64,
+}
+
+impl Default for Simplifier {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Simplifier {
+    pub fn new() -> Self {
+        Simplifier {
+            m: WorkMesh::default(),
+            rings: RingTable::default(),
+            heap: RsHeap::new(Options::DEFAULT_HEAP_SIZE),
+            sc: Scratch::default(),
+            input_faces: 0,
+            passes: 0,
+            collapses: 0,
+            peak_bytes: 0,
+            success: 0.5,
+        }
+    }
+
+    /// Simplifies `mesh` to `opts.target` (and `opts.max_error`).
+    pub fn simplify(&mut self, mesh: &TriMesh, opts: &Options) -> Result<Simplified, Error> {
+        let t0 = std::time::Instant::now();
+        self.start(mesh, opts)?;
+        let goal = opts.target.faces(self.input_faces);
+        let stop = self.run_to(goal, opts);
+        let estimated_error = self.m.max_error();
+        let mesh = take(&mut self.m);
+        Ok(Simplified {
+            report: self.report(
+                goal,
+                &mesh,
+                estimated_error,
+                stop,
+                t0.elapsed().as_secs_f64(),
+            ),
+            mesh,
+        })
+    }
+
+    /// Largest number of bytes the workspace held at once during the last
+    /// call (exact accounting of its arrays' capacities).
+    pub fn peak_bytes(&self) -> usize {
+        self.peak_bytes
+    }
+
+    pub(crate) fn start(&mut self, mesh: &TriMesh, opts: &Options) -> Result<(), Error> {
+        self.peak_bytes = 0;
+        self.passes = 0;
+        self.collapses = 0;
+        self.success = 0.5;
+        self.input_faces = mesh.faces.len();
+        // The ring table's offset array is free until the first pass: it
+        // serves as the weld map here and as the vertex index table of
+        // every compaction (it is rebuilt at the start of each pass).
+        self.m.load(mesh, &opts.weights, &mut self.rings.off)?;
+        self.m.border_weight = crate::quadric::BORDER_WEIGHT;
+        self.note_memory();
+        if let Some(p) = opts.prune {
+            prune_small_components(&mut self.m, p);
+        }
+        compact(&mut self.m, &mut self.rings.off);
+        Ok(())
+    }
+
+    fn note_memory(&mut self) {
+        let b = self.m.heap_bytes()
+            + self.rings.heap_bytes()
+            + self.sc.samples.capacity() * 4
+            + self.heap.capacity() * std::mem::size_of::<Record>();
+        self.peak_bytes = self.peak_bytes.max(b);
+    }
+
+    /// Passes until `goal` faces (or a stop condition).
+    pub(crate) fn run_to(&mut self, goal: usize, opts: &Options) -> StopReason {
+        let mut unbounded = false;
+        let mut passes_here = 0;
+        loop {
+            if self.m.live_faces <= goal {
+                return StopReason::Reached;
+            }
+            if passes_here >= opts.max_passes {
+                return StopReason::PassLimit;
+            }
+            let n = self.m.pos.len();
+            self.rings.rebuild(n, &self.m.faces);
+            let tau = if unbounded {
+                f32::INFINITY
+            } else {
+                pass_threshold(&self.m, &self.rings, opts, goal, self.success, &mut self.sc)
+            };
+            self.note_memory();
+            let st = run_pass(
+                &mut self.m,
+                &self.rings,
+                &mut self.heap,
+                opts,
+                goal,
+                tau,
+                &mut self.sc,
+            );
+            compact(&mut self.m, &mut self.rings.off);
+            self.passes += 1;
+            passes_here += 1;
+            self.collapses += st.collapses;
+            let admitted = st.collapses
+                + st.rejected_dependency
+                + st.rejected_topology
+                + st.rejected_flip
+                + st.rejected_seam
+                + st.rejected_max_error;
+            if admitted > 0 {
+                self.success = (st.collapses as f64 / admitted as f64).clamp(0.1, 1.0);
+            }
+            if st.faces_removed == 0 {
+                if tau.is_finite() {
+                    unbounded = true;
+                    continue;
+                }
+                return if st.rejected_max_error > 0 {
+                    StopReason::MaxError
+                } else {
+                    StopReason::Blocked {
+                        topology: st.rejected_topology,
+                        flip: st.rejected_flip,
+                        seam: st.rejected_seam,
+                    }
+                };
+            }
+            unbounded = false;
+        }
+    }
+
+    pub(crate) fn report(
+        &self,
+        goal: usize,
+        mesh: &TriMesh,
+        estimated_error: f32,
+        stop: StopReason,
+        seconds: f64,
+    ) -> LevelReport {
+        LevelReport {
+            target_faces: goal,
+            triangles: mesh.faces.len(),
+            vertices: mesh.positions.len(),
+            estimated_error,
+            passes: self.passes,
+            collapses: self.collapses,
+            stop,
+            seconds,
+        }
+    }
+}
