@@ -81,6 +81,7 @@ fn build_without_input_writes_the_bunny_and_its_lod_chain_deterministically() {
         "lods/lods.json".into(),
         "report.md".into(),
         format!("{n}.mco"),
+        format!("{n}.pop"),
         format!("scans/{n}.conf"),
     ];
     expected.extend((0..8).map(|i| format!("scans/{n}_{i:03}.ply")));
@@ -116,6 +117,10 @@ fn build_without_input_writes_the_bunny_and_its_lod_chain_deterministically() {
     );
     assert!(
         report.contains("## Continuous LOD (marching cube octree)") && report.contains("| 10 |"),
+        "{report}"
+    );
+    assert!(
+        report.contains("## Progressive stream (octree particles)"),
         "{report}"
     );
     // The chain halves the bunny three times, each level measured.

@@ -202,6 +202,6 @@ fn run_stats(ui: &Ui, file: &Path, json: bool) -> Result<()> {
     if json {
         return super::print_json(&s);
     }
-    print!("{s}");
+    crate::out!("{s}")?;
     Ok(())
 }
