@@ -189,26 +189,17 @@ pub fn run(ui: &Ui, args: &BuildArgs) -> Result<()> {
     outputs.push(("lod_error.svg".into(), svg.len()));
 
     // Continuous LOD: the marching cube octree built from virtual scans.
-    continuous_lod(
+    let input = Input {
         ui,
         mesh,
-        &name,
+        name: &name,
         out,
-        args.samples,
-        &mut report,
-        &mut outputs,
-    )?;
+        samples: args.samples,
+    };
+    continuous_lod(&input, &mut report, &mut outputs)?;
 
     // Progressive stream: octree particles, level by level.
-    progressive_stream(
-        ui,
-        mesh,
-        &name,
-        out,
-        args.samples,
-        &mut report,
-        &mut outputs,
-    )?;
+    progressive_stream(&input, &mut report, &mut outputs)?;
 
     writeln!(report, "## Outputs\n\n| file | bytes |\n|---|---:|")?;
     for (file, _) in &outputs {
@@ -248,20 +239,34 @@ pub fn run(ui: &Ui, args: &BuildArgs) -> Result<()> {
     Ok(())
 }
 
+/// What every section of the build reads: the input mesh, its name, the
+/// output directory and the sample count for error measurements.
+#[derive(Clone, Copy)]
+struct Input<'a> {
+    ui: &'a Ui,
+    mesh: &'a TriMesh,
+    name: &'a str,
+    out: &'a std::path::Path,
+    samples: usize,
+}
+
 /// The thesis's experiment on the input: 8 virtual range scans
 /// (`scans/`), the marching cube octree built from them (`NAME.mco`), and
 /// extractions at 50 / 10 / 1 % of its full size, each measured against
 /// the input next to an HQMS simplification of the input to the same
 /// triangle count.
 fn continuous_lod(
-    ui: &Ui,
-    mesh: &TriMesh,
-    name: &str,
-    out: &std::path::Path,
-    samples: usize,
+    input: &Input,
     report: &mut String,
     outputs: &mut Vec<(String, usize)>,
 ) -> Result<()> {
+    let Input {
+        ui,
+        mesh,
+        name,
+        out,
+        samples,
+    } = *input;
     use lodkit_mco::evaluate::{BUILD_SCANS, extraction_errors};
     let step = ui.spinner("scanning the input from 8 virtual views");
     let scans = lodkit_mco::scanner::scan_mesh(mesh, &BUILD_SCANS)?;
@@ -332,14 +337,17 @@ fn continuous_lod(
 /// particles, the triangles of the direct triangulation and their error
 /// against the input.
 fn progressive_stream(
-    ui: &Ui,
-    mesh: &TriMesh,
-    name: &str,
-    out: &std::path::Path,
-    samples: usize,
+    input: &Input,
     report: &mut String,
     outputs: &mut Vec<(String, usize)>,
 ) -> Result<()> {
+    let Input {
+        ui,
+        mesh,
+        name,
+        out,
+        samples,
+    } = *input;
     use lodkit_particles::thinning::ThinningOptions;
     use lodkit_particles::triangulate::TriangulateOptions;
     use lodkit_particles::{EncodeOptions, encode, progressive_levels};
