@@ -1,29 +1,9 @@
 //! End-to-end tests of the `lodkit` binary: exit codes, messages, outputs.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
-fn lodkit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lodkit"))
-        .args(args)
-        .output()
-        .expect("run lodkit")
-}
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-fn bunny() -> String {
-    repo()
-        .join("data/models/stanford_bunny.ply")
-        .display()
-        .to_string()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+mod common;
+use common::{bunny, lodkit, repo, stderr};
 
 /// Every file under `dir`, relative, sorted.
 fn tree(dir: &Path) -> Vec<String> {

@@ -1,14 +1,10 @@
 //! End-to-end tests of `lodkit scan` and `lodkit mco build|extract|info`.
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn lodkit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lodkit"))
-        .args(args)
-        .output()
-        .expect("run lodkit")
-}
+mod common;
+use common::lodkit;
 
 fn ok(o: &Output) {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));

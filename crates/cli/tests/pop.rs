@@ -1,25 +1,7 @@
 //! End-to-end tests of `lodkit pop encode|decode|stats`.
 
-use std::path::Path;
-use std::process::{Command, Output};
-
-fn lodkit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lodkit"))
-        .args(args)
-        .output()
-        .expect("run lodkit")
-}
-
-fn bunny() -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../data/models/stanford_bunny.ply")
-        .display()
-        .to_string()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+mod common;
+use common::{bunny, lodkit, stderr};
 
 #[test]
 fn encode_decode_and_stats_the_bunny() {

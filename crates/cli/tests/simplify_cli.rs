@@ -2,21 +2,12 @@
 //! `lodkit bench simplify`.
 
 use std::path::Path;
-use std::process::{Command, Output};
 
 use lodkit_mesh::io::{WriteOptions, save_mesh};
 use lodkit_mesh::{Model, TriMesh};
 
-fn lodkit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lodkit"))
-        .args(args)
-        .output()
-        .expect("run lodkit")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+mod common;
+use common::{lodkit, stderr};
 
 fn mesh_at(p: &Path) -> TriMesh {
     match lodkit_mesh::io::load(p).unwrap() {
