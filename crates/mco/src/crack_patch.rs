@@ -29,8 +29,10 @@
 //! segment ends) the fine mean is used.
 //!
 //! Not patchable this way: a face the coarse side crosses nowhere while the
-//! fine side does, and a coarse edge whose fine crossings are not its own
-//! crossing. [`expand_together`] finds the nodes around such faces and
+//! fine side does, an ambiguous coarse face whose four crossings the fine
+//! side joins the other way round (the armadillo has some), a closed fine
+//! loop inside a face, and a coarse edge whose fine crossings are not its
+//! own crossing. [`expand_together`] finds the nodes around such faces and
 //! edges and the priority numbering expands them in one LOD step, so these
 //! interfaces never appear in an extraction (fine vertices met there are
 //! only counted, in `BuildStats::unpatched`).
@@ -64,17 +66,116 @@ fn edge_vertex(tree: &Tree, l: usize, cube: [u32; 3], e: u8) -> u32 {
     tree.levels[l].edges[&edge_key(corner_key(cube, l as u32, a), e / 4)]
 }
 
-/// Face crossings of a configuration on face `f`: true if any.
-fn face_crossed(cfg: u8, f: Face) -> bool {
-    face_edges(f).iter().any(|&e| {
-        let [x, y] = EDGES[e as usize];
-        (cfg >> x & 1) != (cfg >> y & 1)
-    })
+/// Segment `[e0, e1]` of face edges of the level-`l` cube `cube` as a
+/// vertex pair, smaller index first.
+fn segment_vertices(tree: &Tree, l: usize, cube: [u32; 3], s: [u8; 2]) -> [u32; 2] {
+    let a = edge_vertex(tree, l, cube, s[0]);
+    let b = edge_vertex(tree, l, cube, s[1]);
+    [a.min(b), a.max(b)]
 }
 
-/// Same-level node pairs whose shared face the coarse level does not cross
-/// but the level below does: they must expand in the same LOD step (see
-/// [`crate::priority`]). Call after [`crate::octree_build::assemble`].
+/// Whether the face `f` shared by the level-`l` nodes at `pc` and `mc`
+/// (`mc` on `f`'s side of `pc`) can be crack-patched when one side is drawn
+/// one level finer than the other: the fine polylines on the face (from the
+/// level below, both sides' children) must join exactly the crossing pairs
+/// the coarse face's segments join, with no closed loop. Then every extra
+/// fine vertex lies on a polyline whose ends are its coarse segment's ends,
+/// and moving it onto that segment closes the gap (Fig. 5.6).
+///
+/// Three things break this: a face the coarse level crosses nowhere while
+/// the finer one does; a closed fine loop inside the face; and an
+/// *ambiguous* coarse face (two opposite corners inside) that the face rule
+/// cuts one way while the finer level, knowing the face's centre, joins the
+/// same four crossings the other way. In the last case the fine polyline
+/// runs across the coarse face from one coarse segment to the other: no
+/// choice of compensation points can close that gap.
+fn face_patchable(tree: &Tree, l: usize, pc: [u32; 3], mc: [u32; 3], f: Face) -> bool {
+    let lv = &tree.levels[l];
+    let below = &tree.levels[l - 1];
+    let axis = f.axis as usize;
+    let cfg = lv.configs[lv.index[&pack(pc[0], pc[1], pc[2])] as usize];
+    let mut coarse: Vec<[u32; 2]> = face_segments(cfg, f)
+        .into_iter()
+        .map(|s| segment_vertices(tree, l, pc, s))
+        .collect();
+    coarse.sort_unstable();
+    let mut fine: Vec<[u32; 2]> = Vec::new();
+    for oct in 0..8u32 {
+        let high = oct >> axis & 1 == 1;
+        // Children of `pc` on its high face, children of `mc` on its low face.
+        let (base, face) = if high {
+            (pc, f)
+        } else {
+            (
+                mc,
+                Face {
+                    axis: f.axis,
+                    side: 0,
+                },
+            )
+        };
+        let c = [
+            base[0] * 2 + (oct & 1),
+            base[1] * 2 + (oct >> 1 & 1),
+            base[2] * 2 + (oct >> 2 & 1),
+        ];
+        if let Some(&ci) = below.index.get(&pack(c[0], c[1], c[2])) {
+            fine.extend(
+                face_segments(below.configs[ci as usize], face)
+                    .into_iter()
+                    .map(|s| segment_vertices(tree, l - 1, c, s)),
+            );
+        }
+    }
+    fine.sort_unstable();
+    fine.dedup();
+    if fine.is_empty() || coarse.is_empty() {
+        return fine.is_empty() && coarse.is_empty();
+    }
+    // Chain the fine segments; a vertex on more than two of them cannot be
+    // told apart, so the face counts as unpatchable.
+    let mut degree: HashMap<u32, u32> = HashMap::new();
+    for s in &fine {
+        for v in s {
+            *degree.entry(*v).or_default() += 1;
+        }
+    }
+    if degree.values().any(|&d| d > 2) {
+        return false;
+    }
+    let mut ends: Vec<u32> = degree.iter().filter(|e| *e.1 == 1).map(|e| *e.0).collect();
+    ends.sort_unstable();
+    let mut used = vec![false; fine.len()];
+    let mut pairs: Vec<[u32; 2]> = Vec::new();
+    for &start in &ends {
+        if fine
+            .iter()
+            .zip(&used)
+            .all(|(s, &u)| u || !s.contains(&start))
+        {
+            continue; // reached as the far end of an earlier chain
+        }
+        let mut at = start;
+        while let Some(k) = (0..fine.len()).find(|&k| !used[k] && fine[k].contains(&at)) {
+            used[k] = true;
+            at = if fine[k][0] == at {
+                fine[k][1]
+            } else {
+                fine[k][0]
+            };
+        }
+        pairs.push([start.min(at), start.max(at)]);
+    }
+    if used.iter().any(|&u| !u) {
+        return false; // a closed loop
+    }
+    pairs.sort_unstable();
+    pairs == coarse
+}
+
+/// Same-level node pairs whose shared face cannot be crack-patched (see
+/// [`face_patchable`]), and the nodes around unpatchable edges: they must
+/// expand in the same LOD step (see [`crate::priority`]). Call after [`crate::octree_build::assemble`].
 pub fn expand_together(tree: &Tree) -> Vec<(u32, u32)> {
     let mut out = Vec::new();
     for l in 1..tree.levels.len() {
@@ -84,33 +185,12 @@ pub fn expand_together(tree: &Tree) -> Vec<(u32, u32)> {
             let pc = unpack(k);
             for axis in 0..3u8 {
                 let f = Face { axis, side: 1 };
-                if face_crossed(lv.configs[i], f) {
-                    continue;
-                }
                 let mut mc = pc;
                 mc[axis as usize] += 1;
                 let Some(&j) = lv.index.get(&pack(mc[0], mc[1], mc[2])) else {
                     continue;
                 };
-                // Children of p on its high face, children of m on its low face.
-                let fine = (0..8u32).any(|oct| {
-                    let bit = oct >> axis & 1;
-                    let (base, face) = if bit == 1 {
-                        (pc, f)
-                    } else {
-                        (mc, Face { axis, side: 0 })
-                    };
-                    let c = [
-                        base[0] * 2 + (oct & 1),
-                        base[1] * 2 + (oct >> 1 & 1),
-                        base[2] * 2 + (oct >> 2 & 1),
-                    ];
-                    below
-                        .index
-                        .get(&pack(c[0], c[1], c[2]))
-                        .is_some_and(|&ci| face_crossed(below.configs[ci as usize], face))
-                });
-                if fine {
+                if !face_patchable(tree, l, pc, mc, f) {
                     out.push((tree.node_id[l][i], tree.node_id[l][j as usize]));
                 }
             }
