@@ -1,6 +1,8 @@
-//! Run-time LOD mesh generation by referencing only (thesis §6.1–6.2.1).
+//! Run-time LOD mesh generation by referencing only (thesis §6.1–6.2.1),
+//! and its birth/death form.
 //!
-//! For LOD number `k` the LOD array is walked in reverse, from `lod[k−1]`
+//! **The §6.1 traversal ([`McoModel::extract_lod_traversal`]).** For LOD
+//! number `k` the LOD array is walked in reverse, from `lod[k−1]`
 //! down to the root: each visited node's children that are not *expanded*
 //! are triangulated, and the node is marked expanded. A node is expanded at
 //! LOD `k` exactly when its priority number is at most `k`, so the §6.1
@@ -35,12 +37,148 @@
 //! thesis's; only the pointer chasing and cache misses are gone. Children
 //! with no triangles are left out.
 //!
+//! **Birth/death tables: what [`McoModel::extract_lod`] reads.** Nodes
+//! expand in priority order, so every triangle a node can draw is drawn for
+//! an interval of LOD numbers: node `c` is drawn for `prio[parent] <= k <
+//! prio[c]`, and its crack patch against a coarse neighbour `q` applies
+//! while `k < prio[q]`. Cutting each node's interval at its neighbours'
+//! priority numbers gives every *triangle version* (crack-patched ones
+//! included) a life `[birth, death)`; LOD `k` draws exactly the versions
+//! alive at `k`. That is the same triangle set as the traversal above,
+//! tested on several shapes at many `k` (`tests/extraction.rs`), reached
+//! without visiting nodes.
+//!
+//! The records are grouped in *death buckets* and sorted by birth inside
+//! each. For a bucket whose deaths all come after `k`, every record born by
+//! `k` is alive: a prefix, one `memcpy`. Buckets whose deaths all come by
+//! `k` are skipped. Only the one bucket holding `k` is filtered, without
+//! branches (each record is written, and the write position advances by
+//! `3 · (death > k)`). Buckets are sized so that this one holds at most an
+//! eighth as many records as the output, and there are `O(log n)` of them
+//! (41 on the real-scan bunny, 61 on a 1M-triangle blob), so an extraction
+//! costs little more than copying its output (`lodkit bench mco`). The
+//! prefix ends are found through a birth table sampled every
+//! [`BIRTH_STRIDE`] LOD numbers and a short binary search.
+//!
+//! The traversal ([`McoModel::extract_lod_traversal`]) stays: it is the
+//! thesis's algorithm, the reference the tables are tested against, and
+//! the view-dependent cut ([`McoModel::extract_expanded`]) walks nodes the
+//! same way.
+//!
 //! By triangle count, the accumulation table gives the LOD number first
-//! ([`crate::priority::lod_for_triangles`]).
+//! (a binary search over its running maximum, the choice of
+//! [`crate::priority::lod_for_triangles`]).
 
 use lodkit_mesh::TriMesh;
 
-use crate::model::McoModel;
+use crate::model::{Lifetimes, McoModel};
+
+/// One triangle version and the LOD numbers that draw it:
+/// `birth <= k < death`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Record {
+    tri: [u32; 3],
+    birth: u32,
+    death: u32,
+}
+
+/// Width, in LOD numbers, of one entry of a death bucket's birth table: a
+/// prefix lookup reads one entry pair and binary-searches the few records
+/// born within this many LOD numbers.
+pub const BIRTH_STRIDE: u32 = 16;
+
+/// A death bucket holds at most `1 / BUCKET_SHARE` as many records as the
+/// LOD number where it starts draws triangles (and up to `MIN_BUCKET`
+/// records anyway): the one bucket an extraction filters then costs a small
+/// fraction of its output, and the buckets stay few (`O(log)` of the
+/// triangle count) so the copies of the others stay cheap.
+const BUCKET_SHARE: u64 = 8;
+const MIN_BUCKET: u64 = 512;
+
+impl Lifetimes {
+    fn from_records(mut recs: Vec<Record>, acc: &[u32]) -> Lifetimes {
+        let max_lod = acc.len().saturating_sub(1);
+        // Records dying at each LOD number (the others never die).
+        let mut dying = vec![0u64; max_lod + 1];
+        for r in &recs {
+            if let Some(c) = dying.get_mut(r.death as usize) {
+                *c += 1;
+            }
+        }
+        let mut lo = Vec::new();
+        let mut e = 0usize;
+        while e <= max_lod {
+            lo.push(e as u32);
+            let cap = (acc.get(e).copied().unwrap_or(0) as u64 / BUCKET_SHARE).max(MIN_BUCKET);
+            let mut held = dying[e];
+            e += 1;
+            while e <= max_lod && held + dying[e] <= cap {
+                held += dying[e];
+                e += 1;
+            }
+        }
+        // Bucket 0 never dies; then decreasing death ranges down to 0.
+        let mut death_lo = vec![(max_lod as u32).saturating_add(1)];
+        death_lo.extend(lo.iter().rev());
+        let bucket = |d: u32| death_lo.partition_point(|&x| x > d);
+        // Stable: ties keep node order, so the layout is deterministic.
+        recs.sort_by_key(|r| (bucket(r.death), r.birth));
+        let mut bucket_start = Vec::with_capacity(death_lo.len() + 1);
+        let mut cut = Vec::new();
+        let mut cut_start = Vec::with_capacity(death_lo.len() + 1);
+        let birth: Vec<u32> = recs.iter().map(|r| r.birth).collect();
+        let mut start = 0usize;
+        for b in 0..death_lo.len() {
+            let end = start + recs[start..].partition_point(|r| bucket(r.death) == b);
+            bucket_start.push(start as u32);
+            cut_start.push(cut.len() as u32);
+            let entries = if end > start {
+                (birth[end - 1] / BIRTH_STRIDE) as usize + 2
+            } else {
+                1
+            };
+            for i in 0..entries {
+                let from = (i as u64 * BIRTH_STRIDE as u64).min(u32::MAX as u64) as u32;
+                cut.push((start + birth[start..end].partition_point(|&x| x < from)) as u32);
+            }
+            start = end;
+        }
+        bucket_start.push(start as u32);
+        cut_start.push(cut.len() as u32);
+        Lifetimes {
+            tris: recs.iter().flat_map(|r| r.tri).collect(),
+            death: recs.iter().map(|r| r.death).collect(),
+            birth,
+            death_lo,
+            bucket_start,
+            cut,
+            cut_start,
+        }
+    }
+
+    /// The end of bucket `b`'s records born at or before `k`.
+    #[inline]
+    fn born_by(&self, b: usize, k: u32) -> usize {
+        let table = &self.cut[self.cut_start[b] as usize..self.cut_start[b + 1] as usize];
+        let s = (k / BIRTH_STRIDE) as usize;
+        if s + 1 >= table.len() {
+            return self.bucket_start[b + 1] as usize;
+        }
+        let (lo, hi) = (table[s] as usize, table[s + 1] as usize);
+        lo + self.birth[lo..hi].partition_point(|&x| x <= k)
+    }
+
+    /// Bytes held by the tables.
+    pub fn bytes(&self) -> usize {
+        4 * (self.tris.len()
+            + self.birth.len()
+            + self.death.len()
+            + self.death_lo.len()
+            + self.bucket_start.len()
+            + self.cut.len()
+            + self.cut_start.len())
+    }
+}
 
 /// True when two of node `n`'s patches substitute the same vertex (a vertex
 /// on the edge between two patched faces): the first patch must win, which
@@ -173,6 +311,101 @@ impl McoModel {
             .filter(|&k| self.step_start[k] > self.step_start[k - 1])
             .map(|k| k as u32)
             .collect();
+        self.lifetimes = self.lifetimes();
+        let mut best = 0u32;
+        self.acc_max = self
+            .acc
+            .iter()
+            .map(|&a| {
+                best = best.max(a);
+                best
+            })
+            .collect();
+    }
+
+    /// The birth/death records of every triangle version (see
+    /// [`crate::model::Lifetimes`] and the module docs).
+    fn lifetimes(&self) -> Lifetimes {
+        let mut recs: Vec<Record> = Vec::with_capacity(self.tris.len() / 3 + self.subs.len());
+        let mut cuts: Vec<u32> = Vec::new();
+        let mut open: Vec<Record> = Vec::new();
+        let mut now: Vec<u32> = Vec::new();
+        for c in 0..self.nodes.len() as u32 {
+            let nd = self.nodes[c as usize];
+            if nd.tri_count == 0 {
+                continue;
+            }
+            // Drawn while the parent is expanded and `c` is not.
+            let birth = if nd.parent == u32::MAX {
+                0
+            } else {
+                self.prio[nd.parent as usize]
+            };
+            let death = self.prio[c as usize];
+            if birth >= death {
+                continue; // never drawn (only in a malformed file)
+            }
+            // The node's triangles change where a patch's coarse neighbour
+            // expands inside the node's life.
+            let patches = &self.patches[nd.patch_start as usize..][..nd.patch_count as usize];
+            cuts.clear();
+            cuts.push(birth);
+            cuts.extend(
+                patches
+                    .iter()
+                    .map(|p| self.prio[p.coarse as usize])
+                    .filter(|&q| birth < q && q < death),
+            );
+            cuts.sort_unstable();
+            cuts.dedup();
+            cuts.push(death);
+            // One open record per triangle, extended while its version
+            // stays the same from one piece of the life to the next.
+            open.clear();
+            for w in cuts.windows(2) {
+                let (from, to) = (w[0], w[1]);
+                now.clear();
+                self.emit(c, &mut now, &|n: u32| self.prio[n as usize] <= from);
+                for (t, tri) in now.chunks_exact(3).enumerate() {
+                    let tri = [tri[0], tri[1], tri[2]];
+                    match open.get_mut(t) {
+                        Some(r) if r.tri == tri => r.death = to,
+                        Some(r) => {
+                            recs.push(*r);
+                            *r = Record {
+                                tri,
+                                birth: from,
+                                death: to,
+                            };
+                        }
+                        None => open.push(Record {
+                            tri,
+                            birth: from,
+                            death: to,
+                        }),
+                    }
+                }
+            }
+            recs.extend_from_slice(&open);
+        }
+        Lifetimes::from_records(recs, &self.acc)
+    }
+
+    /// Bytes held by the derived extraction arrays (the traversal stream,
+    /// the leaf block and its patches, the birth/death tables), beyond the
+    /// stored model.
+    pub fn extraction_bytes(&self) -> usize {
+        4 * (self.stream.len()
+            + self.step_start.len()
+            + self.leaf_block.len()
+            + self.leaf_end.len()
+            + 3 * self.leaf_patches.len()
+            + self.leaf_patch_end.len()
+            + 2 * self.leaf_pairs.len()
+            + 4 * self.leaf_patches_by_coarse.len()
+            + self.inner_steps.len()
+            + self.acc_max.len())
+            + self.lifetimes.bytes()
     }
 
     /// Appends node `n`'s triangles to `out`, crack-patched against every
@@ -201,9 +434,53 @@ impl McoModel {
     }
 
     /// The index buffer of LOD number `k` (clamped to [`McoModel::max_lod`])
-    /// into `out` (cleared first; its allocation is reused). Emits exactly
-    /// `acc[k]` triangles.
+    /// into `out` (cleared first; its allocation is reused), from the
+    /// birth/death tables: every death bucket that starts after `k` gives
+    /// its records born by `k` in one copy, and the one bucket holding `k`
+    /// is filtered on `death > k` without branches. Emits exactly `acc[k]`
+    /// triangles, the same as [`McoModel::extract_lod_traversal`].
     pub fn extract_lod(&self, k: usize, out: &mut Vec<u32>) {
+        out.clear();
+        let lt = &self.lifetimes;
+        if lt.bucket_start.is_empty() {
+            // Not prepared (a hand-made model).
+            self.extract_lod_traversal(k, out);
+            return;
+        }
+        let k = k.min(self.max_lod());
+        out.reserve(3 * self.acc.get(k).copied().unwrap_or(0) as usize + 3);
+        let k = k as u32;
+        for (b, &lo) in lt.death_lo.iter().enumerate() {
+            let start = lt.bucket_start[b] as usize;
+            let end = lt.born_by(b, k);
+            if lo > k {
+                // Every record of this bucket dies after `k`.
+                out.extend_from_slice(&lt.tris[3 * start..3 * end]);
+                continue;
+            }
+            // The bucket holding `k`; the ones after it died by `k`.
+            let base = out.len();
+            out.resize(base + 3 * (end - start) + 3, 0);
+            let dst = &mut out[base..];
+            let mut w = 0;
+            for (t, &d) in lt.tris[3 * start..3 * end]
+                .chunks_exact(3)
+                .zip(&lt.death[start..end])
+            {
+                dst[w..w + 3].copy_from_slice(t);
+                w += 3 * usize::from(d > k);
+            }
+            out.truncate(base + w);
+            break;
+        }
+    }
+
+    /// The index buffer of LOD number `k` (clamped to [`McoModel::max_lod`])
+    /// by the §6.1 reverse-order traversal, into `out` (cleared first; its
+    /// allocation is reused). Emits exactly `acc[k]` triangles: the same
+    /// triangles as [`McoModel::extract_lod`], in another order. This is
+    /// the reference the birth/death tables are tested against.
+    pub fn extract_lod_traversal(&self, k: usize, out: &mut Vec<u32>) {
         out.clear();
         if self.nodes.is_empty() {
             return;
@@ -218,13 +495,7 @@ impl McoModel {
         }
         if self.step_start.len() != self.groups.len() {
             // Not prepared (a hand-made model): follow the nodes instead.
-            for &n in self.lod[..self.groups[k] as usize].iter().rev() {
-                for c in self.children(n) {
-                    if self.prio[c as usize] > kk {
-                        self.emit(c, out, &expanded);
-                    }
-                }
-            }
+            self.extract_lod_nodes(k, out);
             return;
         }
         // Leaves: every leaf child of steps 1..=k, in one copy, then the
@@ -292,9 +563,56 @@ impl McoModel {
     /// The index buffer closest to `triangles` triangles; returns the LOD
     /// number used.
     pub fn extract_triangles(&self, triangles: usize, out: &mut Vec<u32>) -> usize {
-        let k = crate::priority::lod_for_triangles(&self.acc, triangles);
+        let k = self.lod_for_triangles(triangles);
         self.extract_lod(k, out);
         k
+    }
+
+    /// [`crate::priority::lod_for_triangles`] in `O(log n)`: the same
+    /// choice, found by binary search over the running maximum of the
+    /// accumulation table.
+    pub fn lod_for_triangles(&self, triangles: usize) -> usize {
+        if self.acc_max.len() != self.acc.len() || self.acc.is_empty() {
+            return crate::priority::lod_for_triangles(&self.acc, triangles);
+        }
+        let target = triangles.min(u32::MAX as usize) as u32;
+        let k = self.acc_max.partition_point(|&a| a < target);
+        if k == self.acc.len() {
+            return k - 1;
+        }
+        if k == 0 {
+            return 0;
+        }
+        let (hi, lo) = (
+            self.acc[k].abs_diff(target),
+            self.acc[k - 1].abs_diff(target),
+        );
+        if lo < hi { k - 1 } else { k }
+    }
+
+    /// The plain §6.1 traversal over the nodes (no prepared arrays): the LOD
+    /// array from `lod[groups[k] - 1]` back to the root, drawing each
+    /// visited node's children that are not expanded. Slow; kept as the
+    /// definition the prepared forms are tested against.
+    pub fn extract_lod_nodes(&self, k: usize, out: &mut Vec<u32>) {
+        out.clear();
+        if self.nodes.is_empty() {
+            return;
+        }
+        let k = k.min(self.max_lod());
+        let kk = k as u32;
+        let expanded = |n: u32| self.prio[n as usize] <= kk;
+        if k == 0 {
+            self.emit(0, out, &expanded);
+            return;
+        }
+        for &n in self.lod[..self.groups[k] as usize].iter().rev() {
+            for c in self.children(n) {
+                if self.prio[c as usize] > kk {
+                    self.emit(c, out, &expanded);
+                }
+            }
+        }
     }
 
     /// The index buffer of an arbitrary balanced cut given by per-node

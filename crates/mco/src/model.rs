@@ -103,6 +103,33 @@ pub struct McoModel {
     pub leaf_patches_by_coarse: Vec<[u32; 4]>,
     /// LOD steps that have inner-child records, increasing (derived).
     pub inner_steps: Vec<u32>,
+    /// Every drawable triangle version with its life interval, for
+    /// extraction by LOD number (derived; see [`crate::extract`]).
+    pub lifetimes: Lifetimes,
+    /// Running maximum of `acc` (derived): the triangle-count lookup is a
+    /// binary search over it.
+    pub acc_max: Vec<u32>,
+}
+
+/// The birth/death form of the LOD array (derived, not saved; built by
+/// [`McoModel::prepare_extraction`]).
+///
+/// Record `r` is one triangle, `tris[3r..3r + 3]`, as LOD numbers
+/// `birth[r] <= k < death[r]` draw it (crack-patch variants are records of
+/// their own). Records are grouped in *death buckets*: bucket `b` holds the
+/// records with `death` in `[death_lo[b], death_lo[b - 1])` (bucket 0:
+/// never dies), at `bucket_start[b]..bucket_start[b + 1]`, sorted by birth.
+/// `cut[cut_start[b] + s]` is the first record of bucket `b` born at or
+/// after `s * BIRTH_STRIDE`.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Lifetimes {
+    pub tris: Vec<u32>,
+    pub birth: Vec<u32>,
+    pub death: Vec<u32>,
+    pub death_lo: Vec<u32>,
+    pub bucket_start: Vec<u32>,
+    pub cut: Vec<u32>,
+    pub cut_start: Vec<u32>,
 }
 
 impl Default for Grid {
