@@ -4,11 +4,18 @@
 use std::collections::HashMap;
 
 use lodkit_mesh::TriMesh;
-use lodkit_mesh::glam::Vec3;
+use lodkit_mesh::glam::{DVec3, Vec3};
 
 /// Closest point on triangle `abc` to `p` (Ericson, Real-Time Collision
-/// Detection §5.1.5, written from the region description).
+/// Detection §5.1.5, written from the region description). Computed in
+/// f64: the region tests subtract products, and in f32 a sliver triangle
+/// (crack patching makes some) sent points lying on its edge to a wrong
+/// region, reporting gaps of 6e-2 where the true distance was 4e-7.
 pub fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
+    closest_on_triangle_f64(p.as_dvec3(), a.as_dvec3(), b.as_dvec3(), c.as_dvec3()).as_vec3()
+}
+
+fn closest_on_triangle_f64(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
     let ab = b - a;
     let ac = c - a;
     let ap = p - a;
