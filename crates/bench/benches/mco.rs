@@ -1,6 +1,7 @@
 //! Marching cube octree: build throughput (input points per second,
 //! labelled by input size so growth with size is visible) and extraction
-//! (triangles per second, next to a memcpy of the same index buffer).
+//! (triangles per second: the birth/death tables and the §6.1 traversal,
+//! next to a memcpy of the same index buffer).
 //!
 //! Inputs are `shapes::blob` meshes (their vertices with area-weighted
 //! normals are the samples) at a resolution of twice their sample spacing,
@@ -34,7 +35,7 @@ fn extract(c: &mut Criterion) {
     let mut g = c.benchmark_group("mco_extract");
     let mut idx = Vec::new();
     for target in [full / 100, full / 10, full] {
-        let k = lodkit_mco::priority::lod_for_triangles(&model.acc, target);
+        let k = model.lod_for_triangles(target);
         model.extract_lod(k, &mut idx);
         let src = idx.clone();
         let mut dst = vec![0u32; src.len()];
@@ -43,6 +44,11 @@ fn extract(c: &mut Criterion) {
             BenchmarkId::new("extract_tris", src.len() / 3),
             &k,
             |b, &k| b.iter(|| model.extract_lod(black_box(k), &mut idx)),
+        );
+        g.bench_with_input(
+            BenchmarkId::new("traversal_tris", src.len() / 3),
+            &k,
+            |b, &k| b.iter(|| model.extract_lod_traversal(black_box(k), &mut idx)),
         );
         g.bench_with_input(
             BenchmarkId::new("memcpy_tris", src.len() / 3),
