@@ -19,8 +19,8 @@
 //!
 //! **Memory layout for speed (a departure in representation only).** The
 //! thesis follows pointers from each LOD-array entry to its children. Here
-//! [`McoModel::prepare_extraction`] lays the children of each LOD step out
-//! once, in LOD-array order:
+//! the first traversal lays the children of each LOD step out once, in
+//! LOD-array order (kept in [`McoModel::traversal`]):
 //!
 //! - *Leaf* children (never expanded) go to one block, step after step.
 //!   LOD `k` draws every leaf child of steps `1..=k`, which is a prefix of
@@ -71,7 +71,7 @@
 
 use lodkit_mesh::TriMesh;
 
-use crate::model::{Lifetimes, McoModel};
+use crate::model::{Lifetimes, McoModel, Traversal};
 
 /// One triangle version and the LOD numbers that draw it:
 /// `birth <= k < death`.
@@ -94,6 +94,21 @@ pub const BIRTH_STRIDE: u32 = 16;
 /// triangle count) so the copies of the others stay cheap.
 const BUCKET_SHARE: u64 = 8;
 const MIN_BUCKET: u64 = 512;
+
+impl Traversal {
+    /// Bytes held by the arrays.
+    pub fn bytes(&self) -> usize {
+        4 * (self.stream.len()
+            + self.step_start.len()
+            + self.leaf_block.len()
+            + self.leaf_end.len()
+            + 3 * self.leaf_patches.len()
+            + self.leaf_patch_end.len()
+            + 2 * self.leaf_pairs.len()
+            + 4 * self.leaf_patches_by_coarse.len()
+            + self.inner_steps.len())
+    }
+}
 
 impl Lifetimes {
     fn from_records(mut recs: Vec<Record>, acc: &[u32]) -> Lifetimes {
@@ -147,7 +162,11 @@ impl Lifetimes {
         cut_start.push(cut.len() as u32);
         Lifetimes {
             tris: recs.iter().flat_map(|r| r.tri).collect(),
-            death: recs.iter().map(|r| r.death).collect(),
+            // Bucket 0 never dies: its deaths are not kept.
+            death: recs[bucket_start[1] as usize..]
+                .iter()
+                .map(|r| r.death)
+                .collect(),
             birth,
             death_lo,
             bucket_start,
@@ -207,6 +226,22 @@ impl McoModel {
     /// and patches (`O(n)`, a handful of allocations). Called after
     /// building and after loading.
     pub fn prepare_extraction(&mut self) {
+        self.traversal = std::sync::OnceLock::new();
+        self.lifetimes = self.lifetimes();
+        let mut best = 0u32;
+        self.acc_max = self
+            .acc
+            .iter()
+            .map(|&a| {
+                best = best.max(a);
+                best
+            })
+            .collect();
+    }
+
+    /// The traversal's arrays: the leaf block with its patch lists and
+    /// the inner-child record stream (see the module docs).
+    fn traversal_arrays(&self) -> Traversal {
         let mut stream = Vec::with_capacity(self.tris.len() / 4 + 2 * self.nodes.len());
         let mut step_start = Vec::with_capacity(self.groups.len());
         let mut leaf_block = Vec::with_capacity(self.tris.len());
@@ -291,36 +326,29 @@ impl McoModel {
             leaf_end.push(leaf_block.len() as u32);
             leaf_patch_end.push(leaf_patches.len() as u32);
         }
-        self.stream = stream;
-        self.step_start = step_start;
-        self.leaf_block = leaf_block;
-        self.leaf_end = leaf_end;
-        self.leaf_patches = leaf_patches;
-        self.leaf_patch_end = leaf_patch_end;
-        self.leaf_pairs = leaf_pairs;
-        let mut by_coarse: Vec<[u32; 4]> = Vec::with_capacity(self.leaf_patches.len());
-        for k in 1..self.leaf_patch_end.len() {
-            let range = self.leaf_patch_end[k - 1] as usize..self.leaf_patch_end[k] as usize;
-            for &[coarse, start, count] in &self.leaf_patches[range] {
+        let mut by_coarse: Vec<[u32; 4]> = Vec::with_capacity(leaf_patches.len());
+        for k in 1..leaf_patch_end.len() {
+            let range = leaf_patch_end[k - 1] as usize..leaf_patch_end[k] as usize;
+            for &[coarse, start, count] in &leaf_patches[range] {
                 by_coarse.push([coarse, k as u32, start, count]);
             }
         }
         by_coarse.sort_by(|a, b| b[0].cmp(&a[0]).then(a[1..].cmp(&b[1..])));
-        self.leaf_patches_by_coarse = by_coarse;
-        self.inner_steps = (1..self.step_start.len())
-            .filter(|&k| self.step_start[k] > self.step_start[k - 1])
+        let inner_steps = (1..step_start.len())
+            .filter(|&k| step_start[k] > step_start[k - 1])
             .map(|k| k as u32)
             .collect();
-        self.lifetimes = self.lifetimes();
-        let mut best = 0u32;
-        self.acc_max = self
-            .acc
-            .iter()
-            .map(|&a| {
-                best = best.max(a);
-                best
-            })
-            .collect();
+        Traversal {
+            stream,
+            step_start,
+            leaf_block,
+            leaf_end,
+            leaf_patches,
+            leaf_patch_end,
+            leaf_pairs,
+            leaf_patches_by_coarse: by_coarse,
+            inner_steps,
+        }
     }
 
     /// The birth/death records of every triangle version (see
@@ -391,21 +419,13 @@ impl McoModel {
         Lifetimes::from_records(recs, &self.acc)
     }
 
-    /// Bytes held by the derived extraction arrays (the traversal stream,
-    /// the leaf block and its patches, the birth/death tables), beyond the
-    /// stored model.
-    pub fn extraction_bytes(&self) -> usize {
-        4 * (self.stream.len()
-            + self.step_start.len()
-            + self.leaf_block.len()
-            + self.leaf_end.len()
-            + 3 * self.leaf_patches.len()
-            + self.leaf_patch_end.len()
-            + 2 * self.leaf_pairs.len()
-            + 4 * self.leaf_patches_by_coarse.len()
-            + self.inner_steps.len()
-            + self.acc_max.len())
-            + self.lifetimes.bytes()
+    /// Bytes held by the derived extraction arrays beyond the stored model:
+    /// (birth/death tables, the traversal's arrays if built yet).
+    pub fn extraction_bytes(&self) -> (usize, usize) {
+        (
+            self.lifetimes.bytes() + 4 * self.acc_max.len(),
+            self.traversal.get().map_or(0, Traversal::bytes),
+        )
     }
 
     /// Appends node `n`'s triangles to `out`, crack-patched against every
@@ -450,6 +470,7 @@ impl McoModel {
         let k = k.min(self.max_lod());
         out.reserve(3 * self.acc.get(k).copied().unwrap_or(0) as usize + 3);
         let k = k as u32;
+        let immortal = lt.bucket_start[1] as usize;
         for (b, &lo) in lt.death_lo.iter().enumerate() {
             let start = lt.bucket_start[b] as usize;
             let end = lt.born_by(b, k);
@@ -465,7 +486,7 @@ impl McoModel {
             let mut w = 0;
             for (t, &d) in lt.tris[3 * start..3 * end]
                 .chunks_exact(3)
-                .zip(&lt.death[start..end])
+                .zip(&lt.death[start - immortal..end - immortal])
             {
                 dst[w..w + 3].copy_from_slice(t);
                 w += 3 * usize::from(d > k);
@@ -493,20 +514,16 @@ impl McoModel {
             self.emit(0, out, &expanded);
             return;
         }
-        if self.step_start.len() != self.groups.len() {
-            // Not prepared (a hand-made model): follow the nodes instead.
-            self.extract_lod_nodes(k, out);
-            return;
-        }
+        let t = self.traversal.get_or_init(|| self.traversal_arrays());
         // Leaves: every leaf child of steps 1..=k, in one copy, then the
         // crack patches whose coarse neighbour is still drawn coarse.
-        out.extend_from_slice(&self.leaf_block[..self.leaf_end[k] as usize]);
-        let by_step = &self.leaf_patches[..self.leaf_patch_end[k] as usize];
-        let active = self.leaf_patches_by_coarse.partition_point(|p| p[0] > kk);
+        out.extend_from_slice(&t.leaf_block[..t.leaf_end[k] as usize]);
+        let by_step = &t.leaf_patches[..t.leaf_patch_end[k] as usize];
+        let active = t.leaf_patches_by_coarse.partition_point(|p| p[0] > kk);
         if active < by_step.len() {
-            for &[_, step, start, count] in &self.leaf_patches_by_coarse[..active] {
+            for &[_, step, start, count] in &t.leaf_patches_by_coarse[..active] {
                 if step <= kk {
-                    for &[pos, v] in &self.leaf_pairs[start as usize..][..count as usize] {
+                    for &[pos, v] in &t.leaf_pairs[start as usize..][..count as usize] {
                         out[pos as usize] = v;
                     }
                 }
@@ -514,19 +531,19 @@ impl McoModel {
         } else {
             for &[coarse, start, count] in by_step {
                 if coarse > kk {
-                    for &[pos, v] in &self.leaf_pairs[start as usize..][..count as usize] {
+                    for &[pos, v] in &t.leaf_pairs[start as usize..][..count as usize] {
                         out[pos as usize] = v;
                     }
                 }
             }
         }
         // Inner children: the reverse-order traversal of §6.1.
-        let st = &self.stream[..];
-        let steps = self.inner_steps.partition_point(|&s| s <= kk);
-        for &step in self.inner_steps[..steps].iter().rev() {
+        let st = &t.stream[..];
+        let steps = t.inner_steps.partition_point(|&s| s <= kk);
+        for &step in t.inner_steps[..steps].iter().rev() {
             let step = step as usize;
-            let mut p = self.step_start[step - 1] as usize;
-            let end = self.step_start[step] as usize;
+            let mut p = t.step_start[step - 1] as usize;
+            let end = t.step_start[step] as usize;
             while p < end {
                 let prio = st[p];
                 let meta = st[p + 1];

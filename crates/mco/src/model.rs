@@ -81,34 +81,42 @@ pub struct McoModel {
     pub subs: Vec<[u32; 2]>,
     pub deps: Vec<u32>,
     pub stats: BuildStats,
-    /// The extraction stream (derived, not saved; see
-    /// [`McoModel::prepare_extraction`]).
-    pub stream: Vec<u32>,
-    /// LOD number `k`'s records are `stream[step_start[k-1]..step_start[k]]`.
-    pub step_start: Vec<u32>,
-    /// Leaf children's triangles in LOD-step order (derived).
-    pub leaf_block: Vec<u32>,
-    /// LOD number `k` draws `leaf_block[..leaf_end[k]]` (derived).
-    pub leaf_end: Vec<u32>,
-    /// Leaf crack patches in LOD-step order: `[coarse prio, pairs start,
-    /// pairs count]` (derived).
-    pub leaf_patches: Vec<[u32; 3]>,
-    /// LOD number `k`'s leaves have `leaf_patches[..leaf_patch_end[k]]`.
-    pub leaf_patch_end: Vec<u32>,
-    /// `[position in leaf_block, compensation vertex]` (derived).
-    pub leaf_pairs: Vec<[u32; 2]>,
-    /// The leaf patches again as `[coarse prio, step, pairs start, pairs
-    /// count]`, by decreasing coarse priority (derived): for a high `k` the
-    /// active ones are a short prefix.
-    pub leaf_patches_by_coarse: Vec<[u32; 4]>,
-    /// LOD steps that have inner-child records, increasing (derived).
-    pub inner_steps: Vec<u32>,
+    /// The §6.1 traversal's arrays (derived, not saved), built on the
+    /// first [`McoModel::extract_lod_traversal`]: extraction by LOD number
+    /// does not need them.
+    pub traversal: std::sync::OnceLock<Traversal>,
     /// Every drawable triangle version with its life interval, for
     /// extraction by LOD number (derived; see [`crate::extract`]).
     pub lifetimes: Lifetimes,
     /// Running maximum of `acc` (derived): the triangle-count lookup is a
     /// binary search over it.
     pub acc_max: Vec<u32>,
+}
+
+/// The §6.1 traversal's prepared arrays (see [`crate::extract`]).
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Traversal {
+    /// Records of inner children, step after step.
+    pub stream: Vec<u32>,
+    /// LOD number `k`'s records are `stream[step_start[k-1]..step_start[k]]`.
+    pub step_start: Vec<u32>,
+    /// Leaf children's triangles in LOD-step order.
+    pub leaf_block: Vec<u32>,
+    /// LOD number `k` draws `leaf_block[..leaf_end[k]]`.
+    pub leaf_end: Vec<u32>,
+    /// Leaf crack patches in LOD-step order: `[coarse prio, pairs start,
+    /// pairs count]`.
+    pub leaf_patches: Vec<[u32; 3]>,
+    /// LOD number `k`'s leaves have `leaf_patches[..leaf_patch_end[k]]`.
+    pub leaf_patch_end: Vec<u32>,
+    /// `[position in leaf_block, compensation vertex]`.
+    pub leaf_pairs: Vec<[u32; 2]>,
+    /// The leaf patches again as `[coarse prio, step, pairs start, pairs
+    /// count]`, by decreasing coarse priority: for a high `k` the
+    /// active ones are a short prefix.
+    pub leaf_patches_by_coarse: Vec<[u32; 4]>,
+    /// LOD steps that have inner-child records, increasing.
+    pub inner_steps: Vec<u32>,
 }
 
 /// The birth/death form of the LOD array (derived, not saved; built by
@@ -120,7 +128,8 @@ pub struct McoModel {
 /// records with `death` in `[death_lo[b], death_lo[b - 1])` (bucket 0:
 /// never dies), at `bucket_start[b]..bucket_start[b + 1]`, sorted by birth.
 /// `cut[cut_start[b] + s]` is the first record of bucket `b` born at or
-/// after `s * BIRTH_STRIDE`.
+/// after `s * BIRTH_STRIDE`. `death` starts at bucket 1 (record
+/// `bucket_start[1]`): bucket 0's records never die.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct Lifetimes {
     pub tris: Vec<u32>,

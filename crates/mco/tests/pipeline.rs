@@ -186,13 +186,10 @@ fn the_extraction_stream_draws_what_following_the_nodes_draws() {
         },
     )
     .unwrap();
-    let mut plain = m.clone();
-    plain.stream.clear();
-    plain.step_start.clear();
     let (mut a, mut b) = (Vec::new(), Vec::new());
     for k in [1, 3, m.max_lod() / 4, m.max_lod() / 2, m.max_lod()] {
-        m.extract_lod(k, &mut a);
-        plain.extract_lod_traversal(k, &mut b);
+        m.extract_lod_traversal(k, &mut a);
+        m.extract_lod_nodes(k, &mut b);
         let sorted = |v: &[u32]| {
             let mut t: Vec<[u32; 3]> = v.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
             t.sort_unstable();

@@ -22,6 +22,7 @@ fuzz_target!(|data: &[u8]| {
         let mut idx = Vec::new();
         for k in [0, 1, m.max_lod() / 2, m.max_lod(), usize::MAX] {
             m.extract_lod(k, &mut idx);
+            m.extract_lod_traversal(k, &mut idx);
         }
         m.extract_triangles(1000, &mut idx);
         let cam = lodkit_mco::Camera::looking_at([0.0, 0.0, 5.0].into(), [0.0; 3].into());
