@@ -53,10 +53,11 @@
 //! `k` is alive: a prefix, one `memcpy`. Buckets whose deaths all come by
 //! `k` are skipped. Only the one bucket holding `k` is filtered, without
 //! branches (each record is written, and the write position advances by
-//! `3 · (death > k)`). Buckets are sized so that this one holds at most an
-//! eighth as many records as the output, and there are `O(log n)` of them
-//! (41 on the real-scan bunny, 61 on a 1M-triangle blob), so an extraction
-//! costs little more than copying its output (`lodkit bench mco`). The
+//! `3 · (death > k)`; skipped when the whole bucket died by `k`, as at full
+//! size). Buckets are sized so that this one holds at most a sixteenth as
+//! many records as the output, and there are `O(log n)` of them (69 on the
+//! real-scan bunny, 107 on a 1M-triangle blob), so an extraction costs
+//! little more than copying its output (`lodkit bench mco`). The
 //! prefix ends are found through a birth table sampled every
 //! [`BIRTH_STRIDE`] LOD numbers and a short binary search.
 //!
@@ -91,8 +92,11 @@ pub const BIRTH_STRIDE: u32 = 16;
 /// LOD number where it starts draws triangles (and up to `MIN_BUCKET`
 /// records anyway): the one bucket an extraction filters then costs a small
 /// fraction of its output, and the buckets stay few (`O(log)` of the
-/// triangle count) so the copies of the others stay cheap.
-const BUCKET_SHARE: u64 = 8;
+/// triangle count; 107 on a 1M-triangle blob) so the copies of the others
+/// stay cheap. Measured on that blob (`lodkit bench mco`), shares of 8, 16
+/// and 32 cost 1.4, 1.2 and 1.2 times a memcpy at 40k triangles and 1.4,
+/// 1.5 and 1.5 at 10k: 16 is the knee.
+const BUCKET_SHARE: u64 = 16;
 const MIN_BUCKET: u64 = 512;
 
 impl Traversal {
@@ -160,6 +164,15 @@ impl Lifetimes {
         }
         bucket_start.push(start as u32);
         cut_start.push(cut.len() as u32);
+        let death_max = (0..death_lo.len())
+            .map(|b| {
+                recs[bucket_start[b] as usize..bucket_start[b + 1] as usize]
+                    .iter()
+                    .map(|r| r.death)
+                    .max()
+                    .unwrap_or(0)
+            })
+            .collect();
         Lifetimes {
             tris: recs.iter().flat_map(|r| r.tri).collect(),
             // Bucket 0 never dies: its deaths are not kept.
@@ -169,6 +182,7 @@ impl Lifetimes {
                 .collect(),
             birth,
             death_lo,
+            death_max,
             bucket_start,
             cut,
             cut_start,
@@ -193,6 +207,7 @@ impl Lifetimes {
             + self.birth.len()
             + self.death.len()
             + self.death_lo.len()
+            + self.death_max.len()
             + self.bucket_start.len()
             + self.cut.len()
             + self.cut_start.len())
@@ -479,7 +494,11 @@ impl McoModel {
                 out.extend_from_slice(&lt.tris[3 * start..3 * end]);
                 continue;
             }
-            // The bucket holding `k`; the ones after it died by `k`.
+            // The bucket holding `k`; the ones after it died by `k`, and so
+            // may this one (at full size, all of it).
+            if lt.death_max[b] <= k {
+                break;
+            }
             let base = out.len();
             out.resize(base + 3 * (end - start) + 3, 0);
             let dst = &mut out[base..];

@@ -136,6 +136,8 @@ pub struct Lifetimes {
     pub birth: Vec<u32>,
     pub death: Vec<u32>,
     pub death_lo: Vec<u32>,
+    /// The last death in each bucket (0 when empty).
+    pub death_max: Vec<u32>,
     pub bucket_start: Vec<u32>,
     pub cut: Vec<u32>,
     pub cut_start: Vec<u32>,
