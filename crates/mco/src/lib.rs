@@ -13,7 +13,7 @@
 //! | octree, bottom-up four-case rule | `octree_build.rs` | §5.1, Fig. 5.2 |
 //! | priority numbering, LOD array, accumulation table | `priority.rs` | §5.2, §5.4.3, §6.1 |
 //! | crack patching | `crack_patch.rs` | §5.3, Fig. 5.6, §5.4.4 |
-//! | extraction by referencing | `extract.rs` | §6.1, §6.2.1 |
+//! | extraction by referencing: §6.1 traversal, birth/death tables | `extract.rs` | §6.1, §6.2.1 |
 //! | extraction timing next to memcpy | `extraction_bench.rs` | — (the issue's benchmark) |
 //! | view-dependent extraction | `view_dependent.rs` | §8.2 (future work) |
 //! | virtual range scanner | `scanner.rs` | §4.4 (the experiment) |
@@ -24,8 +24,9 @@
 //! Measured (2-core shared Xeon, release): the bunny from its 10 real
 //! scans builds in 1.4 s (362k samples, resolution 140) with a symmetric
 //! mean error of 0.12 mm against the reference (half a cube is 0.56 mm);
-//! extraction at full size runs at 1.3–1.5× the time of a `memcpy` of its
-//! index buffer (`lodkit bench mco`, see `crates/mco/README.md`).
+//! extraction from 10k triangles to full size runs at 0.9–1.5× the time
+//! of a `memcpy` of its index buffer, on the bunny and a 1M-triangle blob
+//! (`lodkit bench mco`, see `crates/mco/README.md`).
 //!
 //! ```no_run
 //! use lodkit_mco::pipeline::{Options, build_from_mesh};
