@@ -175,7 +175,8 @@ fn face_patchable(tree: &Tree, l: usize, pc: [u32; 3], mc: [u32; 3], f: Face) ->
 
 /// Same-level node pairs whose shared face cannot be crack-patched (see
 /// `face_patchable`), and the nodes around unpatchable edges: they must
-/// expand in the same LOD step (see [`crate::priority`]). Call after [`crate::octree_build::assemble`].
+/// expand in the same LOD step (see [`crate::priority`]). Call after
+/// [`crate::octree_build::assemble`].
 pub fn expand_together(tree: &Tree) -> Vec<(u32, u32)> {
     let mut out = Vec::new();
     for l in 1..tree.levels.len() {
