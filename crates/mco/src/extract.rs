@@ -93,9 +93,10 @@ pub const BIRTH_STRIDE: u32 = 16;
 /// records anyway): the one bucket an extraction filters then costs a small
 /// fraction of its output, and the buckets stay few (`O(log)` of the
 /// triangle count; 107 on a 1M-triangle blob) so the copies of the others
-/// stay cheap. Measured on that blob (`lodkit bench mco`), shares of 8, 16
-/// and 32 cost 1.4, 1.2 and 1.2 times a memcpy at 40k triangles and 1.4,
-/// 1.5 and 1.5 at 10k: 16 is the knee.
+/// stay cheap. Measured on that blob (extraction and memcpy in one
+/// process, best of 30 batches), shares of 8, 16 and 32 cost 1.46, 1.18
+/// and 1.15 times a memcpy at 40k triangles and 1.37, 1.48 and 1.53 at
+/// 10k: 16 is the knee.
 const BUCKET_SHARE: u64 = 16;
 const MIN_BUCKET: u64 = 512;
 
