@@ -72,7 +72,7 @@
 
 use lodkit_mesh::TriMesh;
 
-use crate::model::{Lifetimes, McoModel, Traversal};
+use crate::model::{LazyTraversal, Lifetimes, McoModel, Traversal};
 
 /// One triangle version and the LOD numbers that draw it:
 /// `birth <= k < death`.
@@ -242,7 +242,7 @@ impl McoModel {
     /// and patches (`O(n)`, a handful of allocations). Called after
     /// building and after loading.
     pub fn prepare_extraction(&mut self) {
-        self.traversal = std::sync::OnceLock::new();
+        self.traversal = LazyTraversal::default();
         self.lifetimes = self.lifetimes();
         let mut best = 0u32;
         self.acc_max = self
@@ -440,7 +440,7 @@ impl McoModel {
     pub fn extraction_bytes(&self) -> (usize, usize) {
         (
             self.lifetimes.bytes() + 4 * self.acc_max.len(),
-            self.traversal.get().map_or(0, Traversal::bytes),
+            self.traversal.0.get().map_or(0, Traversal::bytes),
         )
     }
 
@@ -534,7 +534,7 @@ impl McoModel {
             self.emit(0, out, &expanded);
             return;
         }
-        let t = self.traversal.get_or_init(|| self.traversal_arrays());
+        let t = self.traversal.0.get_or_init(|| self.traversal_arrays());
         // Leaves: every leaf child of steps 1..=k, in one copy, then the
         // crack patches whose coarse neighbour is still drawn coarse.
         out.extend_from_slice(&t.leaf_block[..t.leaf_end[k] as usize]);

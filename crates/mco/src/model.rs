@@ -84,13 +84,24 @@ pub struct McoModel {
     /// The §6.1 traversal's arrays (derived, not saved), built on the
     /// first [`McoModel::extract_lod_traversal`]: extraction by LOD number
     /// does not need them.
-    pub traversal: std::sync::OnceLock<Traversal>,
+    pub traversal: LazyTraversal,
     /// Every drawable triangle version with its life interval, for
     /// extraction by LOD number (derived; see [`crate::extract`]).
     pub lifetimes: Lifetimes,
     /// Running maximum of `acc` (derived): the triangle-count lookup is a
     /// binary search over it.
     pub acc_max: Vec<u32>,
+}
+
+/// The traversal's arrays once built. Derived from the other fields, so
+/// it never makes two models differ: every `LazyTraversal` compares equal.
+#[derive(Debug, Clone, Default)]
+pub struct LazyTraversal(pub std::sync::OnceLock<Traversal>);
+
+impl PartialEq for LazyTraversal {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
 }
 
 /// The §6.1 traversal's prepared arrays (see [`crate::extract`]).

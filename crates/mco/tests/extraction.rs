@@ -94,3 +94,13 @@ fn triangle_count_lookup_matches_the_accumulation_table() {
         );
     }
 }
+
+#[test]
+fn running_the_traversal_does_not_change_model_equality() {
+    let a = model(&shapes::icosphere(3), 16);
+    let b = a.clone();
+    let mut idx = Vec::new();
+    a.extract_lod_traversal(a.max_lod() / 2, &mut idx);
+    assert!(!idx.is_empty());
+    assert_eq!(a, b);
+}
