@@ -2,8 +2,10 @@
 //! `REPEAT` times with a reused workspace and prints the best time, the
 //! report and a hash of the output (for determinism checks).
 //!
-//! `cargo run --release -p lodkit-simplify --example simplify_loop -- MESH TARGET [REPEAT]`
-//! where `TARGET` is a face count or a ratio with `%` (`1%`).
+//! `cargo run --release -p lodkit-simplify --example simplify_loop -- MESH TARGET [REPEAT [SAMPLES]]`
+//! where `TARGET` is a face count or a ratio with `%` (`1%`). With
+//! `SAMPLES`, also prints the symmetric mean / max distance of the output
+//! from the input (`compare`, that many samples per kind).
 
 use std::hash::{DefaultHasher, Hash, Hasher};
 use std::time::Instant;
@@ -54,4 +56,15 @@ fn main() {
         best * 1e3,
         h.finish()
     );
+    if let Some(n) = args.get(4) {
+        let opts = lodkit_mesh::metrics::CompareOptions {
+            samples: Some(n.parse().expect("samples")),
+            ..Default::default()
+        };
+        let c = lodkit_mesh::metrics::compare(&mesh, &r.mesh, &opts).expect("compare");
+        println!(
+            "symmetric mean {:.3e} max {:.3e}",
+            c.symmetric.mean, c.symmetric.max
+        );
+    }
 }

@@ -367,8 +367,9 @@ pub fn best_contraction(
         (!border || l.m == 1) && !matches!(m.flags[l.v as usize], Flag::Dirty | Flag::Removed)
     };
     if !attributes {
-        // Geometry only: the ring quadric at each candidate.
-        let mut best_cost = f32::INFINITY;
+        // Geometry only: the ring quadric at each candidate, divided by the
+        // ring's area (see `RingQuadric`).
+        let mut best_cost = f64::INFINITY;
         let mut best_t = u32::MAX;
         for l in scan.links.iter().filter(|l| candidate(l)) {
             let c = q.eval(fpos(m, l.v) - psf);
@@ -377,6 +378,7 @@ pub fn best_contraction(
                 best_t = l.v;
             }
         }
+        let best_cost = q.normalise(best_cost);
         // `eval` is finite, so a candidate always replaces +∞.
         return (best_t != u32::MAX).then_some(Record {
             cost: best_cost,

@@ -150,7 +150,7 @@ impl Quadric {
 }
 
 /// A ring's memoryless quadric in the ring's own frame (centre vertex at
-/// the origin), for the cost stage. Every face plane and border plane of a
+/// the origin), for the cost stage, and the ring's area. Every face plane and border plane of a
 /// ring passes through its centre, so the linear and constant parts of the
 /// full [`Quadric`] vanish there and `Q(v) = vᵀ A v`: six coefficients
 /// `[a00 a01 a02 a11 a12 a22]`. Each plane's rank-one term is formed from
@@ -158,13 +158,25 @@ impl Quadric {
 /// vectors and summed in `f64`: the sum is then exactly a sum of squares
 /// of slightly rounded planes, so a candidate in a flat region still gets
 /// a cost near 0 instead of `f32` cancellation noise.
+///
+/// Departure (the record key): the cost is `Q_s(v_t)` divided by the area
+/// of `r_s`, the area-weighted mean squared distance of the moved vertex to
+/// the ring's planes, as meshoptimizer normalises its errors. The plain sum
+/// grows with the faces' size, so small sharp features (the bunny's ears)
+/// looked cheap next to large flat faces and went first: on the bunny at
+/// 1% the max distance was 1.2× meshoptimizer's, normalised 0.6×.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct RingQuadric {
     pub a: [f64; 6],
+    /// Sum of the face areas.
+    pub area: f64,
 }
 
 impl RingQuadric {
-    pub const ZERO: RingQuadric = RingQuadric { a: [0.0; 6] };
+    pub const ZERO: RingQuadric = RingQuadric {
+        a: [0.0; 6],
+        area: 0.0,
+    };
 
     /// Adds the area-weighted plane of the triangle `(0, p, q)` (eq. 4
     /// with QSlim's area weight): `area · n nᵀ` with `n` the unit normal,
@@ -177,7 +189,9 @@ impl RingQuadric {
         if !(l2 > 0.0) {
             return;
         }
-        self.add_scaled(c, 0.5 / l2.sqrt() as f64);
+        let len = l2.sqrt() as f64;
+        self.area += 0.5 * len;
+        self.add_scaled(c, 0.5 / len);
     }
 
     /// Adds `w · c cᵀ`.
@@ -207,17 +221,30 @@ impl RingQuadric {
         self.add_scaled(p, weight * e.length_squared() as f64 / pl2 as f64);
     }
 
-    /// `vᵀ A v` as a record key: never negative, never +∞ or NaN
-    /// (overflow saturates at `f32::MAX`).
+    /// `vᵀ A v` (never negative).
     #[inline]
-    pub fn eval(&self, v: Vec3A) -> f32 {
+    pub fn eval(&self, v: Vec3A) -> f64 {
         let a = &self.a;
         let (x, y, z) = (v.x as f64, v.y as f64, v.z as f64);
         let r = x * (a[0] * x + 2.0 * (a[1] * y + a[2] * z))
             + y * (a[3] * y + 2.0 * a[4] * z)
             + z * (a[5] * z);
-        let r = r as f32;
-        if r <= f32::MAX { r.max(0.0) } else { f32::MAX }
+        r.max(0.0)
+    }
+
+    /// A value of [`eval`](Self::eval) as a record key: divided by the
+    /// ring's area (when it has any), so the key is a mean squared distance
+    /// instead of a volume-like sum; finite and never NaN (overflow
+    /// saturates at `f32::MAX`).
+    #[inline]
+    pub fn normalise(&self, cost: f64) -> f32 {
+        let c = if self.area > 0.0 {
+            cost / self.area
+        } else {
+            cost
+        };
+        let c = c as f32;
+        if c <= f32::MAX { c } else { f32::MAX }
     }
 }
 
