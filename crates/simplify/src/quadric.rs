@@ -189,9 +189,11 @@ impl RingQuadric {
         if !(l2 > 0.0) {
             return;
         }
-        let len = l2.sqrt() as f64;
-        self.area += 0.5 * len;
-        self.add_scaled(c, 0.5 / len);
+        // w = 1 / (2 |c|) in single precision (the weight's rounding only
+        // scales the face's exact rank-one term); area = |c| / 2 = w |c|².
+        let w = 0.5 / l2.sqrt();
+        self.area += (w * l2) as f64;
+        self.add_scaled(c, w as f64);
     }
 
     /// Adds `w · c cᵀ`.
