@@ -4,7 +4,9 @@
 //!
 //! Per case: input / output triangles, the best wall time of each over a
 //! few runs, the time ratio (lodkit / meshopt; ≤ 1 means lodkit is
-//! faster), peak extra memory per input vertex, and both outputs'
+//! faster), the same ratio of the best thread CPU times (on Linux; it does
+//! not count time the core spent on other processes, so it stays
+//! meaningful on a shared, loaded machine), peak extra memory per input vertex, and both outputs'
 //! symmetric mean and max distance to the input from
 //! [`lodkit_mesh::metrics::compare`].
 //!
@@ -161,6 +163,15 @@ pub fn meshopt_simplify(mesh: &TriMesh, positions_bytes: &[u8], target_faces: us
     )
 }
 
+/// This thread's time on a CPU so far, from Linux's
+/// `/proc/thread-self/schedstat` (`None` elsewhere). The time a loaded
+/// machine gives to other processes is not counted.
+pub fn thread_cpu_seconds() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    let ns: f64 = s.split_whitespace().next()?.parse().ok()?;
+    Some(ns * 1e-9)
+}
+
 /// One row of the table.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Row {
@@ -178,6 +189,11 @@ pub struct Row {
     pub meshopt_ms: f64,
     /// lodkit time (fresh workspace) / meshopt time.
     pub time_ratio: f64,
+    /// Best thread CPU time of each side (`None` where the platform does
+    /// not say), and their ratio.
+    pub lodkit_cpu_ms: Option<f64>,
+    pub meshopt_cpu_ms: Option<f64>,
+    pub cpu_ratio: Option<f64>,
     pub lodkit_bytes_per_vertex: Option<f64>,
     pub meshopt_bytes_per_vertex: Option<f64>,
     /// lodkit's exact workspace accounting (arrays' capacities at the peak).
@@ -251,11 +267,14 @@ pub fn run_case(
     let mut lk_best = Duration::MAX;
     let mut lk_reused = Duration::MAX;
     let mut mo_best = Duration::MAX;
+    let (mut lk_cpu, mut mo_cpu) = (f64::INFINITY, f64::INFINITY);
     for _ in 0..cfg.runs.max(1) {
         let t = Instant::now();
+        let c = thread_cpu_seconds();
         let r = Simplifier::new()
             .simplify(mesh, &opts)
             .map_err(|e| e.to_string())?;
+        lk_cpu = lk_cpu.min(thread_cpu_seconds().unwrap_or(f64::NAN) - c.unwrap_or(f64::NAN));
         lk_best = lk_best.min(t.elapsed());
         drop(std::hint::black_box(r));
         let t = Instant::now();
@@ -263,7 +282,9 @@ pub fn run_case(
         lk_reused = lk_reused.min(t.elapsed());
         drop(std::hint::black_box(r));
         let t = Instant::now();
+        let c = thread_cpu_seconds();
         let r = meshopt_simplify(mesh, &bytes, goal);
+        mo_cpu = mo_cpu.min(thread_cpu_seconds().unwrap_or(f64::NAN) - c.unwrap_or(f64::NAN));
         mo_best = mo_best.min(t.elapsed());
         drop(std::hint::black_box(r));
     }
@@ -292,6 +313,10 @@ pub fn run_case(
         lodkit_reused_ms: lk_reused.as_secs_f64() * 1e3,
         meshopt_ms: mo_best.as_secs_f64() * 1e3,
         time_ratio: lk_best.as_secs_f64() / mo_best.as_secs_f64().max(1e-9),
+        lodkit_cpu_ms: lk_cpu.is_finite().then_some(lk_cpu * 1e3),
+        meshopt_cpu_ms: mo_cpu.is_finite().then_some(mo_cpu * 1e3),
+        cpu_ratio: (lk_cpu.is_finite() && mo_cpu.is_finite() && mo_cpu > 0.0)
+            .then_some(lk_cpu / mo_cpu),
         lodkit_bytes_per_vertex: lk_peak.map(|b| b as f64 / nv),
         meshopt_bytes_per_vertex: mo_peak.map(|b| b as f64 / nv),
         lodkit_workspace_bytes_per_vertex: workspace as f64 / nv,
@@ -307,14 +332,14 @@ pub fn run_case(
 pub fn format_table(rows: &[Row]) -> String {
     let mut s = String::new();
     s.push_str(&format!(
-        "{:<16} {:>6} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>6} {:>7} {:>7} {:>10} {:>10} {:>10} {:>10}\n",
+        "{:<16} {:>6} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>6} {:>6} {:>7} {:>7} {:>10} {:>10} {:>10} {:>10}\n",
         "mesh", "target", "in tris", "lk tris", "mo tris", "lk ms", "lk re ms", "mo ms", "ratio",
-        "lk B/v", "mo B/v", "lk mean", "mo mean", "lk max", "mo max"
+        "cpu r", "lk B/v", "mo B/v", "lk mean", "mo mean", "lk max", "mo max"
     ));
     let b = |x: Option<f64>| x.map_or("n/a".to_string(), |v| format!("{v:.1}"));
     for r in rows {
         s.push_str(&format!(
-            "{:<16} {:>6} {:>9} {:>9} {:>9} {:>9.2} {:>9.2} {:>9.2} {:>6.2} {:>7} {:>7} {:>10.3e} {:>10.3e} {:>10.3e} {:>10.3e}\n",
+            "{:<16} {:>6} {:>9} {:>9} {:>9} {:>9.2} {:>9.2} {:>9.2} {:>6.2} {:>6} {:>7} {:>7} {:>10.3e} {:>10.3e} {:>10.3e} {:>10.3e}\n",
             r.mesh,
             r.target,
             r.input_triangles,
@@ -324,6 +349,7 @@ pub fn format_table(rows: &[Row]) -> String {
             r.lodkit_reused_ms,
             r.meshopt_ms,
             r.time_ratio,
+            r.cpu_ratio.map_or("n/a".to_string(), |x| format!("{x:.2}")),
             b(r.lodkit_bytes_per_vertex),
             b(r.meshopt_bytes_per_vertex),
             r.lodkit_mean,

@@ -91,8 +91,18 @@ pub fn collapse(
         return Err(Reject::Topology);
     }
 
-    // Link condition on every other neighbour w of s: c = faces of
-    // I = r_s ∩ r_t that contain w.
+    // The faces of I = r_s ∩ r_t, by their third vertex.
+    sc.opp.clear();
+    for rf in &ss.faces {
+        if rf.a == t {
+            sc.opp.push(rf.b);
+        } else if rf.b == t {
+            sc.opp.push(rf.a);
+        }
+    }
+    // Link condition on every other neighbour w of s: c = faces of I that
+    // contain w. The common neighbours are kept for the duplicate check.
+    sc.common.clear();
     for l in &ss.links {
         if l.v == t {
             continue;
@@ -101,11 +111,8 @@ pub fn collapse(
         if mt == 0 {
             continue;
         }
-        let c = ss
-            .faces
-            .iter()
-            .filter(|rf| (rf.a == t && rf.b == l.v) || (rf.b == t && rf.a == l.v))
-            .count() as u32;
+        sc.common.push(l.v);
+        let c = sc.opp.iter().filter(|&&o| o == l.v).count() as u32;
         let new_m = l.m + mt - 2 * c;
         if c == 0 {
             // Two separate edges (s, w) and (t, w) would become one.
@@ -119,14 +126,21 @@ pub fn collapse(
         }
     }
 
-    // Something must survive, and no two survivors may coincide.
-    let s_keep = ss.faces.iter().filter(|rf| rf.a != t && rf.b != t);
-    let t_keep = || st.faces.iter().filter(|rf| rf.a != s && rf.b != s);
-    if s_keep.clone().count() + t_keep().count() == 0 {
+    // Something must survive (the faces of r_s and r_t outside I), and no
+    // two survivors may coincide — which needs both of a survivor's other
+    // corners to be common neighbours.
+    let m_ts = st.m(s) as usize;
+    if ss.faces.len() - sc.opp.len() + st.faces.len() - m_ts == 0 {
         return Err(Reject::Topology);
     }
-    for x in s_keep.clone() {
-        if t_keep().any(|y| (y.a == x.a && y.b == x.b) || (y.a == x.b && y.b == x.a)) {
+    let common = &sc.common;
+    for x in ss.faces.iter().filter(|rf| rf.a != t && rf.b != t) {
+        if !(common.contains(&x.a) && common.contains(&x.b)) {
+            continue;
+        }
+        if st.faces.iter().any(|y| {
+            y.a != s && y.b != s && ((y.a == x.a && y.b == x.b) || (y.a == x.b && y.b == x.a))
+        }) {
             return Err(Reject::Topology);
         }
     }

@@ -25,7 +25,7 @@
 use glam::{DVec3, Vec3A};
 
 use crate::options::Options;
-use crate::quadric::{ExtendedFace, MAX_DIM, Quadric, add_border_plane};
+use crate::quadric::{ExtendedFace, MAX_DIM, Quadric, RingQuadric, add_border_plane};
 use crate::ring_table::{DEAD, Flag, Link, RingTable, multiplicity};
 use crate::rs_heap::Keyed;
 use crate::work_mesh::WorkMesh;
@@ -80,6 +80,10 @@ pub struct RingScan {
     pub pc: Vec3A,
     pub links: Vec<Link>,
     pub faces: Vec<RingFace>,
+    /// The ring's area-weighted face planes (eq. 4) in the frame, summed
+    /// while scanning; [`add_quadric`](Self::add_quadric) adds the border
+    /// planes.
+    pub planes: Quadric,
 }
 
 impl RingScan {
@@ -89,6 +93,7 @@ impl RingScan {
         self.links.clear();
         self.faces.clear();
         self.center = center;
+        self.planes = Quadric::ZERO;
         let pc = fpos(m, center) - origin;
         self.pc = pc;
         for &f in ring {
@@ -96,23 +101,25 @@ impl RingScan {
             if tri[0] == DEAD {
                 continue;
             }
-            let corner = if tri[0] == center {
-                0
+            let (corner, a, b) = if tri[0] == center {
+                (0, tri[1], tri[2])
             } else if tri[1] == center {
-                1
+                (1, tri[2], tri[0])
             } else {
-                2
+                (2, tri[0], tri[1])
             };
-            let a = tri[(corner + 1) % 3];
-            let b = tri[(corner + 2) % 3];
+            // Exact counts (the collapse's topology checks rely on them).
             add_link(&mut self.links, a);
             add_link(&mut self.links, b);
             let pa = fpos(m, a) - origin;
             let pb = fpos(m, b) - origin;
             let (n, d, area) = plane(pc, pa, pb);
+            if area > 0.0 {
+                self.planes.add_plane(n.as_dvec3(), d as f64, area as f64);
+            }
             self.faces.push(RingFace {
                 f,
-                corner: corner as u8,
+                corner,
                 a,
                 b,
                 pa,
@@ -140,21 +147,23 @@ impl RingScan {
     /// Adds the ring's memoryless vertex quadric (eq. 4: area-weighted face
     /// planes) and its border planes to `q`.
     pub fn add_quadric(&self, m: &WorkMesh, q: &mut Quadric) {
-        let border = self.border();
+        for (x, y) in q.m.iter_mut().zip(&self.planes.m) {
+            *x += y;
+        }
+        if !self.border() {
+            return;
+        }
         let pc = self.pc.as_dvec3();
         for rf in &self.faces {
             if rf.area <= 0.0 {
                 continue;
             }
             let n = rf.n.as_dvec3();
-            q.add_plane(n, rf.d as f64, rf.area as f64);
-            if border {
-                if self.m(rf.a) == 1 {
-                    add_border_plane(q, pc, rf.pa.as_dvec3(), n, m.border_weight);
-                }
-                if self.m(rf.b) == 1 {
-                    add_border_plane(q, pc, rf.pb.as_dvec3(), n, m.border_weight);
-                }
+            if self.m(rf.a) == 1 {
+                add_border_plane(q, pc, rf.pa.as_dvec3(), n, m.border_weight);
+            }
+            if self.m(rf.b) == 1 {
+                add_border_plane(q, pc, rf.pb.as_dvec3(), n, m.border_weight);
             }
         }
     }
@@ -189,20 +198,20 @@ fn add_link(links: &mut Vec<Link>, w: u32) {
 }
 
 /// The cost stage's read of a ring: the link with multiplicities and the
-/// memoryless vertex quadric (face planes, then border planes), without
-/// keeping per-face data — the cheaper sibling of [`RingScan::scan`] for
-/// the one read every ring gets each pass. Returns whether the ring is on a
-/// border; `links` is empty for a ring with no live face.
+/// memoryless vertex quadric (face planes, then border planes) in the
+/// ring's own frame, without keeping per-face data — the cheaper sibling
+/// of [`RingScan::scan`] for the one read every ring gets each pass.
+/// Returns whether the ring is on a border; `links` is empty for a ring
+/// with no live face.
 pub fn scan_quadric(
     m: &WorkMesh,
     ring: &[u32],
     center: u32,
-    origin: Vec3A,
     links: &mut Vec<Link>,
-    q: &mut Quadric,
+    q: &mut RingQuadric,
 ) -> bool {
     links.clear();
-    let pc = fpos(m, center) - origin;
+    let pc = fpos(m, center);
     // Fast path for the common closed fan, where every neighbour is the
     // first other corner of exactly one face and the second of another:
     // the candidates are the first corners, and the two corner multisets
@@ -228,10 +237,7 @@ pub fn scan_quadric(
         xor_a ^= a;
         xor_b ^= b;
         links.push(Link { v: a, m: 2 });
-        let (n, d, area) = plane(pc, fpos(m, a) - origin, fpos(m, b) - origin);
-        if area > 0.0 {
-            q.add_plane(n.as_dvec3(), d as f64, area as f64);
-        }
+        q.add_face(fpos(m, a) - pc, fpos(m, b) - pc);
     }
     if links.is_empty() || (sum_a == sum_b && xor_a == xor_b) {
         return false;
@@ -249,7 +255,7 @@ pub fn scan_quadric(
     }
     let border = links.iter().any(|l| l.m == 1);
     if border {
-        let pcd = pc.as_dvec3();
+        let weight = m.border_weight;
         for &f in ring {
             let tri = m.faces[f as usize];
             if tri[0] == DEAD {
@@ -261,18 +267,19 @@ pub fn scan_quadric(
             if !(ma || mb) {
                 continue;
             }
-            let pa = fpos(m, a) - origin;
-            let pb = fpos(m, b) - origin;
-            let (n, _, area) = plane(pc, pa, pb);
-            if area <= 0.0 {
+            let pa = fpos(m, a) - pc;
+            let pb = fpos(m, b) - pc;
+            let nn = pa.cross(pb);
+            let l2 = nn.length_squared();
+            if !(l2 > 0.0) {
                 continue;
             }
-            let n = n.as_dvec3();
+            let n = nn / l2.sqrt();
             if ma {
-                add_border_plane(q, pcd, pa.as_dvec3(), n, m.border_weight);
+                q.add_border(pa, n, weight);
             }
             if mb {
-                add_border_plane(q, pcd, pb.as_dvec3(), n, m.border_weight);
+                q.add_border(pb, n, weight);
             }
         }
     }
@@ -288,6 +295,10 @@ pub struct Scratch {
     pub ext: Vec<ExtendedFace>,
     pub wedge_map: Vec<(u32, u32)>,
     pub samples: Vec<f32>,
+    /// Third vertices of the faces on a collapsing edge.
+    pub opp: Vec<u32>,
+    /// Common neighbours of a collapsing edge's two ends.
+    pub common: Vec<u32>,
 }
 
 #[inline]
@@ -330,17 +341,16 @@ pub fn best_contraction(
     s: u32,
     sc: &mut Scratch,
 ) -> Option<Record> {
-    let ps = dpos(m, s);
     let psf = fpos(m, s);
     let attributes = attribute_cost_on(m);
-    let mut q = Quadric::ZERO;
+    let mut q = RingQuadric::ZERO;
     let border = if attributes {
         if !sc.scan_s.scan(m, rings.ring(s), s, psf) {
             return None;
         }
         sc.scan_s.border()
     } else {
-        let b = scan_quadric(m, rings.ring(s), s, psf, &mut sc.scan_s.links, &mut q);
+        let b = scan_quadric(m, rings.ring(s), s, &mut sc.scan_s.links, &mut q);
         if sc.scan_s.links.is_empty() {
             return None;
         }
@@ -356,19 +366,36 @@ pub fn best_contraction(
     let candidate = |l: &Link| {
         (!border || l.m == 1) && !matches!(m.flags[l.v as usize], Flag::Dirty | Flag::Removed)
     };
+    if !attributes {
+        // Geometry only: the ring quadric at each candidate, divided by the
+        // ring's area (see `RingQuadric`).
+        let mut best_cost = f64::INFINITY;
+        let mut best_t = u32::MAX;
+        for l in scan.links.iter().filter(|l| candidate(l)) {
+            let c = q.eval(fpos(m, l.v) - psf);
+            if c < best_cost {
+                best_cost = c;
+                best_t = l.v;
+            }
+        }
+        let best_cost = q.normalise(best_cost);
+        // `eval` is finite, so a candidate always replaces +∞.
+        return (best_t != u32::MAX).then_some(Record {
+            cost: best_cost,
+            s,
+            t: best_t,
+        });
+    }
+    // Geometry + attributes: one extended frame per face (the scan's
+    // frame is centred on v_s), border planes as a plain quadric on top.
+    let ps = dpos(m, s);
     let mut best: Option<(f64, u32)> = None;
     let mut consider = |cost: f64, t: u32| {
         if best.is_none_or(|(c, _)| cost < c) {
             best = Some((cost, t));
         }
     };
-    if !attributes {
-        for l in scan.links.iter().filter(|l| candidate(l)) {
-            consider(q.eval(dpos(m, l.v) - ps), l.v);
-        }
-    } else {
-        // Geometry + attributes: one extended frame per face, border planes
-        // as a plain quadric on top.
+    {
         let dim = 3 + m.layout.k;
         sc.ext.clear();
         let mut qb = Quadric::ZERO;

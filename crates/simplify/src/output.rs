@@ -19,14 +19,22 @@ const NONE: u32 = u32::MAX;
 /// every contraction flag to valid for the next pass.
 #[allow(clippy::needless_range_loop)] // one index drives several arrays
 pub fn compact(m: &mut WorkMesh, index: &mut Vec<u32>) {
-    // Faces (and their corner wedges) in place.
+    // Faces (and their corner wedges) in place, marking the vertices they
+    // use in the vertex index table V^i as they move.
     let has_wedges = m.has_wedges();
+    let n = m.pos.len();
+    index.clear();
+    index.resize(n, NONE);
     let mut w = 0;
     for r in 0..m.faces.len() {
-        if m.faces[r][0] == DEAD {
+        let f = m.faces[r];
+        if f[0] == DEAD {
             continue;
         }
-        m.faces[w] = m.faces[r];
+        for v in f {
+            index[v as usize] = 0;
+        }
+        m.faces[w] = f;
         if has_wedges {
             m.wedges[w] = m.wedges[r];
         }
@@ -38,15 +46,7 @@ pub fn compact(m: &mut WorkMesh, index: &mut Vec<u32>) {
     }
     m.live_faces = w;
 
-    // Vertex index table V^i.
-    let n = m.pos.len();
-    index.clear();
-    index.resize(n, NONE);
-    for f in &m.faces {
-        for &v in f {
-            index[v as usize] = 0;
-        }
-    }
+    // Number the marked vertices in their old order.
     let mut next = 0u32;
     for v in 0..n {
         if index[v] != NONE {

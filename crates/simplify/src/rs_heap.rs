@@ -157,10 +157,13 @@ impl<T: Keyed> RsHeap<T> {
         self.sift_down(0, self.tcr);
     }
 
-    /// Sifts position `i` down within positions `..=end`.
+    /// Sifts position `i` down within positions `..=end`: the record is
+    /// held aside while smaller children move up into the hole (one copy
+    /// per level instead of a swap).
     #[inline]
     fn sift_down(&mut self, mut i: usize, end: usize) {
-        let s = &mut self.slots;
+        let s = &mut self.slots[..=end];
+        let rec = s[i];
         loop {
             let l = 2 * i + 1;
             if l > end {
@@ -168,13 +171,14 @@ impl<T: Keyed> RsHeap<T> {
             }
             let r = l + 1;
             let c = if r <= end && less(&s[r], &s[l]) { r } else { l };
-            if less(&s[c], &s[i]) {
-                s.swap(c, i);
+            if less(&s[c], &rec) {
+                s[i] = s[c];
                 i = c;
             } else {
                 break;
             }
         }
+        s[i] = rec;
     }
 
     /// Key of the root (+∞ for a null root).
