@@ -33,6 +33,14 @@
 //! if they form one Hamiltonian cycle through every ON cube, the cycle cuts
 //! the hull into two discs and the one with the smaller mean dihedral angle
 //! is emitted. Otherwise all of `T_i` is emitted: hole-free, non-manifold.
+//! Departure: when the shared edges hold exactly one Hamiltonian cycle plus
+//! edges inside one of its discs, each in the graphs of two or more
+//! neighbours, the other disc is emitted — its interior edges are nobody
+//! else's, and the neighbours keep the ones it leaves (see
+//! [`split_by_cycle`]; on the bunny at R = 7 this resolves a quarter of
+//! the ambiguous neighbourhoods the paper's test leaves whole, with no new
+//! boundary edge). Leaving an edge only one neighbour has would open a
+//! hole, so those stay whole.
 //!
 //! **Decimation (§6.3, optional).** A triangle with an edge shorter than a
 //! fraction of the cube size is not built and its two cubes are merged
@@ -293,7 +301,8 @@ pub fn triangulate(s: &LevelSurface, opts: &TriangulateOptions) -> Triangulation
 }
 
 /// [`triangulate`] plus, per output triangle, the class `C_i` of the
-/// neighbourhood that built it (for diagnosing non-manifold triangles).
+/// neighbourhood that built it, plus 128 when that neighbourhood was an
+/// ambiguous one left whole (for diagnosing non-manifold triangles).
 pub fn triangulate_traced(s: &LevelSurface, opts: &TriangulateOptions) -> (Triangulation, Vec<u8>) {
     let mut classes = Vec::new();
     let t = triangulate_impl(s, opts, Some(&mut classes));
@@ -348,7 +357,7 @@ fn triangulate_impl(
     let t = table();
     // Direct-mapped memo of `split_by_cycle` (1024 slots; key never 0 for
     // a solid, whose mask has four cubes or more).
-    let mut cycles: Vec<(u64, Option<u16>)> = vec![(0, None); 1 << 10];
+    let mut cycles: Vec<(u64, Split)> = vec![(0, Split::Whole); 1 << 10];
     let mut w = Window {
         rows: [0; EXT * EXT],
         bricks: [NONE; 27],
@@ -470,6 +479,8 @@ fn triangulate_impl(
                         faces.push(f);
                         true
                     };
+                    // A solid left whole (no unique cycle).
+                    let mut whole = false;
                     match &cfg.shape {
                         Shape::None => {}
                         Shape::Triangle(tri) => {
@@ -484,7 +495,7 @@ fn triangulate_impl(
                             emit(t2, &mut faces);
                         }
                         Shape::Solid(tris) => {
-                            let shared = shared_edges(&w, o, cfg.edges);
+                            let (shared, twice) = shared_edges(&w, o, cfg.edges);
                             // Triangles on a face of the neighbourhood (three
                             // cubes sharing a coordinate) may be built by the
                             // solid across that face too.
@@ -497,15 +508,20 @@ fn triangulate_impl(
                             };
                             // §6.2's cycle search depends on the configuration
                             // and its shared edges only: memoised.
-                            let key = u64::from(shared) | (u64::from(mask) << 28);
+                            let key = u64::from(shared)
+                                | (u64::from(twice) << 28)
+                                | (u64::from(mask) << 56);
                             let slot = &mut cycles
                                 [(key.wrapping_mul(0x9e37_79b9_7f4a_7c15) >> 54) as usize];
                             if slot.0 != key {
-                                *slot = (key, split_by_cycle(mask, shared, tris));
+                                *slot = (key, split_by_cycle(mask, shared, twice, tris));
                             }
-                            match slot.1 {
-                                Some(disc) => {
-                                    stats.disambiguated += 1;
+                            let split = slot.1;
+                            if split != Split::Whole {
+                                stats.disambiguated += 1;
+                            }
+                            match split {
+                                Split::Either(disc) => {
                                     let mut p = [Vec3::ZERO; 8];
                                     for (j, &v) in vs.iter().enumerate() {
                                         if v != NONE {
@@ -524,7 +540,15 @@ fn triangulate_impl(
                                         }
                                     }
                                 }
-                                None => {
+                                Split::Only(keep) => {
+                                    for (i, &tri) in tris.iter().enumerate() {
+                                        if keep & (1 << i) != 0 {
+                                            solid_emit(tri, &mut faces);
+                                        }
+                                    }
+                                }
+                                Split::Whole => {
+                                    whole = true;
                                     stats.fallbacks += 1;
                                     for &tri in tris {
                                         solid_emit(tri, &mut faces);
@@ -534,7 +558,7 @@ fn triangulate_impl(
                         }
                     }
                     if let Some(tr) = trace.as_deref_mut() {
-                        tr.resize(faces.len(), cfg.class);
+                        tr.resize(faces.len(), cfg.class | if whole { 0x80 } else { 0 });
                     }
                 }
             }
@@ -670,11 +694,11 @@ fn overlaps() -> &'static Overlaps {
 }
 
 /// Edges of `G_i` (as pair bits) also in the graph of an overlapping
-/// neighbourhood of the window.
-fn shared_edges(w: &Window, o: [usize; 3], edges: u32) -> u32 {
+/// neighbourhood of the window, and those in the graphs of two or more.
+fn shared_edges(w: &Window, o: [usize; 3], edges: u32) -> (u32, u32) {
     let t = table();
     let ov = overlaps();
-    let mut shared = 0u32;
+    let (mut shared, mut twice) = (0u32, 0u32);
     for k in 0..27usize {
         if k == 13 || edges & ov.ours[k] == 0 {
             continue;
@@ -691,44 +715,43 @@ fn shared_edges(w: &Window, o: [usize; 3], edges: u32) -> u32 {
         while e2 != 0 {
             let p = e2.trailing_zeros() as usize;
             e2 &= e2 - 1;
-            shared |= 1 << ov.to_ours[k][p];
+            let bit = 1 << ov.to_ours[k][p];
+            twice |= shared & bit;
+            shared |= bit;
         }
     }
-    shared & edges
+    (shared & edges, twice & edges)
 }
 
-/// If `shared` is one Hamiltonian cycle through the ON cubes of `mask`,
-/// one of the two discs of hull triangles it separates (bit `i`: triangle
-/// `i` of `tris`; the other disc is the complement).
-fn split_by_cycle(mask: u8, shared: u32, tris: &[[u8; 3]]) -> Option<u16> {
+/// How §6.2 resolves an ambiguous configuration.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Split {
+    /// No usable cycle: build the whole hull (hole-free, non-manifold).
+    Whole,
+    /// The shared edges are exactly one Hamiltonian cycle (the paper's
+    /// case): either disc (bit `i`: triangle `i`; the other disc is the
+    /// complement); the smoother one is built.
+    Either(u16),
+    /// The shared edges hold exactly one Hamiltonian cycle plus edges
+    /// interior to one of its discs: the other disc is built, whose
+    /// interior edges no neighbour uses.
+    Only(u16),
+}
+
+/// §6.2's disambiguation of the solid `tris` of configuration `mask`,
+/// `shared` being the edges of `G_i` that overlapping neighbourhoods also
+/// have. The paper accepts the shared edges when they form one Hamiltonian
+/// cycle. Departure: when they hold exactly one Hamiltonian cycle and more
+/// (the frequent failure on thinned surfaces: five of a tetrahedron's six
+/// edges), the cycle still cuts the hull in two discs, and the disc whose
+/// interior edges are all unshared is built: the other one, or the whole
+/// hull, would put a third triangle on a shared edge.
+fn split_by_cycle(mask: u8, shared: u32, twice: u32, tris: &[[u8; 3]]) -> Split {
     debug_assert!(tris.len() <= 16);
-    let n = mask.count_ones();
-    if shared.count_ones() != n {
-        return None;
-    }
-    let has = |a: u8, b: u8| a != b && shared & (1 << pair(a, b)) != 0;
-    let on = |j: u8| mask & (1 << j) != 0;
-    for a in (0..8u8).filter(|&a| on(a)) {
-        if (0..8u8).filter(|&b| on(b) && has(a, b)).count() != 2 {
-            return None;
-        }
-    }
-    // Walk the cycle: it must visit every node before closing.
-    let s = mask.trailing_zeros() as u8;
-    let (mut prev, mut cur) = (s, (0..8u8).find(|&b| on(b) && has(s, b))?);
-    let mut steps = 1;
-    while cur != s {
-        let next = (0..8u8).find(|&b| on(b) && b != prev && has(cur, b))?;
-        prev = cur;
-        cur = next;
-        steps += 1;
-        if steps > n {
-            return None;
-        }
-    }
-    if steps != n {
-        return None;
-    }
+    let Some(cycle) = unique_hamiltonian_cycle(mask, shared) else {
+        return Split::Whole;
+    };
+    let on_cycle = |a: u8, b: u8| cycle & (1 << pair(a, b)) != 0;
     // Flood the triangles without crossing the cycle.
     let mut disc = 1u16;
     let mut stack = [0u8; 16];
@@ -739,7 +762,7 @@ fn split_by_cycle(mask: u8, shared: u32, tris: &[[u8; 3]]) -> Option<u16> {
         let i = stack[top] as usize;
         for k in 0..3 {
             let (a, b) = edge_of(&tris[i], k);
-            if has(a, b) {
+            if on_cycle(a, b) {
                 continue;
             }
             for (j, tj) in tris.iter().enumerate() {
@@ -753,9 +776,97 @@ fn split_by_cycle(mask: u8, shared: u32, tris: &[[u8; 3]]) -> Option<u16> {
     }
     let all = ((1u32 << tris.len()) - 1) as u16;
     if disc == all {
+        return Split::Whole;
+    }
+    // The shared edges inside a disc (off the cycle).
+    let interior_shared = |d: u16| {
+        let mut e = 0u32;
+        for (i, t) in tris.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b) = edge_of(t, k);
+                if d & (1 << i) != 0 && !on_cycle(a, b) {
+                    e |= shared & (1 << pair(a, b));
+                }
+            }
+        }
+        e
+    };
+    // A disc may be left out when the shared edges inside it keep two
+    // neighbours' triangles each: leaving them to the neighbours opens no
+    // hole there.
+    let leave = |e: u32| e & !twice == 0;
+    match (interior_shared(disc), interior_shared(all & !disc)) {
+        (0, 0) => Split::Either(disc),
+        (0, e) if leave(e) => Split::Only(disc),
+        (e, 0) if leave(e) => Split::Only(all & !disc),
+        _ => Split::Whole,
+    }
+}
+
+/// The Hamiltonian cycle through the ON cubes of `mask` made of `shared`
+/// edges (as pair bits), if there is exactly one.
+fn unique_hamiltonian_cycle(mask: u8, shared: u32) -> Option<u32> {
+    let n = mask.count_ones() as usize;
+    if n < 3 || (shared.count_ones() as usize) < n {
         return None;
     }
-    Some(disc)
+    let mut search = CycleSearch {
+        mask,
+        shared,
+        n,
+        path: [mask.trailing_zeros() as u8; 8],
+        found: None,
+        count: 0,
+    };
+    search.walk(1);
+    if search.count == 1 {
+        search.found
+    } else {
+        None
+    }
+}
+
+/// Depth-first search over the simple paths of shared edges from the
+/// first ON cube; each cycle is met twice (once per direction).
+struct CycleSearch {
+    mask: u8,
+    shared: u32,
+    n: usize,
+    path: [u8; 8],
+    found: Option<u32>,
+    count: usize,
+}
+
+impl CycleSearch {
+    fn has(&self, a: u8, b: u8) -> bool {
+        a != b && self.shared & (1 << pair(a, b)) != 0
+    }
+
+    fn walk(&mut self, len: usize) {
+        let last = self.path[len - 1];
+        if len == self.n {
+            if self.has(last, self.path[0]) {
+                let mut c = 1u32 << pair(last, self.path[0]);
+                for k in 1..self.n {
+                    c |= 1 << pair(self.path[k - 1], self.path[k]);
+                }
+                if self.found != Some(c) {
+                    self.count += 1;
+                }
+                self.found = Some(c);
+            }
+            return;
+        }
+        for b in 0..8u8 {
+            if self.mask & (1 << b) != 0 && !self.path[..len].contains(&b) && self.has(last, b) {
+                self.path[len] = b;
+                self.walk(len + 1);
+                if self.count > 1 {
+                    return;
+                }
+            }
+        }
+    }
 }
 
 /// Whether the disc `disc` of `tris` (bit `i`: triangle `i`) has a mean
@@ -1101,5 +1212,42 @@ mod tests {
             canon(&reversed.mesh.faces, &|v| n - 1 - v)
         );
         assert_eq!(sorted.stats.configurations, reversed.stats.configurations);
+    }
+
+    #[test]
+    fn tetrahedron_with_a_fifth_shared_edge_builds_the_disc_that_leaves_it_to_two_neighbours() {
+        // C_6: a face triangle 0, 1, 2 and the opposite corner 7.
+        let mask = 0b1000_0111u8;
+        let cfg = &table().configs[mask as usize];
+        assert_eq!(cfg.class, 6);
+        let Shape::Solid(tris) = &cfg.shape else {
+            panic!("C_6 is solid")
+        };
+        let e = |a: u8, b: u8| 1u32 << pair(a, b);
+        let cycle = e(0, 1) | e(1, 7) | e(7, 2) | e(2, 0);
+        // The paper's case: either disc, chosen by dihedral angle.
+        assert!(matches!(
+            split_by_cycle(mask, cycle, 0, tris),
+            Split::Either(_)
+        ));
+        // The face diagonal 1–2 shared too, by two neighbours: build the
+        // disc around the body diagonal 0–7, which no neighbour has.
+        let shared = cycle | e(1, 2);
+        let Split::Only(keep) = split_by_cycle(mask, shared, e(1, 2), tris) else {
+            panic!("one disc left")
+        };
+        let built: Vec<[u8; 3]> = (0..tris.len())
+            .filter(|i| keep & (1 << i) != 0)
+            .map(|i| tris[i])
+            .collect();
+        assert_eq!(built.len(), 2);
+        assert!(built.iter().all(|t| t.contains(&0) && t.contains(&7)));
+        // Shared by one neighbour only: leaving it would open a hole.
+        assert_eq!(split_by_cycle(mask, shared, 0, tris), Split::Whole);
+        // Every edge shared: several cycles, no choice.
+        assert_eq!(
+            split_by_cycle(mask, cfg.edges, cfg.edges, tris),
+            Split::Whole
+        );
     }
 }
