@@ -172,7 +172,8 @@ struct BrickIndex {
 
 impl BrickIndex {
     fn new(level: u8, keys: &[u64]) -> BrickIndex {
-        let side = ((1i64 << level) + (1 << BRICK_BITS) - 1) >> BRICK_BITS;
+        // A u64 Morton code holds 21 bits per axis: no deeper level has cubes.
+        let side = ((1i64 << level.min(21)) + (1 << BRICK_BITS) - 1) >> BRICK_BITS;
         let mut ix = BrickIndex {
             side,
             dense: Vec::new(),
