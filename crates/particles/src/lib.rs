@@ -24,10 +24,13 @@
 //! | Stanford bunny, dense, R = N = 10 | 10 | 2,118,241 | 4.78 | 1.49 | 1.49 |
 //!
 //! Triangles ≈ 2.0–2.1 × particles per level; decode + triangulate of the
-//! finest level ≈ 4.5 M triangles/s (baseline) and 2.2 M/s (entropy) on
-//! one core, 2.8 M/s and 1.8 M/s with orientation
-//! (`cargo bench -p lodkit-bench --bench pop`); `lodkit pop stats FILE`
-//! prints the paper's Table 1 for any stream.
+//! finest level ≈ 10.5 M triangles/s (baseline; the triangulation alone
+//! ≈ 15 M/s) and 3.1 M/s (entropy, mostly its decoder) in CPU time on one
+//! core, icosphere and bunny at R = 8; 3.8 M/s baseline with orientation
+//! (`cargo run --release -p lodkit-particles --example pop_probe --
+//! icosphere 8`; wall time by size: `cargo bench -p lodkit-bench --bench
+//! pop`); `lodkit pop stats FILE` prints the paper's Table 1 for any
+//! stream.
 //!
 //! ```no_run
 //! use lodkit_particles::{encode, EncodeOptions, decode, DecodeOptions, triangulate, TriangulateOptions};

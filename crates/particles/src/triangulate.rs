@@ -1,15 +1,20 @@
 //! Direct triangulation of an octree surface — §6.1, §6.2 and §6.3 of
 //! Yemez & Schmitt.
 //!
-//! **Surface scanning (§6.1.1).** Around every parent cube of level `r − 1`
-//! that has an ON child, the 3×3×3 window of parents is fetched (27
-//! look-ups) and their children laid out in a local 6×6×6 array; the 2×2×2
-//! neighbourhoods whose origin lies in the window's centre (plus the
-//! back-neighbours of Fig. 6) are triangulated from it, and the same array
-//! supplies the overlapping neighbourhoods the disambiguation needs.
-//! Each neighbourhood is visited exactly once: it belongs to the parent of
-//! the first of its eight cubes (in child-code order) whose parent has an
-//! ON child — the paper's back-neighbour rule, made unique.
+//! **Surface scanning (§6.1.1).** The paper fetches the 3×3×3 window of
+//! parents around every parent cube with an ON child and lays their
+//! children out in a 6×6×6 array. Departure, for speed: the window is a
+//! brick of 8×8×8 cubes (the Morton-sorted cubes of one aligned block,
+//! kept as bit sets, with the vertex index of a cube being its brick's
+//! first index plus the ON cubes before it), widened by two cubes on every
+//! side: 27 look-ups fetch 512 cubes' worth of neighbourhoods instead of 8,
+//! the configuration of a neighbourhood is four row reads, and no hash
+//! lookup, allocation or per-cube index array is needed. Each occupied
+//! brick triangulates the neighbourhoods whose origin (lowest cube) lies in
+//! it, plus those whose origin lies in an empty brick below when it is the
+//! first occupied brick, in child-code order, the neighbourhood reaches —
+//! the paper's back-neighbour rule, made unique. The window supplies the
+//! overlapping neighbourhoods the disambiguation needs.
 //!
 //! **Construction rules (§6.1.3).** `C_1–C_3` give their triangle.
 //! `C_4, C_5` pick the diagonal with the smaller dihedral angle, or, when
@@ -28,6 +33,14 @@
 //! if they form one Hamiltonian cycle through every ON cube, the cycle cuts
 //! the hull into two discs and the one with the smaller mean dihedral angle
 //! is emitted. Otherwise all of `T_i` is emitted: hole-free, non-manifold.
+//! Departure: when the shared edges hold exactly one Hamiltonian cycle plus
+//! edges inside one of its discs, each in the graphs of two or more
+//! neighbours, the other disc is emitted — its interior edges are nobody
+//! else's, and the neighbours keep the ones it leaves (see
+//! [`split_by_cycle`]; on the bunny at R = 7 this resolves a quarter of
+//! the ambiguous neighbourhoods the paper's test leaves whole, with no new
+//! boundary edge). Leaving an edge only one neighbour has would open a
+//! hole, so those stay whole.
 //!
 //! **Decimation (§6.3, optional).** A triangle with an edge shorter than a
 //! fraction of the cube size is not built and its two cubes are merged
@@ -39,6 +52,7 @@
 //! triangles are turned to agree with the particle normals when there are
 //! some, else made consistent across manifold edges and each component
 //! turned outwards by its signed volume.
+use std::sync::OnceLock;
 use std::time::Instant;
 
 use glam::Vec3;
@@ -107,43 +121,221 @@ pub struct Triangulation {
 
 const NONE: u32 = u32::MAX;
 
+/// Bricks are 8×8×8 cubes of the level (`BRICK_BITS` per axis).
+const BRICK_BITS: u32 = 3;
+/// Dense brick grids up to this many bricks per axis (R ≤ 10), a hash map
+/// above.
+const DENSE_BRICKS: i64 = 128;
+/// Morton code of a local coordinate `0..8` (its bits spread by three).
+const SPREAD3: [usize; 8] = [0, 1, 8, 9, 64, 65, 72, 73];
+/// Extended window coordinate `E ∈ 0..12` (local `E − 2 ∈ −2..10`): the
+/// brick it falls in (0: below, 1: this one, 2: above) and its local
+/// coordinate there.
+const EXT_BRICK: [usize; 12] = [0, 0, 1, 1, 1, 1, 1, 1, 1, 1, 2, 2];
+const EXT_LOCAL: [usize; 12] = [6, 7, 0, 1, 2, 3, 4, 5, 6, 7, 0, 1];
+/// The extended coordinates in each of the three bricks along an axis.
+const EXT_ROWS: [std::ops::Range<usize>; 3] = [0..2, 2..10, 10..12];
+/// Extended window side.
+const EXT: usize = 12;
+
+/// The ON cubes of one brick, as bits in two orders.
+#[derive(Clone, Copy)]
+struct Brick {
+    /// Linear order: word `z`, bit `8y + x`.
+    lin: [u64; 8],
+    /// Morton order of the local coordinates (eq. 1 within the brick),
+    /// which is the order of the level's cubes.
+    mor: [u64; 8],
+    /// Vertex index of the first cube of each Morton word.
+    base: [u32; 8],
+}
+
+impl Brick {
+    /// Vertex index of the ON cube at local `(x, y, z)`: the level's cubes
+    /// are Morton-sorted, so it is the brick's first index plus the ON
+    /// cubes before it in the brick.
+    #[inline]
+    fn rank(&self, x: usize, y: usize, z: usize) -> u32 {
+        let k = SPREAD3[x] | (SPREAD3[y] << 1) | (SPREAD3[z] << 2);
+        let w = k >> 6;
+        self.base[w] + (self.mor[w] & ((1u64 << (k & 63)) - 1)).count_ones()
+    }
+}
+
+/// Brick coordinates → brick number.
+struct BrickIndex {
+    /// Bricks per axis.
+    side: i64,
+    dense: Vec<u32>,
+    sparse: MortonMap<u32>,
+}
+
+impl BrickIndex {
+    fn new(level: u8, keys: &[u64]) -> BrickIndex {
+        // A u64 Morton code holds 21 bits per axis: no deeper level has cubes.
+        let side = ((1i64 << level.min(21)) + (1 << BRICK_BITS) - 1) >> BRICK_BITS;
+        let mut ix = BrickIndex {
+            side,
+            dense: Vec::new(),
+            sparse: MortonMap::default(),
+        };
+        if side <= DENSE_BRICKS {
+            ix.dense = vec![NONE; (side * side * side) as usize];
+            for (i, &k) in keys.iter().enumerate() {
+                let b = unmorton(k);
+                ix.dense[(b[0] as i64 + side * (b[1] as i64 + side * b[2] as i64)) as usize] =
+                    i as u32;
+            }
+        } else {
+            ix.sparse.reserve(keys.len());
+            for (i, &k) in keys.iter().enumerate() {
+                ix.sparse.insert(k, i as u32);
+            }
+        }
+        ix
+    }
+
+    #[inline]
+    fn get(&self, b: [i64; 3]) -> u32 {
+        // One unsigned compare per axis rejects both sides of the grid.
+        let side = self.side as u64;
+        if b[0] as u64 >= side || b[1] as u64 >= side || b[2] as u64 >= side {
+            return NONE;
+        }
+        if self.dense.is_empty() {
+            let m = morton([b[0] as u32, b[1] as u32, b[2] as u32]);
+            self.sparse.get(&m).copied().unwrap_or(NONE)
+        } else {
+            self.dense[(b[0] + self.side * (b[1] + self.side * b[2])) as usize]
+        }
+    }
+}
+
+/// The ON cubes of a brick and two layers around it, as rows of bits:
+/// `rows[Y + 12 Z]` bit `X` is the cube at local `(X − 2, Y − 2, Z − 2)`.
+/// Neighbourhood origins lie at local `−1..8` (`1..10` extended); the rest
+/// is the vicinity §6.1.1 keeps for the disambiguation.
 struct Window {
-    /// Vertex index of the child at local (x, y, z) ∈ [0, 6)³, or NONE.
-    cell: [u32; 216],
-    /// Whether each of the 27 parents has an ON child.
-    parent: [bool; 27],
+    rows: [u16; EXT * EXT],
+    /// The 27 bricks around (3×3×3, x fastest), NONE where empty.
+    bricks: [u32; 27],
 }
 
 impl Window {
+    /// Configuration of the neighbourhood with origin `o` (extended
+    /// coordinates, each in `0..10`).
     #[inline]
-    fn at(&self, x: usize, y: usize, z: usize) -> u32 {
-        self.cell[x + 6 * y + 36 * z]
-    }
     fn mask(&self, o: [usize; 3]) -> u8 {
-        let mut m = 0u8;
-        for j in 0..8u8 {
-            let c = corner(j);
-            if self.at(
-                o[0] + c[0] as usize,
-                o[1] + c[1] as usize,
-                o[2] + c[2] as usize,
-            ) != NONE
-            {
-                m |= 1 << j;
-            }
-        }
-        m
+        let row = |y: usize, z: usize| ((self.rows[y + EXT * z] >> o[0]) & 3) as u8;
+        row(o[1], o[2])
+            | (row(o[1] + 1, o[2]) << 2)
+            | (row(o[1], o[2] + 1) << 4)
+            | (row(o[1] + 1, o[2] + 1) << 6)
     }
+
+    /// Vertex index of the ON cube at extended coordinates `e`.
+    #[inline]
+    fn vertex(&self, bricks: &[Brick], e: [usize; 3]) -> u32 {
+        let b = self.bricks[EXT_BRICK[e[0]] + 3 * EXT_BRICK[e[1]] + 9 * EXT_BRICK[e[2]]];
+        bricks[b as usize].rank(EXT_LOCAL[e[0]], EXT_LOCAL[e[1]], EXT_LOCAL[e[2]])
+    }
+}
+
+/// Whether this brick owns the neighbourhood with origin `o` (extended)
+/// lying in the bricks below it along the axes of `below`: its origin brick
+/// `p` holds no ON cube, and this brick is the first, in child-code order,
+/// of the occupied bricks `p + F` the neighbourhood can reach (§6.1.1's
+/// back-neighbour rule at brick scale, made unique).
+#[inline]
+fn owns(w: &Window, o: [usize; 3], below: u8) -> bool {
+    // Axes along which the neighbourhood reaches the next brick up.
+    let reach =
+        below | u8::from(o[0] == 9) | (u8::from(o[1] == 9) << 1) | (u8::from(o[2] == 9) << 2);
+    for f in 0..below {
+        if f & !reach != 0 {
+            continue;
+        }
+        // Brick p + F = q − below + F, in the window (x fastest, centre 13).
+        let d = |a: u8| 1 + i32::from((f >> a) & 1) - i32::from((below >> a) & 1);
+        if w.bricks[(d(0) + 3 * d(1) + 9 * d(2)) as usize] != NONE {
+            return false;
+        }
+    }
+    true
+}
+
+/// Bricks of a level (sorted Morton cells) and their keys, in Morton order.
+fn bricks_of(cells: &[u64]) -> (Vec<Brick>, Vec<u64>) {
+    let mut bricks: Vec<Brick> = Vec::new();
+    let mut keys: Vec<u64> = Vec::new();
+    for (i, &c) in cells.iter().enumerate() {
+        let key = c >> (3 * BRICK_BITS);
+        if keys.last() != Some(&key) {
+            keys.push(key);
+            bricks.push(Brick {
+                lin: [0; 8],
+                mor: [0; 8],
+                base: [i as u32; 8],
+            });
+        }
+        let b = bricks.last_mut().expect("pushed above");
+        let k = (c & 511) as usize;
+        b.mor[k >> 6] |= 1 << (k & 63);
+        let (x, y, z) = (
+            (k & 1) | ((k >> 2) & 2) | ((k >> 4) & 4),
+            ((k >> 1) & 1) | ((k >> 3) & 2) | ((k >> 5) & 4),
+            ((k >> 2) & 1) | ((k >> 4) & 2) | ((k >> 6) & 4),
+        );
+        b.lin[z] |= 1 << (8 * y + x);
+    }
+    for b in &mut bricks {
+        for w in 1..8 {
+            b.base[w] = b.base[w - 1] + b.mor[w - 1].count_ones();
+        }
+    }
+    (bricks, keys)
 }
 
 /// Triangulates one decoded level.
 pub fn triangulate(s: &LevelSurface, opts: &TriangulateOptions) -> Triangulation {
+    triangulate_impl(s, opts, None)
+}
+
+/// [`triangulate`] plus, per output triangle, the class `C_i` of the
+/// neighbourhood that built it, plus 128 when that neighbourhood was an
+/// ambiguous one left whole (for diagnosing non-manifold triangles).
+pub fn triangulate_traced(s: &LevelSurface, opts: &TriangulateOptions) -> (Triangulation, Vec<u8>) {
+    let mut classes = Vec::new();
+    let t = triangulate_impl(s, opts, Some(&mut classes));
+    (t, classes)
+}
+
+fn triangulate_impl(
+    s: &LevelSurface,
+    opts: &TriangulateOptions,
+    mut trace: Option<&mut Vec<u8>>,
+) -> Triangulation {
     let start = Instant::now();
     let mut stats = TriangulationStats {
         configurations: vec![0; CLASS_COUNT + 1],
         ..Default::default()
     };
-    let mut faces: Vec<[u32; 3]> = Vec::with_capacity(s.cells.len() * 2);
+    // The scan needs the cubes in strict Morton order (as decoded); a
+    // caller-made surface that is not gets a sorted view.
+    let sorted = s.cells.windows(2).all(|w| w[0] < w[1]);
+    let (order, cells_sorted): (Option<Vec<u32>>, Vec<u64>) = if sorted {
+        (None, Vec::new())
+    } else {
+        let mut o: Vec<u32> = (0..s.cells.len() as u32).collect();
+        o.sort_by_key(|&i| s.cells[i as usize]);
+        o.dedup_by_key(|i| s.cells[*i as usize]);
+        let c = o.iter().map(|&i| s.cells[i as usize]).collect();
+        (Some(o), c)
+    };
+    let cells: &[u64] = if sorted { &s.cells } else { &cells_sorted };
+    // Vertex (sorted order) → vertex of `s`.
+    let vid = |v: u32| order.as_ref().map_or(v, |o| o[v as usize]);
+    let mut faces: Vec<[u32; 3]> = Vec::with_capacity(cells.len() * 2 + 16);
     let mut merges: Vec<(u32, u32)> = Vec::new();
     // Triangles built by solid configurations: the only ones two
     // neighbourhoods can both build (planar faces have one owner).
@@ -160,182 +352,214 @@ pub fn triangulate(s: &LevelSurface, opts: &TriangulateOptions) -> Triangulation
     ];
     let cube = s.frame.cube(s.level);
     let min_edge = opts.decimate.map(|f| f * cube);
-    if s.level >= 1 {
-        // Parents with their child masks and first child index.
-        let mut parents: Vec<(u64, u8, u32)> = Vec::new();
-        for (i, &c) in s.cells.iter().enumerate() {
-            let p = c >> 3;
-            match parents.last_mut() {
-                Some(last) if last.0 == p => last.1 |= 1 << (c & 7),
-                _ => parents.push((p, 1 << (c & 7), i as u32)),
+    let (bricks, keys) = bricks_of(cells);
+    let index = BrickIndex::new(s.level, &keys);
+
+    let t = table();
+    // Direct-mapped memo of `split_by_cycle` (1024 slots; key never 0 for
+    // a solid, whose mask has four cubes or more).
+    let mut cycles: Vec<(u64, Split)> = vec![(0, Split::Whole); 1 << 10];
+    let mut w = Window {
+        rows: [0; EXT * EXT],
+        bricks: [NONE; 27],
+    };
+    for &q in &keys {
+        let qc = unmorton(q).map(i64::from);
+        for k in 0..27 {
+            w.bricks[k] = index.get([
+                qc[0] + (k % 3) as i64 - 1,
+                qc[1] + ((k / 3) % 3) as i64 - 1,
+                qc[2] + (k / 9) as i64 - 1,
+            ]);
+        }
+        // One z-slab word per brick row of three, then a byte per row.
+        let word = |n: u32, lz: usize| -> u64 {
+            if n == NONE {
+                0
+            } else {
+                bricks[n as usize].lin[lz]
             }
-        }
-        // Parents grouped by their own parent (a 2×2×2 block of parents):
-        // the 3×3×3 window spans at most 2×2×2 such blocks, so 8 look-ups
-        // fetch its 27 parents instead of 27.
-        let mut index: MortonMap<[u32; 8]> = MortonMap::default();
-        index.reserve(parents.len() / 2);
-        for (i, p) in parents.iter().enumerate() {
-            index.entry(p.0 >> 3).or_insert([NONE; 8])[(p.0 & 7) as usize] = i as u32;
-        }
-        let mut blocks: [Option<[u32; 8]>; 8] = [None; 8];
-        let side = 1i64 << (s.level - 1);
-        let t = table();
-        let mut w = Window {
-            cell: [NONE; 216],
-            parent: [false; 27],
         };
-        for &(pm, _, _) in &parents {
-            let pc = unmorton(pm);
-            w.cell = [NONE; 216];
-            w.parent = [false; 27];
-            // Block coordinates of the window's lowest parent (may be -1).
-            let base = pc.map(|v| (v as i64 - 1).div_euclid(2));
-            for (b, slot) in blocks.iter_mut().enumerate() {
-                let g = [
-                    base[0] + (b & 1) as i64,
-                    base[1] + ((b >> 1) & 1) as i64,
-                    base[2] + (b >> 2) as i64,
-                ];
-                *slot = if g.iter().all(|&v| v >= 0 && v < (side + 1) / 2) {
-                    index
-                        .get(&morton([g[0] as u32, g[1] as u32, g[2] as u32]))
-                        .copied()
-                } else {
-                    None
-                };
+        for ez in 0..EXT {
+            let lz = EXT_LOCAL[ez];
+            for by in 0..3 {
+                let b = 3 * by + 9 * EXT_BRICK[ez];
+                let (lo, mid, hi) = (
+                    word(w.bricks[b], lz),
+                    word(w.bricks[b + 1], lz),
+                    word(w.bricks[b + 2], lz),
+                );
+                for ey in EXT_ROWS[by].clone() {
+                    let sh = 8 * EXT_LOCAL[ey];
+                    w.rows[ey + EXT * ez] = (((lo >> sh) & 0xc0) >> 6) as u16
+                        | ((((mid >> sh) & 0xff) as u16) << 2)
+                        | ((((hi >> sh) & 3) as u16) << 10);
+                }
             }
-            for dz in 0..3usize {
-                for dy in 0..3usize {
-                    for dx in 0..3usize {
-                        let q = [
-                            pc[0] as i64 + dx as i64 - 1,
-                            pc[1] as i64 + dy as i64 - 1,
-                            pc[2] as i64 + dz as i64 - 1,
+        }
+        for oz in 1..10usize {
+            for oy in 1..10usize {
+                let r = [
+                    w.rows[oy + EXT * oz],
+                    w.rows[oy + 1 + EXT * oz],
+                    w.rows[oy + EXT * (oz + 1)],
+                    w.rows[oy + 1 + EXT * (oz + 1)],
+                ];
+                // Origins x = −1..8 (1..10 extended) whose neighbourhood
+                // has three ON cubes or more: a bit-sliced count of the
+                // eight cubes of all origins of the row at once.
+                let (mut ones, mut twos, mut fours) = (0u16, 0u16, 0u16);
+                for x in [
+                    r[0],
+                    r[0] >> 1,
+                    r[1],
+                    r[1] >> 1,
+                    r[2],
+                    r[2] >> 1,
+                    r[3],
+                    r[3] >> 1,
+                ] {
+                    let carry = ones & x;
+                    ones ^= x;
+                    fours |= twos & carry;
+                    twos ^= carry;
+                }
+                let mut any = (fours | (twos & ones)) & 0x3fe;
+                while any != 0 {
+                    let ox = any.trailing_zeros() as usize;
+                    any &= any - 1;
+                    let o = [ox, oy, oz];
+                    let below =
+                        u8::from(ox == 1) | (u8::from(oy == 1) << 1) | (u8::from(oz == 1) << 2);
+                    if below != 0 && !owns(&w, o, below) {
+                        continue;
+                    }
+                    let mask = w.mask(o);
+                    let cfg = &t.configs[mask as usize];
+                    if cfg.class == 0 {
+                        continue;
+                    }
+                    stats.configurations[cfg.class as usize] += 1;
+                    if matches!(cfg.shape, Shape::Triangle(_) | Shape::Quad(_))
+                        && defer_face(&w, o, cfg.face)
+                    {
+                        continue;
+                    }
+                    // Vertex of each ON corner, looked up once.
+                    let mut vs = [NONE; 8];
+                    let mut on = mask;
+                    while on != 0 {
+                        let j = on.trailing_zeros() as u8;
+                        on &= on - 1;
+                        let c = corner(j);
+                        vs[j as usize] = vid(w.vertex(
+                            &bricks,
+                            [ox + c[0] as usize, oy + c[1] as usize, oz + c[2] as usize],
+                        ));
+                    }
+                    let mut emit = |tri: [u8; 3], faces: &mut Vec<[u32; 3]>| -> bool {
+                        let f = [
+                            vs[tri[0] as usize],
+                            vs[tri[1] as usize],
+                            vs[tri[2] as usize],
                         ];
-                        if q.iter().any(|&v| v < 0 || v >= side) {
-                            continue;
+                        if let Some(min) = min_edge {
+                            for e in 0..3 {
+                                let (a, b) = (f[e], f[(e + 1) % 3]);
+                                if s.positions[a as usize].distance(s.positions[b as usize]) < min
+                                    && !merged[a as usize]
+                                    && !merged[b as usize]
+                                {
+                                    merged[a as usize] = true;
+                                    merged[b as usize] = true;
+                                    merges.push((a, b));
+                                    return false;
+                                }
+                            }
                         }
-                        let b = (q[0].div_euclid(2) - base[0])
-                            | ((q[1].div_euclid(2) - base[1]) << 1)
-                            | ((q[2].div_euclid(2) - base[2]) << 2);
-                        let Some(block) = blocks[b as usize] else {
-                            continue;
-                        };
-                        let pi =
-                            block[((q[0] & 1) | ((q[1] & 1) << 1) | ((q[2] & 1) << 2)) as usize];
-                        if pi == NONE {
-                            continue;
+                        faces.push(f);
+                        true
+                    };
+                    // A solid left whole (no unique cycle).
+                    let mut whole = false;
+                    match &cfg.shape {
+                        Shape::None => {}
+                        Shape::Triangle(tri) => {
+                            emit(*tri, &mut faces);
                         }
-                        let (_, mask, first) = parents[pi as usize];
-                        w.parent[dx + 3 * dy + 9 * dz] = true;
-                        let mut next = first;
-                        for k in 0..8u8 {
-                            if mask & (1 << k) != 0 {
-                                let c = corner(k);
-                                let (x, y, z) = (
-                                    2 * dx + c[0] as usize,
-                                    2 * dy + c[1] as usize,
-                                    2 * dz + c[2] as usize,
-                                );
-                                w.cell[x + 6 * y + 36 * z] = next;
-                                next += 1;
+                        Shape::Quad(q) => {
+                            let vq = [0, 1, 2, 3].map(|k| vs[q[k] as usize] as usize);
+                            let pos = [0, 1, 2, 3].map(|k| s.positions[vq[k]]);
+                            let nrm = s.normals.as_ref().map(|n| [0, 1, 2, 3].map(|k| n[vq[k]]));
+                            let (t1, t2) = choose_quad(*q, pos, nrm);
+                            emit(t1, &mut faces);
+                            emit(t2, &mut faces);
+                        }
+                        Shape::Solid(tris) => {
+                            let (shared, twice) = shared_edges(&w, o, cfg.edges);
+                            // Triangles on a face of the neighbourhood (three
+                            // cubes sharing a coordinate) may be built by the
+                            // solid across that face too.
+                            let mut solid_emit = |tri: [u8; 3], faces: &mut Vec<[u32; 3]>| {
+                                if emit(tri, faces)
+                                    && !((tri[0] ^ tri[1]) | (tri[0] ^ tri[2])) & 7 != 0
+                                {
+                                    from_solids.push(faces.len() as u32 - 1);
+                                }
+                            };
+                            // §6.2's cycle search depends on the configuration
+                            // and its shared edges only: memoised.
+                            let key = u64::from(shared)
+                                | (u64::from(twice) << 28)
+                                | (u64::from(mask) << 56);
+                            let slot = &mut cycles
+                                [(key.wrapping_mul(0x9e37_79b9_7f4a_7c15) >> 54) as usize];
+                            if slot.0 != key {
+                                *slot = (key, split_by_cycle(mask, shared, twice, tris));
+                            }
+                            let split = slot.1;
+                            if split != Split::Whole {
+                                stats.disambiguated += 1;
+                            }
+                            match split {
+                                Split::Either(disc) => {
+                                    let mut p = [Vec3::ZERO; 8];
+                                    for (j, &v) in vs.iter().enumerate() {
+                                        if v != NONE {
+                                            p[j] = s.positions[v as usize];
+                                        }
+                                    }
+                                    let pos = |j: u8| p[j as usize];
+                                    let keep = if smoother_disc(tris, disc, &pos) {
+                                        disc
+                                    } else {
+                                        !disc
+                                    };
+                                    for (i, &tri) in tris.iter().enumerate() {
+                                        if keep & (1 << i) != 0 {
+                                            solid_emit(tri, &mut faces);
+                                        }
+                                    }
+                                }
+                                Split::Only(keep) => {
+                                    for (i, &tri) in tris.iter().enumerate() {
+                                        if keep & (1 << i) != 0 {
+                                            solid_emit(tri, &mut faces);
+                                        }
+                                    }
+                                }
+                                Split::Whole => {
+                                    whole = true;
+                                    stats.fallbacks += 1;
+                                    for &tri in tris {
+                                        solid_emit(tri, &mut faces);
+                                    }
+                                }
                             }
                         }
                     }
-                }
-            }
-            for oz in 1..4usize {
-                for oy in 1..4usize {
-                    for ox in 1..4usize {
-                        let o = [ox, oy, oz];
-                        // Owner: parent of the first cube whose parent has ON children.
-                        let owner = (0..8usize).find_map(|j| {
-                            let k = ((ox + (j & 1)) / 2)
-                                + 3 * ((oy + ((j >> 1) & 1)) / 2)
-                                + 9 * ((oz + (j >> 2)) / 2);
-                            w.parent[k].then_some(k)
-                        });
-                        // 13 is the window's centre parent.
-                        if owner != Some(13) {
-                            continue;
-                        }
-                        let mask = w.mask(o);
-                        let cfg = &t.configs[mask as usize];
-                        if cfg.class == 0 {
-                            continue;
-                        }
-                        stats.configurations[cfg.class as usize] += 1;
-                        let v = |j: u8| {
-                            let c = corner(j);
-                            w.at(ox + c[0] as usize, oy + c[1] as usize, oz + c[2] as usize)
-                        };
-                        let mut emit = |tri: [u8; 3], faces: &mut Vec<[u32; 3]>| {
-                            let f = tri.map(v);
-                            if let Some(min) = min_edge {
-                                for e in 0..3 {
-                                    let (a, b) = (f[e], f[(e + 1) % 3]);
-                                    if s.positions[a as usize].distance(s.positions[b as usize])
-                                        < min
-                                        && !merged[a as usize]
-                                        && !merged[b as usize]
-                                    {
-                                        merged[a as usize] = true;
-                                        merged[b as usize] = true;
-                                        merges.push((a, b));
-                                        return;
-                                    }
-                                }
-                            }
-                            faces.push(f);
-                        };
-                        match &cfg.shape {
-                            Shape::None => {}
-                            Shape::Triangle(tri) => {
-                                if defer_face(&w, o, cfg.face) {
-                                    continue;
-                                }
-                                emit(*tri, &mut faces);
-                            }
-                            Shape::Quad(q) => {
-                                if defer_face(&w, o, cfg.face) {
-                                    continue;
-                                }
-                                let pos = q.map(|j| s.positions[v(j) as usize]);
-                                let nrm = s.normals.as_ref().map(|n| q.map(|j| n[v(j) as usize]));
-                                let (t1, t2) = choose_quad(*q, pos, nrm);
-                                emit(t1, &mut faces);
-                                emit(t2, &mut faces);
-                            }
-                            Shape::Solid(tris) => {
-                                let shared = shared_edges(&w, o, mask, cfg.edges);
-                                match split_by_cycle(mask, shared, tris) {
-                                    Some((a, b)) => {
-                                        stats.disambiguated += 1;
-                                        let pos = |j: u8| s.positions[v(j) as usize];
-                                        let pick =
-                                            if mean_dihedral(&a, &pos) <= mean_dihedral(&b, &pos) {
-                                                a
-                                            } else {
-                                                b
-                                            };
-                                        let first = faces.len();
-                                        for tri in pick {
-                                            emit(tri, &mut faces);
-                                        }
-                                        from_solids.extend(first as u32..faces.len() as u32);
-                                    }
-                                    None => {
-                                        stats.fallbacks += 1;
-                                        let first = faces.len();
-                                        for &tri in tris {
-                                            emit(tri, &mut faces);
-                                        }
-                                        from_solids.extend(first as u32..faces.len() as u32);
-                                    }
-                                }
-                            }
-                        }
+                    if let Some(tr) = trace.as_deref_mut() {
+                        tr.resize(faces.len(), cfg.class | if whole { 0x80 } else { 0 });
                     }
                 }
             }
@@ -344,7 +568,14 @@ pub fn triangulate(s: &LevelSurface, opts: &TriangulateOptions) -> Triangulation
     // A triangle whose three cubes share a coordinate lies on the face
     // between two neighbourhoods; two solid ones may both have built it:
     // keep one.
-    dedupe_face_triangles(&s.cells, &mut faces, &from_solids);
+    let drop = dedupe_face_triangles(&mut faces, &from_solids);
+    if let Some(tr) = trace {
+        let mut i = 0;
+        tr.retain(|_| {
+            i += 1;
+            !drop[i - 1]
+        });
+    }
     let mut mesh = s.vertices_only();
     if !merges.is_empty() {
         decimate_merge(&mut mesh, &mut faces, &merges);
@@ -386,19 +617,23 @@ fn tri_normal(a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
 fn choose_quad(q: [u8; 4], p: [Vec3; 4], n: Option<[Vec3; 4]>) -> ([u8; 3], [u8; 3]) {
     let ac = ([q[0], q[1], q[2]], [q[0], q[2], q[3]]);
     let bd = ([q[0], q[1], q[3]], [q[1], q[2], q[3]]);
+    let cross = |t: [usize; 3]| (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]);
     let score = |t: ([usize; 3], [usize; 3])| -> f32 {
-        let n1 = tri_normal(p[t.0[0]], p[t.0[1]], p[t.0[2]]);
-        let n2 = tri_normal(p[t.1[0]], p[t.1[1]], p[t.1[2]]);
+        let (m1, m2) = (cross(t.0), cross(t.1));
         match n {
             // Disagreement with the particle normals.
             Some(vn) => {
+                let (n1, n2) = (m1.normalize_or_zero(), m2.normalize_or_zero());
                 let s1: f32 = t.0.iter().map(|&i| 1.0 - n1.dot(vn[i]).abs()).sum();
                 let s2: f32 = t.1.iter().map(|&i| 1.0 - n2.dot(vn[i]).abs()).sum();
                 s1 + s2
             }
             // Dihedral angle between the two triangles (its cosine,
-            // negated: same order, no acos).
-            None => -n1.dot(n2),
+            // negated: same order, no acos; one square root).
+            None => {
+                let l = (m1.length_squared() * m2.length_squared()).sqrt();
+                if l > 0.0 { -m1.dot(m2) / l } else { 0.0 }
+            }
         }
     };
     let s_ac = score(([0, 1, 2], [0, 2, 3]));
@@ -406,147 +641,270 @@ fn choose_quad(q: [u8; 4], p: [Vec3; 4], n: Option<[Vec3; 4]>) -> ([u8; 3], [u8;
     if s_ac <= s_bd { ac } else { bd }
 }
 
-/// Edges of `G_i` (as pair bits) also in the graph of an overlapping
-/// neighbourhood of the window.
-fn shared_edges(w: &Window, o: [usize; 3], mask: u8, edges: u32) -> u32 {
-    let t = table();
-    let mut shared = 0u32;
-    let ns: Vec<u8> = (0..8).filter(|j| mask & (1 << j) != 0).collect();
-    for (i, &a) in ns.iter().enumerate() {
-        for &b in &ns[i + 1..] {
-            let bit = 1u32 << pair(a, b);
-            if edges & bit == 0 {
-                continue;
+/// For each of the 26 overlapping neighbourhoods `o + d` (index
+/// `(dx+1) + 3(dy+1) + 9(dz+1)`): its corners that lie in this block, and
+/// its corner pairs inside the overlap mapped to this block's pairs.
+struct Overlaps {
+    corners: [u8; 27],
+    pairs: [u32; 27],
+    to_ours: [[u8; 28]; 27],
+    /// This block's pairs inside the overlap.
+    ours: [u32; 27],
+}
+
+fn overlaps() -> &'static Overlaps {
+    static O: OnceLock<Overlaps> = OnceLock::new();
+    O.get_or_init(|| {
+        let mut o = Overlaps {
+            corners: [0; 27],
+            pairs: [0; 27],
+            to_ours: [[u8::MAX; 28]; 27],
+            ours: [0; 27],
+        };
+        for k in 0..27usize {
+            let d = [
+                (k % 3) as i32 - 1,
+                ((k / 3) % 3) as i32 - 1,
+                (k / 9) as i32 - 1,
+            ];
+            // Neighbour corner j2 sits at our local c2 + d.
+            let ours_of = |j2: u8| -> Option<u8> {
+                let c = corner(j2);
+                let l = [c[0] + d[0], c[1] + d[1], c[2] + d[2]];
+                l.iter()
+                    .all(|v| (0..=1).contains(v))
+                    .then(|| (l[0] + 2 * l[1] + 4 * l[2]) as u8)
+            };
+            for j2 in 0..8u8 {
+                if ours_of(j2).is_some() {
+                    o.corners[k] |= 1 << j2;
+                }
             }
-            let (ca, cb) = (corner(a), corner(b));
-            'nb: for dz in -1i32..=1 {
-                for dy in -1i32..=1 {
-                    for dx in -1i32..=1 {
-                        if (dx, dy, dz) == (0, 0, 0) {
-                            continue;
-                        }
-                        let d = [dx, dy, dz];
-                        // Corners of a and b inside the neighbour block o + d.
-                        let la = [ca[0] - d[0], ca[1] - d[1], ca[2] - d[2]];
-                        let lb = [cb[0] - d[0], cb[1] - d[1], cb[2] - d[2]];
-                        if la.iter().chain(lb.iter()).any(|&v| !(0..=1).contains(&v)) {
-                            continue;
-                        }
-                        let o2 = [
-                            (o[0] as i32 + dx) as usize,
-                            (o[1] as i32 + dy) as usize,
-                            (o[2] as i32 + dz) as usize,
-                        ];
-                        let m2 = w.mask(o2);
-                        // A neighbour whose cubes all lie in this block
-                        // (a planar patch on the shared face) is this
-                        // block's own geometry, not outside evidence.
-                        let inside = (0..8u8).filter(|j| m2 & (1 << j) != 0).all(|j| {
-                            let c = corner(j);
-                            (0..3).all(|k| (0..=1).contains(&(c[k] + d[k])))
-                        });
-                        if inside {
-                            continue;
-                        }
-                        let cfg = &t.configs[m2 as usize];
-                        let ja = (la[0] + 2 * la[1] + 4 * la[2]) as u8;
-                        let jb = (lb[0] + 2 * lb[1] + 4 * lb[2]) as u8;
-                        if cfg.edges & (1 << pair(ja, jb)) != 0 {
-                            shared |= bit;
-                            break 'nb;
-                        }
+            for a2 in 0..8u8 {
+                for b2 in a2 + 1..8u8 {
+                    if let (Some(a), Some(b)) = (ours_of(a2), ours_of(b2)) {
+                        o.pairs[k] |= 1 << pair(a2, b2);
+                        o.to_ours[k][pair(a2, b2) as usize] = pair(a, b) as u8;
+                        o.ours[k] |= 1 << pair(a, b);
                     }
                 }
             }
         }
-    }
-    shared
+        o
+    })
 }
 
-/// If `shared` is one Hamiltonian cycle through the ON cubes of `mask`,
-/// the two discs of hull triangles it separates.
-/// Two discs of triangles.
-type Discs = (Vec<[u8; 3]>, Vec<[u8; 3]>);
+/// Edges of `G_i` (as pair bits) also in the graph of an overlapping
+/// neighbourhood of the window, and those in the graphs of two or more.
+fn shared_edges(w: &Window, o: [usize; 3], edges: u32) -> (u32, u32) {
+    let t = table();
+    let ov = overlaps();
+    let (mut shared, mut twice) = (0u32, 0u32);
+    for k in 0..27usize {
+        if k == 13 || edges & ov.ours[k] == 0 {
+            continue;
+        }
+        let o2 = [o[0] + k % 3 - 1, o[1] + (k / 3) % 3 - 1, o[2] + k / 9 - 1];
+        let m2 = w.mask(o2);
+        // A neighbour whose cubes all lie in this block (a planar patch on
+        // the shared face) is this block's own geometry, not outside
+        // evidence.
+        if m2 & !ov.corners[k] == 0 {
+            continue;
+        }
+        let mut e2 = t.configs[m2 as usize].edges & ov.pairs[k];
+        while e2 != 0 {
+            let p = e2.trailing_zeros() as usize;
+            e2 &= e2 - 1;
+            let bit = 1 << ov.to_ours[k][p];
+            twice |= shared & bit;
+            shared |= bit;
+        }
+    }
+    (shared & edges, twice & edges)
+}
 
-fn split_by_cycle(mask: u8, shared: u32, tris: &[[u8; 3]]) -> Option<Discs> {
-    let ns: Vec<u8> = (0..8).filter(|j| mask & (1 << j) != 0).collect();
-    if shared.count_ones() as usize != ns.len() {
-        return None;
-    }
-    let has = |a: u8, b: u8| shared & (1 << pair(a, b)) != 0;
-    for &a in &ns {
-        if ns.iter().filter(|&&b| b != a && has(a, b)).count() != 2 {
-            return None;
-        }
-    }
-    // Walk the cycle: it must visit every node before closing.
-    let (mut prev, mut cur) = (ns[0], *ns.iter().find(|&&b| b != ns[0] && has(ns[0], b))?);
-    let mut steps = 1;
-    while cur != ns[0] {
-        let next = *ns.iter().find(|&&b| b != cur && b != prev && has(cur, b))?;
-        prev = cur;
-        cur = next;
-        steps += 1;
-        if steps > ns.len() {
-            return None;
-        }
-    }
-    if steps != ns.len() {
-        return None;
-    }
+/// How §6.2 resolves an ambiguous configuration.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Split {
+    /// No usable cycle: build the whole hull (hole-free, non-manifold).
+    Whole,
+    /// The shared edges are exactly one Hamiltonian cycle (the paper's
+    /// case): either disc (bit `i`: triangle `i`; the other disc is the
+    /// complement); the smoother one is built.
+    Either(u16),
+    /// The shared edges hold exactly one Hamiltonian cycle plus edges
+    /// interior to one of its discs: the other disc is built, whose
+    /// interior edges no neighbour uses.
+    Only(u16),
+}
+
+/// §6.2's disambiguation of the solid `tris` of configuration `mask`,
+/// `shared` being the edges of `G_i` that overlapping neighbourhoods also
+/// have. The paper accepts the shared edges when they form one Hamiltonian
+/// cycle. Departure: when they hold exactly one Hamiltonian cycle and more
+/// (the frequent failure on thinned surfaces: five of a tetrahedron's six
+/// edges), the cycle still cuts the hull in two discs, and the disc whose
+/// interior edges are all unshared is built: the other one, or the whole
+/// hull, would put a third triangle on a shared edge.
+fn split_by_cycle(mask: u8, shared: u32, twice: u32, tris: &[[u8; 3]]) -> Split {
+    debug_assert!(tris.len() <= 16);
+    let Some(cycle) = unique_hamiltonian_cycle(mask, shared) else {
+        return Split::Whole;
+    };
+    let on_cycle = |a: u8, b: u8| cycle & (1 << pair(a, b)) != 0;
     // Flood the triangles without crossing the cycle.
-    let mut side = vec![u8::MAX; tris.len()];
-    side[0] = 0;
-    let mut stack = vec![0usize];
+    let mut disc = 1u16;
+    let mut stack = [0u8; 16];
+    let mut top = 1;
     let edge_of = |t: &[u8; 3], k: usize| (t[k], t[(k + 1) % 3]);
-    while let Some(i) = stack.pop() {
+    while top > 0 {
+        top -= 1;
+        let i = stack[top] as usize;
         for k in 0..3 {
             let (a, b) = edge_of(&tris[i], k);
-            if has(a, b) {
+            if on_cycle(a, b) {
                 continue;
             }
             for (j, tj) in tris.iter().enumerate() {
-                if side[j] == u8::MAX && (0..3).any(|m| edge_of(tj, m) == (b, a)) {
-                    side[j] = 0;
-                    stack.push(j);
+                if disc & (1 << j) == 0 && (0..3).any(|m| edge_of(tj, m) == (b, a)) {
+                    disc |= 1 << j;
+                    stack[top] = j as u8;
+                    top += 1;
                 }
             }
         }
     }
-    let a: Vec<[u8; 3]> = tris
-        .iter()
-        .zip(&side)
-        .filter(|(_, s)| **s == 0)
-        .map(|(t, _)| *t)
-        .collect();
-    let b: Vec<[u8; 3]> = tris
-        .iter()
-        .zip(&side)
-        .filter(|(_, s)| **s != 0)
-        .map(|(t, _)| *t)
-        .collect();
-    if a.is_empty() || b.is_empty() {
-        return None;
+    let all = ((1u32 << tris.len()) - 1) as u16;
+    if disc == all {
+        return Split::Whole;
     }
-    Some((a, b))
+    // The shared edges inside a disc (off the cycle).
+    let interior_shared = |d: u16| {
+        let mut e = 0u32;
+        for (i, t) in tris.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b) = edge_of(t, k);
+                if d & (1 << i) != 0 && !on_cycle(a, b) {
+                    e |= shared & (1 << pair(a, b));
+                }
+            }
+        }
+        e
+    };
+    // A disc may be left out when the shared edges inside it keep two
+    // neighbours' triangles each: leaving them to the neighbours opens no
+    // hole there.
+    let leave = |e: u32| e & !twice == 0;
+    match (interior_shared(disc), interior_shared(all & !disc)) {
+        (0, 0) => Split::Either(disc),
+        (0, e) if leave(e) => Split::Only(disc),
+        (e, 0) if leave(e) => Split::Only(all & !disc),
+        _ => Split::Whole,
+    }
 }
 
-/// Mean dihedral angle over the interior edges of a disc of triangles.
-fn mean_dihedral(tris: &[[u8; 3]], pos: &impl Fn(u8) -> Vec3) -> f32 {
-    let mut sum = 0.0;
-    let mut n = 0;
-    for (i, ti) in tris.iter().enumerate() {
-        for tj in &tris[i + 1..] {
-            let shared = ti.iter().filter(|v| tj.contains(v)).count();
-            if shared == 2 {
-                let ni = tri_normal(pos(ti[0]), pos(ti[1]), pos(ti[2]));
-                let nj = tri_normal(pos(tj[0]), pos(tj[1]), pos(tj[2]));
-                sum += ni.dot(nj).clamp(-1.0, 1.0).acos();
-                n += 1;
+/// The Hamiltonian cycle through the ON cubes of `mask` made of `shared`
+/// edges (as pair bits), if there is exactly one.
+fn unique_hamiltonian_cycle(mask: u8, shared: u32) -> Option<u32> {
+    let n = mask.count_ones() as usize;
+    if n < 3 || (shared.count_ones() as usize) < n {
+        return None;
+    }
+    let mut search = CycleSearch {
+        mask,
+        shared,
+        n,
+        path: [mask.trailing_zeros() as u8; 8],
+        found: None,
+        count: 0,
+    };
+    search.walk(1);
+    if search.count == 1 {
+        search.found
+    } else {
+        None
+    }
+}
+
+/// Depth-first search over the simple paths of shared edges from the
+/// first ON cube; each cycle is met twice (once per direction).
+struct CycleSearch {
+    mask: u8,
+    shared: u32,
+    n: usize,
+    path: [u8; 8],
+    found: Option<u32>,
+    count: usize,
+}
+
+impl CycleSearch {
+    fn has(&self, a: u8, b: u8) -> bool {
+        a != b && self.shared & (1 << pair(a, b)) != 0
+    }
+
+    fn walk(&mut self, len: usize) {
+        let last = self.path[len - 1];
+        if len == self.n {
+            if self.has(last, self.path[0]) {
+                let mut c = 1u32 << pair(last, self.path[0]);
+                for k in 1..self.n {
+                    c |= 1 << pair(self.path[k - 1], self.path[k]);
+                }
+                if self.found != Some(c) {
+                    self.count += 1;
+                }
+                self.found = Some(c);
+            }
+            return;
+        }
+        for b in 0..8u8 {
+            if self.mask & (1 << b) != 0 && !self.path[..len].contains(&b) && self.has(last, b) {
+                self.path[len] = b;
+                self.walk(len + 1);
+                if self.count > 1 {
+                    return;
+                }
             }
         }
     }
-    if n == 0 { 0.0 } else { sum / n as f32 }
+}
+
+/// Whether the disc `disc` of `tris` (bit `i`: triangle `i`) has a mean
+/// dihedral angle over its interior edges no larger than its complement's
+/// (§6.2's choice). Discs with one interior edge each (`C_6`, the frequent
+/// case) compare cosines, no `acos` needed.
+fn smoother_disc(tris: &[[u8; 3]], disc: u16, pos: &impl Fn(u8) -> Vec3) -> bool {
+    let mut normals = [Vec3::ZERO; 16];
+    for (i, t) in tris.iter().enumerate().take(16) {
+        normals[i] = tri_normal(pos(t[0]), pos(t[1]), pos(t[2]));
+    }
+    // Cosines of the interior edges of each side.
+    let mut cos = [[0.0f32; 16]; 2];
+    let mut n = [0usize; 2];
+    for (i, ti) in tris.iter().enumerate().take(16) {
+        let side = usize::from(disc & (1 << i) == 0);
+        for (j, tj) in tris.iter().enumerate().take(16).skip(i + 1) {
+            if usize::from(disc & (1 << j) == 0) != side || n[side] == 16 {
+                continue;
+            }
+            if ti.iter().filter(|v| tj.contains(v)).count() == 2 {
+                cos[side][n[side]] = normals[i].dot(normals[j]).clamp(-1.0, 1.0);
+                n[side] += 1;
+            }
+        }
+    }
+    if n == [1, 1] {
+        return cos[0][0] >= cos[1][0];
+    }
+    let mean = |c: &[f32]| {
+        if c.is_empty() {
+            0.0
+        } else {
+            c.iter().map(|x| x.acos()).sum::<f32>() / c.len() as f32
+        }
+    };
+    mean(&cos[0][..n[0]]) <= mean(&cos[1][..n[1]])
 }
 
 /// §6.3: merge the cubes joined by short edges (positions and attributes
@@ -584,16 +942,14 @@ fn decimate_merge(mesh: &mut TriMesh, faces: &mut Vec<[u32; 3]>, merges: &[(u32,
     faces.retain(|f| f[0] != f[1] && f[1] != f[2] && f[0] != f[2]);
 }
 
-fn dedupe_face_triangles(cells: &[u64], faces: &mut Vec<[u32; 3]>, candidates: &[u32]) {
-    let mut keyed: Vec<([u32; 3], u32)> = Vec::new();
+/// Drops the second of two identical triangles among `candidates` (solid
+/// triangles on a face of their neighbourhood); returns what was dropped.
+fn dedupe_face_triangles(faces: &mut Vec<[u32; 3]>, candidates: &[u32]) -> Vec<bool> {
+    let mut keyed: Vec<([u32; 3], u32)> = Vec::with_capacity(candidates.len());
     for &i in candidates {
-        let f = &faces[i as usize];
-        let c = f.map(|v| unmorton(cells[v as usize]));
-        if (0..3).any(|a| c[0][a] == c[1][a] && c[1][a] == c[2][a]) {
-            let mut k = *f;
-            k.sort_unstable();
-            keyed.push((k, i));
-        }
+        let mut k = faces[i as usize];
+        k.sort_unstable();
+        keyed.push((k, i));
     }
     keyed.sort_unstable();
     let mut drop = vec![false; faces.len()];
@@ -607,6 +963,7 @@ fn dedupe_face_triangles(cells: &[u64], faces: &mut Vec<[u32; 3]>, candidates: &
         i += 1;
         !drop[i - 1]
     });
+    drop
 }
 
 fn edge_key(a: u32, b: u32) -> u64 {
@@ -629,6 +986,11 @@ fn sorted_sides(faces: &[[u32; 3]]) -> Vec<(u64, u32)> {
 /// strict count; Table 1 counts non-manifold *local triangulations*, see
 /// [`TriangulationStats::fallbacks`]).
 pub fn non_manifold_triangles(mesh: &TriMesh) -> usize {
+    non_manifold_flags(mesh).iter().filter(|b| **b).count()
+}
+
+/// Per triangle: whether it is incident to an edge used more than twice.
+pub fn non_manifold_flags(mesh: &TriMesh) -> Vec<bool> {
     let sides = sorted_sides(&mesh.faces);
     let mut bad = vec![false; mesh.faces.len()];
     let mut i = 0;
@@ -644,7 +1006,7 @@ pub fn non_manifold_triangles(mesh: &TriMesh) -> usize {
         }
         i = j;
     }
-    bad.iter().filter(|b| **b).count()
+    bad
 }
 
 /// See the module docs, "Orientation".
@@ -722,5 +1084,171 @@ fn orient(mesh: &mut TriMesh) {
                 mesh.faces[i].swap(1, 2);
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::octree::Frame;
+
+    /// A thin spherical shell of cubes at `level`, Morton-sorted, crossing
+    /// many bricks (and the grid's lower faces when `offset` is 0).
+    fn shell(level: u8, offset: f32) -> LevelSurface {
+        let side = 1u32 << level;
+        let c = side as f32 * 0.5 - offset;
+        let r = side as f32 * 0.42;
+        let mut cells = Vec::new();
+        for z in 0..side {
+            for y in 0..side {
+                for x in 0..side {
+                    let p = Vec3::new(x as f32, y as f32, z as f32) + 0.5 - c;
+                    if (p.length() - r).abs() < 0.5 {
+                        cells.push(morton([x, y, z]));
+                    }
+                }
+            }
+        }
+        cells.sort_unstable();
+        let frame = Frame {
+            origin: Vec3::ZERO,
+            size: 1.0,
+        };
+        let positions = cells
+            .iter()
+            .map(|&m| frame.cell_centre(unmorton(m), u32::from(level)))
+            .collect();
+        LevelSurface {
+            level,
+            frame,
+            cells,
+            positions,
+            colours: None,
+            normals: None,
+        }
+    }
+
+    /// Configuration counts by brute force: every origin next to an ON cube.
+    fn brute_force_configurations(s: &LevelSurface) -> Vec<u64> {
+        let on: std::collections::HashSet<[i64; 3]> = s
+            .cells
+            .iter()
+            .map(|&m| unmorton(m).map(i64::from))
+            .collect();
+        let mut origins = std::collections::BTreeSet::new();
+        for c in &on {
+            for j in 0..8u8 {
+                let k = corner(j);
+                origins.insert([
+                    c[0] - i64::from(k[0]),
+                    c[1] - i64::from(k[1]),
+                    c[2] - i64::from(k[2]),
+                ]);
+            }
+        }
+        let mut counts = vec![0u64; CLASS_COUNT + 1];
+        for o in origins {
+            let mut mask = 0u8;
+            for j in 0..8u8 {
+                let k = corner(j);
+                let p = [
+                    o[0] + i64::from(k[0]),
+                    o[1] + i64::from(k[1]),
+                    o[2] + i64::from(k[2]),
+                ];
+                if on.contains(&p) {
+                    mask |= 1 << j;
+                }
+            }
+            counts[table().configs[mask as usize].class as usize] += 1;
+        }
+        counts[0] = 0;
+        counts
+    }
+
+    #[test]
+    fn brick_scan_visits_every_neighbourhood_exactly_once() {
+        // Shells touching the grid's lower faces and shells away from
+        // them, at levels below, at and above one brick per axis.
+        for (level, offset) in [(3, 0.0), (4, 0.3), (5, 0.0), (6, 1.7), (6, 0.0)] {
+            let s = shell(level, offset);
+            let t = triangulate(&s, &TriangulateOptions::DEFAULT);
+            assert_eq!(
+                t.stats.configurations,
+                brute_force_configurations(&s),
+                "level {level}, offset {offset}"
+            );
+            assert!(t.stats.triangles > 0);
+        }
+    }
+
+    #[test]
+    fn unsorted_cells_triangulate_like_sorted_ones() {
+        let s = shell(5, 0.3);
+        let opts = TriangulateOptions {
+            orient: false,
+            ..TriangulateOptions::DEFAULT
+        };
+        let sorted = triangulate(&s, &opts);
+        // Reverse the cubes: vertex i becomes n − 1 − i.
+        let n = s.cells.len() as u32;
+        let mut rev = s.clone();
+        rev.cells.reverse();
+        rev.positions.reverse();
+        let reversed = triangulate(&rev, &opts);
+        let canon = |faces: &[[u32; 3]], map: &dyn Fn(u32) -> u32| {
+            let mut f: Vec<[u32; 3]> = faces
+                .iter()
+                .map(|t| {
+                    let mut t = t.map(map);
+                    t.sort_unstable();
+                    t
+                })
+                .collect();
+            f.sort_unstable();
+            f
+        };
+        assert_eq!(
+            canon(&sorted.mesh.faces, &|v| v),
+            canon(&reversed.mesh.faces, &|v| n - 1 - v)
+        );
+        assert_eq!(sorted.stats.configurations, reversed.stats.configurations);
+    }
+
+    #[test]
+    fn tetrahedron_with_a_fifth_shared_edge_builds_the_disc_that_leaves_it_to_two_neighbours() {
+        // C_6: a face triangle 0, 1, 2 and the opposite corner 7.
+        let mask = 0b1000_0111u8;
+        let cfg = &table().configs[mask as usize];
+        assert_eq!(cfg.class, 6);
+        let Shape::Solid(tris) = &cfg.shape else {
+            panic!("C_6 is solid")
+        };
+        let e = |a: u8, b: u8| 1u32 << pair(a, b);
+        let cycle = e(0, 1) | e(1, 7) | e(7, 2) | e(2, 0);
+        // The paper's case: either disc, chosen by dihedral angle.
+        assert!(matches!(
+            split_by_cycle(mask, cycle, 0, tris),
+            Split::Either(_)
+        ));
+        // The face diagonal 1–2 shared too, by two neighbours: build the
+        // disc around the body diagonal 0–7, which no neighbour has.
+        let shared = cycle | e(1, 2);
+        let Split::Only(keep) = split_by_cycle(mask, shared, e(1, 2), tris) else {
+            panic!("one disc left")
+        };
+        let built: Vec<[u8; 3]> = (0..tris.len())
+            .filter(|i| keep & (1 << i) != 0)
+            .map(|i| tris[i])
+            .collect();
+        assert_eq!(built.len(), 2);
+        assert!(built.iter().all(|t| t.contains(&0) && t.contains(&7)));
+        // Shared by one neighbour only: leaving it would open a hole.
+        assert_eq!(split_by_cycle(mask, shared, 0, tris), Split::Whole);
+        // Every edge shared: several cycles, no choice.
+        assert_eq!(
+            split_by_cycle(mask, cfg.edges, cfg.edges, tris),
+            Split::Whole
+        );
     }
 }
