@@ -9,7 +9,7 @@ use crate::encode_baseline::BitWriter;
 use crate::encode_entropy::EntropyWriter;
 use crate::error::{Error, Result};
 use crate::hierarchical_coding::{self as hc, BitCoder, LevelInput, Truth};
-use crate::octree::{BuildOptions, MortonMap, Octree, QBITS, Sidedness, unmorton};
+use crate::octree::{BuildOptions, Octree, QBITS, Sidedness, unmorton};
 use crate::ordering::Hierarchy;
 use crate::thinning::{ThinningOptions, thin};
 
@@ -213,30 +213,25 @@ fn encode_with<W: ChunkWriter>(
         ..Default::default()
     };
     let mut coded: Vec<[u32; 3]> = Vec::with_capacity(leaves.len());
+    let mut links = hc::Links::root();
     for r in 0..=dr {
         // Structure.
         let mut w = W::open();
         if r == 0 {
             coded.push(hc::code_root(&mut w, depth, Some(leaves[0]))?);
         } else {
-            let parent_index = if entropy {
-                hc::index_of(&h.levels[r - 1])
-            } else {
-                MortonMap::default()
-            };
             let inp = LevelInput {
                 depth,
                 r: r as u8,
                 entropy,
                 parents: &h.levels[r - 1],
-                parent_index: &parent_index,
                 max_nodes: usize::MAX,
             };
             let truth = Truth {
                 level: &h.levels[r],
                 leaves: &leaves,
             };
-            let got = hc::code_level(&mut w, &inp, &mut coded, Some(&truth))?;
+            let got = hc::code_level(&mut w, &inp, &mut links, &mut coded, Some(&truth))?;
             if got != h.levels[r] {
                 return Err(Error::Input(format!(
                     "internal: level {r} does not re-derive from its code"

@@ -25,7 +25,7 @@
 //! Precision layer `b` (bits `R + 1 ..= N`, §7.2): one bit per coordinate
 //! of every particle, in stream order.
 use crate::error::{Result, stream_err};
-use crate::octree::{MortonMap, morton, unmorton};
+use crate::octree::unmorton;
 use crate::ordering::{HLevel, NO_PARTICLE};
 
 /// One binary symbol at a time, with a context for adaptive layers.
@@ -75,10 +75,31 @@ pub struct LevelInput<'a> {
     pub entropy: bool,
     /// Nodes at level `r − 1`.
     pub parents: &'a HLevel,
-    /// Index of the parents by Morton code (entropy contexts).
-    pub parent_index: &'a MortonMap<u32>,
     /// Refuse to build more nodes than this (decoder guard).
     pub max_nodes: usize,
+}
+
+/// No node across this face.
+const NONE: u32 = u32::MAX;
+
+/// Face-neighbour links of one level, for the entropy contexts: `nb[i][d]`
+/// is the index of the node across face `d` of node `i` (`d = a` towards
+/// `−a`, `d = 3 + a` towards `+a`) or `NONE`. Built from the parent
+/// level's links while the level is coded (a child's neighbour is a
+/// sibling or a child of its parent's neighbour), so no context needs a
+/// hash or a search: the coder of level `r` reads only arrays.
+#[derive(Debug, Clone, Default)]
+pub struct Links {
+    nb: Vec<[u32; 6]>,
+}
+
+impl Links {
+    /// The links of level 0: the root has no neighbour.
+    pub fn root() -> Links {
+        Links {
+            nb: vec![[NONE; 6]],
+        }
+    }
 }
 
 /// The truth an encoder codes from.
@@ -101,23 +122,49 @@ pub fn code_root<C: BitCoder>(
     Ok(leaf)
 }
 
+/// Index of child `j` of the node whose children are `mask`, the first at
+/// `first`, if that child exists.
+#[inline]
+fn child_index(mask: u8, first: u32, j: usize) -> Option<u32> {
+    (mask >> j & 1 == 1).then(|| first + (mask & ((1u8 << j) - 1)).count_ones())
+}
+
 /// Codes level `r` and returns it; new particles' leaves are appended to
-/// `leaves` (their index is their particle number).
+/// `leaves` (their index is their particle number). In entropy mode
+/// `links` holds the links of level `r − 1` on entry and those of level
+/// `r` on return (below `R`); the baseline leaves it alone.
 pub fn code_level<C: BitCoder>(
     coder: &mut C,
     inp: &LevelInput,
+    links: &mut Links,
     leaves: &mut Vec<[u32; 3]>,
     truth: Option<&Truth>,
 ) -> Result<HLevel> {
     let depth = u32::from(inp.depth);
     let r = u32::from(inp.r);
     let parents = inp.parents;
+    let entropy = inp.entropy;
+    if entropy && links.nb.len() != parents.cells.len() {
+        return stream_err(format!(
+            "level {r}: neighbour links do not match level {}",
+            r - 1
+        ));
+    }
     let mut out = HLevel::default();
-    // Level-r nodes coded so far (value: phantom), for neighbour contexts.
-    let mut fine: MortonMap<bool> = MortonMap::default();
-    let side_parent = 1i64 << (r - 1);
+    // Per parent: its children (bit k: child k present), which of them are
+    // phantoms, and the index of its first child in `out`.
+    let n_parents = parents.cells.len();
+    let (mut masks, mut phantoms, mut firsts) = if entropy {
+        (
+            vec![0u8; n_parents],
+            vec![0u8; n_parents],
+            vec![0u32; n_parents],
+        )
+    } else {
+        (Vec::new(), Vec::new(), Vec::new())
+    };
     let mut t = 0usize;
-    for p in 0..parents.cells.len() {
+    for p in 0..n_parents {
         let pc = parents.cells[p];
         let phantom_parent = parents.phantom[p];
         let mut present = [false; 8];
@@ -140,48 +187,54 @@ pub fn code_level<C: BitCoder>(
                     as usize,
             )
         };
-        let pxyz = unmorton(pc);
+        // The parent's face neighbours (`coarse`, bit 2a: towards −a, bit
+        // 2a + 1: towards +a) and the children masks of those towards −a,
+        // all coded before this parent (their Morton codes are smaller).
         let mut coarse = 0usize;
-        if inp.entropy {
-            // Parent's face neighbours on the far side of each child half.
+        let mut back_mask = [0u8; 3];
+        let mut back_phantom = [0u8; 3];
+        if entropy {
+            let nb = &links.nb[p];
             for a in 0..3 {
-                for (dir, bit) in [(-1i64, 0usize), (1, 1)] {
-                    let v = pxyz[a] as i64 + dir;
-                    if v < 0 || v >= side_parent {
-                        continue;
-                    }
-                    let mut n = pxyz;
-                    n[a] = v as u32;
-                    if inp.parent_index.contains_key(&morton(n)) {
-                        coarse |= 1 << (2 * a + bit);
-                    }
+                if nb[a] != NONE {
+                    coarse |= 1 << (2 * a);
+                    back_mask[a] = masks[nb[a] as usize];
+                    back_phantom[a] = phantoms[nb[a] as usize];
+                }
+                if nb[3 + a] != NONE {
+                    coarse |= 1 << (2 * a + 1);
                 }
             }
         }
+        // Whether the node at child `k` − e_a exists (`set` = this parent's
+        // children so far) and is in `set`'s / `back`'s bits.
+        let behind = |k: usize, a: usize, own: u8, back: &[u8; 3]| -> bool {
+            let bit = 1 << a;
+            if k & bit != 0 {
+                own >> (k ^ bit) & 1 == 1
+            } else {
+                back[a] >> (k | bit) & 1 == 1
+            }
+        };
         // 1. Occupancy.
         let mut count = 0usize;
+        let mut own = 0u8;
         for k in 0..8usize {
-            let cell = (pc << 3) | k as u64;
             if Some(k) == implicit {
                 present[k] = true;
                 phantom[k] = false;
             } else {
-                let ctx = if inp.entropy {
+                let ctx = if entropy {
                     let state = match implicit {
                         None => 0,
                         Some(i) if k < i => 1,
                         Some(_) => 2,
                     };
-                    let c = unmorton(cell);
                     let mut fine_bits = 0usize;
                     let mut coarse_bits = 0usize;
                     for a in 0..3 {
-                        if c[a] > 0 {
-                            let mut n = c;
-                            n[a] -= 1;
-                            if fine.contains_key(&morton(n)) {
-                                fine_bits |= 1 << a;
-                            }
+                        if behind(k, a, own, &back_mask) {
+                            fine_bits |= 1 << a;
                         }
                         let half = (k >> a) & 1;
                         if coarse & (1 << (2 * a + half)) != 0 {
@@ -196,15 +249,14 @@ pub fn code_level<C: BitCoder>(
             }
             if present[k] {
                 count += 1;
-                if inp.entropy {
-                    fine.insert(cell, false);
-                }
+                own |= 1 << k;
             }
         }
         if count == 0 {
             return stream_err(format!("level {r}: a phantom node has no child"));
         }
         // 2. Phantom flags.
+        let mut own_phantom = 0u8;
         for k in 0..8usize {
             if !present[k] || Some(k) == implicit {
                 continue;
@@ -213,19 +265,14 @@ pub fn code_level<C: BitCoder>(
                 phantom[k] = false;
                 continue;
             }
-            if inp.entropy && implicit.is_some_and(|i| k < i) {
+            if entropy && implicit.is_some_and(|i| k < i) {
                 phantom[k] = true;
             } else {
-                let ctx = if inp.entropy {
-                    let c = unmorton((pc << 3) | k as u64);
+                let ctx = if entropy {
                     let mut nb = 0usize;
                     for a in 0..3 {
-                        if c[a] > 0 {
-                            let mut n = c;
-                            n[a] -= 1;
-                            if fine.get(&morton(n)) == Some(&true) {
-                                nb |= 1 << a;
-                            }
+                        if behind(k, a, own_phantom, &back_phantom) {
+                            nb |= 1 << a;
                         }
                     }
                     FLAG + ((usize::from(phantom_parent) * 8 + nb) * 4) + (count - 1).min(3)
@@ -234,9 +281,14 @@ pub fn code_level<C: BitCoder>(
                 };
                 coder.bit(&mut phantom[k], ctx)?;
             }
-            if phantom[k] && inp.entropy {
-                fine.insert((pc << 3) | k as u64, true);
+            if phantom[k] {
+                own_phantom |= 1 << k;
             }
+        }
+        if entropy {
+            masks[p] = own;
+            phantoms[p] = own_phantom;
+            firsts[p] = out.cells.len() as u32;
         }
         // 3. Leaf paths of the new particles, then the nodes.
         for k in 0..8usize {
@@ -258,14 +310,10 @@ pub fn code_level<C: BitCoder>(
                 // predicts which path bits the lexicographic rule fixes.
                 let mut ext = [0usize; 3];
                 let mut back = [0usize; 3];
-                if inp.entropy {
+                if entropy {
                     for a in 0..3 {
                         ext[a] = ((coarse >> (2 * a)) & 1) + ((coarse >> (2 * a + 1)) & 1);
-                        if c[a] > 0 {
-                            let mut n = c;
-                            n[a] -= 1;
-                            back[a] = usize::from(fine.contains_key(&morton(n)));
-                        }
+                        back[a] = usize::from(behind(k, a, own, &back_mask));
                     }
                 }
                 for d in (r + 1)..=depth {
@@ -273,7 +321,7 @@ pub fn code_level<C: BitCoder>(
                     let step = (d - r).min(3) as usize - 1;
                     for (a, l) in leaf.iter_mut().enumerate() {
                         let mut b = (want[a] >> s) & 1 == 1;
-                        let ctx = if inp.entropy {
+                        let ctx = if entropy {
                             PATH + ((step * 3 + a) * 3 + ext[a]) * 2 + back[a]
                         } else {
                             PATH
@@ -295,7 +343,42 @@ pub fn code_level<C: BitCoder>(
             ));
         }
     }
+    if entropy && r < depth {
+        *links = child_links(&links.nb, &masks, &firsts, out.cells.len());
+    }
     Ok(out)
+}
+
+/// The links of the children level: a child's neighbour across a face is
+/// a sibling, or a child of the parent's neighbour across that face.
+fn child_links(parent_nb: &[[u32; 6]], masks: &[u8], firsts: &[u32], n: usize) -> Links {
+    let mut nb = Vec::with_capacity(n);
+    for p in 0..masks.len() {
+        let mut m = masks[p];
+        while m != 0 {
+            let k = m.trailing_zeros() as usize;
+            m &= m - 1;
+            let mut row = [NONE; 6];
+            for d in 0..6 {
+                let bit = 1usize << (d % 3);
+                let towards_plus = d >= 3;
+                let inside = (k & bit != 0) != towards_plus;
+                let (q, j) = if inside {
+                    (p as u32, k ^ bit)
+                } else {
+                    (parent_nb[p][d], k ^ bit)
+                };
+                if q != NONE
+                    && let Some(i) = child_index(masks[q as usize], firsts[q as usize], j)
+                {
+                    row[d] = i;
+                }
+            }
+            nb.push(row);
+        }
+    }
+    debug_assert_eq!(nb.len(), n);
+    Links { nb }
 }
 
 /// Precision layer for bit `b` (1-based from the most significant of the
@@ -315,14 +398,4 @@ pub fn code_precision<C: BitCoder>(coder: &mut C, b: u32, q: &mut [[u32; 3]]) ->
         }
     }
     Ok(())
-}
-
-/// Morton index of a level, for neighbour lookups.
-pub fn index_of(level: &HLevel) -> MortonMap<u32> {
-    let mut m = MortonMap::default();
-    m.reserve(level.cells.len());
-    for (i, &c) in level.cells.iter().enumerate() {
-        m.insert(c, i as u32);
-    }
-    m
 }
