@@ -146,6 +146,7 @@ fn decode_with<'a, R: ChunkRead<'a>>(
     };
     let mut leaves: Vec<[u32; 3]> = Vec::new();
     let mut links = hc::Links::root();
+    let mut neighbours = Vec::new();
     // The chunk expected next: (kind, index).
     let mut expect = (ChunkKind::Level, 0u8);
     for chunk in ChunkReader::new(bytes) {
@@ -252,7 +253,10 @@ fn decode_with<'a, R: ChunkRead<'a>>(
                     ));
                 }
                 let mut c = R::open(chunk.payload)?;
-                hc::code_precision(&mut c, u32::from(b), &mut d.q)?;
+                if entropy && neighbours.is_empty() {
+                    neighbours = hc::particle_faces(&links, &d.levels[depth as usize], d.q.len());
+                }
+                hc::code_precision(&mut c, depth, u32::from(b), &mut d.q, &neighbours)?;
                 d.precision = b;
                 expect = (ChunkKind::Precision, b.saturating_add(1));
             }

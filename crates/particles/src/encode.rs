@@ -16,6 +16,28 @@ use crate::thinning::{ThinningOptions, thin};
 /// Default precision `N`: §7.2 finds 12 bits enough for most models.
 pub const DEFAULT_PRECISION: u8 = 12;
 
+/// Where the entropy mode puts each particle's vertex inside its leaf.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum Placement {
+    /// The mean of the leaf's samples (§5.5), as the baseline always does.
+    Mean,
+    /// On the plane of the leaf's samples (through their mean, across
+    /// their mean normal), where the leaf's middle column along the
+    /// [`hc::normal_axis`] the decoder infers from the neighbours meets it.
+    /// The two tangential coordinates then cost almost nothing (they are
+    /// the leaf's middle, which the precision contexts predict) and the
+    /// error across the surface is the plane's. Falls back to the mean
+    /// where the input has no normals, the plane is steeper than
+    /// [`MIN_NORMAL_COSINE`] against that axis, or it leaves the leaf
+    /// there.
+    SurfaceColumn,
+}
+
+/// Smallest `|n · axis|` for which [`Placement::SurfaceColumn`] moves a
+/// vertex: steeper planes would slide far along the column for a small
+/// tangential move (`tan ≤ 1.73` at 0.5).
+pub const MIN_NORMAL_COSINE: f32 = 0.5;
+
 /// Options of [`encode`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EncodeOptions {
@@ -31,10 +53,13 @@ pub struct EncodeOptions {
     pub colours: bool,
     /// Code normals (§5.5); off by default, as §6.2 lets the coder drop them.
     pub normals: bool,
+    /// Vertex placement of the entropy mode (the baseline codes means).
+    pub placement: Placement,
 }
 
 impl EncodeOptions {
-    /// Entropy mode, automatic depth, `N = 12`, inner thinning, colours kept.
+    /// Entropy mode, automatic depth, `N = 12`, inner thinning, colours
+    /// kept, vertices on surface columns.
     pub const DEFAULT: EncodeOptions = EncodeOptions {
         depth: None,
         precision: DEFAULT_PRECISION,
@@ -43,6 +68,7 @@ impl EncodeOptions {
         sidedness: None,
         colours: true,
         normals: false,
+        placement: Placement::SurfaceColumn,
     };
 }
 
@@ -297,9 +323,25 @@ fn encode_with<W: ChunkWriter>(
         .iter()
         .map(|&l| tree.leaves.q[leaf_source[l as usize] as usize])
         .collect();
+    let neighbours = if entropy {
+        hc::particle_faces(&links, &h.levels[dr], q.len())
+    } else {
+        Vec::new()
+    };
+    if entropy
+        && opts.placement == Placement::SurfaceColumn
+        && let Some(normals) = &tree.leaves.normal
+    {
+        for (i, v) in q.iter_mut().enumerate() {
+            let n = normals[leaf_source[h.particle_leaf[i] as usize] as usize];
+            if let Some(p) = surface_column(*v, leaves[i], n, &neighbours[i], depth, precision) {
+                *v = p;
+            }
+        }
+    }
     for b in (u32::from(depth) + 1)..=u32::from(precision) {
         let mut w = W::open();
-        hc::code_precision(&mut w, b, &mut q)?;
+        hc::code_precision(&mut w, depth, b, &mut q, &neighbours)?;
         let (payload, bits) = w.close();
         write_chunk(
             ChunkKind::Precision,
@@ -313,4 +355,110 @@ fn encode_with<W: ChunkWriter>(
     }
     report.total_bytes = out.len();
     Ok(Encoded { bytes: out, report })
+}
+
+/// [`Placement::SurfaceColumn`] for one particle: `mean` (16-bit grid)
+/// and unit `normal` of its samples, `leaf` (`R`-bit) and its face mask.
+/// The tangential coordinates become the centre of the `N`-bit cell at
+/// the leaf's middle (what a decoder at full precision draws), the normal
+/// one the plane's height there. `None`: keep the mean.
+fn surface_column(
+    mean: [u32; 3],
+    leaf: [u32; 3],
+    normal: glam::Vec3,
+    faces: &u8,
+    depth: u8,
+    precision: u8,
+) -> Option<[u32; 3]> {
+    let s = QBITS - u32::from(depth);
+    if s == 0 {
+        return None;
+    }
+    let g = hc::normal_axis(*faces);
+    let n = normal.to_array().map(f64::from);
+    if n[g].abs() < f64::from(MIN_NORMAL_COSINE) {
+        return None;
+    }
+    let half_cell = (1u32 << (QBITS - u32::from(precision))) >> 1;
+    let mut out = [0u32; 3];
+    let mut rise = 0.0;
+    for a in 0..3 {
+        if a != g {
+            out[a] = (leaf[a] << s) + (1 << (s - 1)) + half_cell;
+            rise += n[a] * (f64::from(out[a]) - f64::from(mean[a]));
+        }
+    }
+    let h = (f64::from(mean[g]) - rise / n[g]).round();
+    let lo = f64::from(leaf[g] << s);
+    let hi = lo + f64::from((1u32 << s) - 1);
+    if !(lo..=hi).contains(&h) {
+        return None;
+    }
+    out[g] = h as u32;
+    Some(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::decode::{DecodeOptions, decode};
+
+    /// RMS distance of the decoded full-precision vertices from the unit
+    /// sphere the icosphere approximates, and the stream size.
+    fn sphere_rms(placement: Placement, precision: u8) -> (f64, usize) {
+        let model = Model::Mesh(lodkit_mesh::shapes::icosphere(5));
+        let opts = EncodeOptions {
+            depth: Some(6),
+            precision,
+            placement,
+            ..EncodeOptions::DEFAULT
+        };
+        let e = encode(&model, &opts).unwrap();
+        let d = decode(&e.bytes, &DecodeOptions::default()).unwrap();
+        let s = d.surface(6).unwrap();
+        let sq: f64 = s
+            .positions
+            .iter()
+            .map(|p| (f64::from(p.length()) - 1.0).powi(2))
+            .sum();
+        ((sq / s.positions.len() as f64).sqrt(), e.bytes.len())
+    }
+
+    #[test]
+    fn surface_columns_cost_fewer_bytes_than_means_at_about_the_same_error() {
+        for n in [10u8, 12] {
+            let (rms_mean, bytes_mean) = sphere_rms(Placement::Mean, n);
+            let (rms_col, bytes_col) = sphere_rms(Placement::SurfaceColumn, n);
+            assert!(
+                bytes_col * 10 < bytes_mean * 8,
+                "N = {n}: {bytes_col} B against {bytes_mean} B"
+            );
+            assert!(
+                rms_col < rms_mean * 1.25,
+                "N = {n}: RMS {rms_col:.3e} against {rms_mean:.3e}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_surface_column_lies_on_the_plane_inside_the_leaf() {
+        // Leaf (3, 5, 7) at R = 4 (4096 grid units a side), a plane tilted
+        // about x with its normal mostly along z.
+        let leaf = [3u32, 5, 7];
+        let n = glam::Vec3::new(0.0, 0.6, 0.8);
+        let mean = [3 * 4096 + 1000, 5 * 4096 + 2500, 7 * 4096 + 2000];
+        let faces = 0b011_011; // neighbours across x and y: z is the normal axis
+        let p = surface_column(mean, leaf, n, &faces, 4, 12).unwrap();
+        // Tangential: the 12-bit cell at the leaf's middle, drawn at its centre.
+        assert_eq!(p[0], 3 * 4096 + 2048 + 8);
+        assert_eq!(p[1], 5 * 4096 + 2048 + 8);
+        let off: f64 = (0..3)
+            .map(|a| f64::from(n[a]) * (f64::from(p[a]) - f64::from(mean[a])))
+            .sum();
+        assert!(off.abs() <= 1.0, "{off} grid units off the plane");
+        assert_eq!(p[2] >> 12, 7);
+        // Steeper than the limit against the inferred axis: keep the mean.
+        let steep = glam::Vec3::new(0.0, 0.9, 0.43);
+        assert_eq!(surface_column(mean, leaf, steep, &faces, 4, 12), None);
+    }
 }

@@ -56,7 +56,10 @@ const FLAG_STATES: usize = 2 * 8 * 4;
 const PATH: usize = FLAG + FLAG_STATES;
 const PATH_STATES: usize = 3 * 3 * 3 * 2;
 const PREC: usize = PATH + PATH_STATES;
-const PREC_STATES: usize = 3 * 16 * 4;
+/// Entropy mode: axis × layer bucket × neighbours along it × normal axis
+/// or not × 2 bits above (216); the plain layout, axis × 16 bits × 2 bits
+/// above (192), fits inside.
+const PREC_STATES: usize = 3 * 3 * 3 * 2 * 4;
 /// First context of the attribute bits (see [`crate::attributes`]).
 pub const ATTR: usize = PREC + PREC_STATES;
 /// Contexts reserved for attributes: channel × component × 16 bit places,
@@ -132,7 +135,8 @@ fn child_index(mask: u8, first: u32, j: usize) -> Option<u32> {
 /// Codes level `r` and returns it; new particles' leaves are appended to
 /// `leaves` (their index is their particle number). In entropy mode
 /// `links` holds the links of level `r − 1` on entry and those of level
-/// `r` on return (below `R`); the baseline leaves it alone.
+/// `r` on return (those of level `R` serve [`particle_neighbours`]); the
+/// baseline leaves it alone.
 pub fn code_level<C: BitCoder>(
     coder: &mut C,
     inp: &LevelInput,
@@ -343,7 +347,7 @@ pub fn code_level<C: BitCoder>(
             ));
         }
     }
-    if entropy && r < depth {
+    if entropy {
         *links = child_links(&links.nb, &masks, &firsts, out.cells.len());
     }
     Ok(out)
@@ -381,21 +385,167 @@ fn child_links(parent_nb: &[[u32; 6]], masks: &[u8], firsts: &[u32], n: usize) -
     Links { nb }
 }
 
+/// Which face neighbours every particle's leaf has at level `R`, by
+/// particle number: bit `d` set when the leaf across face `d` is ON (`d =
+/// a` towards `−a`, `3 + a` towards `+a`). From the links [`code_level`]
+/// leaves after level `R` (entropy mode); empty when `links` does not
+/// describe `leaves`.
+pub fn particle_faces(links: &Links, leaves: &HLevel, particles: usize) -> Vec<u8> {
+    if links.nb.len() != leaves.cells.len() {
+        return Vec::new();
+    }
+    let mut out = vec![0u8; particles];
+    for (i, row) in links.nb.iter().enumerate() {
+        if let Some(slot) = out.get_mut(leaves.particle[i] as usize) {
+            for d in 0..6 {
+                if row[d] != NONE {
+                    *slot |= 1 << d;
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Face neighbours along each axis (0–2) of a [`particle_faces`] mask.
+#[inline]
+pub fn faces_per_axis(mask: u8) -> [u8; 3] {
+    [0, 1, 2].map(|a| (mask >> a & 1) + (mask >> (a + 3) & 1))
+}
+
+/// The axis a leaf's surface most likely crosses — the one with the
+/// fewest face neighbours (a surface spreads across its tangent axes);
+/// ties go to the later axis. Encoder and decoder derive it alike.
+#[inline]
+pub fn normal_axis(mask: u8) -> usize {
+    let c = faces_per_axis(mask);
+    let mut g = 2;
+    for a in [1, 0] {
+        if c[a] < c[g] {
+            g = a;
+        }
+    }
+    g
+}
+
 /// Precision layer for bit `b` (1-based from the most significant of the
-/// 16): one bit per coordinate of every particle. `q` holds 16-bit
+/// 16, `R < b`): one bit per coordinate of every particle. `q` holds 16-bit
 /// coordinates; the encoder's are complete, the decoder's get bit `b` set.
-pub fn code_precision<C: BitCoder>(coder: &mut C, b: u32, q: &mut [[u32; 3]]) -> Result<()> {
+///
+/// Contexts: the axis, the two bits above (a centroid near the middle of
+/// its cube reads 0111… or 1000…, so they predict this one) and the layer.
+/// In entropy mode `faces` ([`particle_faces`], else empty) adds how many
+/// face neighbours the leaf has along the axis and whether the axis is
+/// its [`normal_axis`]: the coordinate across the surface carries the
+/// information, those along it are predictable (the entropy encoder puts
+/// them at the leaf's middle, see [`crate::encode::Placement`]).
+pub fn code_precision<C: BitCoder>(
+    coder: &mut C,
+    depth: u8,
+    b: u32,
+    q: &mut [[u32; 3]],
+    faces: &[u8],
+) -> Result<()> {
     let shift = 16 - b;
     let layer = (b as usize).min(16) - 1;
-    for v in q.iter_mut() {
+    if faces.is_empty() {
+        for v in q.iter_mut() {
+            for (a, c) in v.iter_mut().enumerate() {
+                let mut bit = (*c >> shift) & 1 == 1;
+                let above = ((*c >> (shift + 1)) & 3) as usize;
+                coder.bit(&mut bit, PREC + (a * 16 + layer) * 4 + above)?;
+                *c = (*c & !(1 << shift)) | (u32::from(bit) << shift);
+            }
+        }
+        return Ok(());
+    }
+    if faces.len() != q.len() {
+        return stream_err("precision layer: face table does not match the particles");
+    }
+    // Layer bucket: the first bits below the leaf are the informative ones.
+    let lb = (b.saturating_sub(u32::from(depth) + 1) as usize).min(2);
+    for (v, &f) in q.iter_mut().zip(faces) {
+        let cnt = faces_per_axis(f);
+        let g = normal_axis(f);
         for (a, c) in v.iter_mut().enumerate() {
             let mut bit = (*c >> shift) & 1 == 1;
-            // The two bits above: a centroid near the middle of its cube
-            // reads 0111… or 1000…, so they predict this one.
             let above = ((*c >> (shift + 1)) & 3) as usize;
-            coder.bit(&mut bit, PREC + (a * 16 + layer) * 4 + above)?;
+            let ctx = PREC
+                + ((((a * 3 + lb) * 3 + cnt[a] as usize) * 2 + usize::from(a == g)) * 4)
+                + above;
+            coder.bit(&mut bit, ctx)?;
             *c = (*c & !(1 << shift)) | (u32::from(bit) << shift);
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use std::collections::HashMap;
+
+    use super::*;
+    use crate::encode_baseline::BitWriter;
+    use crate::octree::{BuildOptions, Octree, morton, offset};
+    use crate::ordering::Hierarchy;
+    use crate::thinning::{ThinningOptions, thin};
+
+    #[test]
+    fn propagated_links_are_the_face_neighbours_a_hash_lookup_finds() {
+        let model = lodkit_mesh::Model::Mesh(lodkit_mesh::shapes::icosphere(3));
+        let mut tree = Octree::build(&model, &BuildOptions::default()).unwrap();
+        thin(&mut tree, &ThinningOptions::DEFAULT);
+        let (h, _) = Hierarchy::from_thinned(&tree).unwrap();
+        let leaves: Vec<[u32; 3]> = h
+            .particle_leaf
+            .iter()
+            .map(|&l| unmorton(h.levels[h.depth as usize].cells[l as usize]))
+            .collect();
+        let mut coded = vec![leaves[0]];
+        let mut links = Links::root();
+        let mut checked = 0;
+        for r in 1..=h.depth as usize {
+            let inp = LevelInput {
+                depth: h.depth,
+                r: r as u8,
+                entropy: true,
+                parents: &h.levels[r - 1],
+                max_nodes: usize::MAX,
+            };
+            let truth = Truth {
+                level: &h.levels[r],
+                leaves: &leaves,
+            };
+            let mut w = BitWriter::new();
+            let got = code_level(&mut w, &inp, &mut links, &mut coded, Some(&truth)).unwrap();
+            assert_eq!(got, h.levels[r]);
+            let index: HashMap<u64, u32> = got
+                .cells
+                .iter()
+                .enumerate()
+                .map(|(i, &c)| (c, i as u32))
+                .collect();
+            for (i, &c) in got.cells.iter().enumerate() {
+                for d in 0..6 {
+                    let mut step = [0i32; 3];
+                    step[d % 3] = if d < 3 { -1 } else { 1 };
+                    let want = offset(unmorton(c), step, 1 << r)
+                        .and_then(|n| index.get(&morton(n)).copied())
+                        .unwrap_or(NONE);
+                    assert_eq!(links.nb[i][d], want, "level {r} node {i} face {d}");
+                    checked += usize::from(want != NONE);
+                }
+            }
+        }
+        assert!(checked > 1000, "{checked} links checked");
+    }
+
+    #[test]
+    fn the_normal_axis_is_the_one_without_face_neighbours() {
+        // A z = const sheet: neighbours at ±x and ±y.
+        assert_eq!(normal_axis(0b011_011), 2);
+        // An x = const sheet: neighbours at ±y, ±z.
+        assert_eq!(normal_axis(0b110_110), 0);
+        assert_eq!(faces_per_axis(0b100_001), [1, 0, 1]);
+    }
 }

@@ -58,7 +58,7 @@ pub mod triangulation_table;
 
 pub use container::Mode;
 pub use decode::{DecodeOptions, Decoded, LevelSurface, decode};
-pub use encode::{EncodeOptions, EncodeReport, Encoded, LevelReport, encode};
+pub use encode::{EncodeOptions, EncodeReport, Encoded, LevelReport, Placement, encode};
 pub use error::{Error, Result};
 pub use octree::Sidedness;
 pub use stats::{LevelStats, ProgressiveLevel, StreamStats, progressive_levels, stream_stats};
