@@ -256,7 +256,7 @@ fn decode_with<'a, R: ChunkRead<'a>>(
                 if entropy && neighbours.is_empty() {
                     neighbours = hc::particle_faces(&links, &d.levels[depth as usize], d.q.len());
                 }
-                hc::code_precision(&mut c, depth, u32::from(b), &mut d.q, &neighbours)?;
+                hc::code_precision(&mut c, depth, u32::from(b), &mut d.q, &mut neighbours)?;
                 d.precision = b;
                 expect = (ChunkKind::Precision, b.saturating_add(1));
             }

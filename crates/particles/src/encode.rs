@@ -323,7 +323,7 @@ fn encode_with<W: ChunkWriter>(
         .iter()
         .map(|&l| tree.leaves.q[leaf_source[l as usize] as usize])
         .collect();
-    let neighbours = if entropy {
+    let mut neighbours = if entropy {
         hc::particle_faces(&links, &h.levels[dr], q.len())
     } else {
         Vec::new()
@@ -336,12 +336,13 @@ fn encode_with<W: ChunkWriter>(
             let n = normals[leaf_source[h.particle_leaf[i] as usize] as usize];
             if let Some(p) = surface_column(*v, leaves[i], n, &neighbours[i], depth, precision) {
                 *v = p;
+                neighbours[i] |= hc::COLUMN;
             }
         }
     }
     for b in (u32::from(depth) + 1)..=u32::from(precision) {
         let mut w = W::open();
-        hc::code_precision(&mut w, depth, b, &mut q, &neighbours)?;
+        hc::code_precision(&mut w, depth, b, &mut q, &mut neighbours)?;
         let (payload, bits) = w.close();
         write_chunk(
             ChunkKind::Precision,

@@ -181,7 +181,7 @@ impl EntropyWriter {
 }
 
 impl BitCoder for EntropyWriter {
-    #[inline]
+    #[inline(always)]
     fn bit(&mut self, b: &mut bool, ctx: usize) -> Result<()> {
         let s = self.ctx[ctx] as usize;
         self.encode(*b, u32::from(P0[s]));
@@ -229,14 +229,14 @@ impl<'a> EntropyReader<'a> {
         })
     }
 
-    #[inline]
+    #[inline(always)]
     fn next_byte(&mut self) -> u32 {
         let b = self.bytes.get(self.pos).copied().unwrap_or(0);
         self.pos += 1;
         u32::from(b)
     }
 
-    #[inline]
+    #[inline(always)]
     fn decode(&mut self, p0: u32) -> bool {
         let bound = (self.range >> PRECISION) * p0;
         let bit = self.code >= bound;
@@ -255,7 +255,7 @@ impl<'a> EntropyReader<'a> {
 }
 
 impl BitCoder for EntropyReader<'_> {
-    #[inline]
+    #[inline(always)]
     fn bit(&mut self, b: &mut bool, ctx: usize) -> Result<()> {
         if self.symbols >= self.budget {
             return stream_err("entropy payload decodes to more symbols than its size allows");

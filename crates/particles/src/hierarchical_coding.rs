@@ -60,8 +60,11 @@ const PREC: usize = PATH + PATH_STATES;
 /// or not × 2 bits above (216); the plain layout, axis × 16 bits × 2 bits
 /// above (192), fits inside.
 const PREC_STATES: usize = 3 * 3 * 3 * 2 * 4;
+/// Column flags: face neighbours along x, y, z (0–2 each).
+const COL: usize = PREC + PREC_STATES;
+const COL_STATES: usize = 27;
 /// First context of the attribute bits (see [`crate::attributes`]).
-pub const ATTR: usize = PREC + PREC_STATES;
+pub const ATTR: usize = COL + COL_STATES;
 /// Contexts reserved for attributes: channel × component × 16 bit places,
 /// plus correction bits.
 pub const ATTR_STATES: usize = 2 * 3 * 16 + 2 * 3 * 3;
@@ -428,23 +431,34 @@ pub fn normal_axis(mask: u8) -> usize {
     g
 }
 
+/// Flag in a [`particle_faces`] mask: the particle's vertex sits at its
+/// leaf's middle column along its [`normal_axis`] (entropy mode; coded in
+/// the first precision layer, then only that axis has precision bits).
+pub const COLUMN: u8 = 1 << 7;
+
 /// Precision layer for bit `b` (1-based from the most significant of the
 /// 16, `R < b`): one bit per coordinate of every particle. `q` holds 16-bit
 /// coordinates; the encoder's are complete, the decoder's get bit `b` set.
 ///
-/// Contexts: the axis, the two bits above (a centroid near the middle of
-/// its cube reads 0111… or 1000…, so they predict this one) and the layer.
-/// In entropy mode `faces` ([`particle_faces`], else empty) adds how many
-/// face neighbours the leaf has along the axis and whether the axis is
-/// its [`normal_axis`]: the coordinate across the surface carries the
-/// information, those along it are predictable (the entropy encoder puts
-/// them at the leaf's middle, see [`crate::encode::Placement`]).
+/// Baseline (`faces` empty): every bit, contexts axis, layer and the two
+/// bits above (a centroid near the middle of its cube reads 0111… or
+/// 1000…, so they predict this one) — ignored by the raw layer.
+///
+/// Entropy mode (`faces` from [`particle_faces`]; the encoder sets
+/// [`COLUMN`] where [`crate::encode::Placement::SurfaceColumn`] placed the
+/// vertex): the first layer codes each particle's column flag (context:
+/// its face neighbours per axis); a column particle's two tangential
+/// coordinates are then the leaf's middle (`1` then zeros below `R`) and
+/// only its normal axis has bits. Precision bits are conditioned on the
+/// axis, the layer (first, second, later), the leaf's face neighbours
+/// along the axis, whether it is the normal axis, and the two bits above.
+/// The decoder's flags persist in `faces` from layer to layer.
 pub fn code_precision<C: BitCoder>(
     coder: &mut C,
     depth: u8,
     b: u32,
     q: &mut [[u32; 3]],
-    faces: &[u8],
+    faces: &mut [u8],
 ) -> Result<()> {
     let shift = 16 - b;
     let layer = (b as usize).min(16) - 1;
@@ -462,12 +476,30 @@ pub fn code_precision<C: BitCoder>(
     if faces.len() != q.len() {
         return stream_err("precision layer: face table does not match the particles");
     }
+    let first_layer = b == u32::from(depth) + 1;
     // Layer bucket: the first bits below the leaf are the informative ones.
     let lb = (b.saturating_sub(u32::from(depth) + 1) as usize).min(2);
-    for (v, &f) in q.iter_mut().zip(faces) {
-        let cnt = faces_per_axis(f);
-        let g = normal_axis(f);
+    for (v, f) in q.iter_mut().zip(faces.iter_mut()) {
+        let cnt = faces_per_axis(*f);
+        let g = normal_axis(*f);
+        if first_layer {
+            let mut column = *f & COLUMN != 0;
+            let ctx = COL + (cnt[0] as usize * 3 + cnt[1] as usize) * 3 + cnt[2] as usize;
+            coder.bit(&mut column, ctx)?;
+            if column {
+                *f |= COLUMN;
+            } else {
+                *f &= !COLUMN;
+            }
+        }
+        let column = *f & COLUMN != 0;
         for (a, c) in v.iter_mut().enumerate() {
+            if column && a != g {
+                if first_layer {
+                    *c = ((*c >> shift) | 1) << shift;
+                }
+                continue;
+            }
             let mut bit = (*c >> shift) & 1 == 1;
             let above = ((*c >> (shift + 1)) & 3) as usize;
             let ctx = PREC
