@@ -146,7 +146,7 @@ fn decode_with<'a, R: ChunkRead<'a>>(
     };
     let mut leaves: Vec<[u32; 3]> = Vec::new();
     let mut links = hc::Links::root();
-    let mut neighbours = Vec::new();
+    let mut neighbours = hc::Faces::default();
     // The chunk expected next: (kind, index).
     let mut expect = (ChunkKind::Level, 0u8);
     for chunk in ChunkReader::new(bytes) {

@@ -23,13 +23,14 @@ pub enum Placement {
     Mean,
     /// On the plane of the leaf's samples (through their mean, across
     /// their mean normal), where the leaf's middle column along the
-    /// [`hc::normal_axis`] the decoder infers from the neighbours meets it.
-    /// The two tangential coordinates then cost almost nothing (they are
-    /// the leaf's middle, which the precision contexts predict) and the
+    /// [`hc::normal_axis`] the decoder infers from the neighbours meets it —
+    /// or, where that crossing leaves the leaf, the quarter or eighth
+    /// column under the mean. The two tangential coordinates then cost
+    /// nothing, or one or two bits (see [`hc::code_precision`]), and the
     /// error across the surface is the plane's. Falls back to the mean
     /// where the input has no normals, the plane is steeper than
-    /// [`MIN_NORMAL_COSINE`] against that axis, or it leaves the leaf
-    /// there.
+    /// [`MIN_NORMAL_COSINE`] against that axis, or every column's crossing
+    /// leaves the leaf.
     SurfaceColumn,
 }
 
@@ -129,6 +130,9 @@ impl EncodeReport {
 pub struct Encoded {
     pub bytes: Vec<u8>,
     pub report: EncodeReport,
+    /// The 16-bit grid vertex of every particle (stream order) as a
+    /// decoder at full precision `N` reads it (bits below `N` zero).
+    pub vertices: Vec<[u32; 3]>,
 }
 
 /// A bit layer that writes chunks.
@@ -326,17 +330,19 @@ fn encode_with<W: ChunkWriter>(
     let mut neighbours = if entropy {
         hc::particle_faces(&links, &h.levels[dr], q.len())
     } else {
-        Vec::new()
+        hc::Faces::default()
     };
     if entropy
+        && precision > depth
         && opts.placement == Placement::SurfaceColumn
         && let Some(normals) = &tree.leaves.normal
     {
         for (i, v) in q.iter_mut().enumerate() {
             let n = normals[leaf_source[h.particle_leaf[i] as usize] as usize];
-            if let Some(p) = surface_column(*v, leaves[i], n, &neighbours[i], depth, precision) {
+            let g = hc::normal_axis(neighbours.mask[i]);
+            if let Some((p, k)) = surface_column(*v, leaves[i], n, g, depth, precision) {
                 *v = p;
-                neighbours[i] |= hc::COLUMN;
+                neighbours.column[i] = 1 + k;
             }
         }
     }
@@ -355,48 +361,58 @@ fn encode_with<W: ChunkWriter>(
         report.precision_bits.push(bits);
     }
     report.total_bytes = out.len();
-    Ok(Encoded { bytes: out, report })
+    let low = QBITS - u32::from(precision);
+    let vertices = q.iter().map(|v| v.map(|c| (c >> low) << low)).collect();
+    Ok(Encoded {
+        bytes: out,
+        report,
+        vertices,
+    })
 }
 
 /// [`Placement::SurfaceColumn`] for one particle: `mean` (16-bit grid)
-/// and unit `normal` of its samples, `leaf` (`R`-bit) and its face mask.
-/// The tangential coordinates become the centre of the `N`-bit cell at
-/// the leaf's middle (what a decoder at full precision draws), the normal
-/// one the plane's height there. `None`: keep the mean.
+/// and unit `normal` of its samples, `leaf` (`R`-bit), the normal axis
+/// `g` the decoder will infer. Tries columns of depth `k = 0, 1, …` (up
+/// to [`hc::MAX_COLUMN_DEPTH`], and below `N`): the tangential
+/// coordinates keep the mean's first `k` bits below `R`, then sit at the
+/// middle of that sub-cell (the centre of its `N`-bit cell there, what a
+/// decoder at full precision draws); the normal one is the plane's height
+/// there. The first `k` whose height stays inside the leaf wins; `None`:
+/// keep the mean.
 fn surface_column(
     mean: [u32; 3],
     leaf: [u32; 3],
     normal: glam::Vec3,
-    faces: &u8,
+    g: usize,
     depth: u8,
     precision: u8,
-) -> Option<[u32; 3]> {
+) -> Option<([u32; 3], u8)> {
     let s = QBITS - u32::from(depth);
-    if s == 0 {
-        return None;
-    }
-    let g = hc::normal_axis(*faces);
     let n = normal.to_array().map(f64::from);
-    if n[g].abs() < f64::from(MIN_NORMAL_COSINE) {
+    if s == 0 || n[g].abs() < f64::from(MIN_NORMAL_COSINE) {
         return None;
     }
     let half_cell = (1u32 << (QBITS - u32::from(precision))) >> 1;
-    let mut out = [0u32; 3];
-    let mut rise = 0.0;
-    for a in 0..3 {
-        if a != g {
-            out[a] = (leaf[a] << s) + (1 << (s - 1)) + half_cell;
-            rise += n[a] * (f64::from(out[a]) - f64::from(mean[a]));
-        }
-    }
-    let h = (f64::from(mean[g]) - rise / n[g]).round();
+    let max_k = hc::MAX_COLUMN_DEPTH.min(precision - depth - 1);
     let lo = f64::from(leaf[g] << s);
     let hi = lo + f64::from((1u32 << s) - 1);
-    if !(lo..=hi).contains(&h) {
-        return None;
+    for k in 0..=max_k {
+        let sub = s - u32::from(k);
+        let mut out = [0u32; 3];
+        let mut rise = 0.0;
+        for a in 0..3 {
+            if a != g {
+                out[a] = ((mean[a] >> sub) << sub) + (1 << (sub - 1)) + half_cell;
+                rise += n[a] * (f64::from(out[a]) - f64::from(mean[a]));
+            }
+        }
+        let h = (f64::from(mean[g]) - rise / n[g]).round();
+        if (lo..=hi).contains(&h) {
+            out[g] = h as u32;
+            return Some((out, k));
+        }
     }
-    out[g] = h as u32;
-    Some(out)
+    None
 }
 
 #[cfg(test)]
@@ -442,14 +458,44 @@ mod tests {
     }
 
     #[test]
+    fn decoders_read_the_vertices_the_encoder_placed() {
+        let model = Model::Mesh(lodkit_mesh::shapes::icosphere(4));
+        for placement in [Placement::Mean, Placement::SurfaceColumn] {
+            for mode in [Mode::Baseline, Mode::Entropy] {
+                for n in [6u8, 7, 8, 9, 12, 16] {
+                    let opts = EncodeOptions {
+                        depth: Some(6),
+                        precision: n,
+                        placement,
+                        mode,
+                        ..EncodeOptions::DEFAULT
+                    };
+                    let e = encode(&model, &opts).unwrap();
+                    let d = decode(&e.bytes, &DecodeOptions::default()).unwrap();
+                    assert_eq!(d.q.len(), e.vertices.len());
+                    let bad = d.q.iter().zip(&e.vertices).position(|(a, b)| a != b);
+                    assert!(
+                        bad.is_none(),
+                        "{placement:?} {mode:?} N = {n}: particle {bad:?} decodes to {:?}, placed at {:?}",
+                        bad.map(|i| d.q[i]),
+                        bad.map(|i| e.vertices[i])
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
     fn a_surface_column_lies_on_the_plane_inside_the_leaf() {
         // Leaf (3, 5, 7) at R = 4 (4096 grid units a side), a plane tilted
         // about x with its normal mostly along z.
         let leaf = [3u32, 5, 7];
         let n = glam::Vec3::new(0.0, 0.6, 0.8);
         let mean = [3 * 4096 + 1000, 5 * 4096 + 2500, 7 * 4096 + 2000];
-        let faces = 0b011_011; // neighbours across x and y: z is the normal axis
-        let p = surface_column(mean, leaf, n, &faces, 4, 12).unwrap();
+        // Neighbours across x and y: z is the normal axis.
+        assert_eq!(hc::normal_axis(0b011_011), 2);
+        let (p, k) = surface_column(mean, leaf, n, 2, 4, 12).unwrap();
+        assert_eq!(k, 0);
         // Tangential: the 12-bit cell at the leaf's middle, drawn at its centre.
         assert_eq!(p[0], 3 * 4096 + 2048 + 8);
         assert_eq!(p[1], 5 * 4096 + 2048 + 8);
@@ -460,6 +506,13 @@ mod tests {
         assert_eq!(p[2] >> 12, 7);
         // Steeper than the limit against the inferred axis: keep the mean.
         let steep = glam::Vec3::new(0.0, 0.9, 0.43);
-        assert_eq!(surface_column(mean, leaf, steep, &faces, 4, 12), None);
+        assert_eq!(surface_column(mean, leaf, steep, 2, 4, 12), None);
+        // A mean near the leaf's top: the middle column's crossing leaves
+        // the leaf, the quarter column under the mean does not.
+        let high = [3 * 4096 + 3500, 5 * 4096 + 3500, 7 * 4096 + 3700];
+        let (p, k) = surface_column(high, leaf, n, 2, 4, 12).unwrap();
+        assert_eq!(k, 1);
+        assert_eq!(p[1], 5 * 4096 + 2048 + 1024 + 8);
+        assert_eq!(p[2] >> 12, 7);
     }
 }

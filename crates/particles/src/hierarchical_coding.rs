@@ -63,8 +63,14 @@ const PREC_STATES: usize = 3 * 3 * 3 * 2 * 4;
 /// Column flags: face neighbours along x, y, z (0–2 each).
 const COL: usize = PREC + PREC_STATES;
 const COL_STATES: usize = 27;
+/// Column depth, unary: one context per step.
+const COLK: usize = COL + COL_STATES;
+/// Normal-axis bits of column particles: layer bucket × predicted height
+/// bin × 2 bits above.
+const PRED: usize = COLK + MAX_COLUMN_DEPTH as usize;
+const PRED_STATES: usize = 3 * PRED_BINS * 4;
 /// First context of the attribute bits (see [`crate::attributes`]).
-pub const ATTR: usize = COL + COL_STATES;
+pub const ATTR: usize = PRED + PRED_STATES;
 /// Contexts reserved for attributes: channel × component × 16 bit places,
 /// plus correction bits.
 pub const ATTR_STATES: usize = 2 * 3 * 16 + 2 * 3 * 3;
@@ -388,22 +394,48 @@ fn child_links(parent_nb: &[[u32; 6]], masks: &[u8], firsts: &[u32], n: usize) -
     Links { nb }
 }
 
-/// Which face neighbours every particle's leaf has at level `R`, by
-/// particle number: bit `d` set when the leaf across face `d` is ON (`d =
-/// a` towards `−a`, `3 + a` towards `+a`). From the links [`code_level`]
-/// leaves after level `R` (entropy mode); empty when `links` does not
-/// describe `leaves`.
-pub fn particle_faces(links: &Links, leaves: &HLevel, particles: usize) -> Vec<u8> {
-    if links.nb.len() != leaves.cells.len() {
-        return Vec::new();
+/// The particles' face neighbourhood at level `R`, for the entropy
+/// mode's precision layers.
+#[derive(Debug, Clone, Default)]
+pub struct Faces {
+    /// Per particle: bit `d` set when the leaf across face `d` is ON (`d =
+    /// a` towards `−a`, `3 + a` towards `+a`).
+    pub mask: Vec<u8>,
+    /// Per particle and face: the neighbour particle, or `u32::MAX`.
+    pub nb: Vec<[u32; 6]>,
+    /// Per particle: `0`, or `1 + k` for a column particle of depth `k`
+    /// (see [`code_precision`]); set by the encoder, decoded in the first
+    /// precision layer.
+    pub column: Vec<u8>,
+}
+
+impl Faces {
+    pub fn is_empty(&self) -> bool {
+        self.mask.is_empty()
     }
-    let mut out = vec![0u8; particles];
+}
+
+/// The face neighbourhood of every particle, by particle number, from the
+/// links [`code_level`] leaves after level `R` (entropy mode); empty when
+/// `links` does not describe `leaves`.
+pub fn particle_faces(links: &Links, leaves: &HLevel, particles: usize) -> Faces {
+    if links.nb.len() != leaves.cells.len() {
+        return Faces::default();
+    }
+    let mut out = Faces {
+        mask: vec![0u8; particles],
+        nb: vec![[NONE; 6]; particles],
+        column: vec![0u8; particles],
+    };
     for (i, row) in links.nb.iter().enumerate() {
-        if let Some(slot) = out.get_mut(leaves.particle[i] as usize) {
-            for d in 0..6 {
-                if row[d] != NONE {
-                    *slot |= 1 << d;
-                }
+        let p = leaves.particle[i] as usize;
+        if p >= particles {
+            continue;
+        }
+        for d in 0..6 {
+            if row[d] != NONE {
+                out.mask[p] |= 1 << d;
+                out.nb[p][d] = leaves.particle[row[d] as usize];
             }
         }
     }
@@ -431,10 +463,9 @@ pub fn normal_axis(mask: u8) -> usize {
     g
 }
 
-/// Flag in a [`particle_faces`] mask: the particle's vertex sits at its
-/// leaf's middle column along its [`normal_axis`] (entropy mode; coded in
-/// the first precision layer, then only that axis has precision bits).
-pub const COLUMN: u8 = 1 << 7;
+/// Deepest column (tangential bits coded below `R` before the implied
+/// middle) the entropy mode signals.
+pub const MAX_COLUMN_DEPTH: u8 = 2;
 
 /// Precision layer for bit `b` (1-based from the most significant of the
 /// 16, `R < b`): one bit per coordinate of every particle. `q` holds 16-bit
@@ -444,21 +475,24 @@ pub const COLUMN: u8 = 1 << 7;
 /// bits above (a centroid near the middle of its cube reads 0111… or
 /// 1000…, so they predict this one) — ignored by the raw layer.
 ///
-/// Entropy mode (`faces` from [`particle_faces`]; the encoder sets
-/// [`COLUMN`] where [`crate::encode::Placement::SurfaceColumn`] placed the
-/// vertex): the first layer codes each particle's column flag (context:
-/// its face neighbours per axis); a column particle's two tangential
-/// coordinates are then the leaf's middle (`1` then zeros below `R`) and
-/// only its normal axis has bits. Precision bits are conditioned on the
-/// axis, the layer (first, second, later), the leaf's face neighbours
-/// along the axis, whether it is the normal axis, and the two bits above.
-/// The decoder's flags persist in `faces` from layer to layer.
+/// Entropy mode (`faces` from [`particle_faces`]; the encoder fills
+/// `faces.column` where [`crate::encode::Placement::SurfaceColumn`] placed
+/// the vertex): the first layer codes each particle's column state —
+/// not a column, or a column of depth `k ≤` [`MAX_COLUMN_DEPTH`] (a flag,
+/// then `k` in unary). A column particle's two tangential coordinates
+/// (axes other than its [`normal_axis`]) code their first `k` bits below
+/// `R`, then are the middle of that sub-cell (`1` then zeros), never coded
+/// again; its normal coordinate is coded in every layer with a context
+/// from the height its neighbours predict ([`height_bin`]). Other bits are
+/// conditioned on the axis, the layer (first, second, later), the leaf's
+/// face neighbours along the axis, whether it is the normal axis, and the
+/// two bits above.
 pub fn code_precision<C: BitCoder>(
     coder: &mut C,
     depth: u8,
     b: u32,
     q: &mut [[u32; 3]],
-    faces: &mut [u8],
+    faces: &mut Faces,
 ) -> Result<()> {
     let shift = 16 - b;
     let layer = (b as usize).min(16) - 1;
@@ -473,43 +507,124 @@ pub fn code_precision<C: BitCoder>(
         }
         return Ok(());
     }
-    if faces.len() != q.len() {
+    let n = q.len();
+    if faces.mask.len() != n || faces.nb.len() != n || faces.column.len() != n {
         return stream_err("precision layer: face table does not match the particles");
     }
-    let first_layer = b == u32::from(depth) + 1;
+    // 1-based layer below the leaf.
+    let rel = b.saturating_sub(u32::from(depth));
+    let first_layer = rel == 1;
     // Layer bucket: the first bits below the leaf are the informative ones.
-    let lb = (b.saturating_sub(u32::from(depth) + 1) as usize).min(2);
-    for (v, f) in q.iter_mut().zip(faces.iter_mut()) {
-        let cnt = faces_per_axis(*f);
-        let g = normal_axis(*f);
+    let lb = (rel.saturating_sub(1) as usize).min(2);
+    for i in 0..n {
+        let f = faces.mask[i];
+        let cnt = faces_per_axis(f);
+        let g = normal_axis(f);
         if first_layer {
-            let mut column = *f & COLUMN != 0;
+            let col = &mut faces.column[i];
+            let mut is_column = *col != 0;
             let ctx = COL + (cnt[0] as usize * 3 + cnt[1] as usize) * 3 + cnt[2] as usize;
-            coder.bit(&mut column, ctx)?;
-            if column {
-                *f |= COLUMN;
+            coder.bit(&mut is_column, ctx)?;
+            if is_column {
+                let want = col.saturating_sub(1);
+                let mut k = 0u8;
+                while k < MAX_COLUMN_DEPTH {
+                    let mut deeper = want > k;
+                    coder.bit(&mut deeper, COLK + k as usize)?;
+                    if !deeper {
+                        break;
+                    }
+                    k += 1;
+                }
+                *col = 1 + k;
             } else {
-                *f &= !COLUMN;
+                *col = 0;
             }
         }
-        let column = *f & COLUMN != 0;
-        for (a, c) in v.iter_mut().enumerate() {
-            if column && a != g {
-                if first_layer {
-                    *c = ((*c >> shift) | 1) << shift;
+        let col = faces.column[i];
+        for a in 0..3 {
+            let c = q[i][a];
+            let ctx = if col != 0 && a == g {
+                let above = ((c >> (shift + 1)) & 3) as usize;
+                let bin = height_bin(q, faces, i, g, shift, first_layer);
+                PRED + (lb * PRED_BINS + bin) * 4 + above
+            } else {
+                if col != 0 {
+                    let k = u32::from(col - 1);
+                    if rel == k + 1 {
+                        q[i][a] = ((c >> shift) | 1) << shift;
+                    }
+                    if rel > k {
+                        continue;
+                    }
                 }
-                continue;
-            }
-            let mut bit = (*c >> shift) & 1 == 1;
-            let above = ((*c >> (shift + 1)) & 3) as usize;
-            let ctx = PREC
-                + ((((a * 3 + lb) * 3 + cnt[a] as usize) * 2 + usize::from(a == g)) * 4)
-                + above;
+                let above = ((c >> (shift + 1)) & 3) as usize;
+                PREC + ((((a * 3 + lb) * 3 + cnt[a] as usize) * 2 + usize::from(a == g)) * 4)
+                    + above
+            };
+            let mut bit = (c >> shift) & 1 == 1;
             coder.bit(&mut bit, ctx)?;
-            *c = (*c & !(1 << shift)) | (u32::from(bit) << shift);
+            q[i][a] = (c & !(1 << shift)) | (u32::from(bit) << shift);
         }
     }
     Ok(())
+}
+
+/// Bins of the predicted height's offset from the split of the current
+/// interval (below −1, −1, −½, 0, ½, 1 half-interval), plus "no
+/// neighbour".
+const PRED_BINS: usize = 7;
+
+/// Where the height a column particle's neighbours predict falls relative
+/// to the split of its current interval along `g` (the bit at `shift`).
+/// The neighbours are the column particles across its tangential faces
+/// with the same normal axis: they share its slab along `g`, so on a
+/// smooth surface their heights interpolate its own. Each counts with
+/// what the decoder knows of it — bit `shift` decoded when it comes
+/// earlier in the layer, only the bits above when later (in the first
+/// layer a later particle's column state is not known yet, so it is left
+/// out) — at the centre of that interval.
+#[inline]
+fn height_bin(
+    q: &[[u32; 3]],
+    faces: &Faces,
+    i: usize,
+    g: usize,
+    shift: u32,
+    first_layer: bool,
+) -> usize {
+    let c = q[i][g];
+    let lo = u64::from((c >> (shift + 1)) << (shift + 1));
+    let mid2 = 2 * (lo + (1u64 << shift));
+    let mut sum = 0u64;
+    let mut n = 0u64;
+    for d in 0..6 {
+        let j = faces.nb[i][d];
+        if d % 3 == g || j == NONE {
+            continue;
+        }
+        let j = j as usize;
+        if (first_layer && j > i) || faces.column[j] == 0 || normal_axis(faces.mask[j]) != g {
+            continue;
+        }
+        let known = if j < i { shift } else { shift + 1 };
+        let v = u64::from((q[j][g] >> known) << known);
+        sum += 2 * v + (1u64 << known);
+        n += 1;
+    }
+    if n == 0 {
+        return PRED_BINS - 1;
+    }
+    let diff = sum as i64 - (n * mid2) as i64;
+    let u = (n << shift) as i64;
+    match diff {
+        d if d < -2 * u => 0,
+        d if d < -u => 1,
+        d if d < 0 => 2,
+        d if d < u => 3,
+        d if d < 2 * u => 4,
+        _ => 5,
+    }
 }
 
 #[cfg(test)]
