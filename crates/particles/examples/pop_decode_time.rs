@@ -4,7 +4,8 @@
 //! `cargo run --release -p lodkit-particles --example pop_decode_time -- INPUT...`
 //!
 //! An input is a `.pop` file, or `MODEL:R:N[:baseline]` to encode a mesh
-//! or point cloud first (depth `R`, precision `N`, entropy mode unless
+//! or point cloud first (`MODEL` = `icosphereL` for the icosphere of
+//! level `L` the criterion bench uses) (depth `R`, precision `N`, entropy mode unless
 //! `baseline`) — so a format change needs no rebuilt CLI.
 //!
 //! Prints per file: particles, structure bits per particle, ms for the
@@ -22,8 +23,14 @@ fn load(input: &str) -> Vec<u8> {
     if parts.len() < 3 {
         return std::fs::read(input).unwrap_or_else(|e| panic!("{input}: {e}"));
     }
-    let model = lodkit_mesh::io::load(std::path::Path::new(parts[0]))
-        .unwrap_or_else(|e| panic!("{input}: {e}"));
+    let model = if let Some(level) = parts[0].strip_prefix("icosphere") {
+        lodkit_mesh::Model::Mesh(lodkit_mesh::shapes::icosphere(
+            level.parse().expect("level"),
+        ))
+    } else {
+        lodkit_mesh::io::load(std::path::Path::new(parts[0]))
+            .unwrap_or_else(|e| panic!("{input}: {e}"))
+    };
     let opts = EncodeOptions {
         depth: Some(parts[1].parse().expect("depth")),
         precision: parts[2].parse().expect("precision"),

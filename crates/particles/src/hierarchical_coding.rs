@@ -407,6 +407,13 @@ pub struct Faces {
     /// (see [`code_precision`]); set by the encoder, decoded in the first
     /// precision layer.
     pub column: Vec<u8>,
+    /// Per column particle: the neighbours that predict its height (column
+    /// particles across its tangential faces with the same normal axis),
+    /// `u32::MAX`-padded; built at the end of the first precision layer.
+    pred: Vec<[u32; 4]>,
+    /// Per column particle: its height (normal coordinate) as far as coded,
+    /// lower bits zero — a compact copy the predictions read.
+    height: Vec<u16>,
 }
 
 impl Faces {
@@ -426,6 +433,8 @@ pub fn particle_faces(links: &Links, leaves: &HLevel, particles: usize) -> Faces
         mask: vec![0u8; particles],
         nb: vec![[NONE; 6]; particles],
         column: vec![0u8; particles],
+        pred: Vec::new(),
+        height: vec![0u16; particles],
     };
     for (i, row) in links.nb.iter().enumerate() {
         let p = leaves.particle[i] as usize;
@@ -508,7 +517,11 @@ pub fn code_precision<C: BitCoder>(
         return Ok(());
     }
     let n = q.len();
-    if faces.mask.len() != n || faces.nb.len() != n || faces.column.len() != n {
+    if faces.mask.len() != n
+        || faces.nb.len() != n
+        || faces.column.len() != n
+        || faces.height.len() != n
+    {
         return stream_err("precision layer: face table does not match the particles");
     }
     // 1-based layer below the leaf.
@@ -537,6 +550,8 @@ pub fn code_precision<C: BitCoder>(
                     k += 1;
                 }
                 *col = 1 + k;
+                // The leaf's bits of the height are known from the structure.
+                faces.height[i] = ((q[i][g] >> (shift + 1)) << (shift + 1)) as u16;
             } else {
                 *col = 0;
             }
@@ -546,7 +561,11 @@ pub fn code_precision<C: BitCoder>(
             let c = q[i][a];
             let ctx = if col != 0 && a == g {
                 let above = ((c >> (shift + 1)) & 3) as usize;
-                let bin = height_bin(q, faces, i, g, shift, first_layer);
+                let bin = if first_layer {
+                    height_bin(faces, &first_layer_predictors(faces, i, g), i, shift)
+                } else {
+                    height_bin(faces, &faces.pred[i], i, shift)
+                };
                 PRED + (lb * PRED_BINS + bin) * 4 + above
             } else {
                 if col != 0 {
@@ -564,10 +583,52 @@ pub fn code_precision<C: BitCoder>(
             };
             let mut bit = (c >> shift) & 1 == 1;
             coder.bit(&mut bit, ctx)?;
-            q[i][a] = (c & !(1 << shift)) | (u32::from(bit) << shift);
+            let v = (c & !(1 << shift)) | (u32::from(bit) << shift);
+            q[i][a] = v;
+            if col != 0 && a == g {
+                faces.height[i] = ((v >> shift) << shift) as u16;
+            }
         }
     }
+    if first_layer {
+        faces.pred = (0..n)
+            .map(|i| {
+                if faces.column[i] == 0 {
+                    [NONE; 4]
+                } else {
+                    predictors(faces, i, normal_axis(faces.mask[i]), n)
+                }
+            })
+            .collect();
+    }
     Ok(())
+}
+
+/// The column particles across particle `i`'s tangential faces whose
+/// normal axis is also `g`, below `limit` in stream order.
+#[inline]
+fn predictors(faces: &Faces, i: usize, g: usize, limit: usize) -> [u32; 4] {
+    let mut out = [NONE; 4];
+    let mut m = 0;
+    for d in 0..6 {
+        let j = faces.nb[i][d];
+        if d % 3 == g || j == NONE || j as usize >= limit {
+            continue;
+        }
+        let j = j as usize;
+        if faces.column[j] != 0 && normal_axis(faces.mask[j]) == g {
+            out[m] = j as u32;
+            m += 1;
+        }
+    }
+    out
+}
+
+/// [`predictors`] in the first layer: a later particle's column state is
+/// not decoded yet, so only earlier ones count.
+#[inline]
+fn first_layer_predictors(faces: &Faces, i: usize, g: usize) -> [u32; 4] {
+    predictors(faces, i, g, i)
 }
 
 /// Bins of the predicted height's offset from the split of the current
@@ -576,39 +637,25 @@ pub fn code_precision<C: BitCoder>(
 const PRED_BINS: usize = 7;
 
 /// Where the height a column particle's neighbours predict falls relative
-/// to the split of its current interval along `g` (the bit at `shift`).
-/// The neighbours are the column particles across its tangential faces
-/// with the same normal axis: they share its slab along `g`, so on a
-/// smooth surface their heights interpolate its own. Each counts with
+/// to the split of its current interval (the bit at `shift`). The
+/// neighbours ([`predictors`]) share its slab along the normal axis, so on
+/// a smooth surface their heights interpolate its own. Each counts with
 /// what the decoder knows of it — bit `shift` decoded when it comes
-/// earlier in the layer, only the bits above when later (in the first
-/// layer a later particle's column state is not known yet, so it is left
-/// out) — at the centre of that interval.
+/// earlier in the layer, only the bits above when later — at the centre of
+/// that interval.
 #[inline]
-fn height_bin(
-    q: &[[u32; 3]],
-    faces: &Faces,
-    i: usize,
-    g: usize,
-    shift: u32,
-    first_layer: bool,
-) -> usize {
-    let c = q[i][g];
+fn height_bin(faces: &Faces, pred: &[u32; 4], i: usize, shift: u32) -> usize {
+    let c = u32::from(faces.height[i]);
     let lo = u64::from((c >> (shift + 1)) << (shift + 1));
     let mid2 = 2 * (lo + (1u64 << shift));
     let mut sum = 0u64;
     let mut n = 0u64;
-    for d in 0..6 {
-        let j = faces.nb[i][d];
-        if d % 3 == g || j == NONE {
-            continue;
+    for &j in pred {
+        if j == NONE {
+            break;
         }
-        let j = j as usize;
-        if (first_layer && j > i) || faces.column[j] == 0 || normal_axis(faces.mask[j]) != g {
-            continue;
-        }
-        let known = if j < i { shift } else { shift + 1 };
-        let v = u64::from((q[j][g] >> known) << known);
+        let known = if (j as usize) < i { shift } else { shift + 1 };
+        let v = u64::from((u32::from(faces.height[j as usize]) >> known) << known);
         sum += 2 * v + (1u64 << known);
         n += 1;
     }
