@@ -19,15 +19,18 @@
 //!
 //! | input | R | particles | baseline structure bits/particle (paper: 5.1) | entropy structure | all bits/particle at N = 12, entropy |
 //! |---|---|---|---|---|---|
-//! | Stanford bunny (35,947 vertices) | 7 | 33,712 | 4.72 | 2.08 | 15.73 |
-//! | Armadillo (CGAL 26k) | 7 | 23,353 | 4.82 | 2.41 | 16.58 |
+//! | Stanford bunny (35,947 vertices) | 7 | 33,712 | 4.72 | 2.08 | 8.68 |
+//! | Armadillo (CGAL 26k) | 7 | 23,353 | 4.82 | 2.42 | 9.78 |
 //! | Stanford bunny, dense, R = N = 10 | 10 | 2,118,241 | 4.78 | 1.49 | 1.49 |
 //!
-//! Triangles ≈ 2.0–2.1 × particles per level; decode + triangulate of the
-//! finest level ≈ 4.5 M triangles/s (baseline) and 2.2 M/s (entropy) on
-//! one core, 2.8 M/s and 1.8 M/s with orientation
-//! (`cargo bench -p lodkit-bench --bench pop`); `lodkit pop stats FILE`
-//! prints the paper's Table 1 for any stream.
+//! The entropy mode's vertices sit on their samples' plane at their
+//! leaf's middle column ([`encode::Placement`]), so the precision layers
+//! code little more than the coordinate across the surface. Triangles ≈
+//! 2.0–2.1 × particles per level; decode + triangulate is dominated by the
+//! triangulation (`cargo bench -p lodkit-bench --bench pop`; decoding
+//! alone: `cargo run --release -p lodkit-particles --example
+//! pop_decode_time`); `lodkit pop stats FILE` prints the paper's Table 1
+//! for any stream.
 //!
 //! ```no_run
 //! use lodkit_particles::{encode, EncodeOptions, decode, DecodeOptions, triangulate, TriangulateOptions};
