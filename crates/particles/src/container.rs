@@ -13,7 +13,7 @@ use crate::octree::{Frame, MAX_DEPTH, QBITS};
 /// First eight bytes of every `.pop` file.
 pub const MAGIC: [u8; 8] = *b"LKPOP\r\n\x1a";
 /// Container version this crate writes and reads.
-pub const VERSION: u16 = 1;
+pub const VERSION: u16 = 5;
 /// Header size in bytes.
 pub const HEADER_LEN: usize = 40;
 /// Chunk header size in bytes.

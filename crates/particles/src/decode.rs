@@ -16,7 +16,7 @@ use crate::encode_baseline::BitReader;
 use crate::encode_entropy::EntropyReader;
 use crate::error::{Result, stream_err};
 use crate::hierarchical_coding::{self as hc, BitCoder, LevelInput};
-use crate::octree::{Frame, MortonMap, QBITS};
+use crate::octree::{Frame, QBITS};
 use crate::ordering::HLevel;
 
 /// Where to stop reading.
@@ -98,7 +98,7 @@ impl<'a> ChunkRead<'a> for BitReader<'a> {
     }
 }
 
-impl<'a> ChunkRead<'a> for EntropyReader {
+impl<'a> ChunkRead<'a> for EntropyReader<'a> {
     fn open(payload: &'a [u8]) -> Result<Self> {
         EntropyReader::new(payload)
     }
@@ -145,6 +145,8 @@ fn decode_with<'a, R: ChunkRead<'a>>(
         bytes_read: crate::container::HEADER_LEN,
     };
     let mut leaves: Vec<[u32; 3]> = Vec::new();
+    let mut links = hc::Links::root();
+    let mut neighbours = hc::Faces::default();
     // The chunk expected next: (kind, index).
     let mut expect = (ChunkKind::Level, 0u8);
     for chunk in ChunkReader::new(bytes) {
@@ -174,20 +176,14 @@ fn decode_with<'a, R: ChunkRead<'a>>(
                     }
                 } else {
                     let parents = &d.levels[r as usize - 1];
-                    let parent_index = if entropy {
-                        hc::index_of(parents)
-                    } else {
-                        MortonMap::default()
-                    };
                     let inp = LevelInput {
                         depth,
                         r,
                         entropy,
                         parents,
-                        parent_index: &parent_index,
                         max_nodes: chunk.count as usize,
                     };
-                    let lv = hc::code_level(&mut c, &inp, &mut leaves, None)?;
+                    let lv = hc::code_level(&mut c, &inp, &mut links, &mut leaves, None)?;
                     if lv.cells.len() != chunk.count as usize {
                         return stream_err(format!(
                             "level {r} decodes to {} nodes, its chunk declares {}",
@@ -257,7 +253,10 @@ fn decode_with<'a, R: ChunkRead<'a>>(
                     ));
                 }
                 let mut c = R::open(chunk.payload)?;
-                hc::code_precision(&mut c, u32::from(b), &mut d.q)?;
+                if entropy && neighbours.is_empty() {
+                    neighbours = hc::particle_faces(&links, &d.levels[depth as usize], d.q.len());
+                }
+                hc::code_precision(&mut c, depth, u32::from(b), &mut d.q, &mut neighbours)?;
                 d.precision = b;
                 expect = (ChunkKind::Precision, b.saturating_add(1));
             }

@@ -9,12 +9,35 @@ use crate::encode_baseline::BitWriter;
 use crate::encode_entropy::EntropyWriter;
 use crate::error::{Error, Result};
 use crate::hierarchical_coding::{self as hc, BitCoder, LevelInput, Truth};
-use crate::octree::{BuildOptions, MortonMap, Octree, QBITS, Sidedness, unmorton};
+use crate::octree::{BuildOptions, Octree, QBITS, Sidedness, unmorton};
 use crate::ordering::Hierarchy;
 use crate::thinning::{ThinningOptions, thin};
 
 /// Default precision `N`: §7.2 finds 12 bits enough for most models.
 pub const DEFAULT_PRECISION: u8 = 12;
+
+/// Where the entropy mode puts each particle's vertex inside its leaf.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum Placement {
+    /// The mean of the leaf's samples (§5.5), as the baseline always does.
+    Mean,
+    /// On the plane of the leaf's samples (through their mean, across
+    /// their mean normal), where the leaf's middle column along the
+    /// [`hc::normal_axis`] the decoder infers from the neighbours meets it —
+    /// or, where that crossing leaves the leaf, the quarter or eighth
+    /// column under the mean. The two tangential coordinates then cost
+    /// nothing, or one or two bits (see [`hc::code_precision`]), and the
+    /// error across the surface is the plane's. Falls back to the mean
+    /// where the input has no normals, the plane is steeper than
+    /// [`MIN_NORMAL_COSINE`] against that axis, or every column's crossing
+    /// leaves the leaf.
+    SurfaceColumn,
+}
+
+/// Smallest `|n · axis|` for which [`Placement::SurfaceColumn`] moves a
+/// vertex: steeper planes would slide far along the column for a small
+/// tangential move (`tan ≤ 1.73` at 0.5).
+pub const MIN_NORMAL_COSINE: f32 = 0.5;
 
 /// Options of [`encode`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -31,10 +54,13 @@ pub struct EncodeOptions {
     pub colours: bool,
     /// Code normals (§5.5); off by default, as §6.2 lets the coder drop them.
     pub normals: bool,
+    /// Vertex placement of the entropy mode (the baseline codes means).
+    pub placement: Placement,
 }
 
 impl EncodeOptions {
-    /// Entropy mode, automatic depth, `N = 12`, inner thinning, colours kept.
+    /// Entropy mode, automatic depth, `N = 12`, inner thinning, colours
+    /// kept, vertices on surface columns.
     pub const DEFAULT: EncodeOptions = EncodeOptions {
         depth: None,
         precision: DEFAULT_PRECISION,
@@ -43,6 +69,7 @@ impl EncodeOptions {
         sidedness: None,
         colours: true,
         normals: false,
+        placement: Placement::SurfaceColumn,
     };
 }
 
@@ -103,6 +130,9 @@ impl EncodeReport {
 pub struct Encoded {
     pub bytes: Vec<u8>,
     pub report: EncodeReport,
+    /// The 16-bit grid vertex of every particle (stream order) as a
+    /// decoder at full precision `N` reads it (bits below `N` zero).
+    pub vertices: Vec<[u32; 3]>,
 }
 
 /// A bit layer that writes chunks.
@@ -213,30 +243,25 @@ fn encode_with<W: ChunkWriter>(
         ..Default::default()
     };
     let mut coded: Vec<[u32; 3]> = Vec::with_capacity(leaves.len());
+    let mut links = hc::Links::root();
     for r in 0..=dr {
         // Structure.
         let mut w = W::open();
         if r == 0 {
             coded.push(hc::code_root(&mut w, depth, Some(leaves[0]))?);
         } else {
-            let parent_index = if entropy {
-                hc::index_of(&h.levels[r - 1])
-            } else {
-                MortonMap::default()
-            };
             let inp = LevelInput {
                 depth,
                 r: r as u8,
                 entropy,
                 parents: &h.levels[r - 1],
-                parent_index: &parent_index,
                 max_nodes: usize::MAX,
             };
             let truth = Truth {
                 level: &h.levels[r],
                 leaves: &leaves,
             };
-            let got = hc::code_level(&mut w, &inp, &mut coded, Some(&truth))?;
+            let got = hc::code_level(&mut w, &inp, &mut links, &mut coded, Some(&truth))?;
             if got != h.levels[r] {
                 return Err(Error::Input(format!(
                     "internal: level {r} does not re-derive from its code"
@@ -302,9 +327,28 @@ fn encode_with<W: ChunkWriter>(
         .iter()
         .map(|&l| tree.leaves.q[leaf_source[l as usize] as usize])
         .collect();
+    let mut neighbours = if entropy {
+        hc::particle_faces(&links, &h.levels[dr], q.len())
+    } else {
+        hc::Faces::default()
+    };
+    if entropy
+        && precision > depth
+        && opts.placement == Placement::SurfaceColumn
+        && let Some(normals) = &tree.leaves.normal
+    {
+        for (i, v) in q.iter_mut().enumerate() {
+            let n = normals[leaf_source[h.particle_leaf[i] as usize] as usize];
+            let g = hc::normal_axis(neighbours.mask[i]);
+            if let Some((p, k)) = surface_column(*v, leaves[i], n, g, depth, precision) {
+                *v = p;
+                neighbours.column[i] = 1 + k;
+            }
+        }
+    }
     for b in (u32::from(depth) + 1)..=u32::from(precision) {
         let mut w = W::open();
-        hc::code_precision(&mut w, b, &mut q)?;
+        hc::code_precision(&mut w, depth, b, &mut q, &mut neighbours)?;
         let (payload, bits) = w.close();
         write_chunk(
             ChunkKind::Precision,
@@ -317,5 +361,158 @@ fn encode_with<W: ChunkWriter>(
         report.precision_bits.push(bits);
     }
     report.total_bytes = out.len();
-    Ok(Encoded { bytes: out, report })
+    let low = QBITS - u32::from(precision);
+    let vertices = q.iter().map(|v| v.map(|c| (c >> low) << low)).collect();
+    Ok(Encoded {
+        bytes: out,
+        report,
+        vertices,
+    })
+}
+
+/// [`Placement::SurfaceColumn`] for one particle: `mean` (16-bit grid)
+/// and unit `normal` of its samples, `leaf` (`R`-bit), the normal axis
+/// `g` the decoder will infer. Tries columns of depth `k = 0, 1, …` (up
+/// to [`hc::MAX_COLUMN_DEPTH`], and below `N`): the tangential
+/// coordinates keep the mean's first `k` bits below `R`, then sit at the
+/// middle of that sub-cell (the centre of its `N`-bit cell there, what a
+/// decoder at full precision draws); the normal one is the plane's height
+/// there. The first `k` whose height stays inside the leaf wins; `None`:
+/// keep the mean.
+fn surface_column(
+    mean: [u32; 3],
+    leaf: [u32; 3],
+    normal: glam::Vec3,
+    g: usize,
+    depth: u8,
+    precision: u8,
+) -> Option<([u32; 3], u8)> {
+    let s = QBITS - u32::from(depth);
+    let n = normal.to_array().map(f64::from);
+    if s == 0 || n[g].abs() < f64::from(MIN_NORMAL_COSINE) {
+        return None;
+    }
+    let half_cell = (1u32 << (QBITS - u32::from(precision))) >> 1;
+    let max_k = hc::MAX_COLUMN_DEPTH.min(precision - depth - 1);
+    let lo = f64::from(leaf[g] << s);
+    let hi = lo + f64::from((1u32 << s) - 1);
+    for k in 0..=max_k {
+        let sub = s - u32::from(k);
+        let mut out = [0u32; 3];
+        let mut rise = 0.0;
+        for a in 0..3 {
+            if a != g {
+                out[a] = ((mean[a] >> sub) << sub) + (1 << (sub - 1)) + half_cell;
+                rise += n[a] * (f64::from(out[a]) - f64::from(mean[a]));
+            }
+        }
+        let h = (f64::from(mean[g]) - rise / n[g]).round();
+        if (lo..=hi).contains(&h) {
+            out[g] = h as u32;
+            return Some((out, k));
+        }
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::decode::{DecodeOptions, decode};
+
+    /// RMS distance of the decoded full-precision vertices from the unit
+    /// sphere the icosphere approximates, and the stream size.
+    fn sphere_rms(placement: Placement, precision: u8) -> (f64, usize) {
+        let model = Model::Mesh(lodkit_mesh::shapes::icosphere(5));
+        let opts = EncodeOptions {
+            depth: Some(6),
+            precision,
+            placement,
+            ..EncodeOptions::DEFAULT
+        };
+        let e = encode(&model, &opts).unwrap();
+        let d = decode(&e.bytes, &DecodeOptions::default()).unwrap();
+        let s = d.surface(6).unwrap();
+        let sq: f64 = s
+            .positions
+            .iter()
+            .map(|p| (f64::from(p.length()) - 1.0).powi(2))
+            .sum();
+        ((sq / s.positions.len() as f64).sqrt(), e.bytes.len())
+    }
+
+    #[test]
+    fn surface_columns_cost_fewer_bytes_than_means_at_about_the_same_error() {
+        for n in [10u8, 12] {
+            let (rms_mean, bytes_mean) = sphere_rms(Placement::Mean, n);
+            let (rms_col, bytes_col) = sphere_rms(Placement::SurfaceColumn, n);
+            assert!(
+                bytes_col * 10 < bytes_mean * 8,
+                "N = {n}: {bytes_col} B against {bytes_mean} B"
+            );
+            assert!(
+                rms_col < rms_mean * 1.25,
+                "N = {n}: RMS {rms_col:.3e} against {rms_mean:.3e}"
+            );
+        }
+    }
+
+    #[test]
+    fn decoders_read_the_vertices_the_encoder_placed() {
+        let model = Model::Mesh(lodkit_mesh::shapes::icosphere(4));
+        for placement in [Placement::Mean, Placement::SurfaceColumn] {
+            for mode in [Mode::Baseline, Mode::Entropy] {
+                for n in [6u8, 7, 8, 9, 12, 16] {
+                    let opts = EncodeOptions {
+                        depth: Some(6),
+                        precision: n,
+                        placement,
+                        mode,
+                        ..EncodeOptions::DEFAULT
+                    };
+                    let e = encode(&model, &opts).unwrap();
+                    let d = decode(&e.bytes, &DecodeOptions::default()).unwrap();
+                    assert_eq!(d.q.len(), e.vertices.len());
+                    let bad = d.q.iter().zip(&e.vertices).position(|(a, b)| a != b);
+                    assert!(
+                        bad.is_none(),
+                        "{placement:?} {mode:?} N = {n}: particle {bad:?} decodes to {:?}, placed at {:?}",
+                        bad.map(|i| d.q[i]),
+                        bad.map(|i| e.vertices[i])
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_surface_column_lies_on_the_plane_inside_the_leaf() {
+        // Leaf (3, 5, 7) at R = 4 (4096 grid units a side), a plane tilted
+        // about x with its normal mostly along z.
+        let leaf = [3u32, 5, 7];
+        let n = glam::Vec3::new(0.0, 0.6, 0.8);
+        let mean = [3 * 4096 + 1000, 5 * 4096 + 2500, 7 * 4096 + 2000];
+        // Neighbours across x and y: z is the normal axis.
+        assert_eq!(hc::normal_axis(0b011_011), 2);
+        let (p, k) = surface_column(mean, leaf, n, 2, 4, 12).unwrap();
+        assert_eq!(k, 0);
+        // Tangential: the 12-bit cell at the leaf's middle, drawn at its centre.
+        assert_eq!(p[0], 3 * 4096 + 2048 + 8);
+        assert_eq!(p[1], 5 * 4096 + 2048 + 8);
+        let off: f64 = (0..3)
+            .map(|a| f64::from(n[a]) * (f64::from(p[a]) - f64::from(mean[a])))
+            .sum();
+        assert!(off.abs() <= 1.0, "{off} grid units off the plane");
+        assert_eq!(p[2] >> 12, 7);
+        // Steeper than the limit against the inferred axis: keep the mean.
+        let steep = glam::Vec3::new(0.0, 0.9, 0.43);
+        assert_eq!(surface_column(mean, leaf, steep, 2, 4, 12), None);
+        // A mean near the leaf's top: the middle column's crossing leaves
+        // the leaf, the quarter column under the mean does not.
+        let high = [3 * 4096 + 3500, 5 * 4096 + 3500, 7 * 4096 + 3700];
+        let (p, k) = surface_column(high, leaf, n, 2, 4, 12).unwrap();
+        assert_eq!(k, 1);
+        assert_eq!(p[1], 5 * 4096 + 2048 + 1024 + 8);
+        assert_eq!(p[2] >> 12, 7);
+    }
 }

@@ -25,7 +25,7 @@
 //! Precision layer `b` (bits `R + 1 ..= N`, §7.2): one bit per coordinate
 //! of every particle, in stream order.
 use crate::error::{Result, stream_err};
-use crate::octree::{MortonMap, morton, unmorton};
+use crate::octree::unmorton;
 use crate::ordering::{HLevel, NO_PARTICLE};
 
 /// One binary symbol at a time, with a context for adaptive layers.
@@ -56,9 +56,21 @@ const FLAG_STATES: usize = 2 * 8 * 4;
 const PATH: usize = FLAG + FLAG_STATES;
 const PATH_STATES: usize = 3 * 3 * 3 * 2;
 const PREC: usize = PATH + PATH_STATES;
-const PREC_STATES: usize = 3 * 16 * 4;
+/// Entropy mode: axis × layer bucket × neighbours along it × normal axis
+/// or not × 2 bits above (216); the plain layout, axis × 16 bits × 2 bits
+/// above (192), fits inside.
+const PREC_STATES: usize = 3 * 3 * 3 * 2 * 4;
+/// Column flags: face neighbours along x, y, z (0–2 each).
+const COL: usize = PREC + PREC_STATES;
+const COL_STATES: usize = 27;
+/// Column depth, unary: one context per step.
+const COLK: usize = COL + COL_STATES;
+/// Normal-axis bits of column particles: layer bucket × predicted height
+/// bin × 2 bits above.
+const PRED: usize = COLK + MAX_COLUMN_DEPTH as usize;
+const PRED_STATES: usize = 3 * PRED_BINS * 4;
 /// First context of the attribute bits (see [`crate::attributes`]).
-pub const ATTR: usize = PREC + PREC_STATES;
+pub const ATTR: usize = PRED + PRED_STATES;
 /// Contexts reserved for attributes: channel × component × 16 bit places,
 /// plus correction bits.
 pub const ATTR_STATES: usize = 2 * 3 * 16 + 2 * 3 * 3;
@@ -75,10 +87,31 @@ pub struct LevelInput<'a> {
     pub entropy: bool,
     /// Nodes at level `r − 1`.
     pub parents: &'a HLevel,
-    /// Index of the parents by Morton code (entropy contexts).
-    pub parent_index: &'a MortonMap<u32>,
     /// Refuse to build more nodes than this (decoder guard).
     pub max_nodes: usize,
+}
+
+/// No node across this face.
+const NONE: u32 = u32::MAX;
+
+/// Face-neighbour links of one level, for the entropy contexts: `nb[i][d]`
+/// is the index of the node across face `d` of node `i` (`d = a` towards
+/// `−a`, `d = 3 + a` towards `+a`) or `NONE`. Built from the parent
+/// level's links while the level is coded (a child's neighbour is a
+/// sibling or a child of its parent's neighbour), so no context needs a
+/// hash or a search: the coder of level `r` reads only arrays.
+#[derive(Debug, Clone, Default)]
+pub struct Links {
+    nb: Vec<[u32; 6]>,
+}
+
+impl Links {
+    /// The links of level 0: the root has no neighbour.
+    pub fn root() -> Links {
+        Links {
+            nb: vec![[NONE; 6]],
+        }
+    }
 }
 
 /// The truth an encoder codes from.
@@ -101,23 +134,50 @@ pub fn code_root<C: BitCoder>(
     Ok(leaf)
 }
 
+/// Index of child `j` of the node whose children are `mask`, the first at
+/// `first`, if that child exists.
+#[inline]
+fn child_index(mask: u8, first: u32, j: usize) -> Option<u32> {
+    (mask >> j & 1 == 1).then(|| first + (mask & ((1u8 << j) - 1)).count_ones())
+}
+
 /// Codes level `r` and returns it; new particles' leaves are appended to
-/// `leaves` (their index is their particle number).
+/// `leaves` (their index is their particle number). In entropy mode
+/// `links` holds the links of level `r − 1` on entry and those of level
+/// `r` on return (those of level `R` serve [`particle_neighbours`]); the
+/// baseline leaves it alone.
 pub fn code_level<C: BitCoder>(
     coder: &mut C,
     inp: &LevelInput,
+    links: &mut Links,
     leaves: &mut Vec<[u32; 3]>,
     truth: Option<&Truth>,
 ) -> Result<HLevel> {
     let depth = u32::from(inp.depth);
     let r = u32::from(inp.r);
     let parents = inp.parents;
+    let entropy = inp.entropy;
+    if entropy && links.nb.len() != parents.cells.len() {
+        return stream_err(format!(
+            "level {r}: neighbour links do not match level {}",
+            r - 1
+        ));
+    }
     let mut out = HLevel::default();
-    // Level-r nodes coded so far (value: phantom), for neighbour contexts.
-    let mut fine: MortonMap<bool> = MortonMap::default();
-    let side_parent = 1i64 << (r - 1);
+    // Per parent: its children (bit k: child k present), which of them are
+    // phantoms, and the index of its first child in `out`.
+    let n_parents = parents.cells.len();
+    let (mut masks, mut phantoms, mut firsts) = if entropy {
+        (
+            vec![0u8; n_parents],
+            vec![0u8; n_parents],
+            vec![0u32; n_parents],
+        )
+    } else {
+        (Vec::new(), Vec::new(), Vec::new())
+    };
     let mut t = 0usize;
-    for p in 0..parents.cells.len() {
+    for p in 0..n_parents {
         let pc = parents.cells[p];
         let phantom_parent = parents.phantom[p];
         let mut present = [false; 8];
@@ -140,48 +200,54 @@ pub fn code_level<C: BitCoder>(
                     as usize,
             )
         };
-        let pxyz = unmorton(pc);
+        // The parent's face neighbours (`coarse`, bit 2a: towards −a, bit
+        // 2a + 1: towards +a) and the children masks of those towards −a,
+        // all coded before this parent (their Morton codes are smaller).
         let mut coarse = 0usize;
-        if inp.entropy {
-            // Parent's face neighbours on the far side of each child half.
+        let mut back_mask = [0u8; 3];
+        let mut back_phantom = [0u8; 3];
+        if entropy {
+            let nb = &links.nb[p];
             for a in 0..3 {
-                for (dir, bit) in [(-1i64, 0usize), (1, 1)] {
-                    let v = pxyz[a] as i64 + dir;
-                    if v < 0 || v >= side_parent {
-                        continue;
-                    }
-                    let mut n = pxyz;
-                    n[a] = v as u32;
-                    if inp.parent_index.contains_key(&morton(n)) {
-                        coarse |= 1 << (2 * a + bit);
-                    }
+                if nb[a] != NONE {
+                    coarse |= 1 << (2 * a);
+                    back_mask[a] = masks[nb[a] as usize];
+                    back_phantom[a] = phantoms[nb[a] as usize];
+                }
+                if nb[3 + a] != NONE {
+                    coarse |= 1 << (2 * a + 1);
                 }
             }
         }
+        // Whether the node at child `k` − e_a exists (`set` = this parent's
+        // children so far) and is in `set`'s / `back`'s bits.
+        let behind = |k: usize, a: usize, own: u8, back: &[u8; 3]| -> bool {
+            let bit = 1 << a;
+            if k & bit != 0 {
+                own >> (k ^ bit) & 1 == 1
+            } else {
+                back[a] >> (k | bit) & 1 == 1
+            }
+        };
         // 1. Occupancy.
         let mut count = 0usize;
+        let mut own = 0u8;
         for k in 0..8usize {
-            let cell = (pc << 3) | k as u64;
             if Some(k) == implicit {
                 present[k] = true;
                 phantom[k] = false;
             } else {
-                let ctx = if inp.entropy {
+                let ctx = if entropy {
                     let state = match implicit {
                         None => 0,
                         Some(i) if k < i => 1,
                         Some(_) => 2,
                     };
-                    let c = unmorton(cell);
                     let mut fine_bits = 0usize;
                     let mut coarse_bits = 0usize;
                     for a in 0..3 {
-                        if c[a] > 0 {
-                            let mut n = c;
-                            n[a] -= 1;
-                            if fine.contains_key(&morton(n)) {
-                                fine_bits |= 1 << a;
-                            }
+                        if behind(k, a, own, &back_mask) {
+                            fine_bits |= 1 << a;
                         }
                         let half = (k >> a) & 1;
                         if coarse & (1 << (2 * a + half)) != 0 {
@@ -196,15 +262,14 @@ pub fn code_level<C: BitCoder>(
             }
             if present[k] {
                 count += 1;
-                if inp.entropy {
-                    fine.insert(cell, false);
-                }
+                own |= 1 << k;
             }
         }
         if count == 0 {
             return stream_err(format!("level {r}: a phantom node has no child"));
         }
         // 2. Phantom flags.
+        let mut own_phantom = 0u8;
         for k in 0..8usize {
             if !present[k] || Some(k) == implicit {
                 continue;
@@ -213,19 +278,14 @@ pub fn code_level<C: BitCoder>(
                 phantom[k] = false;
                 continue;
             }
-            if inp.entropy && implicit.is_some_and(|i| k < i) {
+            if entropy && implicit.is_some_and(|i| k < i) {
                 phantom[k] = true;
             } else {
-                let ctx = if inp.entropy {
-                    let c = unmorton((pc << 3) | k as u64);
+                let ctx = if entropy {
                     let mut nb = 0usize;
                     for a in 0..3 {
-                        if c[a] > 0 {
-                            let mut n = c;
-                            n[a] -= 1;
-                            if fine.get(&morton(n)) == Some(&true) {
-                                nb |= 1 << a;
-                            }
+                        if behind(k, a, own_phantom, &back_phantom) {
+                            nb |= 1 << a;
                         }
                     }
                     FLAG + ((usize::from(phantom_parent) * 8 + nb) * 4) + (count - 1).min(3)
@@ -234,9 +294,14 @@ pub fn code_level<C: BitCoder>(
                 };
                 coder.bit(&mut phantom[k], ctx)?;
             }
-            if phantom[k] && inp.entropy {
-                fine.insert((pc << 3) | k as u64, true);
+            if phantom[k] {
+                own_phantom |= 1 << k;
             }
+        }
+        if entropy {
+            masks[p] = own;
+            phantoms[p] = own_phantom;
+            firsts[p] = out.cells.len() as u32;
         }
         // 3. Leaf paths of the new particles, then the nodes.
         for k in 0..8usize {
@@ -258,14 +323,10 @@ pub fn code_level<C: BitCoder>(
                 // predicts which path bits the lexicographic rule fixes.
                 let mut ext = [0usize; 3];
                 let mut back = [0usize; 3];
-                if inp.entropy {
+                if entropy {
                     for a in 0..3 {
                         ext[a] = ((coarse >> (2 * a)) & 1) + ((coarse >> (2 * a + 1)) & 1);
-                        if c[a] > 0 {
-                            let mut n = c;
-                            n[a] -= 1;
-                            back[a] = usize::from(fine.contains_key(&morton(n)));
-                        }
+                        back[a] = usize::from(behind(k, a, own, &back_mask));
                     }
                 }
                 for d in (r + 1)..=depth {
@@ -273,7 +334,7 @@ pub fn code_level<C: BitCoder>(
                     let step = (d - r).min(3) as usize - 1;
                     for (a, l) in leaf.iter_mut().enumerate() {
                         let mut b = (want[a] >> s) & 1 == 1;
-                        let ctx = if inp.entropy {
+                        let ctx = if entropy {
                             PATH + ((step * 3 + a) * 3 + ext[a]) * 2 + back[a]
                         } else {
                             PATH
@@ -295,34 +356,389 @@ pub fn code_level<C: BitCoder>(
             ));
         }
     }
+    if entropy {
+        *links = child_links(&links.nb, &masks, &firsts, out.cells.len());
+    }
     Ok(out)
 }
 
+/// The links of the children level: a child's neighbour across a face is
+/// a sibling, or a child of the parent's neighbour across that face.
+fn child_links(parent_nb: &[[u32; 6]], masks: &[u8], firsts: &[u32], n: usize) -> Links {
+    let mut nb = Vec::with_capacity(n);
+    for p in 0..masks.len() {
+        let mut m = masks[p];
+        while m != 0 {
+            let k = m.trailing_zeros() as usize;
+            m &= m - 1;
+            let mut row = [NONE; 6];
+            for d in 0..6 {
+                let bit = 1usize << (d % 3);
+                let towards_plus = d >= 3;
+                let inside = (k & bit != 0) != towards_plus;
+                let (q, j) = if inside {
+                    (p as u32, k ^ bit)
+                } else {
+                    (parent_nb[p][d], k ^ bit)
+                };
+                if q != NONE
+                    && let Some(i) = child_index(masks[q as usize], firsts[q as usize], j)
+                {
+                    row[d] = i;
+                }
+            }
+            nb.push(row);
+        }
+    }
+    debug_assert_eq!(nb.len(), n);
+    Links { nb }
+}
+
+/// The particles' face neighbourhood at level `R`, for the entropy
+/// mode's precision layers.
+#[derive(Debug, Clone, Default)]
+pub struct Faces {
+    /// Per particle: bit `d` set when the leaf across face `d` is ON (`d =
+    /// a` towards `−a`, `3 + a` towards `+a`).
+    pub mask: Vec<u8>,
+    /// Per particle and face: the neighbour particle, or `u32::MAX`.
+    pub nb: Vec<[u32; 6]>,
+    /// Per particle: `0`, or `1 + k` for a column particle of depth `k`
+    /// (see [`code_precision`]); set by the encoder, decoded in the first
+    /// precision layer.
+    pub column: Vec<u8>,
+    /// Per column particle: the neighbours that predict its height (column
+    /// particles across its tangential faces with the same normal axis),
+    /// `u32::MAX`-padded; built at the end of the first precision layer.
+    pred: Vec<[u32; 4]>,
+    /// Per column particle: its height (normal coordinate) as far as coded,
+    /// lower bits zero — a compact copy the predictions read.
+    height: Vec<u16>,
+}
+
+impl Faces {
+    pub fn is_empty(&self) -> bool {
+        self.mask.is_empty()
+    }
+}
+
+/// The face neighbourhood of every particle, by particle number, from the
+/// links [`code_level`] leaves after level `R` (entropy mode); empty when
+/// `links` does not describe `leaves`.
+pub fn particle_faces(links: &Links, leaves: &HLevel, particles: usize) -> Faces {
+    if links.nb.len() != leaves.cells.len() {
+        return Faces::default();
+    }
+    let mut out = Faces {
+        mask: vec![0u8; particles],
+        nb: vec![[NONE; 6]; particles],
+        column: vec![0u8; particles],
+        pred: Vec::new(),
+        height: vec![0u16; particles],
+    };
+    for (i, row) in links.nb.iter().enumerate() {
+        let p = leaves.particle[i] as usize;
+        if p >= particles {
+            continue;
+        }
+        for d in 0..6 {
+            if row[d] != NONE {
+                out.mask[p] |= 1 << d;
+                out.nb[p][d] = leaves.particle[row[d] as usize];
+            }
+        }
+    }
+    out
+}
+
+/// Face neighbours along each axis (0–2) of a [`particle_faces`] mask.
+#[inline]
+pub fn faces_per_axis(mask: u8) -> [u8; 3] {
+    [0, 1, 2].map(|a| (mask >> a & 1) + (mask >> (a + 3) & 1))
+}
+
+/// The axis a leaf's surface most likely crosses — the one with the
+/// fewest face neighbours (a surface spreads across its tangent axes);
+/// ties go to the later axis. Encoder and decoder derive it alike.
+#[inline]
+pub fn normal_axis(mask: u8) -> usize {
+    let c = faces_per_axis(mask);
+    let mut g = 2;
+    for a in [1, 0] {
+        if c[a] < c[g] {
+            g = a;
+        }
+    }
+    g
+}
+
+/// Deepest column (tangential bits coded below `R` before the implied
+/// middle) the entropy mode signals.
+pub const MAX_COLUMN_DEPTH: u8 = 2;
+
 /// Precision layer for bit `b` (1-based from the most significant of the
-/// 16): one bit per coordinate of every particle. `q` holds 16-bit
+/// 16, `R < b`): one bit per coordinate of every particle. `q` holds 16-bit
 /// coordinates; the encoder's are complete, the decoder's get bit `b` set.
-pub fn code_precision<C: BitCoder>(coder: &mut C, b: u32, q: &mut [[u32; 3]]) -> Result<()> {
+///
+/// Baseline (`faces` empty): every bit, contexts axis, layer and the two
+/// bits above (a centroid near the middle of its cube reads 0111… or
+/// 1000…, so they predict this one) — ignored by the raw layer.
+///
+/// Entropy mode (`faces` from [`particle_faces`]; the encoder fills
+/// `faces.column` where [`crate::encode::Placement::SurfaceColumn`] placed
+/// the vertex): the first layer codes each particle's column state —
+/// not a column, or a column of depth `k ≤` [`MAX_COLUMN_DEPTH`] (a flag,
+/// then `k` in unary). A column particle's two tangential coordinates
+/// (axes other than its [`normal_axis`]) code their first `k` bits below
+/// `R`, then are the middle of that sub-cell (`1` then zeros), never coded
+/// again; its normal coordinate is coded in every layer with a context
+/// from the height its neighbours predict ([`height_bin`]). Other bits are
+/// conditioned on the axis, the layer (first, second, later), the leaf's
+/// face neighbours along the axis, whether it is the normal axis, and the
+/// two bits above.
+pub fn code_precision<C: BitCoder>(
+    coder: &mut C,
+    depth: u8,
+    b: u32,
+    q: &mut [[u32; 3]],
+    faces: &mut Faces,
+) -> Result<()> {
     let shift = 16 - b;
     let layer = (b as usize).min(16) - 1;
-    for v in q.iter_mut() {
-        for (a, c) in v.iter_mut().enumerate() {
-            let mut bit = (*c >> shift) & 1 == 1;
-            // The two bits above: a centroid near the middle of its cube
-            // reads 0111… or 1000…, so they predict this one.
-            let above = ((*c >> (shift + 1)) & 3) as usize;
-            coder.bit(&mut bit, PREC + (a * 16 + layer) * 4 + above)?;
-            *c = (*c & !(1 << shift)) | (u32::from(bit) << shift);
+    if faces.is_empty() {
+        for v in q.iter_mut() {
+            for (a, c) in v.iter_mut().enumerate() {
+                let mut bit = (*c >> shift) & 1 == 1;
+                let above = ((*c >> (shift + 1)) & 3) as usize;
+                coder.bit(&mut bit, PREC + (a * 16 + layer) * 4 + above)?;
+                *c = (*c & !(1 << shift)) | (u32::from(bit) << shift);
+            }
         }
+        return Ok(());
+    }
+    let n = q.len();
+    if faces.mask.len() != n
+        || faces.nb.len() != n
+        || faces.column.len() != n
+        || faces.height.len() != n
+    {
+        return stream_err("precision layer: face table does not match the particles");
+    }
+    // 1-based layer below the leaf.
+    let rel = b.saturating_sub(u32::from(depth));
+    let first_layer = rel == 1;
+    // Layer bucket: the first bits below the leaf are the informative ones.
+    let lb = (rel.saturating_sub(1) as usize).min(2);
+    for i in 0..n {
+        let f = faces.mask[i];
+        let cnt = faces_per_axis(f);
+        let g = normal_axis(f);
+        if first_layer {
+            let col = &mut faces.column[i];
+            let mut is_column = *col != 0;
+            let ctx = COL + (cnt[0] as usize * 3 + cnt[1] as usize) * 3 + cnt[2] as usize;
+            coder.bit(&mut is_column, ctx)?;
+            if is_column {
+                let want = col.saturating_sub(1);
+                let mut k = 0u8;
+                while k < MAX_COLUMN_DEPTH {
+                    let mut deeper = want > k;
+                    coder.bit(&mut deeper, COLK + k as usize)?;
+                    if !deeper {
+                        break;
+                    }
+                    k += 1;
+                }
+                *col = 1 + k;
+                // The leaf's bits of the height are known from the structure.
+                faces.height[i] = ((q[i][g] >> (shift + 1)) << (shift + 1)) as u16;
+            } else {
+                *col = 0;
+            }
+        }
+        let col = faces.column[i];
+        for a in 0..3 {
+            let c = q[i][a];
+            let ctx = if col != 0 && a == g {
+                let above = ((c >> (shift + 1)) & 3) as usize;
+                let bin = if first_layer {
+                    height_bin(faces, &first_layer_predictors(faces, i, g), i, shift)
+                } else {
+                    height_bin(faces, &faces.pred[i], i, shift)
+                };
+                PRED + (lb * PRED_BINS + bin) * 4 + above
+            } else {
+                if col != 0 {
+                    let k = u32::from(col - 1);
+                    if rel == k + 1 {
+                        q[i][a] = ((c >> shift) | 1) << shift;
+                    }
+                    if rel > k {
+                        continue;
+                    }
+                }
+                let above = ((c >> (shift + 1)) & 3) as usize;
+                PREC + ((((a * 3 + lb) * 3 + cnt[a] as usize) * 2 + usize::from(a == g)) * 4)
+                    + above
+            };
+            let mut bit = (c >> shift) & 1 == 1;
+            coder.bit(&mut bit, ctx)?;
+            let v = (c & !(1 << shift)) | (u32::from(bit) << shift);
+            q[i][a] = v;
+            if col != 0 && a == g {
+                faces.height[i] = ((v >> shift) << shift) as u16;
+            }
+        }
+    }
+    if first_layer {
+        faces.pred = (0..n)
+            .map(|i| {
+                if faces.column[i] == 0 {
+                    [NONE; 4]
+                } else {
+                    predictors(faces, i, normal_axis(faces.mask[i]), n)
+                }
+            })
+            .collect();
     }
     Ok(())
 }
 
-/// Morton index of a level, for neighbour lookups.
-pub fn index_of(level: &HLevel) -> MortonMap<u32> {
-    let mut m = MortonMap::default();
-    m.reserve(level.cells.len());
-    for (i, &c) in level.cells.iter().enumerate() {
-        m.insert(c, i as u32);
+/// The column particles across particle `i`'s tangential faces whose
+/// normal axis is also `g`, below `limit` in stream order.
+#[inline]
+fn predictors(faces: &Faces, i: usize, g: usize, limit: usize) -> [u32; 4] {
+    let mut out = [NONE; 4];
+    let mut m = 0;
+    for d in 0..6 {
+        let j = faces.nb[i][d];
+        if d % 3 == g || j == NONE || j as usize >= limit {
+            continue;
+        }
+        let j = j as usize;
+        if faces.column[j] != 0 && normal_axis(faces.mask[j]) == g {
+            out[m] = j as u32;
+            m += 1;
+        }
     }
-    m
+    out
+}
+
+/// [`predictors`] in the first layer: a later particle's column state is
+/// not decoded yet, so only earlier ones count.
+#[inline]
+fn first_layer_predictors(faces: &Faces, i: usize, g: usize) -> [u32; 4] {
+    predictors(faces, i, g, i)
+}
+
+/// Bins of the predicted height's offset from the split of the current
+/// interval (below −1, −1, −½, 0, ½, 1 half-interval), plus "no
+/// neighbour".
+const PRED_BINS: usize = 7;
+
+/// Where the height a column particle's neighbours predict falls relative
+/// to the split of its current interval (the bit at `shift`). The
+/// neighbours ([`predictors`]) share its slab along the normal axis, so on
+/// a smooth surface their heights interpolate its own. Each counts with
+/// what the decoder knows of it — bit `shift` decoded when it comes
+/// earlier in the layer, only the bits above when later — at the centre of
+/// that interval.
+#[inline]
+fn height_bin(faces: &Faces, pred: &[u32; 4], i: usize, shift: u32) -> usize {
+    let c = u32::from(faces.height[i]);
+    let lo = u64::from((c >> (shift + 1)) << (shift + 1));
+    let mid2 = 2 * (lo + (1u64 << shift));
+    let mut sum = 0u64;
+    let mut n = 0u64;
+    for &j in pred {
+        if j == NONE {
+            break;
+        }
+        let known = if (j as usize) < i { shift } else { shift + 1 };
+        let v = u64::from((u32::from(faces.height[j as usize]) >> known) << known);
+        sum += 2 * v + (1u64 << known);
+        n += 1;
+    }
+    if n == 0 {
+        return PRED_BINS - 1;
+    }
+    let diff = sum as i64 - (n * mid2) as i64;
+    let u = (n << shift) as i64;
+    // Comparisons summed rather than branched on: the bin is data, not
+    // control flow, so it costs no mispredicted branches.
+    usize::from(diff >= -2 * u)
+        + usize::from(diff >= -u)
+        + usize::from(diff >= 0)
+        + usize::from(diff >= u)
+        + usize::from(diff >= 2 * u)
+}
+
+#[cfg(test)]
+mod tests {
+    use std::collections::HashMap;
+
+    use super::*;
+    use crate::encode_baseline::BitWriter;
+    use crate::octree::{BuildOptions, Octree, morton, offset};
+    use crate::ordering::Hierarchy;
+    use crate::thinning::{ThinningOptions, thin};
+
+    #[test]
+    fn propagated_links_are_the_face_neighbours_a_hash_lookup_finds() {
+        let model = lodkit_mesh::Model::Mesh(lodkit_mesh::shapes::icosphere(3));
+        let mut tree = Octree::build(&model, &BuildOptions::default()).unwrap();
+        thin(&mut tree, &ThinningOptions::DEFAULT);
+        let (h, _) = Hierarchy::from_thinned(&tree).unwrap();
+        let leaves: Vec<[u32; 3]> = h
+            .particle_leaf
+            .iter()
+            .map(|&l| unmorton(h.levels[h.depth as usize].cells[l as usize]))
+            .collect();
+        let mut coded = vec![leaves[0]];
+        let mut links = Links::root();
+        let mut checked = 0;
+        for r in 1..=h.depth as usize {
+            let inp = LevelInput {
+                depth: h.depth,
+                r: r as u8,
+                entropy: true,
+                parents: &h.levels[r - 1],
+                max_nodes: usize::MAX,
+            };
+            let truth = Truth {
+                level: &h.levels[r],
+                leaves: &leaves,
+            };
+            let mut w = BitWriter::new();
+            let got = code_level(&mut w, &inp, &mut links, &mut coded, Some(&truth)).unwrap();
+            assert_eq!(got, h.levels[r]);
+            let index: HashMap<u64, u32> = got
+                .cells
+                .iter()
+                .enumerate()
+                .map(|(i, &c)| (c, i as u32))
+                .collect();
+            for (i, &c) in got.cells.iter().enumerate() {
+                for d in 0..6 {
+                    let mut step = [0i32; 3];
+                    step[d % 3] = if d < 3 { -1 } else { 1 };
+                    let want = offset(unmorton(c), step, 1 << r)
+                        .and_then(|n| index.get(&morton(n)).copied())
+                        .unwrap_or(NONE);
+                    assert_eq!(links.nb[i][d], want, "level {r} node {i} face {d}");
+                    checked += usize::from(want != NONE);
+                }
+            }
+        }
+        assert!(checked > 1000, "{checked} links checked");
+    }
+
+    #[test]
+    fn the_normal_axis_is_the_one_without_face_neighbours() {
+        // A z = const sheet: neighbours at ±x and ±y.
+        assert_eq!(normal_axis(0b011_011), 2);
+        // An x = const sheet: neighbours at ±y, ±z.
+        assert_eq!(normal_axis(0b110_110), 0);
+        assert_eq!(faces_per_axis(0b100_001), [1, 0, 1]);
+    }
 }

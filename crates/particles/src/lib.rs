@@ -19,18 +19,21 @@
 //!
 //! | input | R | particles | baseline structure bits/particle (paper: 5.1) | entropy structure | all bits/particle at N = 12, entropy |
 //! |---|---|---|---|---|---|
-//! | Stanford bunny (35,947 vertices) | 7 | 33,712 | 4.72 | 2.08 | 15.73 |
-//! | Armadillo (CGAL 26k) | 7 | 23,353 | 4.82 | 2.41 | 16.58 |
+//! | Stanford bunny (35,947 vertices) | 7 | 33,712 | 4.72 | 2.08 | 8.68 |
+//! | Armadillo (CGAL 26k) | 7 | 23,353 | 4.82 | 2.42 | 9.78 |
 //! | Stanford bunny, dense, R = N = 10 | 10 | 2,118,241 | 4.78 | 1.49 | 1.49 |
 //!
-//! Triangles ≈ 2.0–2.1 × particles per level; decode + triangulate of the
-//! finest level ≈ 10.5 M triangles/s (baseline; the triangulation alone
-//! ≈ 15 M/s) and 3.1 M/s (entropy, mostly its decoder) in CPU time on one
-//! core, icosphere and bunny at R = 8; 3.8 M/s baseline with orientation
-//! (`cargo run --release -p lodkit-particles --example pop_probe --
-//! icosphere 8`; wall time by size: `cargo bench -p lodkit-bench --bench
-//! pop`); `lodkit pop stats FILE` prints the paper's Table 1 for any
-//! stream.
+//! The entropy mode's vertices sit on their samples' plane at their
+//! leaf's middle column ([`encode::Placement`]), so the precision layers
+//! code little more than the coordinate across the surface. Triangles ≈
+//! 2.0–2.1 × particles per level; decode + triangulate of the finest level
+//! ≈ 10.5 M triangles/s in the baseline mode (the triangulation alone ≈
+//! 15 M/s) in CPU time on one core, icosphere and bunny at R = 8; the
+//! entropy mode is slower, its decoder dominating (`cargo run --release
+//! -p lodkit-particles --example pop_probe -- icosphere 8`; wall time by
+//! size: `cargo bench -p lodkit-bench --bench pop`; decoding alone:
+//! `cargo run --release -p lodkit-particles --example pop_decode_time`);
+//! `lodkit pop stats FILE` prints the paper's Table 1 for any stream.
 //!
 //! ```no_run
 //! use lodkit_particles::{encode, EncodeOptions, decode, DecodeOptions, triangulate, TriangulateOptions};
@@ -61,7 +64,7 @@ pub mod triangulation_table;
 
 pub use container::Mode;
 pub use decode::{DecodeOptions, Decoded, LevelSurface, decode};
-pub use encode::{EncodeOptions, EncodeReport, Encoded, LevelReport, encode};
+pub use encode::{EncodeOptions, EncodeReport, Encoded, LevelReport, Placement, encode};
 pub use error::{Error, Result};
 pub use octree::Sidedness;
 pub use stats::{LevelStats, ProgressiveLevel, StreamStats, progressive_levels, stream_stats};

@@ -7,8 +7,8 @@ use clap::{Args, Subcommand, ValueEnum};
 use lodkit_mesh::Model;
 use lodkit_mesh::io::WriteOptions;
 use lodkit_particles::{
-    DecodeOptions, EncodeOptions, Mode, ThinningOptions, TriangulateOptions, decode, encode,
-    stream_stats, triangulate,
+    DecodeOptions, EncodeOptions, Mode, Placement, ThinningOptions, TriangulateOptions, decode,
+    encode, stream_stats, triangulate,
 };
 
 use crate::ui::Ui;
@@ -45,6 +45,14 @@ pub enum ModeArg {
     Entropy,
 }
 
+#[derive(Clone, Copy, ValueEnum)]
+pub enum PlacementArg {
+    /// The mean of the leaf's samples (§5.5).
+    Mean,
+    /// On the samples' plane at the leaf's middle column (cheap tangential bits).
+    Column,
+}
+
 #[derive(Args)]
 pub struct EncodeArgs {
     /// Input mesh or point cloud.
@@ -60,6 +68,9 @@ pub struct EncodeArgs {
     pub precision: u8,
     #[arg(long, value_enum, default_value_t = ModeArg::Entropy)]
     pub mode: ModeArg,
+    /// Vertex placement in entropy mode (the baseline codes means).
+    #[arg(long, value_enum, default_value_t = PlacementArg::Column)]
+    pub placement: PlacementArg,
     /// Also thin the outer boundary (with the hole-preventing test).
     #[arg(long)]
     pub outer_thinning: bool,
@@ -119,6 +130,10 @@ fn run_encode(ui: &Ui, a: &EncodeArgs) -> Result<()> {
         },
         normals: a.normals,
         colours: !a.no_colours,
+        placement: match a.placement {
+            PlacementArg::Mean => Placement::Mean,
+            PlacementArg::Column => Placement::SurfaceColumn,
+        },
         ..EncodeOptions::DEFAULT
     };
     let step = ui.spinner("encoding octree particles");
