@@ -16,7 +16,9 @@
 use glam::Vec3;
 
 use crate::mc_table::{EDGES, TABLE};
-use crate::signed_distance::{FieldVertex, Grid, KeyMap, SignedDistanceField, pack, unpack};
+use crate::signed_distance::{
+    BRICK, BRICK_BITS, FieldVertex, Grid, KeyMap, SignedDistanceField, pack, unpack,
+};
 
 /// Where a crossing edge's vertex sits, from `v0`: `|d0| / (|d0| + |d1|)`.
 /// Both zero (never for a crossing edge) gives the midpoint.
@@ -71,6 +73,12 @@ impl From<&FieldVertex> for Corner {
     }
 }
 
+impl From<FieldVertex> for Corner {
+    fn from(f: FieldVertex) -> Self {
+        (&f).into()
+    }
+}
+
 /// Linear blend of two corners' attributes at `t` from `a`.
 pub fn blend(a: &Corner, b: &Corner, t: f32) -> (Vec3, [u8; 4]) {
     let n = a.normal.lerp(b.normal, t);
@@ -106,10 +114,27 @@ pub fn corner_key(cube: [u32; 3], level: u32, c: u8) -> u64 {
 /// `None` if a corner is missing from the band. Null configurations (0,
 /// 255) are returned too; callers skip them.
 pub fn leaf_config(field: &SignedDistanceField, cube: [u32; 3]) -> Option<u8> {
+    let [x, y, z] = cube;
+    if x & (BRICK - 1) != BRICK - 1
+        && y & (BRICK - 1) != BRICK - 1
+        && z & (BRICK - 1) != BRICK - 1
+        && let Some(b) = field.brick_of(x, y, z)
+    {
+        // All 8 corners in one brick: direct reads.
+        let mut cfg = 0u8;
+        for c in 0..8u32 {
+            let s = field.slot_in(b, x + (c & 1), y + (c >> 1 & 1), z + (c >> 2));
+            if !field.slot_defined(&s) {
+                return None;
+            }
+            cfg |= ((s.distance < 0.0) as u8) << c;
+        }
+        return Some(cfg);
+    }
     let mut cfg = 0u8;
     for c in 0..8u8 {
-        let v = field.get(corner_key(cube, 0, c))?;
-        if v.distance < 0.0 {
+        let s = field.slot(corner_key(cube, 0, c))?;
+        if s.distance < 0.0 {
             cfg |= 1 << c;
         }
     }
@@ -119,29 +144,28 @@ pub fn leaf_config(field: &SignedDistanceField, cube: [u32; 3]) -> Option<u8> {
 /// All leaf cubes with a surface crossing: `(cube key, configuration)`,
 /// sorted by key. Only cubes touching the band are examined.
 pub fn leaf_cubes(field: &SignedDistanceField) -> Vec<(u64, u8)> {
-    let mut cand: Vec<u64> = Vec::with_capacity(field.len() * 2);
     let cells = field.grid.cells();
-    for &k in field.values.keys() {
-        let [x, y, z] = unpack(k);
-        for c in 0..8u32 {
-            let (dx, dy, dz) = (c & 1, c >> 1 & 1, c >> 2);
-            if x < dx || y < dy || z < dz {
-                continue;
-            }
-            let (cx, cy, cz) = (x - dx, y - dy, z - dz);
-            if cx < cells && cy < cells && cz < cells {
-                cand.push(pack(cx, cy, cz));
+    let mut out = Vec::new();
+    for b in 0..field.brick_count() {
+        let [bx, by, bz] = field.brick_coords(b).map(|c| c << BRICK_BITS);
+        for z in bz..bz + BRICK {
+            for y in by..by + BRICK {
+                for x in bx..bx + BRICK {
+                    if x >= cells || y >= cells || z >= cells {
+                        continue;
+                    }
+                    if let Some(cfg) = leaf_config(field, [x, y, z])
+                        && cfg != 0
+                        && cfg != 255
+                    {
+                        out.push((pack(x, y, z), cfg));
+                    }
+                }
             }
         }
     }
-    cand.sort_unstable();
-    cand.dedup();
-    cand.into_iter()
-        .filter_map(|k| {
-            let cfg = leaf_config(field, unpack(k))?;
-            (cfg != 0 && cfg != 255).then_some((k, cfg))
-        })
-        .collect()
+    out.sort_unstable_by_key(|l| l.0);
+    out
 }
 
 /// Creates (or finds) the vertex of every crossing edge of the given leaf
@@ -163,10 +187,15 @@ pub fn leaf_vertices(
             let (ka, kb) = (corner_key(cube, 0, *a), corner_key(cube, 0, *b));
             let key = edge_key(ka, (e / 4) as u8);
             edges.entry(key).or_insert_with(|| {
-                let (fa, fb) = (&field.values[&ka], &field.values[&kb]);
+                let fa = field
+                    .get(ka)
+                    .expect("a leaf cube's corners are in the band");
+                let fb = field
+                    .get(kb)
+                    .expect("a leaf cube's corners are in the band");
                 let t = edge_ratio(fa.distance, fb.distance);
                 let p = g.position(ka).lerp(g.position(kb), t);
-                let (n, c) = blend(&fa.into(), &fb.into(), t);
+                let (n, c) = blend(&(&fa).into(), &(&fb).into(), t);
                 vb.push(p, n, c)
             });
         }
@@ -227,7 +256,7 @@ mod tests {
         for x in 0..n {
             for y in 0..n {
                 for z in 0..n {
-                    field.values.insert(
+                    field.set(
                         pack(x, y, z),
                         FieldVertex {
                             dist2: 0.0,

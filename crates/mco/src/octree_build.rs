@@ -164,7 +164,7 @@ pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) ->
             let cube = unpack(k);
             for c in 0..8u8 {
                 let v = corner_key(cube, l as u32, c);
-                if field.get(v).is_some() || level.corners.contains_key(&v) {
+                if field.slot(v).is_some() || level.corners.contains_key(&v) {
                     continue;
                 }
                 let value = match tree.corner(l - 1, v) {
@@ -298,17 +298,57 @@ pub fn is_null(cfg: u8) -> bool {
 /// [`crate::crack_patch`].
 pub fn assemble(tree: &mut Tree) -> McoModel {
     let depth = tree.levels.len() - 1;
-    // children[L][i]: level L-1 indices under level L's node i.
-    let mut children: Vec<Vec<Vec<u32>>> = vec![Vec::new(); depth + 1];
-    for (l, slot) in children.iter_mut().enumerate().skip(1) {
-        let mut ch = vec![Vec::new(); tree.levels[l].keys.len()];
-        for (i, &k) in tree.levels[l - 1].keys.iter().enumerate() {
-            let [x, y, z] = unpack(k);
-            let p = tree.levels[l].index[&pack(x >> 1, y >> 1, z >> 1)];
-            ch[p as usize].push(i as u32);
-        }
-        *slot = ch;
-    }
+    // parent[L][i]: level L+1 index of level L's node i (keys are sorted,
+    // so a node's children are consecutive and in key order).
+    let parent: Vec<Vec<u32>> = (0..depth)
+        .map(|l| {
+            let up = &tree.levels[l + 1];
+            let mut j = 0usize;
+            tree.levels[l]
+                .keys
+                .iter()
+                .map(|&k| {
+                    let [x, y, z] = unpack(k);
+                    let pk = pack(x >> 1, y >> 1, z >> 1);
+                    // Parent keys of sorted keys are not sorted (x is the
+                    // low field), so look the parent up unless it is the
+                    // previous child's.
+                    if up.keys.get(j) != Some(&pk) {
+                        j = up.index[&pk] as usize;
+                    }
+                    j as u32
+                })
+                .collect()
+        })
+        .collect();
+    // children[L]: level L's nodes' children (level L-1 indices), as
+    // `start[i]..start[i+1]` into `list`, in increasing index order.
+    let children: Vec<(Vec<u32>, Vec<u32>)> = (0..=depth)
+        .map(|l| {
+            if l == 0 {
+                return (vec![0; tree.levels[0].keys.len() + 1], Vec::new());
+            }
+            let n = tree.levels[l].keys.len();
+            let mut start = vec![0u32; n + 1];
+            for &p in &parent[l - 1] {
+                start[p as usize + 1] += 1;
+            }
+            for i in 0..n {
+                start[i + 1] += start[i];
+            }
+            let mut fill = start.clone();
+            let mut list = vec![0u32; parent[l - 1].len()];
+            for (c, &p) in parent[l - 1].iter().enumerate() {
+                list[fill[p as usize] as usize] = c as u32;
+                fill[p as usize] += 1;
+            }
+            (start, list)
+        })
+        .collect();
+    let kids = |l: usize, i: u32| -> &[u32] {
+        let (start, list) = &children[l];
+        &list[start[i as usize] as usize..start[i as usize + 1] as usize]
+    };
     let mut order: Vec<(usize, u32)> = vec![(depth, 0)];
     let mut first_child = Vec::new();
     let mut head = 0;
@@ -317,7 +357,7 @@ pub fn assemble(tree: &mut Tree) -> McoModel {
         head += 1;
         first_child.push(order.len() as u32);
         if l > 0 {
-            for &c in &children[l][i as usize] {
+            for &c in kids(l, i) {
                 order.push((l - 1, c));
             }
         }
@@ -358,9 +398,7 @@ pub fn assemble(tree: &mut Tree) -> McoModel {
         let parent = if id == 0 {
             u32::MAX
         } else {
-            let [x, y, z] = cube;
-            let pl = &tree.levels[l + 1];
-            tree.node_id[l + 1][pl.index[&pack(x >> 1, y >> 1, z >> 1)] as usize]
+            tree.node_id[l + 1][parent[l][i as usize] as usize]
         };
         model.nodes.push(Node {
             coord: cube,
@@ -368,11 +406,7 @@ pub fn assemble(tree: &mut Tree) -> McoModel {
             first_child: first_child[id],
             tri_start: start as u32,
             tri_count: count as u16,
-            child_count: if l > 0 {
-                children[l][i as usize].len() as u8
-            } else {
-                0
-            },
+            child_count: if l > 0 { kids(l, i).len() as u8 } else { 0 },
             level: l as u8,
             config: lv.configs[i as usize],
             ..Default::default()
@@ -391,31 +425,47 @@ pub fn assemble(tree: &mut Tree) -> McoModel {
         })
         .collect();
     // Balance dependencies: for each of the 26 same-level neighbour cubes,
-    // the lowest existing node above that level covering it.
-    let nbr: Vec<[i32; 3]> = rule_offsets().concat();
+    // the lowest existing node above that level covering it. The 26
+    // neighbours have at most 8 parent cells (2 per axis: the own parent's
+    // and the one on the side the node touches), so climb from those.
+    let mut deps: Vec<u32> = Vec::with_capacity(8);
     for (id, &(l, i)) in order.iter().enumerate() {
         let start = model.deps.len();
         if l > 0 && id > 0 {
             let own_parent = model.nodes[id].parent;
-            let k = tree.levels[l].keys[i as usize];
-            let mut deps: Vec<u32> = nbr
-                .iter()
-                .filter_map(|&d| offset_key(k, d, 1))
-                .filter_map(|nk| {
-                    let [mut x, mut y, mut z] = unpack(nk);
-                    for up in l + 1..=depth {
-                        (x, y, z) = (x >> 1, y >> 1, z >> 1);
-                        if let Some(&j) = tree.levels[up].index.get(&pack(x, y, z)) {
-                            return Some(tree.node_id[up][j as usize]);
+            let c = unpack(tree.levels[l].keys[i as usize]);
+            let axis = |a: usize| -> ([u32; 2], usize) {
+                let v = c[a];
+                if v & 1 == 1 {
+                    ([v >> 1, (v >> 1) + 1], 2)
+                } else if v == 0 {
+                    ([0, 0], 1)
+                } else {
+                    ([(v >> 1) - 1, v >> 1], 2)
+                }
+            };
+            let (ax, ay, az) = (axis(0), axis(1), axis(2));
+            deps.clear();
+            for &pz in &az.0[..az.1] {
+                for &py in &ay.0[..ay.1] {
+                    for &px in &ax.0[..ax.1] {
+                        let (mut x, mut y, mut z) = (px, py, pz);
+                        for up in l + 1..=depth {
+                            if let Some(&j) = tree.levels[up].index.get(&pack(x, y, z)) {
+                                let p = tree.node_id[up][j as usize];
+                                if p != own_parent {
+                                    deps.push(p);
+                                }
+                                break;
+                            }
+                            (x, y, z) = (x >> 1, y >> 1, z >> 1);
                         }
                     }
-                    None
-                })
-                .filter(|&p| p != own_parent)
-                .collect();
+                }
+            }
             deps.sort_unstable();
             deps.dedup();
-            model.deps.extend(deps);
+            model.deps.extend_from_slice(&deps);
         }
         model.nodes[id].deps_start = start as u32;
         model.nodes[id].deps_count = (model.deps.len() - start) as u16;
