@@ -36,6 +36,17 @@ fn main() {
             .map(|r| r.valid.iter().filter(|&&v| v).count())
             .sum();
         build = Box::new(move || build_from_range_images(&scans, &Options::default()).unwrap());
+    } else if let Some(tris) = what.strip_prefix("cloud") {
+        let mesh = shapes::blob(tris.parse().expect("cloudTRIANGLES"));
+        points = mesh.positions.len();
+        let cloud = [lodkit_mesh::Model::Points(lodkit_mesh::PointCloud {
+            positions: mesh.positions.clone(),
+            normals: Some(lodkit_mesh::normals::vertex_normals(&mesh)),
+            colors: None,
+        })];
+        build = Box::new(move || {
+            lodkit_mco::pipeline::build_from_models(&cloud, &Options::default()).unwrap()
+        });
     } else {
         let mesh = shapes::blob(what.parse().expect("a triangle count or `bunny`"));
         points = mesh.positions.len();

@@ -115,12 +115,19 @@ pub fn corner_key(cube: [u32; 3], level: u32, c: u8) -> u64 {
 /// 255) are returned too; callers skip them.
 pub fn leaf_config(field: &SignedDistanceField, cube: [u32; 3]) -> Option<u8> {
     let [x, y, z] = cube;
-    if x & (BRICK - 1) != BRICK - 1
-        && y & (BRICK - 1) != BRICK - 1
-        && z & (BRICK - 1) != BRICK - 1
-        && let Some(b) = field.brick_of(x, y, z)
-    {
-        // All 8 corners in one brick: direct reads.
+    leaf_config_in(field, field.brick_of(x, y, z)?, cube)
+}
+
+/// [`leaf_config`] for a cube whose lowest corner lies in brick `b`: the
+/// corners in that brick are read directly, the others (cubes on the
+/// brick's high faces) through at most one lookup per neighbour brick.
+pub fn leaf_config_in(field: &SignedDistanceField, b: usize, cube: [u32; 3]) -> Option<u8> {
+    let [x, y, z] = cube;
+    let m = BRICK - 1;
+    // Which axes step out of the brick at the high corners.
+    let out = ((x & m == m) as usize) | ((y & m == m) as usize) << 1 | ((z & m == m) as usize) << 2;
+    if out == 0 {
+        // All 8 corners in brick `b` (two cubes in three).
         let mut cfg = 0u8;
         for c in 0..8u32 {
             let s = field.slot_in(b, x + (c & 1), y + (c >> 1 & 1), z + (c >> 2));
@@ -131,12 +138,26 @@ pub fn leaf_config(field: &SignedDistanceField, cube: [u32; 3]) -> Option<u8> {
         }
         return Some(cfg);
     }
+    let mut bricks = [None; 8];
+    bricks[0] = Some(b);
     let mut cfg = 0u8;
-    for c in 0..8u8 {
-        let s = field.slot(corner_key(cube, 0, c))?;
-        if s.distance < 0.0 {
-            cfg |= 1 << c;
+    for c in 0..8u32 {
+        let (dx, dy, dz) = (c & 1, c >> 1 & 1, c >> 2);
+        let (vx, vy, vz) = (x + dx, y + dy, z + dz);
+        let nb = c as usize & out;
+        let vb = match bricks[nb] {
+            Some(vb) => vb,
+            None => {
+                let vb = field.brick_of(vx, vy, vz)?;
+                bricks[nb] = Some(vb);
+                vb
+            }
+        };
+        let s = field.slot_in(vb, vx, vy, vz);
+        if !field.slot_defined(&s) {
+            return None;
         }
+        cfg |= ((s.distance < 0.0) as u8) << c;
     }
     Some(cfg)
 }

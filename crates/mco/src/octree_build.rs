@@ -109,6 +109,14 @@ fn offset_key(v: u64, d: [i32; 3], step: u32) -> Option<u64> {
     Some(pack(o[0], o[1], o[2]))
 }
 
+/// A placeholder corner, overwritten before use.
+const UNSET: Corner = Corner {
+    inside: false,
+    distance: f32::NAN,
+    normal: glam::Vec3::ZERO,
+    color: [0; 4],
+};
+
 /// Builds every level from the leaf cubes up to the single root.
 pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) -> Result<Tree<'f>> {
     if leaves.is_empty() {
@@ -159,40 +167,38 @@ pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) ->
                 .collect(),
             ..Default::default()
         };
-        // Corner signs: Fig. 5.2's four cases on the lattice.
+        // Corner signs: Fig. 5.2's four cases on the lattice, evaluated
+        // once per lattice vertex and kept per node for the passes below.
+        let mut node_corners: Vec<[Corner; 8]> = Vec::with_capacity(keys.len());
         for &k in &keys {
             let cube = unpack(k);
-            for c in 0..8u8 {
-                let v = corner_key(cube, l as u32, c);
-                if field.slot(v).is_some() || level.corners.contains_key(&v) {
-                    continue;
-                }
-                let value = match tree.corner(l - 1, v) {
-                    Some(cv) => cv,
-                    None => rule_value(&tree, l - 1, v, step, &offsets)
-                        .expect("a node's centre is a corner of each of its children"),
+            let mut cs = [UNSET; 8];
+            for (c, slot) in cs.iter_mut().enumerate() {
+                let v = corner_key(cube, l as u32, c as u8);
+                *slot = if let Some(f) = field.get(v) {
+                    f.into()
+                } else if let Some(&cv) = level.corners.get(&v) {
+                    cv
+                } else {
+                    let value = match tree.corner(l - 1, v) {
+                        Some(cv) => cv,
+                        None => rule_value(&tree, l - 1, v, step, &offsets)
+                            .expect("a node's centre is a corner of each of its children"),
+                    };
+                    level.corners.insert(v, value);
+                    value
                 };
-                level.corners.insert(v, value);
             }
+            node_corners.push(cs);
         }
-        let corner_at = |v: u64| -> Corner {
-            field
-                .get(v)
-                .map(Corner::from)
-                .or_else(|| level.corners.get(&v).copied())
-                .expect("every node corner is set above")
-        };
-        let mut configs = Vec::with_capacity(keys.len());
-        for &k in &keys {
-            let cube = unpack(k);
-            let mut cfg = 0u8;
-            for c in 0..8u8 {
-                if corner_at(corner_key(cube, l as u32, c)).inside {
-                    cfg |= 1 << c;
-                }
-            }
-            configs.push(cfg);
-        }
+        let configs: Vec<u8> = node_corners
+            .iter()
+            .map(|cs| {
+                cs.iter()
+                    .enumerate()
+                    .fold(0u8, |cfg, (c, v)| cfg | (v.inside as u8) << c)
+            })
+            .collect();
         // Crossing vertices: the ratio extension, by reference.
         let mut edges: KeyMap<u32> = KeyMap::default();
         for (i, &k) in keys.iter().enumerate() {
@@ -212,7 +218,7 @@ pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) ->
                 let mut d = [0i32; 3];
                 d[axis as usize] = 1;
                 let vm = offset_key(va, d, step).expect("midpoint inside the lattice");
-                let (ca, cb) = (corner_at(va), corner_at(vb));
+                let (ca, cb) = (node_corners[i][*a as usize], node_corners[i][*b as usize]);
                 let below = &tree.levels[l - 1];
                 let id = match tree.corner(l - 1, vm) {
                     Some(cm) => {

@@ -27,7 +27,7 @@ use std::time::Instant;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use lodkit_mesh::{Aabb, Model, RangeImage, TriMesh};
 
-use crate::marching_cubes::leaf_config;
+use crate::marching_cubes::leaf_config_in;
 use crate::model::McoModel;
 use crate::normals_estimation::{mesh_samples, point_cloud_samples, range_image_samples};
 use crate::signed_distance::{
@@ -282,7 +282,7 @@ impl IncrementalBuilder {
                         by + (li >> BRICK_BITS & (BRICK - 1)),
                         bz + (li >> (2 * BRICK_BITS)),
                     ];
-                    let cfg = match leaf_config(field, cube) {
+                    let cfg = match leaf_config_in(field, b, cube) {
                         Some(cfg) if cfg != 0 && cfg != 255 => cfg,
                         _ => 0,
                     };

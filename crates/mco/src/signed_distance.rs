@@ -65,6 +65,11 @@ pub fn unpack(k: u64) -> [u32; 3] {
 /// A multiply-shift hasher for the packed integer keys (the std SipHash is
 /// several times slower on the build's hot maps and buys nothing here:
 /// keys come from geometry, not from an adversary choosing hash inputs).
+///
+/// Tried and rejected: a locality-keeping hash (low bits a linear map of
+/// the key's fields, so neighbouring keys share cache lines): 6% fewer L1
+/// misses on blob(640000) but 4% more instructions from longer probes, and
+/// no measurable gain in time.
 #[derive(Default, Clone, Copy)]
 pub struct KeyHasher(u64);
 
