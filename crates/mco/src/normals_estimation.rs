@@ -91,7 +91,7 @@ pub fn mesh_samples(m: &TriMesh) -> Samples {
 }
 
 /// [`mesh_samples`] with the mesh's vertex normals already computed.
-fn mesh_samples_with(m: &TriMesh, normals: &[Vec3]) -> Samples {
+pub(crate) fn mesh_samples_with(m: &TriMesh, normals: &[Vec3]) -> Samples {
     let mut used = vec![false; m.positions.len()];
     for f in &m.faces {
         for &i in f {
@@ -148,12 +148,20 @@ fn long_edged_faces(m: &TriMesh, cube: f32) -> impl Iterator<Item = (&[u32; 3], 
             return None;
         }
         let [a, b, c] = f.map(|i| m.positions[i as usize]);
-        let longest = a.distance(b).max(b.distance(c)).max(c.distance(a));
+        // One square root: it is monotone, so the longest edge is the root
+        // of the largest squared length (NaNs are skipped by `max` alike).
+        let longest = a
+            .distance_squared(b)
+            .max(b.distance_squared(c))
+            .max(c.distance_squared(a))
+            .sqrt();
         (longest > cube && longest.is_finite()).then_some((f, [a, b, c], longest))
     })
 }
 
-fn densify_mesh_samples(m: &TriMesh, normals: &[Vec3], cube: f32, s: &mut Samples) {
+/// Appends the triangle samples of [`mesh_samples_for_cube`] to `s`, with
+/// `normals` the mesh's vertex normals.
+pub(crate) fn densify_mesh_samples(m: &TriMesh, normals: &[Vec3], cube: f32, s: &mut Samples) {
     for (f, [a, b, c], longest) in long_edged_faces(m, cube) {
         let [na, nb, nc] = f.map(|i| normals[i as usize]);
         // Half-cube spacing, at most 64 subdivisions per side (bounded work).
