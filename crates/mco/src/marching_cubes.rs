@@ -198,7 +198,13 @@ pub fn leaf_vertices(
     vb: &mut VertexBuffer,
 ) -> KeyMap<u32> {
     let g: Grid = field.grid;
-    let mut edges: KeyMap<u32> = KeyMap::default();
+    // About 1.3 distinct crossing edges per surface cube (each edge is
+    // shared by up to 4 cubes): reserve once instead of rehashing.
+    let expect = cubes.len() * 3 / 2;
+    let mut edges: KeyMap<u32> = KeyMap::with_capacity_and_hasher(expect, Default::default());
+    vb.positions.reserve(expect);
+    vb.normals.reserve(expect);
+    vb.colors.reserve(expect);
     for &(k, cfg) in cubes {
         let cube = unpack(k);
         for (e, [a, b]) in EDGES.iter().enumerate() {

@@ -165,6 +165,7 @@ pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) ->
                 .enumerate()
                 .map(|(i, &k)| (k, i as u32))
                 .collect(),
+            corners: KeyMap::with_capacity_and_hasher(keys.len() * 2, Default::default()),
             ..Default::default()
         };
         // Corner signs: Fig. 5.2's four cases on the lattice, evaluated
@@ -200,7 +201,8 @@ pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) ->
             })
             .collect();
         // Crossing vertices: the ratio extension, by reference.
-        let mut edges: KeyMap<u32> = KeyMap::default();
+        let mut edges: KeyMap<u32> =
+            KeyMap::with_capacity_and_hasher(keys.len() * 3 / 2, Default::default());
         for (i, &k) in keys.iter().enumerate() {
             let cfg = configs[i];
             let cube = unpack(k);
