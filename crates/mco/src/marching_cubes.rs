@@ -197,7 +197,25 @@ pub fn leaf_vertices(
     cubes: &[(u64, u8)],
     vb: &mut VertexBuffer,
 ) -> KeyMap<u32> {
+    leaf_vertices_by_cube(field, cubes, vb).0
+}
+
+/// A cube's vertex per cube edge ([`NO_VERTEX`] where the edge does not
+/// cross the surface): what [`node_triangles`] maps the table through.
+pub type CubeEdges = [u32; 12];
+
+/// Marks a cube edge without a crossing in [`CubeEdges`].
+pub const NO_VERTEX: u32 = u32::MAX;
+
+/// [`leaf_vertices`], also returning each cube's [`CubeEdges`] (so the
+/// cubes' triangles need no map lookups).
+pub fn leaf_vertices_by_cube(
+    field: &SignedDistanceField,
+    cubes: &[(u64, u8)],
+    vb: &mut VertexBuffer,
+) -> (KeyMap<u32>, Vec<CubeEdges>) {
     let g: Grid = field.grid;
+    let mut by_cube = Vec::with_capacity(cubes.len());
     // About 1.3 distinct crossing edges per surface cube (each edge is
     // shared by up to 4 cubes): reserve once instead of rehashing.
     let expect = cubes.len() * 3 / 2;
@@ -207,13 +225,14 @@ pub fn leaf_vertices(
     vb.colors.reserve(expect);
     for &(k, cfg) in cubes {
         let cube = unpack(k);
+        let mut ce = [NO_VERTEX; 12];
         for (e, [a, b]) in EDGES.iter().enumerate() {
             if (cfg >> a & 1) == (cfg >> b & 1) {
                 continue;
             }
             let (ka, kb) = (corner_key(cube, 0, *a), corner_key(cube, 0, *b));
             let key = edge_key(ka, (e / 4) as u8);
-            edges.entry(key).or_insert_with(|| {
+            ce[e] = *edges.entry(key).or_insert_with(|| {
                 let fa = field
                     .get(ka)
                     .expect("a leaf cube's corners are in the band");
@@ -226,8 +245,24 @@ pub fn leaf_vertices(
                 vb.push(p, n, c)
             });
         }
+        by_cube.push(ce);
     }
-    edges
+    (edges, by_cube)
+}
+
+/// Triangles of a cube of configuration `cfg` whose edge vertices are
+/// `edges`: the table's edge triples mapped to vertices.
+#[inline]
+pub fn node_triangles(cfg: u8, edges: &CubeEdges, out: &mut Vec<u32>) {
+    for t in TABLE.triangles(cfg) {
+        for &e in t {
+            debug_assert_ne!(
+                edges[e as usize], NO_VERTEX,
+                "the table uses crossing edges only"
+            );
+            out.push(edges[e as usize]);
+        }
+    }
 }
 
 /// Triangles of one cube: the table's edge triples mapped to vertices.

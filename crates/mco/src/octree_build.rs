@@ -39,7 +39,8 @@
 //!   the original algorithm's choice.
 
 use crate::marching_cubes::{
-    Corner, VertexBuffer, blend, corner_key, cube_triangles, edge_key, leaf_vertices,
+    Corner, CubeEdges, NO_VERTEX, VertexBuffer, blend, corner_key, edge_key, leaf_vertices_by_cube,
+    node_triangles,
 };
 use crate::mc_table::EDGES;
 use crate::model::{McoModel, Node};
@@ -58,6 +59,10 @@ pub struct Level {
     pub corners: KeyMap<Corner>,
     /// Crossing edge (leaf-unit [`edge_key`]) → vertex index.
     pub edges: KeyMap<u32>,
+    /// Per node (same order as `keys`): the vertex of each of its 12 cube
+    /// edges, [`NO_VERTEX`] where the edge does not cross; the same
+    /// vertices as `edges`, without a lookup.
+    pub node_edges: Vec<CubeEdges>,
 }
 
 /// All levels plus the vertex buffer; `node_id[L][i]` is the model node of
@@ -126,11 +131,12 @@ pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) ->
     }
     let depth = field.grid.depth as usize;
     let mut vertices = VertexBuffer::default();
-    let edges = leaf_vertices(field, leaves, &mut vertices);
+    let (edges, node_edges) = leaf_vertices_by_cube(field, leaves, &mut vertices);
     let mut level0 = Level {
         keys: leaves.iter().map(|l| l.0).collect(),
         configs: leaves.iter().map(|l| l.1).collect(),
         edges,
+        node_edges,
         ..Default::default()
     };
     level0.index = level0
@@ -203,9 +209,11 @@ pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) ->
         // Crossing vertices: the ratio extension, by reference.
         let mut edges: KeyMap<u32> =
             KeyMap::with_capacity_and_hasher(keys.len() * 3 / 2, Default::default());
+        let mut node_edges: Vec<CubeEdges> = Vec::with_capacity(keys.len());
         for (i, &k) in keys.iter().enumerate() {
             let cfg = configs[i];
             let cube = unpack(k);
+            let mut ce = [NO_VERTEX; 12];
             for (e, [a, b]) in EDGES.iter().enumerate() {
                 if (cfg >> a & 1) == (cfg >> b & 1) {
                     continue;
@@ -214,7 +222,8 @@ pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) ->
                 let va = corner_key(cube, l as u32, *a);
                 let vb = corner_key(cube, l as u32, *b);
                 let ek = edge_key(va, axis);
-                if edges.contains_key(&ek) {
+                if let Some(&id) = edges.get(&ek) {
+                    ce[e] = id;
                     continue;
                 }
                 let mut d = [0i32; 3];
@@ -248,11 +257,14 @@ pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) ->
                     }
                 };
                 edges.insert(ek, id);
+                ce[e] = id;
             }
+            node_edges.push(ce);
         }
         level.keys = keys;
         level.configs = configs;
         level.edges = edges;
+        level.node_edges = node_edges;
         tree.levels.push(level);
     }
     debug_assert_eq!(tree.levels[depth].keys.len(), 1, "a single root");
@@ -387,11 +399,9 @@ pub fn assemble(tree: &mut Tree) -> McoModel {
         let lv = &tree.levels[l];
         let cube = unpack(lv.keys[i as usize]);
         let start = model.tris.len();
-        cube_triangles(
-            cube,
-            l as u32,
+        node_triangles(
             lv.configs[i as usize],
-            &lv.edges,
+            &lv.node_edges[i as usize],
             &mut model.tris,
         );
         let count = (model.tris.len() - start) / 3;
