@@ -22,8 +22,10 @@
 //! | `lodkit build`'s continuous-LOD section | `evaluate.rs` | §4.4, §6.3 |
 //!
 //! Measured (2-core shared Xeon, release): the bunny from its 10 real
-//! scans builds in 1.4 s (362k samples, resolution 140) with a symmetric
-//! mean error of 0.12 mm against the reference (half a cube is 0.56 mm);
+//! scans builds in 0.25 s, best of 3 (362k samples, resolution 140; 1.4
+//! M points/s, see `crates/mco/README.md` for throughput by size) with a
+//! symmetric mean error of 0.12 mm against the reference (half a cube is
+//! 0.56 mm);
 //! extraction at full size runs at 1.3–1.5× the time of a `memcpy` of its
 //! index buffer (`lodkit bench mco`, see `crates/mco/README.md`).
 //!
