@@ -22,11 +22,12 @@
 //! | `lodkit build`'s continuous-LOD section | `evaluate.rs` | §4.4, §6.3 |
 //!
 //! Measured (2-core shared Xeon, release): the bunny from its 10 real
-//! scans builds in 1.4 s (362k samples, resolution 140) with a symmetric
-//! mean error of 0.12 mm against the reference (half a cube is 0.56 mm);
-//! extraction from 10k triangles to full size runs at 0.9–1.5× the time
-//! of a `memcpy` of its index buffer, on the bunny and a 1M-triangle blob
-//! (`lodkit bench mco`, see `crates/mco/README.md`).
+//! scans builds in 0.25 s, best of 3 (362k samples, resolution 140; 1.4
+//! M points/s, see `crates/mco/README.md` for throughput by size) with a
+//! symmetric mean error of 0.12 mm against the reference (half a cube is
+//! 0.56 mm); extraction from 10k triangles to full size runs at 0.9–1.5×
+//! the time of a `memcpy` of its index buffer, on the bunny and a
+//! 1M-triangle blob (`lodkit bench mco`, see `crates/mco/README.md`).
 //!
 //! ```no_run
 //! use lodkit_mco::pipeline::{Options, build_from_mesh};

@@ -16,7 +16,9 @@
 use glam::Vec3;
 
 use crate::mc_table::{EDGES, TABLE};
-use crate::signed_distance::{FieldVertex, Grid, KeyMap, SignedDistanceField, pack, unpack};
+use crate::signed_distance::{
+    BRICK, BRICK_BITS, FieldVertex, Grid, KeyMap, SignedDistanceField, pack, unpack,
+};
 
 /// Where a crossing edge's vertex sits, from `v0`: `|d0| / (|d0| + |d1|)`.
 /// Both zero (never for a crossing edge) gives the midpoint.
@@ -71,6 +73,12 @@ impl From<&FieldVertex> for Corner {
     }
 }
 
+impl From<FieldVertex> for Corner {
+    fn from(f: FieldVertex) -> Self {
+        (&f).into()
+    }
+}
+
 /// Linear blend of two corners' attributes at `t` from `a`.
 pub fn blend(a: &Corner, b: &Corner, t: f32) -> (Vec3, [u8; 4]) {
     let n = a.normal.lerp(b.normal, t);
@@ -106,12 +114,50 @@ pub fn corner_key(cube: [u32; 3], level: u32, c: u8) -> u64 {
 /// `None` if a corner is missing from the band. Null configurations (0,
 /// 255) are returned too; callers skip them.
 pub fn leaf_config(field: &SignedDistanceField, cube: [u32; 3]) -> Option<u8> {
-    let mut cfg = 0u8;
-    for c in 0..8u8 {
-        let v = field.get(corner_key(cube, 0, c))?;
-        if v.distance < 0.0 {
-            cfg |= 1 << c;
+    let [x, y, z] = cube;
+    leaf_config_in(field, field.brick_of(x, y, z)?, cube)
+}
+
+/// [`leaf_config`] for a cube whose lowest corner lies in brick `b`: the
+/// corners in that brick are read directly, the others (cubes on the
+/// brick's high faces) through at most one lookup per neighbour brick.
+pub fn leaf_config_in(field: &SignedDistanceField, b: usize, cube: [u32; 3]) -> Option<u8> {
+    let [x, y, z] = cube;
+    let m = BRICK - 1;
+    // Which axes step out of the brick at the high corners.
+    let out = ((x & m == m) as usize) | ((y & m == m) as usize) << 1 | ((z & m == m) as usize) << 2;
+    if out == 0 {
+        // All 8 corners in brick `b` (two cubes in three).
+        let mut cfg = 0u8;
+        for c in 0..8u32 {
+            let s = field.slot_in(b, x + (c & 1), y + (c >> 1 & 1), z + (c >> 2));
+            if !field.slot_defined(&s) {
+                return None;
+            }
+            cfg |= ((s.distance < 0.0) as u8) << c;
         }
+        return Some(cfg);
+    }
+    let mut bricks = [None; 8];
+    bricks[0] = Some(b);
+    let mut cfg = 0u8;
+    for c in 0..8u32 {
+        let (dx, dy, dz) = (c & 1, c >> 1 & 1, c >> 2);
+        let (vx, vy, vz) = (x + dx, y + dy, z + dz);
+        let nb = c as usize & out;
+        let vb = match bricks[nb] {
+            Some(vb) => vb,
+            None => {
+                let vb = field.brick_of(vx, vy, vz)?;
+                bricks[nb] = Some(vb);
+                vb
+            }
+        };
+        let s = field.slot_in(vb, vx, vy, vz);
+        if !field.slot_defined(&s) {
+            return None;
+        }
+        cfg |= ((s.distance < 0.0) as u8) << c;
     }
     Some(cfg)
 }
@@ -119,29 +165,28 @@ pub fn leaf_config(field: &SignedDistanceField, cube: [u32; 3]) -> Option<u8> {
 /// All leaf cubes with a surface crossing: `(cube key, configuration)`,
 /// sorted by key. Only cubes touching the band are examined.
 pub fn leaf_cubes(field: &SignedDistanceField) -> Vec<(u64, u8)> {
-    let mut cand: Vec<u64> = Vec::with_capacity(field.len() * 2);
     let cells = field.grid.cells();
-    for &k in field.values.keys() {
-        let [x, y, z] = unpack(k);
-        for c in 0..8u32 {
-            let (dx, dy, dz) = (c & 1, c >> 1 & 1, c >> 2);
-            if x < dx || y < dy || z < dz {
-                continue;
-            }
-            let (cx, cy, cz) = (x - dx, y - dy, z - dz);
-            if cx < cells && cy < cells && cz < cells {
-                cand.push(pack(cx, cy, cz));
+    let mut out = Vec::new();
+    for b in 0..field.brick_count() {
+        let [bx, by, bz] = field.brick_coords(b).map(|c| c << BRICK_BITS);
+        for z in bz..bz + BRICK {
+            for y in by..by + BRICK {
+                for x in bx..bx + BRICK {
+                    if x >= cells || y >= cells || z >= cells {
+                        continue;
+                    }
+                    if let Some(cfg) = leaf_config(field, [x, y, z])
+                        && cfg != 0
+                        && cfg != 255
+                    {
+                        out.push((pack(x, y, z), cfg));
+                    }
+                }
             }
         }
     }
-    cand.sort_unstable();
-    cand.dedup();
-    cand.into_iter()
-        .filter_map(|k| {
-            let cfg = leaf_config(field, unpack(k))?;
-            (cfg != 0 && cfg != 255).then_some((k, cfg))
-        })
-        .collect()
+    out.sort_unstable_by_key(|l| l.0);
+    out
 }
 
 /// Creates (or finds) the vertex of every crossing edge of the given leaf
@@ -152,26 +197,72 @@ pub fn leaf_vertices(
     cubes: &[(u64, u8)],
     vb: &mut VertexBuffer,
 ) -> KeyMap<u32> {
+    leaf_vertices_by_cube(field, cubes, vb).0
+}
+
+/// A cube's vertex per cube edge ([`NO_VERTEX`] where the edge does not
+/// cross the surface): what [`node_triangles`] maps the table through.
+pub type CubeEdges = [u32; 12];
+
+/// Marks a cube edge without a crossing in [`CubeEdges`].
+pub const NO_VERTEX: u32 = u32::MAX;
+
+/// [`leaf_vertices`], also returning each cube's [`CubeEdges`] (so the
+/// cubes' triangles need no map lookups).
+pub fn leaf_vertices_by_cube(
+    field: &SignedDistanceField,
+    cubes: &[(u64, u8)],
+    vb: &mut VertexBuffer,
+) -> (KeyMap<u32>, Vec<CubeEdges>) {
     let g: Grid = field.grid;
-    let mut edges: KeyMap<u32> = KeyMap::default();
+    let mut by_cube = Vec::with_capacity(cubes.len());
+    // About 1.3 distinct crossing edges per surface cube (each edge is
+    // shared by up to 4 cubes): reserve once instead of rehashing.
+    let expect = cubes.len() * 3 / 2;
+    let mut edges: KeyMap<u32> = KeyMap::with_capacity_and_hasher(expect, Default::default());
+    vb.positions.reserve(expect);
+    vb.normals.reserve(expect);
+    vb.colors.reserve(expect);
     for &(k, cfg) in cubes {
         let cube = unpack(k);
+        let mut ce = [NO_VERTEX; 12];
         for (e, [a, b]) in EDGES.iter().enumerate() {
             if (cfg >> a & 1) == (cfg >> b & 1) {
                 continue;
             }
             let (ka, kb) = (corner_key(cube, 0, *a), corner_key(cube, 0, *b));
             let key = edge_key(ka, (e / 4) as u8);
-            edges.entry(key).or_insert_with(|| {
-                let (fa, fb) = (&field.values[&ka], &field.values[&kb]);
+            ce[e] = *edges.entry(key).or_insert_with(|| {
+                let fa = field
+                    .get(ka)
+                    .expect("a leaf cube's corners are in the band");
+                let fb = field
+                    .get(kb)
+                    .expect("a leaf cube's corners are in the band");
                 let t = edge_ratio(fa.distance, fb.distance);
                 let p = g.position(ka).lerp(g.position(kb), t);
-                let (n, c) = blend(&fa.into(), &fb.into(), t);
+                let (n, c) = blend(&(&fa).into(), &(&fb).into(), t);
                 vb.push(p, n, c)
             });
         }
+        by_cube.push(ce);
     }
-    edges
+    (edges, by_cube)
+}
+
+/// Triangles of a cube of configuration `cfg` whose edge vertices are
+/// `edges`: the table's edge triples mapped to vertices.
+#[inline]
+pub fn node_triangles(cfg: u8, edges: &CubeEdges, out: &mut Vec<u32>) {
+    for t in TABLE.triangles(cfg) {
+        for &e in t {
+            debug_assert_ne!(
+                edges[e as usize], NO_VERTEX,
+                "the table uses crossing edges only"
+            );
+            out.push(edges[e as usize]);
+        }
+    }
 }
 
 /// Triangles of one cube: the table's edge triples mapped to vertices.
@@ -227,7 +318,7 @@ mod tests {
         for x in 0..n {
             for y in 0..n {
                 for z in 0..n {
-                    field.values.insert(
+                    field.set(
                         pack(x, y, z),
                         FieldVertex {
                             dist2: 0.0,

@@ -86,24 +86,54 @@ pub const FACES: [Face; 6] = [
 ];
 
 /// The face's 4 vertices, counter-clockwise seen from outside the cube.
-pub fn face_vertices(f: Face) -> [u8; 4] {
+pub const fn face_vertices(f: Face) -> [u8; 4] {
     let a = f.axis as u32;
     let (u, w) = ((a + 1) % 3, (a + 2) % 3);
     let base = f.side << a;
-    let at = |x: u8, y: u8| base | (x << u) | (y << w);
+    let (du, dw) = (1u8 << u, 1u8 << w);
     if f.side == 1 {
         // u × w = axis: (0,0) (1,0) (1,1) (0,1) turns around +axis.
-        [at(0, 0), at(1, 0), at(1, 1), at(0, 1)]
+        [base, base | du, base | du | dw, base | dw]
     } else {
-        [at(0, 0), at(0, 1), at(1, 1), at(1, 0)]
+        [base, base | dw, base | du | dw, base | du]
     }
 }
 
+/// The edge joining cube vertices `a` and `b` (which must be adjacent),
+/// for the const tables.
+const fn edge_between_const(a: u8, b: u8) -> u8 {
+    let mut i = 0;
+    while i < 12 {
+        let e = EDGES[i];
+        if (e[0] == a && e[1] == b) || (e[0] == b && e[1] == a) {
+            return i as u8;
+        }
+        i += 1;
+    }
+    panic!("face edges are cube edges")
+}
+
+/// [`face_edges`] of every face, by `axis * 2 + side`.
+const FACE_EDGES: [[u8; 4]; 6] = {
+    let mut out = [[0u8; 4]; 6];
+    let mut f = 0;
+    while f < 6 {
+        let v = face_vertices(FACES[f]);
+        let mut i = 0;
+        while i < 4 {
+            out[f][i] = edge_between_const(v[i], v[(i + 1) % 4]);
+            i += 1;
+        }
+        f += 1;
+    }
+    out
+};
+
 /// The face's 4 edges in the same cyclic order: edge `i` joins vertex `i`
 /// and vertex `i + 1` of [`face_vertices`].
+#[inline]
 pub fn face_edges(f: Face) -> [u8; 4] {
-    let v = face_vertices(f);
-    std::array::from_fn(|i| edge_between(v[i], v[(i + 1) % 4]).expect("face edges are cube edges"))
+    FACE_EDGES[(f.axis * 2 + f.side) as usize]
 }
 
 /// The oriented iso-segments the face rule draws on face `f` for cube
@@ -111,6 +141,37 @@ pub fn face_edges(f: Face) -> [u8; 4] {
 /// Oriented so that, seen from outside the cube, the inside corners lie to
 /// the right of the segment. 0, 1 or 2 segments.
 pub fn face_segments(config: u8, f: Face) -> Vec<[u8; 2]> {
+    face_segments_fixed(config, f).to_vec()
+}
+
+/// [`face_segments`] without allocating: a slice of a table made once by
+/// [`face_segments_derived`].
+#[inline]
+pub fn face_segments_fixed(config: u8, f: Face) -> &'static [[u8; 2]] {
+    let (n, segs) = &FACE_SEGMENTS[config as usize][(f.axis * 2 + f.side) as usize];
+    &segs[..*n as usize]
+}
+
+/// One face's segments: how many (0–2), then the segments.
+type FaceSegments = (u8, [[u8; 2]; 2]);
+
+/// Every configuration's face segments, by face, derived once.
+static FACE_SEGMENTS: LazyLock<Vec<[FaceSegments; 6]>> = LazyLock::new(|| {
+    (0..=255u8)
+        .map(|config| {
+            FACES.map(|f| {
+                let list = face_segments_derived(config, f);
+                let mut segs = [[0u8; 2]; 2];
+                segs[..list.len()].copy_from_slice(&list);
+                (list.len() as u8, segs)
+            })
+        })
+        .collect()
+});
+
+/// The face rule itself (see the module docs): the segments of
+/// [`face_segments`], derived from the face's 4 signs.
+pub fn face_segments_derived(config: u8, f: Face) -> Vec<[u8; 2]> {
     let v = face_vertices(f);
     let e = face_edges(f);
     let inside = |i: usize| config & (1 << v[i % 4]) != 0;
@@ -146,7 +207,7 @@ pub fn face_segments(config: u8, f: Face) -> Vec<[u8; 2]> {
 pub fn trace_loops(config: u8) -> Vec<Vec<u8>> {
     let mut next = [u8::MAX; 12];
     for f in FACES {
-        for [a, b] in face_segments(config, f) {
+        for &[a, b] in face_segments_derived(config, f).iter() {
             debug_assert_eq!(next[a as usize], u8::MAX, "edge leaves twice");
             next[a as usize] = b;
         }
@@ -382,6 +443,22 @@ mod tests {
             .map(|g| std::array::from_fn(|v| g.vertex(v as u8)))
             .collect();
         assert_eq!(perms.len(), 48);
+    }
+
+    #[test]
+    fn face_tables_match_their_derivation() {
+        for f in FACES {
+            let v = face_vertices(f);
+            let e: [u8; 4] = std::array::from_fn(|i| edge_between(v[i], v[(i + 1) % 4]).unwrap());
+            assert_eq!(face_edges(f), e, "{f:?}");
+            for c in 0..=255u8 {
+                assert_eq!(
+                    face_segments(c, f),
+                    face_segments_derived(c, f),
+                    "{c} {f:?}"
+                );
+            }
+        }
     }
 
     #[test]

@@ -87,7 +87,11 @@ pub fn range_image_samples(r: &RangeImage) -> Samples {
 /// normals. Vertices whose normal is zero (only degenerate faces) are
 /// dropped.
 pub fn mesh_samples(m: &TriMesh) -> Samples {
-    let normals = lodkit_mesh::normals::vertex_normals(m);
+    mesh_samples_with(m, &lodkit_mesh::normals::vertex_normals(m))
+}
+
+/// [`mesh_samples`] with the mesh's vertex normals already computed.
+pub(crate) fn mesh_samples_with(m: &TriMesh, normals: &[Vec3]) -> Samples {
     let mut used = vec![false; m.positions.len()];
     for f in &m.faces {
         for &i in f {
@@ -118,22 +122,48 @@ pub fn mesh_samples(m: &TriMesh) -> Samples {
 /// hole edges on the closed bunny at the default resolution, none with
 /// this).
 pub fn mesh_samples_for_cube(m: &TriMesh, cube: f32) -> Samples {
-    let mut s = mesh_samples(m);
-    if !(cube > 0.0 && cube.is_finite()) {
-        return s;
-    }
     let normals = lodkit_mesh::normals::vertex_normals(m);
+    let mut s = mesh_samples_with(m, &normals);
+    densify_mesh_samples(m, &normals, cube, &mut s);
+    s
+}
+
+/// Turns `s`, the [`mesh_samples`] of `m`, into its
+/// [`mesh_samples_for_cube`] (appends the triangle samples), computing the
+/// vertex normals once more only if some triangle needs them.
+pub fn densify_mesh_samples_of(m: &TriMesh, cube: f32, s: &mut Samples) {
+    if long_edged_faces(m, cube).next().is_none() {
+        return;
+    }
+    densify_mesh_samples(m, &lodkit_mesh::normals::vertex_normals(m), cube, s);
+}
+
+/// Faces of `m` (valid indices) with an edge longer than `cube`, with their
+/// corner positions and that edge length.
+fn long_edged_faces(m: &TriMesh, cube: f32) -> impl Iterator<Item = (&[u32; 3], [Vec3; 3], f32)> {
     let nv = m.positions.len();
-    for f in &m.faces {
-        if f.iter().any(|&i| i as usize >= nv) {
-            continue;
+    let ok = cube > 0.0 && cube.is_finite();
+    m.faces.iter().filter_map(move |f| {
+        if !ok || f.iter().any(|&i| i as usize >= nv) {
+            return None;
         }
         let [a, b, c] = f.map(|i| m.positions[i as usize]);
+        // One square root: it is monotone, so the longest edge is the root
+        // of the largest squared length (NaNs are skipped by `max` alike).
+        let longest = a
+            .distance_squared(b)
+            .max(b.distance_squared(c))
+            .max(c.distance_squared(a))
+            .sqrt();
+        (longest > cube && longest.is_finite()).then_some((f, [a, b, c], longest))
+    })
+}
+
+/// Appends the triangle samples of [`mesh_samples_for_cube`] to `s`, with
+/// `normals` the mesh's vertex normals.
+pub(crate) fn densify_mesh_samples(m: &TriMesh, normals: &[Vec3], cube: f32, s: &mut Samples) {
+    for (f, [a, b, c], longest) in long_edged_faces(m, cube) {
         let [na, nb, nc] = f.map(|i| normals[i as usize]);
-        let longest = a.distance(b).max(b.distance(c)).max(c.distance(a));
-        if !(longest > cube && longest.is_finite()) {
-            continue;
-        }
         // Half-cube spacing, at most 64 subdivisions per side (bounded work).
         let n = ((2.0 * longest / cube).ceil() as usize).min(64);
         let color = m.colors.as_ref().map(|cs| cs[f[0] as usize]);
@@ -160,7 +190,6 @@ pub fn mesh_samples_for_cube(m: &TriMesh, cube: f32) -> Samples {
             }
         }
     }
-    s
 }
 
 /// Oriented samples of a point cloud: its own normals when it has them,

@@ -39,7 +39,8 @@
 //!   the original algorithm's choice.
 
 use crate::marching_cubes::{
-    Corner, VertexBuffer, blend, corner_key, cube_triangles, edge_key, leaf_vertices,
+    Corner, CubeEdges, NO_VERTEX, VertexBuffer, blend, corner_key, edge_key, leaf_vertices_by_cube,
+    node_triangles,
 };
 use crate::mc_table::EDGES;
 use crate::model::{McoModel, Node};
@@ -58,6 +59,10 @@ pub struct Level {
     pub corners: KeyMap<Corner>,
     /// Crossing edge (leaf-unit [`edge_key`]) → vertex index.
     pub edges: KeyMap<u32>,
+    /// Per node (same order as `keys`): the vertex of each of its 12 cube
+    /// edges, [`NO_VERTEX`] where the edge does not cross; the same
+    /// vertices as `edges`, without a lookup.
+    pub node_edges: Vec<CubeEdges>,
 }
 
 /// All levels plus the vertex buffer; `node_id[L][i]` is the model node of
@@ -109,6 +114,14 @@ fn offset_key(v: u64, d: [i32; 3], step: u32) -> Option<u64> {
     Some(pack(o[0], o[1], o[2]))
 }
 
+/// A placeholder corner, overwritten before use.
+const UNSET: Corner = Corner {
+    inside: false,
+    distance: f32::NAN,
+    normal: glam::Vec3::ZERO,
+    color: [0; 4],
+};
+
 /// Builds every level from the leaf cubes up to the single root.
 pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) -> Result<Tree<'f>> {
     if leaves.is_empty() {
@@ -118,11 +131,12 @@ pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) ->
     }
     let depth = field.grid.depth as usize;
     let mut vertices = VertexBuffer::default();
-    let edges = leaf_vertices(field, leaves, &mut vertices);
+    let (edges, node_edges) = leaf_vertices_by_cube(field, leaves, &mut vertices);
     let mut level0 = Level {
         keys: leaves.iter().map(|l| l.0).collect(),
         configs: leaves.iter().map(|l| l.1).collect(),
         edges,
+        node_edges,
         ..Default::default()
     };
     level0.index = level0
@@ -157,47 +171,49 @@ pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) ->
                 .enumerate()
                 .map(|(i, &k)| (k, i as u32))
                 .collect(),
+            corners: KeyMap::with_capacity_and_hasher(keys.len() * 2, Default::default()),
             ..Default::default()
         };
-        // Corner signs: Fig. 5.2's four cases on the lattice.
+        // Corner signs: Fig. 5.2's four cases on the lattice, evaluated
+        // once per lattice vertex and kept per node for the passes below.
+        let mut node_corners: Vec<[Corner; 8]> = Vec::with_capacity(keys.len());
         for &k in &keys {
             let cube = unpack(k);
-            for c in 0..8u8 {
-                let v = corner_key(cube, l as u32, c);
-                if field.get(v).is_some() || level.corners.contains_key(&v) {
-                    continue;
-                }
-                let value = match tree.corner(l - 1, v) {
-                    Some(cv) => cv,
-                    None => rule_value(&tree, l - 1, v, step, &offsets)
-                        .expect("a node's centre is a corner of each of its children"),
+            let mut cs = [UNSET; 8];
+            for (c, slot) in cs.iter_mut().enumerate() {
+                let v = corner_key(cube, l as u32, c as u8);
+                *slot = if let Some(f) = field.get(v) {
+                    f.into()
+                } else if let Some(&cv) = level.corners.get(&v) {
+                    cv
+                } else {
+                    let value = match tree.corner(l - 1, v) {
+                        Some(cv) => cv,
+                        None => rule_value(&tree, l - 1, v, step, &offsets)
+                            .expect("a node's centre is a corner of each of its children"),
+                    };
+                    level.corners.insert(v, value);
+                    value
                 };
-                level.corners.insert(v, value);
             }
+            node_corners.push(cs);
         }
-        let corner_at = |v: u64| -> Corner {
-            field
-                .get(v)
-                .map(Corner::from)
-                .or_else(|| level.corners.get(&v).copied())
-                .expect("every node corner is set above")
-        };
-        let mut configs = Vec::with_capacity(keys.len());
-        for &k in &keys {
-            let cube = unpack(k);
-            let mut cfg = 0u8;
-            for c in 0..8u8 {
-                if corner_at(corner_key(cube, l as u32, c)).inside {
-                    cfg |= 1 << c;
-                }
-            }
-            configs.push(cfg);
-        }
+        let configs: Vec<u8> = node_corners
+            .iter()
+            .map(|cs| {
+                cs.iter()
+                    .enumerate()
+                    .fold(0u8, |cfg, (c, v)| cfg | (v.inside as u8) << c)
+            })
+            .collect();
         // Crossing vertices: the ratio extension, by reference.
-        let mut edges: KeyMap<u32> = KeyMap::default();
+        let mut edges: KeyMap<u32> =
+            KeyMap::with_capacity_and_hasher(keys.len() * 3 / 2, Default::default());
+        let mut node_edges: Vec<CubeEdges> = Vec::with_capacity(keys.len());
         for (i, &k) in keys.iter().enumerate() {
             let cfg = configs[i];
             let cube = unpack(k);
+            let mut ce = [NO_VERTEX; 12];
             for (e, [a, b]) in EDGES.iter().enumerate() {
                 if (cfg >> a & 1) == (cfg >> b & 1) {
                     continue;
@@ -206,13 +222,14 @@ pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) ->
                 let va = corner_key(cube, l as u32, *a);
                 let vb = corner_key(cube, l as u32, *b);
                 let ek = edge_key(va, axis);
-                if edges.contains_key(&ek) {
+                if let Some(&id) = edges.get(&ek) {
+                    ce[e] = id;
                     continue;
                 }
                 let mut d = [0i32; 3];
                 d[axis as usize] = 1;
                 let vm = offset_key(va, d, step).expect("midpoint inside the lattice");
-                let (ca, cb) = (corner_at(va), corner_at(vb));
+                let (ca, cb) = (node_corners[i][*a as usize], node_corners[i][*b as usize]);
                 let below = &tree.levels[l - 1];
                 let id = match tree.corner(l - 1, vm) {
                     Some(cm) => {
@@ -240,11 +257,14 @@ pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) ->
                     }
                 };
                 edges.insert(ek, id);
+                ce[e] = id;
             }
+            node_edges.push(ce);
         }
         level.keys = keys;
         level.configs = configs;
         level.edges = edges;
+        level.node_edges = node_edges;
         tree.levels.push(level);
     }
     debug_assert_eq!(tree.levels[depth].keys.len(), 1, "a single root");
@@ -298,17 +318,57 @@ pub fn is_null(cfg: u8) -> bool {
 /// [`crate::crack_patch`].
 pub fn assemble(tree: &mut Tree) -> McoModel {
     let depth = tree.levels.len() - 1;
-    // children[L][i]: level L-1 indices under level L's node i.
-    let mut children: Vec<Vec<Vec<u32>>> = vec![Vec::new(); depth + 1];
-    for (l, slot) in children.iter_mut().enumerate().skip(1) {
-        let mut ch = vec![Vec::new(); tree.levels[l].keys.len()];
-        for (i, &k) in tree.levels[l - 1].keys.iter().enumerate() {
-            let [x, y, z] = unpack(k);
-            let p = tree.levels[l].index[&pack(x >> 1, y >> 1, z >> 1)];
-            ch[p as usize].push(i as u32);
-        }
-        *slot = ch;
-    }
+    // parent[L][i]: level L+1 index of level L's node i (keys are sorted,
+    // so a node's children are consecutive and in key order).
+    let parent: Vec<Vec<u32>> = (0..depth)
+        .map(|l| {
+            let up = &tree.levels[l + 1];
+            let mut j = 0usize;
+            tree.levels[l]
+                .keys
+                .iter()
+                .map(|&k| {
+                    let [x, y, z] = unpack(k);
+                    let pk = pack(x >> 1, y >> 1, z >> 1);
+                    // Parent keys of sorted keys are not sorted (x is the
+                    // low field), so look the parent up unless it is the
+                    // previous child's.
+                    if up.keys.get(j) != Some(&pk) {
+                        j = up.index[&pk] as usize;
+                    }
+                    j as u32
+                })
+                .collect()
+        })
+        .collect();
+    // children[L]: level L's nodes' children (level L-1 indices), as
+    // `start[i]..start[i+1]` into `list`, in increasing index order.
+    let children: Vec<(Vec<u32>, Vec<u32>)> = (0..=depth)
+        .map(|l| {
+            if l == 0 {
+                return (vec![0; tree.levels[0].keys.len() + 1], Vec::new());
+            }
+            let n = tree.levels[l].keys.len();
+            let mut start = vec![0u32; n + 1];
+            for &p in &parent[l - 1] {
+                start[p as usize + 1] += 1;
+            }
+            for i in 0..n {
+                start[i + 1] += start[i];
+            }
+            let mut fill = start.clone();
+            let mut list = vec![0u32; parent[l - 1].len()];
+            for (c, &p) in parent[l - 1].iter().enumerate() {
+                list[fill[p as usize] as usize] = c as u32;
+                fill[p as usize] += 1;
+            }
+            (start, list)
+        })
+        .collect();
+    let kids = |l: usize, i: u32| -> &[u32] {
+        let (start, list) = &children[l];
+        &list[start[i as usize] as usize..start[i as usize + 1] as usize]
+    };
     let mut order: Vec<(usize, u32)> = vec![(depth, 0)];
     let mut first_child = Vec::new();
     let mut head = 0;
@@ -317,7 +377,7 @@ pub fn assemble(tree: &mut Tree) -> McoModel {
         head += 1;
         first_child.push(order.len() as u32);
         if l > 0 {
-            for &c in &children[l][i as usize] {
+            for &c in kids(l, i) {
                 order.push((l - 1, c));
             }
         }
@@ -339,11 +399,9 @@ pub fn assemble(tree: &mut Tree) -> McoModel {
         let lv = &tree.levels[l];
         let cube = unpack(lv.keys[i as usize]);
         let start = model.tris.len();
-        cube_triangles(
-            cube,
-            l as u32,
+        node_triangles(
             lv.configs[i as usize],
-            &lv.edges,
+            &lv.node_edges[i as usize],
             &mut model.tris,
         );
         let count = (model.tris.len() - start) / 3;
@@ -358,9 +416,7 @@ pub fn assemble(tree: &mut Tree) -> McoModel {
         let parent = if id == 0 {
             u32::MAX
         } else {
-            let [x, y, z] = cube;
-            let pl = &tree.levels[l + 1];
-            tree.node_id[l + 1][pl.index[&pack(x >> 1, y >> 1, z >> 1)] as usize]
+            tree.node_id[l + 1][parent[l][i as usize] as usize]
         };
         model.nodes.push(Node {
             coord: cube,
@@ -368,11 +424,7 @@ pub fn assemble(tree: &mut Tree) -> McoModel {
             first_child: first_child[id],
             tri_start: start as u32,
             tri_count: count as u16,
-            child_count: if l > 0 {
-                children[l][i as usize].len() as u8
-            } else {
-                0
-            },
+            child_count: if l > 0 { kids(l, i).len() as u8 } else { 0 },
             level: l as u8,
             config: lv.configs[i as usize],
             ..Default::default()
@@ -391,31 +443,47 @@ pub fn assemble(tree: &mut Tree) -> McoModel {
         })
         .collect();
     // Balance dependencies: for each of the 26 same-level neighbour cubes,
-    // the lowest existing node above that level covering it.
-    let nbr: Vec<[i32; 3]> = rule_offsets().concat();
+    // the lowest existing node above that level covering it. The 26
+    // neighbours have at most 8 parent cells (2 per axis: the own parent's
+    // and the one on the side the node touches), so climb from those.
+    let mut deps: Vec<u32> = Vec::with_capacity(8);
     for (id, &(l, i)) in order.iter().enumerate() {
         let start = model.deps.len();
         if l > 0 && id > 0 {
             let own_parent = model.nodes[id].parent;
-            let k = tree.levels[l].keys[i as usize];
-            let mut deps: Vec<u32> = nbr
-                .iter()
-                .filter_map(|&d| offset_key(k, d, 1))
-                .filter_map(|nk| {
-                    let [mut x, mut y, mut z] = unpack(nk);
-                    for up in l + 1..=depth {
-                        (x, y, z) = (x >> 1, y >> 1, z >> 1);
-                        if let Some(&j) = tree.levels[up].index.get(&pack(x, y, z)) {
-                            return Some(tree.node_id[up][j as usize]);
+            let c = unpack(tree.levels[l].keys[i as usize]);
+            let axis = |a: usize| -> ([u32; 2], usize) {
+                let v = c[a];
+                if v & 1 == 1 {
+                    ([v >> 1, (v >> 1) + 1], 2)
+                } else if v == 0 {
+                    ([0, 0], 1)
+                } else {
+                    ([(v >> 1) - 1, v >> 1], 2)
+                }
+            };
+            let (ax, ay, az) = (axis(0), axis(1), axis(2));
+            deps.clear();
+            for &pz in &az.0[..az.1] {
+                for &py in &ay.0[..ay.1] {
+                    for &px in &ax.0[..ax.1] {
+                        let (mut x, mut y, mut z) = (px, py, pz);
+                        for up in l + 1..=depth {
+                            if let Some(&j) = tree.levels[up].index.get(&pack(x, y, z)) {
+                                let p = tree.node_id[up][j as usize];
+                                if p != own_parent {
+                                    deps.push(p);
+                                }
+                                break;
+                            }
+                            (x, y, z) = (x >> 1, y >> 1, z >> 1);
                         }
                     }
-                    None
-                })
-                .filter(|&p| p != own_parent)
-                .collect();
+                }
+            }
             deps.sort_unstable();
             deps.dedup();
-            model.deps.extend(deps);
+            model.deps.extend_from_slice(&deps);
         }
         model.nodes[id].deps_start = start as u32;
         model.nodes[id].deps_count = (model.deps.len() - start) as u16;

@@ -21,17 +21,18 @@
 //! lattice vertices whose value changed; the octree above the leaves is
 //! rebuilt by [`IncrementalBuilder::build`] (bottom-up, `O(n log n)`).
 
-use std::collections::BTreeMap;
 use std::num::NonZero;
 use std::time::Instant;
 
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use lodkit_mesh::{Aabb, Model, RangeImage, TriMesh};
 
-use crate::marching_cubes::leaf_config;
+use crate::marching_cubes::leaf_config_in;
 use crate::model::McoModel;
 use crate::normals_estimation::{mesh_samples, point_cloud_samples, range_image_samples};
-use crate::signed_distance::{Grid, Samples, SignedDistanceField, pack, unpack};
+use crate::signed_distance::{
+    BRICK, BRICK_BITS, BRICK_VOLUME, Grid, Samples, SignedDistanceField, local_index, pack,
+};
 use crate::{Error, Result};
 
 /// Build options.
@@ -44,39 +45,98 @@ pub struct Options {
 
 /// Oriented samples of any model (see [`crate::normals_estimation`]).
 pub fn samples_of(model: &Model) -> Result<Samples> {
-    match model {
-        Model::Mesh(m) => Ok(mesh_samples(m)),
-        Model::Points(p) => point_cloud_samples(p),
-        Model::Range(r) => Ok(range_image_samples(r)),
-    }
+    input_samples(Input::from(model))
 }
 
-fn median(mut v: Vec<f32>) -> Option<f32> {
-    v.retain(|x| x.is_finite() && *x > 0.0);
-    if v.is_empty() {
+/// The upper median of the finite positive values of `v`.
+///
+/// A radix select: positive finite floats order as their bit patterns, so
+/// one pass counts the values per high 16 bits, and only the values in the
+/// median's bucket (about 1% of edge lengths) are selected among. Same
+/// result as sorting, in two linear passes.
+fn median(v: Vec<f32>) -> Option<f32> {
+    let mut hist = vec![0u32; 1 << 16];
+    let mut n = 0usize;
+    for x in &v {
+        if x.is_finite() && *x > 0.0 {
+            hist[(x.to_bits() >> 16) as usize] += 1;
+            n += 1;
+        }
+    }
+    if n == 0 {
         return None;
     }
-    let mid = v.len() / 2;
-    v.select_nth_unstable_by(mid, f32::total_cmp);
-    Some(v[mid])
+    let mid = n / 2;
+    let mut below = 0usize;
+    let mut bucket = 0u32;
+    for (h, &count) in hist.iter().enumerate() {
+        if below + count as usize > mid {
+            bucket = h as u32;
+            break;
+        }
+        below += count as usize;
+    }
+    let mut low: Vec<u32> = v
+        .iter()
+        .filter(|x| x.is_finite() && **x > 0.0 && x.to_bits() >> 16 == bucket)
+        .map(|x| x.to_bits() & 0xFFFF)
+        .collect();
+    let rank = mid - below;
+    low.select_nth_unstable(rank);
+    Some(f32::from_bits(bucket << 16 | low[rank]))
 }
 
 /// The input's sample spacing (object units), if it can be measured.
 pub fn sample_spacing(model: &Model) -> Option<f32> {
-    match model {
-        Model::Mesh(m) => median(
-            m.faces
-                .iter()
-                .filter(|f| f.iter().all(|&i| (i as usize) < m.positions.len()))
-                .flat_map(|f| {
-                    (0..3).map(move |k| {
-                        m.positions[f[k] as usize].distance(m.positions[f[(k + 1) % 3] as usize])
-                    })
-                })
-                .collect(),
-        ),
-        Model::Range(r) => median(range_spacings(r)),
-        Model::Points(p) => {
+    spacing_of(Input::from(model))
+}
+
+/// A borrowed input model: what the build reads, without copying a mesh
+/// into a [`Model`].
+#[derive(Debug, Clone, Copy)]
+enum Input<'a> {
+    Mesh(&'a TriMesh),
+    Points(&'a lodkit_mesh::PointCloud),
+    Range(&'a RangeImage),
+}
+
+impl<'a> From<&'a Model> for Input<'a> {
+    fn from(m: &'a Model) -> Self {
+        match m {
+            Model::Mesh(m) => Input::Mesh(m),
+            Model::Points(p) => Input::Points(p),
+            Model::Range(r) => Input::Range(r),
+        }
+    }
+}
+
+fn input_samples(input: Input) -> Result<Samples> {
+    match input {
+        Input::Mesh(m) => Ok(mesh_samples(m)),
+        Input::Points(p) => point_cloud_samples(p),
+        Input::Range(r) => Ok(range_image_samples(r)),
+    }
+}
+
+fn spacing_of(input: Input) -> Option<f32> {
+    match input {
+        Input::Mesh(m) => {
+            // Squared lengths: the median's square root is the median
+            // length, with one square root instead of one per edge.
+            let nv = m.positions.len();
+            let mut sq = Vec::with_capacity(3 * m.faces.len());
+            for f in &m.faces {
+                if f.iter().all(|&i| (i as usize) < nv) {
+                    let p = f.map(|i| m.positions[i as usize]);
+                    for k in 0..3 {
+                        sq.push(p[k].distance_squared(p[(k + 1) % 3]));
+                    }
+                }
+            }
+            median(sq).map(f32::sqrt)
+        }
+        Input::Range(r) => median(range_spacings(r)),
+        Input::Points(p) => {
             if p.positions.len() < 2 {
                 return None;
             }
@@ -135,10 +195,16 @@ pub struct AddReport {
 
 /// Builds a model from samples added one batch (e.g. one range image) at a
 /// time on a fixed lattice.
+///
+/// Leaf configurations are kept beside the band's bricks: leaf cube
+/// `(x, y, z)` lives in the brick of its lowest corner `(x, y, z)`, one
+/// byte per cube (0 = no surface or not in the band).
 #[derive(Debug, Clone)]
 pub struct IncrementalBuilder {
     field: SignedDistanceField,
-    leaves: BTreeMap<u64, u8>,
+    /// `BRICK_VOLUME` leaf configurations per brick of the field.
+    configs: Vec<u8>,
+    surface_cubes: usize,
     samples: u64,
     has_colors: Option<bool>,
 }
@@ -155,7 +221,8 @@ impl IncrementalBuilder {
     pub fn new(grid: Grid) -> Self {
         IncrementalBuilder {
             field: SignedDistanceField::new(grid),
-            leaves: BTreeMap::new(),
+            configs: Vec::new(),
+            surface_cubes: 0,
             samples: 0,
             has_colors: None,
         }
@@ -171,7 +238,23 @@ impl IncrementalBuilder {
 
     /// Leaf cubes with a surface, `(key, configuration)` in key order.
     pub fn leaves(&self) -> Vec<(u64, u8)> {
-        self.leaves.iter().map(|(&k, &c)| (k, c)).collect()
+        let mut out = Vec::with_capacity(self.surface_cubes);
+        for (b, cfgs) in self.configs.chunks_exact(BRICK_VOLUME).enumerate() {
+            let [bx, by, bz] = self.field.brick_coords(b).map(|c| c << BRICK_BITS);
+            for (li, &cfg) in cfgs.iter().enumerate() {
+                if cfg != 0 {
+                    let li = li as u32;
+                    let (x, y, z) = (
+                        bx + (li & (BRICK - 1)),
+                        by + (li >> BRICK_BITS & (BRICK - 1)),
+                        bz + (li >> (2 * BRICK_BITS)),
+                    );
+                    out.push((pack(x, y, z), cfg));
+                }
+            }
+        }
+        out.sort_unstable_by_key(|l| l.0);
+        out
     }
 
     /// Adds a batch of samples; only cubes around changed vertices are
@@ -181,40 +264,69 @@ impl IncrementalBuilder {
         self.has_colors = Some(self.has_colors.unwrap_or(colors) && colors);
         self.samples += s.len() as u64;
         let changed = self.field.add(s);
-        let cells = self.field.grid.cells();
-        let mut cubes: Vec<u64> = Vec::with_capacity(changed.len() * 8);
-        for &k in &changed {
-            let [x, y, z] = unpack(k);
-            for c in 0..8u32 {
-                let (dx, dy, dz) = (c & 1, c >> 1 & 1, c >> 2);
-                if x >= dx
-                    && y >= dy
-                    && z >= dz
-                    && x - dx < cells
-                    && y - dy < cells
-                    && z - dz < cells
-                {
-                    cubes.push(pack(x - dx, y - dy, z - dz));
+        let field = &self.field;
+        let bricks = field.brick_count();
+        self.configs.resize(bricks * BRICK_VOLUME, 0);
+        // The cubes around changed vertices: one bit per cube, in the
+        // brick of the cube's lowest corner.
+        let cells = field.grid.cells();
+        let mut dirty = vec![[0u64; BRICK_VOLUME / 64]; bricks];
+        for b in 0..bricks {
+            field.for_each_changed(b, |x, y, z| {
+                let low =
+                    (x & (BRICK - 1)) != 0 && (y & (BRICK - 1)) != 0 && (z & (BRICK - 1)) != 0;
+                for c in 0..8u32 {
+                    let (dx, dy, dz) = (c & 1, c >> 1 & 1, c >> 2);
+                    if x < dx || y < dy || z < dz {
+                        continue;
+                    }
+                    let (cx, cy, cz) = (x - dx, y - dy, z - dz);
+                    if cx >= cells || cy >= cells || cz >= cells {
+                        continue;
+                    }
+                    // A cube whose lowest corner has no brick is not in the band.
+                    let Some(cb) = (if low || c == 0 {
+                        Some(b)
+                    } else {
+                        field.brick_of(cx, cy, cz)
+                    }) else {
+                        continue;
+                    };
+                    let li = local_index(cx, cy, cz);
+                    dirty[cb][li / 64] |= 1 << (li % 64);
                 }
-            }
+            });
         }
-        cubes.sort_unstable();
-        cubes.dedup();
-        for &k in &cubes {
-            match leaf_config(&self.field, unpack(k)) {
-                Some(cfg) if cfg != 0 && cfg != 255 => {
-                    self.leaves.insert(k, cfg);
-                }
-                _ => {
-                    self.leaves.remove(&k);
+        let mut recomputed = 0usize;
+        for (b, words) in dirty.iter().enumerate() {
+            let [bx, by, bz] = field.brick_coords(b).map(|c| c << BRICK_BITS);
+            for (w, &word) in words.iter().enumerate() {
+                let mut m = word;
+                while m != 0 {
+                    let li = (w * 64) as u32 + m.trailing_zeros();
+                    m &= m - 1;
+                    let cube = [
+                        bx + (li & (BRICK - 1)),
+                        by + (li >> BRICK_BITS & (BRICK - 1)),
+                        bz + (li >> (2 * BRICK_BITS)),
+                    ];
+                    let cfg = match leaf_config_in(field, b, cube) {
+                        Some(cfg) if cfg != 0 && cfg != 255 => cfg,
+                        _ => 0,
+                    };
+                    let slot = &mut self.configs[b * BRICK_VOLUME + li as usize];
+                    self.surface_cubes =
+                        self.surface_cubes + (cfg != 0) as usize - (*slot != 0) as usize;
+                    *slot = cfg;
+                    recomputed += 1;
                 }
             }
         }
         AddReport {
             samples: s.len(),
-            vertices_changed: changed.len(),
-            cubes_recomputed: cubes.len(),
-            surface_cubes: self.leaves.len(),
+            vertices_changed: changed,
+            cubes_recomputed: recomputed,
+            surface_cubes: self.surface_cubes,
         }
     }
 
@@ -245,11 +357,16 @@ impl IncrementalBuilder {
 /// The lattice for several inputs: their union box, the given or default
 /// resolution.
 pub fn grid_for(models: &[Model], samples: &[Samples], opts: &Options) -> Result<Grid> {
+    let inputs: Vec<Input> = models.iter().map(Input::from).collect();
+    grid_for_inputs(&inputs, samples, opts)
+}
+
+fn grid_for_inputs(inputs: &[Input], samples: &[Samples], opts: &Options) -> Result<Grid> {
     let bbox = samples.iter().fold(Aabb::EMPTY, |b, s| b.union(&s.bbox()));
     let resolution = match opts.resolution {
         Some(r) => r,
         None => {
-            let spacing = median(models.iter().filter_map(sample_spacing).collect());
+            let spacing = median(inputs.iter().filter_map(|&i| spacing_of(i)).collect());
             default_resolution(bbox, spacing.unwrap_or(0.0))
         }
     };
@@ -258,14 +375,21 @@ pub fn grid_for(models: &[Model], samples: &[Samples], opts: &Options) -> Result
 
 /// Mesh samples made dense enough for `grid` (see
 /// [`crate::normals_estimation::mesh_samples_for_cube`]); other inputs'
-/// samples are kept.
+/// samples are kept. `samples[i]` must be [`samples_of`]`(&models[i])`.
 pub fn densify_meshes(models: &[Model], samples: Vec<Samples>, grid: &Grid) -> Vec<Samples> {
-    models
+    let inputs: Vec<Input> = models.iter().map(Input::from).collect();
+    densify_inputs(&inputs, samples, grid)
+}
+
+fn densify_inputs(inputs: &[Input], samples: Vec<Samples>, grid: &Grid) -> Vec<Samples> {
+    inputs
         .iter()
         .zip(samples)
-        .map(|(m, s)| match m {
-            Model::Mesh(mesh) => crate::normals_estimation::mesh_samples_for_cube(mesh, grid.cube),
-            _ => s,
+        .map(|(i, mut s)| {
+            if let Input::Mesh(mesh) = i {
+                crate::normals_estimation::densify_mesh_samples_of(mesh, grid.cube, &mut s);
+            }
+            s
         })
         .collect()
 }
@@ -273,15 +397,37 @@ pub fn densify_meshes(models: &[Model], samples: Vec<Samples>, grid: &Grid) -> V
 /// Builds from several models (range images, meshes, point clouds), adding
 /// them one at a time.
 pub fn build_from_models(models: &[Model], opts: &Options) -> Result<McoModel> {
+    let inputs: Vec<Input> = models.iter().map(Input::from).collect();
+    build_from_inputs(&inputs, opts)
+}
+
+fn build_from_inputs(inputs: &[Input], opts: &Options) -> Result<McoModel> {
     let t0 = Instant::now();
-    let samples: Vec<Samples> = models.iter().map(samples_of).collect::<Result<_>>()?;
+    // Meshes' vertex normals are computed once, for the vertex samples and
+    // again for the triangle samples that densify them.
+    let mut mesh_normals: Vec<Option<Vec<glam::Vec3>>> = Vec::with_capacity(inputs.len());
+    let mut samples: Vec<Samples> = Vec::with_capacity(inputs.len());
+    for &input in inputs {
+        if let Input::Mesh(m) = input {
+            let normals = lodkit_mesh::normals::vertex_normals(m);
+            samples.push(crate::normals_estimation::mesh_samples_with(m, &normals));
+            mesh_normals.push(Some(normals));
+        } else {
+            samples.push(input_samples(input)?);
+            mesh_normals.push(None);
+        }
+    }
     if samples.iter().all(Samples::is_empty) {
         return Err(Error::Input("the input has no usable samples".into()));
     }
-    let grid = grid_for(models, &samples, opts)?;
-    let samples = densify_meshes(models, samples, &grid);
+    let grid = grid_for_inputs(inputs, &samples, opts)?;
+    for ((input, s), normals) in inputs.iter().zip(&mut samples).zip(&mesh_normals) {
+        if let (Input::Mesh(m), Some(normals)) = (input, normals) {
+            crate::normals_estimation::densify_mesh_samples(m, normals, grid.cube, s);
+        }
+    }
     let mut b = IncrementalBuilder::new(grid);
-    if models.iter().any(|m| !matches!(m, Model::Mesh(_))) {
+    if inputs.iter().any(|i| !matches!(i, Input::Mesh(_))) {
         b = b.with_tangential_rule();
     }
     for s in &samples {
@@ -295,11 +441,52 @@ pub fn build_from_models(models: &[Model], opts: &Options) -> Result<McoModel> {
 /// Builds from a triangle mesh (its vertices with area-weighted normals,
 /// §4.3.1). The entry point `lodkit build` calls.
 pub fn build_from_mesh(mesh: &TriMesh, opts: &Options) -> Result<McoModel> {
-    build_from_models(&[Model::Mesh(mesh.clone())], opts)
+    build_from_inputs(&[Input::Mesh(mesh)], opts)
 }
 
 /// Builds from posed range images (e.g. from a `.conf`).
 pub fn build_from_range_images(images: &[RangeImage], opts: &Options) -> Result<McoModel> {
-    let models: Vec<Model> = images.iter().cloned().map(Model::Range).collect();
-    build_from_models(&models, opts)
+    let inputs: Vec<Input> = images.iter().map(Input::Range).collect();
+    build_from_inputs(&inputs, opts)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The median as sorting finds it.
+    fn sorted_median(mut v: Vec<f32>) -> Option<f32> {
+        v.retain(|x| x.is_finite() && *x > 0.0);
+        v.sort_by(f32::total_cmp);
+        v.get(v.len() / 2).copied()
+    }
+
+    #[test]
+    fn radix_median_equals_the_sorted_median() {
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        for n in [1usize, 2, 3, 10, 1001, 20_000] {
+            // Lengths around one value (one bucket) and spread widely, with
+            // duplicates, zeros, negatives and non-finite values mixed in.
+            let v: Vec<f32> = (0..n)
+                .map(|i| match next() % 9 {
+                    0 => 0.0,
+                    1 => -1.0,
+                    2 => f32::NAN,
+                    3 => f32::INFINITY,
+                    4 => 0.01,
+                    5 => f32::from_bits((next() >> 33) as u32 & 0x7F7F_FFFF),
+                    _ => 0.01 + (i % 97) as f32 * 1e-7,
+                })
+                .collect();
+            assert_eq!(median(v.clone()), sorted_median(v), "n = {n}");
+        }
+        assert_eq!(median(vec![0.0, f32::NAN, -2.0]), None);
+        assert_eq!(median(Vec::new()), None);
+    }
 }

@@ -1,0 +1,70 @@
+//! Release driver for profiling the build (`perf record`, callgrind) and for
+//! checking that a change keeps the output byte-identical: builds
+//! `shapes::blob(TRIS)` — or, with `bunny`, the Stanford bunny from its 10
+//! real range scans in `../shared/data` — `REPEAT` times and prints the
+//! best time, input points per second and a CRC of the encoded model (its
+//! build time zeroed).
+//!
+//! ```text
+//! cargo run --release -p lodkit-mco --example build_driver -- 640000 3
+//! cargo run --release -p lodkit-mco --example build_driver -- bunny 3
+//! ```
+
+use std::time::Instant;
+
+use lodkit_mco::McoModel;
+use lodkit_mco::model_file::encode;
+use lodkit_mco::pipeline::{Options, build_from_mesh, build_from_range_images};
+use lodkit_mesh::shapes;
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let what = args.get(1).map_or("640000", String::as_str);
+    let repeat: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(3);
+    let build: Box<dyn Fn() -> McoModel>;
+    let points;
+    if what == "bunny" {
+        let conf = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../../shared/data/range/stanford_bunny/bun.conf");
+        let scans: Vec<_> = lodkit_mesh::io::conf::load_scans(&conf)
+            .expect("the bunny's scans")
+            .into_iter()
+            .map(|(_, r)| r)
+            .collect();
+        points = scans
+            .iter()
+            .map(|r| r.valid.iter().filter(|&&v| v).count())
+            .sum();
+        build = Box::new(move || build_from_range_images(&scans, &Options::default()).unwrap());
+    } else if let Some(tris) = what.strip_prefix("cloud") {
+        let mesh = shapes::blob(tris.parse().expect("cloudTRIANGLES"));
+        points = mesh.positions.len();
+        let cloud = [lodkit_mesh::Model::Points(lodkit_mesh::PointCloud {
+            positions: mesh.positions.clone(),
+            normals: Some(lodkit_mesh::normals::vertex_normals(&mesh)),
+            colors: None,
+        })];
+        build = Box::new(move || {
+            lodkit_mco::pipeline::build_from_models(&cloud, &Options::default()).unwrap()
+        });
+    } else {
+        let mesh = shapes::blob(what.parse().expect("a triangle count or `bunny`"));
+        points = mesh.positions.len();
+        build = Box::new(move || build_from_mesh(&mesh, &Options::default()).unwrap());
+    }
+    let mut best = f64::INFINITY;
+    let mut crc = 0;
+    for _ in 0..repeat {
+        let t = Instant::now();
+        let mut m = build();
+        best = best.min(t.elapsed().as_secs_f64());
+        m.stats.build_seconds = 0.0;
+        // The file ends with its own CRC; hash what it covers.
+        let bytes = encode(&m);
+        crc = crc32fast::hash(&bytes[..bytes.len() - 4]);
+    }
+    println!(
+        "{what}: {points} points, best {best:.3} s, {:.0} points/s, crc {crc:08x}",
+        points as f64 / best
+    );
+}
