@@ -594,7 +594,7 @@ fn triangulate_impl(
         }
     }
     // The ambiguous solids, settled against everything else built.
-    settle(&faces, &mut trials, s.cells.len());
+    settle(&faces, &from_solids, &mut trials, s.cells.len());
     for t in &trials {
         let Shape::Solid(tris) = &table().configs[t.mask as usize].shape else {
             continue;
@@ -608,7 +608,7 @@ fn triangulate_impl(
         for (i, tri) in tris.iter().enumerate() {
             if t.keep & (1 << i) != 0 {
                 faces.push(tri.map(|j| t.vs[j as usize]));
-                if !((tri[0] ^ tri[1]) | (tri[0] ^ tri[2])) & 7 != 0 {
+                if on_face(tri) {
                     from_solids.push(faces.len() as u32 - 1);
                 }
             }
@@ -807,31 +807,50 @@ fn sorted_tri(mut t: [u32; 3]) -> [u32; 3] {
     t
 }
 
-/// Edge and vertex use by the distinct triangles around the trials
-/// ([`dedupe_face_triangles`] later keeps one copy of each).
+/// Whether the corners of a hull triangle share a coordinate: it lies on a
+/// face of the neighbourhood, and the solid across may build it too.
+fn on_face(tri: &[u8; 3]) -> bool {
+    !((tri[0] ^ tri[1]) | (tri[0] ^ tri[2])) & 7 != 0
+}
+
+/// Edge and vertex use by the distinct triangles around the trials. Only
+/// triangles on a neighbourhood face can be built twice (by the solids on
+/// both sides; [`dedupe_face_triangles`] later keeps one copy), so only
+/// those are counted by key.
 struct Uses {
-    tris: HashMap<[u32; 3], u32>,
+    face_tris: HashMap<[u32; 3], u32>,
     edges: MortonMap<u32>,
     vertices: Vec<u32>,
 }
 
 impl Uses {
-    fn add(&mut self, t: [u32; 3]) {
-        let n = self.tris.entry(sorted_tri(t)).or_insert(0);
-        *n += 1;
-        if *n == 1 {
-            self.touch(t, 1);
-        }
-    }
-    fn remove(&mut self, t: [u32; 3]) {
-        let key = sorted_tri(t);
-        if let Some(n) = self.tris.get_mut(&key) {
-            *n -= 1;
-            if *n == 0 {
-                self.tris.remove(&key);
-                self.touch(t, -1);
+    fn add(&mut self, t: [u32; 3], face: bool) {
+        if face {
+            let n = self.face_tris.entry(sorted_tri(t)).or_insert(0);
+            *n += 1;
+            if *n > 1 {
+                return;
             }
         }
+        self.touch(t, 1);
+    }
+    fn remove(&mut self, t: [u32; 3], face: bool) {
+        if face {
+            let key = sorted_tri(t);
+            let Some(n) = self.face_tris.get_mut(&key) else {
+                return;
+            };
+            *n -= 1;
+            if *n > 0 {
+                return;
+            }
+            self.face_tris.remove(&key);
+        }
+        self.touch(t, -1);
+    }
+    /// Whether a face triangle is built.
+    fn built(&self, t: [u32; 3]) -> bool {
+        self.face_tris.contains_key(&sorted_tri(t))
     }
     fn touch(&mut self, t: [u32; 3], d: i32) {
         for k in 0..3 {
@@ -844,17 +863,16 @@ impl Uses {
     }
 }
 
-/// Chooses, for each ambiguous solid (a disc built on trial, or a hull
-/// §6.2 leaves whole), the subset of its hull triangles that best fits
-/// what the rest of the level built: in this order, fewest hull edges used
-/// by one triangle (holes), fewest of its cubes left in no triangle, fewest
-/// surplus uses of its hull edges (non-manifold edges), its first choice,
-/// fewest triangles. The whole hull leaves no hull edge used once, and a
-/// trial's choice changes the use of its own hull edges only, so settling
-/// opens no hole the first choices did not, and a hole a disc on trial
-/// opened is closed. Trials are settled in scan order, twice over:
-/// deterministic.
-fn settle(faces: &[[u32; 3]], trials: &mut [Trial], vertices: usize) {
+/// Chooses, for each ambiguous solid (a hull §6.2 leaves whole, a disc on
+/// trial, a resolved solid of a class other than `C_6`), the subset of its
+/// hull triangles that best fits what the rest of the level built: in this
+/// order, fewest hull edges used by one triangle (holes), fewest of its
+/// cubes left in no triangle, fewest surplus uses of its hull edges
+/// (non-manifold edges), its current choice, fewest triangles. The whole
+/// hull leaves no hull edge used once, and a trial's choice changes the use
+/// of its own hull edges only, so settling opens no hole the whole hulls
+/// would not. Trials are settled in scan order, twice over: deterministic.
+fn settle(faces: &[[u32; 3]], from_solids: &[u32], trials: &mut [Trial], vertices: usize) {
     if trials.is_empty() {
         return;
     }
@@ -862,9 +880,12 @@ fn settle(faces: &[[u32; 3]], trials: &mut [Trial], vertices: usize) {
         Shape::Solid(tris) => tris.as_slice(),
         _ => &[],
     };
-    let mut near = vec![false; vertices];
+    // Trial vertices, as a bit set (the scan below reads it for every
+    // triangle of the level; bits keep it in the first-level cache).
+    let mut near = vec![0u64; vertices.div_ceil(64)];
+    let is_near = |near: &[u64], v: u32| near[(v >> 6) as usize] & (1 << (v & 63)) != 0;
     let mut uses = Uses {
-        tris: HashMap::new(),
+        face_tris: HashMap::new(),
         edges: MortonMap::default(),
         vertices: vec![0; vertices],
     };
@@ -872,21 +893,25 @@ fn settle(faces: &[[u32; 3]], trials: &mut [Trial], vertices: usize) {
         for tri in hull(t) {
             for k in 0..3 {
                 let (a, b) = (t.vs[tri[k] as usize], t.vs[tri[(k + 1) % 3] as usize]);
-                near[a as usize] = true;
+                near[(a >> 6) as usize] |= 1 << (a & 63);
                 uses.edges.insert(edge_key(a, b), 0);
             }
         }
     }
-    for f in faces {
-        if f.iter().any(|&v| near[v as usize]) {
-            uses.add(*f);
+    let mut from_solid = vec![false; faces.len()];
+    for &i in from_solids {
+        from_solid[i as usize] = true;
+    }
+    for (i, f) in faces.iter().enumerate() {
+        if is_near(&near, f[0]) || is_near(&near, f[1]) || is_near(&near, f[2]) {
+            uses.add(*f, from_solid[i]);
         }
     }
     let tri_of = |t: &Trial, tri: &[u8; 3]| tri.map(|j| t.vs[j as usize]);
     for t in trials.iter() {
         for (i, tri) in hull(t).iter().enumerate() {
             if t.keep & (1 << i) != 0 {
-                uses.add(tri_of(t, tri));
+                uses.add(tri_of(t, tri), on_face(tri));
             }
         }
     }
@@ -898,46 +923,42 @@ fn settle(faces: &[[u32; 3]], trials: &mut [Trial], vertices: usize) {
             }
             for (i, tri) in tris.iter().enumerate() {
                 if t.keep & (1 << i) != 0 {
-                    uses.remove(tri_of(t, tri));
+                    uses.remove(tri_of(t, tri), on_face(tri));
                 }
             }
             // Hull edges (as corner pairs), their use by the others, and
-            // each triangle's edges among them; triangles the others built
-            // already add nothing.
-            let mut edges: Vec<(u8, u8)> = Vec::with_capacity(18);
+            // each triangle's edges among them; face triangles the others
+            // built already add nothing.
+            let mut edges = [(0u8, 0u8); 18];
+            let mut n_edges = 0;
+            let mut base = [0u32; 18];
             let mut tri_edges = [[0usize; 3]; 16];
+            let mut built = [false; 16];
             for (i, tri) in tris.iter().enumerate() {
                 for k in 0..3 {
                     let (a, b) = (tri[k].min(tri[(k + 1) % 3]), tri[k].max(tri[(k + 1) % 3]));
-                    tri_edges[i][k] = match edges.iter().position(|&e| e == (a, b)) {
+                    tri_edges[i][k] = match edges[..n_edges].iter().position(|&e| e == (a, b)) {
                         Some(p) => p,
                         None => {
-                            edges.push((a, b));
-                            edges.len() - 1
+                            let key = edge_key(t.vs[a as usize], t.vs[b as usize]);
+                            base[n_edges] = uses.edges.get(&key).copied().unwrap_or(0);
+                            edges[n_edges] = (a, b);
+                            n_edges += 1;
+                            n_edges - 1
                         }
                     };
                 }
+                built[i] = on_face(tri) && uses.built(tri_of(t, tri));
             }
-            let base: Vec<u32> = edges
-                .iter()
-                .map(|&(a, b)| {
-                    let key = edge_key(t.vs[a as usize], t.vs[b as usize]);
-                    uses.edges.get(&key).copied().unwrap_or(0)
-                })
-                .collect();
-            let built: Vec<bool> = tris
-                .iter()
-                .map(|tri| uses.tris.contains_key(&sorted_tri(tri_of(t, tri))))
-                .collect();
-            let corners: Vec<u8> = (0..8u8).filter(|&j| t.mask & (1 << j) != 0).collect();
-            let bare: Vec<bool> = corners
-                .iter()
-                .map(|&j| uses.vertices[t.vs[j as usize] as usize] == 0)
-                .collect();
-            let mut best = (usize::MAX, usize::MAX, u32::MAX, true, u32::MAX, t.keep);
-            for sub in 0..=all_bits(tris.len()) {
-                let mut count = [0u32; 18];
-                count[..base.len()].copy_from_slice(&base);
+            // Cubes in no other triangle.
+            let mut bare = 0u8;
+            for j in 0..8u8 {
+                if t.mask & (1 << j) != 0 && uses.vertices[t.vs[j as usize] as usize] == 0 {
+                    bare |= 1 << j;
+                }
+            }
+            let score = |sub: u16| {
+                let mut count = base;
                 let mut covered = 0u8;
                 for (i, tri) in tris.iter().enumerate() {
                     if sub & (1 << i) == 0 {
@@ -952,30 +973,35 @@ fn settle(faces: &[[u32; 3]], trials: &mut [Trial], vertices: usize) {
                         }
                     }
                 }
-                let used = &count[..base.len()];
-                let holes = used.iter().filter(|&&c| c == 1).count();
+                let used = &count[..n_edges];
+                let holes = used.iter().filter(|&&c| c == 1).count() as u32;
                 let surplus: u32 = used.iter().map(|&c| c.saturating_sub(2)).sum();
-                let uncovered = corners
-                    .iter()
-                    .zip(&bare)
-                    .filter(|&(&j, &b)| b && covered & (1 << j) == 0)
-                    .count();
-                let score = (
-                    holes,
-                    uncovered,
-                    surplus,
-                    sub != t.keep,
-                    sub.count_ones(),
-                    sub,
-                );
-                if score < best {
-                    best = score;
+                let uncovered = (bare & !covered).count_ones();
+                (holes, uncovered, surplus)
+            };
+            // A choice with no hole, no bare cube and no surplus use is
+            // the best there is: kept without trying the others.
+            if score(t.keep) != (0, 0, 0) {
+                let mut best = (u32::MAX, u32::MAX, u32::MAX, true, u32::MAX, t.keep);
+                for sub in 0..=all_bits(tris.len()) {
+                    let (holes, uncovered, surplus) = score(sub);
+                    let key = (
+                        holes,
+                        uncovered,
+                        surplus,
+                        sub != t.keep,
+                        sub.count_ones(),
+                        sub,
+                    );
+                    if key < best {
+                        best = key;
+                    }
                 }
+                t.keep = best.5;
             }
-            t.keep = best.5;
             for (i, tri) in tris.iter().enumerate() {
                 if t.keep & (1 << i) != 0 {
-                    uses.add(tri_of(t, tri));
+                    uses.add(tri_of(t, tri), on_face(tri));
                 }
             }
         }
