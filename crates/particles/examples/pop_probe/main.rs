@@ -10,7 +10,9 @@
 //! `icosphere` is the bench's icosphere. `POP_PROBE_QUICK=1` skips the
 //! per-level table and orientation, `POP_PROBE_EDGES=1` adds, per level,
 //! the classes of the triangles on each non-manifold edge (`w`: an
-//! ambiguous neighbourhood left whole).
+//! ambiguous neighbourhood left whole), `POP_PROBE_THIN=1` first prints,
+//! per level after thinning, the kept cubes with no IN face neighbour and
+//! the 2×2×2 blocks holding 6 or 7–8 kept cubes.
 use std::path::Path;
 use std::time::Instant;
 
