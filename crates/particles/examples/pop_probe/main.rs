@@ -10,7 +10,9 @@
 //! `icosphere` is the bench's icosphere. `POP_PROBE_QUICK=1` skips the
 //! per-level table and orientation, `POP_PROBE_EDGES=1` adds, per level,
 //! the classes of the triangles on each non-manifold edge (`w`: an
-//! ambiguous neighbourhood left whole).
+//! ambiguous neighbourhood left whole), `POP_PROBE_THIN=1` first prints,
+//! per level after thinning, the kept cubes with no IN face neighbour and
+//! the 2×2×2 blocks holding 6 or 7–8 kept cubes.
 use std::path::Path;
 use std::time::Instant;
 
@@ -81,6 +83,9 @@ fn main() {
         thinning: ThinningOptions { outer, relax_below },
         ..EncodeOptions::DEFAULT
     };
+    if std::env::var_os("POP_PROBE_THIN").is_some() {
+        thinning_report(&model, depth, &opts.thinning);
+    }
     let t0 = Instant::now();
     let bytes = encode(&model, &opts).expect("encode").bytes;
     println!(
@@ -205,5 +210,68 @@ fn main() {
             tt * 1e3 / n,
             tris as f64 * n / (td + tt) / 1e6
         );
+    }
+}
+
+/// Per level after thinning: ON cubes, those with no IN face neighbour
+/// (kept by the topology test, or where outer thinning is off), and
+/// 2×2×2 blocks by ON count (6, 7–8).
+fn thinning_report(model: &lodkit_mesh::Model, depth: u8, t: &ThinningOptions) {
+    use lodkit_particles::octree::{BuildOptions, FACES, Label, Octree, morton, unmorton};
+    let mut tree = Octree::build(
+        model,
+        &BuildOptions {
+            depth: Some(depth),
+            sidedness: None,
+        },
+    )
+    .expect("octree");
+    lodkit_particles::thinning::thin(&mut tree, t);
+    println!(
+        "{:>2} {:>8} {:>8} {:>8} {:>8}",
+        "r", "on", "no-in", "blk6", "blk7+"
+    );
+    for r in 1..=depth {
+        let lv = &tree.levels[r as usize];
+        let on: Vec<u64> = (0..lv.cells.len())
+            .filter(|&i| lv.label[i] == Label::On)
+            .map(|i| lv.cells[i])
+            .collect();
+        let set: std::collections::HashSet<u64> = on.iter().copied().collect();
+        let no_in = on
+            .iter()
+            .filter(|&&m| {
+                let c = unmorton(m);
+                FACES
+                    .iter()
+                    .all(|&d| tree.neighbour_label(r, c, d) != Label::In)
+            })
+            .count();
+        let mut origins: std::collections::HashSet<[u32; 3]> = Default::default();
+        for &m in &on {
+            let c = unmorton(m);
+            for k in 0..8u32 {
+                let o = [
+                    c[0].wrapping_sub(k & 1),
+                    c[1].wrapping_sub((k >> 1) & 1),
+                    c[2].wrapping_sub(k >> 2),
+                ];
+                if o.iter().all(|&v| v < (1 << r)) {
+                    origins.insert(o);
+                }
+            }
+        }
+        let (mut b6, mut b7) = (0, 0);
+        for o in &origins {
+            let n = (0..8u32)
+                .filter(|&k| {
+                    let c = [o[0] + (k & 1), o[1] + ((k >> 1) & 1), o[2] + (k >> 2)];
+                    c.iter().all(|&v| v < (1 << r)) && set.contains(&morton(c))
+                })
+                .count();
+            b6 += usize::from(n == 6);
+            b7 += usize::from(n > 6);
+        }
+        println!("{r:>2} {:>8} {:>8} {:>8} {:>8}", on.len(), no_in, b6, b7);
     }
 }
