@@ -87,7 +87,10 @@ pub struct Options {
     /// small holes close. `false` keeps every border loop (terrain rims).
     pub fill_holes: bool,
     /// Records in the replacement-selection heap (§3.5); the paper uses
-    /// 512 and also shows 1,023. More = closer to a global greedy order.
+    /// 512 and also shows 1,023 (our default is smaller, see
+    /// [`DEFAULT_HEAP_SIZE`](Self::DEFAULT_HEAP_SIZE)). More = closer to a
+    /// global greedy order, but more records whose target goes dirty while
+    /// they wait.
     pub heap_size: usize,
     /// Attribute weights in the cost.
     pub weights: AttributeWeights,
@@ -100,8 +103,16 @@ pub struct Options {
 }
 
 impl Options {
-    /// The paper's heap size (§5: "heap size = 512 records").
-    pub const DEFAULT_HEAP_SIZE: usize = 512;
+    /// Departure: the paper's heap holds 512 records (§5). A record then
+    /// waits about 512 ring costings before it comes out, and in that time
+    /// its target often becomes dirty: on the bunny at 1%, 28k dependency
+    /// rejections (each re-costed) for 34k collapses. With 64 records they
+    /// drop to about half, the heap's sifts get shorter, and simplifying
+    /// the bunny or a 1M blob takes 8–10% fewer instructions; the measured
+    /// mean and max errors stay below meshoptimizer's at 50%, 10%, 1% and
+    /// 1,000 triangles (32 saves 3% more but the 10% max comes within 10%
+    /// of meshoptimizer's).
+    pub const DEFAULT_HEAP_SIZE: usize = 64;
     /// Each pass halves the vertex count at best (Strategy I, eq. 6), so
     /// 64 passes cover any input that fits in memory many times over.
     pub const DEFAULT_MAX_PASSES: u32 = 64;
