@@ -43,7 +43,7 @@ use crate::marching_cubes::{CubeEdges, NO_VERTEX, corner_key, edge_key};
 use crate::mc_table::{EDGES, FACES, Face, face_edges, face_segments_fixed};
 use crate::model::{McoModel, Patch};
 use crate::octree_build::Tree;
-use crate::signed_distance::{KeyMap, pack, unpack};
+use crate::signed_distance::{KEY_BITS, KeyMap, pack, unpack};
 
 fn closest_on_segment(p: Vec3, a: Vec3, b: Vec3) -> Vec3 {
     let ab = b - a;
@@ -73,7 +73,7 @@ fn unit_normal(p: [Vec3; 3]) -> Vec3 {
 /// same four crossings the other way. In the last case the fine polyline
 /// runs across the coarse face from one coarse segment to the other: no
 /// choice of compensation points can close that gap.
-fn face_patchable(tree: &Tree, l: usize, i: usize, pc: [u32; 3], mc: usize, f: Face) -> bool {
+fn face_patchable(tree: &Tree, l: usize, i: usize, mc: usize, f: Face) -> bool {
     let lv = &tree.levels[l];
     let below = &tree.levels[l - 1];
     let axis = f.axis as usize;
@@ -85,30 +85,25 @@ fn face_patchable(tree: &Tree, l: usize, i: usize, pc: [u32; 3], mc: usize, f: F
         nc += 1;
     }
     coarse[..nc].sort_unstable();
-    let mc_cube = unpack(lv.keys[mc]);
+    // Children of `pc` on its high face, children of `mc` on its low face
+    // (the order does not matter: the segments are sorted below).
     let mut fine = [[0u32; 2]; 16];
     let mut nf = 0;
-    for oct in 0..8u32 {
-        let high = oct >> axis & 1 == 1;
-        // Children of `pc` on its high face, children of `mc` on its low face.
-        let (base, face) = if high {
-            (pc, f)
-        } else {
-            (
-                mc_cube,
-                Face {
-                    axis: f.axis,
-                    side: 0,
-                },
-            )
-        };
-        let c = [
-            base[0] * 2 + (oct & 1),
-            base[1] * 2 + (oct >> 1 & 1),
-            base[2] * 2 + (oct >> 2 & 1),
-        ];
-        if let Some(&ci) = below.index.get(&pack(c[0], c[1], c[2])) {
+    for (node, face) in [
+        (i, f),
+        (
+            mc,
+            Face {
+                axis: f.axis,
+                side: 0,
+            },
+        ),
+    ] {
+        for &ci in tree.kids(l, node) {
             let ci = ci as usize;
+            if below.keys[ci] >> (axis as u32 * KEY_BITS) & 1 != face.side as u64 {
+                continue;
+            }
             for s in face_segments_fixed(below.configs[ci], face) {
                 fine[nf] = ordered(&below.node_edges[ci], *s);
                 nf += 1;
@@ -224,14 +219,20 @@ pub fn expand_together(tree: &Tree) -> Vec<(u32, u32)> {
                 let Some(&j) = lv.index.get(&pack(mc[0], mc[1], mc[2])) else {
                     continue;
                 };
-                if !face_patchable(tree, l, i, pc, j as usize, f) {
+                if !face_patchable(tree, l, i, j as usize, f) {
                     out.push((tree.node_id[l][i], tree.node_id[l][j as usize]));
                 }
             }
             // Edges whose fine crossings are not exactly the coarse one (two
             // fine crossings and none coarse, or a coarse fallback vertex):
             // every node around the edge expands together.
-            for (e, [a, _]) in EDGES.iter().enumerate() {
+            const NONE: u32 = u32::MAX;
+            let mut by_octant = [NONE; 8];
+            for &ci in tree.kids(l, i) {
+                let [x, y, z] = unpack(below.keys[ci as usize]);
+                by_octant[(x & 1 | (y & 1) << 1 | (z & 1) << 2) as usize] = ci;
+            }
+            for (e, [a, b]) in EDGES.iter().enumerate() {
                 let axis = e / 4;
                 let va = corner_key(pc, l as u32, *a);
                 // The level's crossings agree between the nodes around an
@@ -240,10 +241,17 @@ pub fn expand_together(tree: &Tree) -> Vec<(u32, u32)> {
                 let [x, y, z] = unpack(va);
                 let mut vm = [x, y, z];
                 vm[axis] += 1 << (l - 1);
+                // The halves are edge `e` of the children in octants `a`
+                // and `b`; a child that exists knows its crossing (the same
+                // as the level's map), otherwise look the half up.
                 let mut fine = [0u32; 2];
                 let mut nf = 0;
-                for h in [va, pack(vm[0], vm[1], vm[2])] {
-                    if let Some(&v) = below.edges.get(&edge_key(h, axis as u8)) {
+                for (h, oct) in [(va, *a), (pack(vm[0], vm[1], vm[2]), *b)] {
+                    let v = match by_octant[oct as usize] {
+                        NONE => below.edges.get(&edge_key(h, axis as u8)).copied(),
+                        ci => Some(below.node_edges[ci as usize][e]).filter(|&v| v != NO_VERTEX),
+                    };
+                    if let Some(v) = v {
                         fine[nf] = v;
                         nf += 1;
                     }
