@@ -320,6 +320,9 @@ pub fn patch(tree: &mut Tree, model: &mut McoModel) {
                 if cube[a] & 1 != f.side as u32 {
                     continue; // the face is inside the parent
                 }
+                if face_segments_fixed(cfg, f).is_empty() {
+                    continue; // no crossing on the face: nothing to move
+                }
                 let mut qc = pc;
                 if f.side == 1 {
                     qc[a] += 1;

@@ -201,7 +201,9 @@ pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) ->
                 } else if let Some(&cv) = level.corners.get(&v) {
                     cv
                 } else {
-                    let value = match tree.corner(l - 1, v) {
+                    // Not in the band (checked above): the level below's own
+                    // corner, else Fig. 5.2's cases 2–4.
+                    let value = match tree.levels[l - 1].corners.get(&v).copied() {
                         Some(cv) => cv,
                         None => rule_value(&tree, l - 1, v, step, &offsets)
                             .expect("a node's centre is a corner of each of its children"),
