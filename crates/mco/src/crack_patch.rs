@@ -37,15 +37,13 @@
 //! interfaces never appear in an extraction (fine vertices met there are
 //! only counted, in `BuildStats::unpatched`).
 
-use std::collections::HashMap;
-
 use glam::Vec3;
 
-use crate::marching_cubes::{corner_key, edge_key};
-use crate::mc_table::{EDGES, FACES, Face, face_edges, face_segments};
+use crate::marching_cubes::{CubeEdges, NO_VERTEX, corner_key, edge_key};
+use crate::mc_table::{EDGES, FACES, Face, face_edges, face_segments_fixed};
 use crate::model::{McoModel, Patch};
 use crate::octree_build::Tree;
-use crate::signed_distance::{pack, unpack};
+use crate::signed_distance::{KEY_BITS, KeyMap, pack, unpack};
 
 fn closest_on_segment(p: Vec3, a: Vec3, b: Vec3) -> Vec3 {
     let ab = b - a;
@@ -58,20 +56,6 @@ fn closest_on_segment(p: Vec3, a: Vec3, b: Vec3) -> Vec3 {
 
 fn unit_normal(p: [Vec3; 3]) -> Vec3 {
     (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero()
-}
-
-/// Vertex of cube edge `e` of the level-`l` node at `cube`.
-fn edge_vertex(tree: &Tree, l: usize, cube: [u32; 3], e: u8) -> u32 {
-    let [a, _] = EDGES[e as usize];
-    tree.levels[l].edges[&edge_key(corner_key(cube, l as u32, a), e / 4)]
-}
-
-/// Segment `[e0, e1]` of face edges of the level-`l` cube `cube` as a
-/// vertex pair, smaller index first.
-fn segment_vertices(tree: &Tree, l: usize, cube: [u32; 3], s: [u8; 2]) -> [u32; 2] {
-    let a = edge_vertex(tree, l, cube, s[0]);
-    let b = edge_vertex(tree, l, cube, s[1]);
-    [a.min(b), a.max(b)]
 }
 
 /// Whether the face `f` shared by the level-`l` nodes at `pc` and `mc`
@@ -89,74 +73,92 @@ fn segment_vertices(tree: &Tree, l: usize, cube: [u32; 3], s: [u8; 2]) -> [u32; 
 /// same four crossings the other way. In the last case the fine polyline
 /// runs across the coarse face from one coarse segment to the other: no
 /// choice of compensation points can close that gap.
-fn face_patchable(tree: &Tree, l: usize, pc: [u32; 3], mc: [u32; 3], f: Face) -> bool {
+fn face_patchable(tree: &Tree, l: usize, i: usize, mc: usize, f: Face) -> bool {
     let lv = &tree.levels[l];
     let below = &tree.levels[l - 1];
     let axis = f.axis as usize;
-    let cfg = lv.configs[lv.index[&pack(pc[0], pc[1], pc[2])] as usize];
-    let mut coarse: Vec<[u32; 2]> = face_segments(cfg, f)
-        .into_iter()
-        .map(|s| segment_vertices(tree, l, pc, s))
-        .collect();
-    coarse.sort_unstable();
-    let mut fine: Vec<[u32; 2]> = Vec::new();
-    for oct in 0..8u32 {
-        let high = oct >> axis & 1 == 1;
-        // Children of `pc` on its high face, children of `mc` on its low face.
-        let (base, face) = if high {
-            (pc, f)
-        } else {
-            (
-                mc,
-                Face {
-                    axis: f.axis,
-                    side: 0,
-                },
-            )
-        };
-        let c = [
-            base[0] * 2 + (oct & 1),
-            base[1] * 2 + (oct >> 1 & 1),
-            base[2] * 2 + (oct >> 2 & 1),
-        ];
-        if let Some(&ci) = below.index.get(&pack(c[0], c[1], c[2])) {
-            fine.extend(
-                face_segments(below.configs[ci as usize], face)
-                    .into_iter()
-                    .map(|s| segment_vertices(tree, l - 1, c, s)),
-            );
+    // At most 2 coarse segments, and 8 children with at most 2 each.
+    let mut coarse = [[0u32; 2]; 2];
+    let mut nc = 0;
+    for s in face_segments_fixed(lv.configs[i], f) {
+        coarse[nc] = ordered(&lv.node_edges[i], *s);
+        nc += 1;
+    }
+    coarse[..nc].sort_unstable();
+    // Children of `pc` on its high face, children of `mc` on its low face
+    // (the order does not matter: the segments are sorted below).
+    let mut fine = [[0u32; 2]; 16];
+    let mut nf = 0;
+    for (node, face) in [
+        (i, f),
+        (
+            mc,
+            Face {
+                axis: f.axis,
+                side: 0,
+            },
+        ),
+    ] {
+        for &ci in tree.kids(l, node) {
+            let ci = ci as usize;
+            if below.keys[ci] >> (axis as u32 * KEY_BITS) & 1 != face.side as u64 {
+                continue;
+            }
+            for s in face_segments_fixed(below.configs[ci], face) {
+                fine[nf] = ordered(&below.node_edges[ci], *s);
+                nf += 1;
+            }
         }
     }
+    let fine = &mut fine[..nf];
     fine.sort_unstable();
-    fine.dedup();
+    let nf = dedup_sorted(fine);
+    let fine = &fine[..nf];
+    let coarse = &coarse[..nc];
     if fine.is_empty() || coarse.is_empty() {
         return fine.is_empty() && coarse.is_empty();
     }
     // Chain the fine segments; a vertex on more than two of them cannot be
     // told apart, so the face counts as unpatchable.
-    let mut degree: HashMap<u32, u32> = HashMap::new();
-    for s in &fine {
-        for v in s {
-            *degree.entry(*v).or_default() += 1;
+    let mut ends_all = [0u32; 32];
+    for (k, s) in fine.iter().enumerate() {
+        ends_all[2 * k] = s[0];
+        ends_all[2 * k + 1] = s[1];
+    }
+    let ends_all = &mut ends_all[..2 * nf];
+    ends_all.sort_unstable();
+    // Vertices on exactly one segment, increasing.
+    let mut ends = [0u32; 32];
+    let mut ne = 0;
+    let mut k = 0;
+    while k < ends_all.len() {
+        let mut run = 1;
+        while k + run < ends_all.len() && ends_all[k + run] == ends_all[k] {
+            run += 1;
         }
+        if run > 2 {
+            return false;
+        }
+        if run == 1 {
+            ends[ne] = ends_all[k];
+            ne += 1;
+        }
+        k += run;
     }
-    if degree.values().any(|&d| d > 2) {
-        return false;
-    }
-    let mut ends: Vec<u32> = degree.iter().filter(|e| *e.1 == 1).map(|e| *e.0).collect();
-    ends.sort_unstable();
-    let mut used = vec![false; fine.len()];
-    let mut pairs: Vec<[u32; 2]> = Vec::new();
-    for &start in &ends {
+    let mut used = [false; 16];
+    let used = &mut used[..nf];
+    let mut pairs = [[0u32; 2]; 16];
+    let mut np = 0;
+    for &start in &ends[..ne] {
         if fine
             .iter()
-            .zip(&used)
+            .zip(used.iter())
             .all(|(s, &u)| u || !s.contains(&start))
         {
             continue; // reached as the far end of an earlier chain
         }
         let mut at = start;
-        while let Some(k) = (0..fine.len()).find(|&k| !used[k] && fine[k].contains(&at)) {
+        while let Some(k) = (0..nf).find(|&k| !used[k] && fine[k].contains(&at)) {
             used[k] = true;
             at = if fine[k][0] == at {
                 fine[k][1]
@@ -164,13 +166,39 @@ fn face_patchable(tree: &Tree, l: usize, pc: [u32; 3], mc: [u32; 3], f: Face) ->
                 fine[k][0]
             };
         }
-        pairs.push([start.min(at), start.max(at)]);
+        pairs[np] = [start.min(at), start.max(at)];
+        np += 1;
     }
     if used.iter().any(|&u| !u) {
         return false; // a closed loop
     }
+    let pairs = &mut pairs[..np];
     pairs.sort_unstable();
     pairs == coarse
+}
+
+/// Segment `[e0, e1]` of a node's face edges as a vertex pair, smaller
+/// index first.
+#[inline]
+fn ordered(edges: &CubeEdges, s: [u8; 2]) -> [u32; 2] {
+    let (a, b) = (edges[s[0] as usize], edges[s[1] as usize]);
+    [a.min(b), a.max(b)]
+}
+
+/// Removes adjacent duplicates of a sorted slice in place; returns the
+/// length kept.
+fn dedup_sorted<T: PartialEq + Copy>(v: &mut [T]) -> usize {
+    if v.is_empty() {
+        return 0;
+    }
+    let mut w = 1;
+    for r in 1..v.len() {
+        if v[r] != v[w - 1] {
+            v[w] = v[r];
+            w += 1;
+        }
+    }
+    w
 }
 
 /// Same-level node pairs whose shared face cannot be crack-patched (see
@@ -191,30 +219,50 @@ pub fn expand_together(tree: &Tree) -> Vec<(u32, u32)> {
                 let Some(&j) = lv.index.get(&pack(mc[0], mc[1], mc[2])) else {
                     continue;
                 };
-                if !face_patchable(tree, l, pc, mc, f) {
+                if !face_patchable(tree, l, i, j as usize, f) {
                     out.push((tree.node_id[l][i], tree.node_id[l][j as usize]));
                 }
             }
             // Edges whose fine crossings are not exactly the coarse one (two
             // fine crossings and none coarse, or a coarse fallback vertex):
             // every node around the edge expands together.
-            for (e, [a, _]) in EDGES.iter().enumerate() {
+            const NONE: u32 = u32::MAX;
+            let mut by_octant = [NONE; 8];
+            for &ci in tree.kids(l, i) {
+                let [x, y, z] = unpack(below.keys[ci as usize]);
+                by_octant[(x & 1 | (y & 1) << 1 | (z & 1) << 2) as usize] = ci;
+            }
+            for (e, [a, b]) in EDGES.iter().enumerate() {
                 let axis = e / 4;
                 let va = corner_key(pc, l as u32, *a);
-                let coarse = lv.edges.get(&edge_key(va, axis as u8)).copied();
+                // The level's crossings agree between the nodes around an
+                // edge, so this node's own edge vertex is the map's.
+                let coarse = Some(lv.node_edges[i][e]).filter(|&v| v != NO_VERTEX);
                 let [x, y, z] = unpack(va);
                 let mut vm = [x, y, z];
                 vm[axis] += 1 << (l - 1);
-                let fine: Vec<u32> = [va, pack(vm[0], vm[1], vm[2])]
-                    .iter()
-                    .filter_map(|&h| below.edges.get(&edge_key(h, axis as u8)).copied())
-                    .collect();
-                if fine.is_empty() || (fine.len() == 1 && Some(fine[0]) == coarse) {
+                // The halves are edge `e` of the children in octants `a`
+                // and `b`; a child that exists knows its crossing (the same
+                // as the level's map), otherwise look the half up.
+                let mut fine = [0u32; 2];
+                let mut nf = 0;
+                for (h, oct) in [(va, *a), (pack(vm[0], vm[1], vm[2]), *b)] {
+                    let v = match by_octant[oct as usize] {
+                        NONE => below.edges.get(&edge_key(h, axis as u8)).copied(),
+                        ci => Some(below.node_edges[ci as usize][e]).filter(|&v| v != NO_VERTEX),
+                    };
+                    if let Some(v) = v {
+                        fine[nf] = v;
+                        nf += 1;
+                    }
+                }
+                if nf == 0 || (nf == 1 && Some(fine[0]) == coarse) {
                     continue;
                 }
                 let (u, w) = ((axis + 1) % 3, (axis + 2) % 3);
                 let base = [x >> l, y >> l, z >> l];
-                let mut around = Vec::new();
+                let mut around = [0u32; 4];
+                let mut na = 0;
                 for du in 0..2u32 {
                     for dw in 0..2u32 {
                         let mut c = base;
@@ -224,11 +272,12 @@ pub fn expand_together(tree: &Tree) -> Vec<(u32, u32)> {
                         c[u] -= du;
                         c[w] -= dw;
                         if let Some(&j) = lv.index.get(&pack(c[0], c[1], c[2])) {
-                            around.push(tree.node_id[l][j as usize]);
+                            around[na] = tree.node_id[l][j as usize];
+                            na += 1;
                         }
                     }
                 }
-                for pair in around.windows(2) {
+                for pair in around[..na].windows(2) {
                     out.push((pair[0], pair[1]));
                 }
             }
@@ -241,25 +290,38 @@ pub fn expand_together(tree: &Tree) -> Vec<(u32, u32)> {
 /// to the tree's vertex buffer. Call after [`crate::octree_build::assemble`].
 pub fn patch(tree: &mut Tree, model: &mut McoModel) {
     let depth = tree.levels.len() - 1;
-    let mut point_of: HashMap<(u32, u32), u32> = HashMap::new();
+    let levels = &tree.levels;
+    let node_id = &tree.node_id;
+    let vertices = &mut tree.vertices;
+    // (fine vertex, coarse node) → compensation point.
+    let mut point_of: KeyMap<u32> = KeyMap::default();
     // Per compensation point: (sum of fine unit normals, count, coarse normal).
     let mut normal_acc: Vec<(Vec3, u32, Vec3)> = Vec::new();
     let mut unpatched = 0u64;
-    let mut patches: Vec<Vec<Patch>> = vec![Vec::new(); model.nodes.len()];
+    // Each node is visited once and its patches pushed together: per node,
+    // the start and count of its run in `found`.
+    let mut runs: Vec<(u32, u8)> = vec![(0, 0); model.nodes.len()];
+    let mut found: Vec<Patch> = Vec::new();
     let mut subs: Vec<[u32; 2]> = Vec::new();
     for l in 0..depth {
-        for i in 0..tree.levels[l].keys.len() {
-            let id = tree.node_id[l][i];
-            let cube = unpack(tree.levels[l].keys[i]);
-            let cfg = tree.levels[l].configs[i];
+        let (lv, up) = (&levels[l], &levels[l + 1]);
+        for i in 0..lv.keys.len() {
+            let cfg = lv.configs[i];
             if cfg == 0 || cfg == 255 {
                 continue;
             }
+            let id = node_id[l][i];
+            let cube = unpack(lv.keys[i]);
+            let ne = &lv.node_edges[i];
+            let run_start = found.len();
             let pc = [cube[0] >> 1, cube[1] >> 1, cube[2] >> 1];
             for f in FACES {
                 let a = f.axis as usize;
                 if cube[a] & 1 != f.side as u32 {
                     continue; // the face is inside the parent
+                }
+                if face_segments_fixed(cfg, f).is_empty() {
+                    continue; // no crossing on the face: nothing to move
                 }
                 let mut qc = pc;
                 if f.side == 1 {
@@ -269,51 +331,55 @@ pub fn patch(tree: &mut Tree, model: &mut McoModel) {
                 } else {
                     qc[a] -= 1;
                 }
-                let Some(&qi) = tree.levels[l + 1].index.get(&pack(qc[0], qc[1], qc[2])) else {
+                let Some(&qi) = up.index.get(&pack(qc[0], qc[1], qc[2])) else {
                     continue;
                 };
-                let q = tree.node_id[l + 1][qi as usize];
-                let qcfg = tree.levels[l + 1].configs[qi as usize];
+                let qi = qi as usize;
+                let q = node_id[l + 1][qi];
                 let opposite = Face {
                     axis: f.axis,
                     side: 1 - f.side,
                 };
-                let segs: Vec<[u32; 2]> = face_segments(qcfg, opposite)
-                    .into_iter()
-                    .map(|[e0, e1]| {
-                        [
-                            edge_vertex(tree, l + 1, qc, e0),
-                            edge_vertex(tree, l + 1, qc, e1),
-                        ]
-                    })
-                    .collect();
-                let mut fine: Vec<u32> = face_edges(f)
-                    .iter()
-                    .filter(|&&e| {
-                        let [x, y] = EDGES[e as usize];
-                        (cfg >> x & 1) != (cfg >> y & 1)
-                    })
-                    .map(|&e| edge_vertex(tree, l, cube, e))
-                    .filter(|v| !segs.iter().any(|s| s.contains(v)))
-                    .collect();
+                let qne = &up.node_edges[qi];
+                let mut seg_buf = [[0u32; 2]; 2];
+                let mut ns = 0;
+                for &[e0, e1] in face_segments_fixed(up.configs[qi], opposite) {
+                    seg_buf[ns] = [qne[e0 as usize], qne[e1 as usize]];
+                    ns += 1;
+                }
+                let segs = &seg_buf[..ns];
+                let mut fine_buf = [0u32; 4];
+                let mut nf = 0;
+                for &e in face_edges(f).iter() {
+                    let [x, y] = EDGES[e as usize];
+                    if (cfg >> x & 1) == (cfg >> y & 1) {
+                        continue;
+                    }
+                    let v = ne[e as usize];
+                    if !segs.iter().any(|s| s.contains(&v)) {
+                        fine_buf[nf] = v;
+                        nf += 1;
+                    }
+                }
+                let fine = &mut fine_buf[..nf];
                 fine.sort_unstable();
-                fine.dedup();
-                if fine.is_empty() {
+                let nf = dedup_sorted(fine);
+                if nf == 0 {
                     continue;
                 }
                 if segs.is_empty() {
-                    unpatched += fine.len() as u64;
+                    unpatched += nf as u64;
                     continue;
                 }
                 let start = subs.len();
-                for x in fine {
-                    let px = tree.vertices.positions[x as usize];
+                for &x in &fine_buf[..nf] {
+                    let px = vertices.positions[x as usize];
                     let (seg, r) = segs
                         .iter()
                         .map(|s| {
                             let (a, b) = (
-                                tree.vertices.positions[s[0] as usize],
-                                tree.vertices.positions[s[1] as usize],
+                                vertices.positions[s[0] as usize],
+                                vertices.positions[s[1] as usize],
                             );
                             (*s, closest_on_segment(px, a, b))
                         })
@@ -322,31 +388,33 @@ pub fn patch(tree: &mut Tree, model: &mut McoModel) {
                                 .total_cmp(&b.1.distance_squared(px))
                         })
                         .expect("segments is not empty");
-                    let new = *point_of.entry((x, q)).or_insert_with(|| {
-                        let n = tree.vertices.normals[x as usize];
-                        let c = tree.vertices.colors[x as usize];
-                        let coarse = model
-                            .node_tris(q)
-                            .chunks_exact(3)
-                            .find(|t| t.contains(&seg[0]) && t.contains(&seg[1]))
-                            .map(|t| {
-                                unit_normal(
-                                    [0, 1, 2].map(|k| tree.vertices.positions[t[k] as usize]),
-                                )
-                            })
-                            .unwrap_or(Vec3::ZERO);
-                        normal_acc.push((Vec3::ZERO, 0, coarse));
-                        tree.vertices.push(r, n, c)
-                    });
+                    let new = *point_of
+                        .entry((x as u64) << 32 | q as u64)
+                        .or_insert_with(|| {
+                            let n = vertices.normals[x as usize];
+                            let c = vertices.colors[x as usize];
+                            let coarse = model
+                                .node_tris(q)
+                                .chunks_exact(3)
+                                .find(|t| t.contains(&seg[0]) && t.contains(&seg[1]))
+                                .map(|t| {
+                                    unit_normal(
+                                        [0, 1, 2].map(|k| vertices.positions[t[k] as usize]),
+                                    )
+                                })
+                                .unwrap_or(Vec3::ZERO);
+                            normal_acc.push((Vec3::ZERO, 0, coarse));
+                            vertices.push(r, n, c)
+                        });
                     // Fine triangles of this node around the moved vertex.
-                    let slot = new as usize - (tree.vertices.len() - normal_acc.len());
+                    let slot = new as usize - (vertices.len() - normal_acc.len());
                     for t in model.node_tris(id).chunks_exact(3) {
                         if t.contains(&x) {
                             let pts = [0, 1, 2].map(|k| {
                                 if t[k] == x {
                                     r
                                 } else {
-                                    tree.vertices.positions[t[k] as usize]
+                                    vertices.positions[t[k] as usize]
                                 }
                             });
                             let un = unit_normal(pts);
@@ -358,16 +426,17 @@ pub fn patch(tree: &mut Tree, model: &mut McoModel) {
                     }
                     subs.push([x, new]);
                 }
-                patches[id as usize].push(Patch {
+                found.push(Patch {
                     coarse: q,
                     subs_start: start as u32,
                     subs_count: (subs.len() - start) as u32,
                 });
             }
+            runs[id as usize] = (run_start as u32, (found.len() - run_start) as u8);
         }
     }
     // §5.4.4: recompute the compensation points' normals.
-    let base = tree.vertices.len() - normal_acc.len();
+    let base = vertices.len() - normal_acc.len();
     for (k, (sum, count, coarse)) in normal_acc.iter().enumerate() {
         let fine = if *count > 0 {
             (*sum / *count as f32).normalize_or_zero()
@@ -376,14 +445,17 @@ pub fn patch(tree: &mut Tree, model: &mut McoModel) {
         };
         let n = (fine + *coarse).normalize_or_zero();
         if n != Vec3::ZERO {
-            tree.vertices.normals[base + k] = n;
+            vertices.normals[base + k] = n;
         }
     }
     model.subs = subs;
-    for (id, list) in patches.into_iter().enumerate() {
+    model.patches.reserve(found.len());
+    for (id, &(start, count)) in runs.iter().enumerate() {
         model.nodes[id].patch_start = model.patches.len() as u32;
-        model.nodes[id].patch_count = list.len() as u8;
-        model.patches.extend(list);
+        model.nodes[id].patch_count = count;
+        model
+            .patches
+            .extend_from_slice(&found[start as usize..][..count as usize]);
     }
     model.stats.unpatched = unpatched;
 }

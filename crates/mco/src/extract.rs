@@ -116,7 +116,7 @@ impl Traversal {
 }
 
 impl Lifetimes {
-    fn from_records(mut recs: Vec<Record>, acc: &[u32]) -> Lifetimes {
+    fn from_records(recs: Vec<Record>, acc: &[u32]) -> Lifetimes {
         let max_lod = acc.len().saturating_sub(1);
         // Records dying at each LOD number (the others never die).
         let mut dying = vec![0u64; max_lod + 1];
@@ -140,17 +140,45 @@ impl Lifetimes {
         // Bucket 0 never dies; then decreasing death ranges down to 0.
         let mut death_lo = vec![(max_lod as u32).saturating_add(1)];
         death_lo.extend(lo.iter().rev());
-        let bucket = |d: u32| death_lo.partition_point(|&x| x > d);
-        // Stable: ties keep node order, so the layout is deterministic.
-        recs.sort_by_key(|r| (bucket(r.death), r.birth));
-        let mut bucket_start = Vec::with_capacity(death_lo.len() + 1);
+        let buckets = death_lo.len();
+        // Bucket of each death, looked up once per record (every death past
+        // `max_lod` is in bucket 0).
+        let last = max_lod + 1;
+        let bucket_of: Vec<u32> = (0..=last)
+            .map(|d| death_lo.partition_point(|&x| x > d as u32) as u32)
+            .collect();
+        let bucket = |d: u32| bucket_of[(d as usize).min(last)] as usize;
+        // The order of a stable sort by (bucket, birth), ties in record
+        // (node) order so the layout is deterministic: a counting sort by
+        // bucket, then each bucket's (birth, record) keys sorted — distinct
+        // keys, so an unstable sort gives exactly that order.
+        let mut bucket_start = vec![0u32; buckets + 1];
+        for r in &recs {
+            bucket_start[bucket(r.death) + 1] += 1;
+        }
+        for b in 0..buckets {
+            bucket_start[b + 1] += bucket_start[b];
+        }
+        let mut fill = bucket_start.clone();
+        let mut order = vec![0u64; recs.len()];
+        for (i, r) in recs.iter().enumerate() {
+            let b = bucket(r.death);
+            order[fill[b] as usize] = (r.birth as u64) << 32 | i as u64;
+            fill[b] += 1;
+        }
+        for b in 0..buckets {
+            order[bucket_start[b] as usize..bucket_start[b + 1] as usize].sort_unstable();
+        }
+        let birth: Vec<u32> = order.iter().map(|&o| (o >> 32) as u32).collect();
+        let mut tris = Vec::with_capacity(3 * recs.len());
+        for &o in &order {
+            tris.extend_from_slice(&recs[o as u32 as usize].tri);
+        }
         let mut cut = Vec::new();
-        let mut cut_start = Vec::with_capacity(death_lo.len() + 1);
-        let birth: Vec<u32> = recs.iter().map(|r| r.birth).collect();
-        let mut start = 0usize;
-        for b in 0..death_lo.len() {
-            let end = start + recs[start..].partition_point(|r| bucket(r.death) == b);
-            bucket_start.push(start as u32);
+        let mut cut_start = Vec::with_capacity(buckets + 1);
+        let mut death_max = Vec::with_capacity(buckets);
+        for b in 0..buckets {
+            let (start, end) = (bucket_start[b] as usize, bucket_start[b + 1] as usize);
             cut_start.push(cut.len() as u32);
             let entries = if end > start {
                 (birth[end - 1] / BIRTH_STRIDE) as usize + 2
@@ -161,25 +189,21 @@ impl Lifetimes {
                 let from = (i as u64 * BIRTH_STRIDE as u64).min(u32::MAX as u64) as u32;
                 cut.push((start + birth[start..end].partition_point(|&x| x < from)) as u32);
             }
-            start = end;
-        }
-        bucket_start.push(start as u32);
-        cut_start.push(cut.len() as u32);
-        let death_max = (0..death_lo.len())
-            .map(|b| {
-                recs[bucket_start[b] as usize..bucket_start[b + 1] as usize]
+            death_max.push(
+                order[start..end]
                     .iter()
-                    .map(|r| r.death)
+                    .map(|&o| recs[o as u32 as usize].death)
                     .max()
-                    .unwrap_or(0)
-            })
-            .collect();
+                    .unwrap_or(0),
+            );
+        }
+        cut_start.push(cut.len() as u32);
         Lifetimes {
-            tris: recs.iter().flat_map(|r| r.tri).collect(),
+            tris,
             // Bucket 0 never dies: its deaths are not kept.
-            death: recs[bucket_start[1] as usize..]
+            death: order[bucket_start[1] as usize..]
                 .iter()
-                .map(|r| r.death)
+                .map(|&o| recs[o as u32 as usize].death)
                 .collect(),
             birth,
             death_lo,

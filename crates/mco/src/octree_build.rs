@@ -73,6 +73,19 @@ pub struct Tree<'f> {
     pub levels: Vec<Level>,
     pub vertices: VertexBuffer,
     pub node_id: Vec<Vec<u32>>,
+    /// Per level, once [`assemble`] has run: each node's children (level
+    /// `L - 1` indices, increasing) as `list[start[i]..start[i + 1]]`.
+    pub children: Vec<(Vec<u32>, Vec<u32>)>,
+}
+
+impl Tree<'_> {
+    /// Level-`l` node `i`'s children (indices into level `l - 1`), after
+    /// [`assemble`].
+    #[inline]
+    pub fn kids(&self, l: usize, i: usize) -> &[u32] {
+        let (start, list) = &self.children[l];
+        &list[start[i] as usize..start[i + 1] as usize]
+    }
 }
 
 impl Tree<'_> {
@@ -150,6 +163,7 @@ pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) ->
         levels: vec![level0],
         vertices,
         node_id: Vec::new(),
+        children: Vec::new(),
     };
     let offsets = rule_offsets();
     for l in 1..=depth {
@@ -187,7 +201,9 @@ pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) ->
                 } else if let Some(&cv) = level.corners.get(&v) {
                     cv
                 } else {
-                    let value = match tree.corner(l - 1, v) {
+                    // Not in the band (checked above): the level below's own
+                    // corner, else Fig. 5.2's cases 2–4.
+                    let value = match tree.levels[l - 1].corners.get(&v).copied() {
                         Some(cv) => cv,
                         None => rule_value(&tree, l - 1, v, step, &offsets)
                             .expect("a node's centre is a corner of each of its children"),
@@ -365,6 +381,8 @@ pub fn assemble(tree: &mut Tree) -> McoModel {
             (start, list)
         })
         .collect();
+    tree.children = children;
+    let children = &tree.children;
     let kids = |l: usize, i: u32| -> &[u32] {
         let (start, list) = &children[l];
         &list[start[i as usize] as usize..start[i as usize + 1] as usize]

@@ -38,9 +38,10 @@
 //! `k` (`k` nodes expanded); [`lod_for_triangles`] inverts it.
 
 use std::cmp::Reverse;
-use std::collections::{BinaryHeap, HashMap};
+use std::collections::BinaryHeap;
 
 use crate::model::McoModel;
+use crate::signed_distance::KeyMap;
 
 /// Fills `model.lod`, `model.groups`, `model.prio` and `model.acc` from
 /// the nodes, metrics and balance dependencies. `together` lists node
@@ -62,11 +63,11 @@ pub fn number(model: &mut McoModel, together: &[(u32, u32)]) {
             uf[ra.max(rb) as usize] = ra.min(rb);
         }
     }
-    let mut members: HashMap<u32, Vec<u32>> = HashMap::new();
+    let mut members: KeyMap<Vec<u32>> = KeyMap::default();
     for i in 0..n as u32 {
         let r = find(&mut uf, i);
         if r != i {
-            members.entry(r).or_insert_with(|| vec![r]).push(i);
+            members.entry(r as u64).or_insert_with(|| vec![r]).push(i);
         }
     }
     let mut expanded = vec![false; n];
@@ -93,7 +94,10 @@ pub fn number(model: &mut McoModel, together: &[(u32, u32)]) {
             continue;
         }
         let root = find(&mut uf, i);
-        let group: Vec<u32> = members.get(&root).cloned().unwrap_or_else(|| vec![i]);
+        let group: Vec<u32> = members
+            .get(&(root as u64))
+            .cloned()
+            .unwrap_or_else(|| vec![i]);
         // Every member must be in the cut (parent expanded) and have its
         // balance dependencies expanded.
         let blocker = group.iter().find_map(|&x| {
