@@ -20,28 +20,50 @@ pub struct ProgressiveLevel {
     pub bytes_so_far: usize,
     /// Particles (kept ON nodes) at this level.
     pub particles: usize,
+    /// Bits per coordinate of the particle positions decoded (N).
+    pub precision: u8,
     pub mesh: TriMesh,
     pub stats: TriangulationStats,
 }
 
-/// Decodes every level of `bytes` (at the stream's full precision) and
-/// triangulates each — what `lodkit build` puts in its report.
+/// Decodes every level of `bytes` and triangulates each — what `lodkit
+/// build` puts in its report. Levels are decoded at the precision their
+/// own chunks give (N = R, no refinement layer), so `bytes_so_far` is
+/// exactly what a reader needs for that mesh; when the stream carries
+/// refinement layers, one more entry follows: the finest level at the
+/// stream's full precision, with `bytes_so_far` the whole stream.
 pub fn progressive_levels(
     bytes: &[u8],
     opts: &TriangulateOptions,
 ) -> Result<Vec<ProgressiveLevel>> {
-    let d = decode(bytes, &DecodeOptions::default())?;
-    let mut out = Vec::with_capacity(d.levels.len());
-    for r in 0..d.levels.len() {
+    let header = crate::container::read_header(bytes)?;
+    let d = decode(
+        bytes,
+        &DecodeOptions {
+            max_precision: Some(header.depth),
+            ..DecodeOptions::default()
+        },
+    )?;
+    let mut out = Vec::with_capacity(d.levels.len() + 1);
+    let mut push = |d: &crate::decode::Decoded, r: usize, bytes_so_far: usize| -> Result<()> {
         let s = d.surface(r as u8)?;
         let t = triangulate(&s, opts);
         out.push(ProgressiveLevel {
             level: r as u8,
-            bytes_so_far: d.bytes_per_level[r],
+            bytes_so_far,
             particles: s.cells.len(),
+            precision: d.precision,
             mesh: t.mesh,
             stats: t.stats,
         });
+        Ok(())
+    };
+    for r in 0..d.levels.len() {
+        push(&d, r, d.bytes_per_level[r])?;
+    }
+    if header.precision > header.depth && d.levels.len() == usize::from(header.depth) + 1 {
+        let full = decode(bytes, &DecodeOptions::default())?;
+        push(&full, usize::from(header.depth), full.bytes_read)?;
     }
     Ok(out)
 }

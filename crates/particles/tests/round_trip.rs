@@ -113,14 +113,23 @@ fn progressive_levels_report_growing_bytes_and_meshes_for_lodkit_build() {
     )
     .unwrap();
     let levels = progressive_levels(&e.bytes, &TriangulateOptions::DEFAULT).unwrap();
-    assert_eq!(levels.len(), 7);
-    for w in levels.windows(2) {
+    // Levels 0..=6 at the precision their chunks give (N = R = 6), then
+    // level 6 again at the stream's full 12 bits.
+    assert_eq!(levels.len(), 8);
+    for w in levels[..7].windows(2) {
         assert!(w[1].bytes_so_far > w[0].bytes_so_far);
         assert!(w[1].particles > w[0].particles);
         assert!(w[1].mesh.faces.len() > w[0].mesh.faces.len());
+        assert_eq!(w[1].precision, 6);
     }
     assert_eq!(levels[6].particles, e.report.particles);
-    assert!(levels[6].bytes_so_far <= e.bytes.len());
+    assert!(levels[6].bytes_so_far < e.bytes.len());
+    let full = &levels[7];
+    assert_eq!((full.level, full.precision), (6, 12));
+    assert_eq!(full.bytes_so_far, e.bytes.len());
+    assert_eq!(full.particles, levels[6].particles);
+    assert_eq!(full.mesh.faces.len(), levels[6].mesh.faces.len());
+    assert_ne!(full.mesh.positions, levels[6].mesh.positions);
 }
 
 #[test]

@@ -376,12 +376,14 @@ fn progressive_stream(
         report,
         "## Progressive stream (octree particles)\n\n`{file}` ({} bytes, entropy-coded, outer thinning): \
          a reader that has the first *bytes so far* can show level *r*, triangulated directly from its \
-         particles; errors against the input, symmetric ({samples} samples of each kind).\n",
+         particles, with *N* bits per coordinate (the level chunks alone give N = R; the refinement \
+         layers that follow them bring the finest level to the stream's full precision); errors \
+         against the input, symmetric ({samples} samples of each kind).\n",
         enc.bytes.len()
     )?;
     writeln!(
         report,
-        "| level | bytes so far | particles | triangles | mean error | max error |\n|---:|---:|---:|---:|---:|---:|"
+        "| level | N | bytes so far | particles | triangles | mean error | max error |\n|---:|---:|---:|---:|---:|---:|---:|"
     )?;
     for l in &levels {
         let (mean, max) = if l.mesh.faces.is_empty() {
@@ -395,8 +397,9 @@ fn progressive_stream(
         };
         writeln!(
             report,
-            "| {} | {} | {} | {} | {mean} | {max} |",
+            "| {} | {} | {} | {} | {} | {mean} | {max} |",
             l.level,
+            l.precision,
             l.bytes_so_far,
             l.particles,
             l.mesh.faces.len()
