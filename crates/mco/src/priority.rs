@@ -20,14 +20,17 @@
 //! expandable one) in `O(n log n)` overall. Ties break on the node number,
 //! so numbering is deterministic.
 //!
-//! **Expanding together.** Two interfaces cannot be patched by moving
-//! fine vertices onto coarse segments (Fig. 5.6): a face that the coarse
-//! level crosses nowhere while the finer level crosses it (a bump thinner
-//! than the coarse cube), and a coarse edge whose fine crossings are not
-//! exactly its own crossing (two fine crossings where the coarse edge has
-//! none, or a coarse crossing that fell back to a midpoint). The fine
-//! polyline there has nothing, or the wrong point, to be moved onto, and
-//! two coarse neighbours would pull a shared fine vertex two ways. The
+//! **Expanding together.** Three interfaces cannot be patched by moving
+//! fine vertices onto coarse segments (Fig. 5.6): a face whose fine
+//! chains do not join the same crossings as its coarse segments (the
+//! coarse level crosses it nowhere while the finer level does — a bump
+//! thinner than the coarse cube —, an ambiguous face the children join
+//! the other way round, or a closed fine loop on the face), and a coarse
+//! edge whose fine crossings are not exactly its own crossing (two fine
+//! crossings where the coarse edge has none, or a coarse crossing that
+//! fell back to a midpoint). The fine polyline there has nothing, or the
+//! wrong point, to be moved onto, and two coarse neighbours would pull a
+//! shared fine vertex two ways. The
 //! same-level nodes around such a face or edge are expanded in the same LOD
 //! step (a union-find class, found by
 //! [`crate::crack_patch::expand_together`]), so that interface only ever
