@@ -70,7 +70,7 @@ fn with_outer_thinning_non_manifold_local_triangulations_stay_under_one_percent(
     let torus = Model::Mesh(lodkit_mesh::shapes::torus(1.0, 0.35, 96, 48));
     let thinning = lodkit_particles::ThinningOptions {
         outer: true,
-        relax_below: 4,
+        ..lodkit_particles::ThinningOptions::DEFAULT
     };
     let opts = EncodeOptions {
         depth: Some(7),
@@ -79,7 +79,11 @@ fn with_outer_thinning_non_manifold_local_triangulations_stay_under_one_percent(
     };
     let e = encode(&torus, &opts).unwrap();
     let d = decode(&e.bytes, &DecodeOptions::default()).unwrap();
-    for r in 4..=7u8 {
+    // From level 3, where the tube (0.7 across) spans two cubes; at level
+    // 2 it is one cube thick and 16 of the 60 triangles share edges four
+    // ways, as the paper's own coarsest levels (Table 1: 4.6 % and 6.1 %
+    // at r = 4) — no manifold surface fits such a shell of cubes.
+    for r in 3..=7u8 {
         let t = triangulate(&d.surface(r).unwrap(), &TriangulateOptions::DEFAULT);
         let share = t.stats.fallbacks as f64 / t.stats.triangles as f64;
         let strict = lodkit_particles::triangulate::non_manifold_triangles(&t.mesh);
@@ -98,6 +102,41 @@ fn with_outer_thinning_non_manifold_local_triangulations_stay_under_one_percent(
         // C6 is the frequent ambiguous class and nearly always resolved.
         let c6 = t.stats.configurations[6];
         assert!(t.stats.disambiguated >= c6 * 9 / 10, "level {r}");
+    }
+}
+
+#[test]
+fn thinning_on_keeps_every_level_of_the_scanned_bunny_under_one_percent_non_manifold() {
+    // The issue's bound, "non-manifold triangles <= 1 % of each level's
+    // triangles with thinning on", on a real open scan: inner and outer
+    // thinning (relaxed below the default level 4, Table 1's setting).
+    // Relaxed below 5 instead, levels 3 and 4 of this bunny reach 3.7 %
+    // and 2.3 %, so the coarse levels are where this test bites.
+    use lodkit_particles::{TriangulateOptions, triangulate};
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../data/models/stanford_bunny.ply");
+    let bunny = lodkit_mesh::io::load(&path).unwrap();
+    let opts = EncodeOptions {
+        depth: Some(7),
+        thinning: lodkit_particles::ThinningOptions {
+            outer: true,
+            ..lodkit_particles::ThinningOptions::DEFAULT
+        },
+        ..EncodeOptions::DEFAULT
+    };
+    let e = encode(&bunny, &opts).unwrap();
+    let d = decode(&e.bytes, &DecodeOptions::default()).unwrap();
+    for r in 0..=7u8 {
+        let t = triangulate(&d.surface(r).unwrap(), &TriangulateOptions::DEFAULT);
+        let strict = lodkit_particles::triangulate::non_manifold_triangles(&t.mesh);
+        assert!(
+            strict * 100 <= t.stats.triangles,
+            "level {r}: {strict} non-manifold triangles of {}",
+            t.stats.triangles
+        );
+        if r >= 3 {
+            assert!(t.stats.triangles >= 100, "level {r} has a surface");
+        }
     }
 }
 

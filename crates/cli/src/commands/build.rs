@@ -356,7 +356,7 @@ fn progressive_stream(
     let opts = EncodeOptions {
         thinning: ThinningOptions {
             outer: true,
-            relax_below: 4,
+            ..ThinningOptions::DEFAULT
         },
         ..EncodeOptions::DEFAULT
     };
