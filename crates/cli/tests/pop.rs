@@ -77,3 +77,37 @@ fn a_cut_stream_is_a_one_line_error_naming_the_file() {
     assert_eq!(e.lines().count(), 1, "{e}");
     assert!(!out.exists());
 }
+
+#[test]
+fn outer_thinning_reports_the_relax_level_it_chose_or_was_given() {
+    let dir = tempfile::tempdir().unwrap();
+    let pop = dir.path().join("bunny.pop");
+    let pop_s = pop.to_str().unwrap();
+    let bunny = bunny();
+    let encode = |extra: &[&str]| {
+        let mut args = vec!["pop", "encode", bunny.as_str(), "-o", pop_s, "--depth", "6"];
+        args.extend_from_slice(extra);
+        lodkit(&args)
+    };
+    let o = encode(&["--outer-thinning"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("outer thinning relaxed below level 4"),
+        "{}",
+        stderr(&o)
+    );
+    let o = encode(&["--outer-thinning", "--relax-below", "5"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("relaxed below level 5"),
+        "{}",
+        stderr(&o)
+    );
+    let o = encode(&["--outer-thinning", "--relax-below", "often"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("expected `auto` or a level"),
+        "{}",
+        stderr(&o)
+    );
+}

@@ -11,7 +11,7 @@ use crate::error::{Error, Result};
 use crate::hierarchical_coding::{self as hc, BitCoder, LevelInput, Truth};
 use crate::octree::{BuildOptions, Octree, QBITS, Sidedness, unmorton};
 use crate::ordering::Hierarchy;
-use crate::thinning::{ThinningOptions, thin};
+use crate::thinning::{ThinningOptions, thin_choosing};
 
 /// Default precision `N`: §7.2 finds 12 bits enough for most models.
 pub const DEFAULT_PRECISION: u8 = 12;
@@ -111,6 +111,9 @@ pub struct EncodeReport {
     /// Bits of each precision layer `R+1..=N`.
     pub precision_bits: Vec<u64>,
     pub total_bytes: usize,
+    /// Level below which outer thinning was relaxed (`None`: inner
+    /// thinning only, or an octree thinned before [`encode_thinned`]).
+    pub relax_below: Option<u8>,
 }
 
 impl EncodeReport {
@@ -172,11 +175,13 @@ pub fn encode(model: &Model, opts: &EncodeOptions) -> Result<Encoded> {
             sidedness: opts.sidedness,
         },
     )?;
-    let eliminated = thin(&mut tree, &opts.thinning);
-    encode_thinned(&tree, &eliminated, opts)
+    let (eliminated, relax_below) = thin_choosing(&mut tree, &opts.thinning);
+    let mut e = encode_thinned(&tree, &eliminated, opts)?;
+    e.report.relax_below = opts.thinning.outer.then_some(relax_below);
+    Ok(e)
 }
 
-/// Encodes an octree already thinned (`eliminated` from [`thin`]).
+/// Encodes an octree already thinned (`eliminated` from [`thin`](crate::thinning::thin)).
 pub fn encode_thinned(
     tree: &Octree,
     eliminated: &[usize],

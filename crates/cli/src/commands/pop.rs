@@ -74,8 +74,9 @@ pub struct EncodeArgs {
     /// Also thin the outer boundary (with the hole-preventing test).
     #[arg(long)]
     pub outer_thinning: bool,
-    /// Relax outer thinning below this level.
-    #[arg(long, default_value_t = ThinningOptions::DEFAULT.relax_below)]
+    /// Relax outer thinning below this level (1–16), or `auto`: the level
+    /// that leaves the coarse levels fewest non-manifold triangles.
+    #[arg(long, default_value = "auto", value_parser = parse_relax)]
     pub relax_below: u8,
     /// Also code particle normals.
     #[arg(long)]
@@ -153,7 +154,23 @@ fn run_encode(ui: &Ui, a: &EncodeArgs) -> Result<()> {
         61.0 / 12.0,
         r.total_bytes as f64 * 8.0 / r.particles.max(1) as f64
     ));
+    if let Some(l) = r.relax_below {
+        ui.status(format!("outer thinning relaxed below level {l}"));
+    }
     Ok(())
+}
+
+/// `--relax-below`: `auto` ([`ThinningOptions::AUTO_RELAX`]) or a level.
+fn parse_relax(v: &str) -> std::result::Result<u8, String> {
+    if v == "auto" {
+        return Ok(ThinningOptions::AUTO_RELAX);
+    }
+    match v.parse::<u8>() {
+        Ok(l @ 1..=16) => Ok(l),
+        _ => Err(format!(
+            "expected `auto` or a level from 1 to 16, got `{v}`"
+        )),
+    }
 }
 
 fn read_pop(path: &Path) -> Result<Vec<u8>> {
