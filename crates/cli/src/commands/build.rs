@@ -374,12 +374,15 @@ fn progressive_stream(
     };
     writeln!(
         report,
-        "## Progressive stream (octree particles)\n\n`{file}` ({} bytes, entropy-coded, outer thinning): \
+        "## Progressive stream (octree particles)\n\n`{file}` ({} bytes, entropy-coded, outer thinning{}): \
          a reader that has the first *bytes so far* can show level *r*, triangulated directly from its \
          particles, with *N* bits per coordinate (the level chunks alone give N = R; the refinement \
          layers that follow them bring the finest level to the stream's full precision); errors \
          against the input, symmetric ({samples} samples of each kind).\n",
-        enc.bytes.len()
+        enc.bytes.len(),
+        enc.report.relax_below.map_or(String::new(), |l| format!(
+            " relaxed below level {l}, the level chosen for this object"
+        ))
     )?;
     writeln!(
         report,
