@@ -93,37 +93,59 @@ fn every_flipped_byte_is_reported_not_decoded() {
 
 #[test]
 fn decoded_levels_stay_within_the_interior_diagonal_of_their_cubes() {
-    // §6.5: h(M_r, S) ≤ ε_r, the interior diagonal of a level-r cube.
-    let sphere = lodkit_mesh::shapes::icosphere(5);
-    let index = SurfaceIndex::new(&sphere).unwrap();
-    let opts = EncodeOptions {
-        depth: Some(7),
-        precision: 14,
-        ..EncodeOptions::DEFAULT
+    // §6.5: h(M_r, S) ≤ ε_r, the interior diagonal of a level-r cube —
+    // with inner thinning (the default) and with outer thinning too, on a
+    // sphere and on the shipped (open) bunny scan.
+    let bunny_path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../data/models/stanford_bunny.ply");
+    let Model::Mesh(bunny) = lodkit_mesh::io::load(&bunny_path).unwrap() else {
+        panic!("the bunny is a mesh")
     };
-    let e = encode(&Model::Mesh(sphere.clone()), &opts).unwrap();
-    let d = decode(&e.bytes, &DecodeOptions::default()).unwrap();
-    for r in 2..=7u8 {
-        let s = d.surface(r).unwrap();
-        let t = triangulate(&s, &TriangulateOptions::DEFAULT);
-        let eps = 3f32.sqrt() * s.frame.cube(r);
-        let mut worst = 0f32;
-        for f in &t.mesh.faces {
-            let [a, b, c] = f.map(|v| t.mesh.positions[v as usize]);
-            for (u, v) in [
-                (0.0, 0.0),
-                (1.0, 0.0),
-                (0.0, 1.0),
-                (1.0 / 3.0, 1.0 / 3.0),
-                (0.5, 0.5),
-                (0.5, 0.0),
-                (0.0, 0.5),
-            ] {
-                let p: Vec3 = a + (b - a) * u + (c - a) * v;
-                worst = worst.max(index.distance(p));
+    let outer = lodkit_particles::ThinningOptions {
+        outer: true,
+        ..lodkit_particles::ThinningOptions::DEFAULT
+    };
+    for (name, surface) in [
+        ("sphere", lodkit_mesh::shapes::icosphere(5)),
+        ("bunny", bunny),
+    ] {
+        let index = SurfaceIndex::new(&surface).unwrap();
+        for thinning in [lodkit_particles::ThinningOptions::DEFAULT, outer] {
+            let opts = EncodeOptions {
+                depth: Some(7),
+                precision: 14,
+                thinning,
+                ..EncodeOptions::DEFAULT
+            };
+            let e = encode(&Model::Mesh(surface.clone()), &opts).unwrap();
+            let d = decode(&e.bytes, &DecodeOptions::default()).unwrap();
+            for r in 2..=7u8 {
+                let s = d.surface(r).unwrap();
+                let t = triangulate(&s, &TriangulateOptions::DEFAULT);
+                let eps = 3f32.sqrt() * s.frame.cube(r);
+                let mut worst = 0f32;
+                for f in &t.mesh.faces {
+                    let [a, b, c] = f.map(|v| t.mesh.positions[v as usize]);
+                    for (u, v) in [
+                        (0.0, 0.0),
+                        (1.0, 0.0),
+                        (0.0, 1.0),
+                        (1.0 / 3.0, 1.0 / 3.0),
+                        (0.5, 0.5),
+                        (0.5, 0.0),
+                        (0.0, 0.5),
+                    ] {
+                        let p: Vec3 = a + (b - a) * u + (c - a) * v;
+                        worst = worst.max(index.distance(p));
+                    }
+                }
+                assert!(
+                    worst <= eps,
+                    "{name}, outer thinning {}: level {r}: h(M_r, S) = {worst} > ε_r = {eps}",
+                    thinning.outer
+                );
             }
         }
-        assert!(worst <= eps, "level {r}: h(M_r, S) = {worst} > ε_r = {eps}");
     }
 }
 
