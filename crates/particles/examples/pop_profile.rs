@@ -63,6 +63,19 @@ fn main() {
         orient,
         ..TriangulateOptions::DEFAULT
     };
+    // A digest of what the loop produces, so an optimisation can be
+    // checked to change nothing (outside the timed loop).
+    let d = decode(&bytes, &DecodeOptions::default()).expect("decodes");
+    let s = d.surface(d.header.depth).expect("finest level");
+    let t = triangulate(&s, &opts);
+    let mut h = std::hash::DefaultHasher::new();
+    std::hash::Hash::hash(&d.q, &mut h);
+    std::hash::Hash::hash(&s.cells, &mut h);
+    std::hash::Hash::hash(&t.mesh.faces, &mut h);
+    println!(
+        "digest {:016x}",
+        std::hash::Hasher::finish(&h)
+    );
     let mut best = [f64::INFINITY; 3];
     let mut tris = 0;
     for _ in 0..iterations {

@@ -407,9 +407,13 @@ pub struct Faces {
     /// (see [`code_precision`]); set by the encoder, decoded in the first
     /// precision layer.
     pub column: Vec<u8>,
+    /// Per particle: its [`normal_axis`] (bits 0–1) and its face
+    /// neighbours along x, y, z ([`faces_per_axis`], two bits each from
+    /// bit 2), computed once rather than in every layer.
+    axes: Vec<u8>,
     /// Per column particle: the neighbours that predict its height (column
     /// particles across its tangential faces with the same normal axis),
-    /// `u32::MAX`-padded; built at the end of the first precision layer.
+    /// `u32::MAX`-padded; filled during the first precision layer.
     pred: Vec<[u32; 4]>,
     /// Per column particle: its height (normal coordinate) as far as coded,
     /// lower bits zero — a compact copy the predictions read.
@@ -433,6 +437,7 @@ pub fn particle_faces(links: &Links, leaves: &HLevel, particles: usize) -> Faces
         mask: vec![0u8; particles],
         nb: vec![[NONE; 6]; particles],
         column: vec![0u8; particles],
+        axes: Vec::new(),
         pred: Vec::new(),
         height: vec![0u16; particles],
     };
@@ -448,7 +453,15 @@ pub fn particle_faces(links: &Links, leaves: &HLevel, particles: usize) -> Faces
             }
         }
     }
+    out.axes = out.mask.iter().map(|&m| pack_axes(m)).collect();
     out
+}
+
+/// [`normal_axis`] and [`faces_per_axis`] of a face mask in one byte.
+#[inline]
+fn pack_axes(mask: u8) -> u8 {
+    let c = faces_per_axis(mask);
+    normal_axis(mask) as u8 | c[0] << 2 | c[1] << 4 | c[2] << 6
 }
 
 /// Face neighbours along each axis (0–2) of a [`particle_faces`] mask.
@@ -521,22 +534,34 @@ pub fn code_precision<C: BitCoder>(
         || faces.nb.len() != n
         || faces.column.len() != n
         || faces.height.len() != n
+        || faces.axes.len() != n
     {
         return stream_err("precision layer: face table does not match the particles");
     }
     // 1-based layer below the leaf.
     let rel = b.saturating_sub(u32::from(depth));
     let first_layer = rel == 1;
+    if first_layer {
+        faces.pred = vec![[NONE; 4]; n];
+    } else if faces.pred.len() != n {
+        return stream_err("precision layer: the first layer below the leaves is missing");
+    }
     // Layer bucket: the first bits below the leaf are the informative ones.
     let lb = (rel.saturating_sub(1) as usize).min(2);
+    // The plain context of axis `a` without the two bits above.
+    let plain = |a: usize, info: u8, g: usize| {
+        let cnt = usize::from((info >> (2 + 2 * a)) & 3);
+        PREC + ((((a * 3 + lb) * 3 + cnt) * 2 + usize::from(a == g)) * 4)
+    };
+    let above = |c: u32| ((c >> (shift + 1)) & 3) as usize;
     for i in 0..n {
-        let f = faces.mask[i];
-        let cnt = faces_per_axis(f);
-        let g = normal_axis(f);
+        let info = faces.axes[i];
+        let g = usize::from(info & 3);
         if first_layer {
             let col = &mut faces.column[i];
             let mut is_column = *col != 0;
-            let ctx = COL + (cnt[0] as usize * 3 + cnt[1] as usize) * 3 + cnt[2] as usize;
+            let ctx = COL + usize::from(info >> 2 & 3) * 9 + usize::from(info >> 4 & 3) * 3
+                + usize::from(info >> 6);
             coder.bit(&mut is_column, ctx)?;
             if is_column {
                 let want = col.saturating_sub(1);
@@ -552,83 +577,72 @@ pub fn code_precision<C: BitCoder>(
                 *col = 1 + k;
                 // The leaf's bits of the height are known from the structure.
                 faces.height[i] = ((q[i][g] >> (shift + 1)) << (shift + 1)) as u16;
+                link_predictors(faces, i, g);
             } else {
                 *col = 0;
             }
         }
         let col = faces.column[i];
+        if col == 0 {
+            for a in 0..3 {
+                let c = q[i][a];
+                let mut bit = (c >> shift) & 1 == 1;
+                coder.bit(&mut bit, plain(a, info, g) + above(c))?;
+                q[i][a] = (c & !(1 << shift)) | (u32::from(bit) << shift);
+            }
+            continue;
+        }
+        let k = u32::from(col - 1);
         for a in 0..3 {
             let c = q[i][a];
-            let ctx = if col != 0 && a == g {
-                let above = ((c >> (shift + 1)) & 3) as usize;
-                let bin = if first_layer {
-                    height_bin(faces, &first_layer_predictors(faces, i, g), i, shift)
-                } else {
-                    height_bin(faces, &faces.pred[i], i, shift)
-                };
-                PRED + (lb * PRED_BINS + bin) * 4 + above
+            let ctx = if a == g {
+                let bin = height_bin(faces, &faces.pred[i], i, shift);
+                PRED + (lb * PRED_BINS + bin) * 4 + above(c)
             } else {
-                if col != 0 {
-                    let k = u32::from(col - 1);
+                if rel > k {
                     if rel == k + 1 {
                         q[i][a] = ((c >> shift) | 1) << shift;
                     }
-                    if rel > k {
-                        continue;
-                    }
+                    continue;
                 }
-                let above = ((c >> (shift + 1)) & 3) as usize;
-                PREC + ((((a * 3 + lb) * 3 + cnt[a] as usize) * 2 + usize::from(a == g)) * 4)
-                    + above
+                plain(a, info, g) + above(c)
             };
             let mut bit = (c >> shift) & 1 == 1;
             coder.bit(&mut bit, ctx)?;
             let v = (c & !(1 << shift)) | (u32::from(bit) << shift);
             q[i][a] = v;
-            if col != 0 && a == g {
+            if a == g {
                 faces.height[i] = ((v >> shift) << shift) as u16;
             }
         }
     }
-    if first_layer {
-        faces.pred = (0..n)
-            .map(|i| {
-                if faces.column[i] == 0 {
-                    [NONE; 4]
-                } else {
-                    predictors(faces, i, normal_axis(faces.mask[i]), n)
-                }
-            })
-            .collect();
-    }
     Ok(())
 }
 
-/// The column particles across particle `i`'s tangential faces whose
-/// normal axis is also `g`, below `limit` in stream order.
+/// Records, in the first layer, the column particles across particle
+/// `i`'s tangential faces whose normal axis is also `g` and that come
+/// before it (the later ones are not decoded yet) as its height predictors,
+/// and `i` as theirs: the relation is symmetric, so once the layer is
+/// through every column particle holds all of its predictors, for the
+/// later layers.
 #[inline]
-fn predictors(faces: &Faces, i: usize, g: usize, limit: usize) -> [u32; 4] {
-    let mut out = [NONE; 4];
-    let mut m = 0;
+fn link_predictors(faces: &mut Faces, i: usize, g: usize) {
+    let push = |row: &mut [u32; 4], v: u32| {
+        if let Some(slot) = row.iter_mut().find(|s| **s == NONE) {
+            *slot = v;
+        }
+    };
     for d in 0..6 {
         let j = faces.nb[i][d];
-        if d % 3 == g || j == NONE || j as usize >= limit {
+        if d % 3 == g || j as usize >= i {
             continue;
         }
         let j = j as usize;
-        if faces.column[j] != 0 && normal_axis(faces.mask[j]) == g {
-            out[m] = j as u32;
-            m += 1;
+        if faces.column[j] != 0 && usize::from(faces.axes[j] & 3) == g {
+            push(&mut faces.pred[i], j as u32);
+            push(&mut faces.pred[j], i as u32);
         }
     }
-    out
-}
-
-/// [`predictors`] in the first layer: a later particle's column state is
-/// not decoded yet, so only earlier ones count.
-#[inline]
-fn first_layer_predictors(faces: &Faces, i: usize, g: usize) -> [u32; 4] {
-    predictors(faces, i, g, i)
 }
 
 /// Bins of the predicted height's offset from the split of the current
