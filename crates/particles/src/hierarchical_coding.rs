@@ -94,6 +94,36 @@ pub struct LevelInput<'a> {
 /// No node across this face.
 const NONE: u32 = u32::MAX;
 
+/// The children (bit `k`: child `k`) on the upper side of their parent
+/// along x, y, z.
+const UPPER: [u8; 3] = [0xaa, 0xcc, 0xf0];
+
+/// Per child `k`: the children that have `k` behind them along x, y, z
+/// (`k` + e_a for `k` on the lower side of axis `a`), one byte per axis.
+const BEHIND_OF: [u32; 8] = {
+    let mut t = [0u32; 8];
+    let mut k = 0;
+    while k < 8 {
+        let mut a = 0;
+        while a < 3 {
+            let bit = 1usize << a;
+            if k & bit == 0 {
+                t[k] |= 1 << ((k | bit) + 8 * a);
+            }
+            a += 1;
+        }
+        k += 1;
+    }
+    t
+};
+
+/// Bits `k`, `8 + k` and `16 + k` of `m` as bits 0, 1, 2.
+#[inline(always)]
+fn axes_of(m: u32, k: usize) -> usize {
+    let x = (m >> k) & 0x01_01_01;
+    ((x | x >> 7 | x >> 14) & 7) as usize
+}
+
 /// Face-neighbour links of one level, for the entropy contexts: `nb[i][d]`
 /// is the index of the node across face `d` of node `i` (`d = a` towards
 /// `−a`, `d = 3 + a` towards `+a`) or `NONE`. Built from the parent
@@ -164,6 +194,10 @@ pub fn code_level<C: BitCoder>(
         ));
     }
     let mut out = HLevel::default();
+    let expected = inp.max_nodes.min(8 * parents.cells.len());
+    out.cells.reserve(expected);
+    out.phantom.reserve(expected);
+    out.particle.reserve(expected);
     // Per parent: its children (bit k: child k present), which of them are
     // phantoms, and the index of its first child in `out`.
     let n_parents = parents.cells.len();
@@ -219,16 +253,26 @@ pub fn code_level<C: BitCoder>(
                 }
             }
         }
-        // Whether the node at child `k` − e_a exists (`set` = this parent's
-        // children so far) and is in `set`'s / `back`'s bits.
-        let behind = |k: usize, a: usize, own: u8, back: &[u8; 3]| -> bool {
-            let bit = 1 << a;
-            if k & bit != 0 {
-                own >> (k ^ bit) & 1 == 1
-            } else {
-                back[a] >> (k | bit) & 1 == 1
-            }
+        // Neighbour sets over the children, one byte per axis (x in bits
+        // 0–7, y in 8–15, z in 16–23): bit `k` of byte `a` of
+        // `behind(back)` is whether the node at child `k` − e_a is among
+        // the children of the neighbour towards −a (child `k | bit`, for
+        // `k` on the lower side); [`BEHIND_OF`] adds this parent's own
+        // children as they are decided (child `k` − e_a is child `k ^
+        // bit` < `k` for `k` on the upper side).
+        let behind = |back: &[u8; 3]| -> u32 {
+            (0..3).fold(0u32, |f, a| {
+                f | u32::from((back[a] >> (1u32 << a)) & !UPPER[a]) << (8 * a)
+            })
         };
+        // Bit `k` of byte `a`: whether the parent's neighbour on child
+        // `k`'s side along `a` is present.
+        let coarse_at = (0..3).fold(0u32, |f, a| {
+            let lo = if coarse >> (2 * a) & 1 == 1 { !UPPER[a] } else { 0 };
+            let hi = if coarse >> (2 * a + 1) & 1 == 1 { UPPER[a] } else { 0 };
+            f | u32::from(lo | hi) << (8 * a)
+        });
+        let mut fine = if entropy { behind(&back_mask) } else { 0 };
         // 1. Occupancy.
         let mut count = 0usize;
         let mut own = 0u8;
@@ -243,17 +287,8 @@ pub fn code_level<C: BitCoder>(
                         Some(i) if k < i => 1,
                         Some(_) => 2,
                     };
-                    let mut fine_bits = 0usize;
-                    let mut coarse_bits = 0usize;
-                    for a in 0..3 {
-                        if behind(k, a, own, &back_mask) {
-                            fine_bits |= 1 << a;
-                        }
-                        let half = (k >> a) & 1;
-                        if coarse & (1 << (2 * a + half)) != 0 {
-                            coarse_bits |= 1 << a;
-                        }
-                    }
+                    let fine_bits = axes_of(fine, k);
+                    let coarse_bits = axes_of(coarse_at, k);
                     OCC + (((state * 8 + k) * 8 + fine_bits) * 8 + coarse_bits) * 3 + count.min(2)
                 } else {
                     OCC
@@ -263,6 +298,7 @@ pub fn code_level<C: BitCoder>(
             if present[k] {
                 count += 1;
                 own |= 1 << k;
+                fine |= BEHIND_OF[k];
             }
         }
         if count == 0 {
@@ -270,6 +306,7 @@ pub fn code_level<C: BitCoder>(
         }
         // 2. Phantom flags.
         let mut own_phantom = 0u8;
+        let mut fine_phantom = if entropy { behind(&back_phantom) } else { 0 };
         for k in 0..8usize {
             if !present[k] || Some(k) == implicit {
                 continue;
@@ -282,12 +319,7 @@ pub fn code_level<C: BitCoder>(
                 phantom[k] = true;
             } else {
                 let ctx = if entropy {
-                    let mut nb = 0usize;
-                    for a in 0..3 {
-                        if behind(k, a, own_phantom, &back_phantom) {
-                            nb |= 1 << a;
-                        }
-                    }
+                    let nb = axes_of(fine_phantom, k);
                     FLAG + ((usize::from(phantom_parent) * 8 + nb) * 4) + (count - 1).min(3)
                 } else {
                     FLAG
@@ -296,6 +328,7 @@ pub fn code_level<C: BitCoder>(
             }
             if phantom[k] {
                 own_phantom |= 1 << k;
+                fine_phantom |= BEHIND_OF[k];
             }
         }
         if entropy {
@@ -326,7 +359,7 @@ pub fn code_level<C: BitCoder>(
                 if entropy {
                     for a in 0..3 {
                         ext[a] = ((coarse >> (2 * a)) & 1) + ((coarse >> (2 * a + 1)) & 1);
-                        back[a] = usize::from(behind(k, a, own, &back_mask));
+                        back[a] = (fine >> (8 * a + k) & 1) as usize;
                     }
                 }
                 for d in (r + 1)..=depth {
@@ -367,23 +400,31 @@ pub fn code_level<C: BitCoder>(
 fn child_links(parent_nb: &[[u32; 6]], masks: &[u8], firsts: &[u32], n: usize) -> Links {
     let mut nb = Vec::with_capacity(n);
     for p in 0..masks.len() {
-        let mut m = masks[p];
-        while m != 0 {
-            let k = m.trailing_zeros() as usize;
-            m &= m - 1;
+        let m = masks[p];
+        if m == 0 {
+            continue;
+        }
+        // Children masks and first indices of the parent's face neighbours.
+        let mut nm = [0u8; 6];
+        let mut nf = [0u32; 6];
+        for d in 0..6 {
+            let q = parent_nb[p][d];
+            if q != NONE {
+                nm[d] = masks[q as usize];
+                nf[d] = firsts[q as usize];
+            }
+        }
+        let mut rest = m;
+        while rest != 0 {
+            let k = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
             let mut row = [NONE; 6];
             for d in 0..6 {
                 let bit = 1usize << (d % 3);
                 let towards_plus = d >= 3;
                 let inside = (k & bit != 0) != towards_plus;
-                let (q, j) = if inside {
-                    (p as u32, k ^ bit)
-                } else {
-                    (parent_nb[p][d], k ^ bit)
-                };
-                if q != NONE
-                    && let Some(i) = child_index(masks[q as usize], firsts[q as usize], j)
-                {
+                let (qm, qf) = if inside { (m, firsts[p]) } else { (nm[d], nf[d]) };
+                if let Some(i) = child_index(qm, qf, k ^ bit) {
                     row[d] = i;
                 }
             }
