@@ -43,14 +43,11 @@ fn load(input: &str) -> Vec<u8> {
 
 fn main() {
     let mut args: Vec<String> = std::env::args().skip(1).collect();
-    let save = args
-        .iter()
-        .position(|a| a == "--save")
-        .map(|i| {
-            let path = args.remove(i + 1);
-            args.remove(i);
-            path
-        });
+    let save = args.iter().position(|a| a == "--save").map(|i| {
+        let path = args.remove(i + 1);
+        args.remove(i);
+        path
+    });
     let input = args.first().expect("INPUT");
     let bytes = load(input);
     if let Some(path) = save {
@@ -68,14 +65,17 @@ fn main() {
     let d = decode(&bytes, &DecodeOptions::default()).expect("decodes");
     let s = d.surface(d.header.depth).expect("finest level");
     let t = triangulate(&s, &opts);
+    if std::env::var_os("POP_PROFILE_STATS").is_some() {
+        eprintln!(
+            "{:?} disambiguated {} fallbacks {}",
+            t.stats.configurations, t.stats.disambiguated, t.stats.fallbacks
+        );
+    }
     let mut h = std::hash::DefaultHasher::new();
     std::hash::Hash::hash(&d.q, &mut h);
     std::hash::Hash::hash(&s.cells, &mut h);
     std::hash::Hash::hash(&t.mesh.faces, &mut h);
-    println!(
-        "digest {:016x}",
-        std::hash::Hasher::finish(&h)
-    );
+    println!("digest {:016x}", std::hash::Hasher::finish(&h));
     let mut best = [f64::INFINITY; 3];
     let mut tris = 0;
     for _ in 0..iterations {

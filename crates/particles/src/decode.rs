@@ -241,10 +241,7 @@ fn decode_with<'a, R: ChunkRead<'a>>(
                     break;
                 }
                 if d.q.is_empty() {
-                    d.q = leaves
-                        .iter()
-                        .map(|l| l.map(|v| v << (QBITS - u32::from(depth))))
-                        .collect();
+                    d.q = to_grid(std::mem::take(&mut leaves), depth);
                 }
                 if chunk.count as usize != d.q.len() {
                     return stream_err(format!(
@@ -267,14 +264,20 @@ fn decode_with<'a, R: ChunkRead<'a>>(
         return stream_err("the stream holds no level");
     }
     if d.q.is_empty() {
-        d.q = leaves
-            .iter()
-            .map(|l| l.map(|v| v << (QBITS - u32::from(depth))))
-            .collect();
+        d.q = to_grid(leaves, depth);
     }
     // The last level's attribute chunk may be missing from a prefix:
     // `surface` then returns that level without attributes.
     Ok(d)
+}
+
+/// Leaf coordinates (`depth` bits) as 16-bit grid coordinates, in place.
+fn to_grid(mut leaves: Vec<[u32; 3]>, depth: u8) -> Vec<[u32; 3]> {
+    let shift = QBITS - u32::from(depth);
+    for l in &mut leaves {
+        *l = l.map(|v| v << shift);
+    }
+    leaves
 }
 
 fn next_structure(r: u8, depth: u8) -> (ChunkKind, u8) {
@@ -300,21 +303,33 @@ impl Decoded {
             ));
         };
         let shift = QBITS - u32::from(self.precision);
-        let mut cells = Vec::with_capacity(lv.cells.len());
-        let mut positions = Vec::with_capacity(lv.cells.len());
-        let mut kept_idx = Vec::with_capacity(lv.cells.len());
+        let kept = lv.phantom.iter().filter(|&&p| !p).count();
+        let mut cells = Vec::with_capacity(kept);
+        let mut positions = Vec::with_capacity(kept);
+        // `cell_centre` in f64, with the frame and the cube size hoisted.
+        let frame = self.header.frame;
+        let cube = f64::from(frame.size) / f64::from(1u32 << self.precision);
+        let origin = frame.origin.as_dvec3();
         for (i, &c) in lv.cells.iter().enumerate() {
             if lv.phantom[i] {
                 continue;
             }
             cells.push(c);
             let q = self.q[lv.particle[i] as usize].map(|v| v >> shift);
-            positions.push(self.header.frame.cell_centre(q, u32::from(self.precision)));
-            kept_idx.push(i);
+            positions.push(
+                (origin + (glam::DVec3::new(q[0] as f64, q[1] as f64, q[2] as f64) + 0.5) * cube)
+                    .as_vec3(),
+            );
         }
         let pick = |store: &Option<Vec<Vec<[u32; 3]>>>| -> Option<Vec<[u32; 3]>> {
             let lvl = store.as_ref()?.get(r as usize)?;
-            Some(kept_idx.iter().map(|&i| lvl[i]).collect())
+            Some(
+                lvl.iter()
+                    .zip(&lv.phantom)
+                    .filter(|(_, p)| !**p)
+                    .map(|(v, _)| *v)
+                    .collect(),
+            )
         };
         let colours = pick(&self.colours).map(|v| {
             v.iter()

@@ -268,8 +268,16 @@ pub fn code_level<C: BitCoder>(
         // Bit `k` of byte `a`: whether the parent's neighbour on child
         // `k`'s side along `a` is present.
         let coarse_at = (0..3).fold(0u32, |f, a| {
-            let lo = if coarse >> (2 * a) & 1 == 1 { !UPPER[a] } else { 0 };
-            let hi = if coarse >> (2 * a + 1) & 1 == 1 { UPPER[a] } else { 0 };
+            let lo = if coarse >> (2 * a) & 1 == 1 {
+                !UPPER[a]
+            } else {
+                0
+            };
+            let hi = if coarse >> (2 * a + 1) & 1 == 1 {
+                UPPER[a]
+            } else {
+                0
+            };
             f | u32::from(lo | hi) << (8 * a)
         });
         let mut fine = if entropy { behind(&back_mask) } else { 0 };
@@ -423,7 +431,11 @@ fn child_links(parent_nb: &[[u32; 6]], masks: &[u8], firsts: &[u32], n: usize) -
                 let bit = 1usize << (d % 3);
                 let towards_plus = d >= 3;
                 let inside = (k & bit != 0) != towards_plus;
-                let (qm, qf) = if inside { (m, firsts[p]) } else { (nm[d], nf[d]) };
+                let (qm, qf) = if inside {
+                    (m, firsts[p])
+                } else {
+                    (nm[d], nf[d])
+                };
                 if let Some(i) = child_index(qm, qf, k ^ bit) {
                     row[d] = i;
                 }
@@ -601,7 +613,9 @@ pub fn code_precision<C: BitCoder>(
         if first_layer {
             let col = &mut faces.column[i];
             let mut is_column = *col != 0;
-            let ctx = COL + usize::from(info >> 2 & 3) * 9 + usize::from(info >> 4 & 3) * 3
+            let ctx = COL
+                + usize::from(info >> 2 & 3) * 9
+                + usize::from(info >> 4 & 3) * 3
                 + usize::from(info >> 6);
             coder.bit(&mut is_column, ctx)?;
             if is_column {

@@ -566,7 +566,7 @@ fn triangulate_impl(
                                         }
                                     }
                                     let pos = |j: u8| p[j as usize];
-                                    let keep = if smoother_disc(tris, disc, &pos) {
+                                    let keep = if smoother_disc(tris, &cfg.adjacent, disc, &pos) {
                                         disc
                                     } else {
                                         !disc
@@ -667,31 +667,35 @@ fn tri_normal(a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
 }
 
 /// The two triangulations of a quad `a b c d`; returns the better one.
+#[inline]
 fn choose_quad(q: [u8; 4], p: [Vec3; 4], n: Option<[Vec3; 4]>) -> ([u8; 3], [u8; 3]) {
     let ac = ([q[0], q[1], q[2]], [q[0], q[2], q[3]]);
     let bd = ([q[0], q[1], q[3]], [q[1], q[2], q[3]]);
-    let cross = |t: [usize; 3]| (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]);
-    let score = |t: ([usize; 3], [usize; 3])| -> f32 {
-        let (m1, m2) = (cross(t.0), cross(t.1));
-        match n {
-            // Disagreement with the particle normals.
-            Some(vn) => {
-                let (n1, n2) = (m1.normalize_or_zero(), m2.normalize_or_zero());
-                let s1: f32 = t.0.iter().map(|&i| 1.0 - n1.dot(vn[i]).abs()).sum();
-                let s2: f32 = t.1.iter().map(|&i| 1.0 - n2.dot(vn[i]).abs()).sum();
-                s1 + s2
-            }
-            // Dihedral angle between the two triangles (its cosine,
-            // negated: same order, no acos; one square root).
-            None => {
-                let l = (m1.length_squared() * m2.length_squared()).sqrt();
-                if l > 0.0 { -m1.dot(m2) / l } else { 0.0 }
-            }
-        }
-    };
-    let s_ac = score(([0, 1, 2], [0, 2, 3]));
-    let s_bd = score(([0, 1, 3], [1, 2, 3]));
+    let s_ac = quad_split_score(&p, n.as_ref(), [0, 1, 2], [0, 2, 3]);
+    let s_bd = quad_split_score(&p, n.as_ref(), [0, 1, 3], [1, 2, 3]);
     if s_ac <= s_bd { ac } else { bd }
+}
+
+/// How badly the triangles `t0`, `t1` of a quad split fit: their
+/// disagreement with the particle normals, or without normals their
+/// dihedral angle (its cosine, negated: same order, no `acos`; one square
+/// root).
+#[inline(always)]
+fn quad_split_score(p: &[Vec3; 4], n: Option<&[Vec3; 4]>, t0: [usize; 3], t1: [usize; 3]) -> f32 {
+    let cross = |t: [usize; 3]| (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]);
+    let (m1, m2) = (cross(t0), cross(t1));
+    match n {
+        Some(vn) => {
+            let (n1, n2) = (m1.normalize_or_zero(), m2.normalize_or_zero());
+            let s1: f32 = t0.iter().map(|&i| 1.0 - n1.dot(vn[i]).abs()).sum();
+            let s2: f32 = t1.iter().map(|&i| 1.0 - n2.dot(vn[i]).abs()).sum();
+            s1 + s2
+        }
+        None => {
+            let l = (m1.length_squared() * m2.length_squared()).sqrt();
+            if l > 0.0 { -m1.dot(m2) / l } else { 0.0 }
+        }
+    }
 }
 
 /// For each of the 26 overlapping neighbourhoods `o + d` (index
@@ -1170,9 +1174,17 @@ impl CycleSearch {
 
 /// Whether the disc `disc` of `tris` (bit `i`: triangle `i`) has a mean
 /// dihedral angle over its interior edges no larger than its complement's
-/// (§6.2's choice). Discs with one interior edge each (`C_6`, the frequent
-/// case) compare cosines, no `acos` needed.
-fn smoother_disc(tris: &[[u8; 3]], disc: u16, pos: &impl Fn(u8) -> Vec3) -> bool {
+/// (§6.2's choice). `adjacent` lists the hull's pairs of triangles that
+/// share an edge ([`crate::triangulation_table::Config::adjacent`]); an
+/// interior edge of a disc is one whose two triangles are both in it.
+/// Discs with one interior edge each (`C_6`, the frequent case) compare
+/// cosines, no `acos` needed.
+fn smoother_disc(
+    tris: &[[u8; 3]],
+    adjacent: &[(u8, u8)],
+    disc: u16,
+    pos: &impl Fn(u8) -> Vec3,
+) -> bool {
     let mut normals = [Vec3::ZERO; 16];
     for (i, t) in tris.iter().enumerate().take(16) {
         normals[i] = tri_normal(pos(t[0]), pos(t[1]), pos(t[2]));
@@ -1180,17 +1192,14 @@ fn smoother_disc(tris: &[[u8; 3]], disc: u16, pos: &impl Fn(u8) -> Vec3) -> bool
     // Cosines of the interior edges of each side.
     let mut cos = [[0.0f32; 16]; 2];
     let mut n = [0usize; 2];
-    for (i, ti) in tris.iter().enumerate().take(16) {
+    for &(i, j) in adjacent {
+        let (i, j) = (usize::from(i), usize::from(j));
         let side = usize::from(disc & (1 << i) == 0);
-        for (j, tj) in tris.iter().enumerate().take(16).skip(i + 1) {
-            if usize::from(disc & (1 << j) == 0) != side || n[side] == 16 {
-                continue;
-            }
-            if ti.iter().filter(|v| tj.contains(v)).count() == 2 {
-                cos[side][n[side]] = normals[i].dot(normals[j]).clamp(-1.0, 1.0);
-                n[side] += 1;
-            }
+        if usize::from(disc & (1 << j) == 0) != side || n[side] == 16 {
+            continue;
         }
+        cos[side][n[side]] = normals[i].dot(normals[j]).clamp(-1.0, 1.0);
+        n[side] += 1;
     }
     if n == [1, 1] {
         return cos[0][0] >= cos[1][0];
