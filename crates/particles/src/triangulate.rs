@@ -237,6 +237,13 @@ struct Window {
     rows: [u16; EXT * EXT],
     /// The 27 bricks around (3×3×3, x fastest), NONE where empty.
     bricks: [u32; 27],
+    /// Vertex index of each extended position (x fastest), valid where
+    /// `stamp` equals `generation`: a cube is in up to eight
+    /// neighbourhoods, its rank is computed once per window.
+    ids: [u32; EXT * EXT * EXT],
+    stamp: [u32; EXT * EXT * EXT],
+    /// Bumped for every window.
+    generation: u32,
 }
 
 impl Window {
@@ -253,9 +260,16 @@ impl Window {
 
     /// Vertex index of the ON cube at extended coordinates `e`.
     #[inline]
-    fn vertex(&self, bricks: &[Brick], e: [usize; 3]) -> u32 {
+    fn vertex(&mut self, bricks: &[Brick], e: [usize; 3]) -> u32 {
+        let i = e[0] + EXT * (e[1] + EXT * e[2]);
+        if self.stamp[i] == self.generation {
+            return self.ids[i];
+        }
         let b = self.bricks[EXT_BRICK[e[0]] + 3 * EXT_BRICK[e[1]] + 9 * EXT_BRICK[e[2]]];
-        bricks[b as usize].rank(EXT_LOCAL[e[0]], EXT_LOCAL[e[1]], EXT_LOCAL[e[2]])
+        let v = bricks[b as usize].rank(EXT_LOCAL[e[0]], EXT_LOCAL[e[1]], EXT_LOCAL[e[2]]);
+        self.stamp[i] = self.generation;
+        self.ids[i] = v;
+        v
     }
 }
 
@@ -381,8 +395,16 @@ fn triangulate_impl(
     let mut w = Window {
         rows: [0; EXT * EXT],
         bricks: [NONE; 27],
+        ids: [0; EXT * EXT * EXT],
+        stamp: [0; EXT * EXT * EXT],
+        generation: 0,
     };
     for &q in &keys {
+        w.generation = w.generation.wrapping_add(1);
+        if w.generation == 0 {
+            w.stamp = [0; EXT * EXT * EXT];
+            w.generation = 1;
+        }
         let qc = unmorton(q).map(i64::from);
         for k in 0..27 {
             w.bricks[k] = index.get([
@@ -751,6 +773,18 @@ fn overlaps() -> &'static Overlaps {
     })
 }
 
+/// The 27 neighbourhoods `o + d − 1` around and including `o`, `d ∈
+/// 0..3` per axis, x fastest.
+const NEIGHBOUR: [[usize; 3]; 27] = {
+    let mut t = [[0usize; 3]; 27];
+    let mut k = 0;
+    while k < 27 {
+        t[k] = [k % 3, (k / 3) % 3, k / 9];
+        k += 1;
+    }
+    t
+};
+
 /// Edges of `G_i` (as pair bits) also in the graph of an overlapping
 /// neighbourhood of the window, and those in the graphs of two or more.
 fn shared_edges(w: &Window, o: [usize; 3], edges: u32) -> (u32, u32) {
@@ -761,7 +795,8 @@ fn shared_edges(w: &Window, o: [usize; 3], edges: u32) -> (u32, u32) {
         if k == 13 || edges & ov.ours[k] == 0 {
             continue;
         }
-        let o2 = [o[0] + k % 3 - 1, o[1] + (k / 3) % 3 - 1, o[2] + k / 9 - 1];
+        let d = NEIGHBOUR[k];
+        let o2 = [o[0] + d[0] - 1, o[1] + d[1] - 1, o[2] + d[2] - 1];
         let m2 = w.mask(o2);
         // A neighbour whose cubes all lie in this block (a planar patch on
         // the shared face) is this block's own geometry, not outside
