@@ -258,6 +258,20 @@ impl Window {
             | (row(o[1] + 1, o[2] + 1) << 6)
     }
 
+    /// The 4×4×4 cubes from `o − 1` to `o + 2` (extended coordinates), bit
+    /// `x + 4y + 16z`: everything the 27 neighbourhoods around `o` see.
+    #[inline]
+    fn block(&self, o: [usize; 3]) -> u64 {
+        let mut b = 0u64;
+        for dz in 0..4 {
+            for dy in 0..4 {
+                let row = (self.rows[o[1] - 1 + dy + EXT * (o[2] - 1 + dz)] >> (o[0] - 1)) & 0xf;
+                b |= u64::from(row) << (4 * (dy + 4 * dz));
+            }
+        }
+        b
+    }
+
     /// Vertex index of the ON cube at extended coordinates `e`.
     #[inline]
     fn vertex(&mut self, bricks: &[Brick], e: [usize; 3]) -> u32 {
@@ -391,6 +405,10 @@ fn triangulate_impl(
     // Direct-mapped memo of `split_by_cycle` (1024 slots; key never 0 for
     // a solid, whose mask has four cubes or more).
     let mut cycles: Vec<(u64, Split)> = vec![(0, Split::Whole); 1 << 10];
+    // Direct-mapped memo of `shared_edges`, keyed by the 4×4×4 cubes
+    // around the neighbourhood, which are all its overlapping
+    // neighbourhoods read (key never 0 around a solid).
+    let mut shared_memo: Vec<(u64, u32, u32)> = vec![(0, 0, 0); 1 << SHARED_MEMO_BITS];
     let mut trials: Vec<Trial> = Vec::new();
     let mut w = Window {
         rows: [0; EXT * EXT],
@@ -537,7 +555,15 @@ fn triangulate_impl(
                             emit(t2, &mut faces);
                         }
                         Shape::Solid(tris) => {
-                            let (shared, twice) = shared_edges(&w, o, cfg.edges);
+                            let around = w.block(o);
+                            let slot = &mut shared_memo[(around.wrapping_mul(0x9e37_79b9_7f4a_7c15)
+                                >> (64 - SHARED_MEMO_BITS))
+                                as usize];
+                            if slot.0 != around {
+                                let (sh, tw) = shared_edges(&w, o, cfg.edges);
+                                *slot = (around, sh, tw);
+                            }
+                            let (shared, twice) = (slot.1, slot.2);
                             // Triangles on a face of the neighbourhood (three
                             // cubes sharing a coordinate) may be built by the
                             // solid across that face too.
@@ -772,6 +798,9 @@ fn overlaps() -> &'static Overlaps {
         o
     })
 }
+
+/// Slots of the `shared_edges` memo, as a power of two.
+const SHARED_MEMO_BITS: u32 = 11;
 
 /// The 27 neighbourhoods `o + d − 1` around and including `o`, `d ∈
 /// 0..3` per axis, x fastest.
