@@ -266,12 +266,12 @@ impl<'a> EntropyReader<'a> {
     fn decode(&mut self, p0: u32) -> bool {
         let bound = (self.range >> PRECISION) * p0;
         let bit = self.code >= bound;
-        if bit {
-            self.code -= bound;
-            self.range -= bound;
-        } else {
-            self.range = bound;
-        }
+        // Without a branch: the decoded bit is data (precision bits are
+        // close to random), and a mispredicted branch per symbol costs
+        // more than the masks. `bound < range`, so nothing wraps.
+        let m = u32::from(bit).wrapping_neg();
+        self.code -= bound & m;
+        self.range = ((self.range - bound) & m) | (bound & !m);
         while self.range < TOP {
             self.range <<= 8;
             self.code = (self.code << 8) | self.next_byte();
