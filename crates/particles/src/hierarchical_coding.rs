@@ -198,6 +198,9 @@ pub fn code_level<C: BitCoder>(
     out.cells.reserve(expected);
     out.phantom.reserve(expected);
     out.particle.reserve(expected);
+    // New particles are among the level's nodes: room for all of them at
+    // once (unused room is never touched) rather than doubling copies.
+    leaves.reserve_exact(expected);
     // Per parent: its children (bit k: child k present), which of them are
     // phantoms, and the index of its first child in `out`.
     let n_parents = parents.cells.len();
