@@ -86,6 +86,17 @@ impl LevelSurface {
             faces: Vec::new(),
         }
     }
+
+    /// [`vertices_only`](Self::vertices_only), moving the particles.
+    pub fn into_vertices(self) -> TriMesh {
+        TriMesh {
+            positions: self.positions,
+            normals: self.normals,
+            colors: self.colours,
+            uvs: None,
+            faces: Vec::new(),
+        }
+    }
 }
 
 trait ChunkRead<'a>: BitCoder + Sized {
@@ -294,8 +305,27 @@ impl Decoded {
         self.levels.len()
     }
 
+    /// [`surface`](Self::surface), consuming the decoded stream so the
+    /// level's cells move into the surface instead of being copied (for a
+    /// reader that only wants one level, as the `pop` bench).
+    pub fn into_surface(mut self, r: u8) -> Result<LevelSurface> {
+        let i = r as usize;
+        if i >= self.levels.len() || self.levels[i].phantom.iter().any(|&p| p) {
+            return self.surface(r);
+        }
+        // No phantom: every cell is kept, in order.
+        let mut s = self.surface_with(r, false)?;
+        s.cells = std::mem::take(&mut self.levels[i].cells);
+        Ok(s)
+    }
+
     /// The octree surface `S^r` with its particles.
     pub fn surface(&self, r: u8) -> Result<LevelSurface> {
+        self.surface_with(r, true)
+    }
+
+    /// [`surface`](Self::surface), its cells left empty unless `copy_cells`.
+    fn surface_with(&self, r: u8, copy_cells: bool) -> Result<LevelSurface> {
         let Some(lv) = self.levels.get(r as usize) else {
             return stream_err(format!(
                 "level {r} is not in the decoded prefix ({} levels)",
@@ -304,7 +334,7 @@ impl Decoded {
         };
         let shift = QBITS - u32::from(self.precision);
         let kept = lv.phantom.iter().filter(|&&p| !p).count();
-        let mut cells = Vec::with_capacity(kept);
+        let mut cells = Vec::with_capacity(if copy_cells { kept } else { 0 });
         let mut positions = Vec::with_capacity(kept);
         // `cell_centre` in f64, with the frame and the cube size hoisted.
         let frame = self.header.frame;
@@ -314,7 +344,9 @@ impl Decoded {
             if lv.phantom[i] {
                 continue;
             }
-            cells.push(c);
+            if copy_cells {
+                cells.push(c);
+            }
             let q = self.q[lv.particle[i] as usize].map(|v| v >> shift);
             positions.push(
                 (origin + (glam::DVec3::new(q[0] as f64, q[1] as f64, q[2] as f64) + 0.5) * cube)

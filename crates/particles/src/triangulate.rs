@@ -69,6 +69,7 @@
 //! triangles are turned to agree with the particle normals when there are
 //! some, else made consistent across manifold edges and each component
 //! turned outwards by its signed volume.
+use std::borrow::Cow;
 use std::collections::HashMap;
 use std::sync::OnceLock;
 use std::time::Instant;
@@ -344,7 +345,14 @@ fn bricks_of(cells: &[u64]) -> (Vec<Brick>, Vec<u64>) {
 
 /// Triangulates one decoded level.
 pub fn triangulate(s: &LevelSurface, opts: &TriangulateOptions) -> Triangulation {
-    triangulate_impl(s, opts, None)
+    triangulate_impl(Cow::Borrowed(s), opts, None)
+}
+
+/// [`triangulate`], the mesh taking over the surface's particles instead
+/// of copying them (for a level built only to be triangulated, as
+/// [`crate::Decoded::into_surface`] gives it).
+pub fn triangulate_owned(s: LevelSurface, opts: &TriangulateOptions) -> Triangulation {
+    triangulate_impl(Cow::Owned(s), opts, None)
 }
 
 /// [`triangulate`] plus, per output triangle, the class `C_i` of the
@@ -352,16 +360,17 @@ pub fn triangulate(s: &LevelSurface, opts: &TriangulateOptions) -> Triangulation
 /// ambiguous one left whole (for diagnosing non-manifold triangles).
 pub fn triangulate_traced(s: &LevelSurface, opts: &TriangulateOptions) -> (Triangulation, Vec<u8>) {
     let mut classes = Vec::new();
-    let t = triangulate_impl(s, opts, Some(&mut classes));
+    let t = triangulate_impl(Cow::Borrowed(s), opts, Some(&mut classes));
     (t, classes)
 }
 
 fn triangulate_impl(
-    s: &LevelSurface,
+    surface: Cow<'_, LevelSurface>,
     opts: &TriangulateOptions,
     mut trace: Option<&mut Vec<u8>>,
 ) -> Triangulation {
     let start = Instant::now();
+    let s: &LevelSurface = &surface;
     let mut stats = TriangulationStats {
         configurations: vec![0; CLASS_COUNT + 1],
         ..Default::default()
@@ -677,7 +686,10 @@ fn triangulate_impl(
             !drop[i - 1]
         });
     }
-    let mut mesh = s.vertices_only();
+    let mut mesh = match surface {
+        Cow::Borrowed(s) => s.vertices_only(),
+        Cow::Owned(s) => s.into_vertices(),
+    };
     if !merges.is_empty() {
         decimate_merge(&mut mesh, &mut faces, &merges);
     }
@@ -1631,6 +1643,31 @@ mod tests {
             split_by_cycle(mask, cfg.edges, cfg.edges, tris),
             Split::Whole
         );
+    }
+
+    #[test]
+    fn owned_surfaces_triangulate_like_borrowed_ones() {
+        use crate::{DecodeOptions, EncodeOptions, decode, encode};
+        let model = lodkit_mesh::Model::Mesh(lodkit_mesh::shapes::blob(5_000));
+        let opts = EncodeOptions {
+            depth: Some(5),
+            ..EncodeOptions::DEFAULT
+        };
+        let bytes = encode(&model, &opts).unwrap().bytes;
+        let d = decode(&bytes, &DecodeOptions::default()).unwrap();
+        // Coarse levels hold phantoms (their cells are filtered), the
+        // finest none (its cells move).
+        for r in [3u8, 5] {
+            let s = d.surface(r).unwrap();
+            let owned = d.clone().into_surface(r).unwrap();
+            assert_eq!(owned.cells, s.cells, "level {r}");
+            assert_eq!(owned.positions, s.positions, "level {r}");
+            let t = triangulate(&s, &TriangulateOptions::DEFAULT);
+            let u = triangulate_owned(owned, &TriangulateOptions::DEFAULT);
+            assert!(!t.mesh.faces.is_empty());
+            assert_eq!(u.mesh.faces, t.mesh.faces, "level {r}");
+            assert_eq!(u.mesh.positions, t.mesh.positions, "level {r}");
+        }
     }
 
     /// Edges used by one triangle.
