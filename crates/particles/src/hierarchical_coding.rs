@@ -130,9 +130,23 @@ fn axes_of(m: u32, k: usize) -> usize {
 /// level's links while the level is coded (a child's neighbour is a
 /// sibling or a child of its parent's neighbour), so no context needs a
 /// hash or a search: the coder of level `r` reads only arrays.
+///
+/// The links of level `R` serve only [`particle_faces`], which reads each
+/// once: [`code_level`] leaves them unbuilt there (`pending`), and they are
+/// derived on the fly from what builds them.
 #[derive(Debug, Clone, Default)]
 pub struct Links {
     nb: Vec<[u32; 6]>,
+    pending: Option<Pending>,
+}
+
+/// What [`child_links`] builds a level's links from.
+#[derive(Debug, Clone)]
+struct Pending {
+    parent_nb: Vec<[u32; 6]>,
+    masks: Vec<u8>,
+    firsts: Vec<u32>,
+    n: usize,
 }
 
 impl Links {
@@ -140,6 +154,22 @@ impl Links {
     pub fn root() -> Links {
         Links {
             nb: vec![[NONE; 6]],
+            pending: None,
+        }
+    }
+
+    /// Nodes the links describe.
+    fn len(&self) -> usize {
+        self.pending.as_ref().map_or(self.nb.len(), |p| p.n)
+    }
+
+    /// Builds links left pending.
+    fn materialise(&mut self) {
+        if let Some(p) = self.pending.take() {
+            self.nb = Vec::with_capacity(p.n);
+            each_child_links(&p.parent_nb, &p.masks, &p.firsts, |_, row| {
+                self.nb.push(row)
+            });
         }
     }
 }
@@ -187,6 +217,9 @@ pub fn code_level<C: BitCoder>(
     let r = u32::from(inp.r);
     let parents = inp.parents;
     let entropy = inp.entropy;
+    if entropy {
+        links.materialise();
+    }
     if entropy && links.nb.len() != parents.cells.len() {
         return stream_err(format!(
             "level {r}: neighbour links do not match level {}",
@@ -401,7 +434,19 @@ pub fn code_level<C: BitCoder>(
         }
     }
     if entropy {
-        *links = child_links(&links.nb, &masks, &firsts, out.cells.len());
+        *links = if r == depth {
+            Links {
+                nb: Vec::new(),
+                pending: Some(Pending {
+                    parent_nb: std::mem::take(&mut links.nb),
+                    masks,
+                    firsts,
+                    n: out.cells.len(),
+                }),
+            }
+        } else {
+            child_links(&links.nb, &masks, &firsts, out.cells.len())
+        };
     }
     Ok(out)
 }
@@ -410,6 +455,20 @@ pub fn code_level<C: BitCoder>(
 /// a sibling, or a child of the parent's neighbour across that face.
 fn child_links(parent_nb: &[[u32; 6]], masks: &[u8], firsts: &[u32], n: usize) -> Links {
     let mut nb = Vec::with_capacity(n);
+    each_child_links(parent_nb, masks, firsts, |_, row| nb.push(row));
+    debug_assert_eq!(nb.len(), n);
+    Links { nb, pending: None }
+}
+
+/// Calls `f(i, links of child i)` for the children level's nodes in order.
+#[inline]
+fn each_child_links(
+    parent_nb: &[[u32; 6]],
+    masks: &[u8],
+    firsts: &[u32],
+    mut f: impl FnMut(usize, [u32; 6]),
+) {
+    let mut i = 0;
     for p in 0..masks.len() {
         let m = masks[p];
         if m == 0 {
@@ -439,15 +498,14 @@ fn child_links(parent_nb: &[[u32; 6]], masks: &[u8], firsts: &[u32], n: usize) -
                 } else {
                     (nm[d], nf[d])
                 };
-                if let Some(i) = child_index(qm, qf, k ^ bit) {
-                    row[d] = i;
+                if let Some(j) = child_index(qm, qf, k ^ bit) {
+                    row[d] = j;
                 }
             }
-            nb.push(row);
+            f(i, row);
+            i += 1;
         }
     }
-    debug_assert_eq!(nb.len(), n);
-    Links { nb }
 }
 
 /// The particles' face neighbourhood at level `R`, for the entropy
@@ -486,7 +544,7 @@ impl Faces {
 /// links [`code_level`] leaves after level `R` (entropy mode); empty when
 /// `links` does not describe `leaves`.
 pub fn particle_faces(links: &Links, leaves: &HLevel, particles: usize) -> Faces {
-    if links.nb.len() != leaves.cells.len() {
+    if links.len() != leaves.cells.len() {
         return Faces::default();
     }
     let mut out = Faces {
@@ -497,15 +555,23 @@ pub fn particle_faces(links: &Links, leaves: &HLevel, particles: usize) -> Faces
         pred: Vec::new(),
         height: vec![0u16; particles],
     };
-    for (i, row) in links.nb.iter().enumerate() {
+    let mut add = |i: usize, row: [u32; 6]| {
         let p = leaves.particle[i] as usize;
         if p >= particles {
-            continue;
+            return;
         }
         for d in 0..6 {
             if row[d] != NONE {
                 out.mask[p] |= 1 << d;
                 out.nb[p][d] = leaves.particle[row[d] as usize];
+            }
+        }
+    };
+    match &links.pending {
+        Some(pl) => each_child_links(&pl.parent_nb, &pl.masks, &pl.firsts, add),
+        None => {
+            for (i, row) in links.nb.iter().enumerate() {
+                add(i, *row);
             }
         }
     }
@@ -784,6 +850,7 @@ mod tests {
             let mut w = BitWriter::new();
             let got = code_level(&mut w, &inp, &mut links, &mut coded, Some(&truth)).unwrap();
             assert_eq!(got, h.levels[r]);
+            links.materialise();
             let index: HashMap<u64, u32> = got
                 .cells
                 .iter()
