@@ -473,6 +473,10 @@ fn triangulate_impl(
                     w.rows[oy + EXT * (oz + 1)],
                     w.rows[oy + 1 + EXT * (oz + 1)],
                 ];
+                // Most rows of a window miss the surface.
+                if (r[0] | r[1] | r[2] | r[3]) & 0x7fe == 0 {
+                    continue;
+                }
                 // Origins x = −1..8 (1..10 extended) whose neighbourhood
                 // has three ON cubes or more: a bit-sliced count of the
                 // eight cubes of all origins of the row at once.
