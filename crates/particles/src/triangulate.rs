@@ -1066,22 +1066,14 @@ fn settle(faces: &[[u32; 3]], from_solids: &[u32], trials: &mut [Trial], vertice
             // A choice with no hole, no bare cube and no surplus use is
             // the best there is: kept without trying the others.
             if score(t.keep) != (0, 0, 0) {
-                let mut best = (u32::MAX, u32::MAX, u32::MAX, true, u32::MAX, t.keep);
-                for sub in 0..=all_bits(tris.len()) {
-                    let (holes, uncovered, surplus) = score(sub);
-                    let key = (
-                        holes,
-                        uncovered,
-                        surplus,
-                        sub != t.keep,
-                        sub.count_ones(),
-                        sub,
-                    );
-                    if key < best {
-                        best = key;
-                    }
-                }
-                t.keep = best.5;
+                t.keep = best_subset(
+                    tris,
+                    &tri_edges[..tris.len()],
+                    &built[..tris.len()],
+                    &base[..n_edges],
+                    bare,
+                    t.keep,
+                );
             }
             for (i, tri) in tris.iter().enumerate() {
                 if t.keep & (1 << i) != 0 {
@@ -1090,6 +1082,73 @@ fn settle(faces: &[[u32; 3]], from_solids: &[u32], trials: &mut [Trial], vertice
             }
         }
     }
+}
+
+/// The subset of `tris` that [`settle`] keeps: the least, in this order,
+/// hull edges used once (`base`: their use by the other triangles),
+/// cubes of `bare` left in no triangle, surplus edge uses, differing from
+/// `keep`, triangles, and the subset's bits. Every subset is visited in
+/// Gray-code order, one triangle added or removed per step, so each costs
+/// the update of three edge counts instead of a recount.
+fn best_subset(
+    tris: &[[u8; 3]],
+    tri_edges: &[[usize; 3]],
+    built: &[bool],
+    base: &[u32],
+    bare: u8,
+    keep: u16,
+) -> u16 {
+    let mut count = [0u32; 18];
+    count[..base.len()].copy_from_slice(base);
+    let mut holes = base.iter().filter(|&&c| c == 1).count() as u32;
+    let mut surplus: u32 = base.iter().map(|&c| c.saturating_sub(2)).sum();
+    // Triangles on each corner, and the corners with one or more.
+    let mut corner = [0u32; 8];
+    let mut covered = 0u8;
+    let key = |sub: u16, holes: u32, surplus: u32, covered: u8| {
+        (
+            holes,
+            (bare & !covered).count_ones(),
+            surplus,
+            sub != keep,
+            sub.count_ones(),
+            sub,
+        )
+    };
+    let mut sub = 0u16;
+    let mut best = key(sub, holes, surplus, covered);
+    for g in 1..=u32::from(all_bits(tris.len())) {
+        let i = g.trailing_zeros() as usize;
+        sub ^= 1 << i;
+        let add = sub & (1 << i) != 0;
+        for &j in &tris[i] {
+            let c = &mut corner[usize::from(j)];
+            if add {
+                *c += 1;
+            } else {
+                *c -= 1;
+            }
+            if *c == 0 {
+                covered &= !(1 << j);
+            } else {
+                covered |= 1 << j;
+            }
+        }
+        if !built[i] {
+            for &e in &tri_edges[i] {
+                let old = count[e];
+                let new = if add { old + 1 } else { old - 1 };
+                count[e] = new;
+                holes = holes + u32::from(new == 1) - u32::from(old == 1);
+                surplus = surplus + new.saturating_sub(2) - old.saturating_sub(2);
+            }
+        }
+        let k = key(sub, holes, surplus, covered);
+        if k < best {
+            best = k;
+        }
+    }
+    best.5
 }
 
 /// How §6.2 resolves an ambiguous configuration.
