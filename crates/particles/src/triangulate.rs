@@ -71,6 +71,7 @@
 //! turned outwards by its signed volume.
 use std::borrow::Cow;
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
 use std::sync::OnceLock;
 use std::time::Instant;
 
@@ -897,12 +898,37 @@ fn on_face(tri: &[u8; 3]) -> bool {
     !((tri[0] ^ tri[1]) | (tri[0] ^ tri[2])) & 7 != 0
 }
 
+/// Hash of a triangle's vertex indices: a multiply per 32-bit word (the
+/// keys are not adversarial; the default SipHash cost more than the
+/// settling it served).
+#[derive(Default)]
+struct TriHasher(u64);
+
+impl Hasher for TriHasher {
+    fn finish(&self) -> u64 {
+        self.0 ^ (self.0 >> 32)
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for w in bytes.chunks(4) {
+            let mut b = [0u8; 4];
+            b[..w.len()].copy_from_slice(w);
+            self.write_u32(u32::from_le_bytes(b));
+        }
+    }
+    fn write_u32(&mut self, v: u32) {
+        self.0 = (self.0.rotate_left(26) ^ u64::from(v)).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+    }
+    fn write_usize(&mut self, v: usize) {
+        self.write_u32(v as u32);
+    }
+}
+
 /// Edge and vertex use by the distinct triangles around the trials. Only
 /// triangles on a neighbourhood face can be built twice (by the solids on
 /// both sides; [`dedupe_face_triangles`] later keeps one copy), so only
 /// those are counted by key.
 struct Uses {
-    face_tris: HashMap<[u32; 3], u32>,
+    face_tris: HashMap<[u32; 3], u32, BuildHasherDefault<TriHasher>>,
     edges: MortonMap<u32>,
     vertices: Vec<u32>,
 }
@@ -969,7 +995,7 @@ fn settle(faces: &[[u32; 3]], from_solids: &[u32], trials: &mut [Trial], vertice
     let mut near = vec![0u64; vertices.div_ceil(64)];
     let is_near = |near: &[u64], v: u32| near[(v >> 6) as usize] & (1 << (v & 63)) != 0;
     let mut uses = Uses {
-        face_tris: HashMap::new(),
+        face_tris: HashMap::default(),
         edges: MortonMap::default(),
         vertices: vec![0; vertices],
     };
