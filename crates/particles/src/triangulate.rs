@@ -1481,6 +1481,56 @@ pub fn non_manifold_flags(mesh: &TriMesh) -> Vec<bool> {
     bad
 }
 
+/// Calls `f(t1, t2)`, `t1 < t2`, for the two triangles of every edge that
+/// exactly two use, in the order of the edges' keys (lower vertex, then
+/// upper) — [`sorted_sides`]' order, without sorting all the sides: they
+/// are bucketed by lower vertex (a counting pass, then a filling one) and
+/// only each vertex's few sorted.
+fn manifold_pairs(faces: &[[u32; 3]], vertices: usize, mut f: impl FnMut(u32, u32)) {
+    let n = faces
+        .iter()
+        .flatten()
+        .map(|&v| v as usize + 1)
+        .max()
+        .unwrap_or(0)
+        .max(vertices);
+    let mut start = vec![0u32; n + 1];
+    for t in faces {
+        for k in 0..3 {
+            start[t[k].min(t[(k + 1) % 3]) as usize + 1] += 1;
+        }
+    }
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    // (upper vertex, triangle), by lower vertex; triangles in order.
+    let mut sides = vec![(0u32, 0u32); 3 * faces.len()];
+    for (i, t) in faces.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let slot = &mut fill[a.min(b) as usize];
+            sides[*slot as usize] = (a.max(b), i as u32);
+            *slot += 1;
+        }
+    }
+    for v in 0..n {
+        let bucket = &mut sides[start[v] as usize..start[v + 1] as usize];
+        bucket.sort_unstable();
+        let mut i = 0;
+        while i < bucket.len() {
+            let mut j = i + 1;
+            while j < bucket.len() && bucket[j].0 == bucket[i].0 {
+                j += 1;
+            }
+            if j - i == 2 {
+                f(bucket[i].1, bucket[i + 1].1);
+            }
+            i = j;
+        }
+    }
+}
+
 /// See the module docs, "Orientation".
 fn orient(mesh: &mut TriMesh) {
     if let Some(n) = &mesh.normals {
@@ -1495,25 +1545,15 @@ fn orient(mesh: &mut TriMesh) {
         return;
     }
     // Triangle → its neighbours across manifold edges.
-    let sides = sorted_sides(&mesh.faces);
     let nf = mesh.faces.len();
     let mut across = vec![[u32::MAX; 3]; nf];
-    let mut i = 0;
-    while i < sides.len() {
-        let mut j = i;
-        while j < sides.len() && sides[j].0 == sides[i].0 {
-            j += 1;
-        }
-        if j - i == 2 {
-            let (t1, t2) = (sides[i].1, sides[i + 1].1);
-            for (t, o) in [(t1, t2), (t2, t1)] {
-                if let Some(slot) = across[t as usize].iter_mut().find(|x| **x == u32::MAX) {
-                    *slot = o;
-                }
+    manifold_pairs(&mesh.faces, mesh.positions.len(), |t1, t2| {
+        for (t, o) in [(t1, t2), (t2, t1)] {
+            if let Some(slot) = across[t as usize].iter_mut().find(|x| **x == u32::MAX) {
+                *slot = o;
             }
         }
-        i = j;
-    }
+    });
     let mut done = vec![false; nf];
     let mut stack = Vec::new();
     let mut component = Vec::new();
