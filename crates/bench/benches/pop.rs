@@ -15,14 +15,16 @@ use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use lodkit_mesh::Model;
-use lodkit_particles::{
-    DecodeOptions, EncodeOptions, Mode, TriangulateOptions, decode, encode, triangulate,
-};
+use lodkit_particles::triangulate::triangulate_owned;
+use lodkit_particles::{DecodeOptions, EncodeOptions, Mode, TriangulateOptions, decode, encode};
 
 fn decode_and_triangulate(bytes: &[u8], opts: &TriangulateOptions) -> usize {
     let d = decode(bytes, &DecodeOptions::default()).expect("own stream decodes");
-    let s = d.surface(d.header.depth).expect("finest level");
-    triangulate(&s, opts).mesh.faces.len()
+    let depth = d.header.depth;
+    // The level is built only to be triangulated: its cells and particles
+    // move into the surface and the mesh rather than being copied.
+    let s = d.into_surface(depth).expect("finest level");
+    triangulate_owned(s, opts).mesh.faces.len()
 }
 
 fn bench(c: &mut Criterion) {

@@ -86,6 +86,17 @@ impl LevelSurface {
             faces: Vec::new(),
         }
     }
+
+    /// [`vertices_only`](Self::vertices_only), moving the particles.
+    pub fn into_vertices(self) -> TriMesh {
+        TriMesh {
+            positions: self.positions,
+            normals: self.normals,
+            colors: self.colours,
+            uvs: None,
+            faces: Vec::new(),
+        }
+    }
 }
 
 trait ChunkRead<'a>: BitCoder + Sized {
@@ -241,10 +252,7 @@ fn decode_with<'a, R: ChunkRead<'a>>(
                     break;
                 }
                 if d.q.is_empty() {
-                    d.q = leaves
-                        .iter()
-                        .map(|l| l.map(|v| v << (QBITS - u32::from(depth))))
-                        .collect();
+                    d.q = to_grid(std::mem::take(&mut leaves), depth);
                 }
                 if chunk.count as usize != d.q.len() {
                     return stream_err(format!(
@@ -267,14 +275,20 @@ fn decode_with<'a, R: ChunkRead<'a>>(
         return stream_err("the stream holds no level");
     }
     if d.q.is_empty() {
-        d.q = leaves
-            .iter()
-            .map(|l| l.map(|v| v << (QBITS - u32::from(depth))))
-            .collect();
+        d.q = to_grid(leaves, depth);
     }
     // The last level's attribute chunk may be missing from a prefix:
     // `surface` then returns that level without attributes.
     Ok(d)
+}
+
+/// Leaf coordinates (`depth` bits) as 16-bit grid coordinates, in place.
+fn to_grid(mut leaves: Vec<[u32; 3]>, depth: u8) -> Vec<[u32; 3]> {
+    let shift = QBITS - u32::from(depth);
+    for l in &mut leaves {
+        *l = l.map(|v| v << shift);
+    }
+    leaves
 }
 
 fn next_structure(r: u8, depth: u8) -> (ChunkKind, u8) {
@@ -291,8 +305,27 @@ impl Decoded {
         self.levels.len()
     }
 
+    /// [`surface`](Self::surface), consuming the decoded stream so the
+    /// level's cells move into the surface instead of being copied (for a
+    /// reader that only wants one level, as the `pop` bench).
+    pub fn into_surface(mut self, r: u8) -> Result<LevelSurface> {
+        let i = r as usize;
+        if i >= self.levels.len() || self.levels[i].phantom.iter().any(|&p| p) {
+            return self.surface(r);
+        }
+        // No phantom: every cell is kept, in order.
+        let mut s = self.surface_with(r, false)?;
+        s.cells = std::mem::take(&mut self.levels[i].cells);
+        Ok(s)
+    }
+
     /// The octree surface `S^r` with its particles.
     pub fn surface(&self, r: u8) -> Result<LevelSurface> {
+        self.surface_with(r, true)
+    }
+
+    /// [`surface`](Self::surface), its cells left empty unless `copy_cells`.
+    fn surface_with(&self, r: u8, copy_cells: bool) -> Result<LevelSurface> {
         let Some(lv) = self.levels.get(r as usize) else {
             return stream_err(format!(
                 "level {r} is not in the decoded prefix ({} levels)",
@@ -300,21 +333,35 @@ impl Decoded {
             ));
         };
         let shift = QBITS - u32::from(self.precision);
-        let mut cells = Vec::with_capacity(lv.cells.len());
-        let mut positions = Vec::with_capacity(lv.cells.len());
-        let mut kept_idx = Vec::with_capacity(lv.cells.len());
+        let kept = lv.phantom.iter().filter(|&&p| !p).count();
+        let mut cells = Vec::with_capacity(if copy_cells { kept } else { 0 });
+        let mut positions = Vec::with_capacity(kept);
+        // `cell_centre` in f64, with the frame and the cube size hoisted.
+        let frame = self.header.frame;
+        let cube = f64::from(frame.size) / f64::from(1u32 << self.precision);
+        let origin = frame.origin.as_dvec3();
         for (i, &c) in lv.cells.iter().enumerate() {
             if lv.phantom[i] {
                 continue;
             }
-            cells.push(c);
+            if copy_cells {
+                cells.push(c);
+            }
             let q = self.q[lv.particle[i] as usize].map(|v| v >> shift);
-            positions.push(self.header.frame.cell_centre(q, u32::from(self.precision)));
-            kept_idx.push(i);
+            positions.push(
+                (origin + (glam::DVec3::new(q[0] as f64, q[1] as f64, q[2] as f64) + 0.5) * cube)
+                    .as_vec3(),
+            );
         }
         let pick = |store: &Option<Vec<Vec<[u32; 3]>>>| -> Option<Vec<[u32; 3]>> {
             let lvl = store.as_ref()?.get(r as usize)?;
-            Some(kept_idx.iter().map(|&i| lvl[i]).collect())
+            Some(
+                lvl.iter()
+                    .zip(&lv.phantom)
+                    .filter(|(_, p)| !**p)
+                    .map(|(v, _)| *v)
+                    .collect(),
+            )
         };
         let colours = pick(&self.colours).map(|v| {
             v.iter()

@@ -53,31 +53,59 @@ impl BitCoder for BitWriter {
 }
 
 /// Reads raw bits; running past the end is an error, so a decoder can
-/// never produce more symbols than the chunk has bits.
+/// never produce more symbols than the chunk has bits. Up to eight bytes
+/// are held in a word, so a bit costs a shift, not a byte look-up.
 #[derive(Debug)]
 pub struct BitReader<'a> {
     data: &'a [u8],
-    pos: u64,
+    /// Next byte to load into `word`.
+    next: usize,
+    /// Bits not yet read, most significant first.
+    word: u64,
+    /// How many bits of `word` are left.
+    left: u32,
 }
 
 impl<'a> BitReader<'a> {
     pub fn new(data: &'a [u8]) -> Self {
-        BitReader { data, pos: 0 }
+        BitReader {
+            data,
+            next: 0,
+            word: 0,
+            left: 0,
+        }
+    }
+
+    /// Loads the next (up to) eight bytes.
+    #[cold]
+    fn refill(&mut self) -> Result<()> {
+        let rest = self.data.get(self.next..).unwrap_or(&[]);
+        if rest.is_empty() {
+            return stream_err("chunk payload ends early");
+        }
+        let n = rest.len().min(8);
+        let mut w = [0u8; 8];
+        w[..n].copy_from_slice(&rest[..n]);
+        self.word = u64::from_be_bytes(w);
+        self.left = 8 * n as u32;
+        self.next += n;
+        Ok(())
     }
 }
 
 impl BitCoder for BitReader<'_> {
+    #[inline]
     fn bit(&mut self, b: &mut bool, _ctx: usize) -> Result<()> {
-        let byte = (self.pos / 8) as usize;
-        let Some(&v) = self.data.get(byte) else {
-            return stream_err("chunk payload ends early");
-        };
-        *b = v & (0x80 >> (self.pos % 8)) != 0;
-        self.pos += 1;
+        if self.left == 0 {
+            self.refill()?;
+        }
+        *b = self.word >> 63 != 0;
+        self.word <<= 1;
+        self.left -= 1;
         Ok(())
     }
     fn symbols(&self) -> u64 {
-        self.pos
+        self.next as u64 * 8 - u64::from(self.left)
     }
 }
 

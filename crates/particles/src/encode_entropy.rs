@@ -122,8 +122,13 @@ const fn next_table(bit: bool) -> [u16; STATES] {
 /// Renormalise once the range drops below this (one byte shifts out).
 const TOP: u32 = 1 << 24;
 
-fn fresh_contexts() -> Vec<u16> {
-    vec![0; NUM_CONTEXTS]
+/// The models of every context, held in the coder itself rather than
+/// behind a pointer: a store to a model then provably leaves the coder's
+/// range and code alone, so they stay in registers across symbols.
+type Contexts = [u16; NUM_CONTEXTS];
+
+fn fresh_contexts() -> Contexts {
+    [0; NUM_CONTEXTS]
 }
 
 /// Context-adaptive encoder of one chunk.
@@ -135,7 +140,7 @@ pub struct EntropyWriter {
     /// `cache` plus the 0xFF bytes behind it that a carry would flip.
     pending: u64,
     out: Vec<u8>,
-    ctx: Vec<u16>,
+    ctx: Contexts,
     symbols: u64,
 }
 
@@ -225,7 +230,7 @@ pub struct EntropyReader<'a> {
     pos: usize,
     range: u32,
     code: u32,
-    ctx: Vec<u16>,
+    ctx: Contexts,
     symbols: u64,
     budget: u64,
 }
@@ -261,12 +266,12 @@ impl<'a> EntropyReader<'a> {
     fn decode(&mut self, p0: u32) -> bool {
         let bound = (self.range >> PRECISION) * p0;
         let bit = self.code >= bound;
-        if bit {
-            self.code -= bound;
-            self.range -= bound;
-        } else {
-            self.range = bound;
-        }
+        // Without a branch: the decoded bit is data (precision bits are
+        // close to random), and a mispredicted branch per symbol costs
+        // more than the masks. `bound < range`, so nothing wraps.
+        let m = u32::from(bit).wrapping_neg();
+        self.code -= bound & m;
+        self.range = ((self.range - bound) & m) | (bound & !m);
         while self.range < TOP {
             self.range <<= 8;
             self.code = (self.code << 8) | self.next_byte();

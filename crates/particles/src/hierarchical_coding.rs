@@ -94,15 +94,59 @@ pub struct LevelInput<'a> {
 /// No node across this face.
 const NONE: u32 = u32::MAX;
 
+/// The children (bit `k`: child `k`) on the upper side of their parent
+/// along x, y, z.
+const UPPER: [u8; 3] = [0xaa, 0xcc, 0xf0];
+
+/// Per child `k`: the children that have `k` behind them along x, y, z
+/// (`k` + e_a for `k` on the lower side of axis `a`), one byte per axis.
+const BEHIND_OF: [u32; 8] = {
+    let mut t = [0u32; 8];
+    let mut k = 0;
+    while k < 8 {
+        let mut a = 0;
+        while a < 3 {
+            let bit = 1usize << a;
+            if k & bit == 0 {
+                t[k] |= 1 << ((k | bit) + 8 * a);
+            }
+            a += 1;
+        }
+        k += 1;
+    }
+    t
+};
+
+/// Bits `k`, `8 + k` and `16 + k` of `m` as bits 0, 1, 2.
+#[inline(always)]
+fn axes_of(m: u32, k: usize) -> usize {
+    let x = (m >> k) & 0x01_01_01;
+    ((x | x >> 7 | x >> 14) & 7) as usize
+}
+
 /// Face-neighbour links of one level, for the entropy contexts: `nb[i][d]`
 /// is the index of the node across face `d` of node `i` (`d = a` towards
 /// `−a`, `d = 3 + a` towards `+a`) or `NONE`. Built from the parent
 /// level's links while the level is coded (a child's neighbour is a
 /// sibling or a child of its parent's neighbour), so no context needs a
 /// hash or a search: the coder of level `r` reads only arrays.
+///
+/// The links of level `R` serve only [`particle_faces`], which reads each
+/// once: [`code_level`] leaves them unbuilt there (`pending`), and they are
+/// derived on the fly from what builds them.
 #[derive(Debug, Clone, Default)]
 pub struct Links {
     nb: Vec<[u32; 6]>,
+    pending: Option<Pending>,
+}
+
+/// What [`child_links`] builds a level's links from.
+#[derive(Debug, Clone)]
+struct Pending {
+    parent_nb: Vec<[u32; 6]>,
+    masks: Vec<u8>,
+    firsts: Vec<u32>,
+    n: usize,
 }
 
 impl Links {
@@ -110,6 +154,22 @@ impl Links {
     pub fn root() -> Links {
         Links {
             nb: vec![[NONE; 6]],
+            pending: None,
+        }
+    }
+
+    /// Nodes the links describe.
+    fn len(&self) -> usize {
+        self.pending.as_ref().map_or(self.nb.len(), |p| p.n)
+    }
+
+    /// Builds links left pending.
+    fn materialise(&mut self) {
+        if let Some(p) = self.pending.take() {
+            self.nb = Vec::with_capacity(p.n);
+            each_child_links(&p.parent_nb, &p.masks, &p.firsts, |_, row| {
+                self.nb.push(row)
+            });
         }
     }
 }
@@ -157,6 +217,9 @@ pub fn code_level<C: BitCoder>(
     let r = u32::from(inp.r);
     let parents = inp.parents;
     let entropy = inp.entropy;
+    if entropy {
+        links.materialise();
+    }
     if entropy && links.nb.len() != parents.cells.len() {
         return stream_err(format!(
             "level {r}: neighbour links do not match level {}",
@@ -164,6 +227,13 @@ pub fn code_level<C: BitCoder>(
         ));
     }
     let mut out = HLevel::default();
+    let expected = inp.max_nodes.min(8 * parents.cells.len());
+    out.cells.reserve(expected);
+    out.phantom.reserve(expected);
+    out.particle.reserve(expected);
+    // New particles are among the level's nodes: room for all of them at
+    // once (unused room is never touched) rather than doubling copies.
+    leaves.reserve_exact(expected);
     // Per parent: its children (bit k: child k present), which of them are
     // phantoms, and the index of its first child in `out`.
     let n_parents = parents.cells.len();
@@ -219,16 +289,34 @@ pub fn code_level<C: BitCoder>(
                 }
             }
         }
-        // Whether the node at child `k` − e_a exists (`set` = this parent's
-        // children so far) and is in `set`'s / `back`'s bits.
-        let behind = |k: usize, a: usize, own: u8, back: &[u8; 3]| -> bool {
-            let bit = 1 << a;
-            if k & bit != 0 {
-                own >> (k ^ bit) & 1 == 1
-            } else {
-                back[a] >> (k | bit) & 1 == 1
-            }
+        // Neighbour sets over the children, one byte per axis (x in bits
+        // 0–7, y in 8–15, z in 16–23): bit `k` of byte `a` of
+        // `behind(back)` is whether the node at child `k` − e_a is among
+        // the children of the neighbour towards −a (child `k | bit`, for
+        // `k` on the lower side); [`BEHIND_OF`] adds this parent's own
+        // children as they are decided (child `k` − e_a is child `k ^
+        // bit` < `k` for `k` on the upper side).
+        let behind = |back: &[u8; 3]| -> u32 {
+            (0..3).fold(0u32, |f, a| {
+                f | u32::from((back[a] >> (1u32 << a)) & !UPPER[a]) << (8 * a)
+            })
         };
+        // Bit `k` of byte `a`: whether the parent's neighbour on child
+        // `k`'s side along `a` is present.
+        let coarse_at = (0..3).fold(0u32, |f, a| {
+            let lo = if coarse >> (2 * a) & 1 == 1 {
+                !UPPER[a]
+            } else {
+                0
+            };
+            let hi = if coarse >> (2 * a + 1) & 1 == 1 {
+                UPPER[a]
+            } else {
+                0
+            };
+            f | u32::from(lo | hi) << (8 * a)
+        });
+        let mut fine = if entropy { behind(&back_mask) } else { 0 };
         // 1. Occupancy.
         let mut count = 0usize;
         let mut own = 0u8;
@@ -243,17 +331,8 @@ pub fn code_level<C: BitCoder>(
                         Some(i) if k < i => 1,
                         Some(_) => 2,
                     };
-                    let mut fine_bits = 0usize;
-                    let mut coarse_bits = 0usize;
-                    for a in 0..3 {
-                        if behind(k, a, own, &back_mask) {
-                            fine_bits |= 1 << a;
-                        }
-                        let half = (k >> a) & 1;
-                        if coarse & (1 << (2 * a + half)) != 0 {
-                            coarse_bits |= 1 << a;
-                        }
-                    }
+                    let fine_bits = axes_of(fine, k);
+                    let coarse_bits = axes_of(coarse_at, k);
                     OCC + (((state * 8 + k) * 8 + fine_bits) * 8 + coarse_bits) * 3 + count.min(2)
                 } else {
                     OCC
@@ -263,6 +342,7 @@ pub fn code_level<C: BitCoder>(
             if present[k] {
                 count += 1;
                 own |= 1 << k;
+                fine |= BEHIND_OF[k];
             }
         }
         if count == 0 {
@@ -270,6 +350,7 @@ pub fn code_level<C: BitCoder>(
         }
         // 2. Phantom flags.
         let mut own_phantom = 0u8;
+        let mut fine_phantom = if entropy { behind(&back_phantom) } else { 0 };
         for k in 0..8usize {
             if !present[k] || Some(k) == implicit {
                 continue;
@@ -282,12 +363,7 @@ pub fn code_level<C: BitCoder>(
                 phantom[k] = true;
             } else {
                 let ctx = if entropy {
-                    let mut nb = 0usize;
-                    for a in 0..3 {
-                        if behind(k, a, own_phantom, &back_phantom) {
-                            nb |= 1 << a;
-                        }
-                    }
+                    let nb = axes_of(fine_phantom, k);
                     FLAG + ((usize::from(phantom_parent) * 8 + nb) * 4) + (count - 1).min(3)
                 } else {
                     FLAG
@@ -296,6 +372,7 @@ pub fn code_level<C: BitCoder>(
             }
             if phantom[k] {
                 own_phantom |= 1 << k;
+                fine_phantom |= BEHIND_OF[k];
             }
         }
         if entropy {
@@ -326,7 +403,7 @@ pub fn code_level<C: BitCoder>(
                 if entropy {
                     for a in 0..3 {
                         ext[a] = ((coarse >> (2 * a)) & 1) + ((coarse >> (2 * a + 1)) & 1);
-                        back[a] = usize::from(behind(k, a, own, &back_mask));
+                        back[a] = (fine >> (8 * a + k) & 1) as usize;
                     }
                 }
                 for d in (r + 1)..=depth {
@@ -357,7 +434,19 @@ pub fn code_level<C: BitCoder>(
         }
     }
     if entropy {
-        *links = child_links(&links.nb, &masks, &firsts, out.cells.len());
+        *links = if r == depth {
+            Links {
+                nb: Vec::new(),
+                pending: Some(Pending {
+                    parent_nb: std::mem::take(&mut links.nb),
+                    masks,
+                    firsts,
+                    n: out.cells.len(),
+                }),
+            }
+        } else {
+            child_links(&links.nb, &masks, &firsts, out.cells.len())
+        };
     }
     Ok(out)
 }
@@ -366,32 +455,57 @@ pub fn code_level<C: BitCoder>(
 /// a sibling, or a child of the parent's neighbour across that face.
 fn child_links(parent_nb: &[[u32; 6]], masks: &[u8], firsts: &[u32], n: usize) -> Links {
     let mut nb = Vec::with_capacity(n);
+    each_child_links(parent_nb, masks, firsts, |_, row| nb.push(row));
+    debug_assert_eq!(nb.len(), n);
+    Links { nb, pending: None }
+}
+
+/// Calls `f(i, links of child i)` for the children level's nodes in order.
+#[inline]
+fn each_child_links(
+    parent_nb: &[[u32; 6]],
+    masks: &[u8],
+    firsts: &[u32],
+    mut f: impl FnMut(usize, [u32; 6]),
+) {
+    let mut i = 0;
     for p in 0..masks.len() {
-        let mut m = masks[p];
-        while m != 0 {
-            let k = m.trailing_zeros() as usize;
-            m &= m - 1;
+        let m = masks[p];
+        if m == 0 {
+            continue;
+        }
+        // Children masks and first indices of the parent's face neighbours.
+        let mut nm = [0u8; 6];
+        let mut nf = [0u32; 6];
+        for d in 0..6 {
+            let q = parent_nb[p][d];
+            if q != NONE {
+                nm[d] = masks[q as usize];
+                nf[d] = firsts[q as usize];
+            }
+        }
+        let mut rest = m;
+        while rest != 0 {
+            let k = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
             let mut row = [NONE; 6];
             for d in 0..6 {
                 let bit = 1usize << (d % 3);
                 let towards_plus = d >= 3;
                 let inside = (k & bit != 0) != towards_plus;
-                let (q, j) = if inside {
-                    (p as u32, k ^ bit)
+                let (qm, qf) = if inside {
+                    (m, firsts[p])
                 } else {
-                    (parent_nb[p][d], k ^ bit)
+                    (nm[d], nf[d])
                 };
-                if q != NONE
-                    && let Some(i) = child_index(masks[q as usize], firsts[q as usize], j)
-                {
-                    row[d] = i;
+                if let Some(j) = child_index(qm, qf, k ^ bit) {
+                    row[d] = j;
                 }
             }
-            nb.push(row);
+            f(i, row);
+            i += 1;
         }
     }
-    debug_assert_eq!(nb.len(), n);
-    Links { nb }
 }
 
 /// The particles' face neighbourhood at level `R`, for the entropy
@@ -407,9 +521,13 @@ pub struct Faces {
     /// (see [`code_precision`]); set by the encoder, decoded in the first
     /// precision layer.
     pub column: Vec<u8>,
+    /// Per particle: its [`normal_axis`] (bits 0–1) and its face
+    /// neighbours along x, y, z ([`faces_per_axis`], two bits each from
+    /// bit 2), computed once rather than in every layer.
+    axes: Vec<u8>,
     /// Per column particle: the neighbours that predict its height (column
     /// particles across its tangential faces with the same normal axis),
-    /// `u32::MAX`-padded; built at the end of the first precision layer.
+    /// `u32::MAX`-padded; filled during the first precision layer.
     pred: Vec<[u32; 4]>,
     /// Per column particle: its height (normal coordinate) as far as coded,
     /// lower bits zero — a compact copy the predictions read.
@@ -426,20 +544,21 @@ impl Faces {
 /// links [`code_level`] leaves after level `R` (entropy mode); empty when
 /// `links` does not describe `leaves`.
 pub fn particle_faces(links: &Links, leaves: &HLevel, particles: usize) -> Faces {
-    if links.nb.len() != leaves.cells.len() {
+    if links.len() != leaves.cells.len() {
         return Faces::default();
     }
     let mut out = Faces {
         mask: vec![0u8; particles],
         nb: vec![[NONE; 6]; particles],
         column: vec![0u8; particles],
+        axes: Vec::new(),
         pred: Vec::new(),
         height: vec![0u16; particles],
     };
-    for (i, row) in links.nb.iter().enumerate() {
+    let mut add = |i: usize, row: [u32; 6]| {
         let p = leaves.particle[i] as usize;
         if p >= particles {
-            continue;
+            return;
         }
         for d in 0..6 {
             if row[d] != NONE {
@@ -447,8 +566,24 @@ pub fn particle_faces(links: &Links, leaves: &HLevel, particles: usize) -> Faces
                 out.nb[p][d] = leaves.particle[row[d] as usize];
             }
         }
+    };
+    match &links.pending {
+        Some(pl) => each_child_links(&pl.parent_nb, &pl.masks, &pl.firsts, add),
+        None => {
+            for (i, row) in links.nb.iter().enumerate() {
+                add(i, *row);
+            }
+        }
     }
+    out.axes = out.mask.iter().map(|&m| pack_axes(m)).collect();
     out
+}
+
+/// [`normal_axis`] and [`faces_per_axis`] of a face mask in one byte.
+#[inline]
+fn pack_axes(mask: u8) -> u8 {
+    let c = faces_per_axis(mask);
+    normal_axis(mask) as u8 | c[0] << 2 | c[1] << 4 | c[2] << 6
 }
 
 /// Face neighbours along each axis (0–2) of a [`particle_faces`] mask.
@@ -521,22 +656,36 @@ pub fn code_precision<C: BitCoder>(
         || faces.nb.len() != n
         || faces.column.len() != n
         || faces.height.len() != n
+        || faces.axes.len() != n
     {
         return stream_err("precision layer: face table does not match the particles");
     }
     // 1-based layer below the leaf.
     let rel = b.saturating_sub(u32::from(depth));
     let first_layer = rel == 1;
+    if first_layer {
+        faces.pred = vec![[NONE; 4]; n];
+    } else if faces.pred.len() != n {
+        return stream_err("precision layer: the first layer below the leaves is missing");
+    }
     // Layer bucket: the first bits below the leaf are the informative ones.
     let lb = (rel.saturating_sub(1) as usize).min(2);
+    // The plain context of axis `a` without the two bits above.
+    let plain = |a: usize, info: u8, g: usize| {
+        let cnt = usize::from((info >> (2 + 2 * a)) & 3);
+        PREC + ((((a * 3 + lb) * 3 + cnt) * 2 + usize::from(a == g)) * 4)
+    };
+    let above = |c: u32| ((c >> (shift + 1)) & 3) as usize;
     for i in 0..n {
-        let f = faces.mask[i];
-        let cnt = faces_per_axis(f);
-        let g = normal_axis(f);
+        let info = faces.axes[i];
+        let g = usize::from(info & 3);
         if first_layer {
             let col = &mut faces.column[i];
             let mut is_column = *col != 0;
-            let ctx = COL + (cnt[0] as usize * 3 + cnt[1] as usize) * 3 + cnt[2] as usize;
+            let ctx = COL
+                + usize::from(info >> 2 & 3) * 9
+                + usize::from(info >> 4 & 3) * 3
+                + usize::from(info >> 6);
             coder.bit(&mut is_column, ctx)?;
             if is_column {
                 let want = col.saturating_sub(1);
@@ -552,83 +701,72 @@ pub fn code_precision<C: BitCoder>(
                 *col = 1 + k;
                 // The leaf's bits of the height are known from the structure.
                 faces.height[i] = ((q[i][g] >> (shift + 1)) << (shift + 1)) as u16;
+                link_predictors(faces, i, g);
             } else {
                 *col = 0;
             }
         }
         let col = faces.column[i];
+        if col == 0 {
+            for a in 0..3 {
+                let c = q[i][a];
+                let mut bit = (c >> shift) & 1 == 1;
+                coder.bit(&mut bit, plain(a, info, g) + above(c))?;
+                q[i][a] = (c & !(1 << shift)) | (u32::from(bit) << shift);
+            }
+            continue;
+        }
+        let k = u32::from(col - 1);
         for a in 0..3 {
             let c = q[i][a];
-            let ctx = if col != 0 && a == g {
-                let above = ((c >> (shift + 1)) & 3) as usize;
-                let bin = if first_layer {
-                    height_bin(faces, &first_layer_predictors(faces, i, g), i, shift)
-                } else {
-                    height_bin(faces, &faces.pred[i], i, shift)
-                };
-                PRED + (lb * PRED_BINS + bin) * 4 + above
+            let ctx = if a == g {
+                let bin = height_bin(faces, &faces.pred[i], i, shift);
+                PRED + (lb * PRED_BINS + bin) * 4 + above(c)
             } else {
-                if col != 0 {
-                    let k = u32::from(col - 1);
+                if rel > k {
                     if rel == k + 1 {
                         q[i][a] = ((c >> shift) | 1) << shift;
                     }
-                    if rel > k {
-                        continue;
-                    }
+                    continue;
                 }
-                let above = ((c >> (shift + 1)) & 3) as usize;
-                PREC + ((((a * 3 + lb) * 3 + cnt[a] as usize) * 2 + usize::from(a == g)) * 4)
-                    + above
+                plain(a, info, g) + above(c)
             };
             let mut bit = (c >> shift) & 1 == 1;
             coder.bit(&mut bit, ctx)?;
             let v = (c & !(1 << shift)) | (u32::from(bit) << shift);
             q[i][a] = v;
-            if col != 0 && a == g {
+            if a == g {
                 faces.height[i] = ((v >> shift) << shift) as u16;
             }
         }
     }
-    if first_layer {
-        faces.pred = (0..n)
-            .map(|i| {
-                if faces.column[i] == 0 {
-                    [NONE; 4]
-                } else {
-                    predictors(faces, i, normal_axis(faces.mask[i]), n)
-                }
-            })
-            .collect();
-    }
     Ok(())
 }
 
-/// The column particles across particle `i`'s tangential faces whose
-/// normal axis is also `g`, below `limit` in stream order.
+/// Records, in the first layer, the column particles across particle
+/// `i`'s tangential faces whose normal axis is also `g` and that come
+/// before it (the later ones are not decoded yet) as its height predictors,
+/// and `i` as theirs: the relation is symmetric, so once the layer is
+/// through every column particle holds all of its predictors, for the
+/// later layers.
 #[inline]
-fn predictors(faces: &Faces, i: usize, g: usize, limit: usize) -> [u32; 4] {
-    let mut out = [NONE; 4];
-    let mut m = 0;
+fn link_predictors(faces: &mut Faces, i: usize, g: usize) {
+    let push = |row: &mut [u32; 4], v: u32| {
+        if let Some(slot) = row.iter_mut().find(|s| **s == NONE) {
+            *slot = v;
+        }
+    };
     for d in 0..6 {
         let j = faces.nb[i][d];
-        if d % 3 == g || j == NONE || j as usize >= limit {
+        if d % 3 == g || j as usize >= i {
             continue;
         }
         let j = j as usize;
-        if faces.column[j] != 0 && normal_axis(faces.mask[j]) == g {
-            out[m] = j as u32;
-            m += 1;
+        if faces.column[j] != 0 && usize::from(faces.axes[j] & 3) == g {
+            push(&mut faces.pred[i], j as u32);
+            push(&mut faces.pred[j], i as u32);
         }
     }
-    out
-}
-
-/// [`predictors`] in the first layer: a later particle's column state is
-/// not decoded yet, so only earlier ones count.
-#[inline]
-fn first_layer_predictors(faces: &Faces, i: usize, g: usize) -> [u32; 4] {
-    predictors(faces, i, g, i)
 }
 
 /// Bins of the predicted height's offset from the split of the current
@@ -712,6 +850,7 @@ mod tests {
             let mut w = BitWriter::new();
             let got = code_level(&mut w, &inp, &mut links, &mut coded, Some(&truth)).unwrap();
             assert_eq!(got, h.levels[r]);
+            links.materialise();
             let index: HashMap<u64, u32> = got
                 .cells
                 .iter()

@@ -69,7 +69,9 @@
 //! triangles are turned to agree with the particle normals when there are
 //! some, else made consistent across manifold edges and each component
 //! turned outwards by its signed volume.
+use std::borrow::Cow;
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
 use std::sync::OnceLock;
 use std::time::Instant;
 
@@ -237,6 +239,13 @@ struct Window {
     rows: [u16; EXT * EXT],
     /// The 27 bricks around (3×3×3, x fastest), NONE where empty.
     bricks: [u32; 27],
+    /// Vertex index of each extended position (x fastest), valid where
+    /// `stamp` equals `generation`: a cube is in up to eight
+    /// neighbourhoods, its rank is computed once per window.
+    ids: [u32; EXT * EXT * EXT],
+    stamp: [u32; EXT * EXT * EXT],
+    /// Bumped for every window.
+    generation: u32,
 }
 
 impl Window {
@@ -251,11 +260,32 @@ impl Window {
             | (row(o[1] + 1, o[2] + 1) << 6)
     }
 
+    /// The 4×4×4 cubes from `o − 1` to `o + 2` (extended coordinates), bit
+    /// `x + 4y + 16z`: everything the 27 neighbourhoods around `o` see.
+    #[inline]
+    fn block(&self, o: [usize; 3]) -> u64 {
+        let mut b = 0u64;
+        for dz in 0..4 {
+            for dy in 0..4 {
+                let row = (self.rows[o[1] - 1 + dy + EXT * (o[2] - 1 + dz)] >> (o[0] - 1)) & 0xf;
+                b |= u64::from(row) << (4 * (dy + 4 * dz));
+            }
+        }
+        b
+    }
+
     /// Vertex index of the ON cube at extended coordinates `e`.
     #[inline]
-    fn vertex(&self, bricks: &[Brick], e: [usize; 3]) -> u32 {
+    fn vertex(&mut self, bricks: &[Brick], e: [usize; 3]) -> u32 {
+        let i = e[0] + EXT * (e[1] + EXT * e[2]);
+        if self.stamp[i] == self.generation {
+            return self.ids[i];
+        }
         let b = self.bricks[EXT_BRICK[e[0]] + 3 * EXT_BRICK[e[1]] + 9 * EXT_BRICK[e[2]]];
-        bricks[b as usize].rank(EXT_LOCAL[e[0]], EXT_LOCAL[e[1]], EXT_LOCAL[e[2]])
+        let v = bricks[b as usize].rank(EXT_LOCAL[e[0]], EXT_LOCAL[e[1]], EXT_LOCAL[e[2]]);
+        self.stamp[i] = self.generation;
+        self.ids[i] = v;
+        v
     }
 }
 
@@ -316,7 +346,14 @@ fn bricks_of(cells: &[u64]) -> (Vec<Brick>, Vec<u64>) {
 
 /// Triangulates one decoded level.
 pub fn triangulate(s: &LevelSurface, opts: &TriangulateOptions) -> Triangulation {
-    triangulate_impl(s, opts, None)
+    triangulate_impl(Cow::Borrowed(s), opts, None)
+}
+
+/// [`triangulate`], the mesh taking over the surface's particles instead
+/// of copying them (for a level built only to be triangulated, as
+/// [`crate::Decoded::into_surface`] gives it).
+pub fn triangulate_owned(s: LevelSurface, opts: &TriangulateOptions) -> Triangulation {
+    triangulate_impl(Cow::Owned(s), opts, None)
 }
 
 /// [`triangulate`] plus, per output triangle, the class `C_i` of the
@@ -324,16 +361,17 @@ pub fn triangulate(s: &LevelSurface, opts: &TriangulateOptions) -> Triangulation
 /// ambiguous one left whole (for diagnosing non-manifold triangles).
 pub fn triangulate_traced(s: &LevelSurface, opts: &TriangulateOptions) -> (Triangulation, Vec<u8>) {
     let mut classes = Vec::new();
-    let t = triangulate_impl(s, opts, Some(&mut classes));
+    let t = triangulate_impl(Cow::Borrowed(s), opts, Some(&mut classes));
     (t, classes)
 }
 
 fn triangulate_impl(
-    s: &LevelSurface,
+    surface: Cow<'_, LevelSurface>,
     opts: &TriangulateOptions,
     mut trace: Option<&mut Vec<u8>>,
 ) -> Triangulation {
     let start = Instant::now();
+    let s: &LevelSurface = &surface;
     let mut stats = TriangulationStats {
         configurations: vec![0; CLASS_COUNT + 1],
         ..Default::default()
@@ -377,12 +415,24 @@ fn triangulate_impl(
     // Direct-mapped memo of `split_by_cycle` (1024 slots; key never 0 for
     // a solid, whose mask has four cubes or more).
     let mut cycles: Vec<(u64, Split)> = vec![(0, Split::Whole); 1 << 10];
+    // Direct-mapped memo of `shared_edges`, keyed by the 4×4×4 cubes
+    // around the neighbourhood, which are all its overlapping
+    // neighbourhoods read (key never 0 around a solid).
+    let mut shared_memo: Vec<(u64, u32, u32)> = vec![(0, 0, 0); 1 << SHARED_MEMO_BITS];
     let mut trials: Vec<Trial> = Vec::new();
     let mut w = Window {
         rows: [0; EXT * EXT],
         bricks: [NONE; 27],
+        ids: [0; EXT * EXT * EXT],
+        stamp: [0; EXT * EXT * EXT],
+        generation: 0,
     };
     for &q in &keys {
+        w.generation = w.generation.wrapping_add(1);
+        if w.generation == 0 {
+            w.stamp = [0; EXT * EXT * EXT];
+            w.generation = 1;
+        }
         let qc = unmorton(q).map(i64::from);
         for k in 0..27 {
             w.bricks[k] = index.get([
@@ -424,6 +474,10 @@ fn triangulate_impl(
                     w.rows[oy + EXT * (oz + 1)],
                     w.rows[oy + 1 + EXT * (oz + 1)],
                 ];
+                // Most rows of a window miss the surface.
+                if (r[0] | r[1] | r[2] | r[3]) & 0x7fe == 0 {
+                    continue;
+                }
                 // Origins x = −1..8 (1..10 extended) whose neighbourhood
                 // has three ON cubes or more: a bit-sliced count of the
                 // eight cubes of all origins of the row at once.
@@ -515,7 +569,15 @@ fn triangulate_impl(
                             emit(t2, &mut faces);
                         }
                         Shape::Solid(tris) => {
-                            let (shared, twice) = shared_edges(&w, o, cfg.edges);
+                            let around = w.block(o);
+                            let slot = &mut shared_memo[(around.wrapping_mul(0x9e37_79b9_7f4a_7c15)
+                                >> (64 - SHARED_MEMO_BITS))
+                                as usize];
+                            if slot.0 != around {
+                                let (sh, tw) = shared_edges(&w, o, cfg.edges);
+                                *slot = (around, sh, tw);
+                            }
+                            let (shared, twice) = (slot.1, slot.2);
                             // Triangles on a face of the neighbourhood (three
                             // cubes sharing a coordinate) may be built by the
                             // solid across that face too.
@@ -566,7 +628,7 @@ fn triangulate_impl(
                                         }
                                     }
                                     let pos = |j: u8| p[j as usize];
-                                    let keep = if smoother_disc(tris, disc, &pos) {
+                                    let keep = if smoother_disc(tris, &cfg.adjacent, disc, &pos) {
                                         disc
                                     } else {
                                         !disc
@@ -629,7 +691,10 @@ fn triangulate_impl(
             !drop[i - 1]
         });
     }
-    let mut mesh = s.vertices_only();
+    let mut mesh = match surface {
+        Cow::Borrowed(s) => s.vertices_only(),
+        Cow::Owned(s) => s.into_vertices(),
+    };
     if !merges.is_empty() {
         decimate_merge(&mut mesh, &mut faces, &merges);
     }
@@ -667,31 +732,35 @@ fn tri_normal(a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
 }
 
 /// The two triangulations of a quad `a b c d`; returns the better one.
+#[inline]
 fn choose_quad(q: [u8; 4], p: [Vec3; 4], n: Option<[Vec3; 4]>) -> ([u8; 3], [u8; 3]) {
     let ac = ([q[0], q[1], q[2]], [q[0], q[2], q[3]]);
     let bd = ([q[0], q[1], q[3]], [q[1], q[2], q[3]]);
-    let cross = |t: [usize; 3]| (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]);
-    let score = |t: ([usize; 3], [usize; 3])| -> f32 {
-        let (m1, m2) = (cross(t.0), cross(t.1));
-        match n {
-            // Disagreement with the particle normals.
-            Some(vn) => {
-                let (n1, n2) = (m1.normalize_or_zero(), m2.normalize_or_zero());
-                let s1: f32 = t.0.iter().map(|&i| 1.0 - n1.dot(vn[i]).abs()).sum();
-                let s2: f32 = t.1.iter().map(|&i| 1.0 - n2.dot(vn[i]).abs()).sum();
-                s1 + s2
-            }
-            // Dihedral angle between the two triangles (its cosine,
-            // negated: same order, no acos; one square root).
-            None => {
-                let l = (m1.length_squared() * m2.length_squared()).sqrt();
-                if l > 0.0 { -m1.dot(m2) / l } else { 0.0 }
-            }
-        }
-    };
-    let s_ac = score(([0, 1, 2], [0, 2, 3]));
-    let s_bd = score(([0, 1, 3], [1, 2, 3]));
+    let s_ac = quad_split_score(&p, n.as_ref(), [0, 1, 2], [0, 2, 3]);
+    let s_bd = quad_split_score(&p, n.as_ref(), [0, 1, 3], [1, 2, 3]);
     if s_ac <= s_bd { ac } else { bd }
+}
+
+/// How badly the triangles `t0`, `t1` of a quad split fit: their
+/// disagreement with the particle normals, or without normals their
+/// dihedral angle (its cosine, negated: same order, no `acos`; one square
+/// root).
+#[inline(always)]
+fn quad_split_score(p: &[Vec3; 4], n: Option<&[Vec3; 4]>, t0: [usize; 3], t1: [usize; 3]) -> f32 {
+    let cross = |t: [usize; 3]| (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]);
+    let (m1, m2) = (cross(t0), cross(t1));
+    match n {
+        Some(vn) => {
+            let (n1, n2) = (m1.normalize_or_zero(), m2.normalize_or_zero());
+            let s1: f32 = t0.iter().map(|&i| 1.0 - n1.dot(vn[i]).abs()).sum();
+            let s2: f32 = t1.iter().map(|&i| 1.0 - n2.dot(vn[i]).abs()).sum();
+            s1 + s2
+        }
+        None => {
+            let l = (m1.length_squared() * m2.length_squared()).sqrt();
+            if l > 0.0 { -m1.dot(m2) / l } else { 0.0 }
+        }
+    }
 }
 
 /// For each of the 26 overlapping neighbourhoods `o + d` (index
@@ -747,6 +816,21 @@ fn overlaps() -> &'static Overlaps {
     })
 }
 
+/// Slots of the `shared_edges` memo, as a power of two.
+const SHARED_MEMO_BITS: u32 = 11;
+
+/// The 27 neighbourhoods `o + d − 1` around and including `o`, `d ∈
+/// 0..3` per axis, x fastest.
+const NEIGHBOUR: [[usize; 3]; 27] = {
+    let mut t = [[0usize; 3]; 27];
+    let mut k = 0;
+    while k < 27 {
+        t[k] = [k % 3, (k / 3) % 3, k / 9];
+        k += 1;
+    }
+    t
+};
+
 /// Edges of `G_i` (as pair bits) also in the graph of an overlapping
 /// neighbourhood of the window, and those in the graphs of two or more.
 fn shared_edges(w: &Window, o: [usize; 3], edges: u32) -> (u32, u32) {
@@ -757,7 +841,8 @@ fn shared_edges(w: &Window, o: [usize; 3], edges: u32) -> (u32, u32) {
         if k == 13 || edges & ov.ours[k] == 0 {
             continue;
         }
-        let o2 = [o[0] + k % 3 - 1, o[1] + (k / 3) % 3 - 1, o[2] + k / 9 - 1];
+        let d = NEIGHBOUR[k];
+        let o2 = [o[0] + d[0] - 1, o[1] + d[1] - 1, o[2] + d[2] - 1];
         let m2 = w.mask(o2);
         // A neighbour whose cubes all lie in this block (a planar patch on
         // the shared face) is this block's own geometry, not outside
@@ -813,12 +898,37 @@ fn on_face(tri: &[u8; 3]) -> bool {
     !((tri[0] ^ tri[1]) | (tri[0] ^ tri[2])) & 7 != 0
 }
 
+/// Hash of a triangle's vertex indices: a multiply per 32-bit word (the
+/// keys are not adversarial; the default SipHash cost more than the
+/// settling it served).
+#[derive(Default)]
+struct TriHasher(u64);
+
+impl Hasher for TriHasher {
+    fn finish(&self) -> u64 {
+        self.0 ^ (self.0 >> 32)
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for w in bytes.chunks(4) {
+            let mut b = [0u8; 4];
+            b[..w.len()].copy_from_slice(w);
+            self.write_u32(u32::from_le_bytes(b));
+        }
+    }
+    fn write_u32(&mut self, v: u32) {
+        self.0 = (self.0.rotate_left(26) ^ u64::from(v)).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+    }
+    fn write_usize(&mut self, v: usize) {
+        self.write_u32(v as u32);
+    }
+}
+
 /// Edge and vertex use by the distinct triangles around the trials. Only
 /// triangles on a neighbourhood face can be built twice (by the solids on
 /// both sides; [`dedupe_face_triangles`] later keeps one copy), so only
 /// those are counted by key.
 struct Uses {
-    face_tris: HashMap<[u32; 3], u32>,
+    face_tris: HashMap<[u32; 3], u32, BuildHasherDefault<TriHasher>>,
     edges: MortonMap<u32>,
     vertices: Vec<u32>,
 }
@@ -885,7 +995,7 @@ fn settle(faces: &[[u32; 3]], from_solids: &[u32], trials: &mut [Trial], vertice
     let mut near = vec![0u64; vertices.div_ceil(64)];
     let is_near = |near: &[u64], v: u32| near[(v >> 6) as usize] & (1 << (v & 63)) != 0;
     let mut uses = Uses {
-        face_tris: HashMap::new(),
+        face_tris: HashMap::default(),
         edges: MortonMap::default(),
         vertices: vec![0; vertices],
     };
@@ -982,22 +1092,14 @@ fn settle(faces: &[[u32; 3]], from_solids: &[u32], trials: &mut [Trial], vertice
             // A choice with no hole, no bare cube and no surplus use is
             // the best there is: kept without trying the others.
             if score(t.keep) != (0, 0, 0) {
-                let mut best = (u32::MAX, u32::MAX, u32::MAX, true, u32::MAX, t.keep);
-                for sub in 0..=all_bits(tris.len()) {
-                    let (holes, uncovered, surplus) = score(sub);
-                    let key = (
-                        holes,
-                        uncovered,
-                        surplus,
-                        sub != t.keep,
-                        sub.count_ones(),
-                        sub,
-                    );
-                    if key < best {
-                        best = key;
-                    }
-                }
-                t.keep = best.5;
+                t.keep = best_subset(
+                    tris,
+                    &tri_edges[..tris.len()],
+                    &built[..tris.len()],
+                    &base[..n_edges],
+                    bare,
+                    t.keep,
+                );
             }
             for (i, tri) in tris.iter().enumerate() {
                 if t.keep & (1 << i) != 0 {
@@ -1006,6 +1108,73 @@ fn settle(faces: &[[u32; 3]], from_solids: &[u32], trials: &mut [Trial], vertice
             }
         }
     }
+}
+
+/// The subset of `tris` that [`settle`] keeps: the least, in this order,
+/// hull edges used once (`base`: their use by the other triangles),
+/// cubes of `bare` left in no triangle, surplus edge uses, differing from
+/// `keep`, triangles, and the subset's bits. Every subset is visited in
+/// Gray-code order, one triangle added or removed per step, so each costs
+/// the update of three edge counts instead of a recount.
+fn best_subset(
+    tris: &[[u8; 3]],
+    tri_edges: &[[usize; 3]],
+    built: &[bool],
+    base: &[u32],
+    bare: u8,
+    keep: u16,
+) -> u16 {
+    let mut count = [0u32; 18];
+    count[..base.len()].copy_from_slice(base);
+    let mut holes = base.iter().filter(|&&c| c == 1).count() as u32;
+    let mut surplus: u32 = base.iter().map(|&c| c.saturating_sub(2)).sum();
+    // Triangles on each corner, and the corners with one or more.
+    let mut corner = [0u32; 8];
+    let mut covered = 0u8;
+    let key = |sub: u16, holes: u32, surplus: u32, covered: u8| {
+        (
+            holes,
+            (bare & !covered).count_ones(),
+            surplus,
+            sub != keep,
+            sub.count_ones(),
+            sub,
+        )
+    };
+    let mut sub = 0u16;
+    let mut best = key(sub, holes, surplus, covered);
+    for g in 1..=u32::from(all_bits(tris.len())) {
+        let i = g.trailing_zeros() as usize;
+        sub ^= 1 << i;
+        let add = sub & (1 << i) != 0;
+        for &j in &tris[i] {
+            let c = &mut corner[usize::from(j)];
+            if add {
+                *c += 1;
+            } else {
+                *c -= 1;
+            }
+            if *c == 0 {
+                covered &= !(1 << j);
+            } else {
+                covered |= 1 << j;
+            }
+        }
+        if !built[i] {
+            for &e in &tri_edges[i] {
+                let old = count[e];
+                let new = if add { old + 1 } else { old - 1 };
+                count[e] = new;
+                holes = holes + u32::from(new == 1) - u32::from(old == 1);
+                surplus = surplus + new.saturating_sub(2) - old.saturating_sub(2);
+            }
+        }
+        let k = key(sub, holes, surplus, covered);
+        if k < best {
+            best = k;
+        }
+    }
+    best.5
 }
 
 /// How §6.2 resolves an ambiguous configuration.
@@ -1170,9 +1339,17 @@ impl CycleSearch {
 
 /// Whether the disc `disc` of `tris` (bit `i`: triangle `i`) has a mean
 /// dihedral angle over its interior edges no larger than its complement's
-/// (§6.2's choice). Discs with one interior edge each (`C_6`, the frequent
-/// case) compare cosines, no `acos` needed.
-fn smoother_disc(tris: &[[u8; 3]], disc: u16, pos: &impl Fn(u8) -> Vec3) -> bool {
+/// (§6.2's choice). `adjacent` lists the hull's pairs of triangles that
+/// share an edge ([`crate::triangulation_table::Config::adjacent`]); an
+/// interior edge of a disc is one whose two triangles are both in it.
+/// Discs with one interior edge each (`C_6`, the frequent case) compare
+/// cosines, no `acos` needed.
+fn smoother_disc(
+    tris: &[[u8; 3]],
+    adjacent: &[(u8, u8)],
+    disc: u16,
+    pos: &impl Fn(u8) -> Vec3,
+) -> bool {
     let mut normals = [Vec3::ZERO; 16];
     for (i, t) in tris.iter().enumerate().take(16) {
         normals[i] = tri_normal(pos(t[0]), pos(t[1]), pos(t[2]));
@@ -1180,17 +1357,14 @@ fn smoother_disc(tris: &[[u8; 3]], disc: u16, pos: &impl Fn(u8) -> Vec3) -> bool
     // Cosines of the interior edges of each side.
     let mut cos = [[0.0f32; 16]; 2];
     let mut n = [0usize; 2];
-    for (i, ti) in tris.iter().enumerate().take(16) {
+    for &(i, j) in adjacent {
+        let (i, j) = (usize::from(i), usize::from(j));
         let side = usize::from(disc & (1 << i) == 0);
-        for (j, tj) in tris.iter().enumerate().take(16).skip(i + 1) {
-            if usize::from(disc & (1 << j) == 0) != side || n[side] == 16 {
-                continue;
-            }
-            if ti.iter().filter(|v| tj.contains(v)).count() == 2 {
-                cos[side][n[side]] = normals[i].dot(normals[j]).clamp(-1.0, 1.0);
-                n[side] += 1;
-            }
+        if usize::from(disc & (1 << j) == 0) != side || n[side] == 16 {
+            continue;
         }
+        cos[side][n[side]] = normals[i].dot(normals[j]).clamp(-1.0, 1.0);
+        n[side] += 1;
     }
     if n == [1, 1] {
         return cos[0][0] >= cos[1][0];
@@ -1307,6 +1481,56 @@ pub fn non_manifold_flags(mesh: &TriMesh) -> Vec<bool> {
     bad
 }
 
+/// Calls `f(t1, t2)`, `t1 < t2`, for the two triangles of every edge that
+/// exactly two use, in the order of the edges' keys (lower vertex, then
+/// upper) — [`sorted_sides`]' order, without sorting all the sides: they
+/// are bucketed by lower vertex (a counting pass, then a filling one) and
+/// only each vertex's few sorted.
+fn manifold_pairs(faces: &[[u32; 3]], vertices: usize, mut f: impl FnMut(u32, u32)) {
+    let n = faces
+        .iter()
+        .flatten()
+        .map(|&v| v as usize + 1)
+        .max()
+        .unwrap_or(0)
+        .max(vertices);
+    let mut start = vec![0u32; n + 1];
+    for t in faces {
+        for k in 0..3 {
+            start[t[k].min(t[(k + 1) % 3]) as usize + 1] += 1;
+        }
+    }
+    for v in 0..n {
+        start[v + 1] += start[v];
+    }
+    let mut fill = start.clone();
+    // (upper vertex, triangle), by lower vertex; triangles in order.
+    let mut sides = vec![(0u32, 0u32); 3 * faces.len()];
+    for (i, t) in faces.iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let slot = &mut fill[a.min(b) as usize];
+            sides[*slot as usize] = (a.max(b), i as u32);
+            *slot += 1;
+        }
+    }
+    for v in 0..n {
+        let bucket = &mut sides[start[v] as usize..start[v + 1] as usize];
+        bucket.sort_unstable();
+        let mut i = 0;
+        while i < bucket.len() {
+            let mut j = i + 1;
+            while j < bucket.len() && bucket[j].0 == bucket[i].0 {
+                j += 1;
+            }
+            if j - i == 2 {
+                f(bucket[i].1, bucket[i + 1].1);
+            }
+            i = j;
+        }
+    }
+}
+
 /// See the module docs, "Orientation".
 fn orient(mesh: &mut TriMesh) {
     if let Some(n) = &mesh.normals {
@@ -1321,25 +1545,15 @@ fn orient(mesh: &mut TriMesh) {
         return;
     }
     // Triangle → its neighbours across manifold edges.
-    let sides = sorted_sides(&mesh.faces);
     let nf = mesh.faces.len();
     let mut across = vec![[u32::MAX; 3]; nf];
-    let mut i = 0;
-    while i < sides.len() {
-        let mut j = i;
-        while j < sides.len() && sides[j].0 == sides[i].0 {
-            j += 1;
-        }
-        if j - i == 2 {
-            let (t1, t2) = (sides[i].1, sides[i + 1].1);
-            for (t, o) in [(t1, t2), (t2, t1)] {
-                if let Some(slot) = across[t as usize].iter_mut().find(|x| **x == u32::MAX) {
-                    *slot = o;
-                }
+    manifold_pairs(&mesh.faces, mesh.positions.len(), |t1, t2| {
+        for (t, o) in [(t1, t2), (t2, t1)] {
+            if let Some(slot) = across[t as usize].iter_mut().find(|x| **x == u32::MAX) {
+                *slot = o;
             }
         }
-        i = j;
-    }
+    });
     let mut done = vec![false; nf];
     let mut stack = Vec::new();
     let mut component = Vec::new();
@@ -1558,6 +1772,31 @@ mod tests {
             split_by_cycle(mask, cfg.edges, cfg.edges, tris),
             Split::Whole
         );
+    }
+
+    #[test]
+    fn owned_surfaces_triangulate_like_borrowed_ones() {
+        use crate::{DecodeOptions, EncodeOptions, decode, encode};
+        let model = lodkit_mesh::Model::Mesh(lodkit_mesh::shapes::blob(5_000));
+        let opts = EncodeOptions {
+            depth: Some(5),
+            ..EncodeOptions::DEFAULT
+        };
+        let bytes = encode(&model, &opts).unwrap().bytes;
+        let d = decode(&bytes, &DecodeOptions::default()).unwrap();
+        // Coarse levels hold phantoms (their cells are filtered), the
+        // finest none (its cells move).
+        for r in [3u8, 5] {
+            let s = d.surface(r).unwrap();
+            let owned = d.clone().into_surface(r).unwrap();
+            assert_eq!(owned.cells, s.cells, "level {r}");
+            assert_eq!(owned.positions, s.positions, "level {r}");
+            let t = triangulate(&s, &TriangulateOptions::DEFAULT);
+            let u = triangulate_owned(owned, &TriangulateOptions::DEFAULT);
+            assert!(!t.mesh.faces.is_empty());
+            assert_eq!(u.mesh.faces, t.mesh.faces, "level {r}");
+            assert_eq!(u.mesh.positions, t.mesh.positions, "level {r}");
+        }
     }
 
     /// Edges used by one triangle.

@@ -68,6 +68,9 @@ pub struct Config {
     /// `Some((axis, side))` when every ON cube lies on one face of the
     /// neighbourhood (planar cases only).
     pub face: Option<(u8, u8)>,
+    /// Solids: the pairs `(i, j)`, `i < j`, of hull triangles sharing an
+    /// edge, in order (the dihedral angles §6.2 compares).
+    pub adjacent: Vec<(u8, u8)>,
 }
 
 /// The generated table.
@@ -310,6 +313,7 @@ fn build() -> Table {
                 shape: Shape::None,
                 edges: 0,
                 face: None,
+                adjacent: Vec::new(),
             });
             continue;
         }
@@ -354,11 +358,22 @@ fn build() -> Table {
             }
             Shape::None => {}
         }
+        let mut adjacent = Vec::new();
+        if let Shape::Solid(ts) = &shape {
+            for (i, ti) in ts.iter().enumerate() {
+                for (j, tj) in ts.iter().enumerate().skip(i + 1) {
+                    if ti.iter().filter(|v| tj.contains(v)).count() == 2 {
+                        adjacent.push((i as u8, j as u8));
+                    }
+                }
+            }
+        }
         configs.push(Config {
             class,
             shape,
             edges: e,
             face,
+            adjacent,
         });
     }
     Table {
