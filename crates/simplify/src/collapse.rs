@@ -36,7 +36,7 @@
 
 use glam::{DVec3, Vec3A};
 
-use crate::cost::{RingScan, Scratch, dpos, fpos};
+use crate::cost::{RingFace, RingScan, Scratch, dpos, fpos};
 use crate::options::Options;
 use crate::quadric::Quadric;
 use crate::ring_table::{DEAD, Flag, RingTable};
@@ -190,13 +190,8 @@ pub fn collapse(
     };
 
     // Error estimate: distance from the new vertex to the old planes.
-    let mut d = 0.0f32;
     let lf = local.as_vec3a();
-    for rf in ss.faces.iter().chain(&st.faces) {
-        if rf.area > 0.0 {
-            d = d.max((rf.n.dot(lf) + rf.d).abs());
-        }
-    }
+    let d = max_plane_distance(&ss.faces, lf).max(max_plane_distance(&st.faces, lf));
     let new_err = m.err[s as usize].max(m.err[t as usize]) + d;
     if opts.max_error.is_some_and(|e| new_err > e) {
         return Err(Reject::MaxError);
@@ -251,6 +246,20 @@ pub fn collapse(
     m.flags[s as usize] = Flag::Removed;
     m.flags[t as usize] = Flag::Dirty;
     Ok(removed)
+}
+
+/// Largest distance from `v` to the plane of a non-degenerate face.
+#[inline]
+fn max_plane_distance(faces: &[RingFace], v: Vec3A) -> f32 {
+    let mut d = 0.0f32;
+    for rf in faces {
+        let e = (rf.n.dot(v) + rf.d).abs();
+        // Degenerate faces carry a zero plane (n = 0, d = 0): e = 0.
+        if e > d {
+            d = e;
+        }
+    }
+    d
 }
 
 /// Whether moving the centre of `scan` to `v` (scan frame) flips or

@@ -84,6 +84,8 @@ pub struct RingScan {
     /// while scanning; [`add_quadric`](Self::add_quadric) adds the border
     /// planes.
     pub planes: Quadric,
+    /// Whether an internal edge has multiplicity 1 (set by the scan).
+    pub border: bool,
 }
 
 impl RingScan {
@@ -129,13 +131,15 @@ impl RingScan {
                 area,
             });
         }
+        self.border = self.links.iter().any(|l| l.m == 1);
         !self.links.is_empty()
     }
 
     /// Whether the ring has an internal edge of multiplicity 1 (the vertex
     /// is on a border of the mesh).
+    #[inline]
     pub fn border(&self) -> bool {
-        self.links.iter().any(|l| l.m == 1)
+        self.border
     }
 
     /// Multiplicity of the internal edge to `w` (0 = not a neighbour).
