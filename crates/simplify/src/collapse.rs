@@ -58,7 +58,10 @@ pub enum Reject {
 }
 
 /// Performs the collapse of `s` onto `t` if it is valid. Returns the number
-/// of faces removed.
+/// of faces removed. With `scanned`, `sc.scan_s` already holds the current
+/// ring of `s` in the frame of `v_s` (the cost stage's read, when the
+/// record is collapsed right after it was costed); otherwise it is read
+/// here.
 pub fn collapse(
     m: &mut WorkMesh,
     rings: &RingTable,
@@ -66,6 +69,7 @@ pub fn collapse(
     s: u32,
     t: u32,
     sc: &mut Scratch,
+    scanned: bool,
 ) -> Result<usize, Reject> {
     // Dependency check (Strategy I): dirty rings are not contracted.
     if m.flags[s as usize] != Flag::Valid
@@ -73,15 +77,18 @@ pub fn collapse(
     {
         return Err(Reject::Dependency);
     }
-    // Both rings read once, in a frame centred on v_t.
+    // Both rings read once, in a frame centred on v_s.
     let (ps, pt) = (dpos(m, s), dpos(m, t));
-    let ptf = fpos(m, t);
-    sc.scan_s.scan(m, rings.ring(s), s, ptf);
+    let psf = fpos(m, s);
+    if !scanned {
+        sc.scan_s.scan(m, rings.ring(s), s, psf);
+    }
+    debug_assert!(sc.scan_s.center == s && sc.scan_s.pc == Vec3A::ZERO);
     let m_st = sc.scan_s.m(t);
     if m_st == 0 {
         return Err(Reject::Dependency);
     }
-    sc.scan_t.scan(m, rings.ring(t), t, ptf);
+    sc.scan_t.scan(m, rings.ring(t), t, psf);
     let (ss, st) = (&sc.scan_s, &sc.scan_t);
 
     // Border rules.
@@ -152,12 +159,12 @@ pub fn collapse(
     let (ss, st) = (&sc.scan_s, &sc.scan_t);
 
     // Second stage of the two-stage optimisation: placement, in the frame
-    // of v_t (so v_t is the origin).
+    // of v_s (so v_s is the origin).
     let mut q = Quadric::ZERO;
     ss.add_quadric(m, &mut q);
     st.add_quadric(m, &mut q);
-    // v_s in the frame, from the same f32 difference the scans used.
-    let (ls, lt) = ((fpos(m, s) - ptf).as_dvec3(), DVec3::ZERO);
+    // v_t in the frame, from the same f32 difference the scans used.
+    let (ls, lt) = (DVec3::ZERO, (fpos(m, t) - psf).as_dvec3());
     let mut candidates = [DVec3::ZERO; 2];
     let mut n_cand = 0;
     // Border placement: a border edge's vertex stays on the old border
@@ -196,7 +203,8 @@ pub fn collapse(
     if opts.max_error.is_some_and(|e| new_err > e) {
         return Err(Reject::MaxError);
     }
-    let vn = local + pt;
+    // Staying at v_t keeps its stored position bit for bit.
+    let vn = if local == lt { pt } else { local + ps };
 
     // Attributes: interpolate along the edge at the projection of v_n.
     let e = pt - ps;

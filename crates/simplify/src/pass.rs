@@ -5,7 +5,10 @@
 //! contraction record (`cost.rs`); the record replaces the heap's root, and
 //! the root record is collapsed if it passes the dependency check
 //! (Strategy I, `collapse.rs`). After the last ring, the finale stage
-//! drains the heap. The pass stops as soon as the face count reaches the
+//! drains the heap. With a one-record heap (the default, see
+//! `Options::DEFAULT_HEAP_SIZE`) there is nothing to reorder: each record
+//! under the threshold is collapsed as soon as it is costed, reusing the
+//! cost stage's read of its ring. The pass stops as soon as the face count reaches the
 //! goal — inside the pass, so the goal is met exactly (within the one or
 //! two faces the last collapse removes).
 //!
@@ -130,8 +133,39 @@ pub fn run_pass(
     sc: &mut Scratch,
 ) -> PassStats {
     let mut st = PassStats::default();
-    heap.reset(opts.heap_size);
     let n = m.pos.len();
+    if opts.heap_size <= 1 {
+        // A one-record heap cannot reorder anything (it only delays each
+        // record by one ring), so its records are collapsed at once: the
+        // record is never stale, nothing is refused by the dependency
+        // check, and nothing is costed twice.
+        for s in 0..n as u32 {
+            if m.live_faces <= goal {
+                break;
+            }
+            if m.flags[s as usize] != Flag::Valid {
+                continue;
+            }
+            let Some(rec) = best_contraction(m, rings, opts, s, sc) else {
+                m.flags[s as usize] = Flag::Null;
+                continue;
+            };
+            if !(rec.cost <= tau) {
+                st.deferred += 1;
+                continue;
+            }
+            // `best_contraction` left the ring of `s` read in its frame.
+            match collapse(m, rings, opts, rec.s, rec.t, sc, true) {
+                Ok(removed) => {
+                    st.collapses += 1;
+                    st.faces_removed += removed;
+                }
+                Err(r) => st.count(r),
+            }
+        }
+        return st;
+    }
+    heap.reset(opts.heap_size);
     // Operation stage (the initial stage is the heap filling with records
     // while its null records come out).
     for s in 0..n as u32 {
@@ -182,7 +216,7 @@ fn apply(
     st: &mut PassStats,
 ) {
     loop {
-        match collapse(m, rings, opts, root.s, root.t, sc) {
+        match collapse(m, rings, opts, root.s, root.t, sc, false) {
             Ok(removed) => {
                 st.collapses += 1;
                 st.faces_removed += removed;
