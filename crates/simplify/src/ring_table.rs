@@ -59,8 +59,14 @@ impl RingTable {
         for i in 0..n {
             self.off[i + 1] += self.off[i];
         }
-        self.list.clear();
-        self.list.resize(self.off[n] as usize, 0);
+        // Every entry is written below: only grow (zero-filling the new
+        // part), never clear, so later, smaller passes skip the fill.
+        let len = self.off[n] as usize;
+        if self.list.len() >= len {
+            self.list.truncate(len);
+        } else {
+            self.list.resize(len, 0);
+        }
         // Fill using off[v] as the cursor of row v - 1 … shifted below: after
         // the fill, off[v] holds the end of row v, i.e. the start of v + 1.
         for (fi, f) in faces.iter().enumerate() {
