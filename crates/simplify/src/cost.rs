@@ -343,7 +343,8 @@ pub fn best_contraction(
         let mut best_cost = f64::INFINITY;
         let mut best_t = u32::MAX;
         for l in scan.links.iter().filter(|l| candidate(l)) {
-            let c = q.eval((fpos(m, l.v) - psf).as_dvec3());
+            // Every plane of the ring passes through v_s, the origin.
+            let c = q.eval_through_origin((fpos(m, l.v) - psf).as_dvec3());
             if c < best_cost {
                 best_cost = c;
                 best_t = l.v;

@@ -105,6 +105,19 @@ impl Quadric {
         r.max(0.0)
     }
 
+    /// [`eval`](Self::eval) of a quadric whose planes all pass through the
+    /// origin (linear and constant parts zero, as in a ring's own frame):
+    /// the same value from the quadratic part alone.
+    #[inline]
+    pub fn eval_through_origin(&self, v: DVec3) -> f64 {
+        let m = &self.m;
+        let (x, y, z) = (v.x, v.y, v.z);
+        let r = x * (m[0] * x + 2.0 * (m[1] * y + m[2] * z))
+            + y * (m[3] * y + 2.0 * (m[4] * z))
+            + z * (m[5] * z);
+        r.max(0.0)
+    }
+
     /// The minimiser of the quadric, solving `A v = -b` (the gradient
     /// condition under eq. 5). `None` when `A` is singular relative to its
     /// own scale (flat or ridge-shaped neighbourhoods).
