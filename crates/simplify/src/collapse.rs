@@ -110,8 +110,12 @@ pub fn collapse(
     // Link condition on every other neighbour w of s: c = faces of I that
     // contain w. The common neighbours are kept for the duplicate check.
     sc.common.clear();
+    // One bit per neighbour of t (by the id's low bits): most neighbours of
+    // s are not neighbours of t and skip the search of t's link.
+    let bit = |v: u32| 1u64 << (v & 63);
+    let t_links = st.links.iter().fold(0u64, |acc, l| acc | bit(l.v));
     for l in &ss.links {
-        if l.v == t {
+        if l.v == t || t_links & bit(l.v) == 0 {
             continue;
         }
         let mt = st.m(l.v);
