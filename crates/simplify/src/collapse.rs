@@ -36,7 +36,7 @@
 
 use glam::{DVec3, Vec3A};
 
-use crate::cost::{RingFace, RingScan, Scratch, dpos, fpos};
+use crate::cost::{RingScan, Scratch, dpos, fpos};
 use crate::options::Options;
 use crate::quadric::Quadric;
 use crate::ring_table::{DEAD, Flag, RingTable};
@@ -193,16 +193,17 @@ pub fn collapse(
         candidates[n_cand] = lt;
         n_cand += 1;
     }
-    let Some(local) = candidates[..n_cand].iter().copied().find(|&v| {
-        let v = v.as_vec3a();
-        !flips(ss, t, v) && !flips(st, s, v)
+    // The first placement that flips no face, and the error estimate there:
+    // the distance from the new vertex to the old planes (one walk over
+    // each ring for both).
+    let Some((local, d)) = candidates[..n_cand].iter().find_map(|&v| {
+        let vf = v.as_vec3a();
+        let ds = unflipped_distance(ss, t, vf)?;
+        let dt = unflipped_distance(st, s, vf)?;
+        Some((v, ds.max(dt)))
     }) else {
         return Err(Reject::Flip);
     };
-
-    // Error estimate: distance from the new vertex to the old planes.
-    let lf = local.as_vec3a();
-    let d = max_plane_distance(&ss.faces, lf).max(max_plane_distance(&st.faces, lf));
     let new_err = m.err[s as usize].max(m.err[t as usize]) + d;
     if opts.max_error.is_some_and(|e| new_err > e) {
         return Err(Reject::MaxError);
@@ -260,25 +261,19 @@ pub fn collapse(
     Ok(removed)
 }
 
-/// Largest distance from `v` to the plane of a non-degenerate face.
+/// Moving the centre of `scan` to `v` (scan frame): `None` if that flips
+/// or degenerates one of its faces that survive the collapse (those not
+/// containing `other`, the edge's other end), else the largest distance
+/// from `v` to the planes of all its faces (a degenerate face's plane is
+/// zero and counts 0).
 #[inline]
-fn max_plane_distance(faces: &[RingFace], v: Vec3A) -> f32 {
+fn unflipped_distance(scan: &RingScan, other: u32, v: Vec3A) -> Option<f32> {
     let mut d = 0.0f32;
-    for rf in faces {
+    for rf in &scan.faces {
         let e = (rf.n.dot(v) + rf.d).abs();
-        // Degenerate faces carry a zero plane (n = 0, d = 0): e = 0.
         if e > d {
             d = e;
         }
-    }
-    d
-}
-
-/// Whether moving the centre of `scan` to `v` (scan frame) flips or
-/// degenerates one of its faces that survive the collapse (those not
-/// containing `other`, the edge's other end).
-fn flips(scan: &RingScan, other: u32, v: Vec3A) -> bool {
-    for rf in &scan.faces {
         if rf.a == other || rf.b == other || rf.area <= 0.0 {
             // Deleted by the collapse, or already degenerate.
             continue;
@@ -287,10 +282,10 @@ fn flips(scan: &RingScan, other: u32, v: Vec3A) -> bool {
         // rf.n is unit and rf.area = |n0| / 2.
         let dot = rf.n.dot(n1);
         if dot <= 0.0 || n1.length_squared() <= 1e-10 * (4.0 * rf.area * rf.area) {
-            return true;
+            return None;
         }
     }
-    false
+    Some(d)
 }
 
 /// Builds `sc.wedge_map` (wedge of `s` → wedge of `t`) from the faces of
