@@ -77,9 +77,13 @@ pub fn collapse(
     {
         return Err(Reject::Dependency);
     }
-    // Both rings read once, in a frame centred on v_s.
+    // Both rings read once, each in its own centre's frame (every face
+    // plane of a ring passes through its centre there, see `cost.rs`);
+    // the collapse works in the frame of v_s.
     let (ps, pt) = (dpos(m, s), dpos(m, t));
-    let psf = fpos(m, s);
+    let (psf, ptf) = (fpos(m, s), fpos(m, t));
+    // v_t in the frame of v_s, from the same f32 difference the scans use.
+    let ltf = ptf - psf;
     if !scanned {
         sc.scan_s.scan(m, rings.ring(s), s, psf);
     }
@@ -88,7 +92,7 @@ pub fn collapse(
     if m_st == 0 {
         return Err(Reject::Dependency);
     }
-    sc.scan_t.scan(m, rings.ring(t), t, psf);
+    sc.scan_t.scan(m, rings.ring(t), t, ptf);
     let (ss, st) = (&sc.scan_s, &sc.scan_t);
 
     // Border rules.
@@ -164,11 +168,12 @@ pub fn collapse(
 
     // Second stage of the two-stage optimisation: placement, in the frame
     // of v_s (so v_s is the origin).
+    let (ls, lt) = (DVec3::ZERO, ltf.as_dvec3());
     let mut q = Quadric::ZERO;
     ss.add_quadric(m, &mut q);
-    st.add_quadric(m, &mut q);
-    // v_t in the frame, from the same f32 difference the scans used.
-    let (ls, lt) = (DVec3::ZERO, (fpos(m, t) - psf).as_dvec3());
+    let mut qt = Quadric::ZERO;
+    st.add_quadric(m, &mut qt);
+    q.add_translated_from_origin(&qt, lt);
     let mut candidates = [DVec3::ZERO; 2];
     let mut n_cand = 0;
     // Border placement: a border edge's vertex stays on the old border
@@ -199,7 +204,7 @@ pub fn collapse(
     let Some((local, d)) = candidates[..n_cand].iter().find_map(|&v| {
         let vf = v.as_vec3a();
         let ds = unflipped_distance(ss, t, vf)?;
-        let dt = unflipped_distance(st, s, vf)?;
+        let dt = unflipped_distance(st, s, vf - ltf)?;
         Some((v, ds.max(dt)))
     }) else {
         return Err(Reject::Flip);

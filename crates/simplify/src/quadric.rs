@@ -92,6 +92,28 @@ impl Quadric {
         m[5] += c * n.z;
     }
 
+    /// Adds `other`, a quadric whose planes all pass through its frame's
+    /// origin (linear and constant parts zero), after moving that origin
+    /// to `o` in this quadric's frame: `other(v - o)` for every `v`.
+    #[inline]
+    pub fn add_translated_from_origin(&mut self, other: &Quadric, o: DVec3) {
+        let a = &other.m;
+        // A o, then b = -A o and c = oᵀ A o.
+        let ao = DVec3::new(
+            a[0] * o.x + a[1] * o.y + a[2] * o.z,
+            a[1] * o.x + a[3] * o.y + a[4] * o.z,
+            a[2] * o.x + a[4] * o.y + a[5] * o.z,
+        );
+        let m = &mut self.m;
+        for i in 0..6 {
+            m[i] += a[i];
+        }
+        m[6] -= ao.x;
+        m[7] -= ao.y;
+        m[8] -= ao.z;
+        m[9] += o.dot(ao);
+    }
+
     /// The quadric's value at `v` (eq. 3). Never negative in exact
     /// arithmetic; rounding can give tiny negatives, clamped to 0.
     #[inline]
