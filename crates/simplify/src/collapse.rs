@@ -149,7 +149,12 @@ pub fn collapse(
         return Err(Reject::Topology);
     }
     let common = &sc.common;
+    // The same 64-bit filter as above, over the common neighbours.
+    let c_bits = common.iter().fold(0u64, |acc, &v| acc | bit(v));
     for x in ss.faces.iter().filter(|rf| rf.a != t && rf.b != t) {
+        if c_bits & bit(x.a) == 0 || c_bits & bit(x.b) == 0 {
+            continue;
+        }
         if !(common.contains(&x.a) && common.contains(&x.b)) {
             continue;
         }
