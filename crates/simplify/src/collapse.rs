@@ -222,14 +222,14 @@ pub fn collapse(
     let vn = if local == lt { pt } else { local + ps };
 
     // Attributes: interpolate along the edge at the projection of v_n.
-    let e = pt - ps;
-    let lambda = if e.length_squared() > 0.0 {
-        ((vn - ps).dot(e) / e.length_squared()).clamp(0.0, 1.0)
-    } else {
-        1.0
-    } as f32;
     let k = m.layout.k;
     if k > 0 {
+        let e = pt - ps;
+        let lambda = if e.length_squared() > 0.0 {
+            ((vn - ps).dot(e) / e.length_squared()).clamp(0.0, 1.0)
+        } else {
+            1.0
+        } as f32;
         let lerp = |attr: &mut Vec<f32>, a: u32, b: u32| {
             for i in 0..k {
                 let (x, y) = (attr[a as usize * k + i], attr[b as usize * k + i]);
