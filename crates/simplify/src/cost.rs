@@ -338,8 +338,13 @@ pub fn best_contraction(
     if !attributes {
         // Geometry only: the ring quadric (face planes through v_s, border
         // planes) at each candidate, divided by the ring's area.
-        let mut q = Quadric::ZERO;
-        scan.add_quadric(m, &mut q);
+        let mut with_border = Quadric::ZERO;
+        let q = if border {
+            scan.add_quadric(m, &mut with_border);
+            &with_border
+        } else {
+            &scan.planes
+        };
         let mut best_cost = f64::INFINITY;
         let mut best_t = u32::MAX;
         for l in scan.links.iter().filter(|l| candidate(l)) {
