@@ -58,7 +58,10 @@ pub enum Reject {
 }
 
 /// Performs the collapse of `s` onto `t` if it is valid. Returns the number
-/// of faces removed.
+/// of faces removed. With `scanned`, `sc.scan_s` already holds the current
+/// ring of `s` in the frame of `v_s` (the cost stage's read, when the
+/// record is collapsed right after it was costed); otherwise it is read
+/// here.
 pub fn collapse(
     m: &mut WorkMesh,
     rings: &RingTable,
@@ -66,6 +69,7 @@ pub fn collapse(
     s: u32,
     t: u32,
     sc: &mut Scratch,
+    scanned: bool,
 ) -> Result<usize, Reject> {
     // Dependency check (Strategy I): dirty rings are not contracted.
     if m.flags[s as usize] != Flag::Valid
@@ -73,10 +77,17 @@ pub fn collapse(
     {
         return Err(Reject::Dependency);
     }
-    // Both rings read once, in a frame centred on v_t.
+    // Both rings read once, each in its own centre's frame (every face
+    // plane of a ring passes through its centre there, see `cost.rs`);
+    // the collapse works in the frame of v_s.
     let (ps, pt) = (dpos(m, s), dpos(m, t));
-    let ptf = fpos(m, t);
-    sc.scan_s.scan(m, rings.ring(s), s, ptf);
+    let (psf, ptf) = (fpos(m, s), fpos(m, t));
+    // v_t in the frame of v_s, from the same f32 difference the scans use.
+    let ltf = ptf - psf;
+    if !scanned {
+        sc.scan_s.scan(m, rings.ring(s), s, psf);
+    }
+    debug_assert!(sc.scan_s.center == s && sc.scan_s.pc == Vec3A::ZERO);
     let m_st = sc.scan_s.m(t);
     if m_st == 0 {
         return Err(Reject::Dependency);
@@ -103,8 +114,12 @@ pub fn collapse(
     // Link condition on every other neighbour w of s: c = faces of I that
     // contain w. The common neighbours are kept for the duplicate check.
     sc.common.clear();
+    // One bit per neighbour of t (by the id's low bits): most neighbours of
+    // s are not neighbours of t and skip the search of t's link.
+    let bit = |v: u32| 1u64 << (v & 63);
+    let t_links = st.links.iter().fold(0u64, |acc, l| acc | bit(l.v));
     for l in &ss.links {
-        if l.v == t {
+        if l.v == t || t_links & bit(l.v) == 0 {
             continue;
         }
         let mt = st.m(l.v);
@@ -134,7 +149,12 @@ pub fn collapse(
         return Err(Reject::Topology);
     }
     let common = &sc.common;
+    // The same 64-bit filter as above, over the common neighbours.
+    let c_bits = common.iter().fold(0u64, |acc, &v| acc | bit(v));
     for x in ss.faces.iter().filter(|rf| rf.a != t && rf.b != t) {
+        if c_bits & bit(x.a) == 0 || c_bits & bit(x.b) == 0 {
+            continue;
+        }
         if !(common.contains(&x.a) && common.contains(&x.b)) {
             continue;
         }
@@ -152,12 +172,13 @@ pub fn collapse(
     let (ss, st) = (&sc.scan_s, &sc.scan_t);
 
     // Second stage of the two-stage optimisation: placement, in the frame
-    // of v_t (so v_t is the origin).
+    // of v_s (so v_s is the origin).
+    let (ls, lt) = (DVec3::ZERO, ltf.as_dvec3());
     let mut q = Quadric::ZERO;
     ss.add_quadric(m, &mut q);
-    st.add_quadric(m, &mut q);
-    // v_s in the frame, from the same f32 difference the scans used.
-    let (ls, lt) = ((fpos(m, s) - ptf).as_dvec3(), DVec3::ZERO);
+    let mut qt = Quadric::ZERO;
+    st.add_quadric(m, &mut qt);
+    q.add_translated_from_origin(&qt, lt);
     let mut candidates = [DVec3::ZERO; 2];
     let mut n_cand = 0;
     // Border placement: a border edge's vertex stays on the old border
@@ -182,36 +203,33 @@ pub fn collapse(
         candidates[n_cand] = lt;
         n_cand += 1;
     }
-    let Some(local) = candidates[..n_cand].iter().copied().find(|&v| {
-        let v = v.as_vec3a();
-        !flips(ss, t, v) && !flips(st, s, v)
+    // The first placement that flips no face, and the error estimate there:
+    // the distance from the new vertex to the old planes (one walk over
+    // each ring for both).
+    let Some((local, d)) = candidates[..n_cand].iter().find_map(|&v| {
+        let vf = v.as_vec3a();
+        let ds = unflipped_distance(ss, t, vf)?;
+        let dt = unflipped_distance(st, s, vf - ltf)?;
+        Some((v, ds.max(dt)))
     }) else {
         return Err(Reject::Flip);
     };
-
-    // Error estimate: distance from the new vertex to the old planes.
-    let mut d = 0.0f32;
-    let lf = local.as_vec3a();
-    for rf in ss.faces.iter().chain(&st.faces) {
-        if rf.area > 0.0 {
-            d = d.max((rf.n.dot(lf) + rf.d).abs());
-        }
-    }
     let new_err = m.err[s as usize].max(m.err[t as usize]) + d;
     if opts.max_error.is_some_and(|e| new_err > e) {
         return Err(Reject::MaxError);
     }
-    let vn = local + pt;
+    // Staying at v_t keeps its stored position bit for bit.
+    let vn = if local == lt { pt } else { local + ps };
 
     // Attributes: interpolate along the edge at the projection of v_n.
-    let e = pt - ps;
-    let lambda = if e.length_squared() > 0.0 {
-        ((vn - ps).dot(e) / e.length_squared()).clamp(0.0, 1.0)
-    } else {
-        1.0
-    } as f32;
     let k = m.layout.k;
     if k > 0 {
+        let e = pt - ps;
+        let lambda = if e.length_squared() > 0.0 {
+            ((vn - ps).dot(e) / e.length_squared()).clamp(0.0, 1.0)
+        } else {
+            1.0
+        } as f32;
         let lerp = |attr: &mut Vec<f32>, a: u32, b: u32| {
             for i in 0..k {
                 let (x, y) = (attr[a as usize * k + i], attr[b as usize * k + i]);
@@ -253,11 +271,19 @@ pub fn collapse(
     Ok(removed)
 }
 
-/// Whether moving the centre of `scan` to `v` (scan frame) flips or
-/// degenerates one of its faces that survive the collapse (those not
-/// containing `other`, the edge's other end).
-fn flips(scan: &RingScan, other: u32, v: Vec3A) -> bool {
+/// Moving the centre of `scan` to `v` (scan frame): `None` if that flips
+/// or degenerates one of its faces that survive the collapse (those not
+/// containing `other`, the edge's other end), else the largest distance
+/// from `v` to the planes of all its faces (a degenerate face's plane is
+/// zero and counts 0).
+#[inline]
+fn unflipped_distance(scan: &RingScan, other: u32, v: Vec3A) -> Option<f32> {
+    let mut d = 0.0f32;
     for rf in &scan.faces {
+        let e = (rf.n.dot(v) + rf.d).abs();
+        if e > d {
+            d = e;
+        }
         if rf.a == other || rf.b == other || rf.area <= 0.0 {
             // Deleted by the collapse, or already degenerate.
             continue;
@@ -266,10 +292,10 @@ fn flips(scan: &RingScan, other: u32, v: Vec3A) -> bool {
         // rf.n is unit and rf.area = |n0| / 2.
         let dot = rf.n.dot(n1);
         if dot <= 0.0 || n1.length_squared() <= 1e-10 * (4.0 * rf.area * rf.area) {
-            return true;
+            return None;
         }
     }
-    false
+    Some(d)
 }
 
 /// Builds `sc.wedge_map` (wedge of `s` → wedge of `t`) from the faces of

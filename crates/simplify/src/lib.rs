@@ -5,7 +5,9 @@
 //! linear time* (Multimedia Systems, 2006): iterative full-edge collapse
 //! driven by memoryless quadrics, ordered by a constant-size
 //! replacement-selection heap inside a single pipeline per pass, with
-//! two-stage optimal placement and hole filling.
+//! two-stage optimal placement and hole filling. (By default the heap
+//! holds one record, so each record under the pass's error threshold is
+//! collapsed as soon as it is costed: see `Options::DEFAULT_HEAP_SIZE`.)
 //!
 //! The pipeline, one file per stage (each names its paper section and its
 //! departures):

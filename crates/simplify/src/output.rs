@@ -26,15 +26,17 @@ pub fn compact(m: &mut WorkMesh, index: &mut Vec<u32>) {
     index.clear();
     index.resize(n, NONE);
     let mut w = 0;
-    for r in 0..m.faces.len() {
-        let f = m.faces[r];
+    // Plain slices in the hot loops: their bounds stay in registers.
+    let (faces, idx) = (&mut m.faces[..], &mut index[..]);
+    for r in 0..faces.len() {
+        let f = faces[r];
         if f[0] == DEAD {
             continue;
         }
         for v in f {
-            index[v as usize] = 0;
+            idx[v as usize] = 0;
         }
-        m.faces[w] = f;
+        faces[w] = f;
         if has_wedges {
             m.wedges[w] = m.wedges[r];
         }
@@ -48,11 +50,12 @@ pub fn compact(m: &mut WorkMesh, index: &mut Vec<u32>) {
 
     // Number the marked vertices in their old order.
     let mut next = 0u32;
+    let (idx, pos, err) = (&mut index[..n], &mut m.pos[..n], &mut m.err[..n]);
     for v in 0..n {
-        if index[v] != NONE {
-            index[v] = next;
-            m.pos[next as usize] = m.pos[v];
-            m.err[next as usize] = m.err[v];
+        if idx[v] != NONE {
+            idx[v] = next;
+            pos[next as usize] = pos[v];
+            err[next as usize] = err[v];
             next += 1;
         }
     }
@@ -66,9 +69,10 @@ pub fn compact(m: &mut WorkMesh, index: &mut Vec<u32>) {
         }
         m.attr.truncate(next as usize * k);
     }
+    let idx = &index[..];
     for f in &mut m.faces {
         for v in f.iter_mut() {
-            *v = index[*v as usize];
+            *v = idx[*v as usize];
         }
     }
     m.pos.truncate(next as usize);

@@ -21,7 +21,7 @@
 //!   2-plane — the value of Garland–Heckbert's extended quadric, computed
 //!   directly from the face instead of from a stored (3+k)² matrix.
 
-use glam::{DVec3, Vec3A};
+use glam::DVec3;
 
 /// Border planes weigh this many times the squared edge length: enough
 /// that a rim vertex slides along the rim rather than inward (on the bunny,
@@ -78,6 +78,42 @@ impl Quadric {
         m[9] += w * d * d;
     }
 
+    /// [`add_plane`](Self::add_plane) with `d = 0`: only the quadratic
+    /// part changes.
+    #[inline]
+    pub fn add_plane_through_origin(&mut self, n: DVec3, w: f64) {
+        let (a, b, c) = (n.x * w, n.y * w, n.z * w);
+        let m = &mut self.m;
+        m[0] += a * n.x;
+        m[1] += a * n.y;
+        m[2] += a * n.z;
+        m[3] += b * n.y;
+        m[4] += b * n.z;
+        m[5] += c * n.z;
+    }
+
+    /// Adds `other`, a quadric whose planes all pass through its frame's
+    /// origin (linear and constant parts zero), after moving that origin
+    /// to `o` in this quadric's frame: `other(v - o)` for every `v`.
+    #[inline]
+    pub fn add_translated_from_origin(&mut self, other: &Quadric, o: DVec3) {
+        let a = &other.m;
+        // A o, then b = -A o and c = oᵀ A o.
+        let ao = DVec3::new(
+            a[0] * o.x + a[1] * o.y + a[2] * o.z,
+            a[1] * o.x + a[3] * o.y + a[4] * o.z,
+            a[2] * o.x + a[4] * o.y + a[5] * o.z,
+        );
+        let m = &mut self.m;
+        for i in 0..6 {
+            m[i] += a[i];
+        }
+        m[6] -= ao.x;
+        m[7] -= ao.y;
+        m[8] -= ao.z;
+        m[9] += o.dot(ao);
+    }
+
     /// The quadric's value at `v` (eq. 3). Never negative in exact
     /// arithmetic; rounding can give tiny negatives, clamped to 0.
     #[inline]
@@ -88,6 +124,19 @@ impl Quadric {
             + y * (m[3] * y + 2.0 * (m[4] * z + m[7]))
             + z * (m[5] * z + 2.0 * m[8])
             + m[9];
+        r.max(0.0)
+    }
+
+    /// [`eval`](Self::eval) of a quadric whose planes all pass through the
+    /// origin (linear and constant parts zero, as in a ring's own frame):
+    /// the same value from the quadratic part alone.
+    #[inline]
+    pub fn eval_through_origin(&self, v: DVec3) -> f64 {
+        let m = &self.m;
+        let (x, y, z) = (v.x, v.y, v.z);
+        let r = x * (m[0] * x + 2.0 * (m[1] * y + m[2] * z))
+            + y * (m[3] * y + 2.0 * (m[4] * z))
+            + z * (m[5] * z);
         r.max(0.0)
     }
 
@@ -146,107 +195,6 @@ impl Quadric {
         };
         let lambda = if lambda.is_finite() { lambda } else { 1.0 };
         (a + e * lambda, lambda)
-    }
-}
-
-/// A ring's memoryless quadric in the ring's own frame (centre vertex at
-/// the origin), for the cost stage, and the ring's area. Every face plane and border plane of a
-/// ring passes through its centre, so the linear and constant parts of the
-/// full [`Quadric`] vanish there and `Q(v) = vᵀ A v`: six coefficients
-/// `[a00 a01 a02 a11 a12 a22]`. Each plane's rank-one term is formed from
-/// the single-precision cross product of the ring's (small, `f32`) edge
-/// vectors and summed in `f64`: the sum is then exactly a sum of squares
-/// of slightly rounded planes, so a candidate in a flat region still gets
-/// a cost near 0 instead of `f32` cancellation noise.
-///
-/// Departure (the record key): the cost is `Q_s(v_t)` divided by the area
-/// of `r_s`, the area-weighted mean squared distance of the moved vertex to
-/// the ring's planes, as meshoptimizer normalises its errors. The plain sum
-/// grows with the faces' size, so small sharp features (the bunny's ears)
-/// looked cheap next to large flat faces and went first: on the bunny at
-/// 1% the max distance was 1.2× meshoptimizer's, normalised 0.6×.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct RingQuadric {
-    pub a: [f64; 6],
-    /// Sum of the face areas.
-    pub area: f64,
-}
-
-impl RingQuadric {
-    pub const ZERO: RingQuadric = RingQuadric {
-        a: [0.0; 6],
-        area: 0.0,
-    };
-
-    /// Adds the area-weighted plane of the triangle `(0, p, q)` (eq. 4
-    /// with QSlim's area weight): `area · n nᵀ` with `n` the unit normal,
-    /// computed as `c cᵀ / (2 |c|)` for `c = p × q` (one square root, no
-    /// normalised vector, no offset: the plane contains the origin).
-    #[inline]
-    pub fn add_face(&mut self, p: Vec3A, q: Vec3A) {
-        let c = p.cross(q);
-        let l2 = c.length_squared();
-        if !(l2 > 0.0) {
-            return;
-        }
-        // w = 1 / (2 |c|) in single precision (the weight's rounding only
-        // scales the face's exact rank-one term); area = |c| / 2 = w |c|².
-        let w = 0.5 / l2.sqrt();
-        self.area += (w * l2) as f64;
-        self.add_scaled(c, w as f64);
-    }
-
-    /// Adds `w · c cᵀ`.
-    #[inline]
-    fn add_scaled(&mut self, c: Vec3A, w: f64) {
-        let (x, y, z) = (c.x as f64, c.y as f64, c.z as f64);
-        let (sx, sy, sz) = (x * w, y * w, z * w);
-        let a = &mut self.a;
-        a[0] += sx * x;
-        a[1] += sx * y;
-        a[2] += sx * z;
-        a[3] += sy * y;
-        a[4] += sy * z;
-        a[5] += sz * z;
-    }
-
-    /// Adds the border plane of the edge `0 → e` of a face with unit
-    /// normal `n` (through the edge, perpendicular to the face), weighted
-    /// by `weight × |e|²`, as [`add_border_plane`] does.
-    #[inline]
-    pub fn add_border(&mut self, e: Vec3A, n: Vec3A, weight: f64) {
-        let p = e.cross(n);
-        let pl2 = p.length_squared();
-        if !(pl2 > 0.0) {
-            return;
-        }
-        self.add_scaled(p, weight * e.length_squared() as f64 / pl2 as f64);
-    }
-
-    /// `vᵀ A v` (never negative).
-    #[inline]
-    pub fn eval(&self, v: Vec3A) -> f64 {
-        let a = &self.a;
-        let (x, y, z) = (v.x as f64, v.y as f64, v.z as f64);
-        let r = x * (a[0] * x + 2.0 * (a[1] * y + a[2] * z))
-            + y * (a[3] * y + 2.0 * a[4] * z)
-            + z * (a[5] * z);
-        r.max(0.0)
-    }
-
-    /// A value of [`eval`](Self::eval) as a record key: divided by the
-    /// ring's area (when it has any), so the key is a mean squared distance
-    /// instead of a volume-like sum; finite and never NaN (overflow
-    /// saturates at `f32::MAX`).
-    #[inline]
-    pub fn normalise(&self, cost: f64) -> f32 {
-        let c = if self.area > 0.0 {
-            cost / self.area
-        } else {
-            cost
-        };
-        let c = c as f32;
-        if c <= f32::MAX { c } else { f32::MAX }
     }
 }
 

@@ -48,19 +48,30 @@ impl RingTable {
     pub fn rebuild(&mut self, n: usize, faces: &[[u32; 3]]) {
         self.off.clear();
         self.off.resize(n + 1, 0);
+        // Plain slices in the loops: their bounds stay in registers.
+        let off = &mut self.off[..];
         for f in faces {
             if f[0] == DEAD {
                 continue;
             }
             for &v in f {
-                self.off[v as usize + 1] += 1;
+                off[v as usize + 1] += 1;
             }
         }
-        for i in 0..n {
-            self.off[i + 1] += self.off[i];
+        let mut acc = 0;
+        for x in off.iter_mut() {
+            acc += *x;
+            *x = acc;
         }
-        self.list.clear();
-        self.list.resize(self.off[n] as usize, 0);
+        // Every entry is written below: only grow (zero-filling the new
+        // part), never clear, so later, smaller passes skip the fill.
+        let len = off[n] as usize;
+        if self.list.len() >= len {
+            self.list.truncate(len);
+        } else {
+            self.list.resize(len, 0);
+        }
+        let list = &mut self.list[..];
         // Fill using off[v] as the cursor of row v - 1 … shifted below: after
         // the fill, off[v] holds the end of row v, i.e. the start of v + 1.
         for (fi, f) in faces.iter().enumerate() {
@@ -68,15 +79,13 @@ impl RingTable {
                 continue;
             }
             for &v in f {
-                let c = &mut self.off[v as usize];
-                self.list[*c as usize] = fi as u32;
+                let c = &mut off[v as usize];
+                list[*c as usize] = fi as u32;
                 *c += 1;
             }
         }
-        for i in (1..=n).rev() {
-            self.off[i] = self.off[i - 1];
-        }
-        self.off[0] = 0;
+        off.copy_within(0..n, 1);
+        off[0] = 0;
     }
 
     #[inline]

@@ -33,6 +33,9 @@ pub struct Simplifier {
     pub(crate) peak_bytes: usize,
     /// Fraction of admitted records that collapsed in the last pass.
     pub(crate) success: f64,
+    /// Whether the working mesh is compacted (no deleted face, no
+    /// unreferenced vertex).
+    pub(crate) compacted: bool,
 }
 
 impl Default for Simplifier {
@@ -53,6 +56,7 @@ impl Simplifier {
             collapses: 0,
             peak_bytes: 0,
             success: 0.5,
+            compacted: true,
         }
     }
 
@@ -97,7 +101,11 @@ impl Simplifier {
         if let Some(p) = opts.prune {
             prune_small_components(&mut self.m, p);
         }
-        compact(&mut self.m, &mut self.rings.off);
+        // No compaction here: the first pass works on the loaded mesh as
+        // it is (deleted faces and unreferenced vertices have empty rings)
+        // and compacts after itself; `run_to` compacts when no pass ran.
+        // On a clean input the compaction would renumber nothing.
+        self.compacted = false;
         Ok(())
     }
 
@@ -109,8 +117,18 @@ impl Simplifier {
         self.peak_bytes = self.peak_bytes.max(b);
     }
 
-    /// Passes until `goal` faces (or a stop condition).
+    /// Passes until `goal` faces (or a stop condition); the working mesh
+    /// is compacted afterwards.
     pub(crate) fn run_to(&mut self, goal: usize, opts: &Options) -> StopReason {
+        let stop = self.run_passes(goal, opts);
+        if !self.compacted {
+            compact(&mut self.m, &mut self.rings.off);
+            self.compacted = true;
+        }
+        stop
+    }
+
+    fn run_passes(&mut self, goal: usize, opts: &Options) -> StopReason {
         let mut unbounded = false;
         let mut passes_here = 0;
         loop {
@@ -138,6 +156,7 @@ impl Simplifier {
                 &mut self.sc,
             );
             compact(&mut self.m, &mut self.rings.off);
+            self.compacted = true;
             self.passes += 1;
             passes_here += 1;
             self.collapses += st.collapses;
