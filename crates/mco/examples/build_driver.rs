@@ -5,7 +5,9 @@
 //! best time, input points per second and a CRC of the encoded model (its
 //! build time zeroed). Beside the wall time it prints the best thread CPU
 //! time, which a loaded machine inflates far less (other processes
-//! preempting this one do not count).
+//! preempting this one do not count). With `MCO_OUT=PATH` in the
+//! environment the last model is also written there (for
+//! `compare_models`, which checks that two builds draw the same meshes).
 //!
 //! ```text
 //! cargo run --release -p lodkit-mco --example build_driver -- 640000 3
@@ -67,6 +69,9 @@ fn main() {
         // The file ends with its own CRC; hash what it covers.
         let bytes = encode(&m);
         crc = crc32fast::hash(&bytes[..bytes.len() - 4]);
+        if let Some(path) = std::env::var_os("MCO_OUT") {
+            std::fs::write(path, &bytes).expect("write MCO_OUT");
+        }
     }
     println!(
         "{what}: {points} points, best {best:.3} s, {:.0} points/s, \
