@@ -42,7 +42,8 @@ use glam::Vec3;
 use crate::marching_cubes::{CubeEdges, NO_VERTEX, corner_key, edge_key};
 use crate::mc_table::{EDGES, FACES, Face, face_edges, face_segments_fixed};
 use crate::model::{McoModel, Patch};
-use crate::octree_build::Tree;
+use crate::neighbours::{FaceNeighbours, NO_NODE};
+use crate::octree_build::{Level, Tree};
 use crate::signed_distance::{KEY_BITS, KeyMap, pack, unpack};
 
 fn closest_on_segment(p: Vec3, a: Vec3, b: Vec3) -> Vec3 {
@@ -201,6 +202,45 @@ fn dedup_sorted<T: PartialEq + Copy>(v: &mut [T]) -> usize {
     w
 }
 
+/// The level-`lv` node at offset `ou` along axis `u` and `ow` along axis
+/// `w` (each in `-1..=1`) from node `i` at `pc`, through the face
+/// neighbour table `nbr`, and a binary search for a diagonal neighbour
+/// whose two paths through face neighbours both cross empty cells.
+#[inline]
+fn near(
+    lv: &Level,
+    nbr: &[FaceNeighbours],
+    i: usize,
+    pc: [u32; 3],
+    (u, ou): (usize, i32),
+    (w, ow): (usize, i32),
+) -> Option<u32> {
+    let step = |n: u32, axis: usize, o: i32| -> u32 {
+        match o {
+            0 => n,
+            _ if n == NO_NODE => NO_NODE,
+            _ => nbr[n as usize][2 * axis + (o > 0) as usize],
+        }
+    };
+    let i = i as u32;
+    let via_u = step(step(i, u, ou), w, ow);
+    if via_u != NO_NODE {
+        return Some(via_u);
+    }
+    if ou == 0 || ow == 0 {
+        return None;
+    }
+    let via_w = step(step(i, w, ow), u, ou);
+    if via_w != NO_NODE {
+        return Some(via_w);
+    }
+    let mut c = pc;
+    for (axis, o) in [(u, ou), (w, ow)] {
+        c[axis] = c[axis].checked_add_signed(o)?;
+    }
+    crate::neighbours::find(&lv.keys, c)
+}
+
 /// Same-level node pairs whose shared face cannot be crack-patched (see
 /// `face_patchable`), and the nodes around unpatchable edges: they must
 /// expand in the same LOD step (see [`crate::priority`]). Call after
@@ -210,15 +250,15 @@ pub fn expand_together(tree: &Tree) -> Vec<(u32, u32)> {
     for l in 1..tree.levels.len() {
         let lv = &tree.levels[l];
         let below = &tree.levels[l - 1];
+        let nbr = &tree.face_neighbours[l];
         for (i, &k) in lv.keys.iter().enumerate() {
             let pc = unpack(k);
             for axis in 0..3u8 {
                 let f = Face { axis, side: 1 };
-                let mut mc = pc;
-                mc[axis as usize] += 1;
-                let Some(&j) = lv.index.get(&pack(mc[0], mc[1], mc[2])) else {
+                let j = nbr[i][2 * axis as usize + 1];
+                if j == NO_NODE {
                     continue;
-                };
+                }
                 if !face_patchable(tree, l, i, j as usize, f) {
                     out.push((tree.node_id[l][i], tree.node_id[l][j as usize]));
                 }
@@ -260,18 +300,15 @@ pub fn expand_together(tree: &Tree) -> Vec<(u32, u32)> {
                     continue;
                 }
                 let (u, w) = ((axis + 1) % 3, (axis + 2) % 3);
-                let base = [x >> l, y >> l, z >> l];
+                // The 4 cubes around the edge are this node and its
+                // neighbours at offsets `(a_u − du, a_w − dw)` along `u`
+                // and `w` (`a_u`, `a_w`: corner `a`'s offsets).
+                let (au, aw) = ((*a >> u & 1) as i32, (*a >> w & 1) as i32);
                 let mut around = [0u32; 4];
                 let mut na = 0;
-                for du in 0..2u32 {
-                    for dw in 0..2u32 {
-                        let mut c = base;
-                        if c[u] < du || c[w] < dw {
-                            continue;
-                        }
-                        c[u] -= du;
-                        c[w] -= dw;
-                        if let Some(&j) = lv.index.get(&pack(c[0], c[1], c[2])) {
+                for du in 0..2i32 {
+                    for dw in 0..2i32 {
+                        if let Some(j) = near(lv, nbr, i, pc, (u, au - du), (w, aw - dw)) {
                             around[na] = tree.node_id[l][j as usize];
                             na += 1;
                         }
@@ -305,6 +342,7 @@ pub fn patch(tree: &mut Tree, model: &mut McoModel) {
     let mut subs: Vec<[u32; 2]> = Vec::new();
     for l in 0..depth {
         let (lv, up) = (&levels[l], &levels[l + 1]);
+        let (parent, up_nbr) = (&tree.parent[l], &tree.face_neighbours[l + 1]);
         for i in 0..lv.keys.len() {
             let cfg = lv.configs[i];
             if cfg == 0 || cfg == 255 {
@@ -314,7 +352,6 @@ pub fn patch(tree: &mut Tree, model: &mut McoModel) {
             let cube = unpack(lv.keys[i]);
             let ne = &lv.node_edges[i];
             let run_start = found.len();
-            let pc = [cube[0] >> 1, cube[1] >> 1, cube[2] >> 1];
             for f in FACES {
                 let a = f.axis as usize;
                 if cube[a] & 1 != f.side as u32 {
@@ -323,17 +360,11 @@ pub fn patch(tree: &mut Tree, model: &mut McoModel) {
                 if face_segments_fixed(cfg, f).is_empty() {
                     continue; // no crossing on the face: nothing to move
                 }
-                let mut qc = pc;
-                if f.side == 1 {
-                    qc[a] += 1;
-                } else if qc[a] == 0 {
+                // The coarse neighbour: across the parent's face.
+                let qi = up_nbr[parent[i] as usize][2 * a + f.side as usize];
+                if qi == NO_NODE {
                     continue;
-                } else {
-                    qc[a] -= 1;
                 }
-                let Some(&qi) = up.index.get(&pack(qc[0], qc[1], qc[2])) else {
-                    continue;
-                };
                 let qi = qi as usize;
                 let q = node_id[l + 1][qi];
                 let opposite = Face {

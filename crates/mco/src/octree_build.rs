@@ -44,6 +44,7 @@ use crate::marching_cubes::{
 };
 use crate::mc_table::EDGES;
 use crate::model::{McoModel, Node};
+use crate::neighbours::{FaceNeighbours, face_neighbours};
 use crate::signed_distance::{KeyMap, SignedDistanceField, pack, unpack};
 use crate::{Error, Result};
 
@@ -76,6 +77,13 @@ pub struct Tree<'f> {
     /// Per level, once [`assemble`] has run: each node's children (level
     /// `L - 1` indices, increasing) as `list[start[i]..start[i + 1]]`.
     pub children: Vec<(Vec<u32>, Vec<u32>)>,
+    /// Per level below the root, once [`assemble`] has run: each node's
+    /// parent (a level `L + 1` index).
+    pub parent: Vec<Vec<u32>>,
+    /// Per level, once [`assemble`] has run: each node's face neighbours
+    /// ([`crate::neighbours`]); empty for the leaf level, which no stage
+    /// asks.
+    pub face_neighbours: Vec<Vec<FaceNeighbours>>,
 }
 
 impl Tree<'_> {
@@ -164,6 +172,8 @@ pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) ->
         vertices,
         node_id: Vec::new(),
         children: Vec::new(),
+        parent: Vec::new(),
+        face_neighbours: Vec::new(),
     };
     let offsets = rule_offsets();
     for l in 1..=depth {
@@ -382,6 +392,18 @@ pub fn assemble(tree: &mut Tree) -> McoModel {
         })
         .collect();
     tree.children = children;
+    tree.face_neighbours = tree
+        .levels
+        .iter()
+        .enumerate()
+        .map(|(l, lv)| {
+            if l == 0 {
+                Vec::new()
+            } else {
+                face_neighbours(&lv.keys)
+            }
+        })
+        .collect();
     let children = &tree.children;
     let kids = |l: usize, i: u32| -> &[u32] {
         let (start, list) = &children[l];
@@ -506,5 +528,6 @@ pub fn assemble(tree: &mut Tree) -> McoModel {
         model.nodes[id].deps_start = start as u32;
         model.nodes[id].deps_count = (model.deps.len() - start) as u16;
     }
+    tree.parent = parent;
     model
 }
