@@ -511,6 +511,40 @@ impl SignedDistanceField {
         }
     }
 
+    /// Brick `b`'s vertices as bit masks, one word per `z` slice (bit
+    /// `x + 8y`): which are defined ([`SignedDistanceField::slot_defined`]),
+    /// which have a negative signed distance (inside), and which a sample
+    /// has reached.
+    pub fn brick_masks(&self, b: usize) -> [[u64; BRICK as usize]; 3] {
+        let first = b * BRICK_VOLUME;
+        let dist2 = &self.dist2[first..][..BRICK_VOLUME];
+        let distance = &self.distance[first..][..BRICK_VOLUME];
+        let sample = &self.sample[first..][..BRICK_VOLUME];
+        let limit = self.tangential_limit;
+        let mut out = [[0u64; BRICK as usize]; 3];
+        for z in 0..BRICK as usize {
+            let (mut d, mut n, mut r) = (0u64, 0u64, 0u64);
+            for bit in 0..64 {
+                let li = z * 64 + bit;
+                let s = Slot {
+                    dist2: dist2[li],
+                    distance: distance[li],
+                    sample: sample[li],
+                };
+                let ok = !s.is_empty()
+                    && (limit == f32::INFINITY
+                        || s.dist2 - s.distance * s.distance <= limit * limit);
+                d |= (ok as u64) << bit;
+                n |= ((s.distance < 0.0) as u64) << bit;
+                r |= (!s.is_empty() as u64) << bit;
+            }
+            out[0][z] = d;
+            out[1][z] = n;
+            out[2][z] = r;
+        }
+        out
+    }
+
     /// Number of bricks.
     pub fn brick_count(&self) -> usize {
         self.brick_coords.len()
