@@ -273,36 +273,37 @@ impl Slot {
     }
 }
 
-/// One brick row of the stamping: `d2[x] = (xsq[x] + y2) + z2` for the 8
-/// vertices of the row and the bit mask of those where `d2 < old`
-/// (IEEE single precision either way, so the SSE2 path and the portable
-/// one give the same bits).
-#[inline]
-fn row_wins(xsq: &[f32; 8], y2: f32, z2: f32, old: &[f32; 8]) -> ([f32; 8], u32) {
+/// One 4-vertex window of a brick row in the stamping: `d2[t] = (xsq[t] +
+/// y2) + z2` and the bit mask of the lanes where `d2 < old` (IEEE single
+/// precision either way, so the SSE2 path and the portable one give the
+/// same bits).
+#[inline(always)]
+fn window_wins(xsq: &[f32; 4], y2: f32, z2: f32, old: &[f32; 4]) -> ([f32; 4], u32) {
     #[cfg(target_arch = "x86_64")]
     {
         use std::arch::x86_64::{
             _mm_add_ps, _mm_cmplt_ps, _mm_loadu_ps, _mm_movemask_ps, _mm_set1_ps, _mm_storeu_ps,
         };
-        let mut d2 = [0f32; 8];
+        let mut d2 = [0f32; 4];
         // SAFETY: SSE2 is part of the x86_64 baseline; every load and
-        // store is an unaligned access to 4 lanes inside an 8-lane array.
+        // store is an unaligned access to a whole 4-lane array.
         let wins = unsafe {
-            let (y, z) = (_mm_set1_ps(y2), _mm_set1_ps(z2));
-            let lo = _mm_add_ps(_mm_add_ps(_mm_loadu_ps(xsq.as_ptr()), y), z);
-            let hi = _mm_add_ps(_mm_add_ps(_mm_loadu_ps(xsq.as_ptr().add(4)), y), z);
-            _mm_storeu_ps(d2.as_mut_ptr(), lo);
-            _mm_storeu_ps(d2.as_mut_ptr().add(4), hi);
-            let wl = _mm_movemask_ps(_mm_cmplt_ps(lo, _mm_loadu_ps(old.as_ptr())));
-            let wh = _mm_movemask_ps(_mm_cmplt_ps(hi, _mm_loadu_ps(old.as_ptr().add(4))));
-            (wl | wh << 4) as u32
+            let d = _mm_add_ps(
+                _mm_add_ps(_mm_loadu_ps(xsq.as_ptr()), _mm_set1_ps(y2)),
+                _mm_set1_ps(z2),
+            );
+            let w = _mm_movemask_ps(_mm_cmplt_ps(d, _mm_loadu_ps(old.as_ptr())));
+            if w != 0 {
+                _mm_storeu_ps(d2.as_mut_ptr(), d);
+            }
+            w as u32
         };
         (d2, wins)
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
-        let d2: [f32; 8] = std::array::from_fn(|x| (xsq[x] + y2) + z2);
-        let wins = (0..8).fold(0u32, |m, x| m | ((d2[x] < old[x]) as u32) << x);
+        let d2: [f32; 4] = std::array::from_fn(|t| (xsq[t] + y2) + z2);
+        let wins = (0..4).fold(0u32, |m, t| m | ((d2[t] < old[t]) as u32) << t);
         (d2, wins)
     }
 }
@@ -432,37 +433,43 @@ impl SignedDistanceField {
                     for bx in lo[0] >> BRICK_BITS..=hi[0] >> BRICK_BITS {
                         let b = self.brick_or_insert(pack(bx, by, bz), [bx, by, bz]);
                         let base = [bx << BRICK_BITS, by << BRICK_BITS, bz << BRICK_BITS];
-                        // This brick's part of the block, as exclusive ranges.
-                        let r = |a: usize| lo[a].max(base[a])..hi[a].min(base[a] + LOCAL_MASK) + 1;
-                        let (rx, ry, rz) = (r(0), r(1), r(2));
-                        // A whole brick row at a time (8 lanes, vectorised):
-                        // lanes outside the block get +∞ and never win.
-                        let mut xsq = [f32::INFINITY; BRICK as usize];
-                        for x in rx {
-                            xsq[(x - base[0]) as usize] = sq[0][(x - lo[0]) as usize];
-                        }
+                        // This brick's part of the block, as inclusive ranges.
+                        let r = |a: usize| (lo[a].max(base[a]), hi[a].min(base[a] + LOCAL_MASK));
+                        let ((xa, xb), (ya, yb), (za, zb)) = (r(0), r(1), r(2));
+                        // A 4-vertex window of each brick row covers the
+                        // block's part (at most 4 vertices): lanes outside
+                        // the part get +∞ and never win.
+                        let p0 = (xa - base[0]).min(BRICK - 4);
+                        let xsq: [f32; 4] = std::array::from_fn(|t| {
+                            let x = base[0] + p0 + t as u32;
+                            if (xa..=xb).contains(&x) {
+                                sq[0][(x - lo[0]) as usize]
+                            } else {
+                                f32::INFINITY
+                            }
+                        });
                         let first = b * BRICK_VOLUME;
                         let dist2 = &mut self.dist2[first..][..BRICK_VOLUME];
                         let distance = &mut self.distance[first..][..BRICK_VOLUME];
                         let sample = &mut self.sample[first..][..BRICK_VOLUME];
                         let changed = &mut self.changed[b];
-                        for z in rz {
+                        // Lane `t`'s offset into the block's x range.
+                        let ix = (base[0] + p0).wrapping_sub(lo[0]);
+                        for z in za..=zb {
                             let k = (z - lo[2]) as usize & 3;
-                            for y in ry.clone() {
+                            for y in ya..=yb {
                                 let j = (y - lo[1]) as usize & 3;
-                                let (y2, z2) = (sq[1][j], sq[2][k]);
-                                let row = local_index(0, y, z);
-                                let old: &mut [f32; BRICK as usize] = (&mut dist2
-                                    [row..row + BRICK as usize])
+                                let row = local_index(0, y, z) + p0 as usize;
+                                let old: &mut [f32; 4] = (&mut dist2[row..row + 4])
                                     .try_into()
-                                    .expect("a brick row");
-                                let (d2, mut wins) = row_wins(&xsq, y2, z2, old);
+                                    .expect("a window of a brick row");
+                                let (d2, mut wins) = window_wins(&xsq, sq[1][j], sq[2][k], old);
                                 while wins != 0 {
-                                    let lx = wins.trailing_zeros() as usize;
+                                    let t = wins.trailing_zeros() as usize;
                                     wins &= wins - 1;
-                                    let li = row + lx;
-                                    let i = (base[0] + lx as u32 - lo[0]) as usize & 3;
-                                    old[lx] = d2[lx];
+                                    let li = row + t;
+                                    let i = ix.wrapping_add(t as u32) as usize & 3;
+                                    old[t] = d2[t];
                                     distance[li] = (dn[0][i] + dn[1][j]) + dn[2][k];
                                     self.defined += (sample[li] == u32::MAX) as usize;
                                     sample[li] = id;
