@@ -307,11 +307,16 @@ fn rule_value(
     offsets: &[Vec<[i32; 3]>; 3],
 ) -> Option<Corner> {
     for class in offsets {
-        let known: Vec<Corner> = class
-            .iter()
-            .filter_map(|&d| offset_key(v, d, step))
-            .filter_map(|k| tree.corner(below, k))
-            .collect();
+        // At most 12 offsets per class (the face diagonals): no allocation.
+        let mut buf = [UNSET; 12];
+        let mut n = 0;
+        for k in class.iter().filter_map(|&d| offset_key(v, d, step)) {
+            if let Some(c) = tree.corner(below, k) {
+                buf[n] = c;
+                n += 1;
+            }
+        }
+        let known = &buf[..n];
         if known.is_empty() {
             continue;
         }
