@@ -39,7 +39,7 @@
 
 use glam::Vec3;
 
-use crate::marching_cubes::{CubeEdges, NO_VERTEX, corner_key, edge_key};
+use crate::marching_cubes::{CubeEdges, NO_VERTEX, corner_key, edge_key, node_triangles};
 use crate::mc_table::{EDGES, FACES, Face, face_edges, face_segments_fixed};
 use crate::model::{McoModel, Patch};
 use crate::neighbours::{FaceNeighbours, NO_NODE};
@@ -330,7 +330,11 @@ pub fn patch(tree: &mut Tree, model: &mut McoModel) {
     let levels = &tree.levels;
     let node_id = &tree.node_id;
     let vertices = &mut tree.vertices;
-    // (fine vertex, coarse node) → compensation point.
+    // (fine vertex, coarse node) → compensation point: per fine vertex, its
+    // first coarse node and point in two arrays (read in vertex order, no
+    // hashing), the rare further ones in a map.
+    let mut first_coarse = vec![NO_NODE; vertices.len()];
+    let mut first_point = vec![0u32; vertices.len()];
     let mut point_of: KeyMap<u32> = KeyMap::default();
     // Per compensation point: (sum of fine unit normals, count, coarse normal).
     let mut normal_acc: Vec<(Vec3, u32, Vec3)> = Vec::new();
@@ -340,6 +344,7 @@ pub fn patch(tree: &mut Tree, model: &mut McoModel) {
     let mut runs: Vec<(u32, u8)> = vec![(0, 0); model.nodes.len()];
     let mut found: Vec<Patch> = Vec::new();
     let mut subs: Vec<[u32; 2]> = Vec::new();
+    let (mut own_tris, mut coarse_tris) = (Vec::new(), Vec::new());
     for l in 0..depth {
         let (lv, up) = (&levels[l], &levels[l + 1]);
         let (parent, up_nbr) = (&tree.parent[l], &tree.face_neighbours[l + 1]);
@@ -352,6 +357,9 @@ pub fn patch(tree: &mut Tree, model: &mut McoModel) {
             let cube = unpack(lv.keys[i]);
             let ne = &lv.node_edges[i];
             let run_start = found.len();
+            // This node's triangles (as `assemble` made them), built when a
+            // patch first needs them.
+            own_tris.clear();
             for f in FACES {
                 let a = f.axis as usize;
                 if cube[a] & 1 != f.side as u32 {
@@ -419,27 +427,44 @@ pub fn patch(tree: &mut Tree, model: &mut McoModel) {
                                 .total_cmp(&b.1.distance_squared(px))
                         })
                         .expect("segments is not empty");
-                    let new = *point_of
-                        .entry((x as u64) << 32 | q as u64)
-                        .or_insert_with(|| {
-                            let n = vertices.normals[x as usize];
-                            let c = vertices.colors[x as usize];
-                            let coarse = model
-                                .node_tris(q)
-                                .chunks_exact(3)
-                                .find(|t| t.contains(&seg[0]) && t.contains(&seg[1]))
-                                .map(|t| {
-                                    unit_normal(
-                                        [0, 1, 2].map(|k| vertices.positions[t[k] as usize]),
-                                    )
-                                })
-                                .unwrap_or(Vec3::ZERO);
-                            normal_acc.push((Vec3::ZERO, 0, coarse));
-                            vertices.push(r, n, c)
-                        });
+                    // The point of `(x, q)`: in the per-vertex slot when
+                    // `x`'s first coarse neighbour is `q`, else in the map.
+                    let mut make = || {
+                        let n = vertices.normals[x as usize];
+                        let c = vertices.colors[x as usize];
+                        // `q`'s triangles, from its level entry (already
+                        // read) rather than the model's node arrays.
+                        coarse_tris.clear();
+                        node_triangles(up.configs[qi], qne, &mut coarse_tris);
+                        let coarse = coarse_tris
+                            .chunks_exact(3)
+                            .find(|t| t.contains(&seg[0]) && t.contains(&seg[1]))
+                            .map(|t| {
+                                unit_normal([0, 1, 2].map(|k| vertices.positions[t[k] as usize]))
+                            })
+                            .unwrap_or(Vec3::ZERO);
+                        normal_acc.push((Vec3::ZERO, 0, coarse));
+                        vertices.push(r, n, c)
+                    };
+                    let xi = x as usize;
+                    let new = if first_coarse[xi] == q {
+                        first_point[xi]
+                    } else if first_coarse[xi] == NO_NODE {
+                        let new = make();
+                        first_coarse[xi] = q;
+                        first_point[xi] = new;
+                        new
+                    } else {
+                        *point_of
+                            .entry((x as u64) << 32 | q as u64)
+                            .or_insert_with(make)
+                    };
                     // Fine triangles of this node around the moved vertex.
                     let slot = new as usize - (vertices.len() - normal_acc.len());
-                    for t in model.node_tris(id).chunks_exact(3) {
+                    if own_tris.is_empty() {
+                        node_triangles(cfg, ne, &mut own_tris);
+                    }
+                    for t in own_tris.chunks_exact(3) {
                         if t.contains(&x) {
                             let pts = [0, 1, 2].map(|k| {
                                 if t[k] == x {
