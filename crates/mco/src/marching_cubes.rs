@@ -17,7 +17,7 @@ use glam::Vec3;
 
 use crate::mc_table::{EDGES, TABLE};
 use crate::signed_distance::{
-    BRICK, BRICK_BITS, FieldVertex, Grid, KeyMap, SignedDistanceField, pack, unpack,
+    BRICK, BRICK_BITS, Grid, KeyMap, SignedDistanceField, Slot, pack, unpack,
 };
 
 /// Where a crossing edge's vertex sits, from `v0`: `|d0| / (|d0| + |d1|)`.
@@ -52,44 +52,56 @@ impl VertexBuffer {
     }
 }
 
-/// A lattice vertex as the octree sees it at some level: side, normal,
-/// colour and (where known) the signed distance.
+/// A lattice vertex as the octree sees it at some level: side, (where
+/// known) the signed distance, and the sample whose normal and colour it
+/// carries. The normal and colour are looked up only where a vertex is
+/// made ([`blend`]): most corners are only asked their side, and the
+/// samples' attributes are a cache miss away.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Corner {
     pub inside: bool,
     pub distance: f32,
-    pub normal: Vec3,
-    pub color: [u8; 4],
+    /// Index of the sample in the field ([`SignedDistanceField::sample_normal`]).
+    pub sample: u32,
 }
 
-impl From<&FieldVertex> for Corner {
-    fn from(f: &FieldVertex) -> Self {
+impl Corner {
+    /// The corner of a stored band slot.
+    #[inline]
+    pub fn of_slot(s: &Slot) -> Corner {
         Corner {
-            inside: f.distance < 0.0,
-            distance: f.distance,
-            normal: f.normal,
-            color: f.color,
+            inside: s.distance < 0.0,
+            distance: s.distance,
+            sample: s.sample,
         }
     }
 }
 
-impl From<FieldVertex> for Corner {
-    fn from(f: FieldVertex) -> Self {
-        (&f).into()
-    }
+/// Linear blend of two corners' normals and colours at `t` from `a`.
+pub fn blend(field: &SignedDistanceField, a: &Corner, b: &Corner, t: f32) -> (Vec3, [u8; 4]) {
+    blend_attributes(
+        (field.sample_normal(a.sample), field.sample_color(a.sample)),
+        (field.sample_normal(b.sample), field.sample_color(b.sample)),
+        t,
+    )
 }
 
-/// Linear blend of two corners' attributes at `t` from `a`.
-pub fn blend(a: &Corner, b: &Corner, t: f32) -> (Vec3, [u8; 4]) {
-    let n = a.normal.lerp(b.normal, t);
+/// Linear blend of two (normal, colour) pairs at `t` from `a`, the normal
+/// renormalised.
+pub fn blend_attributes(a: (Vec3, [u8; 4]), b: (Vec3, [u8; 4]), t: f32) -> (Vec3, [u8; 4]) {
+    let n = a.0.lerp(b.0, t);
     let n = if n.length_squared() > 1e-12 {
         n.normalize()
     } else {
-        a.normal
+        a.0
     };
-    let c = std::array::from_fn(|i| {
-        (a.color[i] as f32 + (b.color[i] as f32 - a.color[i] as f32) * t).round() as u8
-    });
+    // Equal colours blend to themselves (`a + 0 · t`, rounded, is `a` for
+    // finite `t`): skips four roundings, the common case.
+    let c = if a.1 == b.1 && t.is_finite() {
+        a.1
+    } else {
+        std::array::from_fn(|i| (a.1[i] as f32 + (b.1[i] as f32 - a.1[i] as f32) * t).round() as u8)
+    };
     (n, c)
 }
 
@@ -339,14 +351,14 @@ pub fn leaf_vertices_by_cube(
             let key = edge_key(ka, (e / 4) as u8);
             ce[e] = *edges.entry(key).or_insert_with(|| {
                 let fa = field
-                    .get(ka)
+                    .slot(ka)
                     .expect("a leaf cube's corners are in the band");
                 let fb = field
-                    .get(kb)
+                    .slot(kb)
                     .expect("a leaf cube's corners are in the band");
                 let t = edge_ratio(fa.distance, fb.distance);
                 let p = g.position(ka).lerp(g.position(kb), t);
-                let (n, c) = blend(&(&fa).into(), &(&fb).into(), t);
+                let (n, c) = blend(field, &Corner::of_slot(&fa), &Corner::of_slot(&fb), t);
                 vb.push(p, n, c)
             });
         }

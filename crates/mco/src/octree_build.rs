@@ -99,8 +99,8 @@ impl Tree<'_> {
 impl Tree<'_> {
     /// The value of lattice vertex `v` as level `level` sees it.
     pub fn corner(&self, level: usize, v: u64) -> Option<Corner> {
-        if let Some(f) = self.field.get(v) {
-            return Some(f.into());
+        if let Some(s) = self.field.slot(v) {
+            return Some(Corner::of_slot(&s));
         }
         self.levels.get(level)?.corners.get(&v).copied()
     }
@@ -139,8 +139,7 @@ fn offset_key(v: u64, d: [i32; 3], step: u32) -> Option<u64> {
 const UNSET: Corner = Corner {
     inside: false,
     distance: f32::NAN,
-    normal: glam::Vec3::ZERO,
-    color: [0; 4],
+    sample: u32::MAX,
 };
 
 /// Builds every level from the leaf cubes up to the single root.
@@ -206,8 +205,8 @@ pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) ->
             let mut cs = [UNSET; 8];
             for (c, slot) in cs.iter_mut().enumerate() {
                 let v = corner_key(cube, l as u32, c as u8);
-                *slot = if let Some(f) = field.get(v) {
-                    f.into()
+                *slot = if let Some(s) = field.slot(v) {
+                    Corner::of_slot(&s)
                 } else if let Some(&cv) = level.corners.get(&v) {
                     cv
                 } else {
@@ -270,7 +269,7 @@ pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) ->
                                 let g = field.grid;
                                 let p0 = g.position(h0);
                                 let p = p0.lerp(g.position(offset_key(h0, d, step).unwrap()), 0.5);
-                                let (n, col) = blend(&c0, &c1, 0.5);
+                                let (n, col) = blend(field, &c0, &c1, 0.5);
                                 tree.vertices.push(p, n, col)
                             }
                         }
@@ -278,7 +277,7 @@ pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) ->
                     None => {
                         let g = field.grid;
                         let p = g.position(va).lerp(g.position(vb), 0.5);
-                        let (n, col) = blend(&ca, &cb, 0.5);
+                        let (n, col) = blend(field, &ca, &cb, 0.5);
                         tree.vertices.push(p, n, col)
                     }
                 };

@@ -603,6 +603,18 @@ impl SignedDistanceField {
         self.slot_defined(&s).then_some(s)
     }
 
+    /// The normal of sample `i` (a [`Slot::sample`]).
+    #[inline]
+    pub fn sample_normal(&self, i: u32) -> Vec3 {
+        self.normals[i as usize]
+    }
+
+    /// The colour of sample `i` (a [`Slot::sample`]).
+    #[inline]
+    pub fn sample_color(&self, i: u32) -> [u8; 4] {
+        self.colors[i as usize]
+    }
+
     /// The full value of a stored slot.
     #[inline]
     pub fn vertex_of(&self, s: &Slot) -> FieldVertex {
