@@ -340,8 +340,27 @@ pub fn leaf_vertices_by_cube(
     vb.positions.reserve(expect);
     vb.normals.reserve(expect);
     vb.colors.reserve(expect);
+    // Cubes in key order (z slab after z slab) share an edge only within
+    // the two slabs around it: the edges are found in two small maps, those
+    // whose lower vertex is on the current slab's bottom plane and on its
+    // top plane, which stay in cache (one map over all edges was a cache
+    // miss per lookup). The whole map is filled once, from the new edges.
+    let sorted = cubes.is_sorted_by_key(|c| c.0);
+    let mut planes: [KeyMap<u32>; 2] = Default::default();
+    let mut new_edges: Vec<(u64, u32)> = Vec::with_capacity(if sorted { expect } else { 0 });
+    let mut slab = u32::MAX;
     for &(k, cfg) in cubes {
         let cube = unpack(k);
+        if sorted && cube[2] != slab {
+            if slab != u32::MAX && cube[2] == slab + 1 {
+                planes.swap(0, 1);
+                planes[1].clear();
+            } else {
+                planes[0].clear();
+                planes[1].clear();
+            }
+            slab = cube[2];
+        }
         let mut ce = [NO_VERTEX; 12];
         for (e, [a, b]) in EDGES.iter().enumerate() {
             if (cfg >> a & 1) == (cfg >> b & 1) {
@@ -349,7 +368,12 @@ pub fn leaf_vertices_by_cube(
             }
             let (ka, kb) = (corner_key(cube, 0, *a), corner_key(cube, 0, *b));
             let key = edge_key(ka, (e / 4) as u8);
-            ce[e] = *edges.entry(key).or_insert_with(|| {
+            let map = if sorted {
+                &mut planes[(a >> 2) as usize]
+            } else {
+                &mut edges
+            };
+            ce[e] = *map.entry(key).or_insert_with(|| {
                 let fa = field
                     .slot(ka)
                     .expect("a leaf cube's corners are in the band");
@@ -359,11 +383,16 @@ pub fn leaf_vertices_by_cube(
                 let t = edge_ratio(fa.distance, fb.distance);
                 let p = g.position(ka).lerp(g.position(kb), t);
                 let (n, c) = blend(field, &Corner::of_slot(&fa), &Corner::of_slot(&fb), t);
-                vb.push(p, n, c)
+                let id = vb.push(p, n, c);
+                if sorted {
+                    new_edges.push((key, id));
+                }
+                id
             });
         }
         by_cube.push(ce);
     }
+    edges.extend(new_edges);
     (edges, by_cube)
 }
 
