@@ -16,9 +16,7 @@
 use glam::Vec3;
 
 use crate::mc_table::{EDGES, TABLE};
-use crate::signed_distance::{
-    BRICK, BRICK_BITS, Grid, KeyMap, SignedDistanceField, Slot, pack, unpack,
-};
+use crate::signed_distance::{BRICK, BRICK_BITS, Grid, KeyMap, SignedDistanceField, pack, unpack};
 
 /// Where a crossing edge's vertex sits, from `v0`: `|d0| / (|d0| + |d1|)`.
 /// Both zero (never for a crossing edge) gives the midpoint.
@@ -52,38 +50,65 @@ impl VertexBuffer {
     }
 }
 
-/// A lattice vertex as the octree sees it at some level: side, (where
-/// known) the signed distance, and the sample whose normal and colour it
-/// carries. The normal and colour are looked up only where a vertex is
-/// made ([`blend`]): most corners are only asked their side, and the
-/// samples' attributes are a cache miss away.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// A lattice vertex as the octree sees it at some level: its side, and the
+/// band vertex whose sample's normal and colour it carries (itself, or the
+/// one Fig. 5.2's rule picked). The side comes from the band's bit masks
+/// ([`BandSigns`]); the normal and colour are looked up only where a vertex
+/// is made ([`blend`]), so most corners cost no read of the band's slots.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Corner {
     pub inside: bool,
-    pub distance: f32,
-    /// Index of the sample in the field ([`SignedDistanceField::sample_normal`]).
-    pub sample: u32,
+    /// Lattice key of the band vertex that gives the attributes.
+    pub at: u64,
 }
 
-impl Corner {
-    /// The corner of a stored band slot.
-    #[inline]
-    pub fn of_slot(s: &Slot) -> Corner {
-        Corner {
-            inside: s.distance < 0.0,
-            distance: s.distance,
-            sample: s.sample,
+/// The sides of the band's defined vertices, from per-brick bit masks
+/// ([`SignedDistanceField::brick_masks`]): 192 bytes a brick instead of the
+/// 6 KB of its slots, so the octree's corner lookups stay in cache.
+#[derive(Debug, Clone)]
+pub struct BandSigns {
+    masks: Vec<BrickMasks>,
+}
+
+impl BandSigns {
+    pub fn new(field: &SignedDistanceField) -> Self {
+        BandSigns {
+            masks: (0..field.brick_count())
+                .map(|b| field.brick_masks(b))
+                .collect(),
         }
+    }
+
+    /// From every brick's masks, in brick order.
+    pub fn from_masks(masks: Vec<BrickMasks>) -> Self {
+        BandSigns { masks }
+    }
+
+    /// The corner of lattice vertex `v` if it is defined
+    /// ([`SignedDistanceField::slot_defined`]).
+    #[inline]
+    pub fn corner(&self, field: &SignedDistanceField, v: u64) -> Option<Corner> {
+        let [x, y, z] = unpack(v);
+        let b = field.brick_of(x, y, z)?;
+        let m = &self.masks[b];
+        let (w, bit) = (
+            (z & (BRICK - 1)) as usize,
+            (x & (BRICK - 1)) | (y & (BRICK - 1)) << 3,
+        );
+        (m[0][w] >> bit & 1 == 1).then(|| Corner {
+            inside: m[1][w] >> bit & 1 == 1,
+            at: v,
+        })
     }
 }
 
 /// Linear blend of two corners' normals and colours at `t` from `a`.
 pub fn blend(field: &SignedDistanceField, a: &Corner, b: &Corner, t: f32) -> (Vec3, [u8; 4]) {
-    blend_attributes(
-        (field.sample_normal(a.sample), field.sample_color(a.sample)),
-        (field.sample_normal(b.sample), field.sample_color(b.sample)),
-        t,
-    )
+    let attributes = |c: &Corner| {
+        let s = field.slot(c.at).expect("a corner's band vertex is defined");
+        (field.sample_normal(s.sample), field.sample_color(s.sample))
+    };
+    blend_attributes(attributes(a), attributes(b), t)
 }
 
 /// Linear blend of two (normal, colour) pairs at `t` from `a`, the normal
@@ -382,7 +407,17 @@ pub fn leaf_vertices_by_cube(
                     .expect("a leaf cube's corners are in the band");
                 let t = edge_ratio(fa.distance, fb.distance);
                 let p = g.position(ka).lerp(g.position(kb), t);
-                let (n, c) = blend(field, &Corner::of_slot(&fa), &Corner::of_slot(&fb), t);
+                let (n, c) = blend_attributes(
+                    (
+                        field.sample_normal(fa.sample),
+                        field.sample_color(fa.sample),
+                    ),
+                    (
+                        field.sample_normal(fb.sample),
+                        field.sample_color(fb.sample),
+                    ),
+                    t,
+                );
                 let id = vb.push(p, n, c);
                 if sorted {
                     new_edges.push((key, id));

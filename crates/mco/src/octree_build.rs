@@ -39,8 +39,8 @@
 //!   the original algorithm's choice.
 
 use crate::marching_cubes::{
-    Corner, CubeEdges, NO_VERTEX, VertexBuffer, blend, corner_key, edge_key, leaf_vertices_by_cube,
-    node_triangles,
+    BandSigns, Corner, CubeEdges, NO_VERTEX, VertexBuffer, blend, corner_key, edge_key,
+    leaf_vertices_by_cube, node_triangles,
 };
 use crate::mc_table::EDGES;
 use crate::model::{McoModel, Node};
@@ -71,6 +71,8 @@ pub struct Level {
 #[derive(Debug)]
 pub struct Tree<'f> {
     pub field: &'f SignedDistanceField,
+    /// The band's defined vertices' sides, for corner lookups.
+    pub signs: BandSigns,
     pub levels: Vec<Level>,
     pub vertices: VertexBuffer,
     pub node_id: Vec<Vec<u32>>,
@@ -99,8 +101,8 @@ impl Tree<'_> {
 impl Tree<'_> {
     /// The value of lattice vertex `v` as level `level` sees it.
     pub fn corner(&self, level: usize, v: u64) -> Option<Corner> {
-        if let Some(s) = self.field.slot(v) {
-            return Some(Corner::of_slot(&s));
+        if let Some(c) = self.signs.corner(self.field, v) {
+            return Some(c);
         }
         self.levels.get(level)?.corners.get(&v).copied()
     }
@@ -138,12 +140,20 @@ fn offset_key(v: u64, d: [i32; 3], step: u32) -> Option<u64> {
 /// A placeholder corner, overwritten before use.
 const UNSET: Corner = Corner {
     inside: false,
-    distance: f32::NAN,
-    sample: u32::MAX,
+    at: u64::MAX,
 };
 
 /// Builds every level from the leaf cubes up to the single root.
 pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) -> Result<Tree<'f>> {
+    build_levels_with(field, BandSigns::new(field), leaves)
+}
+
+/// [`build_levels`] with the band's sides already at hand.
+pub fn build_levels_with<'f>(
+    field: &'f SignedDistanceField,
+    signs: BandSigns,
+    leaves: &[(u64, u8)],
+) -> Result<Tree<'f>> {
     if leaves.is_empty() {
         return Err(Error::Input(
             "no surface found: the samples produce no sign change at this resolution".into(),
@@ -167,6 +177,7 @@ pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) ->
         .collect();
     let mut tree = Tree {
         field,
+        signs,
         levels: vec![level0],
         vertices,
         node_id: Vec::new(),
@@ -205,8 +216,8 @@ pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) ->
             let mut cs = [UNSET; 8];
             for (c, slot) in cs.iter_mut().enumerate() {
                 let v = corner_key(cube, l as u32, c as u8);
-                *slot = if let Some(s) = field.slot(v) {
-                    Corner::of_slot(&s)
+                *slot = if let Some(c) = tree.signs.corner(field, v) {
+                    c
                 } else if let Some(&cv) = level.corners.get(&v) {
                     cv
                 } else {
@@ -329,10 +340,7 @@ fn rule_value(
             .iter()
             .find(|c| c.inside == majority)
             .expect("the majority side has a member");
-        return Some(Corner {
-            distance: f32::NAN,
-            ..pick
-        });
+        return Some(pick);
     }
     None
 }

@@ -27,7 +27,7 @@ use std::time::Instant;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use lodkit_mesh::{Aabb, Model, RangeImage, TriMesh};
 
-use crate::marching_cubes::{BrickMasks, brick_configs, leaf_config_in};
+use crate::marching_cubes::{BandSigns, BrickMasks, brick_configs, leaf_config_in};
 use crate::model::McoModel;
 use crate::normals_estimation::{mesh_samples, point_cloud_samples, range_image_samples};
 use crate::signed_distance::{
@@ -207,6 +207,8 @@ pub struct IncrementalBuilder {
     surface_cubes: usize,
     samples: u64,
     has_colors: Option<bool>,
+    /// The band's sides when the last add computed them (a first add).
+    signs: Option<BandSigns>,
 }
 
 impl IncrementalBuilder {
@@ -225,6 +227,7 @@ impl IncrementalBuilder {
             surface_cubes: 0,
             samples: 0,
             has_colors: None,
+            signs: None,
         }
     }
 
@@ -279,6 +282,7 @@ impl IncrementalBuilder {
                 recomputed += touched;
                 self.surface_cubes += surface;
             }
+            self.signs = Some(BandSigns::from_masks(masks));
             return AddReport {
                 samples: s.len(),
                 vertices_changed: changed,
@@ -316,6 +320,7 @@ impl IncrementalBuilder {
                 }
             });
         }
+        self.signs = None;
         let mut recomputed = 0usize;
         for (b, words) in dirty.iter().enumerate() {
             let [bx, by, bz] = field.brick_coords(b).map(|c| c << BRICK_BITS);
@@ -359,7 +364,11 @@ impl IncrementalBuilder {
     pub fn build(&self) -> Result<McoModel> {
         let t0 = Instant::now();
         let leaves = self.leaves();
-        let mut tree = crate::octree_build::build_levels(&self.field, &leaves)?;
+        let signs = self
+            .signs
+            .clone()
+            .unwrap_or_else(|| BandSigns::new(&self.field));
+        let mut tree = crate::octree_build::build_levels_with(&self.field, signs, &leaves)?;
         let mut model = crate::octree_build::assemble(&mut tree);
         let together = crate::crack_patch::expand_together(&tree);
         crate::priority::number(&mut model, &together);
