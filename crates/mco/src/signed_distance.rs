@@ -273,38 +273,87 @@ impl Slot {
     }
 }
 
-/// One 4-vertex window of a brick row in the stamping: `d2[t] = (xsq[t] +
-/// y2) + z2` and the bit mask of the lanes where `d2 < old` (IEEE single
-/// precision either way, so the SSE2 path and the portable one give the
-/// same bits).
+/// One brick's columns of [`Slot`]s, for the stamping.
+struct BrickColumns<'a> {
+    dist2: &'a mut [f32],
+    distance: &'a mut [f32],
+    sample: &'a mut [u32],
+}
+
+/// Stamps sample `id` into the 4-vertex window at `row` of a brick (a
+/// window inside one brick row): lane `t`'s squared distance is `(x2[t] +
+/// y2) + z2` and its signed distance `(xd[t] + yd) + zd`; lanes where the
+/// squared distance is below the stored one take the sample. Returns the
+/// mask of those lanes and how many of them no sample had reached. IEEE
+/// single precision either way, so the SSE2 path and the portable one give
+/// the same bits.
 #[inline(always)]
-fn window_wins(xsq: &[f32; 4], y2: f32, z2: f32, old: &[f32; 4]) -> ([f32; 4], u32) {
+fn stamp_window(
+    brick: &mut BrickColumns,
+    row: usize,
+    (x2, y2, z2): (&[f32; 4], f32, f32),
+    (xd, yd, zd): (&[f32; 4], f32, f32),
+    id: u32,
+) -> (u32, u32) {
+    let dist2 = &mut brick.dist2[row..row + 4];
+    let distance = &mut brick.distance[row..row + 4];
+    let sample = &mut brick.sample[row..row + 4];
     #[cfg(target_arch = "x86_64")]
     {
         use std::arch::x86_64::{
-            _mm_add_ps, _mm_cmplt_ps, _mm_loadu_ps, _mm_movemask_ps, _mm_set1_ps, _mm_storeu_ps,
+            __m128, __m128i, _mm_add_ps, _mm_and_ps, _mm_and_si128, _mm_andnot_ps,
+            _mm_andnot_si128, _mm_castps_si128, _mm_castsi128_ps, _mm_cmpeq_epi32, _mm_cmplt_ps,
+            _mm_loadu_ps, _mm_loadu_si128, _mm_movemask_ps, _mm_or_ps, _mm_or_si128,
+            _mm_set1_epi32, _mm_set1_ps, _mm_storeu_ps, _mm_storeu_si128,
         };
-        let mut d2 = [0f32; 4];
         // SAFETY: SSE2 is part of the x86_64 baseline; every load and
-        // store is an unaligned access to a whole 4-lane array.
-        let wins = unsafe {
+        // store is an unaligned access to the 4 lanes of a slice of length
+        // 4 (bounds checked above), stores through mutable borrows.
+        unsafe {
             let d = _mm_add_ps(
-                _mm_add_ps(_mm_loadu_ps(xsq.as_ptr()), _mm_set1_ps(y2)),
+                _mm_add_ps(_mm_loadu_ps(x2.as_ptr()), _mm_set1_ps(y2)),
                 _mm_set1_ps(z2),
             );
-            let w = _mm_movemask_ps(_mm_cmplt_ps(d, _mm_loadu_ps(old.as_ptr())));
-            if w != 0 {
-                _mm_storeu_ps(d2.as_mut_ptr(), d);
+            let old = _mm_loadu_ps(dist2.as_ptr());
+            let m = _mm_cmplt_ps(d, old);
+            let wins = _mm_movemask_ps(m) as u32;
+            if wins == 0 {
+                return (0, 0);
             }
-            w as u32
-        };
-        (d2, wins)
+            let blend =
+                |new: __m128, old: __m128| _mm_or_ps(_mm_and_ps(m, new), _mm_andnot_ps(m, old));
+            _mm_storeu_ps(dist2.as_mut_ptr(), blend(d, old));
+            let dn = _mm_add_ps(
+                _mm_add_ps(_mm_loadu_ps(xd.as_ptr()), _mm_set1_ps(yd)),
+                _mm_set1_ps(zd),
+            );
+            let od = _mm_loadu_ps(distance.as_ptr());
+            _mm_storeu_ps(distance.as_mut_ptr(), blend(dn, od));
+            let mi = _mm_castps_si128(m);
+            let os = _mm_loadu_si128(sample.as_ptr() as *const __m128i);
+            let empty = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(os, _mm_set1_epi32(-1))));
+            let ns = _mm_or_si128(
+                _mm_and_si128(mi, _mm_set1_epi32(id as i32)),
+                _mm_andnot_si128(mi, os),
+            );
+            _mm_storeu_si128(sample.as_mut_ptr() as *mut __m128i, ns);
+            (wins, (wins & empty as u32).count_ones())
+        }
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
-        let d2: [f32; 4] = std::array::from_fn(|t| (xsq[t] + y2) + z2);
-        let wins = (0..4).fold(0u32, |m, t| m | ((d2[t] < old[t]) as u32) << t);
-        (d2, wins)
+        let (mut wins, mut reached) = (0u32, 0u32);
+        for t in 0..4 {
+            let d = (x2[t] + y2) + z2;
+            if d < dist2[t] {
+                dist2[t] = d;
+                distance[t] = (xd[t] + yd) + zd;
+                reached += (sample[t] == u32::MAX) as u32;
+                sample[t] = id;
+                wins |= 1 << t;
+            }
+        }
+        (wins, reached)
     }
 }
 
@@ -395,6 +444,7 @@ impl SignedDistanceField {
             *c = [0; BRICK_VOLUME / 64];
         }
         let g = self.grid;
+        let mut defined = 0usize;
         for (i, (&p, &n)) in samples.positions.iter().zip(&samples.normals).enumerate() {
             if !p.is_finite() || !n.is_finite() {
                 continue;
@@ -440,47 +490,45 @@ impl SignedDistanceField {
                         // block's part (at most 4 vertices): lanes outside
                         // the part get +∞ and never win.
                         let p0 = (xa - base[0]).min(BRICK - 4);
-                        let xsq: [f32; 4] = std::array::from_fn(|t| {
+                        let mut xsq = [f32::INFINITY; 4];
+                        let mut xdn = [0f32; 4];
+                        for t in 0..4 {
                             let x = base[0] + p0 + t as u32;
                             if (xa..=xb).contains(&x) {
-                                sq[0][(x - lo[0]) as usize]
-                            } else {
-                                f32::INFINITY
+                                xsq[t] = sq[0][(x - lo[0]) as usize];
+                                xdn[t] = dn[0][(x - lo[0]) as usize];
                             }
-                        });
+                        }
                         let first = b * BRICK_VOLUME;
-                        let dist2 = &mut self.dist2[first..][..BRICK_VOLUME];
-                        let distance = &mut self.distance[first..][..BRICK_VOLUME];
-                        let sample = &mut self.sample[first..][..BRICK_VOLUME];
+                        let mut brick = BrickColumns {
+                            dist2: &mut self.dist2[first..][..BRICK_VOLUME],
+                            distance: &mut self.distance[first..][..BRICK_VOLUME],
+                            sample: &mut self.sample[first..][..BRICK_VOLUME],
+                        };
                         let changed = &mut self.changed[b];
-                        // Lane `t`'s offset into the block's x range.
-                        let ix = (base[0] + p0).wrapping_sub(lo[0]);
                         for z in za..=zb {
                             let k = (z - lo[2]) as usize & 3;
                             for y in ya..=yb {
                                 let j = (y - lo[1]) as usize & 3;
                                 let row = local_index(0, y, z) + p0 as usize;
-                                let old: &mut [f32; 4] = (&mut dist2[row..row + 4])
-                                    .try_into()
-                                    .expect("a window of a brick row");
-                                let (d2, mut wins) = window_wins(&xsq, sq[1][j], sq[2][k], old);
-                                while wins != 0 {
-                                    let t = wins.trailing_zeros() as usize;
-                                    wins &= wins - 1;
-                                    let li = row + t;
-                                    let i = ix.wrapping_add(t as u32) as usize & 3;
-                                    old[t] = d2[t];
-                                    distance[li] = (dn[0][i] + dn[1][j]) + dn[2][k];
-                                    self.defined += (sample[li] == u32::MAX) as usize;
-                                    sample[li] = id;
-                                    changed[li / 64] |= 1u64 << (li % 64);
-                                }
+                                let (wins, reached) = stamp_window(
+                                    &mut brick,
+                                    row,
+                                    (&xsq, sq[1][j], sq[2][k]),
+                                    (&xdn, dn[1][j], dn[2][k]),
+                                    id,
+                                );
+                                defined += reached as usize;
+                                // The window lies in one 8-vertex row, so in
+                                // one word of the bit set.
+                                changed[row / 64] |= (wins as u64) << (row % 64);
                             }
                         }
                     }
                 }
             }
         }
+        self.defined += defined;
         self.changed
             .iter()
             .flatten()
