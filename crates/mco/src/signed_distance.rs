@@ -518,10 +518,12 @@ impl SignedDistanceField {
                                     (&xdn, dn[1][j], dn[2][k]),
                                     id,
                                 );
-                                defined += reached as usize;
-                                // The window lies in one 8-vertex row, so in
-                                // one word of the bit set.
-                                changed[row / 64] |= (wins as u64) << (row % 64);
+                                if wins != 0 {
+                                    defined += reached as usize;
+                                    // The window lies in one 8-vertex row, so
+                                    // in one word of the bit set.
+                                    changed[row / 64] |= (wins as u64) << (row % 64);
+                                }
                             }
                         }
                     }
