@@ -241,6 +241,22 @@ fn near(
     crate::neighbours::find(&lv.keys, c)
 }
 
+/// Whether the leaf lattice edge from `v` along `axis` joins two defined
+/// band vertices on opposite sides (a leaf vertex can sit only on such an
+/// edge).
+#[inline]
+fn leaf_edge_crosses(tree: &Tree, v: u64, axis: usize) -> bool {
+    let mut far = unpack(v);
+    far[axis] += 1;
+    match (
+        tree.signs.corner(tree.field, v),
+        tree.signs.corner(tree.field, pack(far[0], far[1], far[2])),
+    ) {
+        (Some(a), Some(b)) => a.inside != b.inside,
+        _ => false,
+    }
+}
+
 /// Same-level node pairs whose shared face cannot be crack-patched (see
 /// `face_patchable`), and the nodes around unpatchable edges: they must
 /// expand in the same LOD step (see [`crate::priority`]). Call after
@@ -288,6 +304,11 @@ pub fn expand_together(tree: &Tree) -> Vec<(u32, u32)> {
                 let mut nf = 0;
                 for (h, oct) in [(va, *a), (pack(vm[0], vm[1], vm[2]), *b)] {
                     let v = match by_octant[oct as usize] {
+                        // A leaf edge has a vertex only if its ends are in
+                        // the band on opposite sides: checked in the band's
+                        // bit masks first, which saves most lookups in the
+                        // large leaf edge map.
+                        NONE if l == 1 && !leaf_edge_crosses(tree, h, axis) => None,
                         NONE => below.edges.get(&edge_key(h, axis as u8)).copied(),
                         ci => Some(below.node_edges[ci as usize][e]).filter(|&v| v != NO_VERTEX),
                     };
