@@ -443,6 +443,16 @@ impl SignedDistanceField {
         for c in &mut self.changed {
             *c = [0; BRICK_VOLUME / 64];
         }
+        // A first guess of the bricks this add creates, so the columns are
+        // not copied over and over as they grow (a dense surface scan makes
+        // about one brick per 180 samples; untouched capacity costs no
+        // memory).
+        let guess = samples.len() / 128 * BRICK_VOLUME;
+        self.dist2.reserve(guess);
+        self.distance.reserve(guess);
+        self.sample.reserve(guess);
+        self.normals.reserve(samples.len());
+        self.colors.reserve(samples.len());
         let g = self.grid;
         let mut defined = 0usize;
         for (i, (&p, &n)) in samples.positions.iter().zip(&samples.normals).enumerate() {
