@@ -588,9 +588,13 @@ impl SignedDistanceField {
         let distance = &self.distance[first..][..BRICK_VOLUME];
         let sample = &self.sample[first..][..BRICK_VOLUME];
         let limit = self.tangential_limit;
-        let mut out = [[0u64; BRICK as usize]; 3];
-        for z in 0..BRICK as usize {
-            let (mut d, mut n, mut r) = (0u64, 0u64, 0u64);
+        let [mut defined, mut inside, mut reached] = [[0u64; BRICK as usize]; 3];
+        for (z, ((d, n), r)) in defined
+            .iter_mut()
+            .zip(&mut inside)
+            .zip(&mut reached)
+            .enumerate()
+        {
             for bit in 0..64 {
                 let li = z * 64 + bit;
                 let s = Slot {
@@ -601,15 +605,12 @@ impl SignedDistanceField {
                 let ok = !s.is_empty()
                     && (limit == f32::INFINITY
                         || s.dist2 - s.distance * s.distance <= limit * limit);
-                d |= (ok as u64) << bit;
-                n |= ((s.distance < 0.0) as u64) << bit;
-                r |= (!s.is_empty() as u64) << bit;
+                *d |= (ok as u64) << bit;
+                *n |= ((s.distance < 0.0) as u64) << bit;
+                *r |= (!s.is_empty() as u64) << bit;
             }
-            out[0][z] = d;
-            out[1][z] = n;
-            out[2][z] = r;
         }
-        out
+        [defined, inside, reached]
     }
 
     /// Number of bricks.
