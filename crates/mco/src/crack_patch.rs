@@ -39,10 +39,11 @@
 
 use glam::Vec3;
 
-use crate::marching_cubes::{CubeEdges, NO_VERTEX, corner_key, edge_key};
+use crate::marching_cubes::{CubeEdges, NO_VERTEX, corner_key, edge_key, node_triangles};
 use crate::mc_table::{EDGES, FACES, Face, face_edges, face_segments_fixed};
 use crate::model::{McoModel, Patch};
-use crate::octree_build::Tree;
+use crate::neighbours::{FaceNeighbours, NO_NODE};
+use crate::octree_build::{Level, Tree};
 use crate::signed_distance::{KEY_BITS, KeyMap, pack, unpack};
 
 fn closest_on_segment(p: Vec3, a: Vec3, b: Vec3) -> Vec3 {
@@ -201,6 +202,61 @@ fn dedup_sorted<T: PartialEq + Copy>(v: &mut [T]) -> usize {
     w
 }
 
+/// The level-`lv` node at offset `ou` along axis `u` and `ow` along axis
+/// `w` (each in `-1..=1`) from node `i` at `pc`, through the face
+/// neighbour table `nbr`, and a binary search for a diagonal neighbour
+/// whose two paths through face neighbours both cross empty cells.
+#[inline]
+fn near(
+    lv: &Level,
+    nbr: &[FaceNeighbours],
+    i: usize,
+    pc: [u32; 3],
+    (u, ou): (usize, i32),
+    (w, ow): (usize, i32),
+) -> Option<u32> {
+    let step = |n: u32, axis: usize, o: i32| -> u32 {
+        match o {
+            0 => n,
+            _ if n == NO_NODE => NO_NODE,
+            _ => nbr[n as usize][2 * axis + (o > 0) as usize],
+        }
+    };
+    let i = i as u32;
+    let via_u = step(step(i, u, ou), w, ow);
+    if via_u != NO_NODE {
+        return Some(via_u);
+    }
+    if ou == 0 || ow == 0 {
+        return None;
+    }
+    let via_w = step(step(i, w, ow), u, ou);
+    if via_w != NO_NODE {
+        return Some(via_w);
+    }
+    let mut c = pc;
+    for (axis, o) in [(u, ou), (w, ow)] {
+        c[axis] = c[axis].checked_add_signed(o)?;
+    }
+    crate::neighbours::find(&lv.keys, c)
+}
+
+/// Whether the leaf lattice edge from `v` along `axis` joins two defined
+/// band vertices on opposite sides (a leaf vertex can sit only on such an
+/// edge).
+#[inline]
+fn leaf_edge_crosses(tree: &Tree, v: u64, axis: usize) -> bool {
+    let mut far = unpack(v);
+    far[axis] += 1;
+    match (
+        tree.signs.corner(tree.field, v),
+        tree.signs.corner(tree.field, pack(far[0], far[1], far[2])),
+    ) {
+        (Some(a), Some(b)) => a.inside != b.inside,
+        _ => false,
+    }
+}
+
 /// Same-level node pairs whose shared face cannot be crack-patched (see
 /// `face_patchable`), and the nodes around unpatchable edges: they must
 /// expand in the same LOD step (see [`crate::priority`]). Call after
@@ -210,15 +266,15 @@ pub fn expand_together(tree: &Tree) -> Vec<(u32, u32)> {
     for l in 1..tree.levels.len() {
         let lv = &tree.levels[l];
         let below = &tree.levels[l - 1];
+        let nbr = &tree.face_neighbours[l];
         for (i, &k) in lv.keys.iter().enumerate() {
             let pc = unpack(k);
             for axis in 0..3u8 {
                 let f = Face { axis, side: 1 };
-                let mut mc = pc;
-                mc[axis as usize] += 1;
-                let Some(&j) = lv.index.get(&pack(mc[0], mc[1], mc[2])) else {
+                let j = nbr[i][2 * axis as usize + 1];
+                if j == NO_NODE {
                     continue;
-                };
+                }
                 if !face_patchable(tree, l, i, j as usize, f) {
                     out.push((tree.node_id[l][i], tree.node_id[l][j as usize]));
                 }
@@ -248,6 +304,11 @@ pub fn expand_together(tree: &Tree) -> Vec<(u32, u32)> {
                 let mut nf = 0;
                 for (h, oct) in [(va, *a), (pack(vm[0], vm[1], vm[2]), *b)] {
                     let v = match by_octant[oct as usize] {
+                        // A leaf edge has a vertex only if its ends are in
+                        // the band on opposite sides: checked in the band's
+                        // bit masks first, which saves most lookups in the
+                        // large leaf edge map.
+                        NONE if l == 1 && !leaf_edge_crosses(tree, h, axis) => None,
                         NONE => below.edges.get(&edge_key(h, axis as u8)).copied(),
                         ci => Some(below.node_edges[ci as usize][e]).filter(|&v| v != NO_VERTEX),
                     };
@@ -260,18 +321,15 @@ pub fn expand_together(tree: &Tree) -> Vec<(u32, u32)> {
                     continue;
                 }
                 let (u, w) = ((axis + 1) % 3, (axis + 2) % 3);
-                let base = [x >> l, y >> l, z >> l];
+                // The 4 cubes around the edge are this node and its
+                // neighbours at offsets `(a_u − du, a_w − dw)` along `u`
+                // and `w` (`a_u`, `a_w`: corner `a`'s offsets).
+                let (au, aw) = ((*a >> u & 1) as i32, (*a >> w & 1) as i32);
                 let mut around = [0u32; 4];
                 let mut na = 0;
-                for du in 0..2u32 {
-                    for dw in 0..2u32 {
-                        let mut c = base;
-                        if c[u] < du || c[w] < dw {
-                            continue;
-                        }
-                        c[u] -= du;
-                        c[w] -= dw;
-                        if let Some(&j) = lv.index.get(&pack(c[0], c[1], c[2])) {
+                for du in 0..2i32 {
+                    for dw in 0..2i32 {
+                        if let Some(j) = near(lv, nbr, i, pc, (u, au - du), (w, aw - dw)) {
                             around[na] = tree.node_id[l][j as usize];
                             na += 1;
                         }
@@ -293,7 +351,11 @@ pub fn patch(tree: &mut Tree, model: &mut McoModel) {
     let levels = &tree.levels;
     let node_id = &tree.node_id;
     let vertices = &mut tree.vertices;
-    // (fine vertex, coarse node) → compensation point.
+    // (fine vertex, coarse node) → compensation point: per fine vertex, its
+    // first coarse node and point in two arrays (read in vertex order, no
+    // hashing), the rare further ones in a map.
+    let mut first_coarse = vec![NO_NODE; vertices.len()];
+    let mut first_point = vec![0u32; vertices.len()];
     let mut point_of: KeyMap<u32> = KeyMap::default();
     // Per compensation point: (sum of fine unit normals, count, coarse normal).
     let mut normal_acc: Vec<(Vec3, u32, Vec3)> = Vec::new();
@@ -303,8 +365,10 @@ pub fn patch(tree: &mut Tree, model: &mut McoModel) {
     let mut runs: Vec<(u32, u8)> = vec![(0, 0); model.nodes.len()];
     let mut found: Vec<Patch> = Vec::new();
     let mut subs: Vec<[u32; 2]> = Vec::new();
+    let (mut own_tris, mut coarse_tris) = (Vec::new(), Vec::new());
     for l in 0..depth {
         let (lv, up) = (&levels[l], &levels[l + 1]);
+        let (parent, up_nbr) = (&tree.parent[l], &tree.face_neighbours[l + 1]);
         for i in 0..lv.keys.len() {
             let cfg = lv.configs[i];
             if cfg == 0 || cfg == 255 {
@@ -314,7 +378,9 @@ pub fn patch(tree: &mut Tree, model: &mut McoModel) {
             let cube = unpack(lv.keys[i]);
             let ne = &lv.node_edges[i];
             let run_start = found.len();
-            let pc = [cube[0] >> 1, cube[1] >> 1, cube[2] >> 1];
+            // This node's triangles (as `assemble` made them), built when a
+            // patch first needs them.
+            own_tris.clear();
             for f in FACES {
                 let a = f.axis as usize;
                 if cube[a] & 1 != f.side as u32 {
@@ -323,17 +389,11 @@ pub fn patch(tree: &mut Tree, model: &mut McoModel) {
                 if face_segments_fixed(cfg, f).is_empty() {
                     continue; // no crossing on the face: nothing to move
                 }
-                let mut qc = pc;
-                if f.side == 1 {
-                    qc[a] += 1;
-                } else if qc[a] == 0 {
+                // The coarse neighbour: across the parent's face.
+                let qi = up_nbr[parent[i] as usize][2 * a + f.side as usize];
+                if qi == NO_NODE {
                     continue;
-                } else {
-                    qc[a] -= 1;
                 }
-                let Some(&qi) = up.index.get(&pack(qc[0], qc[1], qc[2])) else {
-                    continue;
-                };
                 let qi = qi as usize;
                 let q = node_id[l + 1][qi];
                 let opposite = Face {
@@ -388,27 +448,44 @@ pub fn patch(tree: &mut Tree, model: &mut McoModel) {
                                 .total_cmp(&b.1.distance_squared(px))
                         })
                         .expect("segments is not empty");
-                    let new = *point_of
-                        .entry((x as u64) << 32 | q as u64)
-                        .or_insert_with(|| {
-                            let n = vertices.normals[x as usize];
-                            let c = vertices.colors[x as usize];
-                            let coarse = model
-                                .node_tris(q)
-                                .chunks_exact(3)
-                                .find(|t| t.contains(&seg[0]) && t.contains(&seg[1]))
-                                .map(|t| {
-                                    unit_normal(
-                                        [0, 1, 2].map(|k| vertices.positions[t[k] as usize]),
-                                    )
-                                })
-                                .unwrap_or(Vec3::ZERO);
-                            normal_acc.push((Vec3::ZERO, 0, coarse));
-                            vertices.push(r, n, c)
-                        });
+                    // The point of `(x, q)`: in the per-vertex slot when
+                    // `x`'s first coarse neighbour is `q`, else in the map.
+                    let mut make = || {
+                        let n = vertices.normals[x as usize];
+                        let c = vertices.colors[x as usize];
+                        // `q`'s triangles, from its level entry (already
+                        // read) rather than the model's node arrays.
+                        coarse_tris.clear();
+                        node_triangles(up.configs[qi], qne, &mut coarse_tris);
+                        let coarse = coarse_tris
+                            .chunks_exact(3)
+                            .find(|t| t.contains(&seg[0]) && t.contains(&seg[1]))
+                            .map(|t| {
+                                unit_normal([0, 1, 2].map(|k| vertices.positions[t[k] as usize]))
+                            })
+                            .unwrap_or(Vec3::ZERO);
+                        normal_acc.push((Vec3::ZERO, 0, coarse));
+                        vertices.push(r, n, c)
+                    };
+                    let xi = x as usize;
+                    let new = if first_coarse[xi] == q {
+                        first_point[xi]
+                    } else if first_coarse[xi] == NO_NODE {
+                        let new = make();
+                        first_coarse[xi] = q;
+                        first_point[xi] = new;
+                        new
+                    } else {
+                        *point_of
+                            .entry((x as u64) << 32 | q as u64)
+                            .or_insert_with(make)
+                    };
                     // Fine triangles of this node around the moved vertex.
                     let slot = new as usize - (vertices.len() - normal_acc.len());
-                    for t in model.node_tris(id).chunks_exact(3) {
+                    if own_tris.is_empty() {
+                        node_triangles(cfg, ne, &mut own_tris);
+                    }
+                    for t in own_tris.chunks_exact(3) {
                         if t.contains(&x) {
                             let pts = [0, 1, 2].map(|k| {
                                 if t[k] == x {

@@ -159,16 +159,33 @@ impl Lifetimes {
         for b in 0..buckets {
             bucket_start[b + 1] += bucket_start[b];
         }
+        // Two stable counting sorts (LSD): by birth, then by bucket. Records
+        // enter in index order, so ties keep it: the order is that of the
+        // (bucket, birth, record) keys, without a comparison sort.
+        let max_birth = recs.iter().map(|r| r.birth).max().unwrap_or(0) as usize;
+        let mut birth_start = vec![0u32; max_birth + 2];
+        for r in &recs {
+            birth_start[r.birth as usize + 1] += 1;
+        }
+        for k in 0..=max_birth {
+            birth_start[k + 1] += birth_start[k];
+        }
+        let mut by_birth = vec![0u32; recs.len()];
+        for (i, r) in recs.iter().enumerate() {
+            let at = &mut birth_start[r.birth as usize];
+            by_birth[*at as usize] = i as u32;
+            *at += 1;
+        }
+        drop(birth_start);
         let mut fill = bucket_start.clone();
         let mut order = vec![0u64; recs.len()];
-        for (i, r) in recs.iter().enumerate() {
+        for &i in &by_birth {
+            let r = &recs[i as usize];
             let b = bucket(r.death);
             order[fill[b] as usize] = (r.birth as u64) << 32 | i as u64;
             fill[b] += 1;
         }
-        for b in 0..buckets {
-            order[bucket_start[b] as usize..bucket_start[b + 1] as usize].sort_unstable();
-        }
+        drop(by_birth);
         let birth: Vec<u32> = order.iter().map(|&o| (o >> 32) as u32).collect();
         let mut tris = Vec::with_capacity(3 * recs.len());
         for &o in &order {

@@ -46,6 +46,7 @@ pub mod marching_cubes;
 pub mod mc_table;
 pub mod model;
 pub mod model_file;
+pub mod neighbours;
 pub mod normals_estimation;
 pub mod octree_build;
 pub mod pipeline;

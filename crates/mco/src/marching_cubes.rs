@@ -16,9 +16,7 @@
 use glam::Vec3;
 
 use crate::mc_table::{EDGES, TABLE};
-use crate::signed_distance::{
-    BRICK, BRICK_BITS, FieldVertex, Grid, KeyMap, SignedDistanceField, pack, unpack,
-};
+use crate::signed_distance::{BRICK, BRICK_BITS, Grid, KeyMap, SignedDistanceField, pack, unpack};
 
 /// Where a crossing edge's vertex sits, from `v0`: `|d0| / (|d0| + |d1|)`.
 /// Both zero (never for a crossing edge) gives the midpoint.
@@ -52,44 +50,83 @@ impl VertexBuffer {
     }
 }
 
-/// A lattice vertex as the octree sees it at some level: side, normal,
-/// colour and (where known) the signed distance.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// A lattice vertex as the octree sees it at some level: its side, and the
+/// band vertex whose sample's normal and colour it carries (itself, or the
+/// one Fig. 5.2's rule picked). The side comes from the band's bit masks
+/// ([`BandSigns`]); the normal and colour are looked up only where a vertex
+/// is made ([`blend`]), so most corners cost no read of the band's slots.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Corner {
     pub inside: bool,
-    pub distance: f32,
-    pub normal: Vec3,
-    pub color: [u8; 4],
+    /// Lattice key of the band vertex that gives the attributes.
+    pub at: u64,
 }
 
-impl From<&FieldVertex> for Corner {
-    fn from(f: &FieldVertex) -> Self {
-        Corner {
-            inside: f.distance < 0.0,
-            distance: f.distance,
-            normal: f.normal,
-            color: f.color,
+/// The sides of the band's defined vertices, from per-brick bit masks
+/// ([`SignedDistanceField::brick_masks`]): 192 bytes a brick instead of the
+/// 6 KB of its slots, so the octree's corner lookups stay in cache.
+#[derive(Debug, Clone)]
+pub struct BandSigns {
+    masks: Vec<BrickMasks>,
+}
+
+impl BandSigns {
+    pub fn new(field: &SignedDistanceField) -> Self {
+        BandSigns {
+            masks: (0..field.brick_count())
+                .map(|b| field.brick_masks(b))
+                .collect(),
         }
     }
-}
 
-impl From<FieldVertex> for Corner {
-    fn from(f: FieldVertex) -> Self {
-        (&f).into()
+    /// From every brick's masks, in brick order.
+    pub fn from_masks(masks: Vec<BrickMasks>) -> Self {
+        BandSigns { masks }
+    }
+
+    /// The corner of lattice vertex `v` if it is defined
+    /// ([`SignedDistanceField::slot_defined`]).
+    #[inline]
+    pub fn corner(&self, field: &SignedDistanceField, v: u64) -> Option<Corner> {
+        let [x, y, z] = unpack(v);
+        let b = field.brick_of(x, y, z)?;
+        let m = &self.masks[b];
+        let (w, bit) = (
+            (z & (BRICK - 1)) as usize,
+            (x & (BRICK - 1)) | (y & (BRICK - 1)) << 3,
+        );
+        (m[0][w] >> bit & 1 == 1).then(|| Corner {
+            inside: m[1][w] >> bit & 1 == 1,
+            at: v,
+        })
     }
 }
 
-/// Linear blend of two corners' attributes at `t` from `a`.
-pub fn blend(a: &Corner, b: &Corner, t: f32) -> (Vec3, [u8; 4]) {
-    let n = a.normal.lerp(b.normal, t);
+/// Linear blend of two corners' normals and colours at `t` from `a`.
+pub fn blend(field: &SignedDistanceField, a: &Corner, b: &Corner, t: f32) -> (Vec3, [u8; 4]) {
+    let attributes = |c: &Corner| {
+        let s = field.slot(c.at).expect("a corner's band vertex is defined");
+        (field.sample_normal(s.sample), field.sample_color(s.sample))
+    };
+    blend_attributes(attributes(a), attributes(b), t)
+}
+
+/// Linear blend of two (normal, colour) pairs at `t` from `a`, the normal
+/// renormalised.
+pub fn blend_attributes(a: (Vec3, [u8; 4]), b: (Vec3, [u8; 4]), t: f32) -> (Vec3, [u8; 4]) {
+    let n = a.0.lerp(b.0, t);
     let n = if n.length_squared() > 1e-12 {
         n.normalize()
     } else {
-        a.normal
+        a.0
     };
-    let c = std::array::from_fn(|i| {
-        (a.color[i] as f32 + (b.color[i] as f32 - a.color[i] as f32) * t).round() as u8
-    });
+    // Equal colours blend to themselves (`a + 0 · t`, rounded, is `a` for
+    // finite `t`): skips four roundings, the common case.
+    let c = if a.1 == b.1 && t.is_finite() {
+        a.1
+    } else {
+        std::array::from_fn(|i| (a.1[i] as f32 + (b.1[i] as f32 - a.1[i] as f32) * t).round() as u8)
+    };
     (n, c)
 }
 
@@ -162,6 +199,111 @@ pub fn leaf_config_in(field: &SignedDistanceField, b: usize, cube: [u32; 3]) -> 
     Some(cfg)
 }
 
+/// Per brick (by number): its vertices' masks from
+/// [`SignedDistanceField::brick_masks`] (defined, inside, reached).
+pub type BrickMasks = [[u64; BRICK as usize]; 3];
+
+/// Bits of a brick slice word (`x + 8y`) with `x = 0`, and with `y = 0`.
+const COLUMN_0: u64 = 0x0101_0101_0101_0101;
+const ROW_0: u64 = 0xFF;
+
+/// The configurations of every leaf cube whose lowest corner lies in
+/// brick `b`, into `out` (one byte per cube, [`crate::signed_distance::local_index`]
+/// order; 0 where the cube has no surface or a corner outside the band),
+/// from the masks of all bricks: 64 cubes (a brick slice) at a time in bit
+/// operations, then one configuration byte per surface cube. The same
+/// configurations as [`leaf_config_in`] cube by cube.
+///
+/// Returns the number of cubes (inside the lattice) with a corner some
+/// sample reached — on a field filled by one add, the cubes
+/// [`crate::pipeline::IncrementalBuilder::add`] would recompute — and the
+/// number of surface cubes.
+pub fn brick_configs(
+    field: &SignedDistanceField,
+    masks: &[BrickMasks],
+    b: usize,
+    out: &mut [u8],
+) -> (usize, usize) {
+    const N: usize = BRICK as usize;
+    let [bx, by, bz] = field.brick_coords(b);
+    // The brick and its 7 neighbours on the high sides (`o = ox | oy << 1
+    // | oz << 2`); a missing one has no defined vertex.
+    let none: BrickMasks = [[0; N]; 3];
+    let near: [&BrickMasks; 8] = std::array::from_fn(|o| {
+        let (ox, oy, oz) = (o as u32 & 1, o as u32 >> 1 & 1, o as u32 >> 2);
+        if o == 0 {
+            return &masks[b];
+        }
+        field
+            .brick_of(
+                (bx + ox) << BRICK_BITS,
+                (by + oy) << BRICK_BITS,
+                (bz + oz) << BRICK_BITS,
+            )
+            .map_or(&none, |nb| &masks[nb])
+    });
+    // Corner `c`'s bits at each cube of slice `z`: the vertex at `+dx, +dy,
+    // +dz`, taken from the neighbours past the brick's high faces.
+    let shifted = |which: usize, c: usize, z: usize| -> u64 {
+        let (dx, dy, dz) = (c & 1, c >> 1 & 1, c >> 2);
+        let (zz, oz) = if z + dz == N { (0, 4) } else { (z + dz, 0) };
+        let w = |o: usize| near[o | oz][which][zz];
+        let sx = |lo: u64, hi: u64| {
+            if dx == 1 {
+                (lo >> 1 & !(COLUMN_0 << 7)) | (hi & COLUMN_0) << 7
+            } else {
+                lo
+            }
+        };
+        let row = sx(w(0), w(1));
+        if dy == 1 {
+            row >> 8 | (sx(w(2), w(3)) & ROW_0) << 56
+        } else {
+            row
+        }
+    };
+    // Cubes past the lattice's last cell do not exist.
+    let cells = field.grid.cells();
+    let base = [bx << BRICK_BITS, by << BRICK_BITS, bz << BRICK_BITS];
+    let mut valid_xy = 0u64;
+    for ly in 0..N as u32 {
+        for lx in 0..N as u32 {
+            if base[0] + lx < cells && base[1] + ly < cells {
+                valid_xy |= 1 << (lx + 8 * ly);
+            }
+        }
+    }
+    let (mut touched, mut surface) = (0usize, 0usize);
+    for z in 0..N {
+        if base[2] + z as u32 >= cells {
+            break;
+        }
+        let mut all_defined = valid_xy;
+        let mut any_reached = 0u64;
+        let mut any_inside = 0u64;
+        let mut all_inside = !0u64;
+        let mut inside = [0u64; 8];
+        for (c, ins) in inside.iter_mut().enumerate() {
+            let d = shifted(0, c, z);
+            *ins = shifted(1, c, z);
+            all_defined &= d;
+            any_reached |= shifted(2, c, z);
+            any_inside |= *ins;
+            all_inside &= *ins;
+        }
+        touched += (any_reached & valid_xy).count_ones() as usize;
+        let mut m = all_defined & any_inside & !all_inside;
+        surface += m.count_ones() as usize;
+        while m != 0 {
+            let bit = m.trailing_zeros();
+            m &= m - 1;
+            let cfg = (0..8).fold(0u8, |cfg, c| cfg | ((inside[c] >> bit & 1) as u8) << c);
+            out[z * 64 + bit as usize] = cfg;
+        }
+    }
+    (touched, surface)
+}
+
 /// All leaf cubes with a surface crossing: `(cube key, configuration)`,
 /// sorted by key. Only cubes touching the band are examined.
 pub fn leaf_cubes(field: &SignedDistanceField) -> Vec<(u64, u8)> {
@@ -223,8 +365,27 @@ pub fn leaf_vertices_by_cube(
     vb.positions.reserve(expect);
     vb.normals.reserve(expect);
     vb.colors.reserve(expect);
+    // Cubes in key order (z slab after z slab) share an edge only within
+    // the two slabs around it: the edges are found in two small maps, those
+    // whose lower vertex is on the current slab's bottom plane and on its
+    // top plane, which stay in cache (one map over all edges was a cache
+    // miss per lookup). The whole map is filled once, from the new edges.
+    let sorted = cubes.is_sorted_by_key(|c| c.0);
+    let mut planes: [KeyMap<u32>; 2] = Default::default();
+    let mut new_edges: Vec<(u64, u32)> = Vec::with_capacity(if sorted { expect } else { 0 });
+    let mut slab = u32::MAX;
     for &(k, cfg) in cubes {
         let cube = unpack(k);
+        if sorted && cube[2] != slab {
+            if slab != u32::MAX && cube[2] == slab + 1 {
+                planes.swap(0, 1);
+                planes[1].clear();
+            } else {
+                planes[0].clear();
+                planes[1].clear();
+            }
+            slab = cube[2];
+        }
         let mut ce = [NO_VERTEX; 12];
         for (e, [a, b]) in EDGES.iter().enumerate() {
             if (cfg >> a & 1) == (cfg >> b & 1) {
@@ -232,21 +393,41 @@ pub fn leaf_vertices_by_cube(
             }
             let (ka, kb) = (corner_key(cube, 0, *a), corner_key(cube, 0, *b));
             let key = edge_key(ka, (e / 4) as u8);
-            ce[e] = *edges.entry(key).or_insert_with(|| {
+            let map = if sorted {
+                &mut planes[(a >> 2) as usize]
+            } else {
+                &mut edges
+            };
+            ce[e] = *map.entry(key).or_insert_with(|| {
                 let fa = field
-                    .get(ka)
+                    .slot(ka)
                     .expect("a leaf cube's corners are in the band");
                 let fb = field
-                    .get(kb)
+                    .slot(kb)
                     .expect("a leaf cube's corners are in the band");
                 let t = edge_ratio(fa.distance, fb.distance);
                 let p = g.position(ka).lerp(g.position(kb), t);
-                let (n, c) = blend(&(&fa).into(), &(&fb).into(), t);
-                vb.push(p, n, c)
+                let (n, c) = blend_attributes(
+                    (
+                        field.sample_normal(fa.sample),
+                        field.sample_color(fa.sample),
+                    ),
+                    (
+                        field.sample_normal(fb.sample),
+                        field.sample_color(fb.sample),
+                    ),
+                    t,
+                );
+                let id = vb.push(p, n, c);
+                if sorted {
+                    new_edges.push((key, id));
+                }
+                id
             });
         }
         by_cube.push(ce);
     }
+    edges.extend(new_edges);
     (edges, by_cube)
 }
 
@@ -395,6 +576,72 @@ mod tests {
             assert!(n.dot((a + b + cc) / 3.0 - center) > 0.0, "inward triangle");
         }
         assert_watertight(&vb, &tris, &field, 13);
+    }
+
+    #[test]
+    fn brick_configs_equal_cube_by_cube_configs() {
+        let mut seed = 0x51f1_5eed_0d15_ea5eu64;
+        let mut s = crate::signed_distance::Samples::default();
+        for _ in 0..4000 {
+            let p = Vec3::new(rng(&mut seed), rng(&mut seed), rng(&mut seed));
+            let n = Vec3::new(
+                rng(&mut seed) - 0.5,
+                rng(&mut seed) - 0.5,
+                rng(&mut seed) - 0.5,
+            );
+            s.positions.push(p);
+            s.normals.push(n.normalize_or(Vec3::Z));
+        }
+        // Resolution 20: the lattice's last cells end inside a brick; with
+        // and without the tangential rule (defined ≠ reached).
+        for limit in [f32::INFINITY, 0.05] {
+            let mut field = SignedDistanceField::new(Grid::new(s.bbox(), 20).unwrap());
+            field.tangential_limit = limit;
+            field.add(&s);
+            let cells = field.grid.cells();
+            let masks: Vec<BrickMasks> = (0..field.brick_count())
+                .map(|b| field.brick_masks(b))
+                .collect();
+            let (mut touched, mut surface) = (0, 0);
+            for b in 0..field.brick_count() {
+                let mut out = [0u8; crate::signed_distance::BRICK_VOLUME];
+                let (t, n) = brick_configs(&field, &masks, b, &mut out);
+                touched += t;
+                surface += n;
+                let base = field.brick_coords(b).map(|c| c << BRICK_BITS);
+                let mut expect_touched = 0;
+                for (li, &got) in out.iter().enumerate() {
+                    let li = li as u32;
+                    let cube = [
+                        base[0] + (li & 7),
+                        base[1] + (li >> 3 & 7),
+                        base[2] + (li >> 6),
+                    ];
+                    if cube.iter().any(|&c| c >= cells) {
+                        assert_eq!(got, 0);
+                        continue;
+                    }
+                    let expect = match leaf_config_in(&field, b, cube) {
+                        Some(cfg) if cfg != 0 && cfg != 255 => cfg,
+                        _ => 0,
+                    };
+                    assert_eq!(got, expect, "cube {cube:?}");
+                    let reached = (0..8u32).any(|c| {
+                        let v = [
+                            cube[0] + (c & 1),
+                            cube[1] + (c >> 1 & 1),
+                            cube[2] + (c >> 2),
+                        ];
+                        field
+                            .brick_of(v[0], v[1], v[2])
+                            .is_some_and(|vb| !field.slot_in(vb, v[0], v[1], v[2]).is_empty())
+                    });
+                    expect_touched += reached as usize;
+                }
+                assert_eq!(t, expect_touched);
+            }
+            assert!(surface > 100 && touched > surface, "{surface} {touched}");
+        }
     }
 
     #[test]

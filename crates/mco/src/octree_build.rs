@@ -39,11 +39,12 @@
 //!   the original algorithm's choice.
 
 use crate::marching_cubes::{
-    Corner, CubeEdges, NO_VERTEX, VertexBuffer, blend, corner_key, edge_key, leaf_vertices_by_cube,
-    node_triangles,
+    BandSigns, Corner, CubeEdges, NO_VERTEX, VertexBuffer, blend, corner_key, edge_key,
+    leaf_vertices_by_cube, node_triangles,
 };
 use crate::mc_table::EDGES;
 use crate::model::{McoModel, Node};
+use crate::neighbours::{FaceNeighbours, face_neighbours};
 use crate::signed_distance::{KeyMap, SignedDistanceField, pack, unpack};
 use crate::{Error, Result};
 
@@ -70,12 +71,21 @@ pub struct Level {
 #[derive(Debug)]
 pub struct Tree<'f> {
     pub field: &'f SignedDistanceField,
+    /// The band's defined vertices' sides, for corner lookups.
+    pub signs: BandSigns,
     pub levels: Vec<Level>,
     pub vertices: VertexBuffer,
     pub node_id: Vec<Vec<u32>>,
     /// Per level, once [`assemble`] has run: each node's children (level
     /// `L - 1` indices, increasing) as `list[start[i]..start[i + 1]]`.
     pub children: Vec<(Vec<u32>, Vec<u32>)>,
+    /// Per level below the root, once [`assemble`] has run: each node's
+    /// parent (a level `L + 1` index).
+    pub parent: Vec<Vec<u32>>,
+    /// Per level, once [`assemble`] has run: each node's face neighbours
+    /// ([`crate::neighbours`]); empty for the leaf level, which no stage
+    /// asks.
+    pub face_neighbours: Vec<Vec<FaceNeighbours>>,
 }
 
 impl Tree<'_> {
@@ -91,8 +101,8 @@ impl Tree<'_> {
 impl Tree<'_> {
     /// The value of lattice vertex `v` as level `level` sees it.
     pub fn corner(&self, level: usize, v: u64) -> Option<Corner> {
-        if let Some(f) = self.field.get(v) {
-            return Some(f.into());
+        if let Some(c) = self.signs.corner(self.field, v) {
+            return Some(c);
         }
         self.levels.get(level)?.corners.get(&v).copied()
     }
@@ -130,13 +140,20 @@ fn offset_key(v: u64, d: [i32; 3], step: u32) -> Option<u64> {
 /// A placeholder corner, overwritten before use.
 const UNSET: Corner = Corner {
     inside: false,
-    distance: f32::NAN,
-    normal: glam::Vec3::ZERO,
-    color: [0; 4],
+    at: u64::MAX,
 };
 
 /// Builds every level from the leaf cubes up to the single root.
 pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) -> Result<Tree<'f>> {
+    build_levels_with(field, BandSigns::new(field), leaves)
+}
+
+/// [`build_levels`] with the band's sides already at hand.
+pub fn build_levels_with<'f>(
+    field: &'f SignedDistanceField,
+    signs: BandSigns,
+    leaves: &[(u64, u8)],
+) -> Result<Tree<'f>> {
     if leaves.is_empty() {
         return Err(Error::Input(
             "no surface found: the samples produce no sign change at this resolution".into(),
@@ -160,10 +177,13 @@ pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) ->
         .collect();
     let mut tree = Tree {
         field,
+        signs,
         levels: vec![level0],
         vertices,
         node_id: Vec::new(),
         children: Vec::new(),
+        parent: Vec::new(),
+        face_neighbours: Vec::new(),
     };
     let offsets = rule_offsets();
     for l in 1..=depth {
@@ -196,8 +216,8 @@ pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) ->
             let mut cs = [UNSET; 8];
             for (c, slot) in cs.iter_mut().enumerate() {
                 let v = corner_key(cube, l as u32, c as u8);
-                *slot = if let Some(f) = field.get(v) {
-                    f.into()
+                *slot = if let Some(c) = tree.signs.corner(field, v) {
+                    c
                 } else if let Some(&cv) = level.corners.get(&v) {
                     cv
                 } else {
@@ -260,7 +280,7 @@ pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) ->
                                 let g = field.grid;
                                 let p0 = g.position(h0);
                                 let p = p0.lerp(g.position(offset_key(h0, d, step).unwrap()), 0.5);
-                                let (n, col) = blend(&c0, &c1, 0.5);
+                                let (n, col) = blend(field, &c0, &c1, 0.5);
                                 tree.vertices.push(p, n, col)
                             }
                         }
@@ -268,7 +288,7 @@ pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) ->
                     None => {
                         let g = field.grid;
                         let p = g.position(va).lerp(g.position(vb), 0.5);
-                        let (n, col) = blend(&ca, &cb, 0.5);
+                        let (n, col) = blend(field, &ca, &cb, 0.5);
                         tree.vertices.push(p, n, col)
                     }
                 };
@@ -297,11 +317,16 @@ fn rule_value(
     offsets: &[Vec<[i32; 3]>; 3],
 ) -> Option<Corner> {
     for class in offsets {
-        let known: Vec<Corner> = class
-            .iter()
-            .filter_map(|&d| offset_key(v, d, step))
-            .filter_map(|k| tree.corner(below, k))
-            .collect();
+        // At most 12 offsets per class (the face diagonals): no allocation.
+        let mut buf = [UNSET; 12];
+        let mut n = 0;
+        for k in class.iter().filter_map(|&d| offset_key(v, d, step)) {
+            if let Some(c) = tree.corner(below, k) {
+                buf[n] = c;
+                n += 1;
+            }
+        }
+        let known = &buf[..n];
         if known.is_empty() {
             continue;
         }
@@ -315,10 +340,7 @@ fn rule_value(
             .iter()
             .find(|c| c.inside == majority)
             .expect("the majority side has a member");
-        return Some(Corner {
-            distance: f32::NAN,
-            ..pick
-        });
+        return Some(pick);
     }
     None
 }
@@ -382,6 +404,18 @@ pub fn assemble(tree: &mut Tree) -> McoModel {
         })
         .collect();
     tree.children = children;
+    tree.face_neighbours = tree
+        .levels
+        .iter()
+        .enumerate()
+        .map(|(l, lv)| {
+            if l == 0 {
+                Vec::new()
+            } else {
+                face_neighbours(&lv.keys)
+            }
+        })
+        .collect();
     let children = &tree.children;
     let kids = |l: usize, i: u32| -> &[u32] {
         let (start, list) = &children[l];
@@ -506,5 +540,6 @@ pub fn assemble(tree: &mut Tree) -> McoModel {
         model.nodes[id].deps_start = start as u32;
         model.nodes[id].deps_count = (model.deps.len() - start) as u16;
     }
+    tree.parent = parent;
     model
 }

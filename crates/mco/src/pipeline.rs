@@ -27,7 +27,7 @@ use std::time::Instant;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use lodkit_mesh::{Aabb, Model, RangeImage, TriMesh};
 
-use crate::marching_cubes::leaf_config_in;
+use crate::marching_cubes::{BandSigns, BrickMasks, brick_configs, leaf_config_in};
 use crate::model::McoModel;
 use crate::normals_estimation::{mesh_samples, point_cloud_samples, range_image_samples};
 use crate::signed_distance::{
@@ -207,6 +207,8 @@ pub struct IncrementalBuilder {
     surface_cubes: usize,
     samples: u64,
     has_colors: Option<bool>,
+    /// The band's sides when the last add computed them (a first add).
+    signs: Option<BandSigns>,
 }
 
 impl IncrementalBuilder {
@@ -225,6 +227,7 @@ impl IncrementalBuilder {
             surface_cubes: 0,
             samples: 0,
             has_colors: None,
+            signs: None,
         }
     }
 
@@ -263,10 +266,30 @@ impl IncrementalBuilder {
         let colors = s.colors.is_some();
         self.has_colors = Some(self.has_colors.unwrap_or(colors) && colors);
         self.samples += s.len() as u64;
+        let fresh = self.configs.is_empty();
         let changed = self.field.add(s);
         let field = &self.field;
         let bricks = field.brick_count();
         self.configs.resize(bricks * BRICK_VOLUME, 0);
+        if fresh {
+            // The first add changed every vertex it reached: every cube of
+            // every brick is recomputed, a brick slice at a time from bit
+            // masks (the same configurations as cube by cube below).
+            let masks: Vec<BrickMasks> = (0..bricks).map(|b| field.brick_masks(b)).collect();
+            let mut recomputed = 0usize;
+            for (b, out) in self.configs.chunks_exact_mut(BRICK_VOLUME).enumerate() {
+                let (touched, surface) = brick_configs(field, &masks, b, out);
+                recomputed += touched;
+                self.surface_cubes += surface;
+            }
+            self.signs = Some(BandSigns::from_masks(masks));
+            return AddReport {
+                samples: s.len(),
+                vertices_changed: changed,
+                cubes_recomputed: recomputed,
+                surface_cubes: self.surface_cubes,
+            };
+        }
         // The cubes around changed vertices: one bit per cube, in the
         // brick of the cube's lowest corner.
         let cells = field.grid.cells();
@@ -297,6 +320,7 @@ impl IncrementalBuilder {
                 }
             });
         }
+        self.signs = None;
         let mut recomputed = 0usize;
         for (b, words) in dirty.iter().enumerate() {
             let [bx, by, bz] = field.brick_coords(b).map(|c| c << BRICK_BITS);
@@ -340,7 +364,11 @@ impl IncrementalBuilder {
     pub fn build(&self) -> Result<McoModel> {
         let t0 = Instant::now();
         let leaves = self.leaves();
-        let mut tree = crate::octree_build::build_levels(&self.field, &leaves)?;
+        let signs = self
+            .signs
+            .clone()
+            .unwrap_or_else(|| BandSigns::new(&self.field));
+        let mut tree = crate::octree_build::build_levels_with(&self.field, signs, &leaves)?;
         let mut model = crate::octree_build::assemble(&mut tree);
         let together = crate::crack_patch::expand_together(&tree);
         crate::priority::number(&mut model, &together);
