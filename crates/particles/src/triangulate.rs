@@ -391,7 +391,10 @@ fn triangulate_impl(
     let cells: &[u64] = if sorted { &s.cells } else { &cells_sorted };
     // Vertex (sorted order) → vertex of `s`.
     let vid = |v: u32| order.as_ref().map_or(v, |o| o[v as usize]);
-    let mut faces: Vec<[u32; 3]> = Vec::with_capacity(cells.len() * 2 + 16);
+    // A closed surface has about two triangles per cube; duplicates
+    // (dropped at the end) and non-manifold hulls add a few: room for
+    // them, so the vector is never regrown (a copy plus fresh pages).
+    let mut faces: Vec<[u32; 3]> = Vec::with_capacity(cells.len() * 2 + cells.len() / 8 + 64);
     let mut merges: Vec<(u32, u32)> = Vec::new();
     // Triangles built by solid configurations: the only ones two
     // neighbourhoods can both build (planar faces have one owner).
@@ -887,9 +890,10 @@ const SETTLE_SKIP_CLASS: u8 = 6;
 /// Sweeps over the trials; a second lets the first ones see the later.
 const SETTLE_SWEEPS: usize = 2;
 
-fn sorted_tri(mut t: [u32; 3]) -> [u32; 3] {
-    t.sort_unstable();
-    t
+#[inline]
+fn sorted_tri(t: [u32; 3]) -> [u32; 3] {
+    let (a, b) = (t[0].min(t[1]), t[0].max(t[1]));
+    [a.min(t[2]), a.max(b.min(t[2])), b.max(t[2])]
 }
 
 /// Whether the corners of a hull triangle share a coordinate: it lies on a
@@ -1417,17 +1421,33 @@ fn decimate_merge(mesh: &mut TriMesh, faces: &mut Vec<[u32; 3]>, merges: &[(u32,
 /// Drops the second of two identical triangles among `candidates` (solid
 /// triangles on a face of their neighbourhood); returns what was dropped.
 fn dedupe_face_triangles(faces: &mut Vec<[u32; 3]>, candidates: &[u32]) -> Vec<bool> {
-    let mut keyed: Vec<([u32; 3], u32)> = Vec::with_capacity(candidates.len());
-    for &i in candidates {
-        let mut k = faces[i as usize];
-        k.sort_unstable();
-        keyed.push((k, i));
-    }
-    keyed.sort_unstable();
+    // Candidates come in increasing order (pushed as the faces grow), so
+    // the first one seen of each vertex set is the lowest index: keep it,
+    // drop later copies. An open-addressed set of candidate indices,
+    // keyed by the sorted vertices, replaces a sort of all candidates.
+    debug_assert!(candidates.windows(2).all(|w| w[0] < w[1]));
     let mut drop = vec![false; faces.len()];
-    for w in keyed.windows(2) {
-        if w[0].0 == w[1].0 {
-            drop[w[1].1 as usize] = true;
+    if candidates.len() > 1 {
+        let bits = (2 * candidates.len()).next_power_of_two().trailing_zeros();
+        let mask = (1usize << bits) - 1;
+        let mut slots = vec![NONE; mask + 1];
+        for &i in candidates {
+            let k = sorted_tri(faces[i as usize]);
+            let h = (u64::from(k[0]) | (u64::from(k[1]) << 21) | (u64::from(k[2]) << 42))
+                .wrapping_mul(0x9e37_79b9_7f4a_7c15);
+            let mut at = (h >> (64 - bits)) as usize;
+            loop {
+                let j = slots[at];
+                if j == NONE {
+                    slots[at] = i;
+                    break;
+                }
+                if sorted_tri(faces[j as usize]) == k {
+                    drop[i as usize] = true;
+                    break;
+                }
+                at = (at + 1) & mask;
+            }
         }
     }
     let mut i = 0;
