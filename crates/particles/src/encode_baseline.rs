@@ -43,6 +43,9 @@ impl BitWriter {
 }
 
 impl BitCoder for BitWriter {
+    fn context_free(&self) -> bool {
+        true
+    }
     fn bit(&mut self, b: &mut bool, _ctx: usize) -> Result<()> {
         self.push(*b);
         Ok(())
@@ -103,6 +106,27 @@ impl BitCoder for BitReader<'_> {
         self.word <<= 1;
         self.left -= 1;
         Ok(())
+    }
+    #[inline]
+    fn bits(&mut self, v: &mut u32, n: u32, _ctx: usize) -> Result<()> {
+        if n == 0 || n > self.left {
+            // Across a refill (or nothing to read): bit by bit.
+            let mut out = 0u32;
+            for _ in 0..n {
+                let mut b = false;
+                self.bit(&mut b, 0)?;
+                out = (out << 1) | u32::from(b);
+            }
+            *v = out;
+            return Ok(());
+        }
+        *v = (self.word >> (64 - n)) as u32;
+        self.word <<= n;
+        self.left -= n;
+        Ok(())
+    }
+    fn context_free(&self) -> bool {
+        true
     }
     fn symbols(&self) -> u64 {
         self.next as u64 * 8 - u64::from(self.left)

@@ -46,6 +46,12 @@ pub trait BitCoder {
         *v = out;
         Ok(())
     }
+    /// Whether the contexts are ignored (the baseline's raw bits): symbols
+    /// with different contexts may then be coded together with
+    /// [`BitCoder::bits`], which a raw reader does with one shift.
+    fn context_free(&self) -> bool {
+        false
+    }
 }
 
 // Context layout (the baseline ignores contexts).
@@ -406,8 +412,20 @@ pub fn code_level<C: BitCoder>(
                         back[a] = (fine >> (8 * a + k) & 1) as usize;
                     }
                 }
+                // Raw bits: the three axes of a depth, read at once.
+                let together = !entropy && coder.context_free();
                 for d in (r + 1)..=depth {
                     let s = depth - d;
+                    if together {
+                        let mut bits = want
+                            .iter()
+                            .fold(0u32, |acc, &w| (acc << 1) | ((w >> s) & 1));
+                        coder.bits(&mut bits, 3, PATH)?;
+                        for (a, l) in leaf.iter_mut().enumerate() {
+                            *l |= ((bits >> (2 - a)) & 1) << s;
+                        }
+                        continue;
+                    }
                     let step = (d - r).min(3) as usize - 1;
                     for (a, l) in leaf.iter_mut().enumerate() {
                         let mut b = (want[a] >> s) & 1 == 1;
@@ -640,6 +658,20 @@ pub fn code_precision<C: BitCoder>(
 ) -> Result<()> {
     let shift = 16 - b;
     let layer = (b as usize).min(16) - 1;
+    if faces.is_empty() && coder.context_free() {
+        // The three bits of a particle, axis 0 first, read at once.
+        for v in q.iter_mut() {
+            let mut bits = v
+                .iter()
+                .fold(0u32, |acc, &c| (acc << 1) | ((c >> shift) & 1));
+            coder.bits(&mut bits, 3, PREC)?;
+            for (a, c) in v.iter_mut().enumerate() {
+                let bit = (bits >> (2 - a)) & 1;
+                *c = (*c & !(1 << shift)) | (bit << shift);
+            }
+        }
+        return Ok(());
+    }
     if faces.is_empty() {
         for v in q.iter_mut() {
             for (a, c) in v.iter_mut().enumerate() {
