@@ -312,6 +312,21 @@ fn owns(w: &Window, o: [usize; 3], below: u8) -> bool {
     true
 }
 
+/// Local Morton code `k < 512` of a brick → its linear position
+/// `64 z + 8 y + x` (word `z`, bit `8 y + x` of [`Brick::lin`]).
+const MORTON_TO_LINEAR: [u16; 512] = {
+    let mut t = [0u16; 512];
+    let mut k = 0;
+    while k < 512 {
+        let x = (k & 1) | ((k >> 2) & 2) | ((k >> 4) & 4);
+        let y = ((k >> 1) & 1) | ((k >> 3) & 2) | ((k >> 5) & 4);
+        let z = ((k >> 2) & 1) | ((k >> 4) & 2) | ((k >> 6) & 4);
+        t[k] = (64 * z + 8 * y + x) as u16;
+        k += 1;
+    }
+    t
+};
+
 /// Bricks of a level (sorted Morton cells) and their keys, in Morton order.
 fn bricks_of(cells: &[u64]) -> (Vec<Brick>, Vec<u64>) {
     let mut bricks: Vec<Brick> = Vec::new();
@@ -329,12 +344,8 @@ fn bricks_of(cells: &[u64]) -> (Vec<Brick>, Vec<u64>) {
         let b = bricks.last_mut().expect("pushed above");
         let k = (c & 511) as usize;
         b.mor[k >> 6] |= 1 << (k & 63);
-        let (x, y, z) = (
-            (k & 1) | ((k >> 2) & 2) | ((k >> 4) & 4),
-            ((k >> 1) & 1) | ((k >> 3) & 2) | ((k >> 5) & 4),
-            ((k >> 2) & 1) | ((k >> 4) & 2) | ((k >> 6) & 4),
-        );
-        b.lin[z] |= 1 << (8 * y + x);
+        let l = usize::from(MORTON_TO_LINEAR[k]);
+        b.lin[l >> 6] |= 1 << (l & 63);
     }
     for b in &mut bricks {
         for w in 1..8 {
