@@ -138,6 +138,29 @@ mod tests {
     use super::*;
 
     #[test]
+    fn multi_bit_reads_match_single_bit_reads_across_refills() {
+        let mut w = BitWriter::new();
+        let pattern: Vec<bool> = (0..100u32).map(|i| (i * 7 + i / 3) % 5 < 2).collect();
+        for mut b in pattern.iter().copied() {
+            w.bit(&mut b, 0).unwrap();
+        }
+        let bytes = w.finish();
+        // Groups of three straddle the 64-bit word every few reads.
+        let mut r = BitReader::new(&bytes);
+        for chunk in pattern.chunks(3) {
+            let mut v = 0u32;
+            r.bits(&mut v, chunk.len() as u32, 0).unwrap();
+            let want = chunk.iter().fold(0u32, |acc, &b| (acc << 1) | u32::from(b));
+            assert_eq!(v, want);
+        }
+        // 100 bits in 13 bytes: 4 padding bits left, then the end.
+        let mut v = 0u32;
+        r.bits(&mut v, 4, 0).unwrap();
+        assert_eq!(v, 0);
+        assert!(r.bits(&mut v, 3, 0).is_err());
+    }
+
+    #[test]
     fn bits_round_trip_and_reading_past_the_end_fails() {
         let pattern = [
             true, false, true, true, false, false, true, false, true, true,

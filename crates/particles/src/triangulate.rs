@@ -1806,6 +1806,22 @@ mod tests {
     }
 
     #[test]
+    fn face_triangle_dedupe_keeps_the_first_copy_in_any_vertex_order() {
+        let mut faces = vec![
+            [0, 1, 2],
+            [5, 6, 7],
+            [2, 0, 1],
+            [1, 2, 3],
+            [7, 5, 6],
+            [0, 2, 1],
+        ];
+        // Triangle 1 is not a candidate: its copy 4 is kept.
+        let drop = dedupe_face_triangles(&mut faces, &[0, 2, 3, 4, 5]);
+        assert_eq!(drop, [false, false, true, false, false, true]);
+        assert_eq!(faces, [[0, 1, 2], [5, 6, 7], [1, 2, 3], [7, 5, 6]]);
+    }
+
+    #[test]
     fn owned_surfaces_triangulate_like_borrowed_ones() {
         use crate::{DecodeOptions, EncodeOptions, decode, encode};
         let model = lodkit_mesh::Model::Mesh(lodkit_mesh::shapes::blob(5_000));
