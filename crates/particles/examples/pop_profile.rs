@@ -12,35 +12,11 @@
 use std::time::Instant;
 
 use lodkit_particles::triangulate::triangulate_owned;
-use lodkit_particles::{
-    DecodeOptions, EncodeOptions, Mode, TriangulateOptions, decode, encode, triangulate,
-};
+use lodkit_particles::{DecodeOptions, TriangulateOptions, decode, triangulate};
 
-fn load(input: &str) -> Vec<u8> {
-    let parts: Vec<&str> = input.split(':').collect();
-    if parts.len() < 3 {
-        return std::fs::read(input).unwrap_or_else(|e| panic!("{input}: {e}"));
-    }
-    let model = if let Some(level) = parts[0].strip_prefix("icosphere") {
-        lodkit_mesh::Model::Mesh(lodkit_mesh::shapes::icosphere(
-            level.parse().expect("level"),
-        ))
-    } else {
-        lodkit_mesh::io::load(std::path::Path::new(parts[0]))
-            .unwrap_or_else(|e| panic!("{input}: {e}"))
-    };
-    let opts = EncodeOptions {
-        depth: Some(parts[1].parse().expect("depth")),
-        precision: parts[2].parse().expect("precision"),
-        mode: if parts.get(3) == Some(&"baseline") {
-            Mode::Baseline
-        } else {
-            Mode::Entropy
-        },
-        ..EncodeOptions::DEFAULT
-    };
-    encode(&model, &opts).expect("encodes").bytes
-}
+#[path = "shared/stream_input.rs"]
+mod stream_input;
+use stream_input::load;
 
 fn main() {
     let mut args: Vec<String> = std::env::args().skip(1).collect();
