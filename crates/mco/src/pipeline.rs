@@ -157,11 +157,15 @@ fn spacing_of(input: Input) -> Option<f32> {
             if p.positions.len() < 2 {
                 return None;
             }
+            let step = (p.positions.len() / 20_000).max(1);
+            // The query point itself is its own nearest (distance 0).
+            let k = CLOUD_SPACING_NEIGHBOUR.min(p.positions.len() - 1);
+            if let Some(d) = crate::cloud_spacing::kth_neighbour_distances(&p.positions, step, k) {
+                return median(d);
+            }
+            // Data the grid does not suit: the same distances from a kd-tree.
             let pts: Vec<[f32; 3]> = p.positions.iter().map(|v| v.to_array()).collect();
             let tree: ImmutableKdTree<f32, 3> = ImmutableKdTree::new_from_slice(&pts).ok()?;
-            let step = (pts.len() / 20_000).max(1);
-            // The query point itself is its own nearest (distance 0).
-            let k = CLOUD_SPACING_NEIGHBOUR.min(pts.len() - 1);
             let n = NonZero::new(k + 1).expect("k + 1 > 0");
             median(
                 pts.iter()
