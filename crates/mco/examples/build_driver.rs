@@ -59,6 +59,7 @@ fn main() {
     let mut best = f64::INFINITY;
     let mut best_cpu = f64::INFINITY;
     let mut crc = 0;
+    let mut shape = String::new();
     for _ in 0..repeat {
         let t = Instant::now();
         let c = thread_cpu_seconds();
@@ -66,6 +67,12 @@ fn main() {
         best_cpu = best_cpu.min(thread_cpu_seconds() - c);
         best = best.min(t.elapsed().as_secs_f64());
         m.stats.build_seconds = 0.0;
+        shape = format!(
+            "resolution {}, {} nodes, {} triangles",
+            m.grid.resolution,
+            m.nodes.len(),
+            m.full_triangles()
+        );
         // The file ends with its own CRC; hash what it covers.
         let bytes = encode(&m);
         crc = crc32fast::hash(&bytes[..bytes.len() - 4]);
@@ -75,7 +82,7 @@ fn main() {
     }
     println!(
         "{what}: {points} points, best {best:.3} s, {:.0} points/s, \
-         thread CPU {best_cpu:.3} s, {:.0} points/CPU-s, crc {crc:08x}",
+         thread CPU {best_cpu:.3} s, {:.0} points/CPU-s, crc {crc:08x}, {shape}",
         points as f64 / best,
         points as f64 / best_cpu
     );

@@ -38,6 +38,7 @@
 //! let mesh = model.mesh_from_indices(&indices);
 //! ```
 
+pub mod cloud_spacing;
 pub mod crack_patch;
 pub mod evaluate;
 pub mod extract;
