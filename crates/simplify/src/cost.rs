@@ -123,6 +123,11 @@ impl RingScan {
         self.pc = pc;
         let mut planes = Quadric::ZERO;
         let mut ring_area = 0.0;
+        // One bit per link vertex (by the id's low bits): a vertex whose
+        // bit is clear is not in the list yet and is pushed without the
+        // search — every link's first occurrence, the search that runs
+        // to the end of the list.
+        let mut seen = 0u64;
         for &e in ring {
             let f = entry_face(e);
             let tri = m.faces[f as usize];
@@ -134,8 +139,8 @@ impl RingScan {
             // The other two corners in winding order, without branches.
             let (a, b) = (tri[NEXT[corner]], tri[NEXT[NEXT[corner]]]);
             // Exact counts (the collapse's topology checks rely on them).
-            add_link(&mut self.links, a);
-            add_link(&mut self.links, b);
+            add_link(&mut self.links, &mut seen, a);
+            add_link(&mut self.links, &mut seen, b);
             let pa = fpos(m, a) - origin;
             let pb = fpos(m, b) - origin;
             let (n, d, area) = if CENTRED {
@@ -241,9 +246,16 @@ fn plane_through_origin(a: Vec3A, b: Vec3A) -> (Vec3A, f32, f32) {
     }
 }
 
-/// Counts one more face on the internal edge to `w`.
+/// Counts one more face on the internal edge to `w`; `seen` has the bit
+/// `w & 63` set for every vertex already in `links`.
 #[inline]
-fn add_link(links: &mut Vec<Link>, w: u32) {
+fn add_link(links: &mut Vec<Link>, seen: &mut u64, w: u32) {
+    let bit = 1u64 << (w & 63);
+    if *seen & bit == 0 {
+        *seen |= bit;
+        links.push(Link { v: w, m: 1 });
+        return;
+    }
     for l in links.iter_mut() {
         if l.v == w {
             l.m += 1;
