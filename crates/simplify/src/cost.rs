@@ -256,13 +256,17 @@ fn add_link(links: &mut Vec<Link>, seen: &mut u64, w: u32) {
         links.push(Link { v: w, m: 1 });
         return;
     }
+    // Almost surely in the list: count it without an early exit (whose
+    // position is data-dependent and mispredicted).
+    let mut hit = 0;
     for l in links.iter_mut() {
-        if l.v == w {
-            l.m += 1;
-            return;
-        }
+        let e = (l.v == w) as u32;
+        l.m += e;
+        hit |= e;
     }
-    links.push(Link { v: w, m: 1 });
+    if hit == 0 {
+        links.push(Link { v: w, m: 1 });
+    }
 }
 
 /// Reusable buffers of the cost and collapse stages (no allocation per
