@@ -26,7 +26,9 @@ use glam::{DVec3, Vec3A};
 
 use crate::options::Options;
 use crate::quadric::{ExtendedFace, MAX_DIM, Quadric, add_border_plane};
-use crate::ring_table::{DEAD, Flag, Link, RingTable, multiplicity};
+use crate::ring_table::{
+    DEAD, Flag, Link, RingEntry, RingTable, entry_corner, entry_face, multiplicity,
+};
 use crate::rs_heap::Keyed;
 use crate::work_mesh::WorkMesh;
 
@@ -91,9 +93,10 @@ pub struct RingScan {
 }
 
 impl RingScan {
-    /// Reads the ring of `center` (face list `ring`) in the frame centred
-    /// on `origin`. Returns false when the ring has no live face.
-    pub fn scan(&mut self, m: &WorkMesh, ring: &[u32], center: u32, origin: Vec3A) -> bool {
+    /// Reads the ring of `center` (ring table entries `ring`, whose corners
+    /// must be current) in the frame centred on `origin`. Returns false
+    /// when the ring has no live face.
+    pub fn scan(&mut self, m: &WorkMesh, ring: &[RingEntry], center: u32, origin: Vec3A) -> bool {
         let pc = fpos(m, center) - origin;
         // In the centre's own frame every face plane passes through the
         // origin: the plane offsets and the quadric's linear and constant
@@ -109,7 +112,7 @@ impl RingScan {
     fn scan_in<const CENTRED: bool>(
         &mut self,
         m: &WorkMesh,
-        ring: &[u32],
+        ring: &[RingEntry],
         center: u32,
         pc: Vec3A,
         origin: Vec3A,
@@ -120,21 +123,24 @@ impl RingScan {
         self.pc = pc;
         let mut planes = Quadric::ZERO;
         let mut ring_area = 0.0;
-        for &f in ring {
+        // One bit per link vertex (by the id's low bits): a vertex whose
+        // bit is clear is not in the list yet and is pushed without the
+        // search — every link's first occurrence, the search that runs
+        // to the end of the list.
+        let mut seen = 0u64;
+        for &e in ring {
+            let f = entry_face(e);
             let tri = m.faces[f as usize];
             if tri[0] == DEAD {
                 continue;
             }
-            let (corner, a, b) = if tri[0] == center {
-                (0, tri[1], tri[2])
-            } else if tri[1] == center {
-                (1, tri[2], tri[0])
-            } else {
-                (2, tri[0], tri[1])
-            };
+            let corner = entry_corner(e);
+            debug_assert_eq!(tri[corner], center);
+            // The other two corners in winding order, without branches.
+            let (a, b) = (tri[NEXT[corner]], tri[NEXT[NEXT[corner]]]);
             // Exact counts (the collapse's topology checks rely on them).
-            add_link(&mut self.links, a);
-            add_link(&mut self.links, b);
+            add_link(&mut self.links, &mut seen, a);
+            add_link(&mut self.links, &mut seen, b);
             let pa = fpos(m, a) - origin;
             let pb = fpos(m, b) - origin;
             let (n, d, area) = if CENTRED {
@@ -152,7 +158,7 @@ impl RingScan {
             }
             self.faces.push(RingFace {
                 f,
-                corner,
+                corner: corner as u8,
                 a,
                 b,
                 pa,
@@ -206,6 +212,10 @@ impl RingScan {
     }
 }
 
+/// The next corner in winding order (index 3 is never a corner; it keeps
+/// the lookup in bounds for any two-bit value).
+const NEXT: [usize; 4] = [1, 2, 0, 0];
+
 /// Unit normal, offset and area of the triangle `(c, a, b)` in its frame
 /// (zeros for a degenerate one). One square root and one division: the
 /// hot spot of the whole simplifier.
@@ -236,16 +246,27 @@ fn plane_through_origin(a: Vec3A, b: Vec3A) -> (Vec3A, f32, f32) {
     }
 }
 
-/// Counts one more face on the internal edge to `w`.
+/// Counts one more face on the internal edge to `w`; `seen` has the bit
+/// `w & 63` set for every vertex already in `links`.
 #[inline]
-fn add_link(links: &mut Vec<Link>, w: u32) {
-    for l in links.iter_mut() {
-        if l.v == w {
-            l.m += 1;
-            return;
-        }
+fn add_link(links: &mut Vec<Link>, seen: &mut u64, w: u32) {
+    let bit = 1u64 << (w & 63);
+    if *seen & bit == 0 {
+        *seen |= bit;
+        links.push(Link { v: w, m: 1 });
+        return;
     }
-    links.push(Link { v: w, m: 1 });
+    // Almost surely in the list: count it without an early exit (whose
+    // position is data-dependent and mispredicted).
+    let mut hit = 0;
+    for l in links.iter_mut() {
+        let e = (l.v == w) as u32;
+        l.m += e;
+        hit |= e;
+    }
+    if hit == 0 {
+        links.push(Link { v: w, m: 1 });
+    }
 }
 
 /// Reusable buffers of the cost and collapse stages (no allocation per
@@ -417,11 +438,12 @@ pub fn best_contraction(
 }
 
 /// The wedge of vertex `v` in the first live face of `ring` containing it.
-pub fn wedge_of_vertex_in_ring(m: &WorkMesh, ring: &[u32], v: u32) -> u32 {
+pub fn wedge_of_vertex_in_ring(m: &WorkMesh, ring: &[RingEntry], v: u32) -> u32 {
     if !m.has_wedges() {
         return v;
     }
-    for &f in ring {
+    for &e in ring {
+        let f = entry_face(e);
         let tri = m.faces[f as usize];
         if tri[0] == DEAD {
             continue;
@@ -451,7 +473,8 @@ mod tests {
             ..Default::default()
         };
         let mut scan = RingScan::default();
-        assert!(scan.scan(&m, &[0, 1], 0, Vec3A::ZERO));
+        // Entries: faces 0 and 1, centre at corner 0 of both.
+        assert!(scan.scan(&m, &[0 << 2, 1 << 2], 0, Vec3A::ZERO));
         assert_eq!((scan.m(2), scan.m(1), scan.m(3), scan.m(9)), (2, 1, 1, 0));
         assert!(scan.border());
         for rf in &scan.faces {

@@ -78,6 +78,8 @@ pub enum Error {
     AttributeLength,
     #[error("{0} vertices is more than 32-bit indices can address")]
     TooLarge(usize),
+    #[error("{0} triangles is more than the ring table can address (2^30)")]
+    TooManyFaces(usize),
 }
 
 /// Why a level stopped where it did.

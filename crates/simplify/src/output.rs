@@ -23,24 +23,26 @@ pub fn compact(m: &mut WorkMesh, index: &mut Vec<u32>) {
     // use in the vertex index table V^i as they move.
     let has_wedges = m.has_wedges();
     let n = m.pos.len();
+    // One slot more than the vertices: a deleted face marks it (DEAD
+    // clamps to `n`), so the loop has no branch on the face's state —
+    // after a pass the deleted faces are scattered and that branch
+    // mispredicted.
     index.clear();
-    index.resize(n, NONE);
+    index.resize(n + 1, NONE);
     let mut w = 0;
     // Plain slices in the hot loops: their bounds stay in registers.
     let (faces, idx) = (&mut m.faces[..], &mut index[..]);
     for r in 0..faces.len() {
         let f = faces[r];
-        if f[0] == DEAD {
-            continue;
-        }
         for v in f {
-            idx[v as usize] = 0;
+            idx[(v as usize).min(n)] = 0;
         }
+        // Written in any case, kept only if live.
         faces[w] = f;
         if has_wedges {
             m.wedges[w] = m.wedges[r];
         }
-        w += 1;
+        w += (f[0] != DEAD) as usize;
     }
     m.faces.truncate(w);
     if has_wedges {
@@ -52,12 +54,13 @@ pub fn compact(m: &mut WorkMesh, index: &mut Vec<u32>) {
     let mut next = 0u32;
     let (idx, pos, err) = (&mut index[..n], &mut m.pos[..n], &mut m.err[..n]);
     for v in 0..n {
-        if idx[v] != NONE {
-            idx[v] = next;
-            pos[next as usize] = pos[v];
-            err[next as usize] = err[v];
-            next += 1;
-        }
+        // Branch-free too: `next <= v`, so the copy is always in bounds
+        // and an unmarked vertex's copy is overwritten or cut.
+        let used = idx[v] != NONE;
+        idx[v] = if used { next } else { NONE };
+        pos[next as usize] = pos[v];
+        err[next as usize] = err[v];
+        next += used as u32;
     }
     let k = m.layout.k;
     if k > 0 && !has_wedges {

@@ -89,6 +89,9 @@ impl WorkMesh {
         if n >= u32::MAX as usize - 1 {
             return Err(Error::TooLarge(n));
         }
+        if mesh.faces.len() >= crate::ring_table::MAX_FACES {
+            return Err(Error::TooManyFaces(mesh.faces.len()));
+        }
         if let Some(i) = mesh.positions.iter().position(|p| !p.is_finite()) {
             return Err(Error::NonFinite(i));
         }
