@@ -140,38 +140,14 @@ pub fn run_pass(
 ) -> PassStats {
     let mut st = PassStats::default();
     let n = m.pos.len();
-    if opts.heap_size <= 1 {
-        // A one-record heap cannot reorder anything (it only delays each
-        // record by one ring), so its records are collapsed at once: the
-        // record is never stale, nothing is refused by the dependency
-        // check, and nothing is costed twice.
-        for s in 0..n as u32 {
-            if m.live_faces <= goal {
-                break;
-            }
-            if m.flags[s as usize] != Flag::Valid {
-                continue;
-            }
-            let Some(rec) = best_contraction(m, rings, opts, s, sc) else {
-                m.flags[s as usize] = Flag::Null;
-                continue;
-            };
-            if !(rec.cost <= tau) {
-                st.deferred += 1;
-                continue;
-            }
-            // `best_contraction` left the ring of `s` read in its frame.
-            match collapse(m, rings, opts, rec.s, rec.t, sc, true) {
-                Ok(removed) => {
-                    st.collapses += 1;
-                    st.faces_removed += removed;
-                }
-                Err(r) => st.count(r),
-            }
-        }
-        return st;
+    // A one-record heap cannot reorder anything (it only delays each
+    // record by one ring), so its records are collapsed at once: the
+    // record is never stale, nothing is refused by the dependency check,
+    // and nothing is costed twice.
+    let immediate = opts.heap_size <= 1;
+    if !immediate {
+        heap.reset(opts.heap_size);
     }
-    heap.reset(opts.heap_size);
     // Operation stage (the initial stage is the heap filling with records
     // while its null records come out).
     for s in 0..n as u32 {
@@ -189,9 +165,21 @@ pub fn run_pass(
             st.deferred += 1;
             continue;
         }
-        if let Some(root) = heap.replace(rec) {
+        if immediate {
+            // `best_contraction` left the ring of `s` read in its frame.
+            match collapse(m, rings, opts, rec.s, rec.t, sc, true) {
+                Ok(removed) => {
+                    st.collapses += 1;
+                    st.faces_removed += removed;
+                }
+                Err(r) => st.count(r),
+            }
+        } else if let Some(root) = heap.replace(rec) {
             apply(m, rings, heap, opts, tau, root, sc, &mut st);
         }
+    }
+    if immediate {
+        return st;
     }
     // Finale stage.
     while m.live_faces > goal {

@@ -64,14 +64,9 @@ impl Quadric {
     /// Adds `w · (n·v + d)²` without building the intermediate quadric.
     #[inline]
     pub fn add_plane(&mut self, n: DVec3, d: f64, w: f64) {
+        self.add_plane_through_origin(n, w);
         let (a, b, c) = (n.x * w, n.y * w, n.z * w);
         let m = &mut self.m;
-        m[0] += a * n.x;
-        m[1] += a * n.y;
-        m[2] += a * n.z;
-        m[3] += b * n.y;
-        m[4] += b * n.z;
-        m[5] += c * n.z;
         m[6] += a * d;
         m[7] += b * d;
         m[8] += c * d;
