@@ -105,14 +105,18 @@ pub fn thin_choosing(tree: &mut Octree, opts: &ThinningOptions) -> (Vec<usize>, 
     }
     let labels: Vec<Vec<Label>> = (0..top).map(|r| tree.levels[r].label.clone()).collect();
     let saved = st.clone();
-    let mut best: Option<(f64, u8)> = None;
-    let mut surfaced: Vec<bool> = Vec::new();
-    for l in (1..=top as u8).rev() {
+    // Back to the shared state, then the coarse levels relaxed below `l`.
+    let thin_coarse = |tree: &mut Octree, st: &mut Thinning, l: u8| {
         for (r, lab) in labels.iter().enumerate() {
             tree.levels[r].label.clone_from(lab);
         }
         st.clone_from(&saved);
         st.levels(tree, &outer(l), 1..=top - 1);
+    };
+    let mut best: Option<(f64, u8)> = None;
+    let mut surfaced: Vec<bool> = Vec::new();
+    for l in (1..=top as u8).rev() {
+        thin_coarse(tree, &mut st, l);
         let (share, triangles) = coarse_non_manifold_share(tree, top - 1);
         // The least thinned candidate (the first) says which levels have
         // a surface; one that thinning emptied (a torus's tube thinner
@@ -133,11 +137,7 @@ pub fn thin_choosing(tree: &mut Octree, opts: &ThinningOptions) -> (Vec<usize>, 
         }
     }
     let l = best.map_or(1, |(_, l)| l);
-    for (r, lab) in labels.iter().enumerate() {
-        tree.levels[r].label.clone_from(lab);
-    }
-    st.clone_from(&saved);
-    st.levels(tree, &outer(l), 1..=top - 1);
+    thin_coarse(tree, &mut st, l);
     (st.eliminated, l)
 }
 
