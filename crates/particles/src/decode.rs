@@ -18,6 +18,7 @@ use crate::error::{Result, stream_err};
 use crate::hierarchical_coding::{self as hc, BitCoder, LevelInput};
 use crate::octree::{Frame, QBITS};
 use crate::ordering::HLevel;
+use crate::precision_coding;
 
 /// Where to stop reading.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -157,7 +158,7 @@ fn decode_with<'a, R: ChunkRead<'a>>(
     };
     let mut leaves: Vec<[u32; 3]> = Vec::new();
     let mut links = hc::Links::root();
-    let mut neighbours = hc::Faces::default();
+    let mut neighbours = precision_coding::Faces::default();
     // The chunk expected next: (kind, index).
     let mut expect = (ChunkKind::Level, 0u8);
     for chunk in ChunkReader::new(bytes) {
@@ -262,9 +263,19 @@ fn decode_with<'a, R: ChunkRead<'a>>(
                 }
                 let mut c = R::open(chunk.payload)?;
                 if entropy && neighbours.is_empty() {
-                    neighbours = hc::particle_faces(&links, &d.levels[depth as usize], d.q.len());
+                    neighbours = precision_coding::particle_faces(
+                        &links,
+                        &d.levels[depth as usize],
+                        d.q.len(),
+                    );
                 }
-                hc::code_precision(&mut c, depth, u32::from(b), &mut d.q, &mut neighbours)?;
+                precision_coding::code_precision(
+                    &mut c,
+                    depth,
+                    u32::from(b),
+                    &mut d.q,
+                    &mut neighbours,
+                )?;
                 d.precision = b;
                 expect = (ChunkKind::Precision, b.saturating_add(1));
             }

@@ -27,6 +27,7 @@
 use crate::error::{Result, stream_err};
 use crate::octree::unmorton;
 use crate::ordering::{HLevel, NO_PARTICLE};
+use crate::precision_coding::MAX_COLUMN_DEPTH;
 
 /// One binary symbol at a time, with a context for adaptive layers.
 pub trait BitCoder {
@@ -61,20 +62,23 @@ const FLAG: usize = OCC + OCC_STATES;
 const FLAG_STATES: usize = 2 * 8 * 4;
 const PATH: usize = FLAG + FLAG_STATES;
 const PATH_STATES: usize = 3 * 3 * 3 * 2;
-const PREC: usize = PATH + PATH_STATES;
+pub(crate) const PREC: usize = PATH + PATH_STATES;
 /// Entropy mode: axis × layer bucket × neighbours along it × normal axis
 /// or not × 2 bits above (216); the plain layout, axis × 16 bits × 2 bits
 /// above (192), fits inside.
 const PREC_STATES: usize = 3 * 3 * 3 * 2 * 4;
 /// Column flags: face neighbours along x, y, z (0–2 each).
-const COL: usize = PREC + PREC_STATES;
+pub(crate) const COL: usize = PREC + PREC_STATES;
 const COL_STATES: usize = 27;
 /// Column depth, unary: one context per step.
-const COLK: usize = COL + COL_STATES;
+pub(crate) const COLK: usize = COL + COL_STATES;
 /// Normal-axis bits of column particles: layer bucket × predicted height
 /// bin × 2 bits above.
-const PRED: usize = COLK + MAX_COLUMN_DEPTH as usize;
+pub(crate) const PRED: usize = COLK + MAX_COLUMN_DEPTH as usize;
 const PRED_STATES: usize = 3 * PRED_BINS * 4;
+/// Bins of the height a column particle's neighbours predict
+/// ([`crate::precision_coding`]).
+pub(crate) const PRED_BINS: usize = 7;
 /// First context of the attribute bits (see [`crate::attributes`]).
 pub const ATTR: usize = PRED + PRED_STATES;
 /// Contexts reserved for attributes: channel × component × 16 bit places,
@@ -137,7 +141,8 @@ fn axes_of(m: u32, k: usize) -> usize {
 /// sibling or a child of its parent's neighbour), so no context needs a
 /// hash or a search: the coder of level `r` reads only arrays.
 ///
-/// The links of level `R` serve only [`particle_faces`], which reads each
+/// The links of level `R` serve only
+/// [`crate::precision_coding::particle_faces`], which reads each
 /// once: [`code_level`] leaves them unbuilt there (`pending`), and they are
 /// derived on the fly from what builds them.
 #[derive(Debug, Clone, Default)]
@@ -165,8 +170,21 @@ impl Links {
     }
 
     /// Nodes the links describe.
-    fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.pending.as_ref().map_or(self.nb.len(), |p| p.n)
+    }
+
+    /// Calls `f(i, links of node i)` for every node in order, deriving
+    /// pending links on the fly.
+    pub(crate) fn for_each_row(&self, mut f: impl FnMut(usize, [u32; 6])) {
+        match &self.pending {
+            Some(p) => each_child_links(&p.parent_nb, &p.masks, &p.firsts, f),
+            None => {
+                for (i, row) in self.nb.iter().enumerate() {
+                    f(i, *row);
+                }
+            }
+        }
     }
 
     /// Builds links left pending.
@@ -210,7 +228,8 @@ fn child_index(mask: u8, first: u32, j: usize) -> Option<u32> {
 /// Codes level `r` and returns it; new particles' leaves are appended to
 /// `leaves` (their index is their particle number). In entropy mode
 /// `links` holds the links of level `r − 1` on entry and those of level
-/// `r` on return (those of level `R` serve [`particle_neighbours`]); the
+/// `r` on return (those of level `R` serve
+/// [`crate::precision_coding::particle_faces`]); the
 /// baseline leaves it alone.
 pub fn code_level<C: BitCoder>(
     coder: &mut C,
@@ -526,323 +545,6 @@ fn each_child_links(
     }
 }
 
-/// The particles' face neighbourhood at level `R`, for the entropy
-/// mode's precision layers.
-#[derive(Debug, Clone, Default)]
-pub struct Faces {
-    /// Per particle: bit `d` set when the leaf across face `d` is ON (`d =
-    /// a` towards `−a`, `3 + a` towards `+a`).
-    pub mask: Vec<u8>,
-    /// Per particle and face: the neighbour particle, or `u32::MAX`.
-    pub nb: Vec<[u32; 6]>,
-    /// Per particle: `0`, or `1 + k` for a column particle of depth `k`
-    /// (see [`code_precision`]); set by the encoder, decoded in the first
-    /// precision layer.
-    pub column: Vec<u8>,
-    /// Per particle: its [`normal_axis`] (bits 0–1) and its face
-    /// neighbours along x, y, z ([`faces_per_axis`], two bits each from
-    /// bit 2), computed once rather than in every layer.
-    axes: Vec<u8>,
-    /// Per column particle: the neighbours that predict its height (column
-    /// particles across its tangential faces with the same normal axis),
-    /// `u32::MAX`-padded; filled during the first precision layer.
-    pred: Vec<[u32; 4]>,
-    /// Per column particle: its height (normal coordinate) as far as coded,
-    /// lower bits zero — a compact copy the predictions read.
-    height: Vec<u16>,
-}
-
-impl Faces {
-    pub fn is_empty(&self) -> bool {
-        self.mask.is_empty()
-    }
-}
-
-/// The face neighbourhood of every particle, by particle number, from the
-/// links [`code_level`] leaves after level `R` (entropy mode); empty when
-/// `links` does not describe `leaves`.
-pub fn particle_faces(links: &Links, leaves: &HLevel, particles: usize) -> Faces {
-    if links.len() != leaves.cells.len() {
-        return Faces::default();
-    }
-    let mut out = Faces {
-        mask: vec![0u8; particles],
-        nb: vec![[NONE; 6]; particles],
-        column: vec![0u8; particles],
-        axes: Vec::new(),
-        pred: Vec::new(),
-        height: vec![0u16; particles],
-    };
-    let mut add = |i: usize, row: [u32; 6]| {
-        let p = leaves.particle[i] as usize;
-        if p >= particles {
-            return;
-        }
-        for d in 0..6 {
-            if row[d] != NONE {
-                out.mask[p] |= 1 << d;
-                out.nb[p][d] = leaves.particle[row[d] as usize];
-            }
-        }
-    };
-    match &links.pending {
-        Some(pl) => each_child_links(&pl.parent_nb, &pl.masks, &pl.firsts, add),
-        None => {
-            for (i, row) in links.nb.iter().enumerate() {
-                add(i, *row);
-            }
-        }
-    }
-    out.axes = out.mask.iter().map(|&m| pack_axes(m)).collect();
-    out
-}
-
-/// [`normal_axis`] and [`faces_per_axis`] of a face mask in one byte.
-#[inline]
-fn pack_axes(mask: u8) -> u8 {
-    let c = faces_per_axis(mask);
-    normal_axis(mask) as u8 | c[0] << 2 | c[1] << 4 | c[2] << 6
-}
-
-/// Face neighbours along each axis (0–2) of a [`particle_faces`] mask.
-#[inline]
-pub fn faces_per_axis(mask: u8) -> [u8; 3] {
-    [0, 1, 2].map(|a| (mask >> a & 1) + (mask >> (a + 3) & 1))
-}
-
-/// The axis a leaf's surface most likely crosses — the one with the
-/// fewest face neighbours (a surface spreads across its tangent axes);
-/// ties go to the later axis. Encoder and decoder derive it alike.
-#[inline]
-pub fn normal_axis(mask: u8) -> usize {
-    let c = faces_per_axis(mask);
-    let mut g = 2;
-    for a in [1, 0] {
-        if c[a] < c[g] {
-            g = a;
-        }
-    }
-    g
-}
-
-/// Deepest column (tangential bits coded below `R` before the implied
-/// middle) the entropy mode signals.
-pub const MAX_COLUMN_DEPTH: u8 = 2;
-
-/// Precision layer for bit `b` (1-based from the most significant of the
-/// 16, `R < b`): one bit per coordinate of every particle. `q` holds 16-bit
-/// coordinates; the encoder's are complete, the decoder's get bit `b` set.
-///
-/// Baseline (`faces` empty): every bit, contexts axis, layer and the two
-/// bits above (a centroid near the middle of its cube reads 0111… or
-/// 1000…, so they predict this one) — ignored by the raw layer.
-///
-/// Entropy mode (`faces` from [`particle_faces`]; the encoder fills
-/// `faces.column` where [`crate::encode::Placement::SurfaceColumn`] placed
-/// the vertex): the first layer codes each particle's column state —
-/// not a column, or a column of depth `k ≤` [`MAX_COLUMN_DEPTH`] (a flag,
-/// then `k` in unary). A column particle's two tangential coordinates
-/// (axes other than its [`normal_axis`]) code their first `k` bits below
-/// `R`, then are the middle of that sub-cell (`1` then zeros), never coded
-/// again; its normal coordinate is coded in every layer with a context
-/// from the height its neighbours predict ([`height_bin`]). Other bits are
-/// conditioned on the axis, the layer (first, second, later), the leaf's
-/// face neighbours along the axis, whether it is the normal axis, and the
-/// two bits above.
-pub fn code_precision<C: BitCoder>(
-    coder: &mut C,
-    depth: u8,
-    b: u32,
-    q: &mut [[u32; 3]],
-    faces: &mut Faces,
-) -> Result<()> {
-    let shift = 16 - b;
-    let layer = (b as usize).min(16) - 1;
-    if faces.is_empty() && coder.context_free() {
-        // The three bits of a particle, axis 0 first, read at once.
-        for v in q.iter_mut() {
-            let mut bits = v
-                .iter()
-                .fold(0u32, |acc, &c| (acc << 1) | ((c >> shift) & 1));
-            coder.bits(&mut bits, 3, PREC)?;
-            for (a, c) in v.iter_mut().enumerate() {
-                let bit = (bits >> (2 - a)) & 1;
-                *c = (*c & !(1 << shift)) | (bit << shift);
-            }
-        }
-        return Ok(());
-    }
-    if faces.is_empty() {
-        for v in q.iter_mut() {
-            for (a, c) in v.iter_mut().enumerate() {
-                let mut bit = (*c >> shift) & 1 == 1;
-                let above = ((*c >> (shift + 1)) & 3) as usize;
-                coder.bit(&mut bit, PREC + (a * 16 + layer) * 4 + above)?;
-                *c = (*c & !(1 << shift)) | (u32::from(bit) << shift);
-            }
-        }
-        return Ok(());
-    }
-    let n = q.len();
-    if faces.mask.len() != n
-        || faces.nb.len() != n
-        || faces.column.len() != n
-        || faces.height.len() != n
-        || faces.axes.len() != n
-    {
-        return stream_err("precision layer: face table does not match the particles");
-    }
-    // 1-based layer below the leaf.
-    let rel = b.saturating_sub(u32::from(depth));
-    let first_layer = rel == 1;
-    if first_layer {
-        faces.pred = vec![[NONE; 4]; n];
-    } else if faces.pred.len() != n {
-        return stream_err("precision layer: the first layer below the leaves is missing");
-    }
-    // Layer bucket: the first bits below the leaf are the informative ones.
-    let lb = (rel.saturating_sub(1) as usize).min(2);
-    // The plain context of axis `a` without the two bits above.
-    let plain = |a: usize, info: u8, g: usize| {
-        let cnt = usize::from((info >> (2 + 2 * a)) & 3);
-        PREC + ((((a * 3 + lb) * 3 + cnt) * 2 + usize::from(a == g)) * 4)
-    };
-    let above = |c: u32| ((c >> (shift + 1)) & 3) as usize;
-    for i in 0..n {
-        let info = faces.axes[i];
-        let g = usize::from(info & 3);
-        if first_layer {
-            let col = &mut faces.column[i];
-            let mut is_column = *col != 0;
-            let ctx = COL
-                + usize::from(info >> 2 & 3) * 9
-                + usize::from(info >> 4 & 3) * 3
-                + usize::from(info >> 6);
-            coder.bit(&mut is_column, ctx)?;
-            if is_column {
-                let want = col.saturating_sub(1);
-                let mut k = 0u8;
-                while k < MAX_COLUMN_DEPTH {
-                    let mut deeper = want > k;
-                    coder.bit(&mut deeper, COLK + k as usize)?;
-                    if !deeper {
-                        break;
-                    }
-                    k += 1;
-                }
-                *col = 1 + k;
-                // The leaf's bits of the height are known from the structure.
-                faces.height[i] = ((q[i][g] >> (shift + 1)) << (shift + 1)) as u16;
-                link_predictors(faces, i, g);
-            } else {
-                *col = 0;
-            }
-        }
-        let col = faces.column[i];
-        if col == 0 {
-            for a in 0..3 {
-                let c = q[i][a];
-                let mut bit = (c >> shift) & 1 == 1;
-                coder.bit(&mut bit, plain(a, info, g) + above(c))?;
-                q[i][a] = (c & !(1 << shift)) | (u32::from(bit) << shift);
-            }
-            continue;
-        }
-        let k = u32::from(col - 1);
-        for a in 0..3 {
-            let c = q[i][a];
-            let ctx = if a == g {
-                let bin = height_bin(faces, &faces.pred[i], i, shift);
-                PRED + (lb * PRED_BINS + bin) * 4 + above(c)
-            } else {
-                if rel > k {
-                    if rel == k + 1 {
-                        q[i][a] = ((c >> shift) | 1) << shift;
-                    }
-                    continue;
-                }
-                plain(a, info, g) + above(c)
-            };
-            let mut bit = (c >> shift) & 1 == 1;
-            coder.bit(&mut bit, ctx)?;
-            let v = (c & !(1 << shift)) | (u32::from(bit) << shift);
-            q[i][a] = v;
-            if a == g {
-                faces.height[i] = ((v >> shift) << shift) as u16;
-            }
-        }
-    }
-    Ok(())
-}
-
-/// Records, in the first layer, the column particles across particle
-/// `i`'s tangential faces whose normal axis is also `g` and that come
-/// before it (the later ones are not decoded yet) as its height predictors,
-/// and `i` as theirs: the relation is symmetric, so once the layer is
-/// through every column particle holds all of its predictors, for the
-/// later layers.
-#[inline]
-fn link_predictors(faces: &mut Faces, i: usize, g: usize) {
-    let push = |row: &mut [u32; 4], v: u32| {
-        if let Some(slot) = row.iter_mut().find(|s| **s == NONE) {
-            *slot = v;
-        }
-    };
-    for d in 0..6 {
-        let j = faces.nb[i][d];
-        if d % 3 == g || j as usize >= i {
-            continue;
-        }
-        let j = j as usize;
-        if faces.column[j] != 0 && usize::from(faces.axes[j] & 3) == g {
-            push(&mut faces.pred[i], j as u32);
-            push(&mut faces.pred[j], i as u32);
-        }
-    }
-}
-
-/// Bins of the predicted height's offset from the split of the current
-/// interval (below −1, −1, −½, 0, ½, 1 half-interval), plus "no
-/// neighbour".
-const PRED_BINS: usize = 7;
-
-/// Where the height a column particle's neighbours predict falls relative
-/// to the split of its current interval (the bit at `shift`). The
-/// neighbours ([`predictors`]) share its slab along the normal axis, so on
-/// a smooth surface their heights interpolate its own. Each counts with
-/// what the decoder knows of it — bit `shift` decoded when it comes
-/// earlier in the layer, only the bits above when later — at the centre of
-/// that interval.
-#[inline]
-fn height_bin(faces: &Faces, pred: &[u32; 4], i: usize, shift: u32) -> usize {
-    let c = u32::from(faces.height[i]);
-    let lo = u64::from((c >> (shift + 1)) << (shift + 1));
-    let mid2 = 2 * (lo + (1u64 << shift));
-    let mut sum = 0u64;
-    let mut n = 0u64;
-    for &j in pred {
-        if j == NONE {
-            break;
-        }
-        let known = if (j as usize) < i { shift } else { shift + 1 };
-        let v = u64::from((u32::from(faces.height[j as usize]) >> known) << known);
-        sum += 2 * v + (1u64 << known);
-        n += 1;
-    }
-    if n == 0 {
-        return PRED_BINS - 1;
-    }
-    let diff = sum as i64 - (n * mid2) as i64;
-    let u = (n << shift) as i64;
-    // Comparisons summed rather than branched on: the bin is data, not
-    // control flow, so it costs no mispredicted branches.
-    usize::from(diff >= -2 * u)
-        + usize::from(diff >= -u)
-        + usize::from(diff >= 0)
-        + usize::from(diff >= u)
-        + usize::from(diff >= 2 * u)
-}
-
 #[cfg(test)]
 mod tests {
     use std::collections::HashMap;
@@ -902,14 +604,5 @@ mod tests {
             }
         }
         assert!(checked > 1000, "{checked} links checked");
-    }
-
-    #[test]
-    fn the_normal_axis_is_the_one_without_face_neighbours() {
-        // A z = const sheet: neighbours at ±x and ±y.
-        assert_eq!(normal_axis(0b011_011), 2);
-        // An x = const sheet: neighbours at ±y, ±z.
-        assert_eq!(normal_axis(0b110_110), 0);
-        assert_eq!(faces_per_axis(0b100_001), [1, 0, 1]);
     }
 }

@@ -58,6 +58,7 @@ pub mod error;
 pub mod hierarchical_coding;
 pub mod octree;
 pub mod ordering;
+pub mod precision_coding;
 pub mod stats;
 pub mod thinning;
 pub mod triangulate;

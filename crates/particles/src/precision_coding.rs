@@ -1,0 +1,408 @@
+//! Precision layers — §7.2 of Yemez & Schmitt (scalable precision), with
+//! the entropy mode's surface columns and height prediction (beyond the
+//! paper).
+//!
+//! Layer `b` (`R < b ≤ N`) adds bit `b` of every particle's three 16-bit
+//! grid coordinates, particles in stream order. The baseline codes every
+//! bit; the entropy mode ([`code_precision`] with a [`Faces`] table) codes
+//! column particles' tangential coordinates only down to their column and
+//! predicts their height from their neighbours'.
+//!
+//! Decoding speed: nearly every particle of a later layer is a column
+//! particle coding one symbol, so the loop is arranged around that case —
+//! its height predictors are a fixed four-slot row read without branching
+//! on how many there are, and its tangential coordinates are settled once.
+use crate::error::{Result, stream_err};
+use crate::hierarchical_coding::{BitCoder, COL, COLK, Links, PREC, PRED, PRED_BINS};
+use crate::ordering::HLevel;
+
+/// No node across this face (the links' marker).
+const NONE: u32 = u32::MAX;
+
+/// Deepest column (tangential bits coded below `R` before the implied
+/// middle) the entropy mode signals.
+pub const MAX_COLUMN_DEPTH: u8 = 2;
+
+/// The particles' face neighbourhood at level `R`, for the entropy mode's
+/// precision layers.
+#[derive(Debug, Clone, Default)]
+pub struct Faces {
+    /// Per particle: its [`normal_axis`] (bits 0–1) and its face
+    /// neighbours along x, y, z ([`faces_per_axis`], two bits each from
+    /// bit 2).
+    axes: Vec<u8>,
+    /// Per particle: `0`, or `1 + k` for a column particle of depth `k`
+    /// (see [`code_precision`]); set by the encoder, decoded in the first
+    /// precision layer.
+    pub column: Vec<u8>,
+    /// Per particle: the particles across its four tangential faces (the
+    /// faces whose axis is not its normal axis), in face order, the
+    /// particle's own number where there is none. After the first precision layer only its
+    /// height predictors are left (column particles with the same normal
+    /// axis, when the particle is a column particle itself).
+    tangential: Vec<[u32; 4]>,
+    /// Whether `tangential` has been reduced to the predictors.
+    predictors_only: bool,
+    /// Per column particle: its height (normal coordinate) as far as coded,
+    /// lower bits zero — a compact copy the predictions read.
+    height: Vec<u16>,
+}
+
+impl Faces {
+    pub fn is_empty(&self) -> bool {
+        self.axes.is_empty()
+    }
+
+    /// Particle `i`'s [`normal_axis`].
+    pub fn normal_axis(&self, i: usize) -> usize {
+        usize::from(self.axes[i] & 3)
+    }
+}
+
+/// The face neighbourhood of every particle, by particle number, from the
+/// links [`crate::hierarchical_coding::code_level`] leaves after level `R`
+/// (entropy mode); empty when `links` does not describe `leaves`.
+pub fn particle_faces(links: &Links, leaves: &HLevel, particles: usize) -> Faces {
+    if links.len() != leaves.cells.len() {
+        return Faces::default();
+    }
+    let mut out = Faces {
+        axes: vec![0u8; particles],
+        column: vec![0u8; particles],
+        tangential: vec![[0; 4]; particles],
+        predictors_only: false,
+        height: vec![0u16; particles],
+    };
+    links.for_each_row(|i, row| {
+        let p = leaves.particle[i] as usize;
+        if p >= particles {
+            return;
+        }
+        let mask = (0..6).fold(0u8, |m, d| m | u8::from(row[d] != NONE) << d);
+        let info = AXES[usize::from(mask)];
+        out.axes[p] = info;
+        // The four faces off the normal axis, in face order; a neighbour
+        // outside the particle table (a hostile stream) is no neighbour.
+        // Selects rather than branches: which faces have a neighbour is
+        // data, and mispredicted branches were most of this loop's time.
+        let t = &mut out.tangential[p];
+        for (s, &d) in TANGENTIAL_FACES[usize::from(info & 3)].iter().enumerate() {
+            let node = row[usize::from(d)];
+            let j = leaves.particle[if node == NONE { i } else { node as usize }];
+            t[s] = if node == NONE || j as usize >= particles {
+                p as u32
+            } else {
+                j
+            };
+        }
+    });
+    out
+}
+
+/// The faces off each normal axis, in face order.
+const TANGENTIAL_FACES: [[u8; 4]; 3] = [[1, 2, 4, 5], [0, 2, 3, 5], [0, 1, 3, 4]];
+
+/// [`normal_axis`] and [`faces_per_axis`] of every face mask, packed.
+static AXES: [u8; 64] = {
+    let mut t = [0u8; 64];
+    let mut m = 0;
+    while m < 64 {
+        t[m] = pack_axes(m as u8);
+        m += 1;
+    }
+    t
+};
+
+/// [`normal_axis`] and [`faces_per_axis`] of a face mask in one byte.
+const fn pack_axes(mask: u8) -> u8 {
+    let c = faces_per_axis(mask);
+    normal_axis(mask) as u8 | c[0] << 2 | c[1] << 4 | c[2] << 6
+}
+
+/// Face neighbours along each axis (0–2) of a face mask (bit `d` set when
+/// the leaf across face `d` is ON, `d = a` towards `−a`, `3 + a` towards
+/// `+a`).
+#[inline]
+pub const fn faces_per_axis(mask: u8) -> [u8; 3] {
+    [
+        (mask & 1) + (mask >> 3 & 1),
+        (mask >> 1 & 1) + (mask >> 4 & 1),
+        (mask >> 2 & 1) + (mask >> 5 & 1),
+    ]
+}
+
+/// The axis a leaf's surface most likely crosses — the one with the
+/// fewest face neighbours (a surface spreads across its tangent axes);
+/// ties go to the later axis. Encoder and decoder derive it alike.
+#[inline]
+pub const fn normal_axis(mask: u8) -> usize {
+    let c = faces_per_axis(mask);
+    let mut g = 2;
+    if c[1] < c[g] {
+        g = 1;
+    }
+    if c[0] < c[g] {
+        g = 0;
+    }
+    g
+}
+
+/// Precision layer for bit `b` (1-based from the most significant of the
+/// 16, `R < b`): one bit per coordinate of every particle. `q` holds 16-bit
+/// coordinates; the encoder's are complete, the decoder's get bit `b` set.
+///
+/// Baseline (`faces` empty): every bit, contexts axis, layer and the two
+/// bits above (a centroid near the middle of its cube reads 0111… or
+/// 1000…, so they predict this one) — ignored by the raw layer.
+///
+/// Entropy mode (`faces` from [`particle_faces`]; the encoder fills
+/// `faces.column` where [`crate::encode::Placement::SurfaceColumn`] placed
+/// the vertex): the first layer codes each particle's column state —
+/// not a column, or a column of depth `k ≤` [`MAX_COLUMN_DEPTH`] (a flag,
+/// then `k` in unary). A column particle's two tangential coordinates
+/// (axes other than its [`normal_axis`]) code their first `k` bits below
+/// `R`, then are the middle of that sub-cell (`1` then zeros), never coded
+/// again; its normal coordinate is coded in every layer with a context
+/// from the height its neighbours predict ([`height_bin`]). Other bits are
+/// conditioned on the axis, the layer (first, second, later), the leaf's
+/// face neighbours along the axis, whether it is the normal axis, and the
+/// two bits above.
+pub fn code_precision<C: BitCoder>(
+    coder: &mut C,
+    depth: u8,
+    b: u32,
+    q: &mut [[u32; 3]],
+    faces: &mut Faces,
+) -> Result<()> {
+    let shift = 16 - b;
+    let layer = (b as usize).min(16) - 1;
+    if faces.is_empty() && coder.context_free() {
+        // The three bits of a particle, axis 0 first, read at once.
+        for v in q.iter_mut() {
+            let mut bits = v
+                .iter()
+                .fold(0u32, |acc, &c| (acc << 1) | ((c >> shift) & 1));
+            coder.bits(&mut bits, 3, PREC)?;
+            for (a, c) in v.iter_mut().enumerate() {
+                let bit = (bits >> (2 - a)) & 1;
+                *c = (*c & !(1 << shift)) | (bit << shift);
+            }
+        }
+        return Ok(());
+    }
+    if faces.is_empty() {
+        for v in q.iter_mut() {
+            for (a, c) in v.iter_mut().enumerate() {
+                let mut bit = (*c >> shift) & 1 == 1;
+                let above = ((*c >> (shift + 1)) & 3) as usize;
+                coder.bit(&mut bit, PREC + (a * 16 + layer) * 4 + above)?;
+                *c = (*c & !(1 << shift)) | (u32::from(bit) << shift);
+            }
+        }
+        return Ok(());
+    }
+    let n = q.len();
+    if faces.axes.len() != n
+        || faces.column.len() != n
+        || faces.tangential.len() != n
+        || faces.height.len() != n
+    {
+        return stream_err("precision layer: face table does not match the particles");
+    }
+    // 1-based layer below the leaf.
+    let rel = b.saturating_sub(u32::from(depth));
+    let first_layer = rel == 1;
+    if first_layer == faces.predictors_only {
+        return stream_err(if first_layer {
+            "precision layer: the first layer below the leaves comes twice"
+        } else {
+            "precision layer: the first layer below the leaves is missing"
+        });
+    }
+    // Layer bucket: the first bits below the leaf are the informative ones.
+    let lb = (rel.saturating_sub(1) as usize).min(2);
+    // The plain context of axis `a` without the two bits above.
+    let plain = |a: usize, info: u8, g: usize| {
+        let cnt = usize::from((info >> (2 + 2 * a)) & 3);
+        PREC + ((((a * 3 + lb) * 3 + cnt) * 2 + usize::from(a == g)) * 4)
+    };
+    let above = |c: u32| ((c >> (shift + 1)) & 3) as usize;
+    let pred_ctx = PRED + lb * PRED_BINS * 4;
+    let Faces {
+        axes,
+        column,
+        tangential,
+        height,
+        ..
+    } = faces;
+    for i in 0..n {
+        let info = axes[i];
+        let g = usize::from(info & 3);
+        if first_layer {
+            let col = &mut column[i];
+            let mut is_column = *col != 0;
+            let ctx = COL
+                + usize::from(info >> 2 & 3) * 9
+                + usize::from(info >> 4 & 3) * 3
+                + usize::from(info >> 6);
+            coder.bit(&mut is_column, ctx)?;
+            if is_column {
+                let want = col.saturating_sub(1);
+                let mut k = 0u8;
+                while k < MAX_COLUMN_DEPTH {
+                    let mut deeper = want > k;
+                    coder.bit(&mut deeper, COLK + k as usize)?;
+                    if !deeper {
+                        break;
+                    }
+                    k += 1;
+                }
+                *col = 1 + k;
+                // The leaf's bits of the height are known from the structure.
+                height[i] = ((q[i][g] >> (shift + 1)) << (shift + 1)) as u16;
+            } else {
+                *col = 0;
+            }
+        }
+        let col = column[i];
+        if col == 0 {
+            for a in 0..3 {
+                let c = q[i][a];
+                let mut bit = (c >> shift) & 1 == 1;
+                coder.bit(&mut bit, plain(a, info, g) + above(c))?;
+                q[i][a] = (c & !(1 << shift)) | (u32::from(bit) << shift);
+            }
+            continue;
+        }
+        // The predictors this particle's height is read against: in the
+        // first layer, the earlier column particles of its tangential
+        // faces with its normal axis (later ones are not decoded yet).
+        let pred = if first_layer {
+            let mut p = tangential[i];
+            for j in &mut p {
+                let keep = ((*j as usize) < i)
+                    & (column[*j as usize] != 0)
+                    & (axes[*j as usize] & 3 == g as u8);
+                *j = if keep { *j } else { i as u32 };
+            }
+            p
+        } else {
+            tangential[i]
+        };
+        let k = u32::from(col - 1);
+        if rel > k {
+            // The common case: tangential coordinates settled (set to the
+            // middle of the column's sub-cell in the layer after its last
+            // coded bit), only the height is coded.
+            if rel == k + 1 {
+                for (a, c) in q[i].iter_mut().enumerate() {
+                    if a != g {
+                        *c = ((*c >> shift) | 1) << shift;
+                    }
+                }
+            }
+            let c = q[i][g];
+            let bin = height_bin(height, &pred, i, shift);
+            let mut bit = (c >> shift) & 1 == 1;
+            coder.bit(&mut bit, pred_ctx + bin * 4 + above(c))?;
+            let v = (c & !(1 << shift)) | (u32::from(bit) << shift);
+            q[i][g] = v;
+            height[i] = ((v >> shift) << shift) as u16;
+            continue;
+        }
+        // Tangential bits still coded: all three axes, in axis order. The
+        // height's context does not depend on the tangential bits, so it
+        // is found first and each axis selects its context without a
+        // branch on which axis is the normal one.
+        let normal_ctx = pred_ctx + height_bin(height, &pred, i, shift) * 4;
+        for a in 0..3 {
+            let c = q[i][a];
+            let ctx = if a == g {
+                normal_ctx
+            } else {
+                plain(a, info, g)
+            } + above(c);
+            let mut bit = (c >> shift) & 1 == 1;
+            coder.bit(&mut bit, ctx)?;
+            q[i][a] = (c & !(1 << shift)) | (u32::from(bit) << shift);
+        }
+        height[i] = ((q[i][g] >> shift) << shift) as u16;
+    }
+    if first_layer {
+        keep_predictors(faces);
+    }
+    Ok(())
+}
+
+/// After the first layer: reduces every particle's tangential neighbours
+/// to its height predictors — for a column particle, the column particles
+/// among them with the same normal axis (the relation is symmetric, so the
+/// later layers see each pair from both sides); none for the others.
+fn keep_predictors(faces: &mut Faces) {
+    let Faces {
+        axes,
+        column,
+        tangential,
+        ..
+    } = faces;
+    for (i, row) in tangential.iter_mut().enumerate() {
+        let g = axes[i] & 3;
+        let own = column[i] != 0;
+        for j in row.iter_mut() {
+            let keep = own & (column[*j as usize] != 0) & (axes[*j as usize] & 3 == g);
+            *j = if keep { *j } else { i as u32 };
+        }
+    }
+    faces.predictors_only = true;
+}
+
+/// Where the height a column particle's neighbours predict falls relative
+/// to the split of its current interval (the bit at `shift`): one of the
+/// [`PRED_BINS`] — below −1, −1..−½, −½..0, 0..½, ½..1, above 1
+/// half-interval, or no neighbour. The predictors share its slab along the
+/// normal axis, so on a smooth surface their heights interpolate its own.
+/// Each counts with what the decoder knows of it — bit `shift` decoded
+/// when it comes earlier in the layer, only the bits above when later — at
+/// the centre of that interval.
+///
+/// `pred` holds particle numbers, `i` itself in the empty slots. `height`
+/// holds exactly the known bits of every height (the bits below are zero),
+/// so the comparison of the predictors' mean centre with the split,
+/// `Σ (2·h_j + 2^known_j) − n·(2·h_i + 2^(shift+1))` against multiples of
+/// `n·2^shift`, divides exactly by `2^shift`: `Σ 2·(h_j − h_i) / 2^shift −
+/// #{j < i}` against `−2n, −n, 0, n, 2n` — and an empty slot (`j = i`)
+/// adds nothing to it. No branch on the slots: which are empty is data.
+#[inline(always)]
+fn height_bin(height: &[u16], pred: &[u32; 4], i: usize, shift: u32) -> usize {
+    let hi = i32::from(height[i]);
+    let mut d = 0i32;
+    let mut n = 0i32;
+    for &j in pred {
+        let j = j as usize;
+        d += (((i32::from(height[j]) - hi) * 2) >> shift) - i32::from(j < i);
+        n += i32::from(j != i);
+    }
+    let bin = usize::from(d >= -2 * n)
+        + usize::from(d >= -n)
+        + usize::from(d >= 0)
+        + usize::from(d >= n)
+        + usize::from(d >= 2 * n);
+    if n == 0 { PRED_BINS - 1 } else { bin }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_normal_axis_is_the_one_without_face_neighbours() {
+        // A z = const sheet: neighbours at ±x and ±y.
+        assert_eq!(normal_axis(0b011_011), 2);
+        // An x = const sheet: neighbours at ±y, ±z.
+        assert_eq!(normal_axis(0b110_110), 0);
+        assert_eq!(faces_per_axis(0b100_001), [1, 0, 1]);
+        // Ties go to the later axis.
+        assert_eq!(normal_axis(0), 2);
+        assert_eq!(normal_axis(0b000_011), 2);
+    }
+}
