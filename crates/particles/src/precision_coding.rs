@@ -73,30 +73,48 @@ pub fn particle_faces(links: &Links, leaves: &HLevel, particles: usize) -> Faces
         predictors_only: false,
         height: vec![0u16; particles],
     };
-    links.for_each_row(|i, row| {
-        let p = leaves.particle[i] as usize;
-        if p >= particles {
-            return;
-        }
-        let mask = (0..6).fold(0u8, |m, d| m | u8::from(row[d] != NONE) << d);
-        let info = AXES[usize::from(mask)];
-        out.axes[p] = info;
-        // The four faces off the normal axis, in face order; a neighbour
-        // outside the particle table (a hostile stream) is no neighbour.
-        // Selects rather than branches: which faces have a neighbour is
-        // data, and mispredicted branches were most of this loop's time.
-        let t = &mut out.tangential[p];
-        for (s, &d) in TANGENTIAL_FACES[usize::from(info & 3)].iter().enumerate() {
-            let node = row[usize::from(d)];
-            let j = leaves.particle[if node == NONE { i } else { node as usize }];
-            t[s] = if node == NONE || j as usize >= particles {
-                p as u32
-            } else {
-                j
-            };
-        }
-    });
+    let (axes, tangential) = (&mut out.axes, &mut out.tangential);
+    links.for_each_row(|i, row| add_faces(axes, tangential, &leaves.particle, i, &row));
     out
+}
+
+/// [`particle_faces`] of node `i` of level `R`, `row` its links.
+#[inline(always)]
+fn add_faces(
+    axes: &mut [u8],
+    tangential: &mut [[u32; 4]],
+    particle: &[u32],
+    i: usize,
+    row: &[u32; 6],
+) {
+    let particles = axes.len();
+    let p = particle[i] as usize;
+    if p >= particles {
+        return;
+    }
+    // A shift chain, one word at a time: the row was just stored word by
+    // word, and a vector load of it would wait for those stores to retire
+    // (a failed store forward) — which the compiler's vectorised form of
+    // this loop did, for most of the function's time.
+    let mut mask = 0u8;
+    for &node in row.iter().rev() {
+        mask = mask << 1 | u8::from(node != NONE);
+    }
+    let info = AXES[usize::from(mask)];
+    axes[p] = info;
+    // The four faces off the normal axis, in face order; a neighbour
+    // outside the particle table (a hostile stream) is no neighbour.
+    // Selects rather than branches: which faces have a neighbour is data.
+    let t = &mut tangential[p];
+    for (s, &d) in TANGENTIAL_FACES[usize::from(info & 3)].iter().enumerate() {
+        let node = row[usize::from(d)];
+        let j = particle[if node == NONE { i } else { node as usize }];
+        t[s] = if node == NONE || j as usize >= particles {
+            p as u32
+        } else {
+            j
+        };
+    }
 }
 
 /// The faces off each normal axis, in face order.
