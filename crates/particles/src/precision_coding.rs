@@ -41,8 +41,9 @@ pub struct Faces {
     /// height predictors are left (column particles with the same normal
     /// axis, when the particle is a column particle itself).
     tangential: Vec<[u32; 4]>,
-    /// Whether `tangential` has been reduced to the predictors.
-    predictors_only: bool,
+    /// Precision layers coded so far (the second reduces `tangential` to
+    /// the predictors, row by row as it goes).
+    layers: u32,
     /// Per column particle: its height (normal coordinate) as far as coded,
     /// lower bits zero — a compact copy the predictions read.
     height: Vec<u16>,
@@ -70,7 +71,7 @@ pub fn particle_faces(links: &Links, leaves: &HLevel, particles: usize) -> Faces
         axes: vec![0u8; particles],
         column: vec![0u8; particles],
         tangential: vec![[0; 4]; particles],
-        predictors_only: false,
+        layers: 0,
         height: vec![0u16; particles],
     };
     let (axes, tangential) = (&mut out.axes, &mut out.tangential);
@@ -229,14 +230,14 @@ pub fn code_precision<C: BitCoder>(
     }
     // 1-based layer below the leaf.
     let rel = b.saturating_sub(u32::from(depth));
-    let first_layer = rel == 1;
-    if first_layer == faces.predictors_only {
-        return stream_err(if first_layer {
-            "precision layer: the first layer below the leaves comes twice"
-        } else {
-            "precision layer: the first layer below the leaves is missing"
-        });
+    if rel != faces.layers + 1 {
+        return stream_err(format!(
+            "precision layer {b} follows {} layers below the leaves",
+            faces.layers
+        ));
     }
+    faces.layers = rel;
+    let first_layer = rel == 1;
     // Layer bucket: the first bits below the leaf are the informative ones.
     let lb = (rel.saturating_sub(1) as usize).min(2);
     // The plain context of axis `a` without the two bits above.
@@ -292,16 +293,22 @@ pub fn code_precision<C: BitCoder>(
             }
             continue;
         }
-        // The predictors this particle's height is read against: in the
-        // first layer, the earlier column particles of its tangential
-        // faces with its normal axis (later ones are not decoded yet).
-        let pred = if first_layer {
+        // The predictors this particle's height is read against: the
+        // column particles of its tangential faces with its normal axis —
+        // in the first layer only the earlier ones (the later ones are not
+        // decoded yet). The second layer keeps the row reduced to them, so
+        // the later layers read it as it is (the relation is symmetric:
+        // each pair is seen from both sides).
+        let pred = if rel <= 2 {
             let mut p = tangential[i];
             for j in &mut p {
-                let keep = ((*j as usize) < i)
+                let keep = (first_layer <= ((*j as usize) < i))
                     & (column[*j as usize] != 0)
                     & (axes[*j as usize] & 3 == g as u8);
                 *j = if keep { *j } else { i as u32 };
+            }
+            if !first_layer {
+                tangential[i] = p;
             }
             p
         } else {
@@ -346,32 +353,7 @@ pub fn code_precision<C: BitCoder>(
         }
         height[i] = ((q[i][g] >> shift) << shift) as u16;
     }
-    if first_layer {
-        keep_predictors(faces);
-    }
     Ok(())
-}
-
-/// After the first layer: reduces every particle's tangential neighbours
-/// to its height predictors — for a column particle, the column particles
-/// among them with the same normal axis (the relation is symmetric, so the
-/// later layers see each pair from both sides); none for the others.
-fn keep_predictors(faces: &mut Faces) {
-    let Faces {
-        axes,
-        column,
-        tangential,
-        ..
-    } = faces;
-    for (i, row) in tangential.iter_mut().enumerate() {
-        let g = axes[i] & 3;
-        let own = column[i] != 0;
-        for j in row.iter_mut() {
-            let keep = own & (column[*j as usize] != 0) & (axes[*j as usize] & 3 == g);
-            *j = if keep { *j } else { i as u32 };
-        }
-    }
-    faces.predictors_only = true;
 }
 
 /// Where the height a column particle's neighbours predict falls relative
