@@ -41,6 +41,9 @@ pub struct Faces {
     /// height predictors are left (column particles with the same normal
     /// axis, when the particle is a column particle itself).
     tangential: Vec<[u32; 4]>,
+    /// Per column particle, from the second layer on: its predictors
+    /// (bits 0–3) and how many of them come before it (bits 4–7).
+    counts: Vec<u8>,
     /// Precision layers coded so far (the second reduces `tangential` to
     /// the predictors, row by row as it goes).
     layers: u32,
@@ -71,6 +74,7 @@ pub fn particle_faces(links: &Links, leaves: &HLevel, particles: usize) -> Faces
         axes: vec![0u8; particles],
         column: vec![0u8; particles],
         tangential: vec![[0; 4]; particles],
+        counts: vec![0u8; particles],
         layers: 0,
         height: vec![0u16; particles],
     };
@@ -225,6 +229,7 @@ pub fn code_precision<C: BitCoder>(
         || faces.column.len() != n
         || faces.tangential.len() != n
         || faces.height.len() != n
+        || faces.counts.len() != n
     {
         return stream_err("precision layer: face table does not match the particles");
     }
@@ -252,6 +257,7 @@ pub fn code_precision<C: BitCoder>(
         column,
         tangential,
         height,
+        counts,
         ..
     } = faces;
     for i in 0..n {
@@ -299,20 +305,27 @@ pub fn code_precision<C: BitCoder>(
         // decoded yet). The second layer keeps the row reduced to them, so
         // the later layers read it as it is (the relation is symmetric:
         // each pair is seen from both sides).
-        let pred = if rel <= 2 {
+        let (pred, count) = if rel <= 2 {
             let mut p = tangential[i];
+            let (mut all, mut before) = (0u8, 0u8);
             for j in &mut p {
-                let keep = (first_layer <= ((*j as usize) < i))
+                let earlier = (*j as usize) < i;
+                let keep = (first_layer <= earlier)
+                    & (*j as usize != i)
                     & (column[*j as usize] != 0)
                     & (axes[*j as usize] & 3 == g as u8);
                 *j = if keep { *j } else { i as u32 };
+                all += u8::from(keep);
+                before += u8::from(keep & earlier);
             }
+            let count = all | before << 4;
             if !first_layer {
                 tangential[i] = p;
+                counts[i] = count;
             }
-            p
+            (p, count)
         } else {
-            tangential[i]
+            (tangential[i], counts[i])
         };
         let k = u32::from(col - 1);
         if rel > k {
@@ -327,7 +340,7 @@ pub fn code_precision<C: BitCoder>(
                 }
             }
             let c = q[i][g];
-            let bin = height_bin(height, &pred, i, shift);
+            let bin = height_bin(height, &pred, count, i, shift);
             let mut bit = (c >> shift) & 1 == 1;
             coder.bit(&mut bit, pred_ctx + bin * 4 + above(c))?;
             let v = (c & !(1 << shift)) | (u32::from(bit) << shift);
@@ -339,7 +352,7 @@ pub fn code_precision<C: BitCoder>(
         // height's context does not depend on the tangential bits, so it
         // is found first and each axis selects its context without a
         // branch on which axis is the normal one.
-        let normal_ctx = pred_ctx + height_bin(height, &pred, i, shift) * 4;
+        let normal_ctx = pred_ctx + height_bin(height, &pred, count, i, shift) * 4;
         for a in 0..3 {
             let c = q[i][a];
             let ctx = if a == g {
@@ -365,30 +378,50 @@ pub fn code_precision<C: BitCoder>(
 /// when it comes earlier in the layer, only the bits above when later — at
 /// the centre of that interval.
 ///
-/// `pred` holds particle numbers, `i` itself in the empty slots. `height`
-/// holds exactly the known bits of every height (the bits below are zero),
-/// so the comparison of the predictors' mean centre with the split,
-/// `Σ (2·h_j + 2^known_j) − n·(2·h_i + 2^(shift+1))` against multiples of
-/// `n·2^shift`, divides exactly by `2^shift`: `Σ 2·(h_j − h_i) / 2^shift −
-/// #{j < i}` against `−2n, −n, 0, n, 2n` — and an empty slot (`j = i`)
-/// adds nothing to it. No branch on the slots: which are empty is data.
+/// `pred` holds particle numbers, `i` itself in the empty slots; `count`
+/// how many are predictors (bits 0–3) and how many of those come before
+/// `i` (bits 4–7). `height` holds exactly the known bits of every height
+/// (the bits below are zero), so the comparison of the predictors' mean
+/// centre with the split, `Σ (2·h_j + 2^known_j) − n·(2·h_i + 2^(shift+1))`
+/// against multiples of `n·2^shift`, divides exactly by `2^shift`:
+/// `2·Σ (h_j − h_i) / 2^shift − #{j < i}` against `−2n, −n, 0, n, 2n` — an
+/// empty slot (`j = i`) adds nothing to the sum, and [`BINS`] makes the
+/// comparisons one lookup. Nothing branches: this runs for nearly every
+/// symbol of a precision layer, so its instruction count is what counts.
 #[inline(always)]
-fn height_bin(height: &[u16], pred: &[u32; 4], i: usize, shift: u32) -> usize {
+fn height_bin(height: &[u16], pred: &[u32; 4], count: u8, i: usize, shift: u32) -> usize {
     let hi = i32::from(height[i]);
-    let mut d = 0i32;
-    let mut n = 0i32;
-    for &j in pred {
-        let j = j as usize;
-        d += (((i32::from(height[j]) - hi) * 2) >> shift) - i32::from(j < i);
-        n += i32::from(j != i);
-    }
-    let bin = usize::from(d >= -2 * n)
-        + usize::from(d >= -n)
-        + usize::from(d >= 0)
-        + usize::from(d >= n)
-        + usize::from(d >= 2 * n);
-    if n == 0 { PRED_BINS - 1 } else { bin }
+    let sum: i32 = pred.iter().map(|&j| i32::from(height[j as usize])).sum();
+    let d = (((sum - 4 * hi) * 2) >> shift) - i32::from(count >> 4);
+    usize::from(BINS[usize::from(count & 7)][(d.clamp(-9, 8) + 9) as usize])
 }
+
+/// [`height_bin`]'s bin of `d` (clamped to `−9..=8`, offset by 9) for `n`
+/// predictors: how many of `−2n, −n, 0, n, 2n` it reaches; `n = 0` is the
+/// "no neighbour" bin.
+static BINS: [[u8; 18]; 5] = {
+    let mut t = [[0u8; 18]; 5];
+    let mut n = 0;
+    while n < 5 {
+        let mut k = 0;
+        while k < 18 {
+            let d = k as i32 - 9;
+            let n32 = n as i32;
+            t[n][k] = if n == 0 {
+                (PRED_BINS - 1) as u8
+            } else {
+                (d >= -2 * n32) as u8
+                    + (d >= -n32) as u8
+                    + (d >= 0) as u8
+                    + (d >= n32) as u8
+                    + (d >= 2 * n32) as u8
+            };
+            k += 1;
+        }
+        n += 1;
+    }
+    t
+};
 
 #[cfg(test)]
 mod tests {
