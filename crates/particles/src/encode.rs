@@ -24,11 +24,12 @@ pub enum Placement {
     Mean,
     /// On the plane of the leaf's samples (through their mean, across
     /// their mean normal), where the leaf's middle column along the
-    /// [`precision_coding::normal_axis`] the decoder infers from the neighbours meets it —
-    /// or, where that crossing leaves the leaf, the quarter or eighth
-    /// column under the mean. The two tangential coordinates then cost
-    /// nothing, or one or two bits (see [`precision_coding::code_precision`]), and the
-    /// error across the surface is the plane's. Falls back to the mean
+    /// [`precision_coding::normal_axis`] the decoder infers from the
+    /// neighbours meets it — or, where that crossing leaves the leaf, the
+    /// quarter or eighth column under the mean. The two tangential
+    /// coordinates then cost nothing, or one or two bits (see
+    /// [`precision_coding::code_precision`]), and the error across the
+    /// surface is the plane's. Falls back to the mean
     /// where the input has no normals, the plane is steeper than
     /// [`MIN_NORMAL_COSINE`] against that axis, or every column's crossing
     /// leaves the leaf.

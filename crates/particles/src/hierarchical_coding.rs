@@ -22,8 +22,8 @@
 //! flag of a child whose code is below the implicit child's (the path rule
 //! makes it a phantom) — the baseline codes every flag, as §7.1 counts.
 //!
-//! Precision layer `b` (bits `R + 1 ..= N`, §7.2): one bit per coordinate
-//! of every particle, in stream order.
+//! Precision layers (bits `R + 1 ..= N`, §7.2) are the next stage,
+//! [`crate::precision_coding`]; the context layout below serves both.
 use crate::error::{Result, stream_err};
 use crate::octree::unmorton;
 use crate::ordering::{HLevel, NO_PARTICLE};
