@@ -46,6 +46,46 @@ pub trait BitCoder {
         *v = out;
         Ok(())
     }
+    /// Checks that `n` more symbols may be coded. A decoder refuses more
+    /// symbols than its payload can carry (a hostile payload must not
+    /// expand without bound); checking once for a run of symbols keeps the
+    /// test off the per-symbol path of [`BitCoder::bit_reserved`].
+    fn reserve(&mut self, _n: u64) -> Result<()> {
+        Ok(())
+    }
+    /// [`BitCoder::bit`] for a symbol that a successful
+    /// [`BitCoder::reserve`] covers: a decoder need not check its budget
+    /// again (the raw reader still fails at the end of its payload).
+    #[inline(always)]
+    fn bit_reserved(&mut self, b: &mut bool, ctx: usize) -> Result<()> {
+        self.bit(b, ctx)
+    }
+    /// Codes bit `k` of `*bits` for each `k` set in `todo` (`todo < 2^8`),
+    /// lowest first, each with context `ctx(k, *bits & (2^k − 1))`: the
+    /// context may depend on the decisions below `k` (and on bits of
+    /// `*bits` outside `todo`, which stay as they are), never on those
+    /// above. The encoder's `*bits` holds the truth; the decoder's bits in
+    /// `todo` are zero on entry. `ctx` must be a pure function; a decoder
+    /// may evaluate it ahead, for both values of the pending bit, to take
+    /// the context's table look-ups off the chain from one decoded bit to
+    /// the next. Reserves its symbols itself.
+    #[inline(always)]
+    fn bits_chained(
+        &mut self,
+        bits: &mut u32,
+        todo: u32,
+        ctx: impl Fn(u32, u32) -> usize,
+    ) -> Result<()> {
+        let mut rest = todo;
+        while rest != 0 {
+            let k = rest.trailing_zeros();
+            rest &= rest - 1;
+            let mut b = (*bits >> k) & 1 == 1;
+            self.bit(&mut b, ctx(k, *bits & ((1 << k) - 1)))?;
+            *bits = (*bits & !(1 << k)) | (u32::from(b) << k);
+        }
+        Ok(())
+    }
     /// Whether the contexts are ignored (the baseline's raw bits): symbols
     /// with different contexts may then be coded together with
     /// [`BitCoder::bits`], which a raw reader does with one shift.
@@ -104,31 +144,57 @@ const NONE: u32 = u32::MAX;
 /// along x, y, z.
 const UPPER: [u8; 3] = [0xaa, 0xcc, 0xf0];
 
-/// Per child `k`: the children that have `k` behind them along x, y, z
-/// (`k` + e_a for `k` on the lower side of axis `a`), one byte per axis.
-const BEHIND_OF: [u32; 8] = {
-    let mut t = [0u32; 8];
-    let mut k = 0;
-    while k < 8 {
+/// Per child `k` and set `known` of children below it (index `256k +
+/// known`): bit `a` set when `k` is on the upper side of axis `a` and its
+/// face neighbour towards −a, child `k − 2^a`, is in `known`.
+static SIBLINGS: [u8; 2048] = {
+    let mut t = [0u8; 2048];
+    let mut i = 0;
+    while i < 2048 {
+        let (k, known) = (i >> 8, i & 0xff);
         let mut a = 0;
         while a < 3 {
-            let bit = 1usize << a;
-            if k & bit == 0 {
-                t[k] |= 1 << ((k | bit) + 8 * a);
+            let bit = 1 << a;
+            if k & bit != 0 && known >> (k ^ bit) & 1 != 0 {
+                t[i] |= bit as u8;
             }
             a += 1;
         }
-        k += 1;
+        i += 1;
     }
     t
 };
 
-/// Bits `k`, `8 + k` and `16 + k` of `m` as bits 0, 1, 2.
-#[inline(always)]
-fn axes_of(m: u32, k: usize) -> usize {
-    let x = (m >> k) & 0x01_01_01;
-    ((x | x >> 7 | x >> 14) & 7) as usize
-}
+/// The part of child `k`'s occupancy context that the decisions below it
+/// decide (index as [`SIBLINGS`]): its siblings behind it and how many
+/// children are present so far (0, 1, 2 or more), in the layout of
+/// [`code_level`]'s occupancy contexts.
+static OCC_KNOWN: [u16; 2048] = {
+    let mut t = [0u16; 2048];
+    let mut i = 0;
+    while i < 2048 {
+        let count = ((i & 0xff) as u32).count_ones();
+        let count = if count > 2 { 2 } else { count };
+        t[i] = SIBLINGS[i] as u16 * 24 + count as u16;
+        i += 1;
+    }
+    t
+};
+
+/// Bit `k` of the index moved to bit `8k`: one byte per child.
+static SPREAD: [u64; 256] = {
+    let mut t = [0u64; 256];
+    let mut i = 0;
+    while i < 256 {
+        let mut k = 0;
+        while k < 8 {
+            t[i] |= ((i as u64 >> k) & 1) << (8 * k);
+            k += 1;
+        }
+        i += 1;
+    }
+    t
+};
 
 /// Face-neighbour links of one level, for the entropy contexts: `nb[i][d]`
 /// is the index of the node across face `d` of node `i` (`d = a` towards
@@ -219,18 +285,55 @@ pub fn code_level<C: BitCoder>(
     leaves: &mut Vec<[u32; 3]>,
     truth: Option<&Truth>,
 ) -> Result<HLevel> {
+    // One loop per mode, so neither carries the other's dead work.
+    if inp.entropy {
+        code_level_in::<C, true>(coder, inp, links, leaves, truth)
+    } else {
+        code_level_in::<C, false>(coder, inp, links, leaves, truth)
+    }
+}
+
+/// The children below child `k` (`k ≤ 8`).
+#[inline(always)]
+fn below(k: u32) -> u32 {
+    (1 << k) - 1
+}
+
+/// Neighbour sets over a parent's children, one byte per axis (x in bits
+/// 0–7, y in 8–15, z in 16–23): bit `k` of byte `a` is whether the node
+/// at child `k` − e_a is among `children` (siblings: child `k − 2^a` for
+/// `k` on the upper side of axis `a`).
+#[inline(always)]
+fn behind(children: u32) -> u32 {
+    ((children & 0x55) << 1) | ((children & 0x33) << 10) | ((children & 0x0f) << 20)
+}
+
+/// [`code_level`] for one mode: `ENTROPY` selects the entropy mode's
+/// contexts and inferences.
+///
+/// Per parent the children are bit masks (bit `k`: child `k`), and every
+/// decision a decoded bit feeds (contexts, counts, which children exist)
+/// is computed from the masks rather than branched on: decoded bits are
+/// data, and a branch on each cost about a mispredicted branch per
+/// symbol.
+fn code_level_in<C: BitCoder, const ENTROPY: bool>(
+    coder: &mut C,
+    inp: &LevelInput,
+    links: &mut Links,
+    leaves: &mut Vec<[u32; 3]>,
+    truth: Option<&Truth>,
+) -> Result<HLevel> {
     let depth = u32::from(inp.depth);
     let r = u32::from(inp.r);
     let parents = inp.parents;
-    let entropy = inp.entropy;
-    if entropy {
+    if ENTROPY {
         links.materialise();
-    }
-    if entropy && links.nb.len() != parents.cells.len() {
-        return stream_err(format!(
-            "level {r}: neighbour links do not match level {}",
-            r - 1
-        ));
+        if links.nb.len() != parents.cells.len() {
+            return stream_err(format!(
+                "level {r}: neighbour links do not match level {}",
+                r - 1
+            ));
+        }
     }
     let mut out = HLevel::default();
     let expected = inp.max_nodes.min(8 * parents.cells.len());
@@ -243,7 +346,7 @@ pub fn code_level<C: BitCoder>(
     // Per parent: its children (bit k: child k present), which of them are
     // phantoms, and the index of its first child in `out`.
     let n_parents = parents.cells.len();
-    let (mut masks, mut phantoms, mut firsts) = if entropy {
+    let (mut masks, mut phantoms, mut firsts) = if ENTROPY {
         (
             vec![0u8; n_parents],
             vec![0u8; n_parents],
@@ -252,168 +355,159 @@ pub fn code_level<C: BitCoder>(
     } else {
         (Vec::new(), Vec::new(), Vec::new())
     };
+    // Bits of each new particle's path: three per level below `r`.
+    let path_symbols = u64::from(3 * (depth - r));
+    let s = depth - r;
     let mut t = 0usize;
     for p in 0..n_parents {
         let pc = parents.cells[p];
         let phantom_parent = parents.phantom[p];
-        let mut present = [false; 8];
-        let mut phantom = [false; 8];
+        // The children (bit `k`: child `k`) and which of them are phantoms:
+        // the truth for an encoder, decided below for a decoder.
+        let mut own = 0u32;
+        let mut phantom = 0u32;
         if let Some(tr) = truth {
             while t < tr.level.cells.len() && tr.level.cells[t] >> 3 == pc {
-                let k = (tr.level.cells[t] & 7) as usize;
-                present[k] = true;
-                phantom[k] = tr.level.phantom[t];
+                let k = (tr.level.cells[t] & 7) as u32;
+                own |= 1 << k;
+                phantom |= u32::from(tr.level.phantom[t]) << k;
                 t += 1;
             }
         }
-        let implicit = if phantom_parent {
-            None
+        // The implicit child (the one holding the parent's particle leaf;
+        // 8, none, under a phantom). A phantom reads the root's leaf, so the
+        // look-up needs no branch.
+        let leaf = leaves[if phantom_parent {
+            0
         } else {
-            let leaf = leaves[parents.particle[p] as usize];
-            let s = depth - r;
-            Some(
-                ((leaf[0] >> s) & 1 | ((leaf[1] >> s) & 1) << 1 | ((leaf[2] >> s) & 1) << 2)
-                    as usize,
-            )
-        };
-        // The parent's face neighbours (`coarse`, bit 2a: towards −a, bit
-        // 2a + 1: towards +a) and the children masks of those towards −a,
-        // all coded before this parent (their Morton codes are smaller).
-        let mut coarse = 0usize;
-        let mut back_mask = [0u8; 3];
-        let mut back_phantom = [0u8; 3];
-        if entropy {
+            parents.particle[p] as usize
+        }];
+        let i = (leaf[0] >> s) & 1 | ((leaf[1] >> s) & 1) << 1 | ((leaf[2] >> s) & 1) << 2;
+        let implicit = if phantom_parent { 8 } else { i };
+        let implicit_bit = (1 << implicit) & 0xff;
+        own |= implicit_bit;
+        phantom &= !implicit_bit;
+        // The parent's face neighbours, bit `k` of byte `a` (see
+        // [`behind`]): `coarse_at`, whether the parent's neighbour on
+        // child `k`'s side along `a` is present; `back_fine` and
+        // `back_phantom`, whether the node at child `k` − e_a is among the
+        // children (phantom children) of the parent's neighbour towards
+        // −a, for `k` on the lower side — all coded before this parent
+        // (their Morton codes are smaller).
+        let mut back_fine = 0u32;
+        // The same per child `k`, in byte `k`: occupancy (bits 3–5 back,
+        // 0–2 coarse) and phantoms (bits 0–2), axis `a` in bit `a`.
+        let mut occ_near = 0u64;
+        let mut phantom_near = 0u64;
+        // Per axis, how many of the parent's two neighbours are present.
+        let mut ext = [0u32; 3];
+        if ENTROPY {
             let nb = &links.nb[p];
             for a in 0..3 {
-                if nb[a] != NONE {
-                    coarse |= 1 << (2 * a);
-                    back_mask[a] = masks[nb[a] as usize];
-                    back_phantom[a] = phantoms[nb[a] as usize];
-                }
-                if nb[3 + a] != NONE {
-                    coarse |= 1 << (2 * a + 1);
-                }
+                let (lo, hi) = (nb[a] != NONE, nb[3 + a] != NONE);
+                // Index 0 stands in for a missing neighbour, masked out.
+                let q = if lo { nb[a] as usize } else { 0 };
+                let keep = u32::from(lo).wrapping_neg();
+                let upper = u32::from(UPPER[a]);
+                let lower = !upper & 0xff;
+                let shift = 1u32 << a;
+                let back = (u32::from(masks[q]) >> shift) & lower & keep;
+                let back_phantom = (u32::from(phantoms[q]) >> shift) & lower & keep;
+                let side = (lower & keep) | (upper & u32::from(hi).wrapping_neg());
+                back_fine |= back << (8 * a);
+                occ_near |= SPREAD[back as usize] << (3 + a) | SPREAD[side as usize] << a;
+                phantom_near |= SPREAD[back_phantom as usize] << a;
+                ext[a] = u32::from(lo) + u32::from(hi);
             }
         }
-        // Neighbour sets over the children, one byte per axis (x in bits
-        // 0–7, y in 8–15, z in 16–23): bit `k` of byte `a` of
-        // `behind(back)` is whether the node at child `k` − e_a is among
-        // the children of the neighbour towards −a (child `k | bit`, for
-        // `k` on the lower side); [`BEHIND_OF`] adds this parent's own
-        // children as they are decided (child `k` − e_a is child `k ^
-        // bit` < `k` for `k` on the upper side).
-        let behind = |back: &[u8; 3]| -> u32 {
-            (0..3).fold(0u32, |f, a| {
-                f | u32::from((back[a] >> (1u32 << a)) & !UPPER[a]) << (8 * a)
-            })
-        };
-        // Bit `k` of byte `a`: whether the parent's neighbour on child
-        // `k`'s side along `a` is present.
-        let coarse_at = (0..3).fold(0u32, |f, a| {
-            let lo = if coarse >> (2 * a) & 1 == 1 {
-                !UPPER[a]
-            } else {
-                0
-            };
-            let hi = if coarse >> (2 * a + 1) & 1 == 1 {
-                UPPER[a]
-            } else {
-                0
-            };
-            f | u32::from(lo | hi) << (8 * a)
-        });
-        let mut fine = if entropy { behind(&back_mask) } else { 0 };
-        // 1. Occupancy.
-        let mut count = 0usize;
-        let mut own = 0u8;
-        for k in 0..8usize {
-            if Some(k) == implicit {
-                present[k] = true;
-                phantom[k] = false;
-            } else {
-                let ctx = if entropy {
-                    let state = match implicit {
-                        None => 0,
-                        Some(i) if k < i => 1,
-                        Some(_) => 2,
-                    };
-                    let fine_bits = axes_of(fine, k);
-                    let coarse_bits = axes_of(coarse_at, k);
-                    OCC + (((state * 8 + k) * 8 + fine_bits) * 8 + coarse_bits) * 3 + count.min(2)
-                } else {
-                    OCC
-                };
-                coder.bit(&mut present[k], ctx)?;
+        // 1. Occupancy: every child but the implicit one.
+        let todo = 0xff & !implicit_bit;
+        if ENTROPY {
+            // Each child's context but for what the decisions below it
+            // add ([`OCC_KNOWN`]): the state (under a phantom 0, before the
+            // implicit child 1, after it 2), the child, its neighbours
+            // among the parent's neighbours' children and the parent's
+            // neighbours on its sides.
+            let not_phantom = u32::from(!phantom_parent);
+            let mut base = [0u32; 8];
+            for (k, b) in base.iter_mut().enumerate() {
+                let k = k as u32;
+                let state = not_phantom * (1 + u32::from(k > implicit));
+                let near = (occ_near >> (8 * k)) as u32 & 63;
+                *b = OCC as u32 + ((state * 8 + k) * 64 + near) * 3;
             }
-            if present[k] {
-                count += 1;
-                own |= 1 << k;
-                fine |= BEHIND_OF[k];
-            }
+            coder.bits_chained(&mut own, todo, |k, known| {
+                (base[k as usize] + u32::from(OCC_KNOWN[(k << 8 | known) as usize])) as usize
+            })?;
+        } else {
+            coder.bits_chained(&mut own, todo, |_, _| OCC)?;
         }
-        if count == 0 {
+        if own == 0 {
             return stream_err(format!("level {r}: a phantom node has no child"));
         }
-        // 2. Phantom flags.
-        let mut own_phantom = 0u8;
-        let mut fine_phantom = if entropy { behind(&back_phantom) } else { 0 };
-        for k in 0..8usize {
-            if !present[k] || Some(k) == implicit {
-                continue;
-            }
-            if r == depth {
-                phantom[k] = false;
-                continue;
-            }
-            if entropy && implicit.is_some_and(|i| k < i) {
-                phantom[k] = true;
+        // 2. Phantom flags of the signalled children, below `R`. The
+        // entropy mode infers those before the implicit child: the path
+        // rule would have picked them if they were kept.
+        if r == depth {
+            phantom = 0;
+        } else {
+            let inferred = if ENTROPY && !phantom_parent {
+                own & below(implicit)
             } else {
-                let ctx = if entropy {
-                    let nb = axes_of(fine_phantom, k);
-                    FLAG + ((usize::from(phantom_parent) * 8 + nb) * 4) + (count - 1).min(3)
-                } else {
-                    FLAG
-                };
-                coder.bit(&mut phantom[k], ctx)?;
-            }
-            if phantom[k] {
-                own_phantom |= 1 << k;
-                fine_phantom |= BEHIND_OF[k];
+                0
+            };
+            let coded = own & !implicit_bit & !inferred;
+            phantom = (phantom & coded) | inferred;
+            if ENTROPY {
+                let pp = u32::from(phantom_parent);
+                let count = (own.count_ones() - 1).min(3);
+                let base = FLAG as u32 + pp * 32 + count;
+                coder.bits_chained(&mut phantom, coded, |k, known| {
+                    let near = (phantom_near >> (8 * k)) as u32 & 7;
+                    let nb = near | u32::from(SIBLINGS[(k << 8 | known) as usize]);
+                    (base + nb * 4) as usize
+                })?;
+            } else {
+                coder.bits_chained(&mut phantom, coded, |_, _| FLAG)?;
             }
         }
-        if entropy {
-            masks[p] = own;
-            phantoms[p] = own_phantom;
+        if ENTROPY {
+            masks[p] = own as u8;
+            phantoms[p] = phantom as u8;
             firsts[p] = out.cells.len() as u32;
         }
         // 3. Leaf paths of the new particles, then the nodes.
-        for k in 0..8usize {
-            if !present[k] {
-                continue;
-            }
-            let cell = (pc << 3) | k as u64;
-            let particle = if phantom[k] {
+        let parent_at = unmorton(pc);
+        let fine = back_fine | behind(own);
+        let mut rest = own;
+        while rest != 0 {
+            let k = rest.trailing_zeros();
+            rest &= rest - 1;
+            let cell = (pc << 3) | u64::from(k);
+            let mut leaf = [0, 1, 2].map(|a| ((parent_at[a] << 1) | (k >> a & 1)) << s);
+            let particle = if r == depth {
+                // No phantoms and no path bits at `R`: whether the child
+                // brings a new particle is data, so it is always written
+                // and taken back when it is the implicit child.
+                let id = leaves.len();
+                leaves.push(leaf);
+                let implicit_child = k == implicit;
+                leaves.truncate(id + usize::from(!implicit_child));
+                if implicit_child {
+                    parents.particle[p]
+                } else {
+                    id as u32
+                }
+            } else if phantom >> k & 1 == 1 {
                 NO_PARTICLE
-            } else if Some(k) == implicit {
+            } else if k == implicit {
                 parents.particle[p]
             } else {
                 let id = leaves.len();
                 let want = truth.map(|tr| tr.leaves[id]).unwrap_or([0; 3]);
-                let c = unmorton(cell);
-                let mut leaf = c.map(|v| v << (depth - r));
-                // Context: the surface's extent along each axis (how many
-                // of the parent's two neighbours on that axis are present)
-                // predicts which path bits the lexicographic rule fixes.
-                let mut ext = [0usize; 3];
-                let mut back = [0usize; 3];
-                if entropy {
-                    for a in 0..3 {
-                        ext[a] = ((coarse >> (2 * a)) & 1) + ((coarse >> (2 * a + 1)) & 1);
-                        back[a] = (fine >> (8 * a + k) & 1) as usize;
-                    }
-                }
+                coder.reserve(path_symbols)?;
                 // Raw bits: the three axes of a depth, read at once.
-                let together = !entropy && coder.context_free();
+                let together = !ENTROPY && coder.context_free();
                 for d in (r + 1)..=depth {
                     let s = depth - d;
                     if together {
@@ -426,15 +520,21 @@ pub fn code_level<C: BitCoder>(
                         }
                         continue;
                     }
-                    let step = (d - r).min(3) as usize - 1;
+                    let step = (d - r).min(3) - 1;
                     for (a, l) in leaf.iter_mut().enumerate() {
                         let mut b = (want[a] >> s) & 1 == 1;
-                        let ctx = if entropy {
-                            PATH + ((step * 3 + a) * 3 + ext[a]) * 2 + back[a]
+                        let ctx = if ENTROPY {
+                            // Context: the surface's extent along each axis
+                            // (how many of the parent's two neighbours on
+                            // that axis are present) predicts which path
+                            // bits the lexicographic rule fixes; and
+                            // whether the node behind the child is present.
+                            let back = fine >> (8 * a as u32 + k) & 1;
+                            PATH + (((step * 3 + a as u32) * 3 + ext[a]) * 2 + back) as usize
                         } else {
                             PATH
                         };
-                        coder.bit(&mut b, ctx)?;
+                        coder.bit_reserved(&mut b, ctx)?;
                         *l |= u32::from(b) << s;
                     }
                 }
@@ -442,7 +542,7 @@ pub fn code_level<C: BitCoder>(
                 id as u32
             };
             out.cells.push(cell);
-            out.phantom.push(phantom[k]);
+            out.phantom.push(phantom >> k & 1 == 1);
             out.particle.push(particle);
         }
         if out.cells.len() > inp.max_nodes {
@@ -451,7 +551,7 @@ pub fn code_level<C: BitCoder>(
             ));
         }
     }
-    if entropy {
+    if ENTROPY {
         *links = if r == depth {
             Links {
                 nb: Vec::new(),
