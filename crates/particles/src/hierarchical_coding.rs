@@ -266,13 +266,6 @@ pub fn code_root<C: BitCoder>(
     Ok(leaf)
 }
 
-/// Index of child `j` of the node whose children are `mask`, the first at
-/// `first`, if that child exists.
-#[inline]
-fn child_index(mask: u8, first: u32, j: usize) -> Option<u32> {
-    (mask >> j & 1 == 1).then(|| first + (mask & ((1u8 << j) - 1)).count_ones())
-}
-
 /// Codes level `r` and returns it; new particles' leaves are appended to
 /// `leaves` (their index is their particle number). In entropy mode
 /// `links` holds the links of level `r − 1` on entry and those of level
@@ -579,6 +572,9 @@ fn child_links(parent_nb: &[[u32; 6]], masks: &[u8], firsts: &[u32], n: usize) -
 }
 
 /// Calls `f(i, links of child i)` for the children level's nodes in order.
+///
+/// Which children exist is data: each link is selected with masks (the
+/// child's rank among its siblings from a table), not branched on.
 #[inline]
 fn each_child_links(
     parent_nb: &[[u32; 6]],
@@ -592,39 +588,50 @@ fn each_child_links(
         if m == 0 {
             continue;
         }
-        // Children masks and first indices of the parent's face neighbours.
+        let first = firsts[p];
+        // Children masks and first indices of the parent's face neighbours
+        // (an empty mask for a missing one; index 0 stands in for it).
         let mut nm = [0u8; 6];
         let mut nf = [0u32; 6];
         for d in 0..6 {
             let q = parent_nb[p][d];
-            if q != NONE {
-                nm[d] = masks[q as usize];
-                nf[d] = firsts[q as usize];
-            }
+            let present = q != NONE;
+            let q = if present { q as usize } else { 0 };
+            nm[d] = masks[q] & u8::from(present).wrapping_neg();
+            nf[d] = firsts[q];
         }
         let mut rest = m;
         while rest != 0 {
             let k = rest.trailing_zeros() as usize;
             rest &= rest - 1;
             let mut row = [NONE; 6];
-            for d in 0..6 {
+            for (d, link) in row.iter_mut().enumerate() {
                 let bit = 1usize << (d % 3);
                 let towards_plus = d >= 3;
                 let inside = (k & bit != 0) != towards_plus;
-                let (qm, qf) = if inside {
-                    (m, firsts[p])
-                } else {
-                    (nm[d], nf[d])
-                };
-                if let Some(j) = child_index(qm, qf, k ^ bit) {
-                    row[d] = j;
-                }
+                let (qm, qf) = if inside { (m, first) } else { (nm[d], nf[d]) };
+                let j = k ^ bit;
+                let index = qf + u32::from(RANK[usize::from(qm) << 3 | j]);
+                *link = if qm >> j & 1 == 1 { index } else { NONE };
             }
             f(i, row);
             i += 1;
         }
     }
 }
+
+/// `RANK[8 · mask + j]`: the children of `mask` below child `j` — the
+/// index of child `j` among its siblings (a population count, which the
+/// baseline x86-64 instruction set lacks).
+static RANK: [u8; 2048] = {
+    let mut t = [0u8; 2048];
+    let mut i = 0;
+    while i < 2048 {
+        t[i] = ((i >> 3) & ((1 << (i & 7)) - 1)).count_ones() as u8;
+        i += 1;
+    }
+    t
+};
 
 /// The particles' face neighbourhood at level `R`, for the entropy
 /// mode's precision layers.
