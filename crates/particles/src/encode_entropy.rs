@@ -119,6 +119,34 @@ const fn next_table(bit: bool) -> [u16; STATES] {
     t
 }
 
+/// The decoder's form of a model: its state in the low 16 bits and the
+/// state's `P(false)` in the high 16, so one load gives the probability
+/// (no dependent look-up of [`P0`] on the chain from one symbol to the
+/// next).
+const fn entry(state: u16) -> u32 {
+    (P0[state as usize] as u32) << 16 | state as u32
+}
+
+/// The entry after decoding `false` (`[0]`) or `true` (`[1]`) in state `s`.
+static NEXT_ENTRY: [[u32; STATES]; 2] = {
+    let mut t = [[0u32; STATES]; 2];
+    let mut b = 0;
+    while b < 2 {
+        let mut i = 0;
+        while i < STATES {
+            t[b][i] = entry(NEXT[b][i]);
+            i += 1;
+        }
+        b += 1;
+    }
+    t
+};
+
+/// Decoder models: [`NUM_CONTEXTS`] rounded up to a power of two, so that
+/// a context masked to it needs no bounds check (valid contexts are below
+/// [`NUM_CONTEXTS`]; the mask changes none of them).
+const READ_MODELS: usize = NUM_CONTEXTS.next_power_of_two();
+
 /// Renormalise once the range drops below this (one byte shifts out).
 const TOP: u32 = 1 << 24;
 
@@ -260,7 +288,8 @@ impl RangeDecoder {
 pub struct EntropyReader<'a> {
     bytes: &'a [u8],
     dec: RangeDecoder,
-    ctx: Contexts,
+    /// Per context, its model as an [`entry`].
+    ctx: [u32; READ_MODELS],
     symbols: u64,
     budget: u64,
 }
@@ -281,7 +310,7 @@ impl<'a> EntropyReader<'a> {
                 code,
                 pos: 4,
             },
-            ctx: fresh_contexts(),
+            ctx: [entry(0); READ_MODELS],
             symbols: 0,
             budget: (payload.len() as u64 * 8 + 64) * MAX_SYMBOLS_PER_BIT,
         })
@@ -303,9 +332,9 @@ impl BitCoder for EntropyReader<'_> {
     }
     #[inline(always)]
     fn bit_reserved(&mut self, b: &mut bool, ctx: usize) -> Result<()> {
-        let s = self.ctx[ctx] as usize;
-        *b = self.dec.decode(self.bytes, u32::from(P0[s]));
-        self.ctx[ctx] = NEXT[usize::from(*b)][s];
+        let m = &mut self.ctx[ctx & (READ_MODELS - 1)];
+        *b = self.dec.decode(self.bytes, *m >> 16);
+        *m = NEXT_ENTRY[usize::from(*b)][(*m & 0xffff) as usize];
         self.symbols += 1;
         Ok(())
     }
@@ -334,38 +363,35 @@ impl BitCoder for EntropyReader<'_> {
         let bytes = self.bytes;
         let mut k = rest.trailing_zeros();
         rest &= rest - 1;
-        let mut c = ctx(k, v & ((1 << k) - 1));
-        let mut s = usize::from(self.ctx[c]);
-        let mut p = u32::from(P0[s]);
+        const MASK: usize = READ_MODELS - 1;
+        let mut c = ctx(k, v & ((1 << k) - 1)) & MASK;
+        let mut e = self.ctx[c];
         let mut n = 1;
         while rest != 0 {
             let next = rest.trailing_zeros();
             rest &= rest - 1;
             let known = v & ((1 << next) - 1);
-            let c0 = ctx(next, known);
-            let c1 = ctx(next, known | 1 << k);
-            let (s0, s1) = (usize::from(self.ctx[c0]), usize::from(self.ctx[c1]));
-            let (p0, p1) = (u32::from(P0[s0]), u32::from(P0[s1]));
-            let bit = dec.decode(bytes, p);
-            self.ctx[c] = NEXT[usize::from(bit)][s];
+            let c0 = ctx(next, known) & MASK;
+            let c1 = ctx(next, known | 1 << k) & MASK;
+            let (e0, e1) = (self.ctx[c0], self.ctx[c1]);
+            let bit = dec.decode(bytes, e >> 16);
+            self.ctx[c] = NEXT_ENTRY[usize::from(bit)][(e & 0xffff) as usize];
             v |= u32::from(bit) << k;
             let prev = c;
             // Selected with masks, not a branch: the bit is data.
             let m = usize::from(bit).wrapping_neg();
             c = c0 ^ ((c0 ^ c1) & m);
-            s = s0 ^ ((s0 ^ s1) & m);
-            p = p0 ^ ((p0 ^ p1) & m as u32);
+            e = e0 ^ ((e0 ^ e1) & m as u32);
             if c == prev {
                 // Read before the model was updated (never the case for
                 // the contexts of `code_level`, which differ by child).
-                s = usize::from(self.ctx[c]);
-                p = u32::from(P0[s]);
+                e = self.ctx[c];
             }
             k = next;
             n += 1;
         }
-        let bit = dec.decode(bytes, p);
-        self.ctx[c] = NEXT[usize::from(bit)][s];
+        let bit = dec.decode(bytes, e >> 16);
+        self.ctx[c] = NEXT_ENTRY[usize::from(bit)][(e & 0xffff) as usize];
         v |= u32::from(bit) << k;
         self.dec = dec;
         self.symbols += n;

@@ -328,14 +328,28 @@ fn code_level_in<C: BitCoder, const ENTROPY: bool>(
             ));
         }
     }
-    let mut out = HLevel::default();
     let expected = inp.max_nodes.min(8 * parents.cells.len());
-    out.cells.reserve(expected);
-    out.phantom.reserve(expected);
-    out.particle.reserve(expected);
+    // The level's nodes are written by index, `n` so far, into room for
+    // all of them plus one parent's eight children: at `R` every child is
+    // written and the count advanced by whether it exists (no branch on a
+    // decoded bit); the room is cut to `n` at the end. The `max_nodes`
+    // check after each parent keeps `n + 8` within it.
+    let room = expected + 8;
+    let mut cells = vec![0u64; room];
+    let mut phantoms_out = vec![false; room];
+    let mut particles = vec![0u32; room];
+    let mut n = 0usize;
+    let finest = r == depth;
     // New particles are among the level's nodes: room for all of them at
-    // once (unused room is never touched) rather than doubling copies.
-    leaves.reserve_exact(expected);
+    // once (unused room is never touched) rather than doubling copies; at
+    // `R` they are written by index like the nodes.
+    let leaves_start = leaves.len();
+    if finest {
+        leaves.resize(leaves_start + room, [0; 3]);
+    } else {
+        leaves.reserve_exact(expected);
+    }
+    let mut n_leaves = leaves_start;
     // Per parent: its children (bit k: child k present), which of them are
     // phantoms, and the index of its first child in `out`.
     let n_parents = parents.cells.len();
@@ -370,11 +384,8 @@ fn code_level_in<C: BitCoder, const ENTROPY: bool>(
         // The implicit child (the one holding the parent's particle leaf;
         // 8, none, under a phantom). A phantom reads the root's leaf, so the
         // look-up needs no branch.
-        let leaf = leaves[if phantom_parent {
-            0
-        } else {
-            parents.particle[p] as usize
-        }];
+        let leaf =
+            leaves[(parents.particle[p] & u32::from(!phantom_parent).wrapping_neg()) as usize];
         let i = (leaf[0] >> s) & 1 | ((leaf[1] >> s) & 1) << 1 | ((leaf[2] >> s) & 1) << 2;
         let implicit = if phantom_parent { 8 } else { i };
         let implicit_bit = (1 << implicit) & 0xff;
@@ -467,31 +478,40 @@ fn code_level_in<C: BitCoder, const ENTROPY: bool>(
         if ENTROPY {
             masks[p] = own as u8;
             phantoms[p] = phantom as u8;
-            firsts[p] = out.cells.len() as u32;
+            firsts[p] = n as u32;
         }
         // 3. Leaf paths of the new particles, then the nodes.
         let parent_at = unmorton(pc);
+        if finest {
+            // No phantoms and no path bits at `R`: every child of the
+            // parent is written, kept when it exists, and brings a new
+            // particle unless it is the implicit child — whose particle,
+            // the parent's, is set after the loop (a select in the loop
+            // compiles to a branch on the decoded bits).
+            let first = n;
+            let base = parent_at.map(|c| c << 1);
+            for k in 0..8 {
+                cells[n] = (pc << 3) | u64::from(k);
+                particles[n] = n_leaves as u32;
+                leaves[n_leaves] = [base[0] | (k & 1), base[1] | (k >> 1 & 1), base[2] | k >> 2];
+                let exists = (own >> k & 1) as usize;
+                n += exists;
+                n_leaves += exists & usize::from(k != implicit);
+            }
+            // Under a phantom (no implicit child) the slot is rewritten as
+            // it is.
+            let at = first + usize::from(RANK[(own << 3 | (implicit & 7)) as usize]);
+            let keep = u32::from(!phantom_parent).wrapping_neg();
+            particles[at] = (parents.particle[p] & keep) | (particles[at] & !keep);
+        }
         let fine = back_fine | behind(own);
-        let mut rest = own;
+        let mut rest = if finest { 0 } else { own };
         while rest != 0 {
             let k = rest.trailing_zeros();
             rest &= rest - 1;
             let cell = (pc << 3) | u64::from(k);
             let mut leaf = [0, 1, 2].map(|a| ((parent_at[a] << 1) | (k >> a & 1)) << s);
-            let particle = if r == depth {
-                // No phantoms and no path bits at `R`: whether the child
-                // brings a new particle is data, so it is always written
-                // and taken back when it is the implicit child.
-                let id = leaves.len();
-                leaves.push(leaf);
-                let implicit_child = k == implicit;
-                leaves.truncate(id + usize::from(!implicit_child));
-                if implicit_child {
-                    parents.particle[p]
-                } else {
-                    id as u32
-                }
-            } else if phantom >> k & 1 == 1 {
+            let particle = if phantom >> k & 1 == 1 {
                 NO_PARTICLE
             } else if k == implicit {
                 parents.particle[p]
@@ -534,11 +554,12 @@ fn code_level_in<C: BitCoder, const ENTROPY: bool>(
                 leaves.push(leaf);
                 id as u32
             };
-            out.cells.push(cell);
-            out.phantom.push(phantom >> k & 1 == 1);
-            out.particle.push(particle);
+            cells[n] = cell;
+            phantoms_out[n] = phantom >> k & 1 == 1;
+            particles[n] = particle;
+            n += 1;
         }
-        if out.cells.len() > inp.max_nodes {
+        if n > inp.max_nodes {
             return stream_err(format!(
                 "level {r} holds more nodes than its chunk declares"
             ));
@@ -552,14 +573,24 @@ fn code_level_in<C: BitCoder, const ENTROPY: bool>(
                     parent_nb: std::mem::take(&mut links.nb),
                     masks,
                     firsts,
-                    n: out.cells.len(),
+                    n,
                 }),
             }
         } else {
-            child_links(&links.nb, &masks, &firsts, out.cells.len())
+            child_links(&links.nb, &masks, &firsts, n)
         };
     }
-    Ok(out)
+    cells.truncate(n);
+    phantoms_out.truncate(n);
+    particles.truncate(n);
+    if finest {
+        leaves.truncate(n_leaves);
+    }
+    Ok(HLevel {
+        cells,
+        phantom: phantoms_out,
+        particle: particles,
+    })
 }
 
 /// The links of the children level: a child's neighbour across a face is
@@ -1009,6 +1040,77 @@ mod tests {
             }
         }
         assert!(checked > 1000, "{checked} links checked");
+    }
+
+    #[test]
+    fn garbage_level_payloads_decode_without_panicking() {
+        // The decoder writes a level's nodes by index into room sized from
+        // the chunk's node count: hostile payloads, whatever node counts
+        // they declare, must end in a level or an error, never a panic.
+        use crate::encode_entropy::EntropyReader;
+        let model = lodkit_mesh::Model::Mesh(lodkit_mesh::shapes::icosphere(2));
+        let mut tree = Octree::build(
+            &model,
+            &BuildOptions {
+                depth: Some(5),
+                ..BuildOptions::default()
+            },
+        )
+        .unwrap();
+        thin(&mut tree, &ThinningOptions::DEFAULT);
+        let (h, _) = Hierarchy::from_thinned(&tree).unwrap();
+        let depth = h.depth;
+        let leaves: Vec<[u32; 3]> = h
+            .particle_leaf
+            .iter()
+            .map(|&l| unmorton(h.levels[depth as usize].cells[l as usize]))
+            .collect();
+        let mut outcomes = [0usize; 2];
+        for r in 1..=depth {
+            // The true links and leaves of the levels above `r`.
+            let mut links = Links::root();
+            let mut coded = vec![leaves[0]];
+            for q in 1..r {
+                let inp = LevelInput {
+                    depth,
+                    r: q,
+                    entropy: true,
+                    parents: &h.levels[q as usize - 1],
+                    max_nodes: usize::MAX,
+                };
+                let truth = Truth {
+                    level: &h.levels[q as usize],
+                    leaves: &leaves,
+                };
+                let mut w = crate::encode_entropy::EntropyWriter::new();
+                code_level(&mut w, &inp, &mut links, &mut coded, Some(&truth)).unwrap();
+            }
+            let nodes = h.levels[r as usize].cells.len();
+            for seed in 0..24u32 {
+                let bytes: Vec<u8> = (0..(16 + seed as usize * 13))
+                    .map(|i| {
+                        ((i as u32).wrapping_mul(2_654_435_761) ^ seed.wrapping_mul(40_503)) as u8
+                    })
+                    .collect();
+                for max_nodes in [0, 1, nodes / 2, nodes, 8 * nodes, usize::MAX] {
+                    let Ok(mut c) = EntropyReader::new(&bytes) else {
+                        continue;
+                    };
+                    let inp = LevelInput {
+                        depth,
+                        r,
+                        entropy: true,
+                        parents: &h.levels[r as usize - 1],
+                        max_nodes,
+                    };
+                    let mut l = links.clone();
+                    let mut got = coded.clone();
+                    let ok = code_level(&mut c, &inp, &mut l, &mut got, None).is_ok();
+                    outcomes[usize::from(ok)] += 1;
+                }
+            }
+        }
+        assert!(outcomes[0] > 0, "{outcomes:?}");
     }
 
     #[test]
