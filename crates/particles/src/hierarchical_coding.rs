@@ -196,6 +196,60 @@ static SPREAD: [u64; 256] = {
     t
 };
 
+/// Per axis `a` and children `m` of the parent's neighbour towards −a: in
+/// byte `k`, bit `3 + a` set when child `k` is on the lower side of `a`
+/// and its neighbour towards −a, that neighbour's child `k + 2^a`, is in
+/// `m`.
+static BACK: [[u64; 256]; 3] = {
+    let mut t = [[0u64; 256]; 3];
+    let mut a = 0;
+    while a < 3 {
+        let mut m = 0;
+        while m < 256 {
+            let lower = !UPPER[a] as usize;
+            t[a][m] = SPREAD[(m >> (1 << a)) & lower] << (3 + a);
+            m += 1;
+        }
+        a += 1;
+    }
+    t
+};
+
+/// Per set of the parent's present face neighbours (bit `d`: across face
+/// `d`): in byte `k`, bit `a` set when the neighbour on child `k`'s side
+/// along `a` is present.
+static COARSE: [u64; 64] = {
+    let mut t = [0u64; 64];
+    let mut f = 0;
+    while f < 64 {
+        let mut a = 0;
+        while a < 3 {
+            let lo = if f >> a & 1 == 1 { !UPPER[a] } else { 0 };
+            let hi = if f >> (a + 3) & 1 == 1 { UPPER[a] } else { 0 };
+            t[f] |= SPREAD[(lo | hi) as usize] << a;
+            a += 1;
+        }
+        f += 1;
+    }
+    t
+};
+
+/// The part of child `k`'s occupancy context that the parent decides,
+/// index `256k + byte` with `byte` as in [`code_level`]'s `near` (state,
+/// neighbours behind, parent's neighbours on its sides).
+static OCC_BASE: [u16; 2048] = {
+    let mut t = [0u16; 2048];
+    let mut i = 0;
+    while i < 2048 {
+        let (k, state, near) = (i >> 8, (i >> 6) & 3, i & 63);
+        if state < 3 {
+            t[i] = (OCC + ((state * 8 + k) * 64 + near) * 3) as u16;
+        }
+        i += 1;
+    }
+    t
+};
+
 /// Face-neighbour links of one level, for the entropy contexts: `nb[i][d]`
 /// is the index of the node across face `d` of node `i` (`d = a` towards
 /// `−a`, `d = 3 + a` towards `+a`) or `NONE`. Built from the parent
@@ -292,15 +346,6 @@ fn below(k: u32) -> u32 {
     (1 << k) - 1
 }
 
-/// Neighbour sets over a parent's children, one byte per axis (x in bits
-/// 0–7, y in 8–15, z in 16–23): bit `k` of byte `a` is whether the node
-/// at child `k` − e_a is among `children` (siblings: child `k − 2^a` for
-/// `k` on the upper side of axis `a`).
-#[inline(always)]
-fn behind(children: u32) -> u32 {
-    ((children & 0x55) << 1) | ((children & 0x33) << 10) | ((children & 0x0f) << 20)
-}
-
 /// [`code_level`] for one mode: `ENTROPY` selects the entropy mode's
 /// contexts and inferences.
 ///
@@ -391,57 +436,45 @@ fn code_level_in<C: BitCoder, const ENTROPY: bool>(
         let implicit_bit = (1 << implicit) & 0xff;
         own |= implicit_bit;
         phantom &= !implicit_bit;
-        // The parent's face neighbours, bit `k` of byte `a` (see
-        // [`behind`]): `coarse_at`, whether the parent's neighbour on
-        // child `k`'s side along `a` is present; `back_fine` and
-        // `back_phantom`, whether the node at child `k` − e_a is among the
-        // children (phantom children) of the parent's neighbour towards
-        // −a, for `k` on the lower side — all coded before this parent
-        // (their Morton codes are smaller).
-        let mut back_fine = 0u32;
-        // The same per child `k`, in byte `k`: occupancy (bits 3–5 back,
-        // 0–2 coarse) and phantoms (bits 0–2), axis `a` in bit `a`.
-        let mut occ_near = 0u64;
+        // Per child `k`, in byte `k` of `near`, what its occupancy context
+        // takes from the parent ([`OCC_BASE`]): the parent's state (bits
+        // 6–7: under a phantom 0, before the implicit child 1, after it 2),
+        // which of the child's neighbours towards −x, −y, −z are children
+        // of the parent's neighbours (bits 3–5; [`BACK`]), and which of the
+        // parent's neighbours on the child's sides are present (bits 0–2;
+        // [`COARSE`]) — all coded before this parent (smaller Morton
+        // codes). `phantom_near`, bits 0–2: those neighbours that are
+        // phantoms. `faces`, bit `d`: the parent's neighbour across face
+        // `d` is present.
+        let mut near = 0u64;
         let mut phantom_near = 0u64;
-        // Per axis, how many of the parent's two neighbours are present.
-        let mut ext = [0u32; 3];
+        let mut faces = 0u32;
         if ENTROPY {
             let nb = &links.nb[p];
-            for a in 0..3 {
-                let (lo, hi) = (nb[a] != NONE, nb[3 + a] != NONE);
-                // Index 0 stands in for a missing neighbour, masked out.
-                let q = if lo { nb[a] as usize } else { 0 };
-                let keep = u32::from(lo).wrapping_neg();
-                let upper = u32::from(UPPER[a]);
-                let lower = !upper & 0xff;
-                let shift = 1u32 << a;
-                let back = (u32::from(masks[q]) >> shift) & lower & keep;
-                let back_phantom = (u32::from(phantoms[q]) >> shift) & lower & keep;
-                let side = (lower & keep) | (upper & u32::from(hi).wrapping_neg());
-                back_fine |= back << (8 * a);
-                occ_near |= SPREAD[back as usize] << (3 + a) | SPREAD[side as usize] << a;
-                phantom_near |= SPREAD[back_phantom as usize] << a;
-                ext[a] = u32::from(lo) + u32::from(hi);
+            for (d, &q) in nb.iter().enumerate() {
+                faces |= u32::from(q != NONE) << d;
             }
+            near = COARSE[faces as usize];
+            for a in 0..3 {
+                let present = nb[a] != NONE;
+                // Index 0 stands in for a missing neighbour, masked out.
+                let q = if present { nb[a] as usize } else { 0 };
+                let keep = u64::from(present).wrapping_neg();
+                near |= BACK[a][usize::from(masks[q])] & keep;
+                phantom_near |= (BACK[a][usize::from(phantoms[q])] & keep) >> 3;
+            }
+            // +1 for every child, +1 more above the implicit one (its own
+            // byte is never read); nothing under a phantom.
+            const ONES: u64 = 0x0101_0101_0101_0101;
+            let state = ONES + ((ONES << (8 * (implicit & 7))) << 8);
+            near |= (state & u64::from(!phantom_parent).wrapping_neg()) << 6;
         }
         // 1. Occupancy: every child but the implicit one.
         let todo = 0xff & !implicit_bit;
         if ENTROPY {
-            // Each child's context but for what the decisions below it
-            // add ([`OCC_KNOWN`]): the state (under a phantom 0, before the
-            // implicit child 1, after it 2), the child, its neighbours
-            // among the parent's neighbours' children and the parent's
-            // neighbours on its sides.
-            let not_phantom = u32::from(!phantom_parent);
-            let mut base = [0u32; 8];
-            for (k, b) in base.iter_mut().enumerate() {
-                let k = k as u32;
-                let state = not_phantom * (1 + u32::from(k > implicit));
-                let near = (occ_near >> (8 * k)) as u32 & 63;
-                *b = OCC as u32 + ((state * 8 + k) * 64 + near) * 3;
-            }
             coder.bits_chained(&mut own, todo, |k, known| {
-                (base[k as usize] + u32::from(OCC_KNOWN[(k << 8 | known) as usize])) as usize
+                let parent_part = OCC_BASE[(k << 8 | (near >> (8 * k)) as u32 & 0xff) as usize];
+                usize::from(parent_part) + usize::from(OCC_KNOWN[(k << 8 | known) as usize])
             })?;
         } else {
             coder.bits_chained(&mut own, todo, |_, _| OCC)?;
@@ -504,7 +537,6 @@ fn code_level_in<C: BitCoder, const ENTROPY: bool>(
             let keep = u32::from(!phantom_parent).wrapping_neg();
             particles[at] = (parents.particle[p] & keep) | (particles[at] & !keep);
         }
-        let fine = back_fine | behind(own);
         let mut rest = if finest { 0 } else { own };
         while rest != 0 {
             let k = rest.trailing_zeros();
@@ -519,6 +551,13 @@ fn code_level_in<C: BitCoder, const ENTROPY: bool>(
                 let id = leaves.len();
                 let want = truth.map(|tr| tr.leaves[id]).unwrap_or([0; 3]);
                 coder.reserve(path_symbols)?;
+                // Path contexts: per axis, how many of the parent's two
+                // neighbours along it are present (the surface's extent
+                // predicts which path bits the lexicographic rule fixes),
+                // and whether the child's neighbour behind it is present.
+                let ext = [0, 1, 2].map(|a| (faces >> a & 1) + (faces >> (a + 3) & 1));
+                let behind = (near >> (8 * k + 3)) as u32 & 7
+                    | u32::from(SIBLINGS[(k << 8 | own & below(k)) as usize]);
                 // Raw bits: the three axes of a depth, read at once.
                 let together = !ENTROPY && coder.context_free();
                 for d in (r + 1)..=depth {
@@ -537,12 +576,7 @@ fn code_level_in<C: BitCoder, const ENTROPY: bool>(
                     for (a, l) in leaf.iter_mut().enumerate() {
                         let mut b = (want[a] >> s) & 1 == 1;
                         let ctx = if ENTROPY {
-                            // Context: the surface's extent along each axis
-                            // (how many of the parent's two neighbours on
-                            // that axis are present) predicts which path
-                            // bits the lexicographic rule fixes; and
-                            // whether the node behind the child is present.
-                            let back = fine >> (8 * a as u32 + k) & 1;
+                            let back = behind >> a & 1;
                             PATH + (((step * 3 + a as u32) * 3 + ext[a]) * 2 + back) as usize
                         } else {
                             PATH
