@@ -397,11 +397,13 @@ fn code_level_in<C: BitCoder, const ENTROPY: bool>(
     let mut n_leaves = leaves_start;
     // Per parent: its children (bit k: child k present), which of them are
     // phantoms, and the index of its first child in `out`.
+    // The masks have an empty sentinel past the parents, which a missing
+    // neighbour reads (see below).
     let n_parents = parents.cells.len();
     let (mut masks, mut phantoms, mut firsts) = if ENTROPY {
         (
-            vec![0u8; n_parents],
-            vec![0u8; n_parents],
+            vec![0u8; n_parents + 1],
+            vec![0u8; n_parents + 1],
             vec![0u32; n_parents],
         )
     } else {
@@ -456,12 +458,12 @@ fn code_level_in<C: BitCoder, const ENTROPY: bool>(
             }
             near = COARSE[faces as usize];
             for a in 0..3 {
-                let present = nb[a] != NONE;
-                // Index 0 stands in for a missing neighbour, masked out.
-                let q = if present { nb[a] as usize } else { 0 };
-                let keep = u64::from(present).wrapping_neg();
-                near |= BACK[a][usize::from(masks[q])] & keep;
-                phantom_near |= (BACK[a][usize::from(phantoms[q])] & keep) >> 3;
+                // A missing neighbour (`NONE`) reads the empty sentinel: a
+                // mask applied after the look-up compiles to a branch
+                // around it, mispredicted on the data.
+                let q = (nb[a] as usize).min(n_parents);
+                near |= BACK[a][usize::from(masks[q])];
+                phantom_near |= BACK[a][usize::from(phantoms[q])] >> 3;
             }
             // +1 for every child, +1 more above the implicit one (its own
             // byte is never read); nothing under a phantom.
@@ -537,17 +539,16 @@ fn code_level_in<C: BitCoder, const ENTROPY: bool>(
             let keep = u32::from(!phantom_parent).wrapping_neg();
             particles[at] = (parents.particle[p] & keep) | (particles[at] & !keep);
         }
-        let mut rest = if finest { 0 } else { own };
-        while rest != 0 {
-            let k = rest.trailing_zeros();
-            rest &= rest - 1;
-            let cell = (pc << 3) | u64::from(k);
-            let mut leaf = [0, 1, 2].map(|a| ((parent_at[a] << 1) | (k >> a & 1)) << s);
-            let particle = if phantom >> k & 1 == 1 {
-                NO_PARTICLE
-            } else if k == implicit {
-                parents.particle[p]
-            } else {
+        if !finest {
+            // The new particles (kept children but the implicit one), in
+            // child order: their leaf paths.
+            let fresh = own & !phantom & !implicit_bit;
+            let first_id = leaves.len();
+            let mut rest = fresh;
+            while rest != 0 {
+                let k = rest.trailing_zeros();
+                rest &= rest - 1;
+                let mut leaf = [0, 1, 2].map(|a| ((parent_at[a] << 1) | (k >> a & 1)) << s);
                 let id = leaves.len();
                 let want = truth.map(|tr| tr.leaves[id]).unwrap_or([0; 3]);
                 coder.reserve(path_symbols)?;
@@ -586,12 +587,25 @@ fn code_level_in<C: BitCoder, const ENTROPY: bool>(
                     }
                 }
                 leaves.push(leaf);
-                id as u32
-            };
-            cells[n] = cell;
-            phantoms_out[n] = phantom >> k & 1 == 1;
-            particles[n] = particle;
-            n += 1;
+            }
+            // The nodes, as at `R`: every child slot written, kept when the
+            // child exists; the particle selected with masks.
+            let window = "the room holds a parent's eight children";
+            let cells8: &mut [u64; 8] = (&mut cells[n..n + 8]).try_into().expect(window);
+            let phantoms8: &mut [bool; 8] = (&mut phantoms_out[n..n + 8]).try_into().expect(window);
+            let particles8: &mut [u32; 8] = (&mut particles[n..n + 8]).try_into().expect(window);
+            let mut count = 0usize;
+            for k in 0..8 {
+                let id = first_id as u32 + u32::from(RANK[(fresh << 3 | k) as usize]);
+                let inherited = u32::from(k == implicit).wrapping_neg();
+                let none = NO_PARTICLE & (phantom >> k & 1).wrapping_neg();
+                cells8[count & 7] = (pc << 3) | u64::from(k);
+                phantoms8[count & 7] = phantom >> k & 1 == 1;
+                particles8[count & 7] =
+                    (id & !inherited) | (parents.particle[p] & inherited) | none;
+                count += (own >> k & 1) as usize;
+            }
+            n += count;
         }
         if n > inp.max_nodes {
             return stream_err(format!(
@@ -600,6 +614,7 @@ fn code_level_in<C: BitCoder, const ENTROPY: bool>(
         }
     }
     if ENTROPY {
+        masks.truncate(n_parents);
         *links = if r == depth {
             Links {
                 nb: Vec::new(),
