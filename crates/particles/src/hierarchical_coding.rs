@@ -387,10 +387,16 @@ fn code_level_in<C: BitCoder, const ENTROPY: bool>(
     let finest = r == depth;
     // New particles are among the level's nodes: room for all of them at
     // once (unused room is never touched) rather than doubling copies; at
-    // `R` they are written by index like the nodes.
+    // `R` they are written by index like the nodes, into room for the
+    // nodes but the implicit children (one per parent that is not a
+    // phantom), checked before each parent.
     let leaves_start = leaves.len();
     if finest {
-        leaves.resize(leaves_start + room, [0; 3]);
+        let inherited = parents.phantom.iter().filter(|&&p| !p).count();
+        leaves.resize(
+            leaves_start + expected.saturating_sub(inherited) + 8,
+            [0; 3],
+        );
     } else {
         leaves.reserve_exact(expected);
     }
@@ -523,6 +529,12 @@ fn code_level_in<C: BitCoder, const ENTROPY: bool>(
             // particle unless it is the implicit child — whose particle,
             // the parent's, is set after the loop (a select in the loop
             // compiles to a branch on the decoded bits).
+            if n_leaves + 8 > leaves.len() {
+                // More new particles than the declared nodes leave room for.
+                return stream_err(format!(
+                    "level {r} holds more nodes than its chunk declares"
+                ));
+            }
             let first = n;
             let base = parent_at.map(|c| c << 1);
             for k in 0..8 {
