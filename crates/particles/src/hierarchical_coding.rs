@@ -375,10 +375,10 @@ fn code_level_in<C: BitCoder, const ENTROPY: bool>(
     }
     let expected = inp.max_nodes.min(8 * parents.cells.len());
     // The level's nodes are written by index, `n` so far, into room for
-    // all of them plus one parent's eight children: at `R` every child is
-    // written and the count advanced by whether it exists (no branch on a
-    // decoded bit); the room is cut to `n` at the end. The `max_nodes`
-    // check after each parent keeps `n + 8` within it.
+    // all of them plus one parent's eight children: every child slot of a
+    // parent is written and the count advanced by whether the child exists
+    // (no branch on a decoded bit); the room is cut to `n` at the end. The
+    // `max_nodes` check after each parent keeps `n + 8` within it.
     let room = expected + 8;
     let mut cells = vec![0u64; room];
     let mut phantoms_out = vec![false; room];
@@ -402,9 +402,9 @@ fn code_level_in<C: BitCoder, const ENTROPY: bool>(
     }
     let mut n_leaves = leaves_start;
     // Per parent: its children (bit k: child k present), which of them are
-    // phantoms, and the index of its first child in `out`.
-    // The masks have an empty sentinel past the parents, which a missing
-    // neighbour reads (see below).
+    // phantoms, and the index of its first child in the level. The masks
+    // have an empty sentinel past the parents, which a missing neighbour
+    // reads (see below).
     let n_parents = parents.cells.len();
     let (mut masks, mut phantoms, mut firsts) = if ENTROPY {
         (
@@ -550,8 +550,7 @@ fn code_level_in<C: BitCoder, const ENTROPY: bool>(
             let at = first + usize::from(RANK[(own << 3 | (implicit & 7)) as usize]);
             let keep = u32::from(!phantom_parent).wrapping_neg();
             particles[at] = (parents.particle[p] & keep) | (particles[at] & !keep);
-        }
-        if !finest {
+        } else {
             // The new particles (kept children but the implicit one), in
             // child order: their leaf paths.
             let fresh = own & !phantom & !implicit_bit;
