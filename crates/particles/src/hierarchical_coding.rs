@@ -47,6 +47,46 @@ pub trait BitCoder {
         *v = out;
         Ok(())
     }
+    /// Checks that `n` more symbols may be coded. A decoder refuses more
+    /// symbols than its payload can carry (a hostile payload must not
+    /// expand without bound); checking once for a run of symbols keeps the
+    /// test off the per-symbol path of [`BitCoder::bit_reserved`].
+    fn reserve(&mut self, _n: u64) -> Result<()> {
+        Ok(())
+    }
+    /// [`BitCoder::bit`] for a symbol that a successful
+    /// [`BitCoder::reserve`] covers: a decoder need not check its budget
+    /// again (the raw reader still fails at the end of its payload).
+    #[inline(always)]
+    fn bit_reserved(&mut self, b: &mut bool, ctx: usize) -> Result<()> {
+        self.bit(b, ctx)
+    }
+    /// Codes bit `k` of `*bits` for each `k` set in `todo` (`todo < 2^8`),
+    /// lowest first, each with context `ctx(k, *bits & (2^k − 1))`: the
+    /// context may depend on the decisions below `k` (and on bits of
+    /// `*bits` outside `todo`, which stay as they are), never on those
+    /// above. The encoder's `*bits` holds the truth; the decoder's bits in
+    /// `todo` are zero on entry. `ctx` must be a pure function; a decoder
+    /// may evaluate it ahead, for both values of the pending bit, to take
+    /// the context's table look-ups off the chain from one decoded bit to
+    /// the next. Reserves its symbols itself.
+    #[inline(always)]
+    fn bits_chained(
+        &mut self,
+        bits: &mut u32,
+        todo: u32,
+        ctx: impl Fn(u32, u32) -> usize,
+    ) -> Result<()> {
+        let mut rest = todo;
+        while rest != 0 {
+            let k = rest.trailing_zeros();
+            rest &= rest - 1;
+            let mut b = (*bits >> k) & 1 == 1;
+            self.bit(&mut b, ctx(k, *bits & ((1 << k) - 1)))?;
+            *bits = (*bits & !(1 << k)) | (u32::from(b) << k);
+        }
+        Ok(())
+    }
     /// Whether the contexts are ignored (the baseline's raw bits): symbols
     /// with different contexts may then be coded together with
     /// [`BitCoder::bits`], which a raw reader does with one shift.
@@ -108,31 +148,111 @@ const NONE: u32 = u32::MAX;
 /// along x, y, z.
 const UPPER: [u8; 3] = [0xaa, 0xcc, 0xf0];
 
-/// Per child `k`: the children that have `k` behind them along x, y, z
-/// (`k` + e_a for `k` on the lower side of axis `a`), one byte per axis.
-const BEHIND_OF: [u32; 8] = {
-    let mut t = [0u32; 8];
-    let mut k = 0;
-    while k < 8 {
+/// Per child `k` and set `known` of children below it (index `256k +
+/// known`): bit `a` set when `k` is on the upper side of axis `a` and its
+/// face neighbour towards −a, child `k − 2^a`, is in `known`.
+static SIBLINGS: [u8; 2048] = {
+    let mut t = [0u8; 2048];
+    let mut i = 0;
+    while i < 2048 {
+        let (k, known) = (i >> 8, i & 0xff);
         let mut a = 0;
         while a < 3 {
-            let bit = 1usize << a;
-            if k & bit == 0 {
-                t[k] |= 1 << ((k | bit) + 8 * a);
+            let bit = 1 << a;
+            if k & bit != 0 && known >> (k ^ bit) & 1 != 0 {
+                t[i] |= bit as u8;
             }
             a += 1;
         }
-        k += 1;
+        i += 1;
     }
     t
 };
 
-/// Bits `k`, `8 + k` and `16 + k` of `m` as bits 0, 1, 2.
-#[inline(always)]
-fn axes_of(m: u32, k: usize) -> usize {
-    let x = (m >> k) & 0x01_01_01;
-    ((x | x >> 7 | x >> 14) & 7) as usize
-}
+/// The part of child `k`'s occupancy context that the decisions below it
+/// decide (index as [`SIBLINGS`]): its siblings behind it and how many
+/// children are present so far (0, 1, 2 or more), in the layout of
+/// [`code_level`]'s occupancy contexts.
+static OCC_KNOWN: [u16; 2048] = {
+    let mut t = [0u16; 2048];
+    let mut i = 0;
+    while i < 2048 {
+        let count = ((i & 0xff) as u32).count_ones();
+        let count = if count > 2 { 2 } else { count };
+        t[i] = SIBLINGS[i] as u16 * 24 + count as u16;
+        i += 1;
+    }
+    t
+};
+
+/// Bit `k` of the index moved to bit `8k`: one byte per child.
+static SPREAD: [u64; 256] = {
+    let mut t = [0u64; 256];
+    let mut i = 0;
+    while i < 256 {
+        let mut k = 0;
+        while k < 8 {
+            t[i] |= ((i as u64 >> k) & 1) << (8 * k);
+            k += 1;
+        }
+        i += 1;
+    }
+    t
+};
+
+/// Per axis `a` and children `m` of the parent's neighbour towards −a: in
+/// byte `k`, bit `3 + a` set when child `k` is on the lower side of `a`
+/// and its neighbour towards −a, that neighbour's child `k + 2^a`, is in
+/// `m`.
+static BACK: [[u64; 256]; 3] = {
+    let mut t = [[0u64; 256]; 3];
+    let mut a = 0;
+    while a < 3 {
+        let mut m = 0;
+        while m < 256 {
+            let lower = !UPPER[a] as usize;
+            t[a][m] = SPREAD[(m >> (1 << a)) & lower] << (3 + a);
+            m += 1;
+        }
+        a += 1;
+    }
+    t
+};
+
+/// Per set of the parent's present face neighbours (bit `d`: across face
+/// `d`): in byte `k`, bit `a` set when the neighbour on child `k`'s side
+/// along `a` is present.
+static COARSE: [u64; 64] = {
+    let mut t = [0u64; 64];
+    let mut f = 0;
+    while f < 64 {
+        let mut a = 0;
+        while a < 3 {
+            let lo = if f >> a & 1 == 1 { !UPPER[a] } else { 0 };
+            let hi = if f >> (a + 3) & 1 == 1 { UPPER[a] } else { 0 };
+            t[f] |= SPREAD[(lo | hi) as usize] << a;
+            a += 1;
+        }
+        f += 1;
+    }
+    t
+};
+
+/// The part of child `k`'s occupancy context that the parent decides,
+/// index `256k + byte` with `byte` as in [`code_level`]'s `near` (state,
+/// neighbours behind, parent's neighbours on its sides).
+static OCC_BASE: [u16; 2048] = {
+    let mut t = [0u16; 2048];
+    let mut i = 0;
+    while i < 2048 {
+        let (k, state, near) = (i >> 8, (i >> 6) & 3, i & 63);
+        if state < 3 {
+            t[i] = (OCC + ((state * 8 + k) * 64 + near) * 3) as u16;
+        }
+        i += 1;
+    }
+    t
+};
 
 /// Face-neighbour links of one level, for the entropy contexts: `nb[i][d]`
 /// is the index of the node across face `d` of node `i` (`d = a` towards
@@ -218,13 +338,6 @@ pub fn code_root<C: BitCoder>(
     Ok(leaf)
 }
 
-/// Index of child `j` of the node whose children are `mask`, the first at
-/// `first`, if that child exists.
-#[inline]
-fn child_index(mask: u8, first: u32, j: usize) -> Option<u32> {
-    (mask >> j & 1 == 1).then(|| first + (mask & ((1u8 << j) - 1)).count_ones())
-}
-
 /// Codes level `r` and returns it; new particles' leaves are appended to
 /// `leaves` (their index is their particle number). In entropy mode
 /// `links` holds the links of level `r − 1` on entry and those of level
@@ -238,201 +351,246 @@ pub fn code_level<C: BitCoder>(
     leaves: &mut Vec<[u32; 3]>,
     truth: Option<&Truth>,
 ) -> Result<HLevel> {
+    // One loop per mode, so neither carries the other's dead work.
+    if inp.entropy {
+        code_level_in::<C, true>(coder, inp, links, leaves, truth)
+    } else {
+        code_level_in::<C, false>(coder, inp, links, leaves, truth)
+    }
+}
+
+/// The children below child `k` (`k ≤ 8`).
+#[inline(always)]
+fn below(k: u32) -> u32 {
+    (1 << k) - 1
+}
+
+/// [`code_level`] for one mode: `ENTROPY` selects the entropy mode's
+/// contexts and inferences.
+///
+/// Per parent the children are bit masks (bit `k`: child `k`), and every
+/// decision a decoded bit feeds (contexts, counts, which children exist)
+/// is computed from the masks rather than branched on: decoded bits are
+/// data, and a branch on each cost about a mispredicted branch per
+/// symbol.
+fn code_level_in<C: BitCoder, const ENTROPY: bool>(
+    coder: &mut C,
+    inp: &LevelInput,
+    links: &mut Links,
+    leaves: &mut Vec<[u32; 3]>,
+    truth: Option<&Truth>,
+) -> Result<HLevel> {
     let depth = u32::from(inp.depth);
     let r = u32::from(inp.r);
     let parents = inp.parents;
-    let entropy = inp.entropy;
-    if entropy {
+    if ENTROPY {
         links.materialise();
+        if links.nb.len() != parents.cells.len() {
+            return stream_err(format!(
+                "level {r}: neighbour links do not match level {}",
+                r - 1
+            ));
+        }
     }
-    if entropy && links.nb.len() != parents.cells.len() {
-        return stream_err(format!(
-            "level {r}: neighbour links do not match level {}",
-            r - 1
-        ));
-    }
-    let mut out = HLevel::default();
     let expected = inp.max_nodes.min(8 * parents.cells.len());
-    out.cells.reserve(expected);
-    out.phantom.reserve(expected);
-    out.particle.reserve(expected);
+    // The level's nodes are written by index, `n` so far, into room for
+    // all of them plus one parent's eight children: every child slot of a
+    // parent is written and the count advanced by whether the child exists
+    // (no branch on a decoded bit); the room is cut to `n` at the end. The
+    // `max_nodes` check after each parent keeps `n + 8` within it.
+    let room = expected + 8;
+    let mut cells = vec![0u64; room];
+    let mut phantoms_out = vec![false; room];
+    let mut particles = vec![0u32; room];
+    let mut n = 0usize;
+    let finest = r == depth;
     // New particles are among the level's nodes: room for all of them at
-    // once (unused room is never touched) rather than doubling copies.
-    leaves.reserve_exact(expected);
+    // once (unused room is never touched) rather than doubling copies; at
+    // `R` they are written by index like the nodes, into room for the
+    // nodes but the implicit children (one per parent that is not a
+    // phantom), checked before each parent.
+    let leaves_start = leaves.len();
+    if finest {
+        let inherited = parents.phantom.iter().filter(|&&p| !p).count();
+        leaves.resize(
+            leaves_start + expected.saturating_sub(inherited) + 8,
+            [0; 3],
+        );
+    } else {
+        leaves.reserve_exact(expected);
+    }
+    let mut n_leaves = leaves_start;
     // Per parent: its children (bit k: child k present), which of them are
-    // phantoms, and the index of its first child in `out`.
+    // phantoms, and the index of its first child in the level. The masks
+    // have an empty sentinel past the parents, which a missing neighbour
+    // reads (see below).
     let n_parents = parents.cells.len();
-    let (mut masks, mut phantoms, mut firsts) = if entropy {
+    let (mut masks, mut phantoms, mut firsts) = if ENTROPY {
         (
-            vec![0u8; n_parents],
-            vec![0u8; n_parents],
+            vec![0u8; n_parents + 1],
+            vec![0u8; n_parents + 1],
             vec![0u32; n_parents],
         )
     } else {
         (Vec::new(), Vec::new(), Vec::new())
     };
+    // Bits of each new particle's path: three per level below `r`.
+    let path_symbols = u64::from(3 * (depth - r));
+    let s = depth - r;
     let mut t = 0usize;
     for p in 0..n_parents {
         let pc = parents.cells[p];
         let phantom_parent = parents.phantom[p];
-        let mut present = [false; 8];
-        let mut phantom = [false; 8];
+        // The children (bit `k`: child `k`) and which of them are phantoms:
+        // the truth for an encoder, decided below for a decoder.
+        let mut own = 0u32;
+        let mut phantom = 0u32;
         if let Some(tr) = truth {
             while t < tr.level.cells.len() && tr.level.cells[t] >> 3 == pc {
-                let k = (tr.level.cells[t] & 7) as usize;
-                present[k] = true;
-                phantom[k] = tr.level.phantom[t];
+                let k = (tr.level.cells[t] & 7) as u32;
+                own |= 1 << k;
+                phantom |= u32::from(tr.level.phantom[t]) << k;
                 t += 1;
             }
         }
-        let implicit = if phantom_parent {
-            None
-        } else {
-            let leaf = leaves[parents.particle[p] as usize];
-            let s = depth - r;
-            Some(
-                ((leaf[0] >> s) & 1 | ((leaf[1] >> s) & 1) << 1 | ((leaf[2] >> s) & 1) << 2)
-                    as usize,
-            )
-        };
-        // The parent's face neighbours (`coarse`, bit 2a: towards −a, bit
-        // 2a + 1: towards +a) and the children masks of those towards −a,
-        // all coded before this parent (their Morton codes are smaller).
-        let mut coarse = 0usize;
-        let mut back_mask = [0u8; 3];
-        let mut back_phantom = [0u8; 3];
-        if entropy {
+        // The implicit child (the one holding the parent's particle leaf;
+        // 8, none, under a phantom). A phantom reads the root's leaf, so the
+        // look-up needs no branch.
+        let leaf =
+            leaves[(parents.particle[p] & u32::from(!phantom_parent).wrapping_neg()) as usize];
+        let i = (leaf[0] >> s) & 1 | ((leaf[1] >> s) & 1) << 1 | ((leaf[2] >> s) & 1) << 2;
+        let implicit = if phantom_parent { 8 } else { i };
+        let implicit_bit = (1 << implicit) & 0xff;
+        own |= implicit_bit;
+        phantom &= !implicit_bit;
+        // Per child `k`, in byte `k` of `near`, what its occupancy context
+        // takes from the parent ([`OCC_BASE`]): the parent's state (bits
+        // 6–7: under a phantom 0, before the implicit child 1, after it 2),
+        // which of the child's neighbours towards −x, −y, −z are children
+        // of the parent's neighbours (bits 3–5; [`BACK`]), and which of the
+        // parent's neighbours on the child's sides are present (bits 0–2;
+        // [`COARSE`]) — all coded before this parent (smaller Morton
+        // codes). `phantom_near`, bits 0–2: those neighbours that are
+        // phantoms. `faces`, bit `d`: the parent's neighbour across face
+        // `d` is present.
+        let mut near = 0u64;
+        let mut phantom_near = 0u64;
+        let mut faces = 0u32;
+        if ENTROPY {
             let nb = &links.nb[p];
+            for (d, &q) in nb.iter().enumerate() {
+                faces |= u32::from(q != NONE) << d;
+            }
+            near = COARSE[faces as usize];
             for a in 0..3 {
-                if nb[a] != NONE {
-                    coarse |= 1 << (2 * a);
-                    back_mask[a] = masks[nb[a] as usize];
-                    back_phantom[a] = phantoms[nb[a] as usize];
-                }
-                if nb[3 + a] != NONE {
-                    coarse |= 1 << (2 * a + 1);
-                }
+                // A missing neighbour (`NONE`) reads the empty sentinel: a
+                // mask applied after the look-up compiles to a branch
+                // around it, mispredicted on the data.
+                let q = (nb[a] as usize).min(n_parents);
+                near |= BACK[a][usize::from(masks[q])];
+                phantom_near |= BACK[a][usize::from(phantoms[q])] >> 3;
             }
+            // +1 for every child, +1 more above the implicit one (its own
+            // byte is never read); nothing under a phantom.
+            const ONES: u64 = 0x0101_0101_0101_0101;
+            let state = ONES + ((ONES << (8 * (implicit & 7))) << 8);
+            near |= (state & u64::from(!phantom_parent).wrapping_neg()) << 6;
         }
-        // Neighbour sets over the children, one byte per axis (x in bits
-        // 0–7, y in 8–15, z in 16–23): bit `k` of byte `a` of
-        // `behind(back)` is whether the node at child `k` − e_a is among
-        // the children of the neighbour towards −a (child `k | bit`, for
-        // `k` on the lower side); [`BEHIND_OF`] adds this parent's own
-        // children as they are decided (child `k` − e_a is child `k ^
-        // bit` < `k` for `k` on the upper side).
-        let behind = |back: &[u8; 3]| -> u32 {
-            (0..3).fold(0u32, |f, a| {
-                f | u32::from((back[a] >> (1u32 << a)) & !UPPER[a]) << (8 * a)
-            })
-        };
-        // Bit `k` of byte `a`: whether the parent's neighbour on child
-        // `k`'s side along `a` is present.
-        let coarse_at = (0..3).fold(0u32, |f, a| {
-            let lo = if coarse >> (2 * a) & 1 == 1 {
-                !UPPER[a]
-            } else {
-                0
-            };
-            let hi = if coarse >> (2 * a + 1) & 1 == 1 {
-                UPPER[a]
-            } else {
-                0
-            };
-            f | u32::from(lo | hi) << (8 * a)
-        });
-        let mut fine = if entropy { behind(&back_mask) } else { 0 };
-        // 1. Occupancy.
-        let mut count = 0usize;
-        let mut own = 0u8;
-        for k in 0..8usize {
-            if Some(k) == implicit {
-                present[k] = true;
-                phantom[k] = false;
-            } else {
-                let ctx = if entropy {
-                    let state = match implicit {
-                        None => 0,
-                        Some(i) if k < i => 1,
-                        Some(_) => 2,
-                    };
-                    let fine_bits = axes_of(fine, k);
-                    let coarse_bits = axes_of(coarse_at, k);
-                    OCC + (((state * 8 + k) * 8 + fine_bits) * 8 + coarse_bits) * 3 + count.min(2)
-                } else {
-                    OCC
-                };
-                coder.bit(&mut present[k], ctx)?;
-            }
-            if present[k] {
-                count += 1;
-                own |= 1 << k;
-                fine |= BEHIND_OF[k];
-            }
+        // 1. Occupancy: every child but the implicit one.
+        let todo = 0xff & !implicit_bit;
+        if ENTROPY {
+            coder.bits_chained(&mut own, todo, |k, known| {
+                let parent_part = OCC_BASE[(k << 8 | (near >> (8 * k)) as u32 & 0xff) as usize];
+                usize::from(parent_part) + usize::from(OCC_KNOWN[(k << 8 | known) as usize])
+            })?;
+        } else {
+            coder.bits_chained(&mut own, todo, |_, _| OCC)?;
         }
-        if count == 0 {
+        if own == 0 {
             return stream_err(format!("level {r}: a phantom node has no child"));
         }
-        // 2. Phantom flags.
-        let mut own_phantom = 0u8;
-        let mut fine_phantom = if entropy { behind(&back_phantom) } else { 0 };
-        for k in 0..8usize {
-            if !present[k] || Some(k) == implicit {
-                continue;
-            }
-            if r == depth {
-                phantom[k] = false;
-                continue;
-            }
-            if entropy && implicit.is_some_and(|i| k < i) {
-                phantom[k] = true;
+        // 2. Phantom flags of the signalled children, below `R`. The
+        // entropy mode infers those before the implicit child: the path
+        // rule would have picked them if they were kept.
+        if r == depth {
+            phantom = 0;
+        } else {
+            let inferred = if ENTROPY && !phantom_parent {
+                own & below(implicit)
             } else {
-                let ctx = if entropy {
-                    let nb = axes_of(fine_phantom, k);
-                    FLAG + ((usize::from(phantom_parent) * 8 + nb) * 4) + (count - 1).min(3)
-                } else {
-                    FLAG
-                };
-                coder.bit(&mut phantom[k], ctx)?;
-            }
-            if phantom[k] {
-                own_phantom |= 1 << k;
-                fine_phantom |= BEHIND_OF[k];
+                0
+            };
+            let coded = own & !implicit_bit & !inferred;
+            phantom = (phantom & coded) | inferred;
+            if ENTROPY {
+                let pp = u32::from(phantom_parent);
+                let count = (own.count_ones() - 1).min(3);
+                let base = FLAG as u32 + pp * 32 + count;
+                coder.bits_chained(&mut phantom, coded, |k, known| {
+                    let near = (phantom_near >> (8 * k)) as u32 & 7;
+                    let nb = near | u32::from(SIBLINGS[(k << 8 | known) as usize]);
+                    (base + nb * 4) as usize
+                })?;
+            } else {
+                coder.bits_chained(&mut phantom, coded, |_, _| FLAG)?;
             }
         }
-        if entropy {
-            masks[p] = own;
-            phantoms[p] = own_phantom;
-            firsts[p] = out.cells.len() as u32;
+        if ENTROPY {
+            masks[p] = own as u8;
+            phantoms[p] = phantom as u8;
+            firsts[p] = n as u32;
         }
         // 3. Leaf paths of the new particles, then the nodes.
-        for k in 0..8usize {
-            if !present[k] {
-                continue;
+        let parent_at = unmorton(pc);
+        if finest {
+            // No phantoms and no path bits at `R`: every child of the
+            // parent is written, kept when it exists, and brings a new
+            // particle unless it is the implicit child — whose particle,
+            // the parent's, is set after the loop (a select in the loop
+            // compiles to a branch on the decoded bits).
+            if n_leaves + 8 > leaves.len() {
+                // More new particles than the declared nodes leave room for.
+                return stream_err(format!(
+                    "level {r} holds more nodes than its chunk declares"
+                ));
             }
-            let cell = (pc << 3) | k as u64;
-            let particle = if phantom[k] {
-                NO_PARTICLE
-            } else if Some(k) == implicit {
-                parents.particle[p]
-            } else {
+            let first = n;
+            let base = parent_at.map(|c| c << 1);
+            for k in 0..8 {
+                cells[n] = (pc << 3) | u64::from(k);
+                particles[n] = n_leaves as u32;
+                leaves[n_leaves] = [base[0] | (k & 1), base[1] | (k >> 1 & 1), base[2] | k >> 2];
+                let exists = (own >> k & 1) as usize;
+                n += exists;
+                n_leaves += exists & usize::from(k != implicit);
+            }
+            // Under a phantom (no implicit child) the slot is rewritten as
+            // it is.
+            let at = first + usize::from(RANK[(own << 3 | (implicit & 7)) as usize]);
+            let keep = u32::from(!phantom_parent).wrapping_neg();
+            particles[at] = (parents.particle[p] & keep) | (particles[at] & !keep);
+        } else {
+            // The new particles (kept children but the implicit one), in
+            // child order: their leaf paths.
+            let fresh = own & !phantom & !implicit_bit;
+            let first_id = leaves.len();
+            let mut rest = fresh;
+            while rest != 0 {
+                let k = rest.trailing_zeros();
+                rest &= rest - 1;
+                let mut leaf = [0, 1, 2].map(|a| ((parent_at[a] << 1) | (k >> a & 1)) << s);
                 let id = leaves.len();
                 let want = truth.map(|tr| tr.leaves[id]).unwrap_or([0; 3]);
-                let c = unmorton(cell);
-                let mut leaf = c.map(|v| v << (depth - r));
-                // Context: the surface's extent along each axis (how many
-                // of the parent's two neighbours on that axis are present)
-                // predicts which path bits the lexicographic rule fixes.
-                let mut ext = [0usize; 3];
-                let mut back = [0usize; 3];
-                if entropy {
-                    for a in 0..3 {
-                        ext[a] = ((coarse >> (2 * a)) & 1) + ((coarse >> (2 * a + 1)) & 1);
-                        back[a] = (fine >> (8 * a + k) & 1) as usize;
-                    }
-                }
+                coder.reserve(path_symbols)?;
+                // Path contexts: per axis, how many of the parent's two
+                // neighbours along it are present (the surface's extent
+                // predicts which path bits the lexicographic rule fixes),
+                // and whether the child's neighbour behind it is present.
+                let ext = [0, 1, 2].map(|a| (faces >> a & 1) + (faces >> (a + 3) & 1));
+                let behind = (near >> (8 * k + 3)) as u32 & 7
+                    | u32::from(SIBLINGS[(k << 8 | own & below(k)) as usize]);
                 // Raw bits: the three axes of a depth, read at once.
-                let together = !entropy && coder.context_free();
+                let together = !ENTROPY && coder.context_free();
                 for d in (r + 1)..=depth {
                     let s = depth - d;
                     if together {
@@ -445,32 +603,48 @@ pub fn code_level<C: BitCoder>(
                         }
                         continue;
                     }
-                    let step = (d - r).min(3) as usize - 1;
+                    let step = (d - r).min(3) - 1;
                     for (a, l) in leaf.iter_mut().enumerate() {
                         let mut b = (want[a] >> s) & 1 == 1;
-                        let ctx = if entropy {
-                            PATH + ((step * 3 + a) * 3 + ext[a]) * 2 + back[a]
+                        let ctx = if ENTROPY {
+                            let back = behind >> a & 1;
+                            PATH + (((step * 3 + a as u32) * 3 + ext[a]) * 2 + back) as usize
                         } else {
                             PATH
                         };
-                        coder.bit(&mut b, ctx)?;
+                        coder.bit_reserved(&mut b, ctx)?;
                         *l |= u32::from(b) << s;
                     }
                 }
                 leaves.push(leaf);
-                id as u32
-            };
-            out.cells.push(cell);
-            out.phantom.push(phantom[k]);
-            out.particle.push(particle);
+            }
+            // The nodes, as at `R`: every child slot written, kept when the
+            // child exists; the particle selected with masks.
+            let window = "the room holds a parent's eight children";
+            let cells8: &mut [u64; 8] = (&mut cells[n..n + 8]).try_into().expect(window);
+            let phantoms8: &mut [bool; 8] = (&mut phantoms_out[n..n + 8]).try_into().expect(window);
+            let particles8: &mut [u32; 8] = (&mut particles[n..n + 8]).try_into().expect(window);
+            let mut count = 0usize;
+            for k in 0..8 {
+                let id = first_id as u32 + u32::from(RANK[(fresh << 3 | k) as usize]);
+                let inherited = u32::from(k == implicit).wrapping_neg();
+                let none = NO_PARTICLE & (phantom >> k & 1).wrapping_neg();
+                cells8[count & 7] = (pc << 3) | u64::from(k);
+                phantoms8[count & 7] = phantom >> k & 1 == 1;
+                particles8[count & 7] =
+                    (id & !inherited) | (parents.particle[p] & inherited) | none;
+                count += (own >> k & 1) as usize;
+            }
+            n += count;
         }
-        if out.cells.len() > inp.max_nodes {
+        if n > inp.max_nodes {
             return stream_err(format!(
                 "level {r} holds more nodes than its chunk declares"
             ));
         }
     }
-    if entropy {
+    if ENTROPY {
+        masks.truncate(n_parents);
         *links = if r == depth {
             Links {
                 nb: Vec::new(),
@@ -478,14 +652,24 @@ pub fn code_level<C: BitCoder>(
                     parent_nb: std::mem::take(&mut links.nb),
                     masks,
                     firsts,
-                    n: out.cells.len(),
+                    n,
                 }),
             }
         } else {
-            child_links(&links.nb, &masks, &firsts, out.cells.len())
+            child_links(&links.nb, &masks, &firsts, n)
         };
     }
-    Ok(out)
+    cells.truncate(n);
+    phantoms_out.truncate(n);
+    particles.truncate(n);
+    if finest {
+        leaves.truncate(n_leaves);
+    }
+    Ok(HLevel {
+        cells,
+        phantom: phantoms_out,
+        particle: particles,
+    })
 }
 
 /// The links of the children level: a child's neighbour across a face is
@@ -498,6 +682,9 @@ fn child_links(parent_nb: &[[u32; 6]], masks: &[u8], firsts: &[u32], n: usize) -
 }
 
 /// Calls `f(i, links of child i)` for the children level's nodes in order.
+///
+/// Which children exist is data: each link is selected with masks (the
+/// child's rank among its siblings from a table), not branched on.
 #[inline]
 fn each_child_links(
     parent_nb: &[[u32; 6]],
@@ -511,39 +698,50 @@ fn each_child_links(
         if m == 0 {
             continue;
         }
-        // Children masks and first indices of the parent's face neighbours.
+        let first = firsts[p];
+        // Children masks and first indices of the parent's face neighbours
+        // (an empty mask for a missing one; index 0 stands in for it).
         let mut nm = [0u8; 6];
         let mut nf = [0u32; 6];
         for d in 0..6 {
             let q = parent_nb[p][d];
-            if q != NONE {
-                nm[d] = masks[q as usize];
-                nf[d] = firsts[q as usize];
-            }
+            let present = q != NONE;
+            let q = if present { q as usize } else { 0 };
+            nm[d] = masks[q] & u8::from(present).wrapping_neg();
+            nf[d] = firsts[q];
         }
         let mut rest = m;
         while rest != 0 {
             let k = rest.trailing_zeros() as usize;
             rest &= rest - 1;
             let mut row = [NONE; 6];
-            for d in 0..6 {
+            for (d, link) in row.iter_mut().enumerate() {
                 let bit = 1usize << (d % 3);
                 let towards_plus = d >= 3;
                 let inside = (k & bit != 0) != towards_plus;
-                let (qm, qf) = if inside {
-                    (m, firsts[p])
-                } else {
-                    (nm[d], nf[d])
-                };
-                if let Some(j) = child_index(qm, qf, k ^ bit) {
-                    row[d] = j;
-                }
+                let (qm, qf) = if inside { (m, first) } else { (nm[d], nf[d]) };
+                let j = k ^ bit;
+                let index = qf + u32::from(RANK[usize::from(qm) << 3 | j]);
+                *link = if qm >> j & 1 == 1 { index } else { NONE };
             }
             f(i, row);
             i += 1;
         }
     }
 }
+
+/// `RANK[8 · mask + j]`: the children of `mask` below child `j` — the
+/// index of child `j` among its siblings (a population count, which the
+/// baseline x86-64 instruction set lacks).
+static RANK: [u8; 2048] = {
+    let mut t = [0u8; 2048];
+    let mut i = 0;
+    while i < 2048 {
+        t[i] = ((i >> 3) & ((1 << (i & 7)) - 1)).count_ones() as u8;
+        i += 1;
+    }
+    t
+};
 
 #[cfg(test)]
 mod tests {
@@ -604,5 +802,76 @@ mod tests {
             }
         }
         assert!(checked > 1000, "{checked} links checked");
+    }
+
+    #[test]
+    fn garbage_level_payloads_decode_without_panicking() {
+        // The decoder writes a level's nodes by index into room sized from
+        // the chunk's node count: hostile payloads, whatever node counts
+        // they declare, must end in a level or an error, never a panic.
+        use crate::encode_entropy::EntropyReader;
+        let model = lodkit_mesh::Model::Mesh(lodkit_mesh::shapes::icosphere(2));
+        let mut tree = Octree::build(
+            &model,
+            &BuildOptions {
+                depth: Some(5),
+                ..BuildOptions::default()
+            },
+        )
+        .unwrap();
+        thin(&mut tree, &ThinningOptions::DEFAULT);
+        let (h, _) = Hierarchy::from_thinned(&tree).unwrap();
+        let depth = h.depth;
+        let leaves: Vec<[u32; 3]> = h
+            .particle_leaf
+            .iter()
+            .map(|&l| unmorton(h.levels[depth as usize].cells[l as usize]))
+            .collect();
+        let mut outcomes = [0usize; 2];
+        for r in 1..=depth {
+            // The true links and leaves of the levels above `r`.
+            let mut links = Links::root();
+            let mut coded = vec![leaves[0]];
+            for q in 1..r {
+                let inp = LevelInput {
+                    depth,
+                    r: q,
+                    entropy: true,
+                    parents: &h.levels[q as usize - 1],
+                    max_nodes: usize::MAX,
+                };
+                let truth = Truth {
+                    level: &h.levels[q as usize],
+                    leaves: &leaves,
+                };
+                let mut w = crate::encode_entropy::EntropyWriter::new();
+                code_level(&mut w, &inp, &mut links, &mut coded, Some(&truth)).unwrap();
+            }
+            let nodes = h.levels[r as usize].cells.len();
+            for seed in 0..24u32 {
+                let bytes: Vec<u8> = (0..(16 + seed as usize * 13))
+                    .map(|i| {
+                        ((i as u32).wrapping_mul(2_654_435_761) ^ seed.wrapping_mul(40_503)) as u8
+                    })
+                    .collect();
+                for max_nodes in [0, 1, nodes / 2, nodes, 8 * nodes, usize::MAX] {
+                    let Ok(mut c) = EntropyReader::new(&bytes) else {
+                        continue;
+                    };
+                    let inp = LevelInput {
+                        depth,
+                        r,
+                        entropy: true,
+                        parents: &h.levels[r as usize - 1],
+                        max_nodes,
+                    };
+                    let mut l = links.clone();
+                    let mut got = coded.clone();
+                    let ok = code_level(&mut c, &inp, &mut l, &mut got, None).is_ok();
+                    outcomes[usize::from(ok)] += 1;
+                }
+            }
+        }
+        assert!(outcomes[0] > 0, "{outcomes:?}");
     }
 }
