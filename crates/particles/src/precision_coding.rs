@@ -438,4 +438,67 @@ mod tests {
         assert_eq!(normal_axis(0), 2);
         assert_eq!(normal_axis(0b000_011), 2);
     }
+
+    /// The bin as the format defines it (docs/formats/pop.md): each
+    /// predictor at the centre of what is known of its height, their mean
+    /// against the split of the particle's interval, in half-intervals.
+    fn bin_by_definition(height: &[u16], pred: &[u32; 4], i: usize, shift: u32) -> usize {
+        let c = f64::from(height[i]);
+        let split = c + f64::from(1u32 << shift);
+        let mut sum = 0.0;
+        let mut n = 0.0;
+        for &j in pred.iter().filter(|&&j| j as usize != i) {
+            let known = if (j as usize) < i { shift } else { shift + 1 };
+            sum += f64::from(height[j as usize]) + f64::from(1u32 << known) / 2.0;
+            n += 1.0;
+        }
+        if n == 0.0 {
+            return PRED_BINS - 1;
+        }
+        let off = (sum / n - split) / f64::from(1u32 << shift) * 2.0;
+        [-2.0, -1.0, 0.0, 1.0, 2.0]
+            .iter()
+            .filter(|&&t| off >= t)
+            .count()
+    }
+
+    #[test]
+    fn the_height_bin_lookup_matches_the_definition() {
+        // Heights known to the bits the decoder knows at particle `i` of
+        // the layer at `shift`: its own and the later ones' to `shift + 1`,
+        // the earlier ones' to `shift`.
+        let mut seed = 0x9e37_79b9u32;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            seed
+        };
+        for _ in 0..200_000 {
+            let shift = next() % 12;
+            let i = 2 + (next() % 3) as usize;
+            let height: Vec<u16> = (0..8usize)
+                .map(|j| {
+                    let known = if j < i { shift } else { shift + 1 };
+                    ((next() as u16) >> known) << known
+                })
+                .collect();
+            let mut pred = [i as u32; 4];
+            let mut count = 0u8;
+            for slot in &mut pred {
+                if next() % 4 != 0 {
+                    let j = next() % 8;
+                    if j as usize != i {
+                        *slot = j;
+                        count += 1 + (u8::from((j as usize) < i) << 4);
+                    }
+                }
+            }
+            assert_eq!(
+                height_bin(&height, &pred, count, i, shift),
+                bin_by_definition(&height, &pred, i, shift),
+                "height {height:?} pred {pred:?} i {i} shift {shift}"
+            );
+        }
+    }
 }
