@@ -741,6 +741,7 @@ fn defer_face(w: &Window, o: [usize; 3], face: Option<(u8, u8)>) -> bool {
     )
 }
 
+#[inline]
 fn tri_normal(a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
     (b - a).cross(c - a).normalize_or_zero()
 }
@@ -1365,6 +1366,30 @@ fn smoother_disc(
     disc: u16,
     pos: &impl Fn(u8) -> Vec3,
 ) -> bool {
+    // A tetrahedron (`C_6`, the frequent case) splits into two discs of
+    // two triangles each, one interior edge apiece: the general count
+    // below, with its 16-slot arrays, comes down to two dihedral cosines
+    // (the same products in the same order, so the same bits).
+    // (`count_ones` is a dozen instructions without the popcnt
+    // extension, which the baseline x86-64 target lacks.)
+    let two_bits = |d: u16| {
+        let rest = d & d.wrapping_sub(1);
+        (rest != 0) & (rest & rest.wrapping_sub(1) == 0)
+    };
+    if (tris.len() == 4) & two_bits(disc) {
+        let normal = |t: [u8; 3]| tri_normal(pos(t[0]), pos(t[1]), pos(t[2]));
+        let normals = [
+            normal(tris[0]),
+            normal(tris[1]),
+            normal(tris[2]),
+            normal(tris[3]),
+        ];
+        let cosine = |d: u16| {
+            let (i, j) = (d.trailing_zeros() as usize, 15 - d.leading_zeros() as usize);
+            normals[i & 3].dot(normals[j & 3]).clamp(-1.0, 1.0)
+        };
+        return cosine(disc & 15) >= cosine(!disc & 15);
+    }
     let mut normals = [Vec3::ZERO; 16];
     for (i, t) in tris.iter().enumerate().take(16) {
         normals[i] = tri_normal(pos(t[0]), pos(t[1]), pos(t[2]));
