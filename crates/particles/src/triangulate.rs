@@ -441,7 +441,10 @@ fn triangulate_impl(
         stamp: [0; EXT * EXT * EXT],
         generation: 0,
     };
+    // First face each brick built (see [`settle_ranges`]).
+    let mut brick_faces: Vec<u32> = Vec::with_capacity(keys.len() + 1);
     for &q in &keys {
+        brick_faces.push(faces.len() as u32);
         w.generation = w.generation.wrapping_add(1);
         if w.generation == 0 {
             w.stamp = [0; EXT * EXT * EXT];
@@ -670,7 +673,13 @@ fn triangulate_impl(
         }
     }
     // The ambiguous solids, settled against everything else built.
-    settle(&faces, &from_solids, &mut trials, s.cells.len());
+    brick_faces.push(faces.len() as u32);
+    let ranges = if order.is_none() {
+        settle_ranges(&trials, cells, &index, &brick_faces)
+    } else {
+        vec![(0, faces.len() as u32)]
+    };
+    settle(&faces, &ranges, &from_solids, &mut trials, s.cells.len());
     for t in &trials {
         let Shape::Solid(tris) = &table().configs[t.mask as usize].shape else {
             continue;
@@ -697,13 +706,9 @@ fn triangulate_impl(
     // A triangle whose three cubes share a coordinate lies on the face
     // between two neighbourhoods; two solid ones may both have built it:
     // keep one.
-    let drop = dedupe_face_triangles(&mut faces, &from_solids);
+    let dropped = dedupe_face_triangles(&mut faces, &from_solids);
     if let Some(tr) = trace {
-        let mut i = 0;
-        tr.retain(|_| {
-            i += 1;
-            !drop[i - 1]
-        });
+        remove_sorted(tr, &dropped);
     }
     let mut mesh = match surface {
         Cow::Borrowed(s) => s.vertices_only(),
@@ -989,6 +994,63 @@ impl Uses {
     }
 }
 
+/// The ranges of `faces` (increasing, disjoint) that hold every triangle
+/// on a vertex of a trial. A triangle is built by the brick that scans its
+/// neighbourhood: the brick of the neighbourhood's origin or, when that
+/// one is empty, an occupied brick the neighbourhood reaches ([`owns`]).
+/// A neighbourhood holding cube `v` has its origin in `v`'s brick or, where
+/// `v` is on the brick's lower face, in the brick below; it reaches the
+/// brick above only where its origin is on an upper face, i.e. where `v`
+/// is on the brick's lower face (the brick of `v`) or its upper face (the
+/// brick above). So the bricks `v`'s brick plus, per axis, −1 or 0 where
+/// `v` is on the lower face, 0 or +1 on the upper face, 0 elsewhere, scan
+/// every triangle on `v`: only their triangles, a fraction of the
+/// level's, are read (`brick_faces`: the first triangle of each brick,
+/// plus the end). `cells` in Morton order, vertex `i` = cell `i`.
+fn settle_ranges(
+    trials: &[Trial],
+    cells: &[u64],
+    index: &BrickIndex,
+    brick_faces: &[u32],
+) -> Vec<(u32, u32)> {
+    let mut marked = vec![false; brick_faces.len() - 1];
+    for t in trials {
+        for (j, &v) in t.vs.iter().enumerate() {
+            if t.mask & (1 << j) == 0 {
+                continue;
+            }
+            let c = cells[v as usize];
+            let b = unmorton(c >> (3 * BRICK_BITS)).map(i64::from);
+            let local = unmorton(c & 511);
+            // Per axis, the offsets of the bricks to scan.
+            let offsets = local.map(|l| match l {
+                0 => [-1, 0],
+                7 => [0, 1],
+                _ => [0, 0],
+            });
+            for d in 0..8 {
+                let n = index.get([
+                    b[0] + offsets[0][d & 1],
+                    b[1] + offsets[1][(d >> 1) & 1],
+                    b[2] + offsets[2][d >> 2],
+                ]);
+                if n != NONE {
+                    marked[n as usize] = true;
+                }
+            }
+        }
+    }
+    let mut ranges: Vec<(u32, u32)> = Vec::new();
+    for (n, _) in marked.iter().enumerate().filter(|(_, m)| **m) {
+        let (start, end) = (brick_faces[n], brick_faces[n + 1]);
+        match ranges.last_mut() {
+            Some(last) if last.1 == start => last.1 = end,
+            _ => ranges.push((start, end)),
+        }
+    }
+    ranges
+}
+
 /// Chooses, for each ambiguous solid (a hull §6.2 leaves whole, a disc on
 /// trial, a resolved solid of a class other than `C_6`), the subset of its
 /// hull triangles that best fits what the rest of the level built: in this
@@ -998,7 +1060,13 @@ impl Uses {
 /// hull leaves no hull edge used once, and a trial's choice changes the use
 /// of its own hull edges only, so settling opens no hole the whole hulls
 /// would not. Trials are settled in scan order, twice over: deterministic.
-fn settle(faces: &[[u32; 3]], from_solids: &[u32], trials: &mut [Trial], vertices: usize) {
+fn settle(
+    faces: &[[u32; 3]],
+    ranges: &[(u32, u32)],
+    from_solids: &[u32],
+    trials: &mut [Trial],
+    vertices: usize,
+) {
     if trials.is_empty() {
         return;
     }
@@ -1009,7 +1077,6 @@ fn settle(faces: &[[u32; 3]], from_solids: &[u32], trials: &mut [Trial], vertice
     // Trial vertices, as a bit set (the scan below reads it for every
     // triangle of the level; bits keep it in the first-level cache).
     let mut near = vec![0u64; vertices.div_ceil(64)];
-    let is_near = |near: &[u64], v: u32| near[(v >> 6) as usize] & (1 << (v & 63)) != 0;
     let mut uses = Uses {
         face_tris: HashMap::default(),
         edges: MortonMap::default(),
@@ -1024,13 +1091,18 @@ fn settle(faces: &[[u32; 3]], from_solids: &[u32], trials: &mut [Trial], vertice
             }
         }
     }
-    let mut from_solid = vec![false; faces.len()];
-    for &i in from_solids {
-        from_solid[i as usize] = true;
-    }
-    for (i, f) in faces.iter().enumerate() {
-        if is_near(&near, f[0]) || is_near(&near, f[1]) || is_near(&near, f[2]) {
-            uses.add(*f, from_solid[i]);
+    // Every triangle that can hold a trial vertex is tested: three bits,
+    // or-ed without a branch each; whether a near one came from a solid is
+    // read off the sorted `from_solids` with a cursor.
+    let bit = |v: u32| (near[(v >> 6) as usize] >> (v & 63)) & 1;
+    let mut solid = from_solids.iter().map(|&i| i as usize).peekable();
+    for &(start, end) in ranges {
+        for i in start as usize..end as usize {
+            let f = faces[i];
+            if bit(f[0]) | bit(f[1]) | bit(f[2]) != 0 {
+                while solid.next_if(|&j| j < i).is_some() {}
+                uses.add(f, solid.peek() == Some(&i));
+            }
         }
     }
     let tri_of = |t: &Trial, tri: &[u8; 3]| tri.map(|j| t.vs[j as usize]);
@@ -1455,43 +1527,58 @@ fn decimate_merge(mesh: &mut TriMesh, faces: &mut Vec<[u32; 3]>, merges: &[(u32,
 }
 
 /// Drops the second of two identical triangles among `candidates` (solid
-/// triangles on a face of their neighbourhood); returns what was dropped.
-fn dedupe_face_triangles(faces: &mut Vec<[u32; 3]>, candidates: &[u32]) -> Vec<bool> {
+/// triangles on a face of their neighbourhood); returns the indices
+/// dropped, in increasing order.
+fn dedupe_face_triangles(faces: &mut Vec<[u32; 3]>, candidates: &[u32]) -> Vec<u32> {
     // Candidates come in increasing order (pushed as the faces grow), so
     // the first one seen of each vertex set is the lowest index: keep it,
-    // drop later copies. An open-addressed set of candidate indices,
-    // keyed by the sorted vertices, replaces a sort of all candidates.
+    // drop later copies. An open-addressed set of candidates, keyed by the
+    // sorted vertices, replaces a sort of all candidates; the keys are
+    // gathered first, in one forward pass, so that a probe reads this
+    // small array instead of a random place of `faces`.
     debug_assert!(candidates.windows(2).all(|w| w[0] < w[1]));
-    let mut drop = vec![false; faces.len()];
+    let mut dropped = Vec::new();
     if candidates.len() > 1 {
+        let keys: Vec<[u32; 3]> = candidates
+            .iter()
+            .map(|&i| sorted_tri(faces[i as usize]))
+            .collect();
         let bits = (2 * candidates.len()).next_power_of_two().trailing_zeros();
         let mask = (1usize << bits) - 1;
         let mut slots = vec![NONE; mask + 1];
-        for &i in candidates {
-            let k = sorted_tri(faces[i as usize]);
+        for (p, k) in keys.iter().enumerate() {
             let h = (u64::from(k[0]) | (u64::from(k[1]) << 21) | (u64::from(k[2]) << 42))
                 .wrapping_mul(0x9e37_79b9_7f4a_7c15);
             let mut at = (h >> (64 - bits)) as usize;
             loop {
-                let j = slots[at];
-                if j == NONE {
-                    slots[at] = i;
+                let q = slots[at];
+                if q == NONE {
+                    slots[at] = p as u32;
                     break;
                 }
-                if sorted_tri(faces[j as usize]) == k {
-                    drop[i as usize] = true;
+                if keys[q as usize] == *k {
+                    dropped.push(candidates[p]);
                     break;
                 }
                 at = (at + 1) & mask;
             }
         }
     }
+    remove_sorted(faces, &dropped);
+    dropped
+}
+
+/// Removes the elements at the increasing indices `drop` from `v`.
+fn remove_sorted<T>(v: &mut Vec<T>, drop: &[u32]) {
+    if drop.is_empty() {
+        return;
+    }
+    let mut next = drop.iter().map(|&i| i as usize).peekable();
     let mut i = 0;
-    faces.retain(|_| {
+    v.retain(|_| {
         i += 1;
-        !drop[i - 1]
+        next.next_if_eq(&(i - 1)).is_none()
     });
-    drop
 }
 
 fn edge_key(a: u32, b: u32) -> u64 {
@@ -1841,8 +1928,8 @@ mod tests {
             [0, 2, 1],
         ];
         // Triangle 1 is not a candidate: its copy 4 is kept.
-        let drop = dedupe_face_triangles(&mut faces, &[0, 2, 3, 4, 5]);
-        assert_eq!(drop, [false, false, true, false, false, true]);
+        let dropped = dedupe_face_triangles(&mut faces, &[0, 2, 3, 4, 5]);
+        assert_eq!(dropped, [2, 5]);
         assert_eq!(faces, [[0, 1, 2], [5, 6, 7], [1, 2, 3], [7, 5, 6]]);
     }
 
