@@ -756,9 +756,48 @@ fn tri_normal(a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
 fn choose_quad(q: [u8; 4], p: [Vec3; 4], n: Option<[Vec3; 4]>) -> ([u8; 3], [u8; 3]) {
     let ac = ([q[0], q[1], q[2]], [q[0], q[2], q[3]]);
     let bd = ([q[0], q[1], q[3]], [q[1], q[2], q[3]]);
-    let s_ac = quad_split_score(&p, n.as_ref(), [0, 1, 2], [0, 2, 3]);
-    let s_bd = quad_split_score(&p, n.as_ref(), [0, 1, 3], [1, 2, 3]);
+    let (s_ac, s_bd) = match n {
+        Some(_) => (
+            quad_split_score(&p, n.as_ref(), [0, 1, 2], [0, 2, 3]),
+            quad_split_score(&p, n.as_ref(), [0, 1, 3], [1, 2, 3]),
+        ),
+        None => quad_dihedral_scores(&p),
+    };
     if s_ac <= s_bd { ac } else { bd }
+}
+
+/// [`quad_split_score`] without normals for both splits at once: the four
+/// triangle normals (unnormalised) side by side in the lanes of `Vec4`s,
+/// with each lane's operations those of the scalar code in the same order
+/// (`Vec3::cross`, `Vec3::dot`), so the scores have the same bits.
+#[inline(always)]
+fn quad_dihedral_scores(p: &[Vec3; 4]) -> (f32, f32) {
+    use glam::Vec4;
+    // Lanes: triangles 0 1 2 and 0 2 3 (split a–c), 0 1 3 and 1 2 3 (b–d);
+    // edge vectors `a = p[t1] − p[t0]`, `b = p[t2] − p[t0]`.
+    let lanes = |c: fn(Vec3) -> f32| {
+        let (p0, p1, p2, p3) = (c(p[0]), c(p[1]), c(p[2]), c(p[3]));
+        let origin = Vec4::new(p0, p0, p0, p1);
+        (
+            Vec4::new(p1, p2, p1, p2) - origin,
+            Vec4::new(p2, p3, p3, p3) - origin,
+        )
+    };
+    let (ax, bx) = lanes(|v| v.x);
+    let (ay, by) = lanes(|v| v.y);
+    let (az, bz) = lanes(|v| v.z);
+    let nx = ay * bz - by * az;
+    let ny = az * bx - bz * ax;
+    let nz = ax * by - bx * ay;
+    // Each lane times its partner (0 with 1, 2 with 3).
+    let partner = |v: Vec4| Vec4::new(v.y, v.x, v.w, v.z);
+    let squared = nx * nx + ny * ny + nz * nz;
+    let dots = nx * partner(nx) + ny * partner(ny) + nz * partner(nz);
+    let l = (squared * partner(squared)).sqrt();
+    let score = |k: usize| {
+        if l[k] > 0.0 { -dots[k] / l[k] } else { 0.0 }
+    };
+    (score(0), score(2))
 }
 
 /// How badly the triangles `t0`, `t1` of a quad split fit: their
