@@ -327,6 +327,20 @@ const MORTON_TO_LINEAR: [u16; 512] = {
     t
 };
 
+/// Local Morton code `k < 512` → extended window index of the cube in the
+/// centre brick, `(x + 2) + 12 (y + 2) + 144 (z + 2)`.
+const MORTON_TO_EXT: [u16; 512] = {
+    let mut t = [0u16; 512];
+    let mut k = 0;
+    while k < 512 {
+        let l = MORTON_TO_LINEAR[k] as usize;
+        let (x, y, z) = (l & 7, (l >> 3) & 7, l >> 6);
+        t[k] = ((x + 2) + EXT * (y + 2) + EXT * EXT * (z + 2)) as u16;
+        k += 1;
+    }
+    t
+};
+
 /// Bricks of a level (sorted Morton cells) and their keys, in Morton order.
 fn bricks_of(cells: &[u64]) -> (Vec<Brick>, Vec<u64>) {
     let mut bricks: Vec<Brick> = Vec::new();
@@ -443,12 +457,24 @@ fn triangulate_impl(
     };
     // First face each brick built (see [`settle_ranges`]).
     let mut brick_faces: Vec<u32> = Vec::with_capacity(keys.len() + 1);
-    for &q in &keys {
+    for (qi, &q) in keys.iter().enumerate() {
         brick_faces.push(faces.len() as u32);
         w.generation = w.generation.wrapping_add(1);
         if w.generation == 0 {
             w.stamp = [0; EXT * EXT * EXT];
             w.generation = 1;
+        }
+        // The brick's own cubes are consecutive vertices: their indices
+        // go into the cache in one pass (no rank to count), leaving
+        // [`Window::vertex`] the few cubes of the bricks around.
+        let first = bricks[qi].base[0] as usize;
+        let end = bricks
+            .get(qi + 1)
+            .map_or(cells.len(), |b| b.base[0] as usize);
+        for (i, &c) in cells[first..end].iter().enumerate() {
+            let e = usize::from(MORTON_TO_EXT[(c & 511) as usize]);
+            w.stamp[e] = w.generation;
+            w.ids[e] = (first + i) as u32;
         }
         let qc = unmorton(q).map(i64::from);
         for k in 0..27 {
