@@ -1015,12 +1015,22 @@ impl Hasher for TriHasher {
 /// those are counted by key.
 struct Uses {
     face_tris: HashMap<[u32; 3], u32, BuildHasherDefault<TriHasher>>,
+    /// The trials' hull edges (by key) → their slot in `edge_uses`.
     edges: MortonMap<u32>,
+    edge_uses: Vec<u32>,
     vertices: Vec<u32>,
 }
 
+/// Where a triangle's edges are counted: looked up by key (a triangle of
+/// the level), or the slots of a trial's hull triangle, found once.
+#[derive(Clone, Copy)]
+enum EdgeSlots {
+    Lookup,
+    Known([u32; 3]),
+}
+
 impl Uses {
-    fn add(&mut self, t: [u32; 3], face: bool) {
+    fn add(&mut self, t: [u32; 3], face: bool, slots: EdgeSlots) {
         if face {
             let n = self.face_tris.entry(sorted_tri(t)).or_insert(0);
             *n += 1;
@@ -1028,9 +1038,9 @@ impl Uses {
                 return;
             }
         }
-        self.touch(t, 1);
+        self.touch(t, 1, slots);
     }
-    fn remove(&mut self, t: [u32; 3], face: bool) {
+    fn remove(&mut self, t: [u32; 3], face: bool, slots: EdgeSlots) {
         if face {
             let key = sorted_tri(t);
             let Some(n) = self.face_tris.get_mut(&key) else {
@@ -1042,15 +1052,20 @@ impl Uses {
             }
             self.face_tris.remove(&key);
         }
-        self.touch(t, -1);
+        self.touch(t, -1, slots);
     }
     /// Whether a face triangle is built.
     fn built(&self, t: [u32; 3]) -> bool {
         self.face_tris.contains_key(&sorted_tri(t))
     }
-    fn touch(&mut self, t: [u32; 3], d: i32) {
+    fn touch(&mut self, t: [u32; 3], d: i32, slots: EdgeSlots) {
         for k in 0..3 {
-            if let Some(n) = self.edges.get_mut(&edge_key(t[k], t[(k + 1) % 3])) {
+            let slot = match slots {
+                EdgeSlots::Lookup => self.edges.get(&edge_key(t[k], t[(k + 1) % 3])).copied(),
+                EdgeSlots::Known(s) => Some(s[k]),
+            };
+            if let Some(slot) = slot {
+                let n = &mut self.edge_uses[slot as usize];
                 *n = n.wrapping_add_signed(d);
             }
             let v = &mut self.vertices[t[k] as usize];
@@ -1145,17 +1160,29 @@ fn settle(
     let mut uses = Uses {
         face_tris: HashMap::default(),
         edges: MortonMap::default(),
+        edge_uses: Vec::new(),
         vertices: vec![0; vertices],
     };
+    // The edge slots of every hull triangle of every trial, trial by trial
+    // (`first[i]`: trial `i`'s first), so that the sweeps count a trial's
+    // edges without hashing.
+    let mut first = Vec::with_capacity(trials.len());
+    let mut hull_slots: Vec<[u32; 3]> = Vec::new();
+    uses.edges.reserve(trials.len() * 12);
     for t in trials.iter() {
+        first.push(hull_slots.len());
         for tri in hull(t) {
+            let mut slots = [0u32; 3];
             for k in 0..3 {
                 let (a, b) = (t.vs[tri[k] as usize], t.vs[tri[(k + 1) % 3] as usize]);
                 near[(a >> 6) as usize] |= 1 << (a & 63);
-                uses.edges.insert(edge_key(a, b), 0);
+                let next = uses.edges.len() as u32;
+                slots[k] = *uses.edges.entry(edge_key(a, b)).or_insert(next);
             }
+            hull_slots.push(slots);
         }
     }
+    uses.edge_uses = vec![0; uses.edges.len()];
     // Every triangle that can hold a trial vertex is tested: three bits,
     // or-ed without a branch each; whether a near one came from a solid is
     // read off the sorted `from_solids` with a cursor.
@@ -1166,27 +1193,29 @@ fn settle(
             let f = faces[i];
             if bit(f[0]) | bit(f[1]) | bit(f[2]) != 0 {
                 while solid.next_if(|&j| j < i).is_some() {}
-                uses.add(f, solid.peek() == Some(&i));
+                uses.add(f, solid.peek() == Some(&i), EdgeSlots::Lookup);
             }
         }
     }
     let tri_of = |t: &Trial, tri: &[u8; 3]| tri.map(|j| t.vs[j as usize]);
-    for t in trials.iter() {
+    for (n, t) in trials.iter().enumerate() {
         for (i, tri) in hull(t).iter().enumerate() {
             if t.keep & (1 << i) != 0 {
-                uses.add(tri_of(t, tri), on_face(tri));
+                let slots = EdgeSlots::Known(hull_slots[first[n] + i]);
+                uses.add(tri_of(t, tri), on_face(tri), slots);
             }
         }
     }
     for _ in 0..SETTLE_SWEEPS {
-        for t in trials.iter_mut() {
+        for (n, t) in trials.iter_mut().enumerate() {
             let tris = hull(t);
             if tris.len() > SETTLE_MAX_TRIANGLES {
                 continue;
             }
+            let slots = &hull_slots[first[n]..first[n] + tris.len()];
             for (i, tri) in tris.iter().enumerate() {
                 if t.keep & (1 << i) != 0 {
-                    uses.remove(tri_of(t, tri), on_face(tri));
+                    uses.remove(tri_of(t, tri), on_face(tri), EdgeSlots::Known(slots[i]));
                 }
             }
             // Hull edges (as corner pairs), their use by the others, and
@@ -1203,8 +1232,7 @@ fn settle(
                     tri_edges[i][k] = match edges[..n_edges].iter().position(|&e| e == (a, b)) {
                         Some(p) => p,
                         None => {
-                            let key = edge_key(t.vs[a as usize], t.vs[b as usize]);
-                            base[n_edges] = uses.edges.get(&key).copied().unwrap_or(0);
+                            base[n_edges] = uses.edge_uses[slots[i][k] as usize];
                             edges[n_edges] = (a, b);
                             n_edges += 1;
                             n_edges - 1
@@ -1256,7 +1284,7 @@ fn settle(
             }
             for (i, tri) in tris.iter().enumerate() {
                 if t.keep & (1 << i) != 0 {
-                    uses.add(tri_of(t, tri), on_face(tri));
+                    uses.add(tri_of(t, tri), on_face(tri), EdgeSlots::Known(slots[i]));
                 }
             }
         }
