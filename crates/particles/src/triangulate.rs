@@ -81,7 +81,7 @@ use lodkit_mesh::topology::UnionFind;
 
 use crate::decode::LevelSurface;
 use crate::octree::{MortonMap, morton, unmorton};
-use crate::triangulation_table::{CLASS_COUNT, Shape, corner, pair, table};
+use crate::triangulation_table::{CLASS_COUNT, Compact, Shape, Table, corner, pair, table};
 
 /// Options of [`triangulate`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -457,6 +457,8 @@ fn triangulate_impl(
     };
     // First face each brick built (see [`settle_ranges`]).
     let mut brick_faces: Vec<u32> = Vec::with_capacity(keys.len() + 1);
+    // Neighbourhoods per class (a fixed array: no bounds check per count).
+    let mut configurations = [0u64; 32];
     for (qi, &q) in keys.iter().enumerate() {
         brick_faces.push(faces.len() as u32);
         w.generation = w.generation.wrapping_add(1);
@@ -551,14 +553,11 @@ fn triangulate_impl(
                         continue;
                     }
                     let mask = w.mask(o);
-                    let cfg = &t.configs[mask as usize];
-                    if cfg.class == 0 {
-                        continue;
-                    }
-                    stats.configurations[cfg.class as usize] += 1;
-                    if matches!(cfg.shape, Shape::Triangle(_) | Shape::Quad(_))
-                        && defer_face(&w, o, cfg.face)
-                    {
+                    // Three ON cubes or more (`any`): a class.
+                    let c = t.compact[mask as usize];
+                    debug_assert!(c.class != 0);
+                    configurations[usize::from(c.class) & 31] += 1;
+                    if c.face != 0 && defer_face(t, &w, o, c.face) {
                         continue;
                     }
                     // Vertex of each ON corner, looked up once.
@@ -598,20 +597,22 @@ fn triangulate_impl(
                     };
                     // A solid left whole (no unique cycle).
                     let mut whole = false;
-                    match &cfg.shape {
-                        Shape::None => {}
-                        Shape::Triangle(tri) => {
-                            emit(*tri, &mut faces);
-                        }
-                        Shape::Quad(q) => {
-                            let vq = [0, 1, 2, 3].map(|k| vs[q[k] as usize] as usize);
-                            let pos = [0, 1, 2, 3].map(|k| s.positions[vq[k]]);
-                            let nrm = s.normals.as_ref().map(|n| [0, 1, 2, 3].map(|k| n[vq[k]]));
-                            let (t1, t2) = choose_quad(*q, pos, nrm);
-                            emit(t1, &mut faces);
-                            emit(t2, &mut faces);
-                        }
-                        Shape::Solid(tris) => {
+                    let q = c.corners;
+                    if c.kind == Compact::TRIANGLE {
+                        emit([q[0], q[1], q[2]], &mut faces);
+                    } else if c.kind == Compact::QUAD {
+                        let vq = [0, 1, 2, 3].map(|k| vs[q[k] as usize] as usize);
+                        let pos = [0, 1, 2, 3].map(|k| s.positions[vq[k]]);
+                        let nrm = s.normals.as_ref().map(|n| [0, 1, 2, 3].map(|k| n[vq[k]]));
+                        let (t1, t2) = choose_quad(q, pos, nrm);
+                        emit(t1, &mut faces);
+                        emit(t2, &mut faces);
+                    } else {
+                        let cfg = &t.configs[mask as usize];
+                        let Shape::Solid(tris) = &cfg.shape else {
+                            unreachable!("three ON cubes or more, not planar")
+                        };
+                        {
                             let around = w.block(o);
                             let slot = &mut shared_memo[(around.wrapping_mul(0x9e37_79b9_7f4a_7c15)
                                 >> (64 - SHARED_MEMO_BITS))
@@ -692,12 +693,15 @@ fn triangulate_impl(
                         }
                     }
                     if let Some(tr) = trace.as_deref_mut() {
-                        tr.resize(faces.len(), cfg.class | if whole { 0x80 } else { 0 });
+                        tr.resize(faces.len(), c.class | if whole { 0x80 } else { 0 });
                     }
                 }
             }
         }
     }
+    stats
+        .configurations
+        .copy_from_slice(&configurations[..=CLASS_COUNT]);
     // The ambiguous solids, settled against everything else built.
     brick_faces.push(faces.len() as u32);
     let ranges = if order.is_none() {
@@ -757,19 +761,16 @@ fn triangulate_impl(
 /// is the upper face (the other side sees it as its lower face), and when
 /// the other side is a solid configuration, whose disc choice then covers
 /// the face alone (two owners would cover it twice).
-fn defer_face(w: &Window, o: [usize; 3], face: Option<(u8, u8)>) -> bool {
-    let Some((axis, side)) = face else {
-        return false;
-    };
-    if side == 1 {
+/// `face`: [`Compact::face`], not 0.
+#[inline]
+fn defer_face(t: &Table, w: &Window, o: [usize; 3], face: u8) -> bool {
+    if face == 1 {
         return true;
     }
     let mut across = o;
-    across[axis as usize] -= 1;
-    matches!(
-        table().configs[w.mask(across) as usize].shape,
-        Shape::Solid(_)
-    )
+    across[usize::from(face - 2) % 3] -= 1;
+    let m = w.mask(across);
+    t.solid[usize::from(m >> 6)] & (1 << (m & 63)) != 0
 }
 
 #[inline]
