@@ -578,19 +578,10 @@ fn triangulate_impl(
                             vs[tri[1] as usize],
                             vs[tri[2] as usize],
                         ];
-                        if let Some(min) = min_edge {
-                            for e in 0..3 {
-                                let (a, b) = (f[e], f[(e + 1) % 3]);
-                                if s.positions[a as usize].distance(s.positions[b as usize]) < min
-                                    && !merged[a as usize]
-                                    && !merged[b as usize]
-                                {
-                                    merged[a as usize] = true;
-                                    merged[b as usize] = true;
-                                    merges.push((a, b));
-                                    return false;
-                                }
-                            }
+                        if let Some(min) = min_edge
+                            && merge_short_edge(f, min, &s.positions, &mut merged, &mut merges)
+                        {
+                            return false;
                         }
                         faces.push(f);
                         true
@@ -754,6 +745,33 @@ fn triangulate_impl(
     stats.triangles = mesh.faces.len();
     stats.seconds = start.elapsed().as_secs_f64();
     Triangulation { mesh, stats }
+}
+
+/// §6.3: merges the cubes of the first edge of `f` shorter than `min`
+/// whose cubes are not merged yet; whether it did (the triangle is then
+/// not built). Out of line: the scan's emission stays small enough to
+/// inline.
+#[inline(never)]
+fn merge_short_edge(
+    f: [u32; 3],
+    min: f32,
+    positions: &[Vec3],
+    merged: &mut [bool],
+    merges: &mut Vec<(u32, u32)>,
+) -> bool {
+    for e in 0..3 {
+        let (a, b) = (f[e], f[(e + 1) % 3]);
+        if positions[a as usize].distance(positions[b as usize]) < min
+            && !merged[a as usize]
+            && !merged[b as usize]
+        {
+            merged[a as usize] = true;
+            merged[b as usize] = true;
+            merges.push((a, b));
+            return true;
+        }
+    }
+    false
 }
 
 /// Whether a planar configuration lying on a face of its neighbourhood
