@@ -182,6 +182,13 @@ impl Brick {
     }
 }
 
+/// An empty brick, for the empty places of a window.
+static EMPTY_BRICK: Brick = Brick {
+    lin: [0; 8],
+    mor: [0; 8],
+    base: [0; 8],
+};
+
 /// Brick coordinates → brick number.
 struct BrickIndex {
     /// Bricks per axis.
@@ -235,10 +242,13 @@ impl BrickIndex {
 /// `rows[Y + 12 Z]` bit `X` is the cube at local `(X − 2, Y − 2, Z − 2)`.
 /// Neighbourhood origins lie at local `−1..8` (`1..10` extended); the rest
 /// is the vicinity §6.1.1 keeps for the disambiguation.
-struct Window {
+struct Window<'a> {
     rows: [u16; EXT * EXT],
     /// The 27 bricks around (3×3×3, x fastest), NONE where empty.
     bricks: [u32; 27],
+    /// The same bricks, [`EMPTY_BRICK`] where empty (read without a
+    /// branch).
+    around: [&'a Brick; 27],
     /// Vertex index of each extended position (x fastest), valid where
     /// `stamp` equals `generation`: a cube is in up to eight
     /// neighbourhoods, its rank is computed once per window.
@@ -248,7 +258,7 @@ struct Window {
     generation: u32,
 }
 
-impl Window {
+impl Window<'_> {
     /// Configuration of the neighbourhood with origin `o` (extended
     /// coordinates, each in `0..10`).
     #[inline]
@@ -276,13 +286,13 @@ impl Window {
 
     /// Vertex index of the ON cube at extended coordinates `e`.
     #[inline]
-    fn vertex(&mut self, bricks: &[Brick], e: [usize; 3]) -> u32 {
+    fn vertex(&mut self, e: [usize; 3]) -> u32 {
         let i = e[0] + EXT * (e[1] + EXT * e[2]);
         if self.stamp[i] == self.generation {
             return self.ids[i];
         }
-        let b = self.bricks[EXT_BRICK[e[0]] + 3 * EXT_BRICK[e[1]] + 9 * EXT_BRICK[e[2]]];
-        let v = bricks[b as usize].rank(EXT_LOCAL[e[0]], EXT_LOCAL[e[1]], EXT_LOCAL[e[2]]);
+        let b = self.around[EXT_BRICK[e[0]] + 3 * EXT_BRICK[e[1]] + 9 * EXT_BRICK[e[2]]];
+        let v = b.rank(EXT_LOCAL[e[0]], EXT_LOCAL[e[1]], EXT_LOCAL[e[2]]);
         self.stamp[i] = self.generation;
         self.ids[i] = v;
         v
@@ -451,6 +461,7 @@ fn triangulate_impl(
     let mut w = Window {
         rows: [0; EXT * EXT],
         bricks: [NONE; 27],
+        around: [&EMPTY_BRICK; 27],
         ids: [0; EXT * EXT * EXT],
         stamp: [0; EXT * EXT * EXT],
         generation: 0,
@@ -486,22 +497,22 @@ fn triangulate_impl(
                 qc[2] + (k / 9) as i64 - 1,
             ]);
         }
+        for k in 0..27 {
+            w.around[k] = match w.bricks[k] {
+                NONE => &EMPTY_BRICK,
+                n => &bricks[n as usize],
+            };
+        }
         // One z-slab word per brick row of three, then a byte per row.
-        let word = |n: u32, lz: usize| -> u64 {
-            if n == NONE {
-                0
-            } else {
-                bricks[n as usize].lin[lz]
-            }
-        };
+        let word = |b: &Brick, lz: usize| b.lin[lz];
         for ez in 0..EXT {
             let lz = EXT_LOCAL[ez];
             for by in 0..3 {
                 let b = 3 * by + 9 * EXT_BRICK[ez];
                 let (lo, mid, hi) = (
-                    word(w.bricks[b], lz),
-                    word(w.bricks[b + 1], lz),
-                    word(w.bricks[b + 2], lz),
+                    word(w.around[b], lz),
+                    word(w.around[b + 1], lz),
+                    word(w.around[b + 2], lz),
                 );
                 for ey in EXT_ROWS[by].clone() {
                     let sh = 8 * EXT_LOCAL[ey];
@@ -567,10 +578,11 @@ fn triangulate_impl(
                         let j = on.trailing_zeros() as u8;
                         on &= on - 1;
                         let c = corner(j);
-                        vs[j as usize] = vid(w.vertex(
-                            &bricks,
-                            [ox + c[0] as usize, oy + c[1] as usize, oz + c[2] as usize],
-                        ));
+                        vs[j as usize] = vid(w.vertex([
+                            ox + c[0] as usize,
+                            oy + c[1] as usize,
+                            oz + c[2] as usize,
+                        ]));
                     }
                     let mut emit = |tri: [u8; 3], faces: &mut Vec<[u32; 3]>| -> bool {
                         let f = [
@@ -656,13 +668,9 @@ fn triangulate_impl(
                             };
                             match split {
                                 Split::Either(disc) => {
-                                    let mut p = [Vec3::ZERO; 8];
-                                    for (j, &v) in vs.iter().enumerate() {
-                                        if v != NONE {
-                                            p[j] = s.positions[v as usize];
-                                        }
-                                    }
-                                    let pos = |j: u8| p[j as usize];
+                                    // Hull corners are ON: `vs` holds their
+                                    // vertices.
+                                    let pos = |j: u8| s.positions[vs[usize::from(j & 7)] as usize];
                                     let keep = if smoother_disc(tris, &cfg.adjacent, disc, &pos) {
                                         disc
                                     } else {
