@@ -146,8 +146,6 @@ const BRICK_BITS: u32 = 3;
 /// Dense brick grids up to this many bricks per axis (R ≤ 10), a hash map
 /// above.
 const DENSE_BRICKS: i64 = 128;
-/// Morton code of a local coordinate `0..8` (its bits spread by three).
-const SPREAD3: [usize; 8] = [0, 1, 8, 9, 64, 65, 72, 73];
 /// Extended window coordinate `E ∈ 0..12` (local `E − 2 ∈ −2..10`): the
 /// brick it falls in (0: below, 1: this one, 2: above) and its local
 /// coordinate there.
@@ -168,18 +166,6 @@ struct Brick {
     mor: [u64; 8],
     /// Vertex index of the first cube of each Morton word.
     base: [u32; 8],
-}
-
-impl Brick {
-    /// Vertex index of the ON cube at local `(x, y, z)`: the level's cubes
-    /// are Morton-sorted, so it is the brick's first index plus the ON
-    /// cubes before it in the brick.
-    #[inline]
-    fn rank(&self, x: usize, y: usize, z: usize) -> u32 {
-        let k = SPREAD3[x] | (SPREAD3[y] << 1) | (SPREAD3[z] << 2);
-        let w = k >> 6;
-        self.base[w] + (self.mor[w] & ((1u64 << (k & 63)) - 1)).count_ones()
-    }
 }
 
 /// An empty brick, for the empty places of a window.
@@ -249,14 +235,91 @@ struct Window<'a> {
     /// The same bricks, [`EMPTY_BRICK`] where empty (read without a
     /// branch).
     around: [&'a Brick; 27],
-    /// Vertex index of each extended position (x fastest), valid where
-    /// `stamp` equals `generation`: a cube is in up to eight
-    /// neighbourhoods, its rank is computed once per window.
-    ids: [u32; EXT * EXT * EXT],
-    stamp: [u32; EXT * EXT * EXT],
-    /// Bumped for every window.
-    generation: u32,
+    /// Vertex index of each ON cube a neighbourhood of the window's brick
+    /// can have as a corner (extended coordinates `1..=10` per axis, x
+    /// fastest; [`Window::fill_ids`]), stale elsewhere; a power of two long
+    /// so that a masked index needs no bounds check.
+    ids: [u32; IDS],
 }
+
+/// Length of [`Window::ids`].
+const IDS: usize = 2048;
+
+/// Extended index offset of each corner of a neighbourhood.
+const CORNER_OFFSET: [usize; 8] = [
+    0,
+    1,
+    EXT,
+    EXT + 1,
+    EXT * EXT,
+    EXT * EXT + 1,
+    EXT * EXT + EXT,
+    EXT * EXT + EXT + 1,
+];
+
+/// The `(window brick, Morton word)` pairs, window brick `b` (3×3×3, x
+/// fastest) other than the centre, holding cubes a neighbourhood of the
+/// centre brick can reach: the top layer (local 7) of a brick below and
+/// the bottom layer (local 0) of a brick above, per axis; with those
+/// cubes' bits.
+const REACHED: [(u8, u8, u64); 56] = {
+    let mut t = [(0u8, 0u8, 0u64); 56];
+    let mut n = 0;
+    let mut b = 0;
+    while b < 27 {
+        let pos = [b % 3, (b / 3) % 3, b / 9];
+        let mut w = 0;
+        while b != 13 && w < 8 {
+            let mut bits = 0u64;
+            let mut i = 0;
+            while i < 64 {
+                let k = w * 64 + i;
+                let l = [
+                    (k & 1) | ((k >> 2) & 2) | ((k >> 4) & 4),
+                    ((k >> 1) & 1) | ((k >> 3) & 2) | ((k >> 5) & 4),
+                    ((k >> 2) & 1) | ((k >> 4) & 2) | ((k >> 6) & 4),
+                ];
+                let mut ok = true;
+                let mut a = 0;
+                while a < 3 {
+                    ok &= match pos[a] {
+                        0 => l[a] == 7,
+                        1 => true,
+                        _ => l[a] == 0,
+                    };
+                    a += 1;
+                }
+                if ok {
+                    bits |= 1 << i;
+                }
+                i += 1;
+            }
+            if bits != 0 {
+                t[n] = (b as u8, w as u8, bits);
+                n += 1;
+            }
+            w += 1;
+        }
+        b += 1;
+    }
+    assert!(n == 56);
+    t
+};
+
+/// Extended index offset of window brick `b`'s cubes from the centre
+/// brick's (wrapping: negative below).
+const BRICK_OFFSET: [usize; 27] = {
+    let mut t = [0usize; 27];
+    let mut b = 0;
+    while b < 27 {
+        let d = (b % 3) as isize - 1
+            + EXT as isize * (((b / 3) % 3) as isize - 1)
+            + (EXT * EXT) as isize * ((b / 9) as isize - 1);
+        t[b] = (8 * d) as usize;
+        b += 1;
+    }
+    t
+};
 
 impl Window<'_> {
     /// Configuration of the neighbourhood with origin `o` (extended
@@ -284,18 +347,43 @@ impl Window<'_> {
         b
     }
 
-    /// Vertex index of the ON cube at extended coordinates `e`.
-    #[inline]
-    fn vertex(&mut self, e: [usize; 3]) -> u32 {
-        let i = e[0] + EXT * (e[1] + EXT * e[2]);
-        if self.stamp[i] == self.generation {
-            return self.ids[i];
+    /// Fills [`Window::ids`]. The level's cubes are Morton-sorted: the
+    /// centre brick's are consecutive vertices (`first..end`, `cells`
+    /// their codes); a cube of a brick around is its brick word's first
+    /// index plus the ON cubes before it in the word.
+    fn fill_ids(&mut self, first: usize, cells: &[u64]) {
+        for (i, &c) in cells.iter().enumerate() {
+            self.ids[usize::from(MORTON_TO_EXT[(c & 511) as usize]) & (IDS - 1)] =
+                (first + i) as u32;
         }
-        let b = self.around[EXT_BRICK[e[0]] + 3 * EXT_BRICK[e[1]] + 9 * EXT_BRICK[e[2]]];
-        let v = b.rank(EXT_LOCAL[e[0]], EXT_LOCAL[e[1]], EXT_LOCAL[e[2]]);
-        self.stamp[i] = self.generation;
-        self.ids[i] = v;
-        v
+        for &(b, w, reached) in &REACHED {
+            let (b, w) = (usize::from(b), usize::from(w));
+            let brick = self.around[b];
+            let all = brick.mor[w];
+            let mut m = all & reached;
+            while m != 0 {
+                let bit = m.trailing_zeros();
+                m &= m - 1;
+                let e = usize::from(MORTON_TO_EXT[(w << 6) | bit as usize])
+                    .wrapping_add(BRICK_OFFSET[b]);
+                self.ids[e & (IDS - 1)] = brick.base[w] + (all & ((1u64 << bit) - 1)).count_ones();
+            }
+        }
+    }
+
+    /// Vertex of each corner of the neighbourhood with origin `o` that is
+    /// ON in `mask`, NONE elsewhere: eight reads and a mask, no branch
+    /// (which corners are ON is what a branch predictor cannot guess).
+    #[inline]
+    fn corners(&self, o: [usize; 3], mask: u8) -> [u32; 8] {
+        let at = o[0] + EXT * (o[1] + EXT * o[2]);
+        let mut vs = [NONE; 8];
+        for (j, v) in vs.iter_mut().enumerate() {
+            // All ones where the corner is OFF.
+            let off = u32::from((mask >> j) & 1).wrapping_sub(1);
+            *v = self.ids[(at + CORNER_OFFSET[j]) & (IDS - 1)] | off;
+        }
+        vs
     }
 }
 
@@ -462,9 +550,7 @@ fn triangulate_impl(
         rows: [0; EXT * EXT],
         bricks: [NONE; 27],
         around: [&EMPTY_BRICK; 27],
-        ids: [0; EXT * EXT * EXT],
-        stamp: [0; EXT * EXT * EXT],
-        generation: 0,
+        ids: [0; IDS],
     };
     // First face each brick built (see [`settle_ranges`]).
     let mut brick_faces: Vec<u32> = Vec::with_capacity(keys.len() + 1);
@@ -472,23 +558,10 @@ fn triangulate_impl(
     let mut configurations = [0u64; 32];
     for (qi, &q) in keys.iter().enumerate() {
         brick_faces.push(faces.len() as u32);
-        w.generation = w.generation.wrapping_add(1);
-        if w.generation == 0 {
-            w.stamp = [0; EXT * EXT * EXT];
-            w.generation = 1;
-        }
-        // The brick's own cubes are consecutive vertices: their indices
-        // go into the cache in one pass (no rank to count), leaving
-        // [`Window::vertex`] the few cubes of the bricks around.
         let first = bricks[qi].base[0] as usize;
         let end = bricks
             .get(qi + 1)
             .map_or(cells.len(), |b| b.base[0] as usize);
-        for (i, &c) in cells[first..end].iter().enumerate() {
-            let e = usize::from(MORTON_TO_EXT[(c & 511) as usize]);
-            w.stamp[e] = w.generation;
-            w.ids[e] = (first + i) as u32;
-        }
         let qc = unmorton(q).map(i64::from);
         for k in 0..27 {
             w.bricks[k] = index.get([
@@ -503,6 +576,7 @@ fn triangulate_impl(
                 n => &bricks[n as usize],
             };
         }
+        w.fill_ids(first, &cells[first..end]);
         // One z-slab word per brick row of three, then a byte per row.
         let word = |b: &Brick, lz: usize| b.lin[lz];
         for ez in 0..EXT {
@@ -571,18 +645,13 @@ fn triangulate_impl(
                     if c.face != 0 && defer_face(t, &w, o, c.face) {
                         continue;
                     }
-                    // Vertex of each ON corner, looked up once.
-                    let mut vs = [NONE; 8];
-                    let mut on = mask;
-                    while on != 0 {
-                        let j = on.trailing_zeros() as u8;
-                        on &= on - 1;
-                        let c = corner(j);
-                        vs[j as usize] = vid(w.vertex([
-                            ox + c[0] as usize,
-                            oy + c[1] as usize,
-                            oz + c[2] as usize,
-                        ]));
+                    let mut vs = w.corners(o, mask);
+                    if order.is_some() {
+                        for v in &mut vs {
+                            if *v != NONE {
+                                *v = vid(*v);
+                            }
+                        }
                     }
                     let mut emit = |tri: [u8; 3], faces: &mut Vec<[u32; 3]>| -> bool {
                         let f = [
