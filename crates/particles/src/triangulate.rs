@@ -885,7 +885,11 @@ fn choose_quad(q: [u8; 4], p: [Vec3; 4], n: Option<[Vec3; 4]>) -> ([u8; 3], [u8;
         ),
         None => quad_dihedral_scores(&p),
     };
-    if s_ac <= s_bd { ac } else { bd }
+    // Picked without a branch: the comparison waits on a square root and
+    // a division, and a mispredicted guess would throw that wait away.
+    let m = 0u8.wrapping_sub(u8::from(s_ac <= s_bd));
+    let pick = |a: [u8; 3], b: [u8; 3]| [0, 1, 2].map(|k| (a[k] & m) | (b[k] & !m));
+    (pick(ac.0, bd.0), pick(ac.1, bd.1))
 }
 
 /// [`quad_split_score`] without normals for both splits at once: the four
