@@ -637,7 +637,11 @@ fn triangulate_impl(
                     if below != 0 && !owns(&w, o, below) {
                         continue;
                     }
-                    let mask = w.mask(o);
+                    // `w.mask(o)`, from the rows at hand.
+                    let pair = |r: u16| ((r >> ox) & 3) as u8;
+                    let mask =
+                        pair(r[0]) | (pair(r[1]) << 2) | (pair(r[2]) << 4) | (pair(r[3]) << 6);
+                    debug_assert_eq!(mask, w.mask(o));
                     // Three ON cubes or more (`any`): a class.
                     let c = t.compact[mask as usize];
                     debug_assert!(c.class != 0);
