@@ -441,8 +441,11 @@ const MORTON_TO_EXT: [u16; 512] = {
 
 /// Bricks of a level (sorted Morton cells) and their keys, in Morton order.
 fn bricks_of(cells: &[u64]) -> (Vec<Brick>, Vec<u64>) {
-    let mut bricks: Vec<Brick> = Vec::new();
-    let mut keys: Vec<u64> = Vec::new();
+    // Room for 16 cubes a brick and more (surfaces have some 40): never
+    // regrown, which copied the bricks and touched fresh pages.
+    let room = cells.len() / 16 + 1;
+    let mut bricks: Vec<Brick> = Vec::with_capacity(room);
+    let mut keys: Vec<u64> = Vec::with_capacity(room);
     for (i, &c) in cells.iter().enumerate() {
         let key = c >> (3 * BRICK_BITS);
         if keys.last() != Some(&key) {
