@@ -1918,8 +1918,13 @@ fn orient(mesh: &mut TriMesh) {
                 // Consistent neighbours traverse their shared edge in
                 // opposite directions.
                 let g = mesh.faces[j];
-                let same_dir = (0..3)
-                    .any(|k| (0..3).any(|m| g[m] == f[k] && g[(m + 1) % 3] == f[(k + 1) % 3]));
+                // (All nine pairings tested, or-ed: no branch on each.)
+                let mut same_dir = false;
+                for k in 0..3 {
+                    for m in 0..3 {
+                        same_dir |= (g[m] == f[k]) & (g[(m + 1) % 3] == f[(k + 1) % 3]);
+                    }
+                }
                 if same_dir {
                     mesh.faces[j].swap(1, 2);
                 }
