@@ -1419,51 +1419,59 @@ fn best_subset(
     // Triangles on each corner, and the corners with one or more.
     let mut corner = [0u32; 8];
     let mut covered = 0u8;
-    let key = |sub: u16, holes: u32, surplus: u32, covered: u8| {
-        (
-            holes,
-            (bare & !covered).count_ones(),
-            surplus,
-            sub != keep,
-            sub.count_ones(),
-            sub,
-        )
+    // The key, packed in a word whose order is the tuple's: holes (≤ 18),
+    // bare cubes left (≤ 8), surplus (< 2^20: at most 18 edges of a few
+    // dozen triangles each), differing from `keep`, triangles (≤ 16), the
+    // subset. A minimum without a branch per subset, and no `count_ones`
+    // (software on the baseline x86-64 target): the triangles are counted
+    // as they come and go.
+    let key = |sub: u16, ntri: u32, holes: u32, surplus: u32, covered: u8| {
+        debug_assert!(holes < 32 && surplus < 1 << 20 && ntri < 32);
+        (u64::from(holes) << 46)
+            | (u64::from(POP8[usize::from(bare & !covered)]) << 42)
+            | (u64::from(surplus) << 22)
+            | (u64::from(sub != keep) << 21)
+            | (u64::from(ntri) << 16)
+            | u64::from(sub)
     };
-    let mut sub = 0u16;
-    let mut best = key(sub, holes, surplus, covered);
+    let (mut sub, mut ntri) = (0u16, 0u32);
+    let mut best = key(sub, ntri, holes, surplus, covered);
     for g in 1..=u32::from(all_bits(tris.len())) {
         let i = g.trailing_zeros() as usize;
         sub ^= 1 << i;
         let add = sub & (1 << i) != 0;
+        // +1 or −1.
+        let d = if add { 1 } else { u32::MAX };
+        ntri = ntri.wrapping_add(d);
         for &j in &tris[i] {
             let c = &mut corner[usize::from(j)];
-            if add {
-                *c += 1;
-            } else {
-                *c -= 1;
-            }
-            if *c == 0 {
-                covered &= !(1 << j);
-            } else {
-                covered |= 1 << j;
-            }
+            *c = c.wrapping_add(d);
+            covered = (covered & !(1 << j)) | (u8::from(*c != 0) << j);
         }
         if !built[i] {
             for &e in &tri_edges[i] {
                 let old = count[e];
-                let new = if add { old + 1 } else { old - 1 };
+                let new = old.wrapping_add(d);
                 count[e] = new;
                 holes = holes + u32::from(new == 1) - u32::from(old == 1);
                 surplus = surplus + new.saturating_sub(2) - old.saturating_sub(2);
             }
         }
-        let k = key(sub, holes, surplus, covered);
-        if k < best {
-            best = k;
-        }
+        best = best.min(key(sub, ntri, holes, surplus, covered));
     }
-    best.5
+    best as u16
 }
+
+/// Bits set in a byte.
+const POP8: [u8; 256] = {
+    let mut t = [0u8; 256];
+    let mut i = 0;
+    while i < 256 {
+        t[i] = (i as u32).count_ones() as u8;
+        i += 1;
+    }
+    t
+};
 
 /// How §6.2 resolves an ambiguous configuration.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
