@@ -81,7 +81,7 @@ use lodkit_mesh::topology::UnionFind;
 
 use crate::decode::LevelSurface;
 use crate::octree::{MortonMap, morton, unmorton};
-use crate::triangulation_table::{CLASS_COUNT, Shape, corner, pair, table};
+use crate::triangulation_table::{CLASS_COUNT, Compact, Shape, Table, corner, pair, table};
 
 /// Options of [`triangulate`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -146,8 +146,6 @@ const BRICK_BITS: u32 = 3;
 /// Dense brick grids up to this many bricks per axis (R ≤ 10), a hash map
 /// above.
 const DENSE_BRICKS: i64 = 128;
-/// Morton code of a local coordinate `0..8` (its bits spread by three).
-const SPREAD3: [usize; 8] = [0, 1, 8, 9, 64, 65, 72, 73];
 /// Extended window coordinate `E ∈ 0..12` (local `E − 2 ∈ −2..10`): the
 /// brick it falls in (0: below, 1: this one, 2: above) and its local
 /// coordinate there.
@@ -170,17 +168,12 @@ struct Brick {
     base: [u32; 8],
 }
 
-impl Brick {
-    /// Vertex index of the ON cube at local `(x, y, z)`: the level's cubes
-    /// are Morton-sorted, so it is the brick's first index plus the ON
-    /// cubes before it in the brick.
-    #[inline]
-    fn rank(&self, x: usize, y: usize, z: usize) -> u32 {
-        let k = SPREAD3[x] | (SPREAD3[y] << 1) | (SPREAD3[z] << 2);
-        let w = k >> 6;
-        self.base[w] + (self.mor[w] & ((1u64 << (k & 63)) - 1)).count_ones()
-    }
-}
+/// An empty brick, for the empty places of a window.
+static EMPTY_BRICK: Brick = Brick {
+    lin: [0; 8],
+    mor: [0; 8],
+    base: [0; 8],
+};
 
 /// Brick coordinates → brick number.
 struct BrickIndex {
@@ -235,20 +228,100 @@ impl BrickIndex {
 /// `rows[Y + 12 Z]` bit `X` is the cube at local `(X − 2, Y − 2, Z − 2)`.
 /// Neighbourhood origins lie at local `−1..8` (`1..10` extended); the rest
 /// is the vicinity §6.1.1 keeps for the disambiguation.
-struct Window {
+struct Window<'a> {
     rows: [u16; EXT * EXT],
     /// The 27 bricks around (3×3×3, x fastest), NONE where empty.
     bricks: [u32; 27],
-    /// Vertex index of each extended position (x fastest), valid where
-    /// `stamp` equals `generation`: a cube is in up to eight
-    /// neighbourhoods, its rank is computed once per window.
-    ids: [u32; EXT * EXT * EXT],
-    stamp: [u32; EXT * EXT * EXT],
-    /// Bumped for every window.
-    generation: u32,
+    /// The same bricks, [`EMPTY_BRICK`] where empty (read without a
+    /// branch).
+    around: [&'a Brick; 27],
+    /// Vertex index of each ON cube a neighbourhood of the window's brick
+    /// can have as a corner (extended coordinates `1..=10` per axis, x
+    /// fastest; [`Window::fill_ids`]), stale elsewhere; a power of two long
+    /// so that a masked index needs no bounds check.
+    ids: [u32; IDS],
 }
 
-impl Window {
+/// Length of [`Window::ids`].
+const IDS: usize = 2048;
+
+/// Extended index offset of each corner of a neighbourhood.
+const CORNER_OFFSET: [usize; 8] = [
+    0,
+    1,
+    EXT,
+    EXT + 1,
+    EXT * EXT,
+    EXT * EXT + 1,
+    EXT * EXT + EXT,
+    EXT * EXT + EXT + 1,
+];
+
+/// The `(window brick, Morton word)` pairs, window brick `b` (3×3×3, x
+/// fastest) other than the centre, holding cubes a neighbourhood of the
+/// centre brick can reach: the top layer (local 7) of a brick below and
+/// the bottom layer (local 0) of a brick above, per axis; with those
+/// cubes' bits.
+const REACHED: [(u8, u8, u64); 56] = {
+    let mut t = [(0u8, 0u8, 0u64); 56];
+    let mut n = 0;
+    let mut b = 0;
+    while b < 27 {
+        let pos = [b % 3, (b / 3) % 3, b / 9];
+        let mut w = 0;
+        while b != 13 && w < 8 {
+            let mut bits = 0u64;
+            let mut i = 0;
+            while i < 64 {
+                let k = w * 64 + i;
+                let l = [
+                    (k & 1) | ((k >> 2) & 2) | ((k >> 4) & 4),
+                    ((k >> 1) & 1) | ((k >> 3) & 2) | ((k >> 5) & 4),
+                    ((k >> 2) & 1) | ((k >> 4) & 2) | ((k >> 6) & 4),
+                ];
+                let mut ok = true;
+                let mut a = 0;
+                while a < 3 {
+                    ok &= match pos[a] {
+                        0 => l[a] == 7,
+                        1 => true,
+                        _ => l[a] == 0,
+                    };
+                    a += 1;
+                }
+                if ok {
+                    bits |= 1 << i;
+                }
+                i += 1;
+            }
+            if bits != 0 {
+                t[n] = (b as u8, w as u8, bits);
+                n += 1;
+            }
+            w += 1;
+        }
+        b += 1;
+    }
+    assert!(n == 56);
+    t
+};
+
+/// Extended index offset of window brick `b`'s cubes from the centre
+/// brick's (wrapping: negative below).
+const BRICK_OFFSET: [usize; 27] = {
+    let mut t = [0usize; 27];
+    let mut b = 0;
+    while b < 27 {
+        let d = (b % 3) as isize - 1
+            + EXT as isize * (((b / 3) % 3) as isize - 1)
+            + (EXT * EXT) as isize * ((b / 9) as isize - 1);
+        t[b] = (8 * d) as usize;
+        b += 1;
+    }
+    t
+};
+
+impl Window<'_> {
     /// Configuration of the neighbourhood with origin `o` (extended
     /// coordinates, each in `0..10`).
     #[inline]
@@ -274,18 +347,43 @@ impl Window {
         b
     }
 
-    /// Vertex index of the ON cube at extended coordinates `e`.
-    #[inline]
-    fn vertex(&mut self, bricks: &[Brick], e: [usize; 3]) -> u32 {
-        let i = e[0] + EXT * (e[1] + EXT * e[2]);
-        if self.stamp[i] == self.generation {
-            return self.ids[i];
+    /// Fills [`Window::ids`]. The level's cubes are Morton-sorted: the
+    /// centre brick's are consecutive vertices (`first..end`, `cells`
+    /// their codes); a cube of a brick around is its brick word's first
+    /// index plus the ON cubes before it in the word.
+    fn fill_ids(&mut self, first: usize, cells: &[u64]) {
+        for (i, &c) in cells.iter().enumerate() {
+            self.ids[usize::from(MORTON_TO_EXT[(c & 511) as usize]) & (IDS - 1)] =
+                (first + i) as u32;
         }
-        let b = self.bricks[EXT_BRICK[e[0]] + 3 * EXT_BRICK[e[1]] + 9 * EXT_BRICK[e[2]]];
-        let v = bricks[b as usize].rank(EXT_LOCAL[e[0]], EXT_LOCAL[e[1]], EXT_LOCAL[e[2]]);
-        self.stamp[i] = self.generation;
-        self.ids[i] = v;
-        v
+        for &(b, w, reached) in &REACHED {
+            let (b, w) = (usize::from(b), usize::from(w));
+            let brick = self.around[b];
+            let all = brick.mor[w];
+            let mut m = all & reached;
+            while m != 0 {
+                let bit = m.trailing_zeros();
+                m &= m - 1;
+                let e = usize::from(MORTON_TO_EXT[(w << 6) | bit as usize])
+                    .wrapping_add(BRICK_OFFSET[b]);
+                self.ids[e & (IDS - 1)] = brick.base[w] + (all & ((1u64 << bit) - 1)).count_ones();
+            }
+        }
+    }
+
+    /// Vertex of each corner of the neighbourhood with origin `o` that is
+    /// ON in `mask`, NONE elsewhere: eight reads and a mask, no branch
+    /// (which corners are ON is what a branch predictor cannot guess).
+    #[inline]
+    fn corners(&self, o: [usize; 3], mask: u8) -> [u32; 8] {
+        let at = o[0] + EXT * (o[1] + EXT * o[2]);
+        let mut vs = [NONE; 8];
+        for (j, v) in vs.iter_mut().enumerate() {
+            // All ones where the corner is OFF.
+            let off = u32::from((mask >> j) & 1).wrapping_sub(1);
+            *v = self.ids[(at + CORNER_OFFSET[j]) & (IDS - 1)] | off;
+        }
+        vs
     }
 }
 
@@ -327,10 +425,27 @@ const MORTON_TO_LINEAR: [u16; 512] = {
     t
 };
 
+/// Local Morton code `k < 512` → extended window index of the cube in the
+/// centre brick, `(x + 2) + 12 (y + 2) + 144 (z + 2)`.
+const MORTON_TO_EXT: [u16; 512] = {
+    let mut t = [0u16; 512];
+    let mut k = 0;
+    while k < 512 {
+        let l = MORTON_TO_LINEAR[k] as usize;
+        let (x, y, z) = (l & 7, (l >> 3) & 7, l >> 6);
+        t[k] = ((x + 2) + EXT * (y + 2) + EXT * EXT * (z + 2)) as u16;
+        k += 1;
+    }
+    t
+};
+
 /// Bricks of a level (sorted Morton cells) and their keys, in Morton order.
 fn bricks_of(cells: &[u64]) -> (Vec<Brick>, Vec<u64>) {
-    let mut bricks: Vec<Brick> = Vec::new();
-    let mut keys: Vec<u64> = Vec::new();
+    // Room for 16 cubes a brick and more (surfaces have some 40): never
+    // regrown, which copied the bricks and touched fresh pages.
+    let room = cells.len() / 16 + 1;
+    let mut bricks: Vec<Brick> = Vec::with_capacity(room);
+    let mut keys: Vec<u64> = Vec::with_capacity(room);
     for (i, &c) in cells.iter().enumerate() {
         let key = c >> (3 * BRICK_BITS);
         if keys.last() != Some(&key) {
@@ -437,16 +552,19 @@ fn triangulate_impl(
     let mut w = Window {
         rows: [0; EXT * EXT],
         bricks: [NONE; 27],
-        ids: [0; EXT * EXT * EXT],
-        stamp: [0; EXT * EXT * EXT],
-        generation: 0,
+        around: [&EMPTY_BRICK; 27],
+        ids: [0; IDS],
     };
-    for &q in &keys {
-        w.generation = w.generation.wrapping_add(1);
-        if w.generation == 0 {
-            w.stamp = [0; EXT * EXT * EXT];
-            w.generation = 1;
-        }
+    // First face each brick built (see [`settle_ranges`]).
+    let mut brick_faces: Vec<u32> = Vec::with_capacity(keys.len() + 1);
+    // Neighbourhoods per class (a fixed array: no bounds check per count).
+    let mut configurations = [0u64; 32];
+    for (qi, &q) in keys.iter().enumerate() {
+        brick_faces.push(faces.len() as u32);
+        let first = bricks[qi].base[0] as usize;
+        let end = bricks
+            .get(qi + 1)
+            .map_or(cells.len(), |b| b.base[0] as usize);
         let qc = unmorton(q).map(i64::from);
         for k in 0..27 {
             w.bricks[k] = index.get([
@@ -455,22 +573,23 @@ fn triangulate_impl(
                 qc[2] + (k / 9) as i64 - 1,
             ]);
         }
+        for k in 0..27 {
+            w.around[k] = match w.bricks[k] {
+                NONE => &EMPTY_BRICK,
+                n => &bricks[n as usize],
+            };
+        }
+        w.fill_ids(first, &cells[first..end]);
         // One z-slab word per brick row of three, then a byte per row.
-        let word = |n: u32, lz: usize| -> u64 {
-            if n == NONE {
-                0
-            } else {
-                bricks[n as usize].lin[lz]
-            }
-        };
+        let word = |b: &Brick, lz: usize| b.lin[lz];
         for ez in 0..EXT {
             let lz = EXT_LOCAL[ez];
             for by in 0..3 {
                 let b = 3 * by + 9 * EXT_BRICK[ez];
                 let (lo, mid, hi) = (
-                    word(w.bricks[b], lz),
-                    word(w.bricks[b + 1], lz),
-                    word(w.bricks[b + 2], lz),
+                    word(w.around[b], lz),
+                    word(w.around[b + 1], lz),
+                    word(w.around[b + 2], lz),
                 );
                 for ey in EXT_ROWS[by].clone() {
                     let sh = 8 * EXT_LOCAL[ey];
@@ -521,28 +640,25 @@ fn triangulate_impl(
                     if below != 0 && !owns(&w, o, below) {
                         continue;
                     }
-                    let mask = w.mask(o);
-                    let cfg = &t.configs[mask as usize];
-                    if cfg.class == 0 {
+                    // `w.mask(o)`, from the rows at hand.
+                    let pair = |r: u16| ((r >> ox) & 3) as u8;
+                    let mask =
+                        pair(r[0]) | (pair(r[1]) << 2) | (pair(r[2]) << 4) | (pair(r[3]) << 6);
+                    debug_assert_eq!(mask, w.mask(o));
+                    // Three ON cubes or more (`any`): a class.
+                    let c = t.compact[mask as usize];
+                    debug_assert!(c.class != 0);
+                    configurations[usize::from(c.class) & 31] += 1;
+                    if c.face != 0 && defer_face(t, &w, o, c.face) {
                         continue;
                     }
-                    stats.configurations[cfg.class as usize] += 1;
-                    if matches!(cfg.shape, Shape::Triangle(_) | Shape::Quad(_))
-                        && defer_face(&w, o, cfg.face)
-                    {
-                        continue;
-                    }
-                    // Vertex of each ON corner, looked up once.
-                    let mut vs = [NONE; 8];
-                    let mut on = mask;
-                    while on != 0 {
-                        let j = on.trailing_zeros() as u8;
-                        on &= on - 1;
-                        let c = corner(j);
-                        vs[j as usize] = vid(w.vertex(
-                            &bricks,
-                            [ox + c[0] as usize, oy + c[1] as usize, oz + c[2] as usize],
-                        ));
+                    let mut vs = w.corners(o, mask);
+                    if order.is_some() {
+                        for v in &mut vs {
+                            if *v != NONE {
+                                *v = vid(*v);
+                            }
+                        }
                     }
                     let mut emit = |tri: [u8; 3], faces: &mut Vec<[u32; 3]>| -> bool {
                         let f = [
@@ -550,39 +666,32 @@ fn triangulate_impl(
                             vs[tri[1] as usize],
                             vs[tri[2] as usize],
                         ];
-                        if let Some(min) = min_edge {
-                            for e in 0..3 {
-                                let (a, b) = (f[e], f[(e + 1) % 3]);
-                                if s.positions[a as usize].distance(s.positions[b as usize]) < min
-                                    && !merged[a as usize]
-                                    && !merged[b as usize]
-                                {
-                                    merged[a as usize] = true;
-                                    merged[b as usize] = true;
-                                    merges.push((a, b));
-                                    return false;
-                                }
-                            }
+                        if let Some(min) = min_edge
+                            && merge_short_edge(f, min, &s.positions, &mut merged, &mut merges)
+                        {
+                            return false;
                         }
                         faces.push(f);
                         true
                     };
                     // A solid left whole (no unique cycle).
                     let mut whole = false;
-                    match &cfg.shape {
-                        Shape::None => {}
-                        Shape::Triangle(tri) => {
-                            emit(*tri, &mut faces);
-                        }
-                        Shape::Quad(q) => {
-                            let vq = [0, 1, 2, 3].map(|k| vs[q[k] as usize] as usize);
-                            let pos = [0, 1, 2, 3].map(|k| s.positions[vq[k]]);
-                            let nrm = s.normals.as_ref().map(|n| [0, 1, 2, 3].map(|k| n[vq[k]]));
-                            let (t1, t2) = choose_quad(*q, pos, nrm);
-                            emit(t1, &mut faces);
-                            emit(t2, &mut faces);
-                        }
-                        Shape::Solid(tris) => {
+                    let q = c.corners;
+                    if c.kind == Compact::TRIANGLE {
+                        emit([q[0], q[1], q[2]], &mut faces);
+                    } else if c.kind == Compact::QUAD {
+                        let vq = [0, 1, 2, 3].map(|k| vs[q[k] as usize] as usize);
+                        let pos = [0, 1, 2, 3].map(|k| s.positions[vq[k]]);
+                        let nrm = s.normals.as_ref().map(|n| [0, 1, 2, 3].map(|k| n[vq[k]]));
+                        let (t1, t2) = choose_quad(q, pos, nrm);
+                        emit(t1, &mut faces);
+                        emit(t2, &mut faces);
+                    } else {
+                        let cfg = &t.configs[mask as usize];
+                        let Shape::Solid(tris) = &cfg.shape else {
+                            unreachable!("three ON cubes or more, not planar")
+                        };
+                        {
                             let around = w.block(o);
                             let slot = &mut shared_memo[(around.wrapping_mul(0x9e37_79b9_7f4a_7c15)
                                 >> (64 - SHARED_MEMO_BITS))
@@ -635,13 +744,9 @@ fn triangulate_impl(
                             };
                             match split {
                                 Split::Either(disc) => {
-                                    let mut p = [Vec3::ZERO; 8];
-                                    for (j, &v) in vs.iter().enumerate() {
-                                        if v != NONE {
-                                            p[j] = s.positions[v as usize];
-                                        }
-                                    }
-                                    let pos = |j: u8| p[j as usize];
+                                    // Hull corners are ON: `vs` holds their
+                                    // vertices.
+                                    let pos = |j: u8| s.positions[vs[usize::from(j & 7)] as usize];
                                     let keep = if smoother_disc(tris, &cfg.adjacent, disc, &pos) {
                                         disc
                                     } else {
@@ -663,14 +768,23 @@ fn triangulate_impl(
                         }
                     }
                     if let Some(tr) = trace.as_deref_mut() {
-                        tr.resize(faces.len(), cfg.class | if whole { 0x80 } else { 0 });
+                        tr.resize(faces.len(), c.class | if whole { 0x80 } else { 0 });
                     }
                 }
             }
         }
     }
+    stats
+        .configurations
+        .copy_from_slice(&configurations[..=CLASS_COUNT]);
     // The ambiguous solids, settled against everything else built.
-    settle(&faces, &from_solids, &mut trials, s.cells.len());
+    brick_faces.push(faces.len() as u32);
+    let ranges = if order.is_none() {
+        settle_ranges(&trials, cells, &index, &brick_faces)
+    } else {
+        vec![(0, faces.len() as u32)]
+    };
+    settle(&faces, &ranges, &from_solids, &mut trials, s.cells.len());
     for t in &trials {
         let Shape::Solid(tris) = &table().configs[t.mask as usize].shape else {
             continue;
@@ -697,13 +811,9 @@ fn triangulate_impl(
     // A triangle whose three cubes share a coordinate lies on the face
     // between two neighbourhoods; two solid ones may both have built it:
     // keep one.
-    let drop = dedupe_face_triangles(&mut faces, &from_solids);
+    let dropped = dedupe_face_triangles(&mut faces, &from_solids);
     if let Some(tr) = trace {
-        let mut i = 0;
-        tr.retain(|_| {
-            i += 1;
-            !drop[i - 1]
-        });
+        remove_sorted(tr, &dropped);
     }
     let mut mesh = match surface {
         Cow::Borrowed(s) => s.vertices_only(),
@@ -721,26 +831,51 @@ fn triangulate_impl(
     Triangulation { mesh, stats }
 }
 
+/// §6.3: merges the cubes of the first edge of `f` shorter than `min`
+/// whose cubes are not merged yet; whether it did (the triangle is then
+/// not built). Out of line: the scan's emission stays small enough to
+/// inline.
+#[inline(never)]
+fn merge_short_edge(
+    f: [u32; 3],
+    min: f32,
+    positions: &[Vec3],
+    merged: &mut [bool],
+    merges: &mut Vec<(u32, u32)>,
+) -> bool {
+    for e in 0..3 {
+        let (a, b) = (f[e], f[(e + 1) % 3]);
+        if positions[a as usize].distance(positions[b as usize]) < min
+            && !merged[a as usize]
+            && !merged[b as usize]
+        {
+            merged[a as usize] = true;
+            merged[b as usize] = true;
+            merges.push((a, b));
+            return true;
+        }
+    }
+    false
+}
+
 /// Whether a planar configuration lying on a face of its neighbourhood
 /// leaves that face to the neighbourhood on the other side: always when it
 /// is the upper face (the other side sees it as its lower face), and when
 /// the other side is a solid configuration, whose disc choice then covers
 /// the face alone (two owners would cover it twice).
-fn defer_face(w: &Window, o: [usize; 3], face: Option<(u8, u8)>) -> bool {
-    let Some((axis, side)) = face else {
-        return false;
-    };
-    if side == 1 {
+/// `face`: [`Compact::face`], not 0.
+#[inline]
+fn defer_face(t: &Table, w: &Window, o: [usize; 3], face: u8) -> bool {
+    if face == 1 {
         return true;
     }
     let mut across = o;
-    across[axis as usize] -= 1;
-    matches!(
-        table().configs[w.mask(across) as usize].shape,
-        Shape::Solid(_)
-    )
+    across[usize::from(face - 2) % 3] -= 1;
+    let m = w.mask(across);
+    t.solid[usize::from(m >> 6)] & (1 << (m & 63)) != 0
 }
 
+#[inline]
 fn tri_normal(a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
     (b - a).cross(c - a).normalize_or_zero()
 }
@@ -750,9 +885,52 @@ fn tri_normal(a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
 fn choose_quad(q: [u8; 4], p: [Vec3; 4], n: Option<[Vec3; 4]>) -> ([u8; 3], [u8; 3]) {
     let ac = ([q[0], q[1], q[2]], [q[0], q[2], q[3]]);
     let bd = ([q[0], q[1], q[3]], [q[1], q[2], q[3]]);
-    let s_ac = quad_split_score(&p, n.as_ref(), [0, 1, 2], [0, 2, 3]);
-    let s_bd = quad_split_score(&p, n.as_ref(), [0, 1, 3], [1, 2, 3]);
-    if s_ac <= s_bd { ac } else { bd }
+    let (s_ac, s_bd) = match n {
+        Some(_) => (
+            quad_split_score(&p, n.as_ref(), [0, 1, 2], [0, 2, 3]),
+            quad_split_score(&p, n.as_ref(), [0, 1, 3], [1, 2, 3]),
+        ),
+        None => quad_dihedral_scores(&p),
+    };
+    // Picked without a branch: the comparison waits on a square root and
+    // a division, and a mispredicted guess would throw that wait away.
+    let m = 0u8.wrapping_sub(u8::from(s_ac <= s_bd));
+    let pick = |a: [u8; 3], b: [u8; 3]| [0, 1, 2].map(|k| (a[k] & m) | (b[k] & !m));
+    (pick(ac.0, bd.0), pick(ac.1, bd.1))
+}
+
+/// [`quad_split_score`] without normals for both splits at once: the four
+/// triangle normals (unnormalised) side by side in the lanes of `Vec4`s,
+/// with each lane's operations those of the scalar code in the same order
+/// (`Vec3::cross`, `Vec3::dot`), so the scores have the same bits.
+#[inline(always)]
+fn quad_dihedral_scores(p: &[Vec3; 4]) -> (f32, f32) {
+    use glam::Vec4;
+    // Lanes: triangles 0 1 2 and 0 2 3 (split a–c), 0 1 3 and 1 2 3 (b–d);
+    // edge vectors `a = p[t1] − p[t0]`, `b = p[t2] − p[t0]`.
+    let lanes = |c: fn(Vec3) -> f32| {
+        let (p0, p1, p2, p3) = (c(p[0]), c(p[1]), c(p[2]), c(p[3]));
+        let origin = Vec4::new(p0, p0, p0, p1);
+        (
+            Vec4::new(p1, p2, p1, p2) - origin,
+            Vec4::new(p2, p3, p3, p3) - origin,
+        )
+    };
+    let (ax, bx) = lanes(|v| v.x);
+    let (ay, by) = lanes(|v| v.y);
+    let (az, bz) = lanes(|v| v.z);
+    let nx = ay * bz - by * az;
+    let ny = az * bx - bz * ax;
+    let nz = ax * by - bx * ay;
+    // Each lane times its partner (0 with 1, 2 with 3).
+    let partner = |v: Vec4| Vec4::new(v.y, v.x, v.w, v.z);
+    let squared = nx * nx + ny * ny + nz * nz;
+    let dots = nx * partner(nx) + ny * partner(ny) + nz * partner(nz);
+    let l = (squared * partner(squared)).sqrt();
+    let score = |k: usize| {
+        if l[k] > 0.0 { -dots[k] / l[k] } else { 0.0 }
+    };
+    (score(0), score(2))
 }
 
 /// How badly the triangles `t0`, `t1` of a quad split fit: their
@@ -944,12 +1122,22 @@ impl Hasher for TriHasher {
 /// those are counted by key.
 struct Uses {
     face_tris: HashMap<[u32; 3], u32, BuildHasherDefault<TriHasher>>,
+    /// The trials' hull edges (by key) → their slot in `edge_uses`.
     edges: MortonMap<u32>,
+    edge_uses: Vec<u32>,
     vertices: Vec<u32>,
 }
 
+/// Where a triangle's edges are counted: looked up by key (a triangle of
+/// the level), or the slots of a trial's hull triangle, found once.
+#[derive(Clone, Copy)]
+enum EdgeSlots {
+    Lookup,
+    Known([u32; 3]),
+}
+
 impl Uses {
-    fn add(&mut self, t: [u32; 3], face: bool) {
+    fn add(&mut self, t: [u32; 3], face: bool, slots: EdgeSlots) {
         if face {
             let n = self.face_tris.entry(sorted_tri(t)).or_insert(0);
             *n += 1;
@@ -957,9 +1145,9 @@ impl Uses {
                 return;
             }
         }
-        self.touch(t, 1);
+        self.touch(t, 1, slots);
     }
-    fn remove(&mut self, t: [u32; 3], face: bool) {
+    fn remove(&mut self, t: [u32; 3], face: bool, slots: EdgeSlots) {
         if face {
             let key = sorted_tri(t);
             let Some(n) = self.face_tris.get_mut(&key) else {
@@ -971,21 +1159,83 @@ impl Uses {
             }
             self.face_tris.remove(&key);
         }
-        self.touch(t, -1);
+        self.touch(t, -1, slots);
     }
     /// Whether a face triangle is built.
     fn built(&self, t: [u32; 3]) -> bool {
         self.face_tris.contains_key(&sorted_tri(t))
     }
-    fn touch(&mut self, t: [u32; 3], d: i32) {
+    fn touch(&mut self, t: [u32; 3], d: i32, slots: EdgeSlots) {
         for k in 0..3 {
-            if let Some(n) = self.edges.get_mut(&edge_key(t[k], t[(k + 1) % 3])) {
+            let slot = match slots {
+                EdgeSlots::Lookup => self.edges.get(&edge_key(t[k], t[(k + 1) % 3])).copied(),
+                EdgeSlots::Known(s) => Some(s[k]),
+            };
+            if let Some(slot) = slot {
+                let n = &mut self.edge_uses[slot as usize];
                 *n = n.wrapping_add_signed(d);
             }
             let v = &mut self.vertices[t[k] as usize];
             *v = v.wrapping_add_signed(d);
         }
     }
+}
+
+/// The ranges of `faces` (increasing, disjoint) that hold every triangle
+/// on a vertex of a trial. A triangle is built by the brick that scans its
+/// neighbourhood: the brick of the neighbourhood's origin or, when that
+/// one is empty, an occupied brick the neighbourhood reaches ([`owns`]).
+/// A neighbourhood holding cube `v` has its origin in `v`'s brick or, where
+/// `v` is on the brick's lower face, in the brick below; it reaches the
+/// brick above only where its origin is on an upper face, i.e. where `v`
+/// is on the brick's lower face (the brick of `v`) or its upper face (the
+/// brick above). So the bricks `v`'s brick plus, per axis, −1 or 0 where
+/// `v` is on the lower face, 0 or +1 on the upper face, 0 elsewhere, scan
+/// every triangle on `v`: only their triangles, a fraction of the
+/// level's, are read (`brick_faces`: the first triangle of each brick,
+/// plus the end). `cells` in Morton order, vertex `i` = cell `i`.
+fn settle_ranges(
+    trials: &[Trial],
+    cells: &[u64],
+    index: &BrickIndex,
+    brick_faces: &[u32],
+) -> Vec<(u32, u32)> {
+    let mut marked = vec![false; brick_faces.len() - 1];
+    for t in trials {
+        for (j, &v) in t.vs.iter().enumerate() {
+            if t.mask & (1 << j) == 0 {
+                continue;
+            }
+            let c = cells[v as usize];
+            let b = unmorton(c >> (3 * BRICK_BITS)).map(i64::from);
+            let local = unmorton(c & 511);
+            // Per axis, the offsets of the bricks to scan.
+            let offsets = local.map(|l| match l {
+                0 => [-1, 0],
+                7 => [0, 1],
+                _ => [0, 0],
+            });
+            for d in 0..8 {
+                let n = index.get([
+                    b[0] + offsets[0][d & 1],
+                    b[1] + offsets[1][(d >> 1) & 1],
+                    b[2] + offsets[2][d >> 2],
+                ]);
+                if n != NONE {
+                    marked[n as usize] = true;
+                }
+            }
+        }
+    }
+    let mut ranges: Vec<(u32, u32)> = Vec::new();
+    for (n, _) in marked.iter().enumerate().filter(|(_, m)| **m) {
+        let (start, end) = (brick_faces[n], brick_faces[n + 1]);
+        match ranges.last_mut() {
+            Some(last) if last.1 == start => last.1 = end,
+            _ => ranges.push((start, end)),
+        }
+    }
+    ranges
 }
 
 /// Chooses, for each ambiguous solid (a hull §6.2 leaves whole, a disc on
@@ -997,7 +1247,13 @@ impl Uses {
 /// hull leaves no hull edge used once, and a trial's choice changes the use
 /// of its own hull edges only, so settling opens no hole the whole hulls
 /// would not. Trials are settled in scan order, twice over: deterministic.
-fn settle(faces: &[[u32; 3]], from_solids: &[u32], trials: &mut [Trial], vertices: usize) {
+fn settle(
+    faces: &[[u32; 3]],
+    ranges: &[(u32, u32)],
+    from_solids: &[u32],
+    trials: &mut [Trial],
+    vertices: usize,
+) {
     if trials.is_empty() {
         return;
     }
@@ -1008,47 +1264,65 @@ fn settle(faces: &[[u32; 3]], from_solids: &[u32], trials: &mut [Trial], vertice
     // Trial vertices, as a bit set (the scan below reads it for every
     // triangle of the level; bits keep it in the first-level cache).
     let mut near = vec![0u64; vertices.div_ceil(64)];
-    let is_near = |near: &[u64], v: u32| near[(v >> 6) as usize] & (1 << (v & 63)) != 0;
     let mut uses = Uses {
         face_tris: HashMap::default(),
         edges: MortonMap::default(),
+        edge_uses: Vec::new(),
         vertices: vec![0; vertices],
     };
+    // The edge slots of every hull triangle of every trial, trial by trial
+    // (`first[i]`: trial `i`'s first), so that the sweeps count a trial's
+    // edges without hashing.
+    let mut first = Vec::with_capacity(trials.len());
+    let mut hull_slots: Vec<[u32; 3]> = Vec::new();
+    uses.edges.reserve(trials.len() * 12);
     for t in trials.iter() {
+        first.push(hull_slots.len());
         for tri in hull(t) {
+            let mut slots = [0u32; 3];
             for k in 0..3 {
                 let (a, b) = (t.vs[tri[k] as usize], t.vs[tri[(k + 1) % 3] as usize]);
                 near[(a >> 6) as usize] |= 1 << (a & 63);
-                uses.edges.insert(edge_key(a, b), 0);
+                let next = uses.edges.len() as u32;
+                slots[k] = *uses.edges.entry(edge_key(a, b)).or_insert(next);
+            }
+            hull_slots.push(slots);
+        }
+    }
+    uses.edge_uses = vec![0; uses.edges.len()];
+    // Every triangle that can hold a trial vertex is tested: three bits,
+    // or-ed without a branch each; whether a near one came from a solid is
+    // read off the sorted `from_solids` with a cursor.
+    let bit = |v: u32| (near[(v >> 6) as usize] >> (v & 63)) & 1;
+    let mut solid = from_solids.iter().map(|&i| i as usize).peekable();
+    for &(start, end) in ranges {
+        for i in start as usize..end as usize {
+            let f = faces[i];
+            if bit(f[0]) | bit(f[1]) | bit(f[2]) != 0 {
+                while solid.next_if(|&j| j < i).is_some() {}
+                uses.add(f, solid.peek() == Some(&i), EdgeSlots::Lookup);
             }
         }
     }
-    let mut from_solid = vec![false; faces.len()];
-    for &i in from_solids {
-        from_solid[i as usize] = true;
-    }
-    for (i, f) in faces.iter().enumerate() {
-        if is_near(&near, f[0]) || is_near(&near, f[1]) || is_near(&near, f[2]) {
-            uses.add(*f, from_solid[i]);
-        }
-    }
     let tri_of = |t: &Trial, tri: &[u8; 3]| tri.map(|j| t.vs[j as usize]);
-    for t in trials.iter() {
+    for (n, t) in trials.iter().enumerate() {
         for (i, tri) in hull(t).iter().enumerate() {
             if t.keep & (1 << i) != 0 {
-                uses.add(tri_of(t, tri), on_face(tri));
+                let slots = EdgeSlots::Known(hull_slots[first[n] + i]);
+                uses.add(tri_of(t, tri), on_face(tri), slots);
             }
         }
     }
     for _ in 0..SETTLE_SWEEPS {
-        for t in trials.iter_mut() {
+        for (n, t) in trials.iter_mut().enumerate() {
             let tris = hull(t);
             if tris.len() > SETTLE_MAX_TRIANGLES {
                 continue;
             }
+            let slots = &hull_slots[first[n]..first[n] + tris.len()];
             for (i, tri) in tris.iter().enumerate() {
                 if t.keep & (1 << i) != 0 {
-                    uses.remove(tri_of(t, tri), on_face(tri));
+                    uses.remove(tri_of(t, tri), on_face(tri), EdgeSlots::Known(slots[i]));
                 }
             }
             // Hull edges (as corner pairs), their use by the others, and
@@ -1065,8 +1339,7 @@ fn settle(faces: &[[u32; 3]], from_solids: &[u32], trials: &mut [Trial], vertice
                     tri_edges[i][k] = match edges[..n_edges].iter().position(|&e| e == (a, b)) {
                         Some(p) => p,
                         None => {
-                            let key = edge_key(t.vs[a as usize], t.vs[b as usize]);
-                            base[n_edges] = uses.edges.get(&key).copied().unwrap_or(0);
+                            base[n_edges] = uses.edge_uses[slots[i][k] as usize];
                             edges[n_edges] = (a, b);
                             n_edges += 1;
                             n_edges - 1
@@ -1118,7 +1391,7 @@ fn settle(faces: &[[u32; 3]], from_solids: &[u32], trials: &mut [Trial], vertice
             }
             for (i, tri) in tris.iter().enumerate() {
                 if t.keep & (1 << i) != 0 {
-                    uses.add(tri_of(t, tri), on_face(tri));
+                    uses.add(tri_of(t, tri), on_face(tri), EdgeSlots::Known(slots[i]));
                 }
             }
         }
@@ -1146,51 +1419,59 @@ fn best_subset(
     // Triangles on each corner, and the corners with one or more.
     let mut corner = [0u32; 8];
     let mut covered = 0u8;
-    let key = |sub: u16, holes: u32, surplus: u32, covered: u8| {
-        (
-            holes,
-            (bare & !covered).count_ones(),
-            surplus,
-            sub != keep,
-            sub.count_ones(),
-            sub,
-        )
+    // The key, packed in a word whose order is the tuple's: holes (≤ 18),
+    // bare cubes left (≤ 8), surplus (< 2^20: at most 18 edges of a few
+    // dozen triangles each), differing from `keep`, triangles (≤ 16), the
+    // subset. A minimum without a branch per subset, and no `count_ones`
+    // (software on the baseline x86-64 target): the triangles are counted
+    // as they come and go.
+    let key = |sub: u16, ntri: u32, holes: u32, surplus: u32, covered: u8| {
+        debug_assert!(holes < 32 && surplus < 1 << 20 && ntri < 32);
+        (u64::from(holes) << 46)
+            | (u64::from(POP8[usize::from(bare & !covered)]) << 42)
+            | (u64::from(surplus) << 22)
+            | (u64::from(sub != keep) << 21)
+            | (u64::from(ntri) << 16)
+            | u64::from(sub)
     };
-    let mut sub = 0u16;
-    let mut best = key(sub, holes, surplus, covered);
+    let (mut sub, mut ntri) = (0u16, 0u32);
+    let mut best = key(sub, ntri, holes, surplus, covered);
     for g in 1..=u32::from(all_bits(tris.len())) {
         let i = g.trailing_zeros() as usize;
         sub ^= 1 << i;
         let add = sub & (1 << i) != 0;
+        // +1 or −1.
+        let d = if add { 1 } else { u32::MAX };
+        ntri = ntri.wrapping_add(d);
         for &j in &tris[i] {
             let c = &mut corner[usize::from(j)];
-            if add {
-                *c += 1;
-            } else {
-                *c -= 1;
-            }
-            if *c == 0 {
-                covered &= !(1 << j);
-            } else {
-                covered |= 1 << j;
-            }
+            *c = c.wrapping_add(d);
+            covered = (covered & !(1 << j)) | (u8::from(*c != 0) << j);
         }
         if !built[i] {
             for &e in &tri_edges[i] {
                 let old = count[e];
-                let new = if add { old + 1 } else { old - 1 };
+                let new = old.wrapping_add(d);
                 count[e] = new;
                 holes = holes + u32::from(new == 1) - u32::from(old == 1);
                 surplus = surplus + new.saturating_sub(2) - old.saturating_sub(2);
             }
         }
-        let k = key(sub, holes, surplus, covered);
-        if k < best {
-            best = k;
-        }
+        best = best.min(key(sub, ntri, holes, surplus, covered));
     }
-    best.5
+    best as u16
 }
+
+/// Bits set in a byte.
+const POP8: [u8; 256] = {
+    let mut t = [0u8; 256];
+    let mut i = 0;
+    while i < 256 {
+        t[i] = (i as u32).count_ones() as u8;
+        i += 1;
+    }
+    t
+};
 
 /// How §6.2 resolves an ambiguous configuration.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -1365,6 +1646,30 @@ fn smoother_disc(
     disc: u16,
     pos: &impl Fn(u8) -> Vec3,
 ) -> bool {
+    // A tetrahedron (`C_6`, the frequent case) splits into two discs of
+    // two triangles each, one interior edge apiece: the general count
+    // below, with its 16-slot arrays, comes down to two dihedral cosines
+    // (the same products in the same order, so the same bits).
+    // (`count_ones` is a dozen instructions without the popcnt
+    // extension, which the baseline x86-64 target lacks.)
+    let two_bits = |d: u16| {
+        let rest = d & d.wrapping_sub(1);
+        (rest != 0) & (rest & rest.wrapping_sub(1) == 0)
+    };
+    if (tris.len() == 4) & two_bits(disc) {
+        let normal = |t: [u8; 3]| tri_normal(pos(t[0]), pos(t[1]), pos(t[2]));
+        let normals = [
+            normal(tris[0]),
+            normal(tris[1]),
+            normal(tris[2]),
+            normal(tris[3]),
+        ];
+        let cosine = |d: u16| {
+            let (i, j) = (d.trailing_zeros() as usize, 15 - d.leading_zeros() as usize);
+            normals[i & 3].dot(normals[j & 3]).clamp(-1.0, 1.0)
+        };
+        return cosine(disc & 15) >= cosine(!disc & 15);
+    }
     let mut normals = [Vec3::ZERO; 16];
     for (i, t) in tris.iter().enumerate().take(16) {
         normals[i] = tri_normal(pos(t[0]), pos(t[1]), pos(t[2]));
@@ -1430,43 +1735,58 @@ fn decimate_merge(mesh: &mut TriMesh, faces: &mut Vec<[u32; 3]>, merges: &[(u32,
 }
 
 /// Drops the second of two identical triangles among `candidates` (solid
-/// triangles on a face of their neighbourhood); returns what was dropped.
-fn dedupe_face_triangles(faces: &mut Vec<[u32; 3]>, candidates: &[u32]) -> Vec<bool> {
+/// triangles on a face of their neighbourhood); returns the indices
+/// dropped, in increasing order.
+fn dedupe_face_triangles(faces: &mut Vec<[u32; 3]>, candidates: &[u32]) -> Vec<u32> {
     // Candidates come in increasing order (pushed as the faces grow), so
     // the first one seen of each vertex set is the lowest index: keep it,
-    // drop later copies. An open-addressed set of candidate indices,
-    // keyed by the sorted vertices, replaces a sort of all candidates.
+    // drop later copies. An open-addressed set of candidates, keyed by the
+    // sorted vertices, replaces a sort of all candidates; the keys are
+    // gathered first, in one forward pass, so that a probe reads this
+    // small array instead of a random place of `faces`.
     debug_assert!(candidates.windows(2).all(|w| w[0] < w[1]));
-    let mut drop = vec![false; faces.len()];
+    let mut dropped = Vec::new();
     if candidates.len() > 1 {
+        let keys: Vec<[u32; 3]> = candidates
+            .iter()
+            .map(|&i| sorted_tri(faces[i as usize]))
+            .collect();
         let bits = (2 * candidates.len()).next_power_of_two().trailing_zeros();
         let mask = (1usize << bits) - 1;
         let mut slots = vec![NONE; mask + 1];
-        for &i in candidates {
-            let k = sorted_tri(faces[i as usize]);
+        for (p, k) in keys.iter().enumerate() {
             let h = (u64::from(k[0]) | (u64::from(k[1]) << 21) | (u64::from(k[2]) << 42))
                 .wrapping_mul(0x9e37_79b9_7f4a_7c15);
             let mut at = (h >> (64 - bits)) as usize;
             loop {
-                let j = slots[at];
-                if j == NONE {
-                    slots[at] = i;
+                let q = slots[at];
+                if q == NONE {
+                    slots[at] = p as u32;
                     break;
                 }
-                if sorted_tri(faces[j as usize]) == k {
-                    drop[i as usize] = true;
+                if keys[q as usize] == *k {
+                    dropped.push(candidates[p]);
                     break;
                 }
                 at = (at + 1) & mask;
             }
         }
     }
+    remove_sorted(faces, &dropped);
+    dropped
+}
+
+/// Removes the elements at the increasing indices `drop` from `v`.
+fn remove_sorted<T>(v: &mut Vec<T>, drop: &[u32]) {
+    if drop.is_empty() {
+        return;
+    }
+    let mut next = drop.iter().map(|&i| i as usize).peekable();
     let mut i = 0;
-    faces.retain(|_| {
+    v.retain(|_| {
         i += 1;
-        !drop[i - 1]
+        next.next_if_eq(&(i - 1)).is_none()
     });
-    drop
 }
 
 fn edge_key(a: u32, b: u32) -> u64 {
@@ -1606,8 +1926,13 @@ fn orient(mesh: &mut TriMesh) {
                 // Consistent neighbours traverse their shared edge in
                 // opposite directions.
                 let g = mesh.faces[j];
-                let same_dir = (0..3)
-                    .any(|k| (0..3).any(|m| g[m] == f[k] && g[(m + 1) % 3] == f[(k + 1) % 3]));
+                // (All nine pairings tested, or-ed: no branch on each.)
+                let mut same_dir = false;
+                for k in 0..3 {
+                    for m in 0..3 {
+                        same_dir |= (g[m] == f[k]) & (g[(m + 1) % 3] == f[(k + 1) % 3]);
+                    }
+                }
                 if same_dir {
                     mesh.faces[j].swap(1, 2);
                 }
@@ -1816,8 +2141,8 @@ mod tests {
             [0, 2, 1],
         ];
         // Triangle 1 is not a candidate: its copy 4 is kept.
-        let drop = dedupe_face_triangles(&mut faces, &[0, 2, 3, 4, 5]);
-        assert_eq!(drop, [false, false, true, false, false, true]);
+        let dropped = dedupe_face_triangles(&mut faces, &[0, 2, 3, 4, 5]);
+        assert_eq!(dropped, [2, 5]);
         assert_eq!(faces, [[0, 1, 2], [5, 6, 7], [1, 2, 3], [7, 5, 6]]);
     }
 

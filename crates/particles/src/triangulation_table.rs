@@ -78,6 +78,33 @@ pub struct Table {
     pub configs: Vec<Config>,
     /// A representative configuration (the smallest mask) of each class.
     pub representatives: [u8; CLASS_COUNT],
+    /// [`Table::configs`] in the 8 bytes per configuration a scan reads
+    /// for every neighbourhood (2 KiB in all, where the configurations
+    /// with their vectors spread over many cache lines).
+    pub compact: [Compact; 256],
+    /// Bit `m`: configuration `m` is a solid (`C_6+`).
+    pub solid: [u64; 4],
+}
+
+/// How a configuration is triangulated, packed (see [`Table::compact`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Compact {
+    /// As [`Config::class`].
+    pub class: u8,
+    /// 0 none, 1 a triangle, 2 a quad, 3 a solid ([`Shape`]).
+    pub kind: u8,
+    /// [`Config::face`]: 0 none, 1 the upper face along some axis, `2 +
+    /// axis` the lower face along `axis`.
+    pub face: u8,
+    /// The triangle's or the quad's corners.
+    pub corners: [u8; 4],
+}
+
+impl Compact {
+    pub const NONE: u8 = 0;
+    pub const TRIANGLE: u8 = 1;
+    pub const QUAD: u8 = 2;
+    pub const SOLID: u8 = 3;
 }
 
 /// The 48 symmetries as corner permutations.
@@ -376,9 +403,34 @@ fn build() -> Table {
             adjacent,
         });
     }
+    let mut compact = [Compact::default(); 256];
+    let mut solid = [0u64; 4];
+    for (m, c) in configs.iter().enumerate() {
+        let (kind, corners) = match &c.shape {
+            Shape::None => (Compact::NONE, [0; 4]),
+            Shape::Triangle(t) => (Compact::TRIANGLE, [t[0], t[1], t[2], 0]),
+            Shape::Quad(q) => (Compact::QUAD, *q),
+            Shape::Solid(_) => (Compact::SOLID, [0; 4]),
+        };
+        if kind == Compact::SOLID {
+            solid[m >> 6] |= 1 << (m & 63);
+        }
+        compact[m] = Compact {
+            class: c.class,
+            kind,
+            face: match c.face {
+                None => 0,
+                Some((_, 1)) => 1,
+                Some((axis, _)) => 2 + axis,
+            },
+            corners,
+        };
+    }
     Table {
         configs,
         representatives,
+        compact,
+        solid,
     }
 }
 
