@@ -27,13 +27,12 @@
 //! leaf's middle column ([`encode::Placement`]), so the precision layers
 //! code little more than the coordinate across the surface. Triangles ≈
 //! 2.0–2.1 × particles per level; decode + triangulate of the finest level
-//! (best of alternated runs on a loaded 2-core machine, `cargo run
-//! --release -p lodkit-particles --example pop_profile -- icosphere6:8:12`)
-//! ≈ 10.4–12.1 M triangles/s in the baseline mode and 5.9–7.0 M in the
-//! entropy mode, whose range decoder is bound by the chain of contexts
-//! each waiting on the previous symbol (wall time by size: `cargo bench -p lodkit-bench
-//! --bench pop`; decoding alone: `cargo run --release -p lodkit-particles
-//! --example pop_decode_time`);
+//! (criterion, 2-core machine at load < 1, `cargo bench -p lodkit-bench
+//! --bench pop`) 13–16 M triangles/s in the baseline mode and 7.8–8.6 M in
+//! the entropy mode, whose decoder makes about 12 binary decisions per
+//! particle at R = 8 (per stage: `cargo run --release -p lodkit-particles
+//! --example pop_profile -- icosphere6:8:12`; decoding alone: `cargo run
+//! --release -p lodkit-particles --example pop_decode_time`);
 //! `lodkit pop stats FILE` prints the paper's Table 1 for any stream.
 //!
 //! ```no_run
