@@ -12,8 +12,9 @@
 //! The pipeline reads top to bottom in the file names:
 //! [`octree`] → [`thinning`] → [`ordering`] → [`attributes`] →
 //! [`hierarchical_coding`] (levels) and [`precision_coding`] (precision
-//! layers) over [`encode_baseline`] or [`encode_entropy`] → [`container`]; and back: [`decode`] → [`triangulate`] (with
-//! [`triangulation_table`]) → [`stats`].
+//! layers) over [`encode_baseline`] or [`encode_entropy`] → [`container`];
+//! and back: [`decode`](mod@decode) → [`triangulate`](mod@triangulate)
+//! (with [`triangulation_table`]) → [`stats`].
 //!
 //! ## What to expect (release build, shared 2-core machine)
 //!

@@ -186,7 +186,7 @@ pub const fn normal_axis(mask: u8) -> usize {
 /// (axes other than its [`normal_axis`]) code their first `k` bits below
 /// `R`, then are the middle of that sub-cell (`1` then zeros), never coded
 /// again; its normal coordinate is coded in every layer with a context
-/// from the height its neighbours predict ([`height_bin`]). Other bits are
+/// from the height its neighbours predict (`height_bin`). Other bits are
 /// conditioned on the axis, the layer (first, second, later), the leaf's
 /// face neighbours along the axis, whether it is the normal axis, and the
 /// two bits above.

@@ -32,7 +32,7 @@
 //! of neighbourhoods against Table 1's ≈ 10 %) are the staircases of a
 //! curved, noisy surface at this resolution, not cubes left behind. The
 //! non-manifold triangles they caused are handled by the triangulation
-//! (see [`crate::triangulate`], "Settling").
+//! (see [`crate::triangulate`](mod@crate::triangulate), "Settling").
 use crate::octree::{FACES, Label, Octree, offset, unmorton};
 
 /// Options of [`thin`].

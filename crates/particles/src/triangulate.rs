@@ -37,7 +37,7 @@
 //! edges inside one of its discs, each in the graphs of two or more
 //! neighbours, the other disc is emitted — its interior edges are nobody
 //! else's, and the neighbours keep the ones it leaves (see
-//! [`split_by_cycle`]; on the bunny at R = 7 this resolves a quarter of
+//! `split_by_cycle`; on the bunny at R = 7 this resolves a quarter of
 //! the ambiguous neighbourhoods the paper's test leaves whole, with no new
 //! boundary edge). When an edge inside one disc is in one neighbour's
 //! graph only, that disc is the first choice (leaving the edge would
@@ -50,7 +50,7 @@
 //! resolved ones of every class but `C_6` — are built last: each takes the
 //! subset of its hull triangles that best fits what the rest of the level
 //! built (no hull edge used once, every cube in a triangle, fewest surplus
-//! edge uses), in scan order, two sweeps ([`settle`]). The whole hull is
+//! edge uses), in scan order, two sweeps (`settle`). The whole hull is
 //! always a candidate, so this opens no hole. Resolved `C_6`s (≈ 15 % of
 //! neighbourhoods) are built at once: settling them too changed nothing on
 //! the bunny or the armadillo and cost 8× the triangulation time. On the
