@@ -37,9 +37,9 @@ pub struct Faces {
     pub column: Vec<u8>,
     /// Per particle: the particles across its four tangential faces (the
     /// faces whose axis is not its normal axis), in face order, the
-    /// particle's own number where there is none. After the first precision layer only its
-    /// height predictors are left (column particles with the same normal
-    /// axis, when the particle is a column particle itself).
+    /// particle's own number where there is none. From the second
+    /// precision layer on, a column particle's row holds only its height
+    /// predictors (the column particles among them with its normal axis).
     tangential: Vec<[u32; 4]>,
     /// Per column particle, from the second layer on: its predictors
     /// (bits 0–3) and how many of them come before it (bits 4–7).
