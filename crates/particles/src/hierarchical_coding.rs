@@ -296,6 +296,7 @@ impl Links {
 
     /// Calls `f(i, links of node i)` for every node in order, deriving
     /// pending links on the fly.
+    #[inline(always)]
     pub(crate) fn for_each_row(&self, mut f: impl FnMut(usize, [u32; 6])) {
         match &self.pending {
             Some(p) => each_child_links(&p.parent_nb, &p.masks, &p.firsts, f),
@@ -685,7 +686,7 @@ fn child_links(parent_nb: &[[u32; 6]], masks: &[u8], firsts: &[u32], n: usize) -
 ///
 /// Which children exist is data: each link is selected with masks (the
 /// child's rank among its siblings from a table), not branched on.
-#[inline]
+#[inline(always)]
 fn each_child_links(
     parent_nb: &[[u32; 6]],
     masks: &[u8],
