@@ -97,14 +97,7 @@ fn add_faces(
     if p >= particles {
         return;
     }
-    // A shift chain, one word at a time: the row was just stored word by
-    // word, and a vector load of it would wait for those stores to retire
-    // (a failed store forward) — which the compiler's vectorised form of
-    // this loop did, for most of the function's time.
-    let mut mask = 0u8;
-    for &node in row.iter().rev() {
-        mask = mask << 1 | u8::from(node != NONE);
-    }
+    let mask = (0..6).fold(0u8, |m, d| m | u8::from(row[d] != NONE) << d);
     let info = AXES[usize::from(mask)];
     axes[p] = info;
     // The four faces off the normal axis, in face order; a neighbour
