@@ -256,6 +256,9 @@ pub fn code_precision<C: BitCoder>(
     for i in 0..n {
         let info = axes[i];
         let g = usize::from(info & 3);
+        // A particle codes at most a column flag, two depth decisions and
+        // three coordinates: one budget check covers them.
+        coder.reserve(6)?;
         if first_layer {
             let col = &mut column[i];
             let mut is_column = *col != 0;
@@ -263,13 +266,13 @@ pub fn code_precision<C: BitCoder>(
                 + usize::from(info >> 2 & 3) * 9
                 + usize::from(info >> 4 & 3) * 3
                 + usize::from(info >> 6);
-            coder.bit(&mut is_column, ctx)?;
+            coder.bit_reserved(&mut is_column, ctx)?;
             if is_column {
                 let want = col.saturating_sub(1);
                 let mut k = 0u8;
                 while k < MAX_COLUMN_DEPTH {
                     let mut deeper = want > k;
-                    coder.bit(&mut deeper, COLK + k as usize)?;
+                    coder.bit_reserved(&mut deeper, COLK + k as usize)?;
                     if !deeper {
                         break;
                     }
@@ -287,7 +290,7 @@ pub fn code_precision<C: BitCoder>(
             for a in 0..3 {
                 let c = q[i][a];
                 let mut bit = (c >> shift) & 1 == 1;
-                coder.bit(&mut bit, plain(a, info, g) + above(c))?;
+                coder.bit_reserved(&mut bit, plain(a, info, g) + above(c))?;
                 q[i][a] = (c & !(1 << shift)) | (u32::from(bit) << shift);
             }
             continue;
@@ -335,7 +338,7 @@ pub fn code_precision<C: BitCoder>(
             let c = q[i][g];
             let bin = height_bin(height, &pred, count, i, shift);
             let mut bit = (c >> shift) & 1 == 1;
-            coder.bit(&mut bit, pred_ctx + bin * 4 + above(c))?;
+            coder.bit_reserved(&mut bit, pred_ctx + bin * 4 + above(c))?;
             let v = (c & !(1 << shift)) | (u32::from(bit) << shift);
             q[i][g] = v;
             height[i] = ((v >> shift) << shift) as u16;
@@ -354,7 +357,7 @@ pub fn code_precision<C: BitCoder>(
                 plain(a, info, g)
             } + above(c);
             let mut bit = (c >> shift) & 1 == 1;
-            coder.bit(&mut bit, ctx)?;
+            coder.bit_reserved(&mut bit, ctx)?;
             q[i][a] = (c & !(1 << shift)) | (u32::from(bit) << shift);
         }
         height[i] = ((q[i][g] >> shift) << shift) as u16;
