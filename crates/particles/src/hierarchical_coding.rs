@@ -141,8 +141,8 @@ pub struct LevelInput<'a> {
     pub max_nodes: usize,
 }
 
-/// No node across this face.
-const NONE: u32 = u32::MAX;
+/// No node across this face (a [`Links`] row's marker).
+pub(crate) const NONE: u32 = u32::MAX;
 
 /// The children (bit `k`: child `k`) on the upper side of their parent
 /// along x, y, z.

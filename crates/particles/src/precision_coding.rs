@@ -13,11 +13,8 @@
 //! its height predictors are a fixed four-slot row read without branching
 //! on how many there are, and its tangential coordinates are settled once.
 use crate::error::{Result, stream_err};
-use crate::hierarchical_coding::{BitCoder, COL, COLK, Links, PREC, PRED, PRED_BINS};
+use crate::hierarchical_coding::{BitCoder, COL, COLK, Links, NONE, PREC, PRED, PRED_BINS};
 use crate::ordering::HLevel;
-
-/// No node across this face (the links' marker).
-const NONE: u32 = u32::MAX;
 
 /// Deepest column (tangential bits coded below `R` before the implied
 /// middle) the entropy mode signals.
