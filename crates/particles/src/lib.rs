@@ -14,7 +14,7 @@
 //! [`hierarchical_coding`] (levels) and [`precision_coding`] (precision
 //! layers) over [`encode_baseline`] or [`encode_entropy`] → [`container`];
 //! and back: [`decode`](mod@decode) → [`triangulate`](mod@triangulate)
-//! (with [`triangulation_table`]) → [`stats`].
+//! (with [`triangulation_table`], then [`orientation`]) → [`stats`].
 //!
 //! ## What to expect (release build, shared 2-core machine)
 //!
@@ -58,6 +58,7 @@ pub mod error;
 pub mod hierarchical_coding;
 pub mod octree;
 pub mod ordering;
+pub mod orientation;
 pub mod precision_coding;
 pub mod stats;
 pub mod thinning;

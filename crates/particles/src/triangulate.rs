@@ -66,9 +66,7 @@
 //! a short edge whose cubes are already taken is kept.
 //!
 //! **Orientation** (not in the paper, which renders without culling):
-//! triangles are turned to agree with the particle normals when there are
-//! some, else made consistent across manifold edges and each component
-//! turned outwards by its signed volume.
+//! [`crate::orientation`], when [`TriangulateOptions::orient`] asks.
 use std::borrow::Cow;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
@@ -824,7 +822,7 @@ fn triangulate_impl(
     }
     mesh.faces = faces;
     if opts.orient {
-        orient(&mut mesh);
+        crate::orientation::orient(&mut mesh);
     }
     stats.triangles = mesh.faces.len();
     stats.seconds = start.elapsed().as_secs_f64();
@@ -1830,129 +1828,6 @@ pub fn non_manifold_flags(mesh: &TriMesh) -> Vec<bool> {
         i = j;
     }
     bad
-}
-
-/// Calls `f(t1, t2)`, `t1 < t2`, for the two triangles of every edge that
-/// exactly two use, in the order of the edges' keys (lower vertex, then
-/// upper) — [`sorted_sides`]' order, without sorting all the sides: they
-/// are bucketed by lower vertex (a counting pass, then a filling one) and
-/// only each vertex's few sorted.
-fn manifold_pairs(faces: &[[u32; 3]], vertices: usize, mut f: impl FnMut(u32, u32)) {
-    let n = faces
-        .iter()
-        .flatten()
-        .map(|&v| v as usize + 1)
-        .max()
-        .unwrap_or(0)
-        .max(vertices);
-    let mut start = vec![0u32; n + 1];
-    for t in faces {
-        for k in 0..3 {
-            start[t[k].min(t[(k + 1) % 3]) as usize + 1] += 1;
-        }
-    }
-    for v in 0..n {
-        start[v + 1] += start[v];
-    }
-    let mut fill = start.clone();
-    // (upper vertex, triangle), by lower vertex; triangles in order.
-    let mut sides = vec![(0u32, 0u32); 3 * faces.len()];
-    for (i, t) in faces.iter().enumerate() {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            let slot = &mut fill[a.min(b) as usize];
-            sides[*slot as usize] = (a.max(b), i as u32);
-            *slot += 1;
-        }
-    }
-    for v in 0..n {
-        let bucket = &mut sides[start[v] as usize..start[v + 1] as usize];
-        bucket.sort_unstable();
-        let mut i = 0;
-        while i < bucket.len() {
-            let mut j = i + 1;
-            while j < bucket.len() && bucket[j].0 == bucket[i].0 {
-                j += 1;
-            }
-            if j - i == 2 {
-                f(bucket[i].1, bucket[i + 1].1);
-            }
-            i = j;
-        }
-    }
-}
-
-/// See the module docs, "Orientation".
-fn orient(mesh: &mut TriMesh) {
-    if let Some(n) = &mesh.normals {
-        for f in &mut mesh.faces {
-            let [a, b, c] = f.map(|v| mesh.positions[v as usize]);
-            let fn_ = (b - a).cross(c - a);
-            let vn = n[f[0] as usize] + n[f[1] as usize] + n[f[2] as usize];
-            if fn_.dot(vn) < 0.0 {
-                f.swap(1, 2);
-            }
-        }
-        return;
-    }
-    // Triangle → its neighbours across manifold edges.
-    let nf = mesh.faces.len();
-    let mut across = vec![[u32::MAX; 3]; nf];
-    manifold_pairs(&mesh.faces, mesh.positions.len(), |t1, t2| {
-        for (t, o) in [(t1, t2), (t2, t1)] {
-            if let Some(slot) = across[t as usize].iter_mut().find(|x| **x == u32::MAX) {
-                *slot = o;
-            }
-        }
-    });
-    let mut done = vec![false; nf];
-    let mut stack = Vec::new();
-    let mut component = Vec::new();
-    for seed in 0..nf {
-        if done[seed] {
-            continue;
-        }
-        done[seed] = true;
-        stack.push(seed);
-        component.clear();
-        while let Some(i) = stack.pop() {
-            component.push(i);
-            let f = mesh.faces[i];
-            for &j in &across[i] {
-                if j == u32::MAX || done[j as usize] {
-                    continue;
-                }
-                let j = j as usize;
-                // Consistent neighbours traverse their shared edge in
-                // opposite directions.
-                let g = mesh.faces[j];
-                // (All nine pairings tested, or-ed: no branch on each.)
-                let mut same_dir = false;
-                for k in 0..3 {
-                    for m in 0..3 {
-                        same_dir |= (g[m] == f[k]) & (g[(m + 1) % 3] == f[(k + 1) % 3]);
-                    }
-                }
-                if same_dir {
-                    mesh.faces[j].swap(1, 2);
-                }
-                done[j] = true;
-                stack.push(j);
-            }
-        }
-        let volume: f64 = component
-            .iter()
-            .map(|&i| {
-                let [a, b, c] = mesh.faces[i].map(|v| mesh.positions[v as usize].as_dvec3());
-                a.dot(b.cross(c))
-            })
-            .sum();
-        if volume < 0.0 {
-            for &i in &component {
-                mesh.faces[i].swap(1, 2);
-            }
-        }
-    }
 }
 
 #[cfg(test)]

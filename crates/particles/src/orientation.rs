@@ -1,0 +1,267 @@
+//! Orientation of a triangulated level (not in the paper, which renders
+//! without culling): triangles are turned to agree with the particle
+//! normals when there are some, else made consistent across manifold
+//! edges and each connected component turned outwards by its signed
+//! volume.
+//!
+//! The triangulation builds triangles neighbourhood by neighbourhood with
+//! no common winding, so without normals the winding is propagated over
+//! the edge graph: a walk from the lowest triangle of each component
+//! turns every neighbour across an edge that exactly two triangles use to
+//! traverse that edge the other way, then the component's signed volume
+//! decides whether it faces outwards.
+use lodkit_mesh::TriMesh;
+
+/// See the module docs.
+pub fn orient(mesh: &mut TriMesh) {
+    if let Some(n) = &mesh.normals {
+        for f in &mut mesh.faces {
+            let [a, b, c] = f.map(|v| mesh.positions[v as usize]);
+            let face_normal = (b - a).cross(c - a);
+            let vn = n[f[0] as usize] + n[f[1] as usize] + n[f[2] as usize];
+            if face_normal.dot(vn) < 0.0 {
+                f.swap(1, 2);
+            }
+        }
+        return;
+    }
+    // Windings as a union-find with parity: `flip[t]` tells whether `t`
+    // must turn relative to `parent[t]`. Each root is its component's
+    // lowest triangle, which keeps its winding, as a walk from it would.
+    let faces = &mut mesh.faces;
+    let nf = faces.len();
+    let mut parent: Vec<u32> = (0..nf as u32).collect();
+    let mut flip = vec![false; nf];
+    manifold_pairs(faces, mesh.positions.len(), |t1, t2| {
+        let (f, g) = (faces[t1 as usize], faces[t2 as usize]);
+        // Consistent neighbours traverse their shared edge in opposite
+        // directions. (All nine pairings tested, or-ed: no branch on each.)
+        let mut same_dir = false;
+        for k in 0..3 {
+            for m in 0..3 {
+                same_dir |= (g[m] == f[k]) & (g[(m + 1) % 3] == f[(k + 1) % 3]);
+            }
+        }
+        let (r1, p1) = find(&mut parent, &mut flip, t1);
+        let (r2, p2) = find(&mut parent, &mut flip, t2);
+        // Equal roots: the edge closes a cycle, consistent or not (a
+        // non-orientable component keeps the first windings found).
+        if r1 != r2 {
+            let (lo, hi) = (r1.min(r2), r1.max(r2));
+            parent[hi as usize] = lo;
+            flip[hi as usize] = p1 ^ p2 ^ same_dir;
+        }
+    });
+    // Each component's signed volume with the windings made consistent
+    // (untouched entries of `volume` cost no memory).
+    let mut volume = vec![0f64; nf];
+    for t in 0..nf {
+        let (r, p) = find(&mut parent, &mut flip, t as u32);
+        let [a, b, c] = faces[t].map(|v| mesh.positions[v as usize].as_dvec3());
+        let v = a.dot(b.cross(c));
+        volume[r as usize] += if p { -v } else { v };
+    }
+    for (t, f) in faces.iter_mut().enumerate() {
+        // Found above: `parent` is the root, `flip` the parity to it.
+        let r = parent[t] as usize;
+        if flip[t] != (volume[r] < 0.0) {
+            f.swap(1, 2);
+        }
+    }
+}
+
+/// The root of `t` and whether `t` turns relative to it; every triangle
+/// passed on the way is linked to the root directly.
+#[inline]
+fn find(parent: &mut [u32], flip: &mut [bool], t: u32) -> (u32, bool) {
+    let (mut x, mut p) = (t as usize, false);
+    while parent[x] as usize != x {
+        p ^= flip[x];
+        x = parent[x] as usize;
+    }
+    let root = x as u32;
+    let (mut y, mut py) = (t as usize, p);
+    while parent[y] != root && parent[y] as usize != y {
+        let (next, fy) = (parent[y] as usize, flip[y]);
+        parent[y] = root;
+        flip[y] = py;
+        py ^= fy;
+        y = next;
+    }
+    (root, p)
+}
+
+/// Calls `f(t1, t2)`, `t1 < t2`, for the two triangles of every edge that
+/// exactly two use, in the order of the edges' keys (lower vertex, then
+/// upper). The sides are bucketed by lower vertex (a counting pass, then
+/// a filling one), each packed in one word, upper vertex above triangle,
+/// so that sorting a vertex's few sides orders them by upper vertex, then
+/// triangle.
+fn manifold_pairs(faces: &[[u32; 3]], vertices: usize, mut f: impl FnMut(u32, u32)) {
+    let n = faces
+        .iter()
+        .flatten()
+        .map(|&v| v as usize + 1)
+        .max()
+        .unwrap_or(0)
+        .max(vertices);
+    // `end[v]`: one past vertex `v`'s last side; the filling pass, going
+    // backwards, leaves it at the first (triangles then in order).
+    let mut end = vec![0u32; n];
+    for t in faces {
+        for k in 0..3 {
+            end[t[k].min(t[(k + 1) % 3]) as usize] += 1;
+        }
+    }
+    let mut total = 0;
+    for e in &mut end {
+        total += *e;
+        *e = total;
+    }
+    let mut sides = vec![0u64; total as usize];
+    for (i, t) in faces.iter().enumerate().rev() {
+        for k in (0..3).rev() {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let slot = &mut end[a.min(b) as usize];
+            *slot -= 1;
+            sides[*slot as usize] = u64::from(a.max(b)) << 32 | i as u64;
+        }
+    }
+    let start = end;
+    for v in 0..n {
+        let to = start.get(v + 1).map_or(sides.len(), |&s| s as usize);
+        let bucket = &mut sides[start[v] as usize..to];
+        insertion_sort(bucket);
+        let mut i = 0;
+        while i < bucket.len() {
+            let upper = bucket[i] >> 32;
+            let mut j = i + 1;
+            while j < bucket.len() && bucket[j] >> 32 == upper {
+                j += 1;
+            }
+            if j - i == 2 {
+                f(bucket[i] as u32, bucket[i + 1] as u32);
+            }
+            i = j;
+        }
+    }
+}
+
+/// A vertex has a handful of sides: insertion sort beats the general sort
+/// on them.
+#[inline]
+fn insertion_sort(v: &mut [u64]) {
+    for i in 1..v.len() {
+        let x = v[i];
+        let mut j = i;
+        while j > 0 && v[j - 1] > x {
+            v[j] = v[j - 1];
+            j -= 1;
+        }
+        v[j] = x;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+    use lodkit_mesh::shapes::{blob, icosphere, torus};
+
+    use super::*;
+
+    /// Directed sides traversed the same way by two triangles (zero on a
+    /// consistently wound manifold).
+    fn same_way_sides(faces: &[[u32; 3]]) -> usize {
+        let mut seen = std::collections::HashMap::new();
+        for f in faces {
+            for k in 0..3 {
+                *seen.entry((f[k], f[(k + 1) % 3])).or_insert(0) += 1;
+            }
+        }
+        seen.values().filter(|&&c| c > 1).count()
+    }
+
+    fn signed_volume(m: &TriMesh, faces: &[[u32; 3]]) -> f64 {
+        faces
+            .iter()
+            .map(|f| {
+                let [a, b, c] = f.map(|v| m.positions[v as usize].as_dvec3());
+                a.dot(b.cross(c))
+            })
+            .sum()
+    }
+
+    /// Turns every triangle whose hash says so.
+    fn scramble(m: &mut TriMesh) {
+        for (i, f) in m.faces.iter_mut().enumerate() {
+            if (i as u32).wrapping_mul(0x9e37_79b9) >> 31 == 1 {
+                f.swap(1, 2);
+            }
+        }
+    }
+
+    #[test]
+    fn scrambled_closed_surfaces_are_wound_consistently_and_outwards() {
+        for mut m in [icosphere(4), torus(1.0, 0.3, 48, 24), blob(20_000)] {
+            m.normals = None;
+            let want = m.faces.clone();
+            scramble(&mut m);
+            assert!(same_way_sides(&m.faces) > 0);
+            orient(&mut m);
+            assert_eq!(same_way_sides(&m.faces), 0);
+            assert!(signed_volume(&m, &m.faces) > 0.0);
+            // The generators wind outwards: every triangle is back.
+            assert_eq!(m.faces, want);
+        }
+    }
+
+    #[test]
+    fn each_component_is_turned_outwards_on_its_own() {
+        // A sphere inside a sphere, the inner one listed first and
+        // inside out: as separate components both end up facing out.
+        let outer = icosphere(3);
+        let mut m = icosphere(2);
+        m.normals = None;
+        for p in &mut m.positions {
+            *p *= 0.5;
+        }
+        for f in &mut m.faces {
+            f.swap(1, 2);
+        }
+        let inner = m.faces.len();
+        let base = m.positions.len() as u32;
+        m.positions.extend(&outer.positions);
+        m.faces
+            .extend(outer.faces.iter().map(|f| f.map(|v| v + base)));
+        scramble(&mut m);
+        orient(&mut m);
+        assert_eq!(same_way_sides(&m.faces), 0);
+        assert!(signed_volume(&m, &m.faces[..inner]) > 0.0);
+        assert!(signed_volume(&m, &m.faces[inner..]) > 0.0);
+    }
+
+    #[test]
+    fn normals_decide_when_there_are_some() {
+        let mut m = icosphere(3);
+        // Normals pointing inwards: every triangle faces them.
+        m.normals = Some(m.positions.iter().map(|p| -p.normalize()).collect());
+        scramble(&mut m);
+        orient(&mut m);
+        let n = m.normals.as_ref().unwrap();
+        for f in &m.faces {
+            let [a, b, c] = f.map(|v| m.positions[v as usize]);
+            let vn: Vec3 = f.iter().map(|&v| n[v as usize]).sum();
+            assert!((b - a).cross(c - a).dot(vn) > 0.0);
+        }
+    }
+
+    #[test]
+    fn pairs_are_the_edges_two_triangles_share() {
+        // Three triangles on edge 0–1 (none paired there), a fourth sharing
+        // edge 1–2 with the first alone.
+        let faces = [[0, 1, 2], [1, 0, 3], [0, 1, 4], [2, 1, 5]];
+        let mut got = Vec::new();
+        manifold_pairs(&faces, 6, |a, b| got.push((a, b)));
+        assert_eq!(got, vec![(0, 3)]);
+    }
+}
