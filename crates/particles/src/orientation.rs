@@ -25,23 +25,17 @@ pub fn orient(mesh: &mut TriMesh) {
         }
         return;
     }
+    let faces = &mut mesh.faces;
+    let nf = faces.len();
+    if nf > MAX_TRIANGLES {
+        return;
+    }
     // Windings as a union-find with parity: `flip[t]` tells whether `t`
     // must turn relative to `parent[t]`. Each root is its component's
     // lowest triangle, which keeps its winding, as a walk from it would.
-    let faces = &mut mesh.faces;
-    let nf = faces.len();
     let mut parent: Vec<u32> = (0..nf as u32).collect();
     let mut flip = vec![false; nf];
-    manifold_pairs(faces, mesh.positions.len(), |t1, t2| {
-        let (f, g) = (faces[t1 as usize], faces[t2 as usize]);
-        // Consistent neighbours traverse their shared edge in opposite
-        // directions. (All nine pairings tested, or-ed: no branch on each.)
-        let mut same_dir = false;
-        for k in 0..3 {
-            for m in 0..3 {
-                same_dir |= (g[m] == f[k]) & (g[(m + 1) % 3] == f[(k + 1) % 3]);
-            }
-        }
+    manifold_pairs(faces, mesh.positions.len(), |t1, t2, same_dir| {
         let (r1, p1) = find(&mut parent, &mut flip, t1);
         let (r2, p2) = find(&mut parent, &mut flip, t2);
         // Equal roots: the edge closes a cycle, consistent or not (a
@@ -57,6 +51,7 @@ pub fn orient(mesh: &mut TriMesh) {
     let mut volume = vec![0f64; nf];
     for t in 0..nf {
         let (r, p) = find(&mut parent, &mut flip, t as u32);
+        (parent[t], flip[t]) = (r, p);
         let [a, b, c] = faces[t].map(|v| mesh.positions[v as usize].as_dvec3());
         let v = a.dot(b.cross(c));
         volume[r as usize] += if p { -v } else { v };
@@ -70,34 +65,40 @@ pub fn orient(mesh: &mut TriMesh) {
     }
 }
 
-/// The root of `t` and whether `t` turns relative to it; every triangle
-/// passed on the way is linked to the root directly.
+/// The root of `t` and whether `t` turns relative to it; the triangles
+/// passed on the way are relinked to their grandparents (path halving).
 #[inline]
 fn find(parent: &mut [u32], flip: &mut [bool], t: u32) -> (u32, bool) {
     let (mut x, mut p) = (t as usize, false);
-    while parent[x] as usize != x {
+    loop {
+        let up = parent[x] as usize;
+        if up == x {
+            return (x as u32, p);
+        }
+        let top = parent[up] as usize;
+        // A root's `flip` is false: `x` then keeps its parent.
+        flip[x] ^= flip[up];
+        parent[x] = top as u32;
         p ^= flip[x];
-        x = parent[x] as usize;
+        x = top;
     }
-    let root = x as u32;
-    let (mut y, mut py) = (t as usize, p);
-    while parent[y] != root && parent[y] as usize != y {
-        let (next, fy) = (parent[y] as usize, flip[y]);
-        parent[y] = root;
-        flip[y] = py;
-        py ^= fy;
-        y = next;
-    }
-    (root, p)
 }
 
-/// Calls `f(t1, t2)`, `t1 < t2`, for the two triangles of every edge that
-/// exactly two use, in the order of the edges' keys (lower vertex, then
-/// upper). The sides are bucketed by lower vertex (a counting pass, then
-/// a filling one), each packed in one word, upper vertex above triangle,
+/// Most triangles [`orient`] turns (larger meshes, of 12 GB of faces and
+/// more, are left as built): a side packs its triangle in 31 bits, and
+/// the sides of all triangles are counted in 32.
+const MAX_TRIANGLES: usize = 1 << 30;
+
+/// Calls `f(t1, t2, same_dir)`, `t1 < t2`, for the two triangles of every
+/// edge that exactly two use, in the order of the edges' keys (lower
+/// vertex, then upper); `same_dir` when both traverse it the same way
+/// (their windings disagree). The sides are bucketed by lower vertex (a
+/// counting pass, then a filling one), each packed in one word — upper
+/// vertex, triangle, whether it runs from the lower vertex to the upper —
 /// so that sorting a vertex's few sides orders them by upper vertex, then
 /// triangle.
-fn manifold_pairs(faces: &[[u32; 3]], vertices: usize, mut f: impl FnMut(u32, u32)) {
+fn manifold_pairs(faces: &[[u32; 3]], vertices: usize, mut f: impl FnMut(u32, u32, bool)) {
+    debug_assert!(faces.len() <= MAX_TRIANGLES);
     let n = faces
         .iter()
         .flatten()
@@ -124,7 +125,7 @@ fn manifold_pairs(faces: &[[u32; 3]], vertices: usize, mut f: impl FnMut(u32, u3
             let (a, b) = (t[k], t[(k + 1) % 3]);
             let slot = &mut end[a.min(b) as usize];
             *slot -= 1;
-            sides[*slot as usize] = u64::from(a.max(b)) << 32 | i as u64;
+            sides[*slot as usize] = u64::from(a.max(b)) << 32 | (i as u64) << 1 | u64::from(a < b);
         }
     }
     let start = end;
@@ -140,7 +141,8 @@ fn manifold_pairs(faces: &[[u32; 3]], vertices: usize, mut f: impl FnMut(u32, u3
                 j += 1;
             }
             if j - i == 2 {
-                f(bucket[i] as u32, bucket[i + 1] as u32);
+                let (s1, s2) = (bucket[i] as u32, bucket[i + 1] as u32);
+                f(s1 >> 1, s2 >> 1, (s1 ^ s2) & 1 == 0);
             }
             i = j;
         }
@@ -261,7 +263,12 @@ mod tests {
         // edge 1–2 with the first alone.
         let faces = [[0, 1, 2], [1, 0, 3], [0, 1, 4], [2, 1, 5]];
         let mut got = Vec::new();
-        manifold_pairs(&faces, 6, |a, b| got.push((a, b)));
-        assert_eq!(got, vec![(0, 3)]);
+        manifold_pairs(&faces, 6, |a, b, same| got.push((a, b, same)));
+        assert_eq!(got, vec![(0, 3, false)]);
+        // Turned, the fourth runs along 1–2 as the first does.
+        let faces = [[0, 1, 2], [1, 0, 3], [0, 1, 4], [1, 2, 5]];
+        got.clear();
+        manifold_pairs(&faces, 6, |a, b, same| got.push((a, b, same)));
+        assert_eq!(got, vec![(0, 3, true)]);
     }
 }
