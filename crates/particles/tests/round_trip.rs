@@ -291,3 +291,48 @@ fn point_clouds_with_normals_encode_and_decode() {
         t.stats.triangles
     );
 }
+
+/// Decoded levels come out wound consistently and outwards: every edge
+/// two triangles share is traversed once each way, and the closed level
+/// encloses a positive volume.
+#[test]
+fn decoded_levels_are_wound_consistently_and_outwards() {
+    use std::collections::HashMap;
+
+    use lodkit_particles::{TriangulateOptions, triangulate};
+    let opts = EncodeOptions {
+        depth: Some(6),
+        ..EncodeOptions::DEFAULT
+    };
+    let e = encode(&sphere(), &opts).unwrap();
+    let d = decode(&e.bytes, &DecodeOptions::default()).unwrap();
+    for r in 3..=6u8 {
+        let m = triangulate(&d.surface(r).unwrap(), &TriangulateOptions::DEFAULT).mesh;
+        let mut sides: HashMap<(u32, u32), [usize; 2]> = HashMap::new();
+        for f in &m.faces {
+            for k in 0..3 {
+                let (a, b) = (f[k], f[(k + 1) % 3]);
+                sides.entry((a.min(b), a.max(b))).or_default()[usize::from(a < b)] += 1;
+            }
+        }
+        let shared = sides.values().filter(|u| u[0] + u[1] == 2).count();
+        let same_way = sides
+            .values()
+            .filter(|u| u[0] + u[1] == 2 && (u[0] == 2 || u[1] == 2))
+            .count();
+        assert!(shared > 0);
+        assert_eq!(
+            same_way, 0,
+            "level {r}: {same_way} of {shared} shared edges"
+        );
+        let volume: f64 = m
+            .faces
+            .iter()
+            .map(|f| {
+                let [a, b, c] = f.map(|v| m.positions[v as usize].as_dvec3());
+                a.dot(b.cross(c))
+            })
+            .sum();
+        assert!(volume > 0.0, "level {r}: volume {volume}");
+    }
+}
