@@ -697,7 +697,7 @@ fn triangulate_impl(
                                 >> (64 - SHARED_MEMO_BITS))
                                 as usize];
                             if slot.0 != around {
-                                let (sh, tw) = shared_edges(&w, o, cfg.edges);
+                                let (sh, tw) = shared_edges(around, mask);
                                 *slot = (around, sh, tw);
                             }
                             let (shared, twice) = (slot.1, slot.2);
@@ -957,24 +957,33 @@ fn quad_split_score(p: &[Vec3; 4], n: Option<&[Vec3; 4]>, t0: [usize; 3], t1: [u
 
 /// For each of the 26 overlapping neighbourhoods `o + d` (index
 /// `(dx+1) + 3(dy+1) + 9(dz+1)`): its corners that lie in this block, and
-/// its corner pairs inside the overlap mapped to this block's pairs.
+/// its corner pairs inside the overlap with the same pairs in this
+/// block's numbering.
 struct Overlaps {
     corners: [u8; 27],
-    pairs: [u32; 27],
-    to_ours: [[u8; 28]; 27],
-    /// This block's pairs inside the overlap.
-    ours: [u32; 27],
+    /// `(its pair bit, our pair bit)` for each corner pair of the overlap:
+    /// six for a neighbour across a face, one across an edge (the rest
+    /// zero), none across a corner.
+    pairs: [[(u32, u32); 6]; 27],
+    /// Per configuration, the neighbours whose overlap holds an edge of
+    /// its graph `G_i` (bit `k`; never the configuration itself, 13).
+    near: [u32; 256],
 }
+
+/// The neighbours across a face (a 2×2 overlap, six corner pairs), as
+/// bits `k` of [`Overlaps::near`]; the others with an overlap pair are
+/// across an edge (one pair).
+const ACROSS_FACE: u32 = 1 << 4 | 1 << 10 | 1 << 12 | 1 << 14 | 1 << 16 | 1 << 22;
 
 fn overlaps() -> &'static Overlaps {
     static O: OnceLock<Overlaps> = OnceLock::new();
     O.get_or_init(|| {
         let mut o = Overlaps {
             corners: [0; 27],
-            pairs: [0; 27],
-            to_ours: [[u8::MAX; 28]; 27],
-            ours: [0; 27],
+            pairs: [[(0, 0); 6]; 27],
+            near: [0; 256],
         };
+        let mut ours = [0u32; 27];
         for k in 0..27usize {
             let d = [
                 (k % 3) as i32 - 1,
@@ -994,13 +1003,25 @@ fn overlaps() -> &'static Overlaps {
                     o.corners[k] |= 1 << j2;
                 }
             }
+            let mut n = 0;
             for a2 in 0..8u8 {
                 for b2 in a2 + 1..8u8 {
-                    if let (Some(a), Some(b)) = (ours_of(a2), ours_of(b2)) {
-                        o.pairs[k] |= 1 << pair(a2, b2);
-                        o.to_ours[k][pair(a2, b2) as usize] = pair(a, b) as u8;
-                        o.ours[k] |= 1 << pair(a, b);
+                    if let (Some(a), Some(b)) = (ours_of(a2), ours_of(b2))
+                        && k != 13
+                    {
+                        o.pairs[k][n] = (1 << pair(a2, b2), 1 << pair(a, b));
+                        ours[k] |= 1 << pair(a, b);
+                        n += 1;
                     }
+                }
+            }
+            debug_assert!(n == 6 || (n <= 1 && ACROSS_FACE & (1 << k) == 0));
+        }
+        for (mask, near) in o.near.iter_mut().enumerate() {
+            let edges = table().configs[mask].edges;
+            for (k, &ours) in ours.iter().enumerate() {
+                if edges & ours != 0 {
+                    *near |= 1 << k;
                 }
             }
         }
@@ -1011,47 +1032,48 @@ fn overlaps() -> &'static Overlaps {
 /// Slots of the `shared_edges` memo, as a power of two.
 const SHARED_MEMO_BITS: u32 = 11;
 
-/// The 27 neighbourhoods `o + d − 1` around and including `o`, `d ∈
-/// 0..3` per axis, x fastest.
-const NEIGHBOUR: [[usize; 3]; 27] = {
-    let mut t = [[0usize; 3]; 27];
-    let mut k = 0;
-    while k < 27 {
-        t[k] = [k % 3, (k / 3) % 3, k / 9];
-        k += 1;
-    }
-    t
-};
-
-/// Edges of `G_i` (as pair bits) also in the graph of an overlapping
-/// neighbourhood of the window, and those in the graphs of two or more.
-fn shared_edges(w: &Window, o: [usize; 3], edges: u32) -> (u32, u32) {
+/// Edges of `G_i` (as pair bits) of the configuration `mask` also in the
+/// graph of an overlapping neighbourhood, and those in the graphs of two or
+/// more. `around`: the 4×4×4 cubes of [`Window::block`], all that the
+/// neighbourhoods read. Without a branch on the neighbours' configurations
+/// (what a branch predictor cannot guess): fixed steps per neighbour.
+fn shared_edges(around: u64, mask: u8) -> (u32, u32) {
     let t = table();
     let ov = overlaps();
     let (mut shared, mut twice) = (0u32, 0u32);
-    for k in 0..27usize {
-        if k == 13 || edges & ov.ours[k] == 0 {
-            continue;
-        }
-        let d = NEIGHBOUR[k];
-        let o2 = [o[0] + d[0] - 1, o[1] + d[1] - 1, o[2] + d[2] - 1];
-        let m2 = w.mask(o2);
-        // A neighbour whose cubes all lie in this block (a planar patch on
-        // the shared face) is this block's own geometry, not outside
-        // evidence.
-        if m2 & !ov.corners[k] == 0 {
-            continue;
-        }
-        let mut e2 = t.configs[m2 as usize].edges & ov.pairs[k];
-        while e2 != 0 {
-            let p = e2.trailing_zeros() as usize;
-            e2 &= e2 - 1;
-            let bit = 1 << ov.to_ours[k][p];
-            twice |= shared & bit;
-            shared |= bit;
+    // All ones where `x` is not zero.
+    let ones = |x: u32| 0u32.wrapping_sub(u32::from(x != 0));
+    // Configuration of neighbour `k`, its graph's edges in the overlap
+    // (none when all its cubes lie in this block: a planar patch on the
+    // shared face is this block's own geometry, not outside evidence).
+    let theirs = |k: usize| {
+        let c = around >> (k % 3 + 4 * ((k / 3) % 3) + 16 * (k / 9));
+        let m2 = ((c & 3) | ((c >> 2) & 0xc) | ((c >> 12) & 0x30) | ((c >> 14) & 0xc0)) as u8;
+        t.configs[usize::from(m2)].edges & ones(u32::from(m2 & !ov.corners[k]))
+    };
+    let near = ov.near[usize::from(mask)];
+    let mut add = |e2: u32, (their, our): (u32, u32)| {
+        let bit = our & ones(e2 & their);
+        twice |= shared & bit;
+        shared |= bit;
+    };
+    let mut faces = near & ACROSS_FACE;
+    while faces != 0 {
+        let k = faces.trailing_zeros() as usize;
+        faces &= faces - 1;
+        let e2 = theirs(k);
+        for p in ov.pairs[k] {
+            add(e2, p);
         }
     }
-    (shared & edges, twice & edges)
+    let mut edges = near & !ACROSS_FACE;
+    while edges != 0 {
+        let k = edges.trailing_zeros() as usize;
+        edges &= edges - 1;
+        add(theirs(k), ov.pairs[k][0]);
+    }
+    let e = t.configs[usize::from(mask)].edges;
+    (shared & e, twice & e)
 }
 
 /// An ambiguous solid whose triangles are chosen once the level is
