@@ -242,6 +242,14 @@ struct Window<'a> {
     ids: [u32; IDS],
 }
 
+/// The scan's groups of four origin rows: first extended `y`, and a one
+/// in the low bit of each row (16 bits) that is an origin row (`1..=9`).
+const ROW_GROUPS: [(usize, u64); 3] = [
+    (1, 0x0001_0001_0001_0001),
+    (5, 0x0001_0001_0001_0001),
+    (9, 1),
+];
+
 /// Length of [`Window::ids`].
 const IDS: usize = 2048;
 
@@ -331,6 +339,17 @@ impl Window<'_> {
             | (row(o[1] + 1, o[2]) << 2)
             | (row(o[1], o[2] + 1) << 4)
             | (row(o[1] + 1, o[2] + 1) << 6)
+    }
+
+    /// Rows `i..i + 4` (four consecutive `y` of one `z`), 16 bits each,
+    /// first lowest.
+    #[inline]
+    fn rows4(&self, i: usize) -> u64 {
+        let r: &[u16; 4] = self.rows[i..i + 4].try_into().expect("four rows");
+        u64::from(r[0])
+            | (u64::from(r[1]) << 16)
+            | (u64::from(r[2]) << 32)
+            | (u64::from(r[3]) << 48)
     }
 
     /// The 4×4×4 cubes from `o − 1` to `o + 2` (extended coordinates), bit
@@ -600,21 +619,25 @@ fn triangulate_impl(
             }
         }
         for oz in 1..10usize {
-            for oy in 1..10usize {
+            // Origins y = −1..8 (1..10 extended) four at a time
+            // (`oy0..oy0 + 4`), a row of 16 bits each ([`Window::rows4`]).
+            for (oy0, lanes) in ROW_GROUPS {
                 let r = [
-                    w.rows[oy + EXT * oz],
-                    w.rows[oy + 1 + EXT * oz],
-                    w.rows[oy + EXT * (oz + 1)],
-                    w.rows[oy + 1 + EXT * (oz + 1)],
+                    w.rows4(oy0 + EXT * oz),
+                    w.rows4(oy0 + 1 + EXT * oz),
+                    w.rows4(oy0 + EXT * (oz + 1)),
+                    w.rows4(oy0 + 1 + EXT * (oz + 1)),
                 ];
                 // Most rows of a window miss the surface.
-                if (r[0] | r[1] | r[2] | r[3]) & 0x7fe == 0 {
+                if (r[0] | r[1] | r[2] | r[3]) & (lanes * 0x7fe) == 0 {
                     continue;
                 }
                 // Origins x = −1..8 (1..10 extended) whose neighbourhood
                 // has three ON cubes or more: a bit-sliced count of the
-                // eight cubes of all origins of the row at once.
-                let (mut ones, mut twos, mut fours) = (0u16, 0u16, 0u16);
+                // eight cubes of all origins of the four rows at once
+                // (bitwise: the bit a shift moves across rows lands on
+                // no origin).
+                let (mut ones, mut twos, mut fours) = (0u64, 0u64, 0u64);
                 for x in [
                     r[0],
                     r[0] >> 1,
@@ -630,10 +653,11 @@ fn triangulate_impl(
                     fours |= twos & carry;
                     twos ^= carry;
                 }
-                let mut any = (fours | (twos & ones)) & 0x3fe;
+                let mut any = (fours | (twos & ones)) & (lanes * 0x3fe);
                 while any != 0 {
-                    let ox = any.trailing_zeros() as usize;
+                    let bit = any.trailing_zeros() as usize;
                     any &= any - 1;
+                    let (ox, oy) = (bit & 15, oy0 + (bit >> 4));
                     let o = [ox, oy, oz];
                     let below =
                         u8::from(ox == 1) | (u8::from(oy == 1) << 1) | (u8::from(oz == 1) << 2);
@@ -641,7 +665,7 @@ fn triangulate_impl(
                         continue;
                     }
                     // `w.mask(o)`, from the rows at hand.
-                    let pair = |r: u16| ((r >> ox) & 3) as u8;
+                    let pair = |r: u64| ((r >> bit) & 3) as u8;
                     let mask =
                         pair(r[0]) | (pair(r[1]) << 2) | (pair(r[2]) << 4) | (pair(r[3]) << 6);
                     debug_assert_eq!(mask, w.mask(o));
@@ -878,6 +902,15 @@ fn defer_face(t: &Table, w: &Window, o: [usize; 3], face: u8) -> bool {
 #[inline]
 fn tri_normal(a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
     (b - a).cross(c - a).normalize_or_zero()
+}
+
+/// Unit normal of the hull triangle `t` (corners), `pos` giving the
+/// corners' positions. A function rather than a closure so that it can be
+/// forced inline: a closure called four times in [`smoother_disc`] was
+/// left out of line.
+#[inline(always)]
+fn hull_normal(t: [u8; 3], pos: &impl Fn(u8) -> Vec3) -> Vec3 {
+    tri_normal(pos(t[0]), pos(t[1]), pos(t[2]))
 }
 
 /// The two triangulations of a quad `a b c d`; returns the better one.
@@ -1679,12 +1712,11 @@ fn smoother_disc(
         (rest != 0) & (rest & rest.wrapping_sub(1) == 0)
     };
     if (tris.len() == 4) & two_bits(disc) {
-        let normal = |t: [u8; 3]| tri_normal(pos(t[0]), pos(t[1]), pos(t[2]));
         let normals = [
-            normal(tris[0]),
-            normal(tris[1]),
-            normal(tris[2]),
-            normal(tris[3]),
+            hull_normal(tris[0], pos),
+            hull_normal(tris[1], pos),
+            hull_normal(tris[2], pos),
+            hull_normal(tris[3], pos),
         ];
         let cosine = |d: u16| {
             let (i, j) = (d.trailing_zeros() as usize, 15 - d.leading_zeros() as usize);
@@ -1694,7 +1726,7 @@ fn smoother_disc(
     }
     let mut normals = [Vec3::ZERO; 16];
     for (i, t) in tris.iter().enumerate().take(16) {
-        normals[i] = tri_normal(pos(t[0]), pos(t[1]), pos(t[2]));
+        normals[i] = hull_normal(*t, pos);
     }
     // Cosines of the interior edges of each side.
     let mut cos = [[0.0f32; 16]; 2];
