@@ -353,15 +353,14 @@ impl Window<'_> {
     }
 
     /// The 4×4×4 cubes from `o − 1` to `o + 2` (extended coordinates), bit
-    /// `x + 4y + 16z`: everything the 27 neighbourhoods around `o` see.
+    /// `x + 16y + 4z`: everything the 27 neighbourhoods around `o` see.
+    /// (That order makes the four rows of a `z` one read and one mask.)
     #[inline]
     fn block(&self, o: [usize; 3]) -> u64 {
         let mut b = 0u64;
         for dz in 0..4 {
-            for dy in 0..4 {
-                let row = (self.rows[o[1] - 1 + dy + EXT * (o[2] - 1 + dz)] >> (o[0] - 1)) & 0xf;
-                b |= u64::from(row) << (4 * (dy + 4 * dz));
-            }
+            let rows = self.rows4(o[1] - 1 + EXT * (o[2] - 1 + dz)) >> (o[0] - 1);
+            b |= (rows & 0x000f_000f_000f_000f) << (4 * dz);
         }
         b
     }
@@ -1080,8 +1079,8 @@ fn shared_edges(around: u64, mask: u8) -> (u32, u32) {
     // (none when all its cubes lie in this block: a planar patch on the
     // shared face is this block's own geometry, not outside evidence).
     let theirs = |k: usize| {
-        let c = around >> (k % 3 + 4 * ((k / 3) % 3) + 16 * (k / 9));
-        let m2 = ((c & 3) | ((c >> 2) & 0xc) | ((c >> 12) & 0x30) | ((c >> 14) & 0xc0)) as u8;
+        let c = around >> (k % 3 + 16 * ((k / 3) % 3) + 4 * (k / 9));
+        let m2 = ((c & 0x33) | ((c >> 14) & 0xcc)) as u8;
         t.configs[usize::from(m2)].edges & ones(u32::from(m2 & !ov.corners[k]))
     };
     let near = ov.near[usize::from(mask)];
