@@ -562,10 +562,10 @@ fn triangulate_impl(
     // Direct-mapped memo of `split_by_cycle` (1024 slots; key never 0 for
     // a solid, whose mask has four cubes or more).
     let mut cycles: Vec<(u64, Split)> = vec![(0, Split::Whole); 1 << 10];
-    // Direct-mapped memo of `shared_edges`, keyed by the 4×4×4 cubes
-    // around the neighbourhood, which are all its overlapping
-    // neighbourhoods read (key never 0 around a solid).
-    let mut shared_memo: Vec<(u64, u32, u32)> = vec![(0, 0, 0); 1 << SHARED_MEMO_BITS];
+    // Direct-mapped memo of `shared_edges` and the split it leads to,
+    // keyed by the 4×4×4 cubes around the neighbourhood, which are all its
+    // overlapping neighbourhoods read (key never 0 around a solid).
+    let mut shared_memo: Vec<(u64, Split)> = vec![(0, Split::Whole); 1 << SHARED_MEMO_BITS];
     let mut trials: Vec<Trial> = Vec::new();
     let mut w = Window {
         rows: [0; EXT * EXT],
@@ -720,10 +720,21 @@ fn triangulate_impl(
                                 >> (64 - SHARED_MEMO_BITS))
                                 as usize];
                             if slot.0 != around {
-                                let (sh, tw) = shared_edges(around, mask);
-                                *slot = (around, sh, tw);
+                                let (shared, twice) = shared_edges(around, mask);
+                                // §6.2's cycle search depends on the
+                                // configuration and its shared edges only:
+                                // memoised too, over all blocks.
+                                let key = u64::from(shared)
+                                    | (u64::from(twice) << 28)
+                                    | (u64::from(mask) << 56);
+                                let cycle = &mut cycles
+                                    [(key.wrapping_mul(0x9e37_79b9_7f4a_7c15) >> 54) as usize];
+                                if cycle.0 != key {
+                                    *cycle = (key, split_by_cycle(mask, shared, twice, tris));
+                                }
+                                *slot = (around, cycle.1);
                             }
-                            let (shared, twice) = (slot.1, slot.2);
+                            let split = slot.1;
                             // Triangles on a face of the neighbourhood (three
                             // cubes sharing a coordinate) may be built by the
                             // solid across that face too.
@@ -734,17 +745,6 @@ fn triangulate_impl(
                                     from_solids.push(faces.len() as u32 - 1);
                                 }
                             };
-                            // §6.2's cycle search depends on the configuration
-                            // and its shared edges only: memoised.
-                            let key = u64::from(shared)
-                                | (u64::from(twice) << 28)
-                                | (u64::from(mask) << 56);
-                            let slot = &mut cycles
-                                [(key.wrapping_mul(0x9e37_79b9_7f4a_7c15) >> 54) as usize];
-                            if slot.0 != key {
-                                *slot = (key, split_by_cycle(mask, shared, twice, tris));
-                            }
-                            let split = slot.1;
                             // With decimation, whose merges follow the
                             // scan, every solid is built at once; without,
                             // the choices are settled once the level is
