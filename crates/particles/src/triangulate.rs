@@ -395,11 +395,12 @@ impl Window<'_> {
     #[inline]
     fn corners(&self, o: [usize; 3], mask: u8) -> [u32; 8] {
         let at = o[0] + EXT * (o[1] + EXT * o[2]);
-        let mut vs = [NONE; 8];
+        // One bounds check; the reads come in adjacent pairs.
+        let ids = &self.ids[at..at + CORNER_OFFSET[7] + 1];
+        let mut vs = CORNER_OFFSET.map(|d| ids[d]);
         for (j, v) in vs.iter_mut().enumerate() {
             // All ones where the corner is OFF.
-            let off = u32::from((mask >> j) & 1).wrapping_sub(1);
-            *v = self.ids[(at + CORNER_OFFSET[j]) & (IDS - 1)] | off;
+            *v |= u32::from(mask & (1 << j) == 0).wrapping_neg();
         }
         vs
     }
