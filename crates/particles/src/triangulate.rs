@@ -151,8 +151,6 @@ const DENSE_BRICKS: i64 = 128;
 /// coordinate there.
 const EXT_BRICK: [usize; 12] = [0, 0, 1, 1, 1, 1, 1, 1, 1, 1, 2, 2];
 const EXT_LOCAL: [usize; 12] = [6, 7, 0, 1, 2, 3, 4, 5, 6, 7, 0, 1];
-/// The extended coordinates in each of the three bricks along an axis.
-const EXT_ROWS: [std::ops::Range<usize>; 3] = [0..2, 2..10, 10..12];
 /// Extended window side.
 const EXT: usize = 12;
 
@@ -240,6 +238,13 @@ struct Window<'a> {
     /// fastest; [`Window::fill_ids`]), stale elsewhere; a power of two long
     /// so that a masked index needs no bounds check.
     ids: [u32; IDS],
+}
+
+/// The four low bytes of `x` in the four 16-bit parts of a word.
+#[inline]
+fn spread_bytes(x: u64) -> u64 {
+    let x = (x | (x << 16)) & 0x0000_ffff_0000_ffff;
+    (x | (x << 8)) & 0x00ff_00ff_00ff_00ff
 }
 
 /// The scan's groups of four origin rows: first extended `y`, and a one
@@ -350,6 +355,19 @@ impl Window<'_> {
             | (u64::from(r[1]) << 16)
             | (u64::from(r[2]) << 32)
             | (u64::from(r[3]) << 48)
+    }
+
+    /// Sets rows `i..i + 4` to the four 16-bit parts of `rows`, first
+    /// lowest.
+    #[inline]
+    fn set_rows4(&mut self, i: usize, rows: u64) {
+        let four = [
+            rows as u16,
+            (rows >> 16) as u16,
+            (rows >> 32) as u16,
+            (rows >> 48) as u16,
+        ];
+        self.rows[i..i + 4].copy_from_slice(&four);
     }
 
     /// The 4×4×4 cubes from `o − 1` to `o + 2` (extended coordinates), bit
@@ -599,23 +617,29 @@ fn triangulate_impl(
             };
         }
         w.fill_ids(first, &cells[first..end]);
-        // One z-slab word per brick row of three, then a byte per row.
-        let word = |b: &Brick, lz: usize| b.lin[lz];
+        // Per extended z, the z-slab word of each brick of the 3×3 around
+        // (a byte per row); four rows at a time, the bytes of each brick
+        // along x spread to 16-bit rows and merged: the top two cubes of
+        // the brick below, its eight, the bottom two of the brick above.
         for ez in 0..EXT {
-            let lz = EXT_LOCAL[ez];
-            for by in 0..3 {
-                let b = 3 * by + 9 * EXT_BRICK[ez];
-                let (lo, mid, hi) = (
-                    word(w.around[b], lz),
-                    word(w.around[b + 1], lz),
-                    word(w.around[b + 2], lz),
-                );
-                for ey in EXT_ROWS[by].clone() {
-                    let sh = 8 * EXT_LOCAL[ey];
-                    w.rows[ey + EXT * ez] = (((lo >> sh) & 0xc0) >> 6) as u16
-                        | ((((mid >> sh) & 0xff) as u16) << 2)
-                        | ((((hi >> sh) & 3) as u16) << 10);
-                }
+            let (lz, b) = (EXT_LOCAL[ez], 9 * EXT_BRICK[ez]);
+            // Bytes of extended rows `4g..4g + 4` of the bricks at `bx`.
+            let bytes = |bx: usize| {
+                let slab = |by: usize| w.around[b + 3 * by + bx].lin[lz];
+                let (below, this, above) = (slab(0), slab(1), slab(2));
+                [
+                    (below >> 48) | ((this & 0xffff) << 16),
+                    (this >> 16) & 0xffff_ffff,
+                    (this >> 48) | ((above & 0xffff) << 16),
+                ]
+            };
+            let (lo, mid, hi) = (bytes(0), bytes(1), bytes(2));
+            for g in 0..3 {
+                const TWO: u64 = 0x0003_0003_0003_0003;
+                let rows = ((spread_bytes(lo[g]) >> 6) & TWO)
+                    | (spread_bytes(mid[g]) << 2)
+                    | ((spread_bytes(hi[g]) & TWO) << 10);
+                w.set_rows4(4 * g + EXT * ez, rows);
             }
         }
         for oz in 1..10usize {
