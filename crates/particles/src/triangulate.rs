@@ -1497,26 +1497,41 @@ fn best_subset(
     count[..base.len()].copy_from_slice(base);
     let mut holes = base.iter().filter(|&&c| c == 1).count() as u32;
     let mut surplus: u32 = base.iter().map(|&c| c.saturating_sub(2)).sum();
-    // Triangles on each corner, and the corners with one or more.
-    let mut corner = [0u32; 8];
-    let mut covered = 0u8;
+    // Triangles on each corner, a 4-bit count per corner (a corner is in
+    // at most `SETTLE_MAX_TRIANGLES` < 16 triangles), added and removed a
+    // triangle at a time with one addition: each triangle's corners as
+    // ones in their counts.
+    debug_assert!(tris.len() <= SETTLE_MAX_TRIANGLES && SETTLE_MAX_TRIANGLES < 16);
+    let mut corners = 0u32;
+    let mut ones = [0u32; 16];
+    for (n, t) in ones.iter_mut().zip(tris) {
+        *n = t.iter().fold(0, |n, &j| n | (1 << (4 * j)));
+    }
+    // `bare` with a one in each of its corners' counts.
+    let bare = (0..8).fold(0u32, |b, j| b | (u32::from((bare >> j) & 1) << (4 * j)));
+    // Bare cubes in no triangle: the bare counts that are zero, summed
+    // into the top count by a multiplication (at most 8: no carry).
+    let uncovered = |corners: u32| {
+        let some = (corners | (corners >> 1) | (corners >> 2) | (corners >> 3)) & 0x1111_1111;
+        (bare & !some).wrapping_mul(0x1111_1111) >> 28
+    };
     // The key, packed in a word whose order is the tuple's: holes (≤ 18),
     // bare cubes left (≤ 8), surplus (< 2^20: at most 18 edges of a few
     // dozen triangles each), differing from `keep`, triangles (≤ 16), the
     // subset. A minimum without a branch per subset, and no `count_ones`
     // (software on the baseline x86-64 target): the triangles are counted
     // as they come and go.
-    let key = |sub: u16, ntri: u32, holes: u32, surplus: u32, covered: u8| {
+    let key = |sub: u16, ntri: u32, holes: u32, surplus: u32, corners: u32| {
         debug_assert!(holes < 32 && surplus < 1 << 20 && ntri < 32);
         (u64::from(holes) << 46)
-            | (u64::from(POP8[usize::from(bare & !covered)]) << 42)
+            | (u64::from(uncovered(corners)) << 42)
             | (u64::from(surplus) << 22)
             | (u64::from(sub != keep) << 21)
             | (u64::from(ntri) << 16)
             | u64::from(sub)
     };
     let (mut sub, mut ntri) = (0u16, 0u32);
-    let mut best = key(sub, ntri, holes, surplus, covered);
+    let mut best = key(sub, ntri, holes, surplus, corners);
     for g in 1..=u32::from(all_bits(tris.len())) {
         let i = g.trailing_zeros() as usize;
         sub ^= 1 << i;
@@ -1524,11 +1539,7 @@ fn best_subset(
         // +1 or −1.
         let d = if add { 1 } else { u32::MAX };
         ntri = ntri.wrapping_add(d);
-        for &j in &tris[i] {
-            let c = &mut corner[usize::from(j)];
-            *c = c.wrapping_add(d);
-            covered = (covered & !(1 << j)) | (u8::from(*c != 0) << j);
-        }
+        corners = corners.wrapping_add(ones[i].wrapping_mul(d));
         if !built[i] {
             for &e in &tri_edges[i] {
                 let old = count[e];
@@ -1538,21 +1549,10 @@ fn best_subset(
                 surplus = surplus + new.saturating_sub(2) - old.saturating_sub(2);
             }
         }
-        best = best.min(key(sub, ntri, holes, surplus, covered));
+        best = best.min(key(sub, ntri, holes, surplus, corners));
     }
     best as u16
 }
-
-/// Bits set in a byte.
-const POP8: [u8; 256] = {
-    let mut t = [0u8; 256];
-    let mut i = 0;
-    while i < 256 {
-        t[i] = (i as u32).count_ones() as u8;
-        i += 1;
-    }
-    t
-};
 
 /// How §6.2 resolves an ambiguous configuration.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
