@@ -928,10 +928,38 @@ fn tri_normal(a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
     (b - a).cross(c - a).normalize_or_zero()
 }
 
+/// [`hull_normal`] of four triangles at once, as the `x`, `y` and `z`
+/// of each: the triangles side by side in the lanes of `Vec4`s, each
+/// lane's operations those of the scalar code in the same order
+/// (`Vec3::cross`, `Vec3::normalize_or_zero`), so the normals have the
+/// same bits.
+#[inline(always)]
+fn hull_normals4(tris: [[u8; 3]; 4], pos: &impl Fn(u8) -> Vec3) -> [[f32; 4]; 3] {
+    use glam::Vec4;
+    let mut p = [[Vec3::ZERO; 3]; 4];
+    for (pt, t) in p.iter_mut().zip(tris) {
+        for (v, j) in pt.iter_mut().zip(t) {
+            *v = pos(j);
+        }
+    }
+    // Corner `c` of the four triangles, coordinate `f`.
+    let lane =
+        |c: usize, f: fn(Vec3) -> f32| Vec4::new(f(p[0][c]), f(p[1][c]), f(p[2][c]), f(p[3][c]));
+    let edge = |c: usize, f: fn(Vec3) -> f32| lane(c, f) - lane(0, f);
+    let (ax, ay, az) = (edge(1, |v| v.x), edge(1, |v| v.y), edge(1, |v| v.z));
+    let (bx, by, bz) = (edge(2, |v| v.x), edge(2, |v| v.y), edge(2, |v| v.z));
+    let nx = ay * bz - by * az;
+    let ny = az * bx - bz * ax;
+    let nz = ax * by - bx * ay;
+    let rcp = Vec4::ONE / ((nx * nx) + (ny * ny) + (nz * nz)).sqrt();
+    let ok = rcp.is_finite_mask() & rcp.cmpgt(Vec4::ZERO);
+    let unit = |n: Vec4| Vec4::select(ok, n * rcp, Vec4::ZERO).to_array();
+    [unit(nx), unit(ny), unit(nz)]
+}
+
 /// Unit normal of the hull triangle `t` (corners), `pos` giving the
 /// corners' positions. A function rather than a closure so that it can be
-/// forced inline: a closure called four times in [`smoother_disc`] was
-/// left out of line.
+/// forced inline (LLVM had left such a closure out of line).
 #[inline(always)]
 fn hull_normal(t: [u8; 3], pos: &impl Fn(u8) -> Vec3) -> Vec3 {
     tri_normal(pos(t[0]), pos(t[1]), pos(t[2]))
@@ -1738,15 +1766,14 @@ fn smoother_disc(
         (rest != 0) & (rest & rest.wrapping_sub(1) == 0)
     };
     if (tris.len() == 4) & two_bits(disc) {
-        let normals = [
-            hull_normal(tris[0], pos),
-            hull_normal(tris[1], pos),
-            hull_normal(tris[2], pos),
-            hull_normal(tris[3], pos),
-        ];
+        let [x, y, z] = hull_normals4([tris[0], tris[1], tris[2], tris[3]], pos);
+        // `Vec3::dot`'s order.
         let cosine = |d: u16| {
-            let (i, j) = (d.trailing_zeros() as usize, 15 - d.leading_zeros() as usize);
-            normals[i & 3].dot(normals[j & 3]).clamp(-1.0, 1.0)
+            let (i, j) = (
+                d.trailing_zeros() as usize & 3,
+                (15 - d.leading_zeros()) as usize & 3,
+            );
+            ((x[i] * x[j]) + (y[i] * y[j]) + (z[i] * z[j])).clamp(-1.0, 1.0)
         };
         return cosine(disc & 15) >= cosine(!disc & 15);
     }
