@@ -1883,17 +1883,20 @@ fn dedupe_face_triangles(faces: &mut Vec<[u32; 3]>, candidates: &[u32]) -> Vec<u
     dropped
 }
 
-/// Removes the elements at the increasing indices `drop` from `v`.
-fn remove_sorted<T>(v: &mut Vec<T>, drop: &[u32]) {
-    if drop.is_empty() {
+/// Removes the elements at the increasing indices `drop` from `v`: the
+/// runs between them move down, those before the first stay put (a
+/// `retain` tested every element, a few drops among all the faces).
+fn remove_sorted<T: Copy>(v: &mut Vec<T>, drop: &[u32]) {
+    let Some(&first) = drop.first() else {
         return;
+    };
+    let mut to = first as usize;
+    for (k, &d) in drop.iter().enumerate() {
+        let end = drop.get(k + 1).map_or(v.len(), |&n| n as usize);
+        v.copy_within(d as usize + 1..end, to);
+        to += end - d as usize - 1;
     }
-    let mut next = drop.iter().map(|&i| i as usize).peekable();
-    let mut i = 0;
-    v.retain(|_| {
-        i += 1;
-        next.next_if_eq(&(i - 1)).is_none()
-    });
+    v.truncate(to);
 }
 
 fn edge_key(a: u32, b: u32) -> u64 {
