@@ -678,16 +678,30 @@ fn triangulate_impl(
                     twos ^= carry;
                 }
                 let mut any = (fours | (twos & ones)) & (lanes * 0x3fe);
+                // Origins in a brick below (extended 1 on an axis): only
+                // those this brick owns are kept, tested first so that the
+                // loop below has no test.
+                let mut lower = any
+                    & match (oz, oy0) {
+                        (1, _) => u64::MAX,
+                        (_, 1) => (lanes * 2) | 0x3fe,
+                        _ => lanes * 2,
+                    };
+                while lower != 0 {
+                    let bit = lower.trailing_zeros() as usize;
+                    lower &= lower - 1;
+                    let (ox, oy) = (bit & 15, oy0 + (bit >> 4));
+                    let below =
+                        u8::from(ox == 1) | (u8::from(oy == 1) << 1) | (u8::from(oz == 1) << 2);
+                    if !owns(&w, [ox, oy, oz], below) {
+                        any &= !(1 << bit);
+                    }
+                }
                 while any != 0 {
                     let bit = any.trailing_zeros() as usize;
                     any &= any - 1;
                     let (ox, oy) = (bit & 15, oy0 + (bit >> 4));
                     let o = [ox, oy, oz];
-                    let below =
-                        u8::from(ox == 1) | (u8::from(oy == 1) << 1) | (u8::from(oz == 1) << 2);
-                    if below != 0 && !owns(&w, o, below) {
-                        continue;
-                    }
                     // `w.mask(o)`, from the rows at hand.
                     let pair = |r: u64| ((r >> bit) & 3) as u8;
                     let mask =
