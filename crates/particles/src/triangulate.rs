@@ -1526,7 +1526,9 @@ fn settle(
 /// cubes of `bare` left in no triangle, surplus edge uses, differing from
 /// `keep`, triangles, and the subset's bits. Every subset is visited in
 /// Gray-code order, one triangle added or removed per step, so each costs
-/// the update of three edge counts instead of a recount.
+/// the update of three edge counts instead of a recount. Out of line: its
+/// loop then keeps its state in registers (inlined in the scan, it spilled).
+#[inline(never)]
 fn best_subset(
     tris: &[[u8; 3]],
     tri_edges: &[[usize; 3]],
@@ -1535,7 +1537,8 @@ fn best_subset(
     bare: u8,
     keep: u16,
 ) -> u16 {
-    let mut count = [0u32; 18];
+    // A power of two long: an edge index masked needs no bounds check.
+    let mut count = [0u32; 32];
     count[..base.len()].copy_from_slice(base);
     let mut holes = base.iter().filter(|&&c| c == 1).count() as u32;
     let mut surplus: u32 = base.iter().map(|&c| c.saturating_sub(2)).sum();
@@ -1584,6 +1587,7 @@ fn best_subset(
         corners = corners.wrapping_add(ones[i].wrapping_mul(d));
         if !built[i] {
             for &e in &tri_edges[i] {
+                let e = e & 31;
                 let old = count[e];
                 let new = old.wrapping_add(d);
                 count[e] = new;
