@@ -722,12 +722,10 @@ fn triangulate_impl(
                             }
                         }
                     }
+                    // Corners index `vs` masked: no bounds check.
+                    let vertex = |j: u8| vs[usize::from(j & 7)];
                     let mut emit = |tri: [u8; 3], faces: &mut Vec<[u32; 3]>| -> bool {
-                        let f = [
-                            vs[tri[0] as usize],
-                            vs[tri[1] as usize],
-                            vs[tri[2] as usize],
-                        ];
+                        let f = [vertex(tri[0]), vertex(tri[1]), vertex(tri[2])];
                         if let Some(min) = min_edge
                             && merge_short_edge(f, min, &s.positions, &mut merged, &mut merges)
                         {
@@ -742,7 +740,7 @@ fn triangulate_impl(
                     if c.kind == Compact::TRIANGLE {
                         emit([q[0], q[1], q[2]], &mut faces);
                     } else if c.kind == Compact::QUAD {
-                        let vq = [0, 1, 2, 3].map(|k| vs[q[k] as usize] as usize);
+                        let vq = [0, 1, 2, 3].map(|k| vertex(q[k]) as usize);
                         let pos = [0, 1, 2, 3].map(|k| s.positions[vq[k]]);
                         let nrm = s.normals.as_ref().map(|n| [0, 1, 2, 3].map(|k| n[vq[k]]));
                         let (t1, t2) = choose_quad(q, pos, nrm);
