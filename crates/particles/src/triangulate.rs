@@ -149,8 +149,6 @@ const DENSE_BRICKS: i64 = 128;
 /// coordinate there.
 const EXT_BRICK: [usize; 12] = [0, 0, 1, 1, 1, 1, 1, 1, 1, 1, 2, 2];
 const EXT_LOCAL: [usize; 12] = [6, 7, 0, 1, 2, 3, 4, 5, 6, 7, 0, 1];
-/// The extended coordinates in each of the three bricks along an axis.
-const EXT_ROWS: [std::ops::Range<usize>; 3] = [0..2, 2..10, 10..12];
 /// Extended window side.
 const EXT: usize = 12;
 
@@ -239,6 +237,21 @@ struct Window<'a> {
     /// so that a masked index needs no bounds check.
     ids: [u32; IDS],
 }
+
+/// The four low bytes of `x` in the four 16-bit parts of a word.
+#[inline]
+fn spread_bytes(x: u64) -> u64 {
+    let x = (x | (x << 16)) & 0x0000_ffff_0000_ffff;
+    (x | (x << 8)) & 0x00ff_00ff_00ff_00ff
+}
+
+/// The scan's groups of four origin rows: first extended `y`, and a one
+/// in the low bit of each row (16 bits) that is an origin row (`1..=9`).
+const ROW_GROUPS: [(usize, u64); 3] = [
+    (1, 0x0001_0001_0001_0001),
+    (5, 0x0001_0001_0001_0001),
+    (9, 1),
+];
 
 /// Length of [`Window::ids`].
 const IDS: usize = 2048;
@@ -331,16 +344,39 @@ impl Window<'_> {
             | (row(o[1] + 1, o[2] + 1) << 6)
     }
 
+    /// Rows `i..i + 4` (four consecutive `y` of one `z`), 16 bits each,
+    /// first lowest.
+    #[inline]
+    fn rows4(&self, i: usize) -> u64 {
+        let r: &[u16; 4] = self.rows[i..i + 4].try_into().expect("four rows");
+        u64::from(r[0])
+            | (u64::from(r[1]) << 16)
+            | (u64::from(r[2]) << 32)
+            | (u64::from(r[3]) << 48)
+    }
+
+    /// Sets rows `i..i + 4` to the four 16-bit parts of `rows`, first
+    /// lowest.
+    #[inline]
+    fn set_rows4(&mut self, i: usize, rows: u64) {
+        let four = [
+            rows as u16,
+            (rows >> 16) as u16,
+            (rows >> 32) as u16,
+            (rows >> 48) as u16,
+        ];
+        self.rows[i..i + 4].copy_from_slice(&four);
+    }
+
     /// The 4×4×4 cubes from `o − 1` to `o + 2` (extended coordinates), bit
-    /// `x + 4y + 16z`: everything the 27 neighbourhoods around `o` see.
+    /// `x + 16y + 4z`: everything the 27 neighbourhoods around `o` see.
+    /// (That order makes the four rows of a `z` one read and one mask.)
     #[inline]
     fn block(&self, o: [usize; 3]) -> u64 {
         let mut b = 0u64;
         for dz in 0..4 {
-            for dy in 0..4 {
-                let row = (self.rows[o[1] - 1 + dy + EXT * (o[2] - 1 + dz)] >> (o[0] - 1)) & 0xf;
-                b |= u64::from(row) << (4 * (dy + 4 * dz));
-            }
+            let rows = self.rows4(o[1] - 1 + EXT * (o[2] - 1 + dz)) >> (o[0] - 1);
+            b |= (rows & 0x000f_000f_000f_000f) << (4 * dz);
         }
         b
     }
@@ -375,11 +411,12 @@ impl Window<'_> {
     #[inline]
     fn corners(&self, o: [usize; 3], mask: u8) -> [u32; 8] {
         let at = o[0] + EXT * (o[1] + EXT * o[2]);
-        let mut vs = [NONE; 8];
+        // One bounds check; the reads come in adjacent pairs.
+        let ids = &self.ids[at..at + CORNER_OFFSET[7] + 1];
+        let mut vs = CORNER_OFFSET.map(|d| ids[d]);
         for (j, v) in vs.iter_mut().enumerate() {
             // All ones where the corner is OFF.
-            let off = u32::from((mask >> j) & 1).wrapping_sub(1);
-            *v = self.ids[(at + CORNER_OFFSET[j]) & (IDS - 1)] | off;
+            *v |= u32::from(mask & (1 << j) == 0).wrapping_neg();
         }
         vs
     }
@@ -542,10 +579,10 @@ fn triangulate_impl(
     // Direct-mapped memo of `split_by_cycle` (1024 slots; key never 0 for
     // a solid, whose mask has four cubes or more).
     let mut cycles: Vec<(u64, Split)> = vec![(0, Split::Whole); 1 << 10];
-    // Direct-mapped memo of `shared_edges`, keyed by the 4×4×4 cubes
-    // around the neighbourhood, which are all its overlapping
-    // neighbourhoods read (key never 0 around a solid).
-    let mut shared_memo: Vec<(u64, u32, u32)> = vec![(0, 0, 0); 1 << SHARED_MEMO_BITS];
+    // Direct-mapped memo of `shared_edges` and the split it leads to,
+    // keyed by the 4×4×4 cubes around the neighbourhood, which are all its
+    // overlapping neighbourhoods read (key never 0 around a solid).
+    let mut shared_memo: Vec<(u64, Split)> = vec![(0, Split::Whole); 1 << SHARED_MEMO_BITS];
     let mut trials: Vec<Trial> = Vec::new();
     let mut w = Window {
         rows: [0; EXT * EXT],
@@ -578,41 +615,51 @@ fn triangulate_impl(
             };
         }
         w.fill_ids(first, &cells[first..end]);
-        // One z-slab word per brick row of three, then a byte per row.
-        let word = |b: &Brick, lz: usize| b.lin[lz];
+        // Per extended z, the z-slab word of each brick of the 3×3 around
+        // (a byte per row); four rows at a time, the bytes of each brick
+        // along x spread to 16-bit rows and merged: the top two cubes of
+        // the brick below, its eight, the bottom two of the brick above.
         for ez in 0..EXT {
-            let lz = EXT_LOCAL[ez];
-            for by in 0..3 {
-                let b = 3 * by + 9 * EXT_BRICK[ez];
-                let (lo, mid, hi) = (
-                    word(w.around[b], lz),
-                    word(w.around[b + 1], lz),
-                    word(w.around[b + 2], lz),
-                );
-                for ey in EXT_ROWS[by].clone() {
-                    let sh = 8 * EXT_LOCAL[ey];
-                    w.rows[ey + EXT * ez] = (((lo >> sh) & 0xc0) >> 6) as u16
-                        | ((((mid >> sh) & 0xff) as u16) << 2)
-                        | ((((hi >> sh) & 3) as u16) << 10);
-                }
+            let (lz, b) = (EXT_LOCAL[ez], 9 * EXT_BRICK[ez]);
+            // Bytes of extended rows `4g..4g + 4` of the bricks at `bx`.
+            let bytes = |bx: usize| {
+                let slab = |by: usize| w.around[b + 3 * by + bx].lin[lz];
+                let (below, this, above) = (slab(0), slab(1), slab(2));
+                [
+                    (below >> 48) | ((this & 0xffff) << 16),
+                    (this >> 16) & 0xffff_ffff,
+                    (this >> 48) | ((above & 0xffff) << 16),
+                ]
+            };
+            let (lo, mid, hi) = (bytes(0), bytes(1), bytes(2));
+            for g in 0..3 {
+                const TWO: u64 = 0x0003_0003_0003_0003;
+                let rows = ((spread_bytes(lo[g]) >> 6) & TWO)
+                    | (spread_bytes(mid[g]) << 2)
+                    | ((spread_bytes(hi[g]) & TWO) << 10);
+                w.set_rows4(4 * g + EXT * ez, rows);
             }
         }
         for oz in 1..10usize {
-            for oy in 1..10usize {
+            // Origins y = −1..8 (1..10 extended) four at a time
+            // (`oy0..oy0 + 4`), a row of 16 bits each ([`Window::rows4`]).
+            for (oy0, lanes) in ROW_GROUPS {
                 let r = [
-                    w.rows[oy + EXT * oz],
-                    w.rows[oy + 1 + EXT * oz],
-                    w.rows[oy + EXT * (oz + 1)],
-                    w.rows[oy + 1 + EXT * (oz + 1)],
+                    w.rows4(oy0 + EXT * oz),
+                    w.rows4(oy0 + 1 + EXT * oz),
+                    w.rows4(oy0 + EXT * (oz + 1)),
+                    w.rows4(oy0 + 1 + EXT * (oz + 1)),
                 ];
                 // Most rows of a window miss the surface.
-                if (r[0] | r[1] | r[2] | r[3]) & 0x7fe == 0 {
+                if (r[0] | r[1] | r[2] | r[3]) & (lanes * 0x7fe) == 0 {
                     continue;
                 }
                 // Origins x = −1..8 (1..10 extended) whose neighbourhood
                 // has three ON cubes or more: a bit-sliced count of the
-                // eight cubes of all origins of the row at once.
-                let (mut ones, mut twos, mut fours) = (0u16, 0u16, 0u16);
+                // eight cubes of all origins of the four rows at once
+                // (bitwise: the bit a shift moves across rows lands on
+                // no origin).
+                let (mut ones, mut twos, mut fours) = (0u64, 0u64, 0u64);
                 for x in [
                     r[0],
                     r[0] >> 1,
@@ -628,18 +675,33 @@ fn triangulate_impl(
                     fours |= twos & carry;
                     twos ^= carry;
                 }
-                let mut any = (fours | (twos & ones)) & 0x3fe;
-                while any != 0 {
-                    let ox = any.trailing_zeros() as usize;
-                    any &= any - 1;
-                    let o = [ox, oy, oz];
+                let mut any = (fours | (twos & ones)) & (lanes * 0x3fe);
+                // Origins in a brick below (extended 1 on an axis): only
+                // those this brick owns are kept, tested first so that the
+                // loop below has no test.
+                let mut lower = any
+                    & match (oz, oy0) {
+                        (1, _) => u64::MAX,
+                        (_, 1) => (lanes * 2) | 0x3fe,
+                        _ => lanes * 2,
+                    };
+                while lower != 0 {
+                    let bit = lower.trailing_zeros() as usize;
+                    lower &= lower - 1;
+                    let (ox, oy) = (bit & 15, oy0 + (bit >> 4));
                     let below =
                         u8::from(ox == 1) | (u8::from(oy == 1) << 1) | (u8::from(oz == 1) << 2);
-                    if below != 0 && !owns(&w, o, below) {
-                        continue;
+                    if !owns(&w, [ox, oy, oz], below) {
+                        any &= !(1 << bit);
                     }
+                }
+                while any != 0 {
+                    let bit = any.trailing_zeros() as usize;
+                    any &= any - 1;
+                    let (ox, oy) = (bit & 15, oy0 + (bit >> 4));
+                    let o = [ox, oy, oz];
                     // `w.mask(o)`, from the rows at hand.
-                    let pair = |r: u16| ((r >> ox) & 3) as u8;
+                    let pair = |r: u64| ((r >> bit) & 3) as u8;
                     let mask =
                         pair(r[0]) | (pair(r[1]) << 2) | (pair(r[2]) << 4) | (pair(r[3]) << 6);
                     debug_assert_eq!(mask, w.mask(o));
@@ -658,12 +720,10 @@ fn triangulate_impl(
                             }
                         }
                     }
+                    // Corners index `vs` masked: no bounds check.
+                    let vertex = |j: u8| vs[usize::from(j & 7)];
                     let mut emit = |tri: [u8; 3], faces: &mut Vec<[u32; 3]>| -> bool {
-                        let f = [
-                            vs[tri[0] as usize],
-                            vs[tri[1] as usize],
-                            vs[tri[2] as usize],
-                        ];
+                        let f = [vertex(tri[0]), vertex(tri[1]), vertex(tri[2])];
                         if let Some(min) = min_edge
                             && merge_short_edge(f, min, &s.positions, &mut merged, &mut merges)
                         {
@@ -678,7 +738,7 @@ fn triangulate_impl(
                     if c.kind == Compact::TRIANGLE {
                         emit([q[0], q[1], q[2]], &mut faces);
                     } else if c.kind == Compact::QUAD {
-                        let vq = [0, 1, 2, 3].map(|k| vs[q[k] as usize] as usize);
+                        let vq = [0, 1, 2, 3].map(|k| vertex(q[k]) as usize);
                         let pos = [0, 1, 2, 3].map(|k| s.positions[vq[k]]);
                         let nrm = s.normals.as_ref().map(|n| [0, 1, 2, 3].map(|k| n[vq[k]]));
                         let (t1, t2) = choose_quad(q, pos, nrm);
@@ -695,10 +755,21 @@ fn triangulate_impl(
                                 >> (64 - SHARED_MEMO_BITS))
                                 as usize];
                             if slot.0 != around {
-                                let (sh, tw) = shared_edges(&w, o, cfg.edges);
-                                *slot = (around, sh, tw);
+                                let (shared, twice) = shared_edges(around, mask);
+                                // §6.2's cycle search depends on the
+                                // configuration and its shared edges only:
+                                // memoised too, over all blocks.
+                                let key = u64::from(shared)
+                                    | (u64::from(twice) << 28)
+                                    | (u64::from(mask) << 56);
+                                let cycle = &mut cycles
+                                    [(key.wrapping_mul(0x9e37_79b9_7f4a_7c15) >> 54) as usize];
+                                if cycle.0 != key {
+                                    *cycle = (key, split_by_cycle(mask, shared, twice, tris));
+                                }
+                                *slot = (around, cycle.1);
                             }
-                            let (shared, twice) = (slot.1, slot.2);
+                            let split = slot.1;
                             // Triangles on a face of the neighbourhood (three
                             // cubes sharing a coordinate) may be built by the
                             // solid across that face too.
@@ -709,17 +780,6 @@ fn triangulate_impl(
                                     from_solids.push(faces.len() as u32 - 1);
                                 }
                             };
-                            // §6.2's cycle search depends on the configuration
-                            // and its shared edges only: memoised.
-                            let key = u64::from(shared)
-                                | (u64::from(twice) << 28)
-                                | (u64::from(mask) << 56);
-                            let slot = &mut cycles
-                                [(key.wrapping_mul(0x9e37_79b9_7f4a_7c15) >> 54) as usize];
-                            if slot.0 != key {
-                                *slot = (key, split_by_cycle(mask, shared, twice, tris));
-                            }
-                            let split = slot.1;
                             // With decimation, whose merges follow the
                             // scan, every solid is built at once; without,
                             // the choices are settled once the level is
@@ -878,6 +938,43 @@ fn tri_normal(a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
     (b - a).cross(c - a).normalize_or_zero()
 }
 
+/// [`hull_normal`] of four triangles at once, as the `x`, `y` and `z`
+/// of each: the triangles side by side in the lanes of `Vec4`s, each
+/// lane's operations those of the scalar code in the same order
+/// (`Vec3::cross`, `Vec3::normalize_or_zero`), so the normals have the
+/// same bits.
+#[inline(always)]
+fn hull_normals4(tris: [[u8; 3]; 4], pos: &impl Fn(u8) -> Vec3) -> [[f32; 4]; 3] {
+    use glam::Vec4;
+    let mut p = [[Vec3::ZERO; 3]; 4];
+    for (pt, t) in p.iter_mut().zip(tris) {
+        for (v, j) in pt.iter_mut().zip(t) {
+            *v = pos(j);
+        }
+    }
+    // Corner `c` of the four triangles, coordinate `f`.
+    let lane =
+        |c: usize, f: fn(Vec3) -> f32| Vec4::new(f(p[0][c]), f(p[1][c]), f(p[2][c]), f(p[3][c]));
+    let edge = |c: usize, f: fn(Vec3) -> f32| lane(c, f) - lane(0, f);
+    let (ax, ay, az) = (edge(1, |v| v.x), edge(1, |v| v.y), edge(1, |v| v.z));
+    let (bx, by, bz) = (edge(2, |v| v.x), edge(2, |v| v.y), edge(2, |v| v.z));
+    let nx = ay * bz - by * az;
+    let ny = az * bx - bz * ax;
+    let nz = ax * by - bx * ay;
+    let rcp = Vec4::ONE / ((nx * nx) + (ny * ny) + (nz * nz)).sqrt();
+    let ok = rcp.is_finite_mask() & rcp.cmpgt(Vec4::ZERO);
+    let unit = |n: Vec4| Vec4::select(ok, n * rcp, Vec4::ZERO).to_array();
+    [unit(nx), unit(ny), unit(nz)]
+}
+
+/// Unit normal of the hull triangle `t` (corners), `pos` giving the
+/// corners' positions. A function rather than a closure so that it can be
+/// forced inline (LLVM had left such a closure out of line).
+#[inline(always)]
+fn hull_normal(t: [u8; 3], pos: &impl Fn(u8) -> Vec3) -> Vec3 {
+    tri_normal(pos(t[0]), pos(t[1]), pos(t[2]))
+}
+
 /// The two triangulations of a quad `a b c d`; returns the better one.
 #[inline]
 fn choose_quad(q: [u8; 4], p: [Vec3; 4], n: Option<[Vec3; 4]>) -> ([u8; 3], [u8; 3]) {
@@ -955,24 +1052,33 @@ fn quad_split_score(p: &[Vec3; 4], n: Option<&[Vec3; 4]>, t0: [usize; 3], t1: [u
 
 /// For each of the 26 overlapping neighbourhoods `o + d` (index
 /// `(dx+1) + 3(dy+1) + 9(dz+1)`): its corners that lie in this block, and
-/// its corner pairs inside the overlap mapped to this block's pairs.
+/// its corner pairs inside the overlap with the same pairs in this
+/// block's numbering.
 struct Overlaps {
     corners: [u8; 27],
-    pairs: [u32; 27],
-    to_ours: [[u8; 28]; 27],
-    /// This block's pairs inside the overlap.
-    ours: [u32; 27],
+    /// `(its pair bit, our pair bit)` for each corner pair of the overlap:
+    /// six for a neighbour across a face, one across an edge (the rest
+    /// zero), none across a corner.
+    pairs: [[(u32, u32); 6]; 27],
+    /// Per configuration, the neighbours whose overlap holds an edge of
+    /// its graph `G_i` (bit `k`; never the configuration itself, 13).
+    near: [u32; 256],
 }
+
+/// The neighbours across a face (a 2×2 overlap, six corner pairs), as
+/// bits `k` of [`Overlaps::near`]; the others with an overlap pair are
+/// across an edge (one pair).
+const ACROSS_FACE: u32 = 1 << 4 | 1 << 10 | 1 << 12 | 1 << 14 | 1 << 16 | 1 << 22;
 
 fn overlaps() -> &'static Overlaps {
     static O: OnceLock<Overlaps> = OnceLock::new();
     O.get_or_init(|| {
         let mut o = Overlaps {
             corners: [0; 27],
-            pairs: [0; 27],
-            to_ours: [[u8::MAX; 28]; 27],
-            ours: [0; 27],
+            pairs: [[(0, 0); 6]; 27],
+            near: [0; 256],
         };
+        let mut ours = [0u32; 27];
         for k in 0..27usize {
             let d = [
                 (k % 3) as i32 - 1,
@@ -992,13 +1098,25 @@ fn overlaps() -> &'static Overlaps {
                     o.corners[k] |= 1 << j2;
                 }
             }
+            let mut n = 0;
             for a2 in 0..8u8 {
                 for b2 in a2 + 1..8u8 {
-                    if let (Some(a), Some(b)) = (ours_of(a2), ours_of(b2)) {
-                        o.pairs[k] |= 1 << pair(a2, b2);
-                        o.to_ours[k][pair(a2, b2) as usize] = pair(a, b) as u8;
-                        o.ours[k] |= 1 << pair(a, b);
+                    if let (Some(a), Some(b)) = (ours_of(a2), ours_of(b2))
+                        && k != 13
+                    {
+                        o.pairs[k][n] = (1 << pair(a2, b2), 1 << pair(a, b));
+                        ours[k] |= 1 << pair(a, b);
+                        n += 1;
                     }
+                }
+            }
+            debug_assert!(n == 6 || (n <= 1 && ACROSS_FACE & (1 << k) == 0));
+        }
+        for (mask, near) in o.near.iter_mut().enumerate() {
+            let edges = table().configs[mask].edges;
+            for (k, &ours) in ours.iter().enumerate() {
+                if edges & ours != 0 {
+                    *near |= 1 << k;
                 }
             }
         }
@@ -1006,50 +1124,53 @@ fn overlaps() -> &'static Overlaps {
     })
 }
 
-/// Slots of the `shared_edges` memo, as a power of two.
-const SHARED_MEMO_BITS: u32 = 11;
+/// Slots of the `shared_edges` memo, as a power of two: 8192 (128 KiB)
+/// measured fastest on the bunny and the icosphere at R = 8 (2048 and
+/// 4096 miss more, 32768 costs its fresh pages and cache).
+const SHARED_MEMO_BITS: u32 = 13;
 
-/// The 27 neighbourhoods `o + d − 1` around and including `o`, `d ∈
-/// 0..3` per axis, x fastest.
-const NEIGHBOUR: [[usize; 3]; 27] = {
-    let mut t = [[0usize; 3]; 27];
-    let mut k = 0;
-    while k < 27 {
-        t[k] = [k % 3, (k / 3) % 3, k / 9];
-        k += 1;
-    }
-    t
-};
-
-/// Edges of `G_i` (as pair bits) also in the graph of an overlapping
-/// neighbourhood of the window, and those in the graphs of two or more.
-fn shared_edges(w: &Window, o: [usize; 3], edges: u32) -> (u32, u32) {
+/// Edges of `G_i` (as pair bits) of the configuration `mask` also in the
+/// graph of an overlapping neighbourhood, and those in the graphs of two or
+/// more. `around`: the 4×4×4 cubes of [`Window::block`], all that the
+/// neighbourhoods read. Without a branch on the neighbours' configurations
+/// (what a branch predictor cannot guess): fixed steps per neighbour.
+fn shared_edges(around: u64, mask: u8) -> (u32, u32) {
     let t = table();
     let ov = overlaps();
     let (mut shared, mut twice) = (0u32, 0u32);
-    for k in 0..27usize {
-        if k == 13 || edges & ov.ours[k] == 0 {
-            continue;
-        }
-        let d = NEIGHBOUR[k];
-        let o2 = [o[0] + d[0] - 1, o[1] + d[1] - 1, o[2] + d[2] - 1];
-        let m2 = w.mask(o2);
-        // A neighbour whose cubes all lie in this block (a planar patch on
-        // the shared face) is this block's own geometry, not outside
-        // evidence.
-        if m2 & !ov.corners[k] == 0 {
-            continue;
-        }
-        let mut e2 = t.configs[m2 as usize].edges & ov.pairs[k];
-        while e2 != 0 {
-            let p = e2.trailing_zeros() as usize;
-            e2 &= e2 - 1;
-            let bit = 1 << ov.to_ours[k][p];
-            twice |= shared & bit;
-            shared |= bit;
+    // All ones where `x` is not zero.
+    let ones = |x: u32| 0u32.wrapping_sub(u32::from(x != 0));
+    // Configuration of neighbour `k`, its graph's edges in the overlap
+    // (none when all its cubes lie in this block: a planar patch on the
+    // shared face is this block's own geometry, not outside evidence).
+    let theirs = |k: usize| {
+        let c = around >> (k % 3 + 16 * ((k / 3) % 3) + 4 * (k / 9));
+        let m2 = ((c & 0x33) | ((c >> 14) & 0xcc)) as u8;
+        t.configs[usize::from(m2)].edges & ones(u32::from(m2 & !ov.corners[k]))
+    };
+    let near = ov.near[usize::from(mask)];
+    let mut add = |e2: u32, (their, our): (u32, u32)| {
+        let bit = our & ones(e2 & their);
+        twice |= shared & bit;
+        shared |= bit;
+    };
+    let mut faces = near & ACROSS_FACE;
+    while faces != 0 {
+        let k = faces.trailing_zeros() as usize;
+        faces &= faces - 1;
+        let e2 = theirs(k);
+        for p in ov.pairs[k] {
+            add(e2, p);
         }
     }
-    (shared & edges, twice & edges)
+    let mut edges = near & !ACROSS_FACE;
+    while edges != 0 {
+        let k = edges.trailing_zeros() as usize;
+        edges &= edges - 1;
+        add(theirs(k), ov.pairs[k][0]);
+    }
+    let e = t.configs[usize::from(mask)].edges;
+    (shared & e, twice & e)
 }
 
 /// An ambiguous solid whose triangles are chosen once the level is
@@ -1401,7 +1522,9 @@ fn settle(
 /// cubes of `bare` left in no triangle, surplus edge uses, differing from
 /// `keep`, triangles, and the subset's bits. Every subset is visited in
 /// Gray-code order, one triangle added or removed per step, so each costs
-/// the update of three edge counts instead of a recount.
+/// the update of three edge counts instead of a recount. Out of line: its
+/// loop then keeps its state in registers (inlined in the scan, it spilled).
+#[inline(never)]
 fn best_subset(
     tris: &[[u8; 3]],
     tri_edges: &[[usize; 3]],
@@ -1410,30 +1533,46 @@ fn best_subset(
     bare: u8,
     keep: u16,
 ) -> u16 {
-    let mut count = [0u32; 18];
+    // A power of two long: an edge index masked needs no bounds check.
+    let mut count = [0u32; 32];
     count[..base.len()].copy_from_slice(base);
     let mut holes = base.iter().filter(|&&c| c == 1).count() as u32;
     let mut surplus: u32 = base.iter().map(|&c| c.saturating_sub(2)).sum();
-    // Triangles on each corner, and the corners with one or more.
-    let mut corner = [0u32; 8];
-    let mut covered = 0u8;
+    // Triangles on each corner, a 4-bit count per corner (a corner is in
+    // at most `SETTLE_MAX_TRIANGLES` < 16 triangles), added and removed a
+    // triangle at a time with one addition: each triangle's corners as
+    // ones in their counts.
+    debug_assert!(tris.len() <= SETTLE_MAX_TRIANGLES && SETTLE_MAX_TRIANGLES < 16);
+    let mut corners = 0u32;
+    let mut ones = [0u32; 16];
+    for (n, t) in ones.iter_mut().zip(tris) {
+        *n = t.iter().fold(0, |n, &j| n | (1 << (4 * j)));
+    }
+    // `bare` with a one in each of its corners' counts.
+    let bare = (0..8).fold(0u32, |b, j| b | (u32::from((bare >> j) & 1) << (4 * j)));
+    // Bare cubes in no triangle: the bare counts that are zero, summed
+    // into the top count by a multiplication (at most 8: no carry).
+    let uncovered = |corners: u32| {
+        let some = (corners | (corners >> 1) | (corners >> 2) | (corners >> 3)) & 0x1111_1111;
+        (bare & !some).wrapping_mul(0x1111_1111) >> 28
+    };
     // The key, packed in a word whose order is the tuple's: holes (≤ 18),
     // bare cubes left (≤ 8), surplus (< 2^20: at most 18 edges of a few
     // dozen triangles each), differing from `keep`, triangles (≤ 16), the
     // subset. A minimum without a branch per subset, and no `count_ones`
     // (software on the baseline x86-64 target): the triangles are counted
     // as they come and go.
-    let key = |sub: u16, ntri: u32, holes: u32, surplus: u32, covered: u8| {
+    let key = |sub: u16, ntri: u32, holes: u32, surplus: u32, corners: u32| {
         debug_assert!(holes < 32 && surplus < 1 << 20 && ntri < 32);
         (u64::from(holes) << 46)
-            | (u64::from(POP8[usize::from(bare & !covered)]) << 42)
+            | (u64::from(uncovered(corners)) << 42)
             | (u64::from(surplus) << 22)
             | (u64::from(sub != keep) << 21)
             | (u64::from(ntri) << 16)
             | u64::from(sub)
     };
     let (mut sub, mut ntri) = (0u16, 0u32);
-    let mut best = key(sub, ntri, holes, surplus, covered);
+    let mut best = key(sub, ntri, holes, surplus, corners);
     for g in 1..=u32::from(all_bits(tris.len())) {
         let i = g.trailing_zeros() as usize;
         sub ^= 1 << i;
@@ -1441,13 +1580,10 @@ fn best_subset(
         // +1 or −1.
         let d = if add { 1 } else { u32::MAX };
         ntri = ntri.wrapping_add(d);
-        for &j in &tris[i] {
-            let c = &mut corner[usize::from(j)];
-            *c = c.wrapping_add(d);
-            covered = (covered & !(1 << j)) | (u8::from(*c != 0) << j);
-        }
+        corners = corners.wrapping_add(ones[i].wrapping_mul(d));
         if !built[i] {
             for &e in &tri_edges[i] {
+                let e = e & 31;
                 let old = count[e];
                 let new = old.wrapping_add(d);
                 count[e] = new;
@@ -1455,21 +1591,10 @@ fn best_subset(
                 surplus = surplus + new.saturating_sub(2) - old.saturating_sub(2);
             }
         }
-        best = best.min(key(sub, ntri, holes, surplus, covered));
+        best = best.min(key(sub, ntri, holes, surplus, corners));
     }
     best as u16
 }
-
-/// Bits set in a byte.
-const POP8: [u8; 256] = {
-    let mut t = [0u8; 256];
-    let mut i = 0;
-    while i < 256 {
-        t[i] = (i as u32).count_ones() as u8;
-        i += 1;
-    }
-    t
-};
 
 /// How §6.2 resolves an ambiguous configuration.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -1655,22 +1780,20 @@ fn smoother_disc(
         (rest != 0) & (rest & rest.wrapping_sub(1) == 0)
     };
     if (tris.len() == 4) & two_bits(disc) {
-        let normal = |t: [u8; 3]| tri_normal(pos(t[0]), pos(t[1]), pos(t[2]));
-        let normals = [
-            normal(tris[0]),
-            normal(tris[1]),
-            normal(tris[2]),
-            normal(tris[3]),
-        ];
+        let [x, y, z] = hull_normals4([tris[0], tris[1], tris[2], tris[3]], pos);
+        // `Vec3::dot`'s order.
         let cosine = |d: u16| {
-            let (i, j) = (d.trailing_zeros() as usize, 15 - d.leading_zeros() as usize);
-            normals[i & 3].dot(normals[j & 3]).clamp(-1.0, 1.0)
+            let (i, j) = (
+                d.trailing_zeros() as usize & 3,
+                (15 - d.leading_zeros()) as usize & 3,
+            );
+            ((x[i] * x[j]) + (y[i] * y[j]) + (z[i] * z[j])).clamp(-1.0, 1.0)
         };
         return cosine(disc & 15) >= cosine(!disc & 15);
     }
     let mut normals = [Vec3::ZERO; 16];
     for (i, t) in tris.iter().enumerate().take(16) {
-        normals[i] = tri_normal(pos(t[0]), pos(t[1]), pos(t[2]));
+        normals[i] = hull_normal(*t, pos);
     }
     // Cosines of the interior edges of each side.
     let mut cos = [[0.0f32; 16]; 2];
@@ -1774,17 +1897,20 @@ fn dedupe_face_triangles(faces: &mut Vec<[u32; 3]>, candidates: &[u32]) -> Vec<u
     dropped
 }
 
-/// Removes the elements at the increasing indices `drop` from `v`.
-fn remove_sorted<T>(v: &mut Vec<T>, drop: &[u32]) {
-    if drop.is_empty() {
+/// Removes the elements at the increasing indices `drop` from `v`: the
+/// runs between them move down, those before the first stay put (a
+/// `retain` tested every element, a few drops among all the faces).
+fn remove_sorted<T: Copy>(v: &mut Vec<T>, drop: &[u32]) {
+    let Some(&first) = drop.first() else {
         return;
+    };
+    let mut to = first as usize;
+    for (k, &d) in drop.iter().enumerate() {
+        let end = drop.get(k + 1).map_or(v.len(), |&n| n as usize);
+        v.copy_within(d as usize + 1..end, to);
+        to += end - d as usize - 1;
     }
-    let mut next = drop.iter().map(|&i| i as usize).peekable();
-    let mut i = 0;
-    v.retain(|_| {
-        i += 1;
-        next.next_if_eq(&(i - 1)).is_none()
-    });
+    v.truncate(to);
 }
 
 fn edge_key(a: u32, b: u32) -> u64 {
