@@ -136,7 +136,17 @@ fn manifold_pairs(faces: &[[u32; 3]], vertices: usize, mut f: impl FnMut(u32, u3
     for v in 0..n {
         let to = start.get(v + 1).map_or(sides.len(), |&s| s as usize);
         let bucket = &mut sides[start[v] as usize..to];
-        insertion_sort(bucket);
+        // Most vertices have at most 8 sides (6 on average): sorted by a
+        // network, they cost no mispredicted branch.
+        let mut small = [u64::MAX; 8];
+        let bucket: &[u64] = if bucket.len() <= small.len() {
+            small[..bucket.len()].copy_from_slice(bucket);
+            small = sort8(small);
+            &small[..bucket.len()]
+        } else {
+            insertion_sort(bucket);
+            bucket
+        };
         let mut i = 0;
         while i < bucket.len() {
             let upper = bucket[i] >> 32;
@@ -153,8 +163,52 @@ fn manifold_pairs(faces: &[[u32; 3]], vertices: usize, mut f: impl FnMut(u32, u3
     }
 }
 
-/// A vertex has a handful of sides: insertion sort beats the general sort
-/// on them.
+/// Sorts 8 words with Knuth's network of 19 compare-exchanges (depth 6),
+/// each a min and a max without a branch: the insertion sort it replaced
+/// on the vertices of up to 8 sides mispredicted its inner loop's exit
+/// (bunny at R = 8: pairing 5.3 → 4.6 ms). The padding (`u64::MAX`) sorts
+/// last.
+#[inline]
+fn sort8(v: [u64; 8]) -> [u64; 8] {
+    let [
+        mut a0,
+        mut a1,
+        mut a2,
+        mut a3,
+        mut a4,
+        mut a5,
+        mut a6,
+        mut a7,
+    ] = v;
+    macro_rules! exchange {
+        ($x:ident, $y:ident) => {
+            ($x, $y) = ($x.min($y), $x.max($y));
+        };
+    }
+    exchange!(a0, a2);
+    exchange!(a1, a3);
+    exchange!(a4, a6);
+    exchange!(a5, a7);
+    exchange!(a0, a4);
+    exchange!(a1, a5);
+    exchange!(a2, a6);
+    exchange!(a3, a7);
+    exchange!(a0, a1);
+    exchange!(a2, a3);
+    exchange!(a4, a5);
+    exchange!(a6, a7);
+    exchange!(a2, a4);
+    exchange!(a3, a5);
+    exchange!(a1, a4);
+    exchange!(a3, a6);
+    exchange!(a1, a2);
+    exchange!(a3, a4);
+    exchange!(a5, a6);
+    [a0, a1, a2, a3, a4, a5, a6, a7]
+}
+
+/// The vertices of more than 8 sides (a few percent) have a handful:
+/// insertion sort beats the general sort on them.
 #[inline]
 fn insertion_sort(v: &mut [u64]) {
     for i in 1..v.len() {
