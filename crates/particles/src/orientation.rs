@@ -34,57 +34,63 @@ pub fn orient(mesh: &mut TriMesh) {
     if nf > MAX_TRIANGLES {
         return;
     }
-    // Windings as a union-find with parity: `flip[t]` tells whether `t`
-    // must turn relative to `parent[t]`. Each root is its component's
+    // Windings as a union-find with parity: `link[t]` is `t`'s parent,
+    // shifted left by one, and in the low bit whether `t` must turn
+    // relative to it (one load for both). Each root is its component's
     // lowest triangle, which keeps its winding, as a walk from it would.
-    let mut parent: Vec<u32> = (0..nf as u32).collect();
-    let mut flip = vec![false; nf];
+    let mut link: Vec<u32> = (0..nf as u32).map(|t| t << 1).collect();
     manifold_pairs(faces, mesh.positions.len(), |t1, t2, same_dir| {
-        let (r1, p1) = find(&mut parent, &mut flip, t1);
-        let (r2, p2) = find(&mut parent, &mut flip, t2);
+        let (r1, p1) = find(&mut link, t1);
+        let (r2, p2) = find(&mut link, t2);
         // Equal roots: the edge closes a cycle, consistent or not (a
         // non-orientable component keeps the first windings found).
         if r1 != r2 {
             let (lo, hi) = (r1.min(r2), r1.max(r2));
-            parent[hi as usize] = lo;
-            flip[hi as usize] = p1 ^ p2 ^ same_dir;
+            link[hi as usize] = lo << 1 | (p1 ^ p2 ^ u32::from(same_dir));
         }
     });
     // Each component's signed volume with the windings made consistent
-    // (untouched entries of `volume` cost no memory).
+    // (untouched entries of `volume` cost no memory). A parent is never
+    // above its child (roots are the lowest, halving links to a
+    // grandparent), so in triangle order `t`'s parent already links to
+    // the root: one step finds it (a root's link, its own, reads as its
+    // root with no turn).
     let mut volume = vec![0f64; nf];
     for t in 0..nf {
-        let (r, p) = find(&mut parent, &mut flip, t as u32);
-        (parent[t], flip[t]) = (r, p);
+        let l = link[t];
+        let up = link[(l >> 1) as usize];
+        let (r, p) = (up >> 1, (l ^ up) & 1);
+        link[t] = r << 1 | p;
         let [a, b, c] = faces[t].map(|v| mesh.positions[v as usize].as_dvec3());
         let v = a.dot(b.cross(c));
-        volume[r as usize] += if p { -v } else { v };
+        volume[r as usize] += if p == 1 { -v } else { v };
     }
-    for (t, f) in faces.iter_mut().enumerate() {
-        // Found above: `parent` is the root, `flip` the parity to it.
-        let r = parent[t] as usize;
-        if flip[t] != (volume[r] < 0.0) {
+    for (f, l) in faces.iter_mut().zip(link) {
+        // Found above: the root and the parity to it.
+        if (l & 1 == 1) != (volume[(l >> 1) as usize] < 0.0) {
             f.swap(1, 2);
         }
     }
 }
 
-/// The root of `t` and whether `t` turns relative to it; the triangles
-/// passed on the way are relinked to their grandparents (path halving).
+/// The root of `t` and whether `t` turns relative to it (1) or not (0);
+/// the triangles passed on the way are relinked to their grandparents
+/// (path halving).
 #[inline]
-fn find(parent: &mut [u32], flip: &mut [bool], t: u32) -> (u32, bool) {
-    let (mut x, mut p) = (t as usize, false);
+fn find(link: &mut [u32], t: u32) -> (u32, u32) {
+    let (mut x, mut p) = (t as usize, 0);
     loop {
-        let up = parent[x] as usize;
+        let l = link[x];
+        let up = (l >> 1) as usize;
         if up == x {
             return (x as u32, p);
         }
-        let top = parent[up] as usize;
-        // A root's `flip` is false: `x` then keeps its parent.
-        flip[x] ^= flip[up];
-        parent[x] = top as u32;
-        p ^= flip[x];
-        x = top;
+        // A root's turn bit is 0: `x` then keeps its parent.
+        let above = link[up];
+        let l = above & !1 | (l ^ above) & 1;
+        link[x] = l;
+        p ^= l & 1;
+        x = (l >> 1) as usize;
     }
 }
 
