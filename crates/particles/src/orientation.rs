@@ -146,7 +146,13 @@ fn manifold_pairs(faces: &[[u32; 3]], vertices: usize, mut f: impl FnMut(u32, u3
         // network, they cost no mispredicted branch.
         let mut small = [u64::MAX; 8];
         let bucket: &[u64] = if bucket.len() <= small.len() {
-            small[..bucket.len()].copy_from_slice(bucket);
+            // Eight fixed steps, unrolled: a copy of the bucket's length
+            // (`copy_from_slice`, a zip) calls `memcpy`.
+            for (i, w) in small.iter_mut().enumerate() {
+                if i < bucket.len() {
+                    *w = bucket[i];
+                }
+            }
             small = sort8(small);
             &small[..bucket.len()]
         } else {
