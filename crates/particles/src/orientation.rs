@@ -109,13 +109,9 @@ const MAX_TRIANGLES: usize = 1 << 30;
 /// triangle.
 fn manifold_pairs(faces: &[[u32; 3]], vertices: usize, mut f: impl FnMut(u32, u32, bool)) {
     debug_assert!(faces.len() <= MAX_TRIANGLES);
-    let n = faces
-        .iter()
-        .flatten()
-        .map(|&v| v as usize + 1)
-        .max()
-        .unwrap_or(0)
-        .max(vertices);
+    // No pass for the highest vertex: one at or beyond `vertices` panics
+    // here as it would in [`orient`]'s volume pass.
+    let n = vertices;
     // `end[v]`: one past vertex `v`'s last side; the filling pass, going
     // backwards, leaves it at the first (triangles then in order).
     let mut end = vec![0u32; n];
