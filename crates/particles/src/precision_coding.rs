@@ -32,6 +32,11 @@ pub struct Faces {
     /// (see [`code_precision`]); set by the encoder, decoded in the first
     /// precision layer.
     pub column: Vec<u8>,
+    /// Per particle: `1 +` its normal axis once the first precision layer
+    /// has found it a column particle, else `0` — what a neighbour's
+    /// predictors are filtered on, in one byte: a particle not yet reached
+    /// in the first layer reads as no column, as it must.
+    column_axis: Vec<u8>,
     /// Per particle: the particles across its four tangential faces (the
     /// faces whose axis is not its normal axis), in face order, the
     /// particle's own number where there is none. From the second
@@ -70,6 +75,7 @@ pub fn particle_faces(links: &Links, leaves: &HLevel, particles: usize) -> Faces
     let mut out = Faces {
         axes: vec![0u8; particles],
         column: vec![0u8; particles],
+        column_axis: vec![0u8; particles],
         tangential: vec![[0; 4]; particles],
         counts: vec![0u8; particles],
         layers: 0,
@@ -217,6 +223,7 @@ pub fn code_precision<C: BitCoder>(
     let n = q.len();
     if faces.axes.len() != n
         || faces.column.len() != n
+        || faces.column_axis.len() != n
         || faces.tangential.len() != n
         || faces.height.len() != n
         || faces.counts.len() != n
@@ -245,6 +252,7 @@ pub fn code_precision<C: BitCoder>(
     let Faces {
         axes,
         column,
+        column_axis,
         tangential,
         height,
         counts,
@@ -297,22 +305,23 @@ pub fn code_precision<C: BitCoder>(
         // in the first layer only the earlier ones (the later ones are not
         // decoded yet). The second layer keeps the row reduced to them, so
         // the later layers read it as it is (the relation is symmetric:
-        // each pair is seen from both sides).
+        // each pair is seen from both sides). In the first layer the later
+        // particles' and this one's `column_axis` are still `0`.
         let (pred, count) = if rel <= 2 {
             let mut p = tangential[i];
             let (mut all, mut before) = (0u8, 0u8);
+            let axis = 1 + g as u8;
             for j in &mut p {
                 let earlier = (*j as usize) < i;
-                let keep = (first_layer <= earlier)
-                    & (*j as usize != i)
-                    & (column[*j as usize] != 0)
-                    & (axes[*j as usize] & 3 == g as u8);
+                let keep = (column_axis[*j as usize] == axis) & (first_layer | (*j as usize != i));
                 *j = if keep { *j } else { i as u32 };
                 all += u8::from(keep);
                 before += u8::from(keep & earlier);
             }
             let count = all | before << 4;
-            if !first_layer {
+            if first_layer {
+                column_axis[i] = axis;
+            } else {
                 tangential[i] = p;
                 counts[i] = count;
             }
