@@ -103,23 +103,24 @@ fn add_faces(
     let mask = (0..6).fold(0u8, |m, d| m | u8::from(row[d] != NONE) << d);
     let info = AXES[usize::from(mask)];
     axes[p] = info;
-    // The four faces off the normal axis, in face order; a neighbour
-    // outside the particle table (a hostile stream) is no neighbour.
-    // Selects rather than branches: which faces have a neighbour is data.
-    let t = &mut tangential[p];
-    for (s, &d) in TANGENTIAL_FACES[usize::from(info & 3)].iter().enumerate() {
-        let node = row[usize::from(d)];
+    // The four faces off the normal axis `g`, in face order — 1, 2, 4, 5
+    // (g = 0), 0, 2, 3, 5 (g = 1) or 0, 1, 3, 4 (g = 2) — picked with two
+    // selects each rather than indexed, so the row stays in registers.
+    let g = info & 3;
+    let faces = [
+        if g == 0 { row[1] } else { row[0] },
+        if g == 2 { row[1] } else { row[2] },
+        if g == 0 { row[4] } else { row[3] },
+        if g == 2 { row[4] } else { row[5] },
+    ];
+    // A missing neighbour reads the particle itself; one outside the
+    // particle table (a hostile stream) is no neighbour either. Selects
+    // rather than branches: which faces have a neighbour is data.
+    tangential[p] = faces.map(|node| {
         let j = particle[if node == NONE { i } else { node as usize }];
-        t[s] = if node == NONE || j as usize >= particles {
-            p as u32
-        } else {
-            j
-        };
-    }
+        if j as usize >= particles { p as u32 } else { j }
+    });
 }
-
-/// The faces off each normal axis, in face order.
-const TANGENTIAL_FACES: [[u8; 4]; 3] = [[1, 2, 4, 5], [0, 2, 3, 5], [0, 1, 3, 4]];
 
 /// [`normal_axis`] and [`faces_per_axis`] of every face mask, packed.
 static AXES: [u8; 64] = {
