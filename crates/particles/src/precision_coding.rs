@@ -402,8 +402,11 @@ fn height_bin(height: &[u16], pred: &[u32; 4], count: u8, i: usize, shift: u32) 
 /// [`height_bin`]'s bin of `d` (clamped to `−9..=8`, offset by 9) for `n`
 /// predictors: how many of `−2n, −n, 0, n, 2n` it reaches; `n = 0` is the
 /// "no neighbour" bin.
-static BINS: [[u8; 18]; 5] = {
-    let mut t = [[0u8; 18]; 5];
+///
+/// Rows `5..8` (no particle has more than four predictors) are there so
+/// that `count & 7` indexes the table without a bounds check.
+static BINS: [[u8; 18]; 8] = {
+    let mut t = [[0u8; 18]; 8];
     let mut n = 0;
     while n < 5 {
         let mut k = 0;
