@@ -29,7 +29,7 @@
 //! code little more than the coordinate across the surface. Triangles ≈
 //! 2.0–2.1 × particles per level; decode + triangulate of the finest level
 //! (criterion, 2-core machine at load < 1, `cargo bench -p lodkit-bench
-//! --bench pop`) 15–18 M triangles/s in the baseline mode and 8.6–9.4 M in
+//! --bench pop`) 15–18 M triangles/s in the baseline mode and 8.6–9.6 M in
 //! the entropy mode, whose decoder makes about 12 binary decisions per
 //! particle at R = 8 (per stage: `cargo run --release -p lodkit-particles
 //! --example pop_profile -- icosphere6:8:12`; decoding alone: `cargo run
