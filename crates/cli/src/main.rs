@@ -6,6 +6,7 @@
 mod chart;
 mod commands;
 mod ui;
+mod viewer_assets;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -101,6 +102,9 @@ enum Command {
     /// Continuous LOD (marching cube octree): build, extract, info.
     #[command(subcommand)]
     Mco(commands::mco::McoCommand),
+    /// Serve the viewer and the models over HTTP (ranges, ETags), on loopback by default.
+    #[command(after_help = commands::serve::AFTER_HELP)]
+    Serve(commands::serve::ServeArgs),
 }
 
 fn main() -> ExitCode {
@@ -122,6 +126,7 @@ fn main() -> ExitCode {
         Command::Scan(args) => commands::scan::run(&ui, &args),
         Command::Mco(cmd) => commands::mco::run(&ui, &cmd),
         Command::Pop(cmd) => commands::pop::run(&ui, &cmd),
+        Command::Serve(args) => commands::serve::run(&ui, &args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -9,6 +9,7 @@ pub mod lods;
 pub mod mco;
 pub mod pop;
 pub mod scan;
+pub mod serve;
 pub mod simplify;
 
 use std::path::Path;
