@@ -109,11 +109,12 @@ async fn model(path: &Path, headers: &HeaderMap, head: bool) -> Response {
         h.insert(header::ETAG, v);
     }
 
-    if let Some(inm) = headers.get(header::IF_NONE_MATCH) {
-        if range::none_match(inm.as_bytes(), &etag) {
-            *r.status_mut() = StatusCode::NOT_MODIFIED;
-            return r;
-        }
+    if headers
+        .get(header::IF_NONE_MATCH)
+        .is_some_and(|v| range::none_match(v.as_bytes(), &etag))
+    {
+        *r.status_mut() = StatusCode::NOT_MODIFIED;
+        return r;
     }
     let range_header = headers
         .get(header::RANGE)
