@@ -22,7 +22,7 @@ use axum::response::Response;
 use tokio::io::{AsyncReadExt, AsyncSeekExt};
 
 use super::range::{self, Plan};
-use super::roots::{MODELS_PREFIX, Roots, kind_of};
+use super::roots::{Entry, MODELS_PREFIX, Roots, kind_of};
 
 /// Read size of the file streams: large enough that a multi-megabyte model
 /// takes few reads, small enough that 64 clients hold little memory.
@@ -58,11 +58,18 @@ pub async fn route(State(shared): State<Arc<Shared>>, req: Request) -> Response 
     }
     let head = method == Method::HEAD;
     let path = req.uri().path();
-    if path == "/api/models" {
-        return listing_json(&shared.roots, head);
-    }
-    if path == "/models" || path == MODELS_PREFIX {
-        return listing_html(&shared.roots, head);
+    if path == "/api/models" || path == "/models" || path == MODELS_PREFIX {
+        let json = path == "/api/models";
+        // Walking the roots touches the file system: keep it off the reactor.
+        let walker = shared.clone();
+        let entries = tokio::task::spawn_blocking(move || walker.roots.list())
+            .await
+            .unwrap_or_default();
+        return if json {
+            listing_json(&entries, head)
+        } else {
+            listing_html(&entries, head)
+        };
     }
     if let Some(raw) = path.strip_prefix(MODELS_PREFIX) {
         let headers = req.headers();
@@ -194,18 +201,18 @@ fn asset(shared: &Shared, path: &str, headers: &HeaderMap, head: bool) -> Respon
     r
 }
 
-fn listing_json(roots: &Roots, head: bool) -> Response {
-    let body = serde_json::to_vec(&roots.list()).unwrap_or_else(|_| b"[]".to_vec());
+fn listing_json(entries: &[Entry], head: bool) -> Response {
+    let body = serde_json::to_vec(entries).unwrap_or_else(|_| b"[]".to_vec());
     text_response("application/json", body, head)
 }
 
-fn listing_html(roots: &Roots, head: bool) -> Response {
+fn listing_html(entries: &[Entry], head: bool) -> Response {
     let mut page = String::from(
         "<!doctype html>\n<meta charset=\"utf-8\">\n<title>lodkit models</title>\n\
          <h1>Models</h1>\n<p><a href=\"/\">viewer</a> · <a href=\"/api/models\">JSON</a></p>\n\
          <table>\n<tr><th>name</th><th>kind</th><th>bytes</th></tr>\n",
     );
-    for e in roots.list() {
+    for e in entries {
         page.push_str(&format!(
             "<tr><td><a href=\"{}\">{}</a></td><td>{}</td><td>{}</td></tr>\n",
             html_escape(&e.url),
