@@ -593,27 +593,29 @@ fn keep_alive_connections_serve_many_requests() {
 
 #[cfg(unix)]
 #[test]
-fn sigterm_stops_the_server_cleanly() {
+fn sigterm_and_ctrl_c_stop_the_server_cleanly() {
     let f = fixture();
-    let mut s = Server::start(&[&f.root]);
-    assert_eq!(s.get("/api/models", &[]).status, 200);
-    let ok = Command::new("kill")
-        .args(["-TERM", &s.child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(ok.success());
-    let deadline = Instant::now() + Duration::from_secs(10);
-    let status = loop {
-        if let Some(st) = s.child.try_wait().unwrap() {
-            break st;
-        }
-        assert!(
-            Instant::now() < deadline,
-            "still running 10 s after SIGTERM"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    };
-    assert!(status.success(), "{status:?}");
+    for signal in ["-TERM", "-INT"] {
+        let mut s = Server::start(&[&f.root]);
+        assert_eq!(s.get("/api/models", &[]).status, 200);
+        let ok = Command::new("kill")
+            .args([signal, &s.child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(ok.success());
+        let deadline = Instant::now() + Duration::from_secs(10);
+        let status = loop {
+            if let Some(st) = s.child.try_wait().unwrap() {
+                break st;
+            }
+            assert!(
+                Instant::now() < deadline,
+                "still running 10 s after {signal}"
+            );
+            std::thread::sleep(Duration::from_millis(20));
+        };
+        assert!(status.success(), "{signal}: {status:?}");
+    }
 }
 
 #[test]
