@@ -71,3 +71,6 @@ mod tests;
 
 pub use read::read;
 pub use write::write_glb;
+
+#[cfg(doc)]
+use crate::{error::ParseError, mesh::TriMesh};
