@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 pub struct ParseError(pub String);
 
 impl ParseError {
+    /// A one-line message (no trailing newline).
     pub fn new(msg: impl Into<String>) -> Self {
         ParseError(msg.into())
     }
@@ -41,32 +42,52 @@ macro_rules! parse_err {
 /// Errors from lodkit's mesh layer. `Display` is always a single line.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
+    /// The file could not be read or written.
     #[error("{}: {source}", path.display())]
     Io {
+        /// The file.
         path: PathBuf,
+        /// What the operating system said.
         source: std::io::Error,
     },
+    /// The file's bytes are not valid for its format.
     #[error("{}: {message}", path.display())]
-    Parse { path: PathBuf, message: String },
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, and where in the file.
+        message: String,
+    },
+    /// The file is valid but lodkit cannot use it that way (unknown
+    /// extension, a point cloud where a mesh is needed, too large…).
     #[error("{}: {message}", path.display())]
-    Unsupported { path: PathBuf, message: String },
+    Unsupported {
+        /// The file.
+        path: PathBuf,
+        /// What is not supported.
+        message: String,
+    },
+    /// An argument or an in-memory model breaks a precondition.
     #[error("{0}")]
     Invalid(String),
 }
 
 impl Error {
+    /// [`Error::Io`] for `path`.
     pub fn io(path: &Path, source: std::io::Error) -> Self {
         Error::Io {
             path: path.to_path_buf(),
             source,
         }
     }
+    /// [`Error::Parse`] for `path`.
     pub fn parse(path: &Path, e: ParseError) -> Self {
         Error::Parse {
             path: path.to_path_buf(),
             message: e.0,
         }
     }
+    /// [`Error::Unsupported`] for `path`.
     pub fn unsupported(path: &Path, message: impl Into<String>) -> Self {
         Error::Unsupported {
             path: path.to_path_buf(),
@@ -75,4 +96,5 @@ impl Error {
     }
 }
 
+/// `Result` with lodkit-mesh's [`Error`] by default.
 pub type Result<T, E = Error> = std::result::Result<T, E>;

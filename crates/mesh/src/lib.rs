@@ -1,10 +1,44 @@
 //! # lodkit-mesh
 //!
 //! The layer every lodkit capability stands on: the geometry types
-//! ([`TriMesh`], [`PointCloud`], [`RangeImage`]), their file formats
-//! ([`io`]), the topology helpers the simplifier, the marching cube octree
-//! and the particle coder all need ([`topology`]), synthetic test shapes
-//! ([`shapes`]) and Metro-style surface distances ([`metrics`]).
+//! ([`TriMesh`], [`PointCloud`], [`RangeImage`], one [`Model`] for any of
+//! them), their file formats ([`io`]), the topology helpers the
+//! simplifier, the marching cube octree and the particle coder share
+//! ([`topology`]), welding ([`weld`]), normals ([`normals`]), synthetic test
+//! shapes ([`shapes`]), Metro-style surface distances ([`metrics`], after
+//! Cignoni, Rocchini and Scopigno, *Metro: measuring error on simplified
+//! surfaces*, Computer Graphics Forum 17(2), 1998) and the `lodkit info`
+//! report ([`info`]).
+//!
+//! ## Entry points
+//!
+//! | item | contract |
+//! |---|---|
+//! | [`io::load`], [`io::load_mesh`], [`io::decode`] | file or bytes → model; one-line errors naming the file, never a panic |
+//! | [`io::save`], [`io::save_mesh`], [`io::encode`], [`io::write_atomic`] | model → bytes → file, atomic and deterministic |
+//! | [`TriMesh`], [`PointCloud`], [`RangeImage`], [`Model`], [`Aabb`], [`Pose`] | the types and their invariants (`validate`) |
+//! | [`metrics::compare`], [`metrics::one_sided`] | symmetric / one-sided Metro distance, deterministic for a seed |
+//! | [`info::model_info`] | counts, topology defects, genus |
+//! | [`topology::UnionFind`], [`topology::edge_multiplicities`], [`topology::non_manifold_faces`], [`topology::topology_stats`] | shared connectivity primitives |
+//! | [`weld::weld`], [`normals::vertex_normals`], [`shapes`] | welding, normals, test shapes |
+//!
+//! Conventions for every crate (see [`mesh`](mod@mesh)): positions are `f32`
+//! object units, never rescaled; faces are CCW seen from outside; colours
+//! are straight sRGB RGBA8; UVs have a bottom-left origin. Errors:
+//! [`ParseError`] (what is wrong) inside decoders, [`Error`] (which file)
+//! at the `io` boundary.
+//!
+//! ```
+//! use lodkit_mesh::metrics::{compare, CompareOptions};
+//! let fine = lodkit_mesh::shapes::icosphere(4);
+//! let coarse = lodkit_mesh::shapes::icosphere(2);
+//! let opts = CompareOptions { samples: Some(10_000), ..Default::default() };
+//! let r = compare(&fine, &coarse, &opts).unwrap();
+//! assert!(r.symmetric.max > 0.0 && r.symmetric.max < 0.05);
+//! ```
+
+#![deny(missing_docs)]
+#![forbid(unsafe_code)]
 
 pub mod error;
 pub mod info;

@@ -14,16 +14,21 @@ use crate::error::ParseError;
 /// Axis-aligned bounding box. `Aabb::EMPTY` has `min > max`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Aabb {
+    /// The smallest corner.
     pub min: Vec3,
+    /// The largest corner.
     pub max: Vec3,
 }
 
 impl Aabb {
+    /// The box of no points (`min = +∞`, `max = −∞`): the identity of
+    /// [`Aabb::union`].
     pub const EMPTY: Aabb = Aabb {
         min: Vec3::splat(f32::INFINITY),
         max: Vec3::splat(f32::NEG_INFINITY),
     };
 
+    /// The smallest box holding every point ([`Aabb::EMPTY`] for none).
     pub fn from_points<'a>(points: impl IntoIterator<Item = &'a Vec3>) -> Aabb {
         let mut b = Aabb::EMPTY;
         for p in points {
@@ -32,9 +37,11 @@ impl Aabb {
         }
         b
     }
+    /// Whether the box holds no point.
     pub fn is_empty(&self) -> bool {
         self.min.x > self.max.x
     }
+    /// `max − min`; zero for an empty box.
     pub fn size(&self) -> Vec3 {
         if self.is_empty() {
             Vec3::ZERO
@@ -46,9 +53,11 @@ impl Aabb {
     pub fn diagonal(&self) -> f32 {
         self.size().length()
     }
+    /// The midpoint of the box (meaningless for an empty box).
     pub fn center(&self) -> Vec3 {
         (self.min + self.max) * 0.5
     }
+    /// The smallest box holding both boxes.
     pub fn union(&self, o: &Aabb) -> Aabb {
         Aabb {
             min: self.min.min(o.min),
@@ -64,14 +73,20 @@ impl Aabb {
 /// coordinate is finite, and each present attribute has one entry per vertex.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct TriMesh {
+    /// Vertex positions, object-space units.
     pub positions: Vec<Vec3>,
+    /// Per-vertex unit normals, when the mesh has them.
     pub normals: Option<Vec<Vec3>>,
+    /// Per-vertex sRGB RGBA8 colours, when the mesh has them.
     pub colors: Option<Vec<[u8; 4]>>,
+    /// Per-vertex texture coordinates (origin bottom-left), when present.
     pub uvs: Option<Vec<Vec2>>,
+    /// Triangles as vertex indices, counter-clockwise seen from outside.
     pub faces: Vec<[u32; 3]>,
 }
 
 impl TriMesh {
+    /// A mesh of positions and faces, no attributes (not validated).
     pub fn new(positions: Vec<Vec3>, faces: Vec<[u32; 3]>) -> Self {
         TriMesh {
             positions,
@@ -79,12 +94,15 @@ impl TriMesh {
             ..Default::default()
         }
     }
+    /// `positions.len()`.
     pub fn vertex_count(&self) -> usize {
         self.positions.len()
     }
+    /// `faces.len()`.
     pub fn face_count(&self) -> usize {
         self.faces.len()
     }
+    /// The box of every position (referenced or not).
     pub fn bbox(&self) -> Aabb {
         Aabb::from_points(&self.positions)
     }
@@ -159,21 +177,29 @@ impl TriMesh {
 /// A point cloud with optional per-point normals and colours.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct PointCloud {
+    /// Point positions, object-space units.
     pub positions: Vec<Vec3>,
+    /// Per-point unit normals, when known.
     pub normals: Option<Vec<Vec3>>,
+    /// Per-point sRGB RGBA8 colours, when known.
     pub colors: Option<Vec<[u8; 4]>>,
 }
 
 impl PointCloud {
+    /// The number of points.
     pub fn len(&self) -> usize {
         self.positions.len()
     }
+    /// Whether there are no points.
     pub fn is_empty(&self) -> bool {
         self.positions.is_empty()
     }
+    /// The box of every point.
     pub fn bbox(&self) -> Aabb {
         Aabb::from_points(&self.positions)
     }
+    /// Checks that every coordinate is finite and each attribute has one
+    /// entry per point; the message names the first offending element.
     pub fn validate(&self) -> Result<(), ParseError> {
         let n = self.positions.len();
         check_finite(&self.positions, "point")?;
@@ -189,19 +215,24 @@ impl PointCloud {
 /// A rigid transform `world = rotation * local + translation`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Pose {
+    /// Unit quaternion, applied first.
     pub rotation: Quat,
+    /// Added after the rotation.
     pub translation: Vec3,
 }
 
 impl Pose {
+    /// No rotation, no translation.
     pub const IDENTITY: Pose = Pose {
         rotation: Quat::IDENTITY,
         translation: Vec3::ZERO,
     };
+    /// A point from the local frame to the world.
     #[inline]
     pub fn apply(&self, p: Vec3) -> Vec3 {
         self.rotation * p + self.translation
     }
+    /// A direction from the local frame to the world (no translation).
     #[inline]
     pub fn apply_vector(&self, v: Vec3) -> Vec3 {
         self.rotation * v
@@ -215,20 +246,27 @@ impl Pose {
 /// triangulation and normal estimation rely on.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RangeImage {
+    /// Lattice width.
     pub cols: usize,
+    /// Lattice height.
     pub rows: usize,
     /// `rows * cols` points in the sensor's frame.
     pub points: Vec<Vec3>,
+    /// `rows * cols` flags: whether the cell holds a sample.
     pub valid: Vec<bool>,
+    /// `rows * cols` sRGB RGBA8 colours, when the scan has them.
     pub colors: Option<Vec<[u8; 4]>>,
     /// Sensor-to-world transform, when known (e.g. from a `.conf` file).
     pub pose: Option<Pose>,
 }
 
 impl RangeImage {
+    /// The number of cells holding a sample.
     pub fn valid_count(&self) -> usize {
         self.valid.iter().filter(|v| **v).count()
     }
+    /// The sample at `(row, col)` in the sensor's frame, if there is one.
+    /// Panics outside the lattice.
     #[inline]
     pub fn cell(&self, row: usize, col: usize) -> Option<Vec3> {
         let i = row * self.cols + col;
@@ -251,6 +289,8 @@ impl RangeImage {
                 .map(|c| idx.iter().map(|&i| c[i]).collect()),
         }
     }
+    /// Checks the lattice size, that valid cells are finite and that the
+    /// colours have one entry per cell.
     pub fn validate(&self) -> Result<(), ParseError> {
         let n = self
             .rows
@@ -280,12 +320,16 @@ impl RangeImage {
 /// What a geometry file holds once decoded.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Model {
+    /// A triangle mesh (the file has faces).
     Mesh(TriMesh),
+    /// Points with no connectivity.
     Points(PointCloud),
+    /// One scanner's range image (a PLY `range_grid`).
     Range(RangeImage),
 }
 
 impl Model {
+    /// `"mesh"`, `"point cloud"` or `"range image"` (for messages).
     pub fn kind(&self) -> &'static str {
         match self {
             Model::Mesh(_) => "mesh",

@@ -8,16 +8,17 @@
 //! joins the lowest-indexed earlier representative within the tolerance, so
 //! the result depends only on the input, never on hashing order.
 
-use std::collections::HashMap;
-
 use glam::Vec3;
+use rustc_hash::FxHashMap;
 
 use crate::mesh::TriMesh;
 
 /// Result of [`weld_map`]: `remap[old] = new`, `representative[new] = old`.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct WeldMap {
+    /// Per input vertex: its welded vertex.
     pub remap: Vec<u32>,
+    /// Per welded vertex: the input vertex it keeps (the group's first).
     pub representative: Vec<u32>,
 }
 
@@ -28,7 +29,8 @@ pub fn weld_map(positions: &[Vec3], tolerance: f32) -> WeldMap {
     let mut remap = Vec::with_capacity(positions.len());
     let mut representative: Vec<u32> = Vec::new();
     if tolerance <= 0.0 {
-        let mut seen: HashMap<[u32; 3], u32> = HashMap::with_capacity(positions.len());
+        let mut seen: FxHashMap<[u32; 3], u32> =
+            FxHashMap::with_capacity_and_hasher(positions.len(), Default::default());
         for (i, p) in positions.iter().enumerate() {
             let key = [canon(p.x), canon(p.y), canon(p.z)];
             let next = representative.len() as u32;
@@ -41,7 +43,7 @@ pub fn weld_map(positions: &[Vec3], tolerance: f32) -> WeldMap {
     } else {
         let inv = 1.0 / tolerance;
         let cell = |p: Vec3| ((p * inv).floor()).as_ivec3();
-        let mut grid: HashMap<glam::IVec3, Vec<u32>> = HashMap::new();
+        let mut grid: FxHashMap<glam::IVec3, Vec<u32>> = FxHashMap::default();
         let t2 = tolerance * tolerance;
         for (i, p) in positions.iter().enumerate() {
             let c = cell(*p);

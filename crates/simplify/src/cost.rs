@@ -318,10 +318,9 @@ pub fn joint_point(m: &WorkMesh, p: DVec3, w: u32) -> [f64; MAX_DIM] {
 /// Departure (the record key): a geometry-only cost is `Q_s(v_t)` divided
 /// by the area of `r_s`, the area-weighted mean squared distance of the
 /// moved vertex to the ring's planes, as meshoptimizer normalises its
-/// errors. The plain sum grows with the faces' size, so small sharp
-/// features (the bunny's ears) looked cheap next to large flat faces and
-/// went first: on the bunny at 1% the max distance was 1.2× meshoptimizer's,
-/// normalised 0.6×. Finite and never NaN (overflow saturates at `f32::MAX`).
+/// errors. Reason: the plain sum grows with the faces' size, so small sharp
+/// features (the bunny's ears) would look cheap next to large flat faces
+/// and go first. Finite and never NaN (overflow saturates at `f32::MAX`).
 #[inline]
 fn normalised_cost(cost: f64, area: f64) -> f32 {
     let c = if area > 0.0 { cost / area } else { cost };

@@ -2,15 +2,57 @@
 //!
 //! A linear-time mesh simplifier after Chen, Fahn, Tsai, Chen & Lin,
 //! *Generating high-quality discrete LOD meshes for 3D computer games in
-//! linear time* (Multimedia Systems, 2006): iterative full-edge collapse
-//! driven by memoryless quadrics, ordered by a constant-size
+//! linear time* (Multimedia Systems 11(5), 2006): iterative full-edge
+//! collapse driven by memoryless quadrics, ordered by a constant-size
 //! replacement-selection heap inside a single pipeline per pass, with
 //! two-stage optimal placement and hole filling. (By default the heap
 //! holds one record, so each record under the pass's error threshold is
-//! collapsed as soon as it is costed: see `Options::DEFAULT_HEAP_SIZE`.)
+//! collapsed as soon as it is costed: see [`Options::DEFAULT_HEAP_SIZE`].)
 //!
-//! The pipeline, one file per stage (each names its paper section and its
-//! departures):
+//! ## Entry points
+//!
+//! | item | what it does |
+//! |---|---|
+//! | [`simplify`] | one mesh to one budget (`Options::target`) |
+//! | [`lod_chain`] | one mesh to several budgets, each level from the previous |
+//! | [`halving_targets`] | the targets 1/2, 1/4, … for [`lod_chain`] |
+//! | [`Simplifier`] | the same two calls on a reusable workspace (no allocation once warm) |
+//! | [`Options`], [`Target`], [`AttributeWeights`] | every knob, with named defaults |
+//! | [`Simplified`], [`LevelReport`], [`StopReason`] | the output mesh and why it stopped where it did |
+//! | [`Error`] | why simplification could not start |
+//!
+//! ## Contract (all entry points)
+//!
+//! - **Input**: any [`TriMesh`]: positions in any unit (errors are reported
+//!   in the same unit), CCW faces, optional normals / RGBA8 colours / UVs.
+//!   Duplicate positions are welded exactly (bitwise) before simplifying;
+//!   corners that differ in an attribute become wedges, so attribute seams
+//!   are kept, never torn. Degenerate, non-manifold and unwelded input is
+//!   accepted.
+//! - **Output size**: at most the target's face count when
+//!   [`StopReason::Reached`], and at most one or two faces under it (the
+//!   last collapse removes one or two). Otherwise the report says why it
+//!   stopped short ([`StopReason`]): the error bound, no valid collapse
+//!   left, or the pass limit. A lone triangle is never erased; a target
+//!   above the input's face count returns the (welded, compacted) input.
+//! - **Guarantees**: a collapse that would flip a face, create a
+//!   non-manifold edge or tear a seam is refused; a closed manifold stays
+//!   closed and keeps its genus; with
+//!   `lock_border` border vertices do not move; vertices are compacted (no
+//!   unreferenced vertex) and attributes are interpolated at the placed
+//!   vertex. **Deterministic**: the same input and options give the same
+//!   output, bit for bit (single-threaded, no hashing order, no clock in
+//!   the result).
+//! - **Errors** ([`Error`]): an index out of range, a non-finite position,
+//!   an attribute array of the wrong length, more than 2³² − 2 vertices or
+//!   2³⁰ faces. Never a panic on any input.
+//! - **Cost**: `O(V + F)` time per pass (ring table, costing and collapse
+//!   are linear, the heap is constant-size); each pass removes up to about
+//!   half the vertices, so a level takes a handful of passes. Memory: about
+//!   the input's size again, reported exactly by
+//!   [`Simplifier::peak_bytes`].
+//!
+//! ## Stages, one file each (each names its paper section and departures)
 //!
 //! | stage | file | paper |
 //! |---|---|---|
@@ -33,13 +75,13 @@
 //! assert!(lod.mesh.faces.len() <= 500 && lod.mesh.faces.len() >= 497);
 //! ```
 //!
-//! Performance and quality against meshoptimizer: `lodkit bench simplify`
-//! (see the README for the table and the machine). For profiling, the
-//! `simplify_loop` example runs one mesh (a file or `blob:N`) to a target
-//! repeatedly and prints the best wall and thread CPU time and an output
-//! hash: `cargo run --release -p lodkit-simplify --example simplify_loop --
-//! MESH 1% 20`.
+//! Speed and quality against meshoptimizer: `lodkit bench simplify` (the
+//! README has the table and the machine). The example `budget` simplifies
+//! a file to a face budget; the profiling driver is the bench crate's
+//! `simplify_loop` example.
 
+#![deny(missing_docs)]
+#![forbid(unsafe_code)]
 // `!(x > 0.0)` is how this crate says "not positive, or NaN": the negated
 // comparisons are deliberate, so NaN never passes a test meant for numbers.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -53,7 +95,7 @@ mod pass;
 mod prune;
 mod quadric;
 mod ring_table;
-pub mod rs_heap;
+mod rs_heap;
 mod simplifier;
 mod work_mesh;
 
@@ -63,21 +105,29 @@ pub use chain::{halving_targets, lod_chain};
 pub use options::{AttributeWeights, Options, Target};
 pub use simplifier::Simplifier;
 
-/// Why simplification cannot start.
+/// Why simplification cannot start (checked before any work is done).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum Error {
+    /// A face refers to a vertex that does not exist.
     #[error("face {face} has vertex index {index} but the mesh has {vertices} vertices")]
     BadIndex {
+        /// The face's index.
         face: usize,
+        /// The offending vertex index.
         index: u32,
+        /// The mesh's vertex count.
         vertices: usize,
     },
+    /// This vertex has a NaN or infinite coordinate.
     #[error("vertex {0} has a non-finite coordinate")]
     NonFinite(usize),
+    /// `normals`, `colors` or `uvs` is not `positions.len()` long.
     #[error("an attribute array does not have one entry per vertex")]
     AttributeLength,
+    /// More vertices than 32-bit indices (minus two reserved values) address.
     #[error("{0} vertices is more than 32-bit indices can address")]
     TooLarge(usize),
+    /// More faces than the ring table's 30-bit face numbers address.
     #[error("{0} triangles is more than the ring table can address (2^30)")]
     TooManyFaces(usize),
 }
@@ -92,8 +142,11 @@ pub enum StopReason {
     /// No valid collapse is left: every candidate would break the
     /// topology, flip a face or tear a seam (counts from the last pass).
     Blocked {
+        /// Collapses refused because they would break the topology.
         topology: usize,
+        /// Collapses refused because they would flip a face.
         flip: usize,
+        /// Collapses refused because they would tear an attribute seam.
         seam: usize,
     },
     /// `max_passes` passes ran without reaching the target.
@@ -121,12 +174,14 @@ impl std::fmt::Display for StopReason {
     }
 }
 
-/// Per-level report.
+/// What one level (or one [`simplify`] call) did.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LevelReport {
     /// The face budget asked for.
     pub target_faces: usize,
+    /// Triangles in the output.
     pub triangles: usize,
+    /// Vertices in the output (wedges count once per attribute value).
     pub vertices: usize,
     /// Estimated object-space distance to the input (largest accumulated
     /// per-vertex bound, in the input's units).
@@ -135,6 +190,7 @@ pub struct LevelReport {
     pub passes: u32,
     /// Edge collapses performed since the input (cumulative).
     pub collapses: usize,
+    /// Why the level stopped where it did.
     pub stop: StopReason,
     /// Wall time of this level: the whole call for `simplify`; for a chain
     /// level, from the previous level's end (the first level includes
@@ -145,11 +201,17 @@ pub struct LevelReport {
 /// A simplified mesh and its report.
 #[derive(Debug, Clone)]
 pub struct Simplified {
+    /// The output: compacted, with the input's attributes interpolated.
     pub mesh: TriMesh,
+    /// What the call did and why it stopped.
     pub report: LevelReport,
 }
 
-/// Simplifies `mesh` with a fresh workspace; see [`Simplifier::simplify`].
+/// Simplifies `mesh` to `opts.target` faces (and `opts.max_error`) with a
+/// fresh workspace: see the crate docs for the contract (output size,
+/// guarantees, errors, cost). To simplify many meshes, keep a
+/// [`Simplifier`] and call [`Simplifier::simplify`]: same result, no
+/// allocation once its buffers are large enough.
 pub fn simplify(mesh: &TriMesh, opts: &Options) -> Result<Simplified, Error> {
     Simplifier::new().simplify(mesh, opts)
 }

@@ -2,7 +2,7 @@
 //!
 //! The paper (HQMS §4) has two parameters: the output face count (`goal`)
 //! and the RS-heap size. Everything else here is what users of a discrete
-//! LOD tool need beyond the paper (issue 3): an error bound, border locking,
+//! LOD tool need beyond the paper: an error bound, border locking,
 //! hole-filling control, attribute weights and component pruning.
 
 /// How far to simplify.
@@ -105,24 +105,22 @@ pub struct Options {
 impl Options {
     /// Departure: the paper's heap holds 512 records (§5). A record then
     /// waits about 512 ring costings before it comes out, and in that time
-    /// its target often becomes dirty: on the bunny at 1%, 28k dependency
-    /// rejections (each re-costed) for 34k collapses; 64 records halved
-    /// them. Since each pass admits only records under its error threshold
-    /// (`pass.rs`), that threshold already orders the collapses globally and
-    /// the heap's local order adds nothing measurable: with one record the
-    /// bench's mean and max errors on the bunny and the 1M blob stay below
-    /// meshoptimizer's at 50%, 10%, 1% and 1,000 triangles (the bunny's 1%
-    /// max rose from 0.53× to 0.65× of meshoptimizer's, the others moved by
-    /// under 10% either way). A one-record heap cannot reorder anything, so
-    /// the pass collapses each admitted record as soon as it is costed:
-    /// no dependency rejections, no second costing, no heap work, and the
-    /// collapse reuses the cost stage's read of the ring — 18% fewer
-    /// instructions than 64 records on the bunny at 1%.
+    /// its target often becomes dirty (a dependency rejection, re-costed).
+    /// Since each pass admits only records under its error threshold
+    /// (`pass.rs`), that threshold already orders the collapses globally,
+    /// and the heap's local order does not lower the errors (`lodkit bench
+    /// simplify` keeps them below meshoptimizer's with one record). A
+    /// one-record heap cannot reorder anything, so the pass collapses each
+    /// admitted record as soon as it is costed: no dependency rejections,
+    /// no second costing, no heap work, and the collapse reuses the cost
+    /// stage's read of the ring.
     pub const DEFAULT_HEAP_SIZE: usize = 1;
     /// Each pass halves the vertex count at best (Strategy I, eq. 6), so
     /// 64 passes cover any input that fits in memory many times over.
     pub const DEFAULT_MAX_PASSES: u32 = 64;
 
+    /// Half the input, no error bound, borders free, holes filled, the
+    /// default heap and attribute weights, no pruning.
     pub const DEFAULT: Options = Options {
         target: Target::Ratio(0.5),
         max_error: None,

@@ -35,28 +35,25 @@ use crate::work_mesh::WorkMesh;
 /// About this many rings are costed to set the pass threshold: the
 /// quantile of a 512-sample estimate is within about 2% (of the ranks) of
 /// the mesh's, well inside [`PASS_SLACK`], and a fixed count keeps the
-/// sample's time and memory out of the per-vertex budget. (1,024 took 2–3%
-/// more instructions on the bunny at every target, 2,048 1.4% more again;
-/// the errors moved by up to 15% either way, below meshoptimizer's.)
+/// sample's time and memory out of the per-vertex budget (larger samples
+/// cost more and do not lower the errors).
 pub const SAMPLES: usize = 512;
-/// Small meshes still sample at most one ring in this many (16, not 8:
-/// the late passes of a deep target are small, and their samples were a
-/// tenth of all costings; errors stayed below meshoptimizer's).
+/// Small meshes still sample at most one ring in this many: the late
+/// passes of a deep target are small, and a denser sample would be a large
+/// share of all their costings.
 pub const MIN_SAMPLE_STRIDE: usize = 16;
 /// The threshold is this many times the goal quantile of the sample: the
 /// sample and the dependency rule are both approximate, and a pass that
-/// falls short only costs another pass. Fewer rings wait for the next pass
-/// (and are costed again there) the larger it is: with records collapsed
-/// as soon as they are costed, 2 took 4% fewer instructions than 1.5 on
-/// the bunny at 1% and 10%, the errors staying below meshoptimizer's (3
-/// saved 9% but the 1,000-triangle max passed meshoptimizer's).
+/// falls short only costs another pass. The larger it is, the fewer rings
+/// wait for the next pass (and are costed again there), and the less the
+/// threshold orders the collapses; 2 balances the two (`lodkit bench
+/// simplify` checks the errors against meshoptimizer's).
 pub const PASS_SLACK: f32 = 2.0;
 
 /// At most this fraction of the rings is admitted in one pass, however far
 /// the goal is. Without it the first passes of a deep target admit every
 /// ring and the choice between neighbours is left to the heap's local
-/// order: on the bunny at 50% the max error was 3× meshoptimizer's; with
-/// 0.6 it is below it, for one or two more passes.
+/// order, which raises the max error; the cap costs one or two more passes.
 pub const PASS_MAX_FRACTION: f64 = 0.6;
 
 /// What a pass did.

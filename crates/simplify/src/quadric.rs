@@ -24,8 +24,8 @@
 use glam::DVec3;
 
 /// Border planes weigh this many times the squared edge length: enough
-/// that a rim vertex slides along the rim rather than inward (on the bunny,
-/// whose base is open, a weight of 1 doubles the max error at 50%). With
+/// that a rim vertex slides along the rim rather than inward (an open base,
+/// like the bunny's, otherwise shrinks and dominates the max error). With
 /// hole filling on, a hole therefore closes once the triangles around it
 /// are larger than the hole: tiny scanner holes close early, openings the
 /// size of the model stay until the last levels.

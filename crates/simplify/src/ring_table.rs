@@ -57,8 +57,8 @@ pub fn entry_corner(e: RingEntry) -> usize {
 /// Vertex → incident faces, compressed rows: the ring of `v` is
 /// `list[off[v]..off[v + 1]]`, faces in increasing index order. Each entry
 /// is a [`RingEntry`]: the face and the corner of `v` in it, so a scan
-/// never searches a face for its centre (a three-way branch per face that
-/// was 3% of the instructions and mispredicts a third of the time). A
+/// never searches a face for its centre (a three-way, badly predicted
+/// branch per face in the hottest loop). A
 /// corner stays valid for the whole pass for every ring that is read:
 /// a collapse only rewrites the corners of `s` (then removed) and flags
 /// `t` dirty, and neither ring is read again before the next rebuild.

@@ -20,7 +20,11 @@ use crate::rs_heap::RsHeap;
 use crate::work_mesh::WorkMesh;
 use crate::{Error, LevelReport, Simplified, StopReason};
 
-/// Reusable simplification workspace.
+/// Reusable simplification workspace: [`Simplifier::simplify`] and
+/// [`Simplifier::lod_chain`] give the same results as the free functions
+/// [`simplify`](crate::simplify) and [`lod_chain`](crate::lod_chain), and
+/// keep every buffer for the next call. Not shared between threads at once
+/// (`&mut self`); use one per thread.
 #[derive(Debug)]
 pub struct Simplifier {
     pub(crate) m: WorkMesh,
@@ -45,6 +49,7 @@ impl Default for Simplifier {
 }
 
 impl Simplifier {
+    /// An empty workspace (allocates nothing until the first call).
     pub fn new() -> Self {
         Simplifier {
             m: WorkMesh::default(),
@@ -60,7 +65,10 @@ impl Simplifier {
         }
     }
 
-    /// Simplifies `mesh` to `opts.target` (and `opts.max_error`).
+    /// Simplifies `mesh` to `opts.target` (and `opts.max_error`); the
+    /// contract is in the crate docs. The output takes the workspace's
+    /// vertex and face arrays instead of copying them (that copy would be
+    /// the peak), so the next call allocates those two again.
     pub fn simplify(&mut self, mesh: &TriMesh, opts: &Options) -> Result<Simplified, Error> {
         let t0 = std::time::Instant::now();
         self.start(mesh, opts)?;

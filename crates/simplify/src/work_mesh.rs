@@ -19,7 +19,7 @@
 //! faces 12 B each, plus 12 B per face of corner wedges only for meshes
 //! with attribute seams.
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap;
 
 use glam::Vec3;
 use lodkit_mesh::TriMesh;
@@ -174,7 +174,7 @@ impl WorkMesh {
             // one wedge (an unwelded but smooth mesh has no seams).
             let mut wedge_of: Vec<u32> = Vec::new();
             if layout.k > 0 {
-                let mut seen: HashMap<Vec<u32>, u32> = HashMap::new();
+                let mut seen: FxHashMap<Vec<u32>, u32> = FxHashMap::default();
                 let mut key = Vec::with_capacity(1 + layout.k);
                 let mut a = Vec::with_capacity(layout.k);
                 wedge_of.reserve(n);

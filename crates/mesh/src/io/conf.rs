@@ -20,6 +20,7 @@ use crate::parse_err;
 /// One `bmesh FILE tx ty tz qx qy qz qw` line.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ConfEntry {
+    /// The scan's file name, relative to the `.conf` file's directory.
     pub file: String,
     /// Scan-to-world transform.
     pub pose: Pose,

@@ -7,6 +7,26 @@
 //! [`write_atomic`] puts in place with a temp file + rename, so a failed run
 //! never leaves a half-written file, and the same model always produces the
 //! same bytes.
+//!
+//! # Entry points
+//!
+//! - [`load`] / [`load_mesh`]: a file → [`Model`] / [`TriMesh`]. The format
+//!   comes from the extension ([`Format::from_path`]); files over
+//!   [`MAX_FILE_BYTES`] and directories are refused before reading. Errors
+//!   name the file and what is wrong, on one line ([`Error`]). Cost: one
+//!   read of the file plus one linear decode; memory: the file's bytes plus
+//!   the model.
+//! - [`decode`]: bytes of a known format → [`Model`] (what `load` does after
+//!   reading; no file system access except external glTF buffers beside
+//!   `base_dir`). Guarantees on any input: no panic, no allocation sized by
+//!   an unchecked count, and the result passes [`TriMesh::validate`].
+//! - [`save`] / [`save_mesh`]: a model → a file, atomically via
+//!   [`write_atomic`] (temp file, `fsync`, rename): on error the old file
+//!   is untouched and no temp file stays. [`encode`] gives the bytes.
+//!   Deterministic: the same model and options give the same bytes.
+//! - One module per format ([`ply`], [`obj`], [`stl`], [`gltf`], [`xyz`],
+//!   [`conf`]), each documenting what it reads, what it writes and its
+//!   conventions (units are never converted; UV origin and colour space are).
 
 pub mod conf;
 pub mod gltf;
@@ -24,8 +44,11 @@ use crate::mesh::{Model, PointCloud, TriMesh};
 /// The formats lodkit reads and writes, chosen by file extension.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Format {
+    /// Stanford PLY (`.ply`): meshes, point clouds and range grids.
     Ply,
+    /// Wavefront OBJ (`.obj`): meshes.
     Obj,
+    /// STL (`.stl`), binary or ASCII: meshes.
     Stl,
     /// glTF 2.0 JSON (`.gltf`, buffers embedded as data URIs or beside it).
     Gltf,
@@ -38,6 +61,8 @@ pub enum Format {
 }
 
 impl Format {
+    /// The format of a path's extension (case-insensitive; `.txt` reads as
+    /// XYZ); `None` for an unknown or missing extension.
     pub fn from_path(path: &Path) -> Option<Format> {
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
         Some(match ext.as_str() {
@@ -51,6 +76,7 @@ impl Format {
             _ => return None,
         })
     }
+    /// The format's short name, for messages (`"PLY"`, `"glTF"`, …).
     pub fn name(self) -> &'static str {
         match self {
             Format::Ply => "PLY",

@@ -17,7 +17,7 @@
 //! otherwise it is dropped for the whole mesh (a half-textured mesh comes out
 //! untextured rather than misaligned).
 //!
-//! **Guarantees on bad input**: before `tobj` sees the text, [`prescan`]
+//! **Guarantees on bad input**: before `tobj` sees the text, `prescan`
 //! checks every line `tobj` would act on: UTF-8, numbers on `v`/`vt`/`vn`
 //! lines, the same colour layout on every `v` line, faces with at least 3
 //! corners, and every face index (1-based, or negative = relative) in range
@@ -217,7 +217,7 @@ fn without_polylines(text: &str) -> String {
 
 /// Reads an OBJ file into one triangle mesh (see the module docs).
 ///
-/// Errors: invalid UTF-8, any problem [`prescan`] finds (with its line),
+/// Errors: invalid UTF-8, any problem `prescan` finds (with its line),
 /// anything else `tobj` refuses, and a file with no faces.
 pub fn read(bytes: &[u8]) -> Result<TriMesh, ParseError> {
     let text = std::str::from_utf8(bytes)

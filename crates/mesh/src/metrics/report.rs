@@ -67,8 +67,11 @@ impl Accum {
 pub struct DirectionStats {
     /// Number of samples (`vertex_samples + edge_samples + face_samples`).
     pub samples: u64,
+    /// Samples placed on vertices.
     pub vertex_samples: u64,
+    /// Samples placed along edges.
     pub edge_samples: u64,
+    /// Samples placed on faces.
     pub face_samples: u64,
     /// Smallest sample distance (object units).
     pub min: f64,

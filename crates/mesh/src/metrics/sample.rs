@@ -24,10 +24,13 @@
 //!   Zero-area faces get none.
 //!
 //! Determinism: sample `j` belongs to chunk `j / CHUNK`; each chunk draws
-//! from its own SplitMix64 stream seeded by `(seed, chunk)`, so the points do
+//! from its own SplitMix64 stream (Steele, Lea and Flood 2014, as
+//! `rand_xoshiro` implements it) seeded by `(seed, chunk)`, so the points do
 //! not depend on the number of threads or on scheduling.
 
 use glam::{DVec3, Vec3};
+use rand_xoshiro::SplitMix64;
+use rand_xoshiro::rand_core::{Rng, SeedableRng};
 
 use crate::mesh::{Aabb, TriMesh};
 
@@ -37,12 +40,16 @@ pub const CHUNK: usize = 8192;
 /// How many samples of each kind a [`SurfaceSampler`] produces.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
 pub struct SampleCounts {
+    /// Vertex samples.
     pub vertices: usize,
+    /// Edge samples.
     pub edges: usize,
+    /// Face samples.
     pub faces: usize,
 }
 
 impl SampleCounts {
+    /// All samples.
     pub fn total(&self) -> usize {
         self.vertices + self.edges + self.faces
     }
@@ -55,9 +62,13 @@ pub struct SamplingPlan {
     /// samples and exactly `N` face samples (when the mesh has edge length
     /// and area to put them on).
     pub per_kind: usize,
+    /// Sample the referenced vertices.
     pub vertices: bool,
+    /// Sample along the unique edges.
     pub edges: bool,
+    /// Sample the faces.
     pub faces: bool,
+    /// Seed of every RNG stream (same seed, same points).
     pub seed: u64,
 }
 
@@ -93,11 +104,11 @@ impl<'m> SurfaceSampler<'m> {
         if plan.vertices && n > 0 {
             vertices = referenced_vertices(mesh);
             if vertices.len() > n {
-                let mut rng = SplitMix64::new(stream_seed(plan.seed, TAG_VERTEX, 0));
+                let mut rng = SplitMix64::seed_from_u64(stream_seed(plan.seed, TAG_VERTEX, 0));
                 // Partial Fisher-Yates: the first `n` slots become a uniform
                 // random subset; sorted again for locality of the queries.
                 for i in 0..n {
-                    let j = i + rng.below((vertices.len() - i) as u64) as usize;
+                    let j = i + below(&mut rng, (vertices.len() - i) as u64) as usize;
                     vertices.swap(i, j);
                 }
                 vertices.truncate(n);
@@ -118,7 +129,9 @@ impl<'m> SurfaceSampler<'m> {
                     pa.distance(pb)
                 })
                 .collect();
-            let offset = SplitMix64::new(stream_seed(plan.seed, TAG_EDGE, 0)).unit();
+            let offset = unit(&mut SplitMix64::seed_from_u64(stream_seed(
+                plan.seed, TAG_EDGE, 0,
+            )));
             edge_starts = systematic_starts(&lengths, n, offset);
             counts.edges = edge_starts.last().map_or(0, |&s| s as usize);
             if counts.edges == 0 {
@@ -132,7 +145,9 @@ impl<'m> SurfaceSampler<'m> {
             let areas: Vec<f64> = (0..mesh.faces.len())
                 .map(|f| face_area_f64(mesh, f))
                 .collect();
-            let offset = SplitMix64::new(stream_seed(plan.seed, TAG_FACE, 0)).unit();
+            let offset = unit(&mut SplitMix64::seed_from_u64(stream_seed(
+                plan.seed, TAG_FACE, 0,
+            )));
             face_starts = systematic_starts(&areas, n, offset);
             counts.faces = face_starts.last().map_or(0, |&s| s as usize);
             if counts.faces == 0 {
@@ -161,6 +176,7 @@ impl<'m> SurfaceSampler<'m> {
         self.counts.total()
     }
 
+    /// Whether the sampler produces no sample.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
@@ -213,14 +229,14 @@ impl<'m> SurfaceSampler<'m> {
         // Face samples (indices relative to the first face sample).
         let (f0, f1) = (start.max(nv + ne) - (nv + ne), end.max(nv + ne) - (nv + ne));
         if f0 < f1 {
-            let mut rng = SplitMix64::new(stream_seed(self.seed, TAG_FACE, c as u64 + 1));
+            let mut rng = SplitMix64::seed_from_u64(stream_seed(self.seed, TAG_FACE, c as u64 + 1));
             let mut f = locate(&self.face_starts, f0 as u64);
             for j in f0 as u64..f1 as u64 {
                 while self.face_starts[f + 1] <= j {
                     f += 1;
                 }
                 let [a, b, c] = self.mesh.triangle(f);
-                let (mut u, mut v) = (rng.unit(), rng.unit());
+                let (mut u, mut v) = (unit(&mut rng), unit(&mut rng));
                 if u + v > 1.0 {
                     (u, v) = (1.0 - u, 1.0 - v);
                 }
@@ -341,38 +357,26 @@ fn stream_seed(seed: u64, tag: u64, index: u64) -> u64 {
     mix64(seed ^ mix64(tag.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ mix64(index)))
 }
 
-/// SplitMix64's output function (a bijective 64-bit mixer).
+/// SplitMix64's output function (a bijective 64-bit mixer), which seeds
+/// independent streams from `(seed, tag, index)`.
 fn mix64(mut z: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
 }
 
-/// Steele, Lea and Flood's SplitMix64: small, fast, and good enough for
-/// placing sample points (not for cryptography).
-#[derive(Debug, Clone)]
-struct SplitMix64(u64);
+/// Uniform in `[0, 1)` with 53 random bits.
+fn unit(rng: &mut SplitMix64) -> f64 {
+    (rng.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+}
 
-impl SplitMix64 {
-    fn new(seed: u64) -> Self {
-        SplitMix64(seed)
-    }
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        mix64(self.0)
-    }
-    /// Uniform in `[0, 1)` with 53 random bits.
-    fn unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-    /// Uniform in `0..n` (`n > 0`), by rejection (no modulo bias).
-    fn below(&mut self, n: u64) -> u64 {
-        let zone = u64::MAX - u64::MAX % n;
-        loop {
-            let x = self.next_u64();
-            if x < zone {
-                return x % n;
-            }
+/// Uniform in `0..n` (`n > 0`), by rejection (no modulo bias).
+fn below(rng: &mut SplitMix64, n: u64) -> u64 {
+    let zone = u64::MAX - u64::MAX % n;
+    loop {
+        let x = rng.next_u64();
+        if x < zone {
+            return x % n;
         }
     }
 }

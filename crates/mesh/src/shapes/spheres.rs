@@ -1,7 +1,7 @@
 //! Unit spheres: latitude/longitude ([`uv_sphere`]) and subdivided
 //! icosahedron ([`icosphere`]).
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap;
 
 use glam::{Vec2, Vec3};
 
@@ -103,7 +103,7 @@ pub fn icosphere(level: u32) -> TriMesh {
         [9, 8, 1],
     ];
     for _ in 0..level.min(10) {
-        let mut mid: HashMap<(u32, u32), u32> = HashMap::new();
+        let mut mid: FxHashMap<(u32, u32), u32> = FxHashMap::default();
         let mut next = Vec::with_capacity(faces.len() * 4);
         for f in &faces {
             let mut m = [0u32; 3];

@@ -33,15 +33,15 @@
 //! checked here.
 //!
 //! # Writing ([`write_mesh`], [`write_points`])
-//! Binary little-endian unless ASCII is asked for; see [`write`](mod@write) for the
+//! Binary little-endian unless ASCII is asked for; see `write.rs` for the
 //! layout. Output is deterministic.
 //!
-//! Stages, one file each: [`header`] (text header → element list),
-//! `read` (body → model), [`write`](mod@write) (model → bytes).
+//! Stages, one file each: `header` (text header → element list),
+//! `read` (body → model), `write` (model → bytes).
 
-pub mod header;
+pub(crate) mod header;
 mod read;
-pub mod write;
+mod write;
 
 #[cfg(test)]
 mod tests;

@@ -820,19 +820,19 @@ fn no_panic_on_truncation_or_corruption() {
     write_mesh(&mut be, &m, false).unwrap();
     let text = String::from_utf8_lossy(&be).replace("binary_little_endian", "binary_big_endian");
     files.push(text.into_bytes());
-    let mut seed: u64 = 0x9e37_79b9_7f4a_7c15;
+    use rand_xoshiro::SplitMix64;
+    use rand_xoshiro::rand_core::{Rng, SeedableRng};
+    let mut rng = SplitMix64::seed_from_u64(0x9e37_79b9_7f4a_7c15);
     for f in &files {
         for len in 0..=f.len() {
             let _ = read(&f[..len]);
             let _ = load(&f[..len]);
         }
         for _ in 0..3000 {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
+            let r = rng.next_u64();
             let mut g = f.clone();
-            let at = (seed >> 33) as usize % g.len();
-            g[at] = (seed >> 17) as u8;
+            let at = (r >> 33) as usize % g.len();
+            g[at] = (r >> 17) as u8;
             let _ = load(&g);
         }
     }

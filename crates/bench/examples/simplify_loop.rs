@@ -2,7 +2,7 @@
 //! `REPEAT` times with a reused workspace and prints the best time, the
 //! report and a hash of the output (for determinism checks).
 //!
-//! `cargo run --release -p lodkit-simplify --example simplify_loop -- MESH TARGET [REPEAT [SAMPLES]]`
+//! `cargo run --release -p lodkit-bench --example simplify_loop -- MESH TARGET [REPEAT [SAMPLES]]`
 //! where `TARGET` is a face count or a ratio with `%` (`1%`). With
 //! `SAMPLES`, also prints the symmetric mean / max distance of the output
 //! from the input (`compare`, that many samples per kind).
@@ -73,11 +73,8 @@ fn main() {
     }
 }
 
-/// This thread's time on a CPU (Linux `schedstat`; NaN elsewhere): unlike
-/// wall time it does not count the time other processes held the core.
+/// This thread's CPU time (NaN where the clock is missing): unlike wall
+/// time it does not count the time other processes held the core.
 fn cpu_seconds() -> f64 {
-    std::fs::read_to_string("/proc/thread-self/schedstat")
-        .ok()
-        .and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok())
-        .map_or(f64::NAN, |ns| ns * 1e-9)
+    lodkit_bench::simplify::thread_cpu_seconds().unwrap_or(f64::NAN)
 }

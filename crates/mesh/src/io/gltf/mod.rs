@@ -1,0 +1,76 @@
+//! glTF 2.0 (`.gltf` JSON and `.glb` binary): read into one [`TriMesh`],
+//! write an LOD chain as one GLB.
+//!
+//! **Reading** takes every triangle primitive of every mesh reachable from
+//! the default scene (when the file names none: from every root node; when
+//! it has no nodes at all: every mesh, untransformed), with each node's world
+//! transform applied. Conventions:
+//! - `TRIANGLES` are read as they are; `TRIANGLE_STRIP` and `TRIANGLE_FAN`
+//!   are converted to triangles (the degenerate triangles strips use as
+//!   joints are dropped); points and lines are skipped;
+//! - positions get the world matrix, normals its inverse transpose
+//!   (renormalised; under an identity transform normals are kept exactly as
+//!   stored); a mirroring transform (negative determinant) has its
+//!   triangles' winding swapped so faces stay CCW seen from outside;
+//! - `COLOR_0` (float, or normalised u8/u16; RGB or RGBA) is *linear* in
+//!   glTF and becomes sRGB RGBA8 (alpha stays linear, RGB gets alpha 255);
+//! - `TEXCOORD_0` (float or normalised u8/u16) has its V flipped:
+//!   `v = 1 − v_gltf` (glTF's origin is top-left, lodkit's bottom-left);
+//! - indices may be u8/u16/u32 or absent (non-indexed);
+//! - an attribute is kept only if *every* primitive read has it (dropped
+//!   otherwise, never filled with made-up defaults);
+//! - materials, textures, skins, morph targets, cameras, animations and
+//!   other texture coordinate / colour sets are ignored.
+//!
+//! Buffers come from the GLB `BIN` chunk, `data:` URIs (base64 only), or
+//! files relative to `base_dir` (percent-decoded; `None` refuses them);
+//! URLs with a scheme (`http:`, `file:`…) and absolute paths are refused.
+//! Only the buffers that the primitives read actually use are resolved.
+//!
+//! **Guarantees on bad input**: the GLB container is parsed here, not by
+//! `gltf::Glb::from_slice` (which, in gltf 1.4, subtracts 12 from the header
+//! length unchecked and so panics in debug builds on a header length < 12).
+//! Before `gltf`'s validation runs, every primitive's accessor indices are
+//! range-checked (gltf-json 1.4's POSITION min/max check indexes the accessor
+//! list without checking, and panics). Before any accessor is read through
+//! `gltf`'s reader, its type, count (≥ 1), stride (≥ element size) and
+//! extent (accessor inside view, view inside the buffer's real bytes, all in
+//! checked arithmetic) are verified, since the reader would otherwise panic
+//! (stride smaller than an element, count 0) or silently read short.
+//! Sparse accessors are refused. Indices out of range, cycles in the node
+//! graph and nodes with two parents are errors. All of these are one-line
+//! [`ParseError`]s.
+//!
+//! **Writing** ([`write_glb`]): one mesh + one node per level, all nodes
+//! siblings in the default scene. The node and mesh are named
+//! `"{name} ({triangles} triangles)"` and the node's `extras` hold
+//! `{"triangles": N, "vertices": M}`. Accessors: POSITION (f32 vec3 with
+//! min/max), NORMAL (f32 vec3), COLOR_0 (normalised **u16** vec4, linear:
+//! sRGB → linear in u16 is lossless for RGBA8, in u8 it is not, and
+//! `write → read` must give the same colours back), TEXCOORD_0 (f32 vec2, V
+//! flipped), indices u16 when every index fits below 65535 (the
+//! primitive-restart value is reserved) and u32 otherwise. Each accessor has
+//! its own 4-byte-aligned buffer view; the JSON chunk is padded with spaces
+//! and the BIN chunk with zeros. The JSON is built with `gltf-json` types and
+//! serialised with `serde_json`, whose maps are ordered: the same levels
+//! always give the same bytes.
+//!
+//! Stages, one file each: `glb` (the binary container: chunks in, chunks
+//! out), `buffers` (where a buffer's bytes come from: BIN chunk, data URI,
+//! relative file), `read` (document → one mesh), `write` (levels → GLB),
+//! `color` (linear ↔ sRGB, shared by both directions).
+
+mod buffers;
+mod color;
+mod glb;
+mod read;
+mod write;
+
+#[cfg(test)]
+mod tests;
+
+pub use read::read;
+pub use write::write_glb;
+
+#[cfg(doc)]
+use crate::{error::ParseError, mesh::TriMesh};

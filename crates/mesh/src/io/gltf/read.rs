@@ -1,0 +1,457 @@
+//! Reading: document → instances (nodes with world transforms) → checked
+//! accessors → one [`TriMesh`].
+
+use std::borrow::Cow;
+use std::path::Path;
+
+use glam::{Mat3, Mat4, Vec2, Vec3};
+use gltf::accessor::{DataType, Dimensions};
+use gltf::json;
+use gltf::mesh::Mode;
+use gltf::mesh::util::{ReadColors, ReadTexCoords};
+use gltf::{Accessor, Semantic};
+
+use super::buffers::load_buffer;
+use super::color::{linear_to_srgb8, unit8};
+use super::glb::{GLB_MAGIC, split_glb};
+use crate::error::ParseError;
+use crate::mesh::TriMesh;
+use crate::parse_err;
+
+/// Checks what gltf-json's validation indexes without checking.
+fn precheck(root: &json::Root) -> Result<(), ParseError> {
+    let n = root.accessors.len();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let bad = prim
+                .attributes
+                .values()
+                .chain(prim.indices.iter())
+                .map(|a| a.value())
+                .find(|&a| a >= n);
+            if let Some(a) = bad {
+                return Err(parse_err!(
+                    "mesh {m} primitive {p} uses accessor {a} but there are {n} accessors"
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Parses and validates the document; returns it with the GLB BIN chunk.
+fn parse_document(bytes: &[u8]) -> Result<(gltf::Document, Option<&[u8]>), ParseError> {
+    if bytes.is_empty() {
+        return Err(ParseError::new("empty file"));
+    }
+    // A UTF-8 byte-order mark is not allowed by the spec but is tolerated.
+    let unbom = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    let (json_bytes, bin) = if bytes.starts_with(GLB_MAGIC) {
+        split_glb(bytes)?
+    } else if unbom.trim_ascii_start().starts_with(b"{") {
+        (unbom, None)
+    } else {
+        let head = &bytes[..bytes.len().min(4)];
+        return Err(parse_err!(
+            "neither GLB (magic 'glTF') nor glTF JSON (starts with '{{'): starts with '{}'",
+            head.escape_ascii()
+        ));
+    };
+    let root: json::Root =
+        json::deserialize::from_slice(json_bytes).map_err(|e| parse_err!("glTF JSON: {e}"))?;
+    precheck(&root)?;
+    let doc = gltf::Document::from_json(root).map_err(|e| match e {
+        gltf::Error::Validation(errs) => {
+            let more = match errs.len() {
+                0 | 1 => String::new(),
+                n => format!(" (and {} more problems)", n - 1),
+            };
+            match errs.first() {
+                Some((path, err)) => parse_err!("invalid glTF: {path}: {err}{more}"),
+                None => ParseError::new("invalid glTF"),
+            }
+        }
+        other => parse_err!("glTF: {other}"),
+    })?;
+    Ok((doc, bin))
+}
+
+/// One mesh placed in the world by a node.
+struct Instance<'a> {
+    mesh: gltf::Mesh<'a>,
+    world: Mat4,
+}
+
+/// The meshes to read, with world transforms (see the module docs).
+fn instances(doc: &gltf::Document) -> Result<Vec<Instance<'_>>, ParseError> {
+    if doc.nodes().len() == 0 {
+        return Ok(doc
+            .meshes()
+            .map(|mesh| Instance {
+                mesh,
+                world: Mat4::IDENTITY,
+            })
+            .collect());
+    }
+    let roots: Vec<gltf::Node> = match doc.default_scene() {
+        Some(s) => s.nodes().collect(),
+        None => {
+            let mut is_child = vec![false; doc.nodes().len()];
+            for n in doc.nodes() {
+                for c in n.children() {
+                    is_child[c.index()] = true;
+                }
+            }
+            doc.nodes().filter(|n| !is_child[n.index()]).collect()
+        }
+    };
+    let mut seen = vec![false; doc.nodes().len()];
+    let mut stack: Vec<(gltf::Node, Mat4)> = roots
+        .into_iter()
+        .rev()
+        .map(|n| (n, Mat4::IDENTITY))
+        .collect();
+    let mut out = Vec::new();
+    while let Some((node, parent)) = stack.pop() {
+        if std::mem::replace(&mut seen[node.index()], true) {
+            return Err(parse_err!(
+                "node {} is reached twice: the node graph has a cycle or a node with two parents",
+                node.index()
+            ));
+        }
+        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        if let Some(mesh) = node.mesh() {
+            out.push(Instance { mesh, world });
+        }
+        let children: Vec<gltf::Node> = node.children().collect();
+        stack.extend(children.into_iter().rev().map(|c| (c, world)));
+    }
+    Ok(out)
+}
+
+/// Verifies an accessor so that `gltf`'s reader can read all `count`
+/// elements without panicking or coming up short; returns the count.
+fn check_accessor(
+    acc: &Accessor<'_>,
+    what: &str,
+    allowed: &[(DataType, Dimensions)],
+    buffers: &[Option<Cow<'_, [u8]>>],
+) -> Result<usize, ParseError> {
+    let i = acc.index();
+    if acc.sparse().is_some() {
+        return Err(parse_err!(
+            "accessor {i} ({what}) is sparse, which is not supported"
+        ));
+    }
+    let ty = (acc.data_type(), acc.dimensions());
+    if !allowed.contains(&ty) {
+        return Err(parse_err!(
+            "accessor {i} ({what}) has type {:?} {:?}, which is not allowed there",
+            ty.0,
+            ty.1
+        ));
+    }
+    let count = acc.count();
+    if count == 0 {
+        return Err(parse_err!("accessor {i} ({what}) is empty (count 0)"));
+    }
+    let view = acc
+        .view()
+        .ok_or_else(|| parse_err!("accessor {i} ({what}) has no bufferView"))?;
+    let elem = acc.size();
+    let stride = view.stride().unwrap_or(elem);
+    if stride < elem {
+        return Err(parse_err!(
+            "buffer view {} has stride {stride}, less than accessor {i}'s element size {elem}",
+            view.index()
+        ));
+    }
+    let end = (count as u64 - 1)
+        .checked_mul(stride as u64)
+        .and_then(|x| x.checked_add(elem as u64))
+        .and_then(|x| x.checked_add(acc.offset() as u64));
+    match end {
+        Some(e) if e <= view.length() as u64 => {}
+        _ => {
+            return Err(parse_err!(
+                "accessor {i} ({what}): {count} elements from offset {} do not fit in buffer view {} ({} bytes)",
+                acc.offset(),
+                view.index(),
+                view.length()
+            ));
+        }
+    }
+    let b = view.buffer().index();
+    let have = buffers
+        .get(b)
+        .and_then(|d| d.as_ref())
+        .map_or(0, |d| d.len()) as u64;
+    let view_end = (view.offset() as u64).checked_add(view.length() as u64);
+    if view_end.is_none_or(|e| e > have) {
+        return Err(parse_err!(
+            "buffer view {} (bytes {}..+{}) is outside buffer {b}, which has {have} bytes",
+            view.index(),
+            view.offset(),
+            view.length()
+        ));
+    }
+    Ok(count)
+}
+
+/// A primitive to read, from an [`Instance`].
+struct Part<'a> {
+    prim: gltf::Primitive<'a>,
+    world: Mat4,
+    mesh: usize,
+}
+
+/// Reads a glTF or GLB file into one mesh (see the module docs).
+pub fn read(bytes: &[u8], base_dir: Option<&Path>) -> Result<TriMesh, ParseError> {
+    let (doc, bin) = parse_document(bytes)?;
+    let mut parts = Vec::new();
+    for inst in instances(&doc)? {
+        for prim in inst.mesh.primitives() {
+            if matches!(
+                prim.mode(),
+                Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+            ) {
+                parts.push(Part {
+                    prim,
+                    world: inst.world,
+                    mesh: inst.mesh.index(),
+                });
+            }
+        }
+    }
+    if parts.is_empty() {
+        return Err(ParseError::new(
+            "no triangles: the scene has no triangle primitives",
+        ));
+    }
+    let all = |s: &Semantic| parts.iter().all(|p| p.prim.get(s).is_some());
+    let has_n = all(&Semantic::Normals);
+    let has_c = all(&Semantic::Colors(0));
+    let has_uv = all(&Semantic::TexCoords(0));
+
+    // Resolve exactly the buffers the accessors to read live in.
+    let mut buffers: Vec<Option<Cow<[u8]>>> = vec![None; doc.buffers().len()];
+    for p in &parts {
+        let mut accs: Vec<Accessor> = vec![];
+        accs.extend(p.prim.get(&Semantic::Positions));
+        accs.extend(p.prim.indices());
+        if has_n {
+            accs.extend(p.prim.get(&Semantic::Normals));
+        }
+        if has_c {
+            accs.extend(p.prim.get(&Semantic::Colors(0)));
+        }
+        if has_uv {
+            accs.extend(p.prim.get(&Semantic::TexCoords(0)));
+        }
+        for a in accs {
+            if let Some(v) = a.view() {
+                let b = v.buffer();
+                let bi = b.index();
+                if buffers[bi].is_none() {
+                    buffers[bi] = Some(load_buffer(b, bin, base_dir)?);
+                }
+            }
+        }
+    }
+
+    use DataType::{F32, U8, U16, U32};
+    use Dimensions::{Scalar, Vec2 as D2, Vec3 as D3, Vec4 as D4};
+    // Check every accessor and count the output before allocating it.
+    let mut total = 0u64;
+    for (k, p) in parts.iter().enumerate() {
+        let ctx = |w: &str| format!("mesh {} primitive {k}: {w}", p.mesh);
+        let pos = p
+            .prim
+            .get(&Semantic::Positions)
+            .ok_or_else(|| parse_err!("mesh {} primitive {k} has no POSITION", p.mesh))?;
+        let n = check_accessor(&pos, &ctx("POSITION"), &[(F32, D3)], &buffers)?;
+        let same = |a: Option<Accessor>, w: &str, t: &[(DataType, Dimensions)]| {
+            if let Some(a) = a {
+                let c = check_accessor(&a, &ctx(w), t, &buffers)?;
+                if c != n {
+                    return Err(parse_err!(
+                        "mesh {} primitive {k}: {w} has {c} elements but POSITION has {n}",
+                        p.mesh
+                    ));
+                }
+            }
+            Ok(())
+        };
+        if has_n {
+            same(p.prim.get(&Semantic::Normals), "NORMAL", &[(F32, D3)])?;
+        }
+        if has_c {
+            let t = [
+                (U8, D3),
+                (U16, D3),
+                (F32, D3),
+                (U8, D4),
+                (U16, D4),
+                (F32, D4),
+            ];
+            same(p.prim.get(&Semantic::Colors(0)), "COLOR_0", &t)?;
+        }
+        if has_uv {
+            let t = [(U8, D2), (U16, D2), (F32, D2)];
+            same(p.prim.get(&Semantic::TexCoords(0)), "TEXCOORD_0", &t)?;
+        }
+        if let Some(ix) = p.prim.indices() {
+            check_accessor(
+                &ix,
+                &ctx("indices"),
+                &[(U8, Scalar), (U16, Scalar), (U32, Scalar)],
+                &buffers,
+            )?;
+        }
+        total += n as u64;
+    }
+    if total > u32::MAX as u64 {
+        return Err(parse_err!(
+            "{total} vertices once instanced: more than 32-bit indices can address"
+        ));
+    }
+
+    let mut out = TriMesh {
+        positions: Vec::with_capacity(total as usize),
+        normals: has_n.then(|| Vec::with_capacity(total as usize)),
+        colors: has_c.then(|| Vec::with_capacity(total as usize)),
+        uvs: has_uv.then(|| Vec::with_capacity(total as usize)),
+        faces: Vec::new(),
+    };
+    for (k, p) in parts.iter().enumerate() {
+        let reader = p
+            .prim
+            .reader(|b| buffers.get(b.index()).and_then(|d| d.as_deref()));
+        let base = out.positions.len() as u32;
+        let short = || parse_err!("mesh {} primitive {k}: accessor data ended early", p.mesh);
+        let pos: Vec<[f32; 3]> = reader.read_positions().ok_or_else(short)?.collect();
+        let n = pos.len();
+        let m3 = Mat3::from_mat4(p.world);
+        let det = m3.determinant();
+        // Cofactor matrix = det × inverse transpose: defined even when the
+        // matrix is singular, and the sign fix keeps its direction right.
+        let cof = Mat3::from_cols(
+            m3.y_axis.cross(m3.z_axis),
+            m3.z_axis.cross(m3.x_axis),
+            m3.x_axis.cross(m3.y_axis),
+        ) * if det < 0.0 { -1.0 } else { 1.0 };
+        out.positions.extend(
+            pos.iter()
+                .map(|q| p.world.transform_point3(Vec3::from_array(*q))),
+        );
+        if let Some(dst) = out.normals.as_mut() {
+            let src: Vec<[f32; 3]> = reader.read_normals().ok_or_else(short)?.collect();
+            if p.world == Mat4::IDENTITY {
+                dst.extend(src.iter().map(|q| Vec3::from_array(*q)));
+            } else {
+                dst.extend(
+                    src.iter()
+                        .map(|q| (cof * Vec3::from_array(*q)).normalize_or_zero()),
+                );
+            }
+        }
+        if let Some(dst) = out.colors.as_mut() {
+            let lin = |c: [f32; 3]| c.map(linear_to_srgb8);
+            match reader.read_colors(0).ok_or_else(short)? {
+                ReadColors::RgbU8(it) => dst.extend(it.map(|c| {
+                    let [r, g, b] = lin(c.map(|x| x as f32 / 255.0));
+                    [r, g, b, 255]
+                })),
+                ReadColors::RgbU16(it) => dst.extend(it.map(|c| {
+                    let [r, g, b] = lin(c.map(|x| x as f32 / 65535.0));
+                    [r, g, b, 255]
+                })),
+                ReadColors::RgbF32(it) => dst.extend(it.map(|c| {
+                    let [r, g, b] = lin(c);
+                    [r, g, b, 255]
+                })),
+                ReadColors::RgbaU8(it) => dst.extend(it.map(|c| {
+                    let [r, g, b] = lin([c[0], c[1], c[2]].map(|x| x as f32 / 255.0));
+                    [r, g, b, c[3]]
+                })),
+                ReadColors::RgbaU16(it) => dst.extend(it.map(|c| {
+                    let [r, g, b] = lin([c[0], c[1], c[2]].map(|x| x as f32 / 65535.0));
+                    [r, g, b, unit8(c[3] as f32 / 65535.0)]
+                })),
+                ReadColors::RgbaF32(it) => dst.extend(it.map(|c| {
+                    let [r, g, b] = lin([c[0], c[1], c[2]]);
+                    [r, g, b, unit8(c[3])]
+                })),
+            }
+        }
+        if let Some(dst) = out.uvs.as_mut() {
+            let it: ReadTexCoords = reader.read_tex_coords(0).ok_or_else(short)?;
+            dst.extend(it.into_f32().map(|[u, v]| Vec2::new(u, 1.0 - v)));
+        }
+        if [
+            out.normals.as_ref().map(Vec::len),
+            out.colors.as_ref().map(Vec::len),
+            out.uvs.as_ref().map(Vec::len),
+        ]
+        .iter()
+        .flatten()
+        .any(|&l| l != out.positions.len())
+        {
+            return Err(short());
+        }
+        let idx: Vec<u32> = match reader.read_indices() {
+            Some(r) => r.into_u32().collect(),
+            None => (0..n as u32).collect(),
+        };
+        if let Some(&bad) = idx.iter().find(|&&i| i as usize >= n) {
+            return Err(parse_err!(
+                "mesh {} primitive {k}: index {bad} out of range ({n} vertices)",
+                p.mesh
+            ));
+        }
+        let mirrored = det < 0.0;
+        let mut push = |a: u32, b: u32, c: u32| {
+            let f = if mirrored { [a, c, b] } else { [a, b, c] };
+            out.faces.push(f.map(|i| base + i));
+        };
+        match p.prim.mode() {
+            Mode::Triangles => {
+                if !idx.len().is_multiple_of(3) {
+                    return Err(parse_err!(
+                        "mesh {} primitive {k}: {} indices is not a whole number of triangles",
+                        p.mesh,
+                        idx.len()
+                    ));
+                }
+                for t in idx.chunks_exact(3) {
+                    push(t[0], t[1], t[2]);
+                }
+            }
+            Mode::TriangleStrip => {
+                for i in 0..idx.len().saturating_sub(2) {
+                    let (a, b, c) = if i % 2 == 0 {
+                        (idx[i], idx[i + 1], idx[i + 2])
+                    } else {
+                        (idx[i], idx[i + 2], idx[i + 1])
+                    };
+                    if a != b && b != c && a != c {
+                        push(a, b, c);
+                    }
+                }
+            }
+            Mode::TriangleFan => {
+                for i in 1..idx.len().saturating_sub(1) {
+                    let (a, b, c) = (idx[i], idx[i + 1], idx[0]);
+                    if a != b && b != c && a != c {
+                        push(a, b, c);
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    if out.faces.is_empty() {
+        return Err(ParseError::new("no triangles"));
+    }
+    Ok(out)
+}
