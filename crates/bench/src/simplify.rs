@@ -100,7 +100,8 @@ impl Default for BenchConfig {
     }
 }
 
-/// The targets: 50%, 10%, 1% and 1,000 triangles.
+/// The standard targets: 50%, 10%, 1% and 1,000 triangles (a half, a
+/// tenth, a hundredth, and a fixed small budget).
 pub fn standard_targets() -> Vec<(String, Target)> {
     vec![
         ("50%".into(), Target::Ratio(0.5)),

@@ -4,6 +4,8 @@
 //! the file and the problem), 2 usage error (from clap, or a command this
 //! build lacks: `lodkit bench simplify` without the `peers` feature).
 
+#![forbid(unsafe_code)]
+
 mod chart;
 mod commands;
 mod ui;
