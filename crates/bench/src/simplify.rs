@@ -10,7 +10,7 @@
 //! symmetric mean and max distance to the input from
 //! [`lodkit_mesh::metrics::compare`].
 //!
-//! Memory is measured with [`CountingAlloc`]: the binary that runs the bench
+//! Memory is measured with [`crate::alloc::CountingAlloc`]: the binary that runs the bench
 //! installs it as its global allocator, and meshoptimizer's temporary
 //! allocations are routed through Rust's allocator with
 //! `meshopt_setAllocator`, so both sides are counted the same way: the peak
@@ -22,153 +22,16 @@
 //! no error bound, the triangle count decides) and no options, the same
 //! contract as lodkit's `--target`.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::time::{Duration, Instant};
-
 use lodkit_mesh::TriMesh;
-use lodkit_mesh::metrics::{CompareOptions, compare};
-use lodkit_simplify::{Options, Simplifier, Target};
+use lodkit_simplify::Target;
 
-static LIVE: AtomicUsize = AtomicUsize::new(0);
-static PEAK: AtomicUsize = AtomicUsize::new(0);
+#[cfg(feature = "peers")]
+pub use crate::meshopt_peer::meshopt_simplify;
 
-/// A global allocator that counts live bytes and their peak. Install it in
-/// a binary with `#[global_allocator] static A: CountingAlloc = CountingAlloc;`.
-pub struct CountingAlloc;
-
-// SAFETY: every method forwards to the system allocator with the caller's
-// layout unchanged; the counters are plain atomics and never affect the
-// returned pointers.
-unsafe impl GlobalAlloc for CountingAlloc {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        // SAFETY: forwarded contract (non-zero size is the caller's duty).
-        let p = unsafe { System.alloc(layout) };
-        if !p.is_null() {
-            count_alloc(layout.size());
-        }
-        p
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        // SAFETY: as above.
-        let p = unsafe { System.alloc_zeroed(layout) };
-        if !p.is_null() {
-            count_alloc(layout.size());
-        }
-        p
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: `ptr` was allocated by `System` with `layout` (we only
-        // ever hand out System pointers).
-        unsafe { System.dealloc(ptr, layout) };
-        LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        // SAFETY: forwarded contract.
-        let p = unsafe { System.realloc(ptr, layout, new_size) };
-        if !p.is_null() {
-            LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
-            count_alloc(new_size);
-        }
-        p
-    }
-}
-
-#[inline]
-fn count_alloc(size: usize) {
-    let now = LIVE.fetch_add(size, Ordering::Relaxed) + size;
-    PEAK.fetch_max(now, Ordering::Relaxed);
-}
-
-/// Whether [`CountingAlloc`] is the global allocator of this process.
-pub fn counting_active() -> bool {
-    let before = LIVE.load(Ordering::Relaxed);
-    let probe = std::hint::black_box(vec![0u8; 4096]);
-    let active = LIVE.load(Ordering::Relaxed) >= before + 4096;
-    drop(probe);
-    active
-}
-
-/// Runs `f` and returns its result and the peak live bytes above the
-/// live bytes at the start (`None` without the counting allocator).
-pub fn measure_peak<R>(f: impl FnOnce() -> R) -> (R, Option<usize>) {
-    let active = counting_active();
-    let base = LIVE.load(Ordering::Relaxed);
-    PEAK.store(base, Ordering::Relaxed);
-    let r = f();
-    let peak = PEAK.load(Ordering::Relaxed);
-    (r, active.then(|| peak.saturating_sub(base)))
-}
-
-// meshoptimizer's temporary allocations, routed through Rust's global
-// allocator (so `CountingAlloc` sees them). A 16-byte header keeps the size
-// for `dealloc`.
-const HEADER: usize = 16;
-
-unsafe extern "C" fn meshopt_alloc(size: usize) -> *mut std::ffi::c_void {
-    let Ok(layout) = Layout::from_size_align(size + HEADER, HEADER) else {
-        return std::ptr::null_mut();
-    };
-    // SAFETY: the layout has a non-zero size (≥ HEADER).
-    let base = unsafe { std::alloc::alloc(layout) };
-    if base.is_null() {
-        return std::ptr::null_mut();
-    }
-    // SAFETY: `base` is valid for `size + HEADER` bytes and 16-aligned, so
-    // the header write and the offset pointer stay inside the block.
-    unsafe {
-        (base as *mut usize).write(size);
-        base.add(HEADER) as *mut std::ffi::c_void
-    }
-}
-
-unsafe extern "C" fn meshopt_dealloc(p: *mut std::ffi::c_void) {
-    if p.is_null() {
-        return;
-    }
-    // SAFETY: `p` came from `meshopt_alloc`, so the block starts HEADER
-    // bytes earlier and holds its size there, and was allocated with this
-    // layout.
-    unsafe {
-        let base = (p as *mut u8).sub(HEADER);
-        let size = (base as *const usize).read();
-        std::alloc::dealloc(
-            base,
-            Layout::from_size_align_unchecked(size + HEADER, HEADER),
-        );
-    }
-}
-
-fn route_meshopt_allocations() {
-    // SAFETY: called before any other meshopt function in this process
-    // (and again only with the same callbacks); the callbacks follow the
-    // malloc/free contract meshopt expects.
-    unsafe { meshopt::ffi::meshopt_setAllocator(Some(meshopt_alloc), Some(meshopt_dealloc)) };
-}
-
-/// meshopt_simplify on a `TriMesh`: returns the output as a `TriMesh` over
-/// the input's vertices (the vertex array is shared, not simplified —
-/// meshopt returns indices only).
-pub fn meshopt_simplify(mesh: &TriMesh, positions_bytes: &[u8], target_faces: usize) -> Vec<u32> {
-    let adapter = meshopt::VertexDataAdapter::new(positions_bytes, 12, 0)
-        .expect("12-byte stride over 12-byte positions");
-    let indices: &[u32] = mesh.faces.as_flattened();
-    meshopt::simplify(
-        indices,
-        &adapter,
-        target_faces * 3,
-        1.0,
-        meshopt::SimplifyOptions::None,
-        None,
-    )
-}
-
-/// This thread's time on a CPU so far (`CLOCK_THREAD_CPUTIME_ID`, which
-/// brings the running thread's count up to date when read; the
-/// `/proc/thread-self/schedstat` figure used before lags by up to a
-/// scheduler tick, as much as a fifth of a 20 ms run). The time a loaded
-/// machine gives to other processes is not counted. `None` where the
-/// clock is missing.
+/// This thread's time on a CPU so far (`CLOCK_THREAD_CPUTIME_ID`: exact
+/// when read, where `/proc/thread-self/schedstat` lags by up to a
+/// scheduler tick). The time a loaded machine gives to other processes is
+/// not counted. `None` where the clock is missing.
 pub fn thread_cpu_seconds() -> Option<f64> {
     #[cfg(unix)]
     {
@@ -237,7 +100,8 @@ impl Default for BenchConfig {
     }
 }
 
-/// The targets: 50%, 10%, 1% and 1,000 triangles.
+/// The standard targets: 50%, 10%, 1% and 1,000 triangles (a half, a
+/// tenth, a hundredth, and a fixed small budget).
 pub fn standard_targets() -> Vec<(String, Target)> {
     vec![
         ("50%".into(), Target::Ratio(0.5)),
@@ -247,7 +111,26 @@ pub fn standard_targets() -> Vec<(String, Target)> {
     ]
 }
 
-/// Runs one mesh at one target.
+/// Runs one mesh at one target. Errors: lodkit's simplifier refused the
+/// mesh, `compare` failed, or this build has no peer ([`crate::PEERS`]
+/// false: [`NO_PEERS`]).
+#[cfg(not(feature = "peers"))]
+pub fn run_case(
+    _name: &str,
+    _mesh: &TriMesh,
+    _label: &str,
+    _target: Target,
+    _cfg: &BenchConfig,
+) -> Result<Row, String> {
+    Err(NO_PEERS.to_string())
+}
+
+/// Why [`run_case`] fails in a build without the `peers` feature.
+pub const NO_PEERS: &str = "built without meshoptimizer (the `peers` feature): rebuild with `cargo build --release -p lodkit --features peers`";
+
+/// Runs one mesh at one target. Errors: lodkit's simplifier refused the
+/// mesh, or `compare` failed.
+#[cfg(feature = "peers")]
 pub fn run_case(
     name: &str,
     mesh: &TriMesh,
@@ -255,7 +138,14 @@ pub fn run_case(
     target: Target,
     cfg: &BenchConfig,
 ) -> Result<Row, String> {
-    route_meshopt_allocations();
+    use std::time::{Duration, Instant};
+
+    use lodkit_mesh::metrics::{CompareOptions, compare};
+    use lodkit_simplify::{Options, Simplifier};
+
+    use crate::alloc::measure_peak;
+
+    crate::meshopt_peer::route_meshopt_allocations();
     let goal = target.faces(mesh.faces.len());
     let opts = Options {
         target,

@@ -1,7 +1,10 @@
 //! `lodkit` — every level of detail from dense 3D scans.
 //!
 //! Exit codes: 0 success, 1 bad input or failure (one line on stderr naming
-//! the file and the problem), 2 usage error (from clap).
+//! the file and the problem), 2 usage error (from clap, or a command this
+//! build lacks: `lodkit bench simplify` without the `peers` feature).
+
+#![forbid(unsafe_code)]
 
 mod chart;
 mod commands;
@@ -17,7 +20,7 @@ use crate::ui::Ui;
 
 /// Counts live bytes for `lodkit bench`'s memory columns.
 #[global_allocator]
-static ALLOC: lodkit_bench::simplify::CountingAlloc = lodkit_bench::simplify::CountingAlloc;
+static ALLOC: lodkit_bench::alloc::CountingAlloc = lodkit_bench::alloc::CountingAlloc;
 
 #[derive(Parser)]
 #[command(
@@ -55,7 +58,7 @@ enum Command {
         after_help = "Examples:\n  lodkit lods bunny.ply --out lods/\n  lodkit lods scan.ply --out lods/ --ratios 0.5,0.2,0.05,0.01"
     )]
     Lods(commands::lods::LodsArgs),
-    /// In-process comparisons with peer libraries (simplify: meshoptimizer).
+    /// In-process comparisons with peer libraries (simplify: meshoptimizer, with `--features peers`).
     #[command(
         after_help = "Examples:\n  lodkit bench simplify\n  lodkit bench simplify scan.ply --json"
     )]
@@ -134,7 +137,8 @@ fn main() -> ExitCode {
         Err(e) if ui::is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
             ui.error(&e);
-            ExitCode::from(1)
+            let usage = e.downcast_ref::<ui::Usage>().is_some();
+            ExitCode::from(if usage { 2 } else { 1 })
         }
     }
 }

@@ -105,6 +105,19 @@ macro_rules! out {
     }};
 }
 
+/// A request this build or these options cannot serve (exit 2, like
+/// clap's usage errors), as opposed to bad input (exit 1).
+#[derive(Debug)]
+pub struct Usage(pub String);
+
+impl std::fmt::Display for Usage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for Usage {}
+
 /// Whether an error is stdout being closed by the reader (`| head`).
 pub fn is_broken_pipe(e: &anyhow::Error) -> bool {
     e.chain().any(|c| {

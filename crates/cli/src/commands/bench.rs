@@ -1,5 +1,6 @@
 //! `lodkit bench simplify [MESH...]`: lodkit's simplifier against
-//! meshoptimizer in this process (see `lodkit_bench::simplify`);
+//! meshoptimizer in this process (see `lodkit_bench::simplify`; needs the
+//! `peers` feature, else a one-line error and exit 2);
 //! `lodkit bench mco [MODEL...]`: continuous-LOD extraction next to a
 //! memcpy of the same index buffer (see `bench_mco.rs`).
 use std::path::PathBuf;
@@ -51,6 +52,13 @@ pub fn run(ui: &Ui, a: &BenchArgs) -> Result<()> {
         } => (meshes, runs, samples, blob, json),
         BenchWhat::Mco(args) => return super::bench_mco::run(ui, args),
     };
+    if !lodkit_bench::PEERS {
+        return Err(crate::ui::Usage(format!(
+            "lodkit bench simplify: {}",
+            lodkit_bench::simplify::NO_PEERS
+        ))
+        .into());
+    }
     let mut inputs: Vec<(String, TriMesh)> = Vec::new();
     if meshes.is_empty() {
         inputs.push(("bunny".into(), super::builtin_bunny()?));
