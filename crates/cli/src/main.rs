@@ -101,6 +101,11 @@ enum Command {
     /// Continuous LOD (marching cube octree): build, extract, info.
     #[command(subcommand)]
     Mco(commands::mco::McoCommand),
+    /// A picture of a mesh, cloud, .mco cut or .pop level, or a calibrated ring of views.
+    #[command(
+        after_help = "Examples:\n  lodkit render bunny.ply -o bunny.png --view 30,20 --size 800x600\n  lodkit render bunny.mco --triangles 5000 -o cut.png\n  lodkit render bunny.ply --ring 36 --elevations -30,0,30 --out views/"
+    )]
+    Render(commands::render::RenderArgs),
 }
 
 fn main() -> ExitCode {
@@ -122,6 +127,7 @@ fn main() -> ExitCode {
         Command::Scan(args) => commands::scan::run(&ui, &args),
         Command::Mco(cmd) => commands::mco::run(&ui, &cmd),
         Command::Pop(cmd) => commands::pop::run(&ui, &cmd),
+        Command::Render(args) => commands::render::run(&ui, &args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,77 @@
+//! Shading of visible samples: ambient plus Lambert from a headlight.
+//!
+//! The light is a directional headlight along the viewing direction, so
+//! every view is lit the same way relative to the camera and a ring of
+//! views has no dark side. Lighting is two-sided (`|n·l|`): open scans
+//! show their inside through holes, and inconsistently wound faces shade
+//! like their neighbours. Colours are multiplied in sRGB space (no
+//! linearisation): cheap, and what simple scan viewers do.
+
+use glam::Vec3;
+use lodkit_mesh::TriMesh;
+
+/// Light reaching every surface regardless of its orientation.
+pub const AMBIENT: f32 = 0.22;
+/// Headlight strength: a surface facing the camera gets `AMBIENT + DIFFUSE`.
+pub const DIFFUSE: f32 = 0.78;
+
+/// Where the shader finds a visible sample's normal and colour.
+pub(crate) enum Surface<'a> {
+    /// Faces: smooth normals interpolated from `vertex_normals` when
+    /// given, else each face's own normal.
+    Mesh {
+        mesh: &'a TriMesh,
+        vertex_normals: Option<&'a [Vec3]>,
+        face_normals: Vec<Vec3>,
+        colours: Option<&'a [[u8; 4]]>,
+    },
+    /// Points: the point's normal when given, else unlit.
+    Points {
+        normals: Option<&'a [Vec3]>,
+        colours: Option<&'a [[u8; 4]]>,
+    },
+}
+
+/// Shades the sample covered by element `id` at barycentrics `bary`, lit
+/// from direction `light` (unit, towards the camera); `base` is the colour
+/// of an element without colours. Returns sRGB in `0..=255` as `f32`.
+pub(crate) fn shade(s: &Surface<'_>, id: u32, bary: Vec3, light: Vec3, base: Vec3) -> Vec3 {
+    let id = id as usize;
+    match s {
+        Surface::Mesh {
+            mesh,
+            vertex_normals,
+            face_normals,
+            colours,
+        } => {
+            let f = mesh.faces[id];
+            let n = match vertex_normals {
+                Some(vn) => (vn[f[0] as usize] * bary.x
+                    + vn[f[1] as usize] * bary.y
+                    + vn[f[2] as usize] * bary.z)
+                    .normalize_or_zero(),
+                None => face_normals[id],
+            };
+            let c = match colours {
+                Some(c) => {
+                    rgb(c[f[0] as usize]) * bary.x
+                        + rgb(c[f[1] as usize]) * bary.y
+                        + rgb(c[f[2] as usize]) * bary.z
+                }
+                None => base,
+            };
+            c * (AMBIENT + DIFFUSE * n.dot(light).abs())
+        }
+        Surface::Points { normals, colours } => {
+            let c = colours.map_or(base, |c| rgb(c[id]));
+            match normals {
+                Some(n) => c * (AMBIENT + DIFFUSE * n[id].normalize_or_zero().dot(light).abs()),
+                None => c,
+            }
+        }
+    }
+}
+
+fn rgb(c: [u8; 4]) -> Vec3 {
+    Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32)
+}
