@@ -180,7 +180,7 @@ pub fn render(mesh: &TriMesh, camera: &Camera, opts: &RenderOptions) -> Result<I
 
 /// Renders `cloud` as discs ("splats") of [`RenderOptions::point_radius`]
 /// object units facing the camera, shaded by the point normals when the
-/// cloud has them (else unlit) and coloured by its colours when present.
+/// cloud has them (else unlit, darkened with depth) and coloured by its colours when present.
 ///
 /// Guarantees, errors and cost as [`render`] (with points for faces); an
 /// empty cloud gives a background image.
@@ -219,9 +219,16 @@ pub fn render_points(
             ))
         })
         .collect();
+    let inv_z_range = splats
+        .iter()
+        .flatten()
+        .fold((0.0f32, f32::INFINITY), |(n, f), s| {
+            (n.max(s.3), f.min(s.3))
+        });
     let surface = Surface::Points {
         normals: cloud.normals.as_deref(),
         colours: colours(&cloud.colors, opts),
+        inv_z_range,
     };
     let layout = Layout::new(opts);
     let bins = layout.bin(splats.iter().map(|sp| match sp {
@@ -346,7 +353,14 @@ impl Layout {
                             for sx in 0..s {
                                 let i = row + px * s + sx;
                                 if band.id[i] != EMPTY {
-                                    sum += shade(surface, band.id[i], band.bary[i], light, base);
+                                    sum += shade(
+                                        surface,
+                                        band.id[i],
+                                        band.bary[i],
+                                        band.inv_z[i],
+                                        light,
+                                        base,
+                                    );
                                     n += 1;
                                 }
                             }

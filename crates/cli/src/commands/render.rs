@@ -31,7 +31,7 @@ pub struct RenderArgs {
     pub output: Option<PathBuf>,
     /// Camera azimuth and elevation in degrees: azimuth about +Y from the
     /// +Z side towards +X, elevation in [-90, 90] towards +Y.
-    #[arg(long, value_name = "AZ,EL", default_value = "30,20", value_parser = parse_view, conflicts_with = "ring")]
+    #[arg(long, value_name = "AZ,EL", default_value = "30,20", value_parser = parse_view, allow_hyphen_values = true, conflicts_with = "ring")]
     pub view: View,
     /// Image size in pixels, each side in 1..=8192.
     #[arg(long, value_name = "WxH", default_value = "1024x1024", value_parser = parse_size)]
@@ -66,7 +66,7 @@ pub struct RenderArgs {
     pub out: Option<PathBuf>,
     /// Ring elevations in degrees, comma-separated, each in [-90, 90]
     /// (at most 16).
-    #[arg(long, value_name = "LIST", default_value = "20", value_parser = parse_elevations, requires = "ring")]
+    #[arg(long, value_name = "LIST", default_value = "20", value_parser = parse_elevations, allow_hyphen_values = true, requires = "ring")]
     pub elevations: Elevations,
     /// Print what was written as JSON.
     #[arg(long)]
@@ -277,11 +277,28 @@ fn load(ui: &Ui, a: &RenderArgs, k: Kind) -> Result<(Drawable, String)> {
 }
 
 impl Drawable {
-    fn bbox(&self) -> lodkit_mesh::Aabb {
+    /// The points that frame the picture: a mesh's referenced vertices
+    /// (a scan's stray unreferenced vertices are not drawn).
+    fn points(&self) -> Vec<lodkit_mesh::glam::Vec3> {
         match self {
-            Drawable::Mesh(m) => m.bbox(),
-            Drawable::Points(p) => p.bbox(),
+            Drawable::Mesh(m) => {
+                let mut used = vec![false; m.positions.len()];
+                for f in &m.faces {
+                    for &v in f {
+                        used[v as usize] = true;
+                    }
+                }
+                m.positions
+                    .iter()
+                    .zip(&used)
+                    .filter_map(|(p, &u)| u.then_some(*p))
+                    .collect()
+            }
+            Drawable::Points(p) => p.positions.clone(),
         }
+    }
+    fn bbox(&self) -> lodkit_mesh::Aabb {
+        lodkit_mesh::Aabb::from_points(&self.points())
     }
     fn draw(&self, cam: &Camera, opts: &RenderOptions) -> Result<Image> {
         Ok(match self {
@@ -354,8 +371,8 @@ pub fn run(ui: &Ui, a: &RenderArgs) -> Result<()> {
         }
     } else {
         let out = a.output.as_ref().expect("clap requires -o without --ring");
-        let cam = Camera::orbit(
-            &bbox,
+        let cam = Camera::frame(
+            &drawable.points(),
             a.view.azimuth,
             a.view.elevation,
             a.fov,
