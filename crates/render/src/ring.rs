@@ -163,7 +163,8 @@ impl CameraRing {
                         azimuth_deg: v.azimuth_deg,
                         elevation_deg: v.elevation_deg,
                         // Row-major: transform_matrix[row][col].
-                        transform_matrix: [0, 1, 2, 3].map(|r| m.row(r).to_array()),
+                        transform_matrix: [0, 1, 2, 3]
+                            .map(|r| m.row(r).to_array().map(|x| x + 0.0)),
                     }
                 })
                 .collect(),
@@ -198,17 +199,19 @@ impl CameraRing {
         );
         for (i, v) in self.views.iter().enumerate() {
             let (q, t) = v.camera.world_to_camera_cv();
+            // `+ 0.0` writes −0 as 0.
+            let n = [q.w, q.x, q.y, q.z, t.x, t.y, t.z].map(|x| x + 0.0);
             let _ = writeln!(
                 s,
                 "{} {} {} {} {} {} {} {} 1 {}\n",
                 i + 1,
-                q.w,
-                q.x,
-                q.y,
-                q.z,
-                t.x,
-                t.y,
-                t.z,
+                n[0],
+                n[1],
+                n[2],
+                n[3],
+                n[4],
+                n[5],
+                n[6],
                 self.file_name(i)
             );
         }
