@@ -17,7 +17,7 @@
 //! `clip` (near-plane and guard-band clipping, fixed-point snapping) →
 //! `raster` (edge functions, top-left rule, depth buffer) → [`shade`]
 //! (ambient + Lambert headlight) → [`render`](mod@render) (bands, box
-//! filter) → [`image`] (RGBA, mask, PNG); [`colour_scale`] maps numbers to
+//! filter) → [`image`] (RGBA, mask, PNG); [`colour_scale`](mod@colour_scale) maps numbers to
 //! heat-map colours; [`ring`] writes camera rings.
 //!
 //! Why hand-written: the kept Rust software rasteriser, `euc` (0.5), is a

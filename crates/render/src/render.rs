@@ -1,8 +1,8 @@
 //! The render entry points: mesh and point cloud to an RGBA image.
 //!
-//! Stages: camera-space vertices → triangle setup ([`clip`](crate::clip))
+//! Stages: camera-space vertices → triangle setup (`clip`)
 //! → binning into horizontal bands → per band, in parallel:
-//! rasterisation ([`raster`](crate::raster)), shading of the visible
+//! rasterisation (`raster`), shading of the visible
 //! samples ([`shade`](crate::shade)) and the box filter from samples to
 //! pixels. Bands are independent and joined in order, so the image does
 //! not depend on the thread count.
