@@ -108,6 +108,11 @@ enum Command {
     /// Serve the viewer and the models over HTTP (ranges, ETags), on loopback by default.
     #[command(after_help = commands::serve::AFTER_HELP)]
     Serve(commands::serve::ServeArgs),
+    /// A picture of a mesh, cloud, .mco cut or .pop level, or a calibrated ring of views.
+    #[command(
+        after_help = "Examples:\n  lodkit render bunny.ply -o bunny.png --view 30,20 --size 800x600\n  lodkit render bunny.mco --triangles 5000 -o cut.png\n  lodkit render bunny.ply --ring 36 --elevations -30,0,30 --out views/"
+    )]
+    Render(commands::render::RenderArgs),
 }
 
 fn main() -> ExitCode {
@@ -130,6 +135,7 @@ fn main() -> ExitCode {
         Command::Mco(cmd) => commands::mco::run(&ui, &cmd),
         Command::Pop(cmd) => commands::pop::run(&ui, &cmd),
         Command::Serve(args) => commands::serve::run(&ui, &args),
+        Command::Render(args) => commands::render::run(&ui, &args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

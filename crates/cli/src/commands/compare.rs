@@ -32,6 +32,10 @@ pub struct CompareArgs {
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
+    /// Also write B with per-vertex colours from each vertex's distance to
+    /// A (blue = 0 to red = the largest), as .ply, .obj or .glb.
+    #[arg(long, value_name = "OUT", value_parser = heatmap::parse_output)]
+    pub heatmap: Option<PathBuf>,
 }
 
 pub fn run(ui: &Ui, args: &CompareArgs) -> Result<()> {
@@ -49,10 +53,150 @@ pub fn run(ui: &Ui, args: &CompareArgs) -> Result<()> {
     let report = compare(&a, &b, &opts)
         .with_context(|| format!("comparing {} with {}", args.a.display(), args.b.display()))?;
     step.finish();
+    let heat = match &args.heatmap {
+        Some(out) => Some(heatmap::write(&a, &b, &args.a, out)?),
+        None => None,
+    };
     if args.json {
-        return super::print_json(&report);
+        #[derive(serde::Serialize)]
+        struct WithHeatmap<'a> {
+            #[serde(flatten)]
+            report: &'a lodkit_mesh::metrics::CompareReport,
+            heatmap: &'a heatmap::Scale,
+        }
+        return match &heat {
+            Some(h) => super::print_json(&WithHeatmap {
+                report: &report,
+                heatmap: h,
+            }),
+            None => super::print_json(&report),
+        };
     }
     crate::outln!("A: {}\nB: {}", args.a.display(), args.b.display())?;
     crate::outln!("{report}")?;
+    if let Some(h) = &heat {
+        crate::outln!("{}", h.line())?;
+        ui.status(format!(
+            "wrote {} (B's {} vertices coloured by their distance to A)",
+            h.file, h.vertices
+        ));
+    }
     Ok(())
+}
+
+/// `--heatmap`: B coloured by the distance of each vertex to A.
+mod heatmap {
+    use std::path::{Path, PathBuf};
+
+    use anyhow::Result;
+    use lodkit_mesh::io::{Format, WriteOptions, encode, write_atomic};
+    use lodkit_mesh::metrics::SurfaceIndex;
+    use lodkit_mesh::{Model, TriMesh};
+    use lodkit_render::colour_scale;
+
+    /// The colour scale written, for people and for `--json`.
+    #[derive(serde::Serialize)]
+    pub struct Scale {
+        pub file: String,
+        pub vertices: usize,
+        /// Distance shown blue (object units).
+        pub min: f32,
+        /// Distance shown red: the largest of B's referenced vertices.
+        pub max: f32,
+        /// `max` as a percentage of A's bounding-box diagonal.
+        pub max_percent_of_diagonal: f64,
+        pub colours: &'static str,
+    }
+
+    impl Scale {
+        pub fn line(&self) -> String {
+            format!(
+                "heat map: 0 (blue) … {:.6e} (red) object units, {:.4} % of the diagonal of A's bounding box",
+                self.max, self.max_percent_of_diagonal
+            )
+        }
+    }
+
+    /// The output must hold vertex colours: refused otherwise (exit 2).
+    pub fn parse_output(s: &str) -> std::result::Result<PathBuf, String> {
+        let p = PathBuf::from(s);
+        match Format::from_path(&p) {
+            Some(Format::Ply | Format::Obj | Format::Glb) => Ok(p),
+            _ => Err(format!(
+                "{s}: a heat map needs a format with vertex colours and faces: .ply, .obj or .glb"
+            )),
+        }
+    }
+
+    pub fn write(a: &TriMesh, b: &TriMesh, a_path: &Path, out: &Path) -> Result<Scale> {
+        let index = SurfaceIndex::new(a)?;
+        let d = index.distances(&b.positions);
+        let mut used = vec![false; b.positions.len()];
+        for f in &b.faces {
+            for &v in f {
+                used[v as usize] = true;
+            }
+        }
+        let max = d
+            .iter()
+            .zip(&used)
+            .filter(|(_, u)| **u)
+            .map(|(d, _)| *d)
+            .fold(0.0f32, f32::max);
+        let colours = d
+            .iter()
+            .map(|&x| {
+                let t = if max > 0.0 { x / max } else { 0.0 };
+                let [r, g, b] = colour_scale(t);
+                [r, g, b, 255]
+            })
+            .collect();
+        let mesh = TriMesh {
+            colors: Some(colours),
+            ..b.clone()
+        };
+        let diagonal = index.bbox().diagonal() as f64;
+        let scale = Scale {
+            file: out.display().to_string(),
+            vertices: b.positions.len(),
+            min: 0.0,
+            max,
+            max_percent_of_diagonal: if diagonal > 0.0 {
+                max as f64 / diagonal * 100.0
+            } else {
+                0.0
+            },
+            colours: "blue (0) → cyan → green → yellow → red (max), lodkit_render::colour_scale",
+        };
+        let format = Format::from_path(out).expect("checked by the option's parser");
+        let mut bytes = encode(format, &Model::Mesh(mesh), WriteOptions::default())
+            .map_err(|e| anyhow::anyhow!("{}: {e}", out.display()))?;
+        let note = format!(
+            "{}; per-vertex distance to {}",
+            scale.line(),
+            a_path.display()
+        )
+        // PLY and OBJ headers are ASCII lines.
+        .replace('…', "...")
+        .replace(['\n', '\r'], " ");
+        match format {
+            // After the `format` line, where PLY allows comments.
+            Format::Ply => {
+                let at = bytes
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, c)| **c == b'\n')
+                    .nth(1)
+                    .map_or(0, |(i, _)| i + 1);
+                bytes.splice(at..at, format!("comment {note}\n").into_bytes());
+            }
+            Format::Obj => {
+                bytes.splice(0..0, format!("# {note}\n").into_bytes());
+            }
+            // GLB has no comment; the printed line and --json state the scale.
+            _ => {}
+        }
+        write_atomic(out, &bytes)?;
+        Ok(scale)
+    }
 }

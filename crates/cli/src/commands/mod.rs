@@ -8,6 +8,7 @@ pub mod info;
 pub mod lods;
 pub mod mco;
 pub mod pop;
+pub mod render;
 pub mod scan;
 pub mod serve;
 pub mod simplify;
