@@ -5,7 +5,8 @@
 //! `IN` is any format `lodkit_mesh::io::load_mesh` reads (PLY, OBJ, STL,
 //! glTF/GLB), `OUT` any it writes (by extension). Prints what the
 //! simplifier did and why it stopped, e.g.
-//! `69451 -> 1000 triangles in 6 passes, estimated error 2.1e-3 (reached the target)`.
+//! `69451 -> 1000 triangles in 8 passes, estimated error 6.6e-3 (reached the target)`
+//! for `data/models/stanford_bunny.ply` at 1000.
 
 use std::path::Path;
 use std::process::ExitCode;
