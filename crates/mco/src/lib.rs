@@ -7,15 +7,16 @@
 //! | stage | file | thesis |
 //! |---|---|---|
 //! | oriented samples from range images, meshes, point clouds | `normals_estimation.rs` | §4.2, Fig. 4.2, §4.3.1 |
+//! | the cube lattice: packed keys, grid, bricks, key map | `lattice.rs` | §4.2 |
 //! | sparse signed-distance band | `signed_distance.rs` | §4.2 |
-//! | the 256-case table, generated | `mc_table.rs` | §2.2.1, §4.2 |
+//! | the 256-case table, generated | `marching_cubes_cases.rs` | §2.2.1, §4.2 |
 //! | edge-ratio marching cubes (leaves) | `marching_cubes.rs` | §4.2, Fig. 4.1 |
 //! | octree, bottom-up four-case rule | `octree_build.rs` | §5.1, Fig. 5.2 |
-//! | priority numbering, LOD array, accumulation table | `priority.rs` | §5.2, §5.4.3, §6.1 |
+//! | priority numbering, LOD array, accumulation table | `priority_numbering.rs` | §5.2, §5.4.3, §6.1 |
 //! | crack patching | `crack_patch.rs` | §5.3, Fig. 5.6, §5.4.4 |
-//! | extraction by referencing: §6.1 traversal, birth/death tables | `extract.rs` | §6.1, §6.2.1 |
+//! | extraction by referencing: §6.1 traversal, birth/death tables | `extraction_by_referencing.rs` | §6.1, §6.2.1 |
 //! | extraction timing next to memcpy | `extraction_bench.rs` | — (the benchmark) |
-//! | view-dependent extraction | `view_dependent.rs` | §8.2 (future work) |
+//! | view-dependent extraction | `view_dependent_cut.rs` | §8.2 (future work) |
 //! | virtual range scanner | `scanner.rs` | §4.4 (the experiment) |
 //! | `.mco` files | `model_file.rs` | — (`docs/formats/mco.md`) |
 //! | entry points, incremental builder | `pipeline.rs` | §4.4 |
@@ -41,26 +42,27 @@
 pub mod cloud_spacing;
 pub mod crack_patch;
 pub mod evaluate;
-pub mod extract;
 pub mod extraction_bench;
+pub mod extraction_by_referencing;
+pub mod lattice;
 pub mod marching_cubes;
-pub mod mc_table;
+pub mod marching_cubes_cases;
 pub mod model;
 pub mod model_file;
 pub mod neighbours;
 pub mod normals_estimation;
 pub mod octree_build;
 pub mod pipeline;
-pub mod priority;
+pub mod priority_numbering;
 pub mod scanner;
 pub mod signed_distance;
-pub mod view_dependent;
+pub mod view_dependent_cut;
 
 pub use model::McoModel;
 pub use pipeline::{
     IncrementalBuilder, Options, build_from_mesh, build_from_models, build_from_range_images,
 };
-pub use view_dependent::Camera;
+pub use view_dependent_cut::Camera;
 
 /// Errors of the continuous-LOD crate; `Display` is one line.
 #[derive(Debug, thiserror::Error)]

@@ -9,14 +9,15 @@
 //! colours of the samples are carried to the mesh.
 //!
 //! Each crossing edge gets one vertex, shared by the up to 4 cubes around
-//! it, and the table's face rule ([`crate::mc_table`]) makes neighbouring
+//! it, and the table's face rule ([`crate::marching_cubes_cases`]) makes neighbouring
 //! cubes agree on every shared face: the leaf mesh is watertight wherever
 //! the band is complete.
 
 use glam::Vec3;
 
-use crate::mc_table::{EDGES, TABLE};
-use crate::signed_distance::{BRICK, BRICK_BITS, Grid, KeyMap, SignedDistanceField, pack, unpack};
+use crate::lattice::{BRICK, BRICK_BITS, Grid, KeyMap, pack, unpack};
+use crate::marching_cubes_cases::{EDGES, TABLE};
+use crate::signed_distance::SignedDistanceField;
 
 /// Where a crossing edge's vertex sits, from `v0`: `|d0| / (|d0| + |d1|)`.
 /// Both zero (never for a crossing edge) gives the midpoint.
@@ -208,7 +209,7 @@ const COLUMN_0: u64 = 0x0101_0101_0101_0101;
 const ROW_0: u64 = 0xFF;
 
 /// The configurations of every leaf cube whose lowest corner lies in
-/// brick `b`, into `out` (one byte per cube, [`crate::signed_distance::local_index`]
+/// brick `b`, into `out` (one byte per cube, [`crate::lattice::local_index`]
 /// order; 0 where the cube has no surface or a corner outside the band),
 /// from the masks of all bricks: 64 cubes (a brick slice) at a time in bit
 /// operations, then one configuration byte per surface cube. The same
@@ -604,7 +605,7 @@ mod tests {
                 .collect();
             let (mut touched, mut surface) = (0, 0);
             for b in 0..field.brick_count() {
-                let mut out = [0u8; crate::signed_distance::BRICK_VOLUME];
+                let mut out = [0u8; crate::lattice::BRICK_VOLUME];
                 let (t, n) = brick_configs(&field, &masks, b, &mut out);
                 touched += t;
                 surface += n;

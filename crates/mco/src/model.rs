@@ -9,7 +9,7 @@
 //!   `tri_start .. tri_start + 3 * tri_count`;
 //! - `lod`: the LOD array (§5.2), nodes in expansion order; LOD number `k`
 //!   has expanded `lod[..groups[k]]` — one node per LOD number, except the
-//!   few nodes that must expand together (see [`crate::priority`]);
+//!   few nodes that must expand together (see [`crate::priority_numbering`]);
 //!   `prio[n]` is the LOD number that expands `n` (`u32::MAX` for
 //!   leaves); `acc[k]` is the accumulation table (§6.1): triangles emitted
 //!   at LOD number `k`;
@@ -21,8 +21,8 @@
 
 use glam::Vec3;
 
+use crate::lattice::Grid;
 use crate::marching_cubes::VertexBuffer;
-use crate::signed_distance::Grid;
 
 /// One octree node (a marching cube at some level).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -86,7 +86,7 @@ pub struct McoModel {
     /// does not need them.
     pub traversal: LazyTraversal,
     /// Every drawable triangle version with its life interval, for
-    /// extraction by LOD number (derived; see [`crate::extract`]).
+    /// extraction by LOD number (derived; see [`crate::extraction_by_referencing`]).
     pub lifetimes: Lifetimes,
     /// Running maximum of `acc` (derived): the triangle-count lookup is a
     /// binary search over it.
@@ -104,7 +104,7 @@ impl PartialEq for LazyTraversal {
     }
 }
 
-/// The §6.1 traversal's prepared arrays (see [`crate::extract`]).
+/// The §6.1 traversal's prepared arrays (see [`crate::extraction_by_referencing`]).
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct Traversal {
     /// Records of inner children, step after step.
@@ -152,17 +152,6 @@ pub struct Lifetimes {
     pub bucket_start: Vec<u32>,
     pub cut: Vec<u32>,
     pub cut_start: Vec<u32>,
-}
-
-impl Default for Grid {
-    fn default() -> Self {
-        Grid {
-            origin: Vec3::ZERO,
-            cube: 1.0,
-            depth: 0,
-            resolution: 2,
-        }
-    }
 }
 
 impl McoModel {

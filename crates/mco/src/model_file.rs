@@ -13,9 +13,9 @@ use std::path::Path;
 
 use glam::Vec3;
 
+use crate::lattice::{Grid, KEY_BITS};
 use crate::marching_cubes::VertexBuffer;
 use crate::model::{BuildStats, McoModel, Node, Patch};
-use crate::signed_distance::{Grid, KEY_BITS};
 use crate::{Error, Result};
 
 /// File signature.

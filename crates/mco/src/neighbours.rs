@@ -7,13 +7,13 @@
 //! question on large models (the maps outgrow the caches), and those two
 //! stages were a fifth of the build at a million points.
 //!
-//! A level's keys ([`crate::signed_distance::pack`]: `x | y << 20 | z <<
+//! A level's keys ([`crate::lattice::pack`]: `x | y << 20 | z <<
 //! 40`) are sorted, so the keys of the `+axis` neighbours, `key + stride`,
 //! are sorted too: one merge of the level with itself per axis finds every
 //! `+axis` neighbour (and so every `−axis` one) in linear time, reading
 //! both sequences front to back.
 
-use crate::signed_distance::{KEY_BITS, unpack};
+use crate::lattice::{KEY_BITS, unpack};
 
 /// Marks a face without a neighbour in [`FaceNeighbours`].
 pub const NO_NODE: u32 = u32::MAX;
@@ -54,7 +54,7 @@ pub fn face_neighbours(keys: &[u64]) -> Vec<FaceNeighbours> {
 /// The node of `keys` (sorted) at `cell`, if any, by binary search: for
 /// the rare lookups the face tables do not answer.
 pub fn find(keys: &[u64], cell: [u32; 3]) -> Option<u32> {
-    let k = crate::signed_distance::pack(cell[0], cell[1], cell[2]);
+    let k = crate::lattice::pack(cell[0], cell[1], cell[2]);
     keys.binary_search(&k).ok().map(|i| i as u32)
 }
 
@@ -67,7 +67,7 @@ pub fn cell(keys: &[u64], i: u32) -> [u32; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::signed_distance::pack;
+    use crate::lattice::pack;
     use std::collections::HashMap;
 
     #[test]

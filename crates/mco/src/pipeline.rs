@@ -2,9 +2,9 @@
 //! incremental builder (range images added one at a time).
 //!
 //! Stages, in order: oriented samples ([`crate::normals_estimation`]) →
-//! signed-distance band ([`crate::signed_distance`]) → leaf marching cubes
+//! lattice ([`crate::lattice`]) → signed-distance band ([`crate::signed_distance`]) → leaf marching cubes
 //! ([`crate::marching_cubes`]) → octree ([`crate::octree_build`]) →
-//! priority numbering ([`crate::priority`]) → crack patches
+//! priority numbering ([`crate::priority_numbering`]) → crack patches
 //! ([`crate::crack_patch`]).
 //!
 //! **Default resolution** (§4.4): the thesis found that cubes finer than
@@ -29,12 +29,11 @@ use std::time::Instant;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use lodkit_mesh::{Aabb, Model, RangeImage, TriMesh};
 
+use crate::lattice::{BRICK, BRICK_BITS, BRICK_VOLUME, Grid, local_index, pack};
 use crate::marching_cubes::{BandSigns, BrickMasks, brick_configs, leaf_config_in};
 use crate::model::McoModel;
 use crate::normals_estimation::{mesh_samples, point_cloud_samples, range_image_samples};
-use crate::signed_distance::{
-    BRICK, BRICK_BITS, BRICK_VOLUME, Grid, Samples, SignedDistanceField, local_index, pack,
-};
+use crate::signed_distance::{Samples, SignedDistanceField};
 use crate::{Error, Result};
 
 /// Build options.
@@ -394,7 +393,7 @@ impl IncrementalBuilder {
         let mut tree = crate::octree_build::build_levels_with(&self.field, signs, &leaves)?;
         let mut model = crate::octree_build::assemble(&mut tree);
         let together = crate::crack_patch::expand_together(&tree);
-        crate::priority::number(&mut model, &together);
+        crate::priority_numbering::number(&mut model, &together);
         crate::crack_patch::patch(&mut tree, &mut model);
         model.vertices = tree.vertices;
         model.prepare_extraction();

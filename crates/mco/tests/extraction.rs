@@ -89,7 +89,7 @@ fn triangle_count_lookup_matches_the_accumulation_table() {
     for target in (0..=full + 10).step_by(7).chain([0, 1, full, usize::MAX]) {
         assert_eq!(
             m.lod_for_triangles(target),
-            lodkit_mco::priority::lod_for_triangles(&m.acc, target),
+            lodkit_mco::priority_numbering::lod_for_triangles(&m.acc, target),
             "target {target}"
         );
     }

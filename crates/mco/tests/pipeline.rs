@@ -4,8 +4,8 @@
 
 mod support;
 
+use lodkit_mco::lattice::Grid;
 use lodkit_mco::pipeline::{IncrementalBuilder, Options, build_from_mesh, samples_of};
-use lodkit_mco::signed_distance::Grid;
 use lodkit_mco::{Camera, McoModel};
 use lodkit_mesh::glam::Vec3;
 use lodkit_mesh::{Model, TriMesh, shapes};

@@ -68,7 +68,7 @@
 //!
 //! By triangle count, the accumulation table gives the LOD number first
 //! (a binary search over its running maximum, the choice of
-//! [`crate::priority::lod_for_triangles`]).
+//! [`crate::priority_numbering::lod_for_triangles`]).
 
 use lodkit_mesh::TriMesh;
 
@@ -646,12 +646,12 @@ impl McoModel {
         k
     }
 
-    /// [`crate::priority::lod_for_triangles`] in `O(log n)`: the same
+    /// [`crate::priority_numbering::lod_for_triangles`] in `O(log n)`: the same
     /// choice, found by binary search over the running maximum of the
     /// accumulation table.
     pub fn lod_for_triangles(&self, triangles: usize) -> usize {
         if self.acc_max.len() != self.acc.len() || self.acc.is_empty() {
-            return crate::priority::lod_for_triangles(&self.acc, triangles);
+            return crate::priority_numbering::lod_for_triangles(&self.acc, triangles);
         }
         let target = triangles.min(u32::MAX as usize) as u32;
         let k = self.acc_max.partition_point(|&a| a < target);
@@ -695,7 +695,7 @@ impl McoModel {
 
     /// The index buffer of an arbitrary balanced cut given by per-node
     /// `expanded` flags (parents of expanded nodes expanded, balance kept;
-    /// see [`crate::view_dependent`]).
+    /// see [`crate::view_dependent_cut`]).
     pub fn extract_expanded(&self, expanded: &[bool], out: &mut Vec<u32>) {
         out.clear();
         if self.nodes.is_empty() {

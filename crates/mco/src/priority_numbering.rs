@@ -43,8 +43,8 @@
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
+use crate::lattice::KeyMap;
 use crate::model::McoModel;
-use crate::signed_distance::KeyMap;
 
 /// Fills `model.lod`, `model.groups`, `model.prio` and `model.acc` from
 /// the nodes, metrics and balance dependencies. `together` lists node
