@@ -15,12 +15,10 @@
 //! | priority numbering, LOD array, accumulation table | `priority_numbering.rs` | §5.2, §5.4.3, §6.1 |
 //! | crack patching | `crack_patch.rs` | §5.3, Fig. 5.6, §5.4.4 |
 //! | extraction by referencing: §6.1 traversal, birth/death tables | `extraction_by_referencing.rs` | §6.1, §6.2.1 |
-//! | extraction timing next to memcpy | `extraction_bench.rs` | — (the benchmark) |
 //! | view-dependent extraction | `view_dependent_cut.rs` | §8.2 (future work) |
 //! | virtual range scanner | `scanner.rs` | §4.4 (the experiment) |
 //! | `.mco` files | `model_file.rs` | — (`docs/formats/mco.md`) |
 //! | entry points, incremental builder | `pipeline.rs` | §4.4 |
-//! | `lodkit build`'s continuous-LOD section | `evaluate.rs` | §4.4, §6.3 |
 //!
 //! Measured (2-core shared Xeon, release): the bunny from its 10 real
 //! scans builds in 0.25 s, best of 3 (362k samples, resolution 140; 1.4
@@ -41,8 +39,6 @@
 
 pub mod cloud_spacing;
 pub mod crack_patch;
-pub mod evaluate;
-pub mod extraction_bench;
 pub mod extraction_by_referencing;
 pub mod lattice;
 pub mod marching_cubes;
@@ -62,6 +58,7 @@ pub use model::McoModel;
 pub use pipeline::{
     IncrementalBuilder, Options, build_from_mesh, build_from_models, build_from_range_images,
 };
+pub use scanner::{ScanOptions, scan_mesh, write_scans};
 pub use view_dependent_cut::Camera;
 
 /// Errors of the continuous-LOD crate; `Display` is one line.

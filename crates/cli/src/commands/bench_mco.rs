@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
-use lodkit_mco::extraction_bench::{default_targets, time_extraction};
+use lodkit_bench::mco::{default_targets, time_extraction};
 use lodkit_mco::pipeline::{Options, build_from_mesh};
 use lodkit_mco::{McoModel, model_file};
 

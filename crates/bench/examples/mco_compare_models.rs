@@ -3,13 +3,13 @@
 //! the same triangles — compared by their vertices' positions, normals and
 //! colours, so vertex and node numbering may differ. For speed work that
 //! reorders the build's arrays without meaning to change its output (the
-//! files are then not byte-identical, and `build_driver`'s CRC cannot tell).
+//! files are then not byte-identical, and `mco_build_driver`'s CRC cannot tell).
 //!
 //! ```text
-//! MCO_OUT=/tmp/a.mco cargo run --release -p lodkit-mco --example build_driver -- 640000 1
+//! MCO_OUT=/tmp/a.mco cargo run --release -p lodkit-bench --example mco_build_driver -- 640000 1
 //! # … change the build …
-//! MCO_OUT=/tmp/b.mco cargo run --release -p lodkit-mco --example build_driver -- 640000 1
-//! cargo run --release -p lodkit-mco --example compare_models -- /tmp/a.mco /tmp/b.mco
+//! MCO_OUT=/tmp/b.mco cargo run --release -p lodkit-bench --example mco_build_driver -- 640000 1
+//! cargo run --release -p lodkit-bench --example mco_compare_models -- /tmp/a.mco /tmp/b.mco
 //! ```
 
 use std::path::Path;
@@ -48,7 +48,7 @@ fn triangles(m: &McoModel, k: usize) -> Vec<[Corner; 3]> {
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().collect();
     if args.len() != 3 {
-        eprintln!("usage: compare_models A.mco B.mco");
+        eprintln!("usage: mco_compare_models A.mco B.mco");
         return ExitCode::FAILURE;
     }
     let a = load(Path::new(&args[1])).expect("the first model");

@@ -7,15 +7,16 @@
 //! time, which a loaded machine inflates far less (other processes
 //! preempting this one do not count). With `MCO_OUT=PATH` in the
 //! environment the last model is also written there (for
-//! `compare_models`, which checks that two builds draw the same meshes).
+//! `mco_compare_models`, which checks that two builds draw the same meshes).
 //!
 //! ```text
-//! cargo run --release -p lodkit-mco --example build_driver -- 640000 3
-//! cargo run --release -p lodkit-mco --example build_driver -- bunny 3
+//! cargo run --release -p lodkit-bench --example mco_build_driver -- 640000 3
+//! cargo run --release -p lodkit-bench --example mco_build_driver -- bunny 3
 //! ```
 
 use std::time::Instant;
 
+use lodkit_bench::simplify::thread_cpu_seconds;
 use lodkit_mco::McoModel;
 use lodkit_mco::model_file::encode;
 use lodkit_mco::pipeline::{Options, build_from_mesh, build_from_range_images};
@@ -64,7 +65,7 @@ fn main() {
         let t = Instant::now();
         let c = thread_cpu_seconds();
         let mut m = build();
-        best_cpu = best_cpu.min(thread_cpu_seconds() - c);
+        best_cpu = best_cpu.min(thread_cpu_seconds().unwrap_or(f64::NAN) - c.unwrap_or(f64::NAN));
         best = best.min(t.elapsed().as_secs_f64());
         m.stats.build_seconds = 0.0;
         shape = format!(
@@ -86,30 +87,4 @@ fn main() {
         points as f64 / best,
         points as f64 / best_cpu
     );
-}
-
-/// CPU time of the calling thread (`CLOCK_THREAD_CPUTIME_ID`), seconds.
-#[cfg(all(target_os = "linux", target_pointer_width = "64"))]
-fn thread_cpu_seconds() -> f64 {
-    #[repr(C)]
-    struct Timespec {
-        sec: i64,
-        nsec: i64,
-    }
-    unsafe extern "C" {
-        fn clock_gettime(clock: i32, ts: *mut Timespec) -> i32;
-    }
-    const CLOCK_THREAD_CPUTIME_ID: i32 = 3;
-    let mut ts = Timespec { sec: 0, nsec: 0 };
-    // SAFETY: `ts` is a valid, writable timespec (64-bit Linux layout).
-    let rc = unsafe { clock_gettime(CLOCK_THREAD_CPUTIME_ID, &mut ts) };
-    if rc != 0 {
-        return f64::NAN;
-    }
-    ts.sec as f64 + ts.nsec as f64 * 1e-9
-}
-
-#[cfg(not(all(target_os = "linux", target_pointer_width = "64")))]
-fn thread_cpu_seconds() -> f64 {
-    f64::NAN
 }
