@@ -75,4 +75,7 @@ pub enum Error {
     Mesh(#[from] lodkit_mesh::Error),
 }
 
+#[cfg(test)]
+mod tests;
+
 pub type Result<T, E = Error> = std::result::Result<T, E>;

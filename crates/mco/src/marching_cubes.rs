@@ -582,7 +582,7 @@ mod tests {
     #[test]
     fn brick_configs_equal_cube_by_cube_configs() {
         let mut seed = 0x51f1_5eed_0d15_ea5eu64;
-        let mut s = crate::signed_distance::Samples::default();
+        let mut s = lodkit_mesh::PointCloud::default();
         for _ in 0..4000 {
             let p = Vec3::new(rng(&mut seed), rng(&mut seed), rng(&mut seed));
             let n = Vec3::new(
@@ -591,7 +591,9 @@ mod tests {
                 rng(&mut seed) - 0.5,
             );
             s.positions.push(p);
-            s.normals.push(n.normalize_or(Vec3::Z));
+            s.normals
+                .get_or_insert_default()
+                .push(n.normalize_or(Vec3::Z));
         }
         // Resolution 20: the lattice's last cells end inside a brick; with
         // and without the tangential rule (defined ≠ reached).

@@ -27,13 +27,13 @@ use std::num::NonZero;
 use std::time::Instant;
 
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
-use lodkit_mesh::{Aabb, Model, RangeImage, TriMesh};
+use lodkit_mesh::{Aabb, Model, PointCloud, RangeImage, TriMesh};
 
 use crate::lattice::{BRICK, BRICK_BITS, BRICK_VOLUME, Grid, local_index, pack};
 use crate::marching_cubes::{BandSigns, BrickMasks, brick_configs, leaf_config_in};
 use crate::model::McoModel;
 use crate::normals_estimation::{mesh_samples, point_cloud_samples, range_image_samples};
-use crate::signed_distance::{Samples, SignedDistanceField};
+use crate::signed_distance::SignedDistanceField;
 use crate::{Error, Result};
 
 /// Build options.
@@ -45,7 +45,7 @@ pub struct Options {
 }
 
 /// Oriented samples of any model (see [`crate::normals_estimation`]).
-pub fn samples_of(model: &Model) -> Result<Samples> {
+pub fn samples_of(model: &Model) -> Result<PointCloud> {
     input_samples(Input::from(model))
 }
 
@@ -112,7 +112,7 @@ pub fn sample_spacing(model: &Model) -> Option<f32> {
 #[derive(Debug, Clone, Copy)]
 enum Input<'a> {
     Mesh(&'a TriMesh),
-    Points(&'a lodkit_mesh::PointCloud),
+    Points(&'a PointCloud),
     Range(&'a RangeImage),
 }
 
@@ -126,7 +126,7 @@ impl<'a> From<&'a Model> for Input<'a> {
     }
 }
 
-fn input_samples(input: Input) -> Result<Samples> {
+fn input_samples(input: Input) -> Result<PointCloud> {
     match input {
         Input::Mesh(m) => Ok(mesh_samples(m)),
         Input::Points(p) => point_cloud_samples(p),
@@ -284,7 +284,7 @@ impl IncrementalBuilder {
 
     /// Adds a batch of samples; only cubes around changed vertices are
     /// recomputed.
-    pub fn add(&mut self, s: &Samples) -> AddReport {
+    pub fn add(&mut self, s: &PointCloud) -> AddReport {
         let colors = s.colors.is_some();
         self.has_colors = Some(self.has_colors.unwrap_or(colors) && colors);
         self.samples += s.len() as u64;
@@ -406,12 +406,12 @@ impl IncrementalBuilder {
 
 /// The lattice for several inputs: their union box, the given or default
 /// resolution.
-pub fn grid_for(models: &[Model], samples: &[Samples], opts: &Options) -> Result<Grid> {
+pub fn grid_for(models: &[Model], samples: &[PointCloud], opts: &Options) -> Result<Grid> {
     let inputs: Vec<Input> = models.iter().map(Input::from).collect();
     grid_for_inputs(&inputs, samples, opts)
 }
 
-fn grid_for_inputs(inputs: &[Input], samples: &[Samples], opts: &Options) -> Result<Grid> {
+fn grid_for_inputs(inputs: &[Input], samples: &[PointCloud], opts: &Options) -> Result<Grid> {
     let bbox = samples.iter().fold(Aabb::EMPTY, |b, s| b.union(&s.bbox()));
     let resolution = match opts.resolution {
         Some(r) => r,
@@ -426,12 +426,12 @@ fn grid_for_inputs(inputs: &[Input], samples: &[Samples], opts: &Options) -> Res
 /// Mesh samples made dense enough for `grid` (see
 /// [`crate::normals_estimation::mesh_samples_for_cube`]); other inputs'
 /// samples are kept. `samples[i]` must be [`samples_of`]`(&models[i])`.
-pub fn densify_meshes(models: &[Model], samples: Vec<Samples>, grid: &Grid) -> Vec<Samples> {
+pub fn densify_meshes(models: &[Model], samples: Vec<PointCloud>, grid: &Grid) -> Vec<PointCloud> {
     let inputs: Vec<Input> = models.iter().map(Input::from).collect();
     densify_inputs(&inputs, samples, grid)
 }
 
-fn densify_inputs(inputs: &[Input], samples: Vec<Samples>, grid: &Grid) -> Vec<Samples> {
+fn densify_inputs(inputs: &[Input], samples: Vec<PointCloud>, grid: &Grid) -> Vec<PointCloud> {
     inputs
         .iter()
         .zip(samples)
@@ -456,7 +456,7 @@ fn build_from_inputs(inputs: &[Input], opts: &Options) -> Result<McoModel> {
     // Meshes' vertex normals are computed once, for the vertex samples and
     // again for the triangle samples that densify them.
     let mut mesh_normals: Vec<Option<Vec<glam::Vec3>>> = Vec::with_capacity(inputs.len());
-    let mut samples: Vec<Samples> = Vec::with_capacity(inputs.len());
+    let mut samples: Vec<PointCloud> = Vec::with_capacity(inputs.len());
     for &input in inputs {
         if let Input::Mesh(m) = input {
             let normals = lodkit_mesh::normals::vertex_normals(m);
@@ -467,7 +467,7 @@ fn build_from_inputs(inputs: &[Input], opts: &Options) -> Result<McoModel> {
             mesh_normals.push(None);
         }
     }
-    if samples.iter().all(Samples::is_empty) {
+    if samples.iter().all(PointCloud::is_empty) {
         return Err(Error::Input("the input has no usable samples".into()));
     }
     let grid = grid_for_inputs(inputs, &samples, opts)?;

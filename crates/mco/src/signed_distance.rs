@@ -37,45 +37,11 @@
 //!   scans one at a time gives the same field as adding them together.
 
 use glam::Vec3;
-use lodkit_mesh::Aabb;
+use lodkit_mesh::PointCloud;
 
 use crate::lattice::{
     BRICK, BRICK_BITS, BRICK_VOLUME, Grid, KeyMap, LOCAL_MASK, brick_key, local_index, pack, unpack,
 };
-
-/// Oriented samples: positions with unit normals, optional colours.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct Samples {
-    pub positions: Vec<Vec3>,
-    pub normals: Vec<Vec3>,
-    pub colors: Option<Vec<[u8; 4]>>,
-}
-
-impl Samples {
-    pub fn len(&self) -> usize {
-        self.positions.len()
-    }
-    pub fn is_empty(&self) -> bool {
-        self.positions.is_empty()
-    }
-    pub fn bbox(&self) -> Aabb {
-        Aabb::from_points(&self.positions)
-    }
-    /// Appends `o`'s samples (colours kept only if both have them).
-    pub fn append(&mut self, o: &Samples) {
-        let had = !self.positions.is_empty();
-        self.colors = match (self.colors.take(), &o.colors) {
-            (Some(mut a), Some(b)) => {
-                a.extend_from_slice(b);
-                Some(a)
-            }
-            (None, Some(b)) if !had => Some(b.clone()),
-            _ => None,
-        };
-        self.positions.extend_from_slice(&o.positions);
-        self.normals.extend_from_slice(&o.normals);
-    }
-}
 
 /// One lattice vertex of the band: its closest sample's data.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -286,14 +252,14 @@ impl SignedDistanceField {
 
     /// Stamps `samples` into the band; returns how many lattice vertices
     /// changed value (their keys: [`SignedDistanceField::changed_keys`]).
-    /// Samples outside the lattice are clamped into its border cubes.
+    /// PointCloud outside the lattice are clamped into its border cubes.
     /// Non-finite samples are skipped.
     ///
     /// Each sample stamps the `4³` lattice vertices of its cube and the 26
     /// cubes around it; a vertex keeps the closest sample, ties to the
     /// sample added first (samples are visited in order, and a later one
     /// wins only when strictly closer).
-    pub fn add(&mut self, samples: &Samples) -> usize {
+    pub fn add(&mut self, samples: &PointCloud) -> usize {
         for c in &mut self.changed {
             *c = [0; BRICK_VOLUME / 64];
         }
@@ -309,7 +275,8 @@ impl SignedDistanceField {
         self.colors.reserve(samples.len());
         let g = self.grid;
         let mut defined = 0usize;
-        for (i, (&p, &n)) in samples.positions.iter().zip(&samples.normals).enumerate() {
+        let normals = samples.normals.as_deref().unwrap_or_default();
+        for (i, (&p, &n)) in samples.positions.iter().zip(normals).enumerate() {
             if !p.is_finite() || !n.is_finite() {
                 continue;
             }
@@ -604,13 +571,19 @@ impl SignedDistanceField {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use lodkit_mesh::Aabb;
     use std::collections::HashMap;
 
     /// The stamping rule written plainly: every sample visits its 64
     /// vertices, a vertex keeps the strictly closest sample, first wins ties.
-    fn reference_field(g: &Grid, s: &Samples) -> HashMap<u64, (f32, f32, u32)> {
+    fn reference_field(g: &Grid, s: &PointCloud) -> HashMap<u64, (f32, f32, u32)> {
         let mut out: HashMap<u64, (f32, f32, u32)> = HashMap::new();
-        for (i, (&p, &n)) in s.positions.iter().zip(&s.normals).enumerate() {
+        for (i, (&p, &n)) in s
+            .positions
+            .iter()
+            .zip(s.normals.as_deref().unwrap())
+            .enumerate()
+        {
             let [cx, cy, cz] = g.cell_of(p);
             for corner in 0..64u32 {
                 let (dx, dy, dz) = (corner & 3, corner >> 2 & 3, corner >> 4);
@@ -629,19 +602,19 @@ mod tests {
         out
     }
 
-    fn random_samples(seed: &mut u64, count: usize, size: f32) -> Samples {
+    fn random_samples(seed: &mut u64, count: usize, size: f32) -> PointCloud {
         let mut next = || {
             *seed ^= *seed << 13;
             *seed ^= *seed >> 7;
             *seed ^= *seed << 17;
             (*seed >> 40) as f32 / (1u64 << 24) as f32
         };
-        let mut s = Samples::default();
+        let mut s = PointCloud::default();
         for _ in 0..count {
             let p = Vec3::new(next(), next(), next()) * size;
             let n = Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize_or(Vec3::Z);
             s.positions.push(p);
-            s.normals.push(n);
+            s.normals.get_or_insert_default().push(n);
         }
         s
     }
@@ -654,8 +627,9 @@ mod tests {
         let mut s = random_samples(&mut seed, 3000, 1.0);
         let dup = s.positions[..200].to_vec();
         s.positions.extend(dup);
-        let dupn: Vec<Vec3> = s.normals[..200].iter().map(|n| -*n).collect();
-        s.normals.extend(dupn);
+        let normals = s.normals.as_mut().unwrap();
+        let dupn: Vec<Vec3> = normals[..200].iter().map(|n| -*n).collect();
+        normals.extend(dupn);
         let g = Grid::new(s.bbox(), 20).unwrap();
         let mut f = SignedDistanceField::new(g);
         assert_eq!(f.add(&s), f.len());
@@ -669,15 +643,15 @@ mod tests {
                 "vertex {:?}",
                 unpack(k)
             );
-            assert_eq!(v.normal, s.normals[i as usize]);
+            assert_eq!(v.normal, s.normals.as_ref().unwrap()[i as usize]);
         }
         // Adding in two batches gives the same field and reports as
         // changed exactly the vertices the second batch improved.
         let (a, b) = s.positions.split_at(1700);
-        let (na, nb) = s.normals.split_at(1700);
-        let part = |p: &[Vec3], n: &[Vec3]| Samples {
+        let (na, nb) = s.normals.as_deref().unwrap().split_at(1700);
+        let part = |p: &[Vec3], n: &[Vec3]| PointCloud {
             positions: p.to_vec(),
-            normals: n.to_vec(),
+            normals: Some(n.to_vec()),
             colors: None,
         };
         let mut two = SignedDistanceField::new(g);
@@ -707,12 +681,12 @@ mod tests {
             max: Vec3::ONE,
         };
         let g = Grid::new(b, 10).unwrap();
-        let mut s = Samples::default();
+        let mut s = PointCloud::default();
         for i in 0..30 {
             for j in 0..30 {
                 s.positions
                     .push(Vec3::new(i as f32 / 29.0, j as f32 / 29.0, 0.53));
-                s.normals.push(Vec3::Z);
+                s.normals.get_or_insert_default().push(Vec3::Z);
             }
         }
         let mut f = SignedDistanceField::new(g);
