@@ -74,17 +74,19 @@ impl Hasher for KeyHasher {
 /// A `HashMap` keyed by packed lattice keys.
 pub type KeyMap<V> = HashMap<u64, V, BuildHasherDefault<KeyHasher>>;
 
-/// The cube lattice: leaf cubes of edge `cube` from `origin`, `2^depth`
-/// along each axis (the octree root covers all of them).
+/// The cube lattice a model is built on: leaf cubes of edge
+/// [`Grid::cube`] from [`Grid::origin`], `2^depth` along each axis (the
+/// octree root covers all of them). Made by [`Grid::new`] or
+/// [`crate::grid_for`], which validate it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Grid {
-    pub origin: Vec3,
+    pub(crate) origin: Vec3,
     /// Leaf cube edge length (object units).
-    pub cube: f32,
+    pub(crate) cube: f32,
     /// Octree depth: the root is `2^depth` leaf cubes wide.
-    pub depth: u32,
+    pub(crate) depth: u32,
     /// Requested cubes along the longest axis of the input's box.
-    pub resolution: u32,
+    pub(crate) resolution: u32,
 }
 
 /// A placeholder lattice (unit cubes at the origin, depth 0), for models
@@ -101,9 +103,11 @@ impl Default for Grid {
 }
 
 impl Grid {
-    /// The lattice for data inside `bbox` with `resolution` cubes along its
-    /// longest axis, plus a margin of one and a half cubes on every side so
-    /// that the band around the outermost samples is complete.
+    /// The lattice for data inside `bbox` (object units) with `resolution`
+    /// cubes along its longest axis, plus a margin of one and a half cubes
+    /// on every side so that the band around the outermost samples is
+    /// complete. Errors ([`Error::Input`]): an empty or non-finite box, a
+    /// box without extent, `resolution` outside `2..=`[`MAX_RESOLUTION`].
     pub fn new(bbox: Aabb, resolution: u32) -> Result<Grid> {
         if bbox.is_empty() || !bbox.min.is_finite() || !bbox.max.is_finite() {
             return Err(Error::Input("the input has no finite samples".into()));
@@ -137,16 +141,36 @@ impl Grid {
         1 << self.depth
     }
 
+    /// The lattice's lowest corner (object units).
+    pub fn origin(&self) -> Vec3 {
+        self.origin
+    }
+
+    /// Leaf cube edge length (object units).
+    pub fn cube(&self) -> f32 {
+        self.cube
+    }
+
+    /// Octree depth: the root is `2^depth` leaf cubes wide.
+    pub fn depth(&self) -> u32 {
+        self.depth
+    }
+
+    /// Cubes along the longest axis of the inputs' box, as requested.
+    pub fn resolution(&self) -> u32 {
+        self.resolution
+    }
+
     /// World position of lattice vertex `key` (leaf units).
     #[inline]
-    pub fn position(&self, key: u64) -> Vec3 {
+    pub(crate) fn position(&self, key: u64) -> Vec3 {
         let [x, y, z] = unpack(key);
         self.origin + Vec3::new(x as f32, y as f32, z as f32) * self.cube
     }
 
     /// The leaf cube containing `p`, clamped into the lattice.
     #[inline]
-    pub fn cell_of(&self, p: Vec3) -> [u32; 3] {
+    pub(crate) fn cell_of(&self, p: Vec3) -> [u32; 3] {
         let max = self.cells() - 1;
         let c = (p - self.origin) / self.cube;
         // `as u32` truncates, saturates and maps NaN to 0: for c ≥ 0 that is

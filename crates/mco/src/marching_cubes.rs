@@ -39,9 +39,6 @@ impl VertexBuffer {
     pub fn len(&self) -> usize {
         self.positions.len()
     }
-    pub fn is_empty(&self) -> bool {
-        self.positions.is_empty()
-    }
     /// Appends a vertex, returning its index.
     pub fn push(&mut self, p: Vec3, n: Vec3, c: [u8; 4]) -> u32 {
         self.positions.push(p);
@@ -151,6 +148,7 @@ pub fn corner_key(cube: [u32; 3], level: u32, c: u8) -> u64 {
 /// The configuration of leaf cube `cube` (bit v = corner v inside), or
 /// `None` if a corner is missing from the band. Null configurations (0,
 /// 255) are returned too; callers skip them.
+#[cfg(test)]
 pub fn leaf_config(field: &SignedDistanceField, cube: [u32; 3]) -> Option<u8> {
     let [x, y, z] = cube;
     leaf_config_in(field, field.brick_of(x, y, z)?, cube)
@@ -307,6 +305,7 @@ pub fn brick_configs(
 
 /// All leaf cubes with a surface crossing: `(cube key, configuration)`,
 /// sorted by key. Only cubes touching the band are examined.
+#[cfg(test)]
 pub fn leaf_cubes(field: &SignedDistanceField) -> Vec<(u64, u8)> {
     let cells = field.grid.cells();
     let mut out = Vec::new();
@@ -335,6 +334,7 @@ pub fn leaf_cubes(field: &SignedDistanceField) -> Vec<(u64, u8)> {
 /// Creates (or finds) the vertex of every crossing edge of the given leaf
 /// cubes, in cube order then edge order (so vertex numbering is
 /// deterministic). Returns the edge → vertex map.
+#[cfg(test)]
 pub fn leaf_vertices(
     field: &SignedDistanceField,
     cubes: &[(u64, u8)],
@@ -448,6 +448,7 @@ pub fn node_triangles(cfg: u8, edges: &CubeEdges, out: &mut Vec<u32>) {
 }
 
 /// Triangles of one cube: the table's edge triples mapped to vertices.
+#[cfg(test)]
 pub fn cube_triangles(
     cube: [u32; 3],
     level: u32,
@@ -465,6 +466,7 @@ pub fn cube_triangles(
 
 /// Plain (single-level) marching cubes over the band: the full-resolution
 /// mesh, as positions/normals/colours and triangles.
+#[cfg(test)]
 pub fn march(field: &SignedDistanceField) -> (VertexBuffer, Vec<[u32; 3]>) {
     let cubes = leaf_cubes(field);
     let mut vb = VertexBuffer::default();

@@ -13,7 +13,9 @@
 //! `+axis` neighbour (and so every `−axis` one) in linear time, reading
 //! both sequences front to back.
 
-use crate::lattice::{KEY_BITS, unpack};
+use crate::lattice::KEY_BITS;
+#[cfg(test)]
+use crate::lattice::unpack;
 
 /// Marks a face without a neighbour in [`FaceNeighbours`].
 pub const NO_NODE: u32 = u32::MAX;
@@ -60,6 +62,7 @@ pub fn find(keys: &[u64], cell: [u32; 3]) -> Option<u32> {
 
 /// Coordinates of node `i` of `keys`.
 #[inline]
+#[cfg(test)]
 pub fn cell(keys: &[u64], i: u32) -> [u32; 3] {
     unpack(keys[i as usize])
 }

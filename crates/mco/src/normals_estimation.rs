@@ -113,24 +113,9 @@ pub(crate) fn mesh_samples_with(m: &TriMesh, normals: &[Vec3]) -> PointCloud {
     }
 }
 
-/// Mesh samples dense enough for a lattice of cube `cube`: the vertices
-/// (as [`mesh_samples`]) plus, on every triangle with an edge longer than a
-/// cube, points on a barycentric grid of half a cube, with normals
-/// interpolated from the area-weighted vertex normals. Beyond the thesis
-/// (which samples vertices only): a mesh with long edges would otherwise
-/// leave cubes the surface crosses with no sample near, hence holes (14
-/// hole edges on the closed bunny at the default resolution, none with
-/// this).
-pub fn mesh_samples_for_cube(m: &TriMesh, cube: f32) -> PointCloud {
-    let normals = lodkit_mesh::normals::vertex_normals(m);
-    let mut s = mesh_samples_with(m, &normals);
-    densify_mesh_samples(m, &normals, cube, &mut s);
-    s
-}
-
-/// Turns `s`, the [`mesh_samples`] of `m`, into its
-/// [`mesh_samples_for_cube`] (appends the triangle samples), computing the
-/// vertex normals once more only if some triangle needs them.
+/// Makes `s`, the [`mesh_samples`] of `m`, dense enough for cube `cube`
+/// ([`densify_mesh_samples`]), computing the vertex normals once more only
+/// if some triangle needs them.
 pub fn densify_mesh_samples_of(m: &TriMesh, cube: f32, s: &mut PointCloud) {
     if long_edged_faces(m, cube).next().is_none() {
         return;
@@ -159,8 +144,15 @@ fn long_edged_faces(m: &TriMesh, cube: f32) -> impl Iterator<Item = (&[u32; 3], 
     })
 }
 
-/// Appends the triangle samples of [`mesh_samples_for_cube`] to `s`, with
-/// `normals` the mesh's vertex normals.
+/// Makes mesh samples `s` dense enough for a lattice of cube `cube`: to
+/// the vertices (as [`mesh_samples`]) it appends, on every triangle with an edge longer than a
+/// cube, points on a barycentric grid of half a cube, with normals
+/// interpolated from the area-weighted vertex normals. Beyond the thesis
+/// (which samples vertices only): a mesh with long edges would otherwise
+/// leave cubes the surface crosses with no sample near, hence holes (14
+/// hole edges on the closed bunny at the default resolution, none with
+/// this).
+/// `normals` are the mesh's vertex normals.
 pub(crate) fn densify_mesh_samples(m: &TriMesh, normals: &[Vec3], cube: f32, s: &mut PointCloud) {
     let out_normals = s.normals.get_or_insert_default();
     for (f, [a, b, c], longest) in long_edged_faces(m, cube) {

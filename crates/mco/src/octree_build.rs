@@ -144,12 +144,8 @@ const UNSET: Corner = Corner {
     at: u64::MAX,
 };
 
-/// Builds every level from the leaf cubes up to the single root.
-pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) -> Result<Tree<'f>> {
-    build_levels_with(field, BandSigns::new(field), leaves)
-}
-
-/// [`build_levels`] with the band's sides already at hand.
+/// Builds every level from the leaf cubes up to the single root, with the
+/// band's sides `signs` already at hand.
 pub fn build_levels_with<'f>(
     field: &'f SignedDistanceField,
     signs: BandSigns,

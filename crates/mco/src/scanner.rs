@@ -29,13 +29,15 @@ use parry3d::query::{Ray, RayCast};
 
 use crate::{Error, Result};
 
-/// Scanner settings.
+/// Settings of the virtual range scanner ([`scan_mesh`]); the `Default`
+/// is 8 views on the horizon, 256 × 256 samples, no noise.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ScanOptions {
     /// Number of views around the vertical axis.
     pub views: usize,
-    /// Image width and height in samples.
+    /// Image width in samples (2..=8192).
     pub width: usize,
+    /// Image height in samples (2..=8192).
     pub height: usize,
     /// Elevation of every view above the horizontal plane, degrees.
     pub elevation_deg: f32,
@@ -85,8 +87,12 @@ pub fn view_pose(mesh_center: Vec3, i: usize, opts: &ScanOptions) -> Pose {
     }
 }
 
-/// Scans `mesh` from `opts.views` views. Errors on an empty mesh or bad
-/// sizes.
+/// Scans `mesh` (object units) from `opts.views` views around its
+/// vertical axis (see the module docs): one posed range image per view,
+/// in view order, each `width × height` samples with a validity mask.
+/// Deterministic (the noise comes from `opts.seed`). Errors
+/// ([`Error::Input`]): an empty mesh, no views, a side below 2 or above
+/// 8192. Cost: one BVH ray cast per sample.
 pub fn scan_mesh(mesh: &TriMesh, opts: &ScanOptions) -> Result<Vec<RangeImage>> {
     if opts.views == 0 || opts.width < 2 || opts.height < 2 {
         return Err(Error::Input(
@@ -190,9 +196,11 @@ pub fn conf_line(file: &str, pose: &Pose) -> String {
     )
 }
 
-/// Writes `scans` as `{stem}_{i:03}.ply` into `dir` plus `{stem}.conf`;
-/// returns the written paths (the `.conf` last). Files are written
-/// atomically.
+/// Writes `scans` as Stanford range-grid PLY files `{stem}_{i:03}.ply`
+/// into `dir` (created if missing) plus `{stem}.conf` with their poses,
+/// which [`crate::build_from_conf`] and `lodkit_mesh::io::conf` read back;
+/// returns the written paths (the `.conf` last). Each file is written
+/// atomically; errors name the file.
 pub fn write_scans(dir: &Path, stem: &str, scans: &[RangeImage]) -> Result<Vec<PathBuf>> {
     std::fs::create_dir_all(dir).map_err(|e| lodkit_mesh::Error::io(dir, e))?;
     let mut conf = String::from("# written by lodkit scan: bmesh FILE tx ty tz qx qy qz qw\n");

@@ -45,6 +45,7 @@ use crate::lattice::{
 
 /// One lattice vertex of the band: its closest sample's data.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg(test)]
 pub struct FieldVertex {
     /// Squared distance to the closest sample (selection key).
     pub dist2: f32,
@@ -57,7 +58,7 @@ pub struct FieldVertex {
 }
 
 /// Largest offset along the tangent plane, in cubes, for a band vertex to
-/// be defined when the rule is on (see [`SignedDistanceField::get`]). The
+/// be defined when the rule is on (see [`SignedDistanceField::slot_defined`]). The
 /// default cube is twice the sample spacing, so on continuous data some
 /// sample is always within half a cube tangentially; 1.5 leaves room for
 /// irregular sampling. Measured on the bunny from its 10 real scans: the
@@ -76,17 +77,12 @@ pub const NO_COLOR: [u8; 4] = [200, 200, 200, 255];
 pub struct Slot {
     pub dist2: f32,
     pub distance: f32,
-    /// Index into the field's samples; [`Slot::EMPTY`]'s is `u32::MAX`.
+    /// Index into the field's samples; `u32::MAX` = no sample reached the
+    /// vertex (then `dist2` is `+∞`).
     pub sample: u32,
 }
 
 impl Slot {
-    /// A lattice vertex no sample has reached.
-    pub const EMPTY: Slot = Slot {
-        dist2: f32::INFINITY,
-        distance: 0.0,
-        sample: u32::MAX,
-    };
     #[inline]
     pub fn is_empty(&self) -> bool {
         self.sample == u32::MAX
@@ -100,80 +96,110 @@ struct BrickColumns<'a> {
     sample: &'a mut [u32],
 }
 
-/// Stamps sample `id` into the 4-vertex window at `row` of a brick (a
-/// window inside one brick row): lane `t`'s squared distance is `(x2[t] +
-/// y2) + z2` and its signed distance `(xd[t] + yd) + zd`; lanes where the
-/// squared distance is below the stored one take the sample. Returns the
-/// mask of those lanes and how many of them no sample had reached. IEEE
-/// single precision either way, so the SSE2 path and the portable one give
-/// the same bits.
-#[inline(always)]
-fn stamp_window(
-    brick: &mut BrickColumns,
-    row: usize,
-    (x2, y2, z2): (&[f32; 4], f32, f32),
-    (xd, yd, zd): (&[f32; 4], f32, f32),
+/// One stamp of a sample into a 4-vertex window of a brick row: the
+/// window's squared distances `(x2[t] + y2) + z2` and signed distances
+/// `(xd[t] + yd) + zd` for lanes `t = 0..4`.
+#[derive(Clone, Copy)]
+struct Stamp<'a> {
+    x2: &'a [f32; 4],
+    y2: f32,
+    z2: f32,
+    xd: &'a [f32; 4],
+    yd: f32,
+    zd: f32,
     id: u32,
-) -> (u32, u32) {
-    let dist2 = &mut brick.dist2[row..row + 4];
-    let distance = &mut brick.distance[row..row + 4];
-    let sample = &mut brick.sample[row..row + 4];
+}
+
+/// Stamps sample `st.id` into the 4-vertex window at `row` of a brick (a
+/// window inside one brick row): lanes whose squared distance is below the
+/// stored one take the sample. Returns the mask of those lanes and how
+/// many of them no sample had reached.
+///
+/// On x86_64 this is [`stamp_window_sse2`] (SSE2 is part of that target's
+/// baseline, so no run-time detection); elsewhere, wasm32 included,
+/// [`stamp_window_scalar`]. Both do the same IEEE single-precision
+/// operations in the same order, so they give the same bits (the test
+/// `sse2_and_scalar_stamping_agree` runs both on the same inputs).
+#[inline(always)]
+fn stamp_window(brick: &mut BrickColumns, row: usize, st: Stamp) -> (u32, u32) {
     #[cfg(target_arch = "x86_64")]
     {
-        use std::arch::x86_64::{
-            __m128, __m128i, _mm_add_ps, _mm_and_ps, _mm_and_si128, _mm_andnot_ps,
-            _mm_andnot_si128, _mm_castps_si128, _mm_castsi128_ps, _mm_cmpeq_epi32, _mm_cmplt_ps,
-            _mm_loadu_ps, _mm_loadu_si128, _mm_movemask_ps, _mm_or_ps, _mm_or_si128,
-            _mm_set1_epi32, _mm_set1_ps, _mm_storeu_ps, _mm_storeu_si128,
-        };
-        // SAFETY: SSE2 is part of the x86_64 baseline; every load and
-        // store is an unaligned access to the 4 lanes of a slice of length
-        // 4 (bounds checked above), stores through mutable borrows.
-        unsafe {
-            let d = _mm_add_ps(
-                _mm_add_ps(_mm_loadu_ps(x2.as_ptr()), _mm_set1_ps(y2)),
-                _mm_set1_ps(z2),
-            );
-            let old = _mm_loadu_ps(dist2.as_ptr());
-            let m = _mm_cmplt_ps(d, old);
-            let wins = _mm_movemask_ps(m) as u32;
-            if wins == 0 {
-                return (0, 0);
-            }
-            let blend =
-                |new: __m128, old: __m128| _mm_or_ps(_mm_and_ps(m, new), _mm_andnot_ps(m, old));
-            _mm_storeu_ps(dist2.as_mut_ptr(), blend(d, old));
-            let dn = _mm_add_ps(
-                _mm_add_ps(_mm_loadu_ps(xd.as_ptr()), _mm_set1_ps(yd)),
-                _mm_set1_ps(zd),
-            );
-            let od = _mm_loadu_ps(distance.as_ptr());
-            _mm_storeu_ps(distance.as_mut_ptr(), blend(dn, od));
-            let mi = _mm_castps_si128(m);
-            let os = _mm_loadu_si128(sample.as_ptr() as *const __m128i);
-            let empty = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(os, _mm_set1_epi32(-1))));
-            let ns = _mm_or_si128(
-                _mm_and_si128(mi, _mm_set1_epi32(id as i32)),
-                _mm_andnot_si128(mi, os),
-            );
-            _mm_storeu_si128(sample.as_mut_ptr() as *mut __m128i, ns);
-            (wins, (wins & empty as u32).count_ones())
-        }
+        stamp_window_sse2(brick, row, st)
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
-        let (mut wins, mut reached) = (0u32, 0u32);
-        for t in 0..4 {
-            let d = (x2[t] + y2) + z2;
-            if d < dist2[t] {
-                dist2[t] = d;
-                distance[t] = (xd[t] + yd) + zd;
-                reached += (sample[t] == u32::MAX) as u32;
-                sample[t] = id;
-                wins |= 1 << t;
-            }
+        stamp_window_scalar(brick, row, st)
+    }
+}
+
+/// [`stamp_window`], one lane at a time.
+#[inline(always)]
+#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+fn stamp_window_scalar(brick: &mut BrickColumns, row: usize, st: Stamp) -> (u32, u32) {
+    let dist2 = &mut brick.dist2[row..row + 4];
+    let distance = &mut brick.distance[row..row + 4];
+    let sample = &mut brick.sample[row..row + 4];
+    let (mut wins, mut reached) = (0u32, 0u32);
+    for t in 0..4 {
+        let d = (st.x2[t] + st.y2) + st.z2;
+        if d < dist2[t] {
+            dist2[t] = d;
+            distance[t] = (st.xd[t] + st.yd) + st.zd;
+            reached += (sample[t] == u32::MAX) as u32;
+            sample[t] = st.id;
+            wins |= 1 << t;
         }
-        (wins, reached)
+    }
+    (wins, reached)
+}
+
+/// [`stamp_window`] with SSE2: the four lanes compared at once, and a
+/// window the sample wins updated with blends.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+#[allow(unsafe_code)]
+fn stamp_window_sse2(brick: &mut BrickColumns, row: usize, st: Stamp) -> (u32, u32) {
+    use std::arch::x86_64::{
+        __m128, __m128i, _mm_add_ps, _mm_and_ps, _mm_and_si128, _mm_andnot_ps, _mm_andnot_si128,
+        _mm_castps_si128, _mm_castsi128_ps, _mm_cmpeq_epi32, _mm_cmplt_ps, _mm_loadu_ps,
+        _mm_loadu_si128, _mm_movemask_ps, _mm_or_ps, _mm_or_si128, _mm_set1_epi32, _mm_set1_ps,
+        _mm_storeu_ps, _mm_storeu_si128,
+    };
+    let dist2 = &mut brick.dist2[row..row + 4];
+    let distance = &mut brick.distance[row..row + 4];
+    let sample = &mut brick.sample[row..row + 4];
+    // SAFETY: SSE2 is part of the x86_64 baseline, so the intrinsics are
+    // available; every load and store is an unaligned access to the 4
+    // lanes of a slice of length 4 (bounds checked by the slicing above),
+    // and stores go through mutable borrows.
+    unsafe {
+        let d = _mm_add_ps(
+            _mm_add_ps(_mm_loadu_ps(st.x2.as_ptr()), _mm_set1_ps(st.y2)),
+            _mm_set1_ps(st.z2),
+        );
+        let old = _mm_loadu_ps(dist2.as_ptr());
+        let m = _mm_cmplt_ps(d, old);
+        let wins = _mm_movemask_ps(m) as u32;
+        if wins == 0 {
+            return (0, 0);
+        }
+        let blend = |new: __m128, old: __m128| _mm_or_ps(_mm_and_ps(m, new), _mm_andnot_ps(m, old));
+        _mm_storeu_ps(dist2.as_mut_ptr(), blend(d, old));
+        let dn = _mm_add_ps(
+            _mm_add_ps(_mm_loadu_ps(st.xd.as_ptr()), _mm_set1_ps(st.yd)),
+            _mm_set1_ps(st.zd),
+        );
+        let od = _mm_loadu_ps(distance.as_ptr());
+        _mm_storeu_ps(distance.as_mut_ptr(), blend(dn, od));
+        let mi = _mm_castps_si128(m);
+        let os = _mm_loadu_si128(sample.as_ptr() as *const __m128i);
+        let empty = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(os, _mm_set1_epi32(-1))));
+        let ns = _mm_or_si128(
+            _mm_and_si128(mi, _mm_set1_epi32(st.id as i32)),
+            _mm_andnot_si128(mi, os),
+        );
+        _mm_storeu_si128(sample.as_mut_ptr() as *mut __m128i, ns);
+        (wins, (wins & empty as u32).count_ones())
     }
 }
 
@@ -345,9 +371,15 @@ impl SignedDistanceField {
                                 let (wins, reached) = stamp_window(
                                     &mut brick,
                                     row,
-                                    (&xsq, sq[1][j], sq[2][k]),
-                                    (&xdn, dn[1][j], dn[2][k]),
-                                    id,
+                                    Stamp {
+                                        x2: &xsq,
+                                        y2: sq[1][j],
+                                        z2: sq[2][k],
+                                        xd: &xdn,
+                                        yd: dn[1][j],
+                                        zd: dn[2][k],
+                                        id,
+                                    },
                                 );
                                 if wins != 0 {
                                     defined += reached as usize;
@@ -371,6 +403,7 @@ impl SignedDistanceField {
 
     /// Keys of the lattice vertices changed by the last
     /// [`SignedDistanceField::add`], sorted.
+    #[cfg(test)]
     pub fn changed_keys(&self) -> Vec<u64> {
         let mut out = Vec::new();
         for b in 0..self.brick_count() {
@@ -467,8 +500,14 @@ impl SignedDistanceField {
         }
     }
 
-    /// Whether a stored slot is a defined value (reached, and passing the
-    /// tangential rule when it is on).
+    /// Whether a stored slot is a defined value: reached, and (when the
+    /// rule is on, for scan data) its closest sample's tangent plane is a
+    /// fair estimate there — Hoppe et al.'s rule: the vertex's offset
+    /// *along* the tangent plane from the sample is at most
+    /// [`TANGENTIAL_LIMIT`] cubes. Beyond that the vertex is beside the
+    /// data (past a scan's edge, or across a thin feature) rather than
+    /// above or below it, and its sign is a guess that would draw a
+    /// spurious sheet.
     #[inline]
     pub fn slot_defined(&self, s: &Slot) -> bool {
         let limit = self.tangential_limit;
@@ -499,6 +538,7 @@ impl SignedDistanceField {
 
     /// The full value of a stored slot.
     #[inline]
+    #[cfg(test)]
     pub fn vertex_of(&self, s: &Slot) -> FieldVertex {
         FieldVertex {
             dist2: s.dist2,
@@ -508,21 +548,10 @@ impl SignedDistanceField {
         }
     }
 
-    /// The value of lattice vertex `key`, if it is defined: in the band,
-    /// and (when the rule is on, for scan data) its closest sample's tangent
-    /// plane is a fair estimate there — Hoppe et al.'s rule: the vertex's offset *along* the tangent plane
-    /// from the sample is at most [`TANGENTIAL_LIMIT`] cubes. Beyond that
-    /// the vertex is beside the data (past a scan's edge, or across a thin
-    /// feature) rather than above or below it, and its sign is a guess
-    /// that would draw a spurious sheet.
-    #[inline]
-    pub fn get(&self, key: u64) -> Option<FieldVertex> {
-        self.slot(key).map(|s| self.vertex_of(&s))
-    }
-
     /// Sets lattice vertex `key` to `v` directly, as if a sample with `v`'s
     /// normal and colour had been stamped there (for tests and synthetic
     /// fields). Marks it changed.
+    #[cfg(test)]
     pub fn set(&mut self, key: u64, v: FieldVertex) {
         let [x, y, z] = unpack(key);
         let id = self.normals.len() as u32;
@@ -542,6 +571,7 @@ impl SignedDistanceField {
 
     /// Every stored (reached) vertex and its value, before the tangential
     /// rule, in brick order.
+    #[cfg(test)]
     pub fn iter(&self) -> impl Iterator<Item = (u64, FieldVertex)> + '_ {
         (0..self.brick_count()).flat_map(move |b| {
             let [bx, by, bz] = self.brick_coords[b].map(|c| c << BRICK_BITS);
@@ -560,11 +590,9 @@ impl SignedDistanceField {
     }
 
     /// Number of lattice vertices in the band.
+    #[cfg(test)]
     pub fn len(&self) -> usize {
         self.defined
-    }
-    pub fn is_empty(&self) -> bool {
-        self.defined == 0
     }
 }
 
@@ -672,6 +700,81 @@ mod tests {
         assert_eq!(changed, expect.len());
         let one: HashMap<u64, FieldVertex> = f.iter().collect();
         assert_eq!(after, one);
+    }
+
+    /// The SSE2 window and its scalar twin, on the same windows: random
+    /// distances (infinite lanes included, as outside a block's part),
+    /// stored values half beaten and half not, reached and empty lanes, and
+    /// ties (equal distances never win).
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn sse2_and_scalar_stamping_agree() {
+        let mut seed = 0x0123_4567_89ab_cdefu64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        let mut f = move || (next() >> 40) as f32 / (1u64 << 24) as f32;
+        for round in 0..20_000u32 {
+            let mut dist2: Vec<f32> = (0..8).map(|_| 3.0 * f()).collect();
+            let mut distance: Vec<f32> = (0..8).map(|_| f() - 0.5).collect();
+            let sample: Vec<u32> = (0..8)
+                .map(|i| if (round >> i) & 1 == 0 { u32::MAX } else { i })
+                .collect();
+            for t in 0..8 {
+                if sample[t] == u32::MAX {
+                    (dist2[t], distance[t]) = (f32::INFINITY, 0.0);
+                }
+            }
+            let mut x2 = [f(), f(), f(), f()];
+            if round % 5 == 0 {
+                x2[(round / 5 % 4) as usize] = f32::INFINITY;
+            }
+            let xd = [f() - 0.5, f() - 0.5, f() - 0.5, f() - 0.5];
+            let (y2, z2, yd, zd) = (f(), f(), f() - 0.5, f() - 0.5);
+            let row = (round % 5) as usize;
+            if round % 7 == 0 {
+                dist2[row] = (x2[0] + y2) + z2; // a tie: the stored sample stays
+            }
+            let st = Stamp {
+                x2: &x2,
+                y2,
+                z2,
+                xd: &xd,
+                yd,
+                zd,
+                id: 1000 + round,
+            };
+            let (mut a, mut b) = (
+                (dist2.clone(), distance.clone(), sample.clone()),
+                (dist2, distance, sample),
+            );
+            let ra = stamp_window_sse2(
+                &mut BrickColumns {
+                    dist2: &mut a.0,
+                    distance: &mut a.1,
+                    sample: &mut a.2,
+                },
+                row,
+                st,
+            );
+            let rb = stamp_window_scalar(
+                &mut BrickColumns {
+                    dist2: &mut b.0,
+                    distance: &mut b.1,
+                    sample: &mut b.2,
+                },
+                row,
+                st,
+            );
+            assert_eq!(ra, rb, "round {round}");
+            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&a.0), bits(&b.0), "round {round}");
+            assert_eq!(bits(&a.1), bits(&b.1), "round {round}");
+            assert_eq!(a.2, b.2, "round {round}");
+        }
     }
 
     #[test]

@@ -41,7 +41,7 @@ fn errors_grow_as_the_budget_shrinks() {
             (mesh.faces.len(), r.symmetric.mean)
         })
         .collect();
-    let cube = m.grid.cube as f64;
+    let cube = m.grid().cube() as f64;
     assert!(rows[0].1 < 0.5 * cube, "{rows:?}");
     assert!(rows[0].1 <= rows[1].1 && rows[1].1 <= rows[2].1, "{rows:?}");
     assert!(rows[2].0 < rows[1].0);

@@ -272,12 +272,9 @@ fn continuous_lod(
     let written = lodkit_mco::write_scans(&out.join("scans"), name, &scans)?;
     step.finish();
     let step = ui.spinner("building the marching cube octree");
-    let mut model = lodkit_mco::build_from_range_images(&scans, &lodkit_mco::Options::default())?;
-    // The build time is the model file's one varying field: zero it so
-    // `build` stays byte-identical (`lodkit mco build` keeps it).
-    model.stats.build_seconds = 0.0;
+    let model = lodkit_mco::build_from_range_images(&scans, &lodkit_mco::Options::default())?;
     let mco_file = format!("{name}.mco");
-    lodkit_mco::model_file::save(&out.join(&mco_file), &model)?;
+    model.save(&out.join(&mco_file))?;
     step.finish();
     let step = ui.spinner("measuring extractions");
     let rows = extraction_errors(&model, mesh, &[50.0, 10.0, 1.0], Some(samples))?;
