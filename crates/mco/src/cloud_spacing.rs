@@ -124,6 +124,8 @@ pub fn kth_neighbour_distances(points: &[Vec3], step: usize, k: usize) -> Option
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rand_xoshiro::Xoshiro256PlusPlus;
+    use rand_xoshiro::rand_core::{Rng, SeedableRng};
 
     /// The k-th distances as sorting all distances finds them.
     fn brute(points: &[Vec3], step: usize, k: usize) -> Vec<f32> {
@@ -164,13 +166,8 @@ mod tests {
 
     #[test]
     fn grid_neighbours_equal_brute_force_and_the_kd_tree() {
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(0x9e37_79b9_7f4a_7c15);
+        let mut next = || (rng.next_u64() >> 40) as f32 / (1u64 << 24) as f32;
         // A sphere's surface, a flat square with duplicates, and a few
         // scattered points (large rings).
         let sphere: Vec<Vec3> = (0..1200)

@@ -459,6 +459,8 @@ fn load(path: &Path) -> Result<McoModel> {
 mod tests {
     use super::*;
     use crate::pipeline::{Options, build_from_mesh};
+    use rand_xoshiro::Xoshiro256PlusPlus;
+    use rand_xoshiro::rand_core::{Rng, SeedableRng};
 
     fn model() -> McoModel {
         build_from_mesh(
@@ -514,13 +516,8 @@ mod tests {
     fn mutated_files_never_panic() {
         let m = model();
         let bytes = encode(&m);
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
-        };
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(0x2545_f491_4f6c_dd1d);
+        let mut next = || rng.next_u64();
         let mut idx = Vec::new();
         for _ in 0..3000 {
             let mut b = bytes.clone();

@@ -71,17 +71,14 @@ pub fn cell(keys: &[u64], i: u32) -> [u32; 3] {
 mod tests {
     use super::*;
     use crate::lattice::pack;
+    use rand_xoshiro::Xoshiro256PlusPlus;
+    use rand_xoshiro::rand_core::{Rng, SeedableRng};
     use std::collections::HashMap;
 
     #[test]
     fn merge_finds_the_same_neighbours_as_a_map() {
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut next = |m: u64| {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed % m) as u32
-        };
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(0x2545_f491_4f6c_dd1d);
+        let mut next = |m: u64| (rng.next_u64() % m) as u32;
         let mut keys: Vec<u64> = (0..3000)
             .map(|_| pack(next(20), next(20), next(20)))
             .collect();

@@ -565,6 +565,8 @@ pub fn build_from_conf(conf: &Path, opts: &Options) -> Result<McoModel> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rand_xoshiro::Xoshiro256PlusPlus;
+    use rand_xoshiro::rand_core::{Rng, SeedableRng};
 
     /// The median as sorting finds it.
     fn sorted_median(mut v: Vec<f32>) -> Option<f32> {
@@ -575,13 +577,8 @@ mod tests {
 
     #[test]
     fn radix_median_equals_the_sorted_median() {
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
-        };
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(0x2545_f491_4f6c_dd1d);
+        let mut next = || rng.next_u64();
         for n in [1usize, 2, 3, 10, 1001, 20_000] {
             // Lengths around one value (one bucket) and spread widely, with
             // duplicates, zeros, negatives and non-finite values mixed in.

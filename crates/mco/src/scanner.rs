@@ -26,6 +26,8 @@ use std::path::{Path, PathBuf};
 use glam::{Mat3, Quat, Vec3};
 use lodkit_mesh::{Pose, RangeImage, TriMesh};
 use parry3d::query::{Ray, RayCast};
+use rand_xoshiro::Xoshiro256PlusPlus;
+use rand_xoshiro::rand_core::{Rng, SeedableRng};
 
 use crate::{Error, Result};
 
@@ -218,18 +220,17 @@ pub fn write_scans(dir: &Path, stem: &str, scans: &[RangeImage]) -> Result<Vec<P
     Ok(paths)
 }
 
-/// Box–Muller normal deviates from a xorshift generator.
-struct Gauss(u64);
+/// Box–Muller normal deviates from a seeded xoshiro256++ generator.
+struct Gauss(Xoshiro256PlusPlus);
 
 impl Gauss {
     fn new(seed: u64) -> Self {
-        Gauss(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
+        Gauss(Xoshiro256PlusPlus::seed_from_u64(seed))
     }
+    /// Uniform in (0, 1): 24 random bits, centred in their interval, so
+    /// `ln` never sees 0.
     fn uniform(&mut self) -> f32 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        ((self.0 >> 40) as f32 + 0.5) / (1u64 << 24) as f32
+        ((self.0.next_u64() >> 40) as f32 + 0.5) / (1u64 << 24) as f32
     }
     fn next(&mut self) -> f32 {
         let (u, v) = (self.uniform(), self.uniform());

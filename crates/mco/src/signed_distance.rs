@@ -600,6 +600,8 @@ impl SignedDistanceField {
 mod tests {
     use super::*;
     use lodkit_mesh::Aabb;
+    use rand_xoshiro::Xoshiro256PlusPlus;
+    use rand_xoshiro::rand_core::{Rng, SeedableRng};
     use std::collections::HashMap;
 
     /// The stamping rule written plainly: every sample visits its 64
@@ -630,13 +632,8 @@ mod tests {
         out
     }
 
-    fn random_samples(seed: &mut u64, count: usize, size: f32) -> PointCloud {
-        let mut next = || {
-            *seed ^= *seed << 13;
-            *seed ^= *seed >> 7;
-            *seed ^= *seed << 17;
-            (*seed >> 40) as f32 / (1u64 << 24) as f32
-        };
+    fn random_samples(rng: &mut Xoshiro256PlusPlus, count: usize, size: f32) -> PointCloud {
+        let mut next = || (rng.next_u64() >> 40) as f32 / (1u64 << 24) as f32;
         let mut s = PointCloud::default();
         for _ in 0..count {
             let p = Vec3::new(next(), next(), next()) * size;
@@ -649,7 +646,7 @@ mod tests {
 
     #[test]
     fn bricks_hold_exactly_the_closest_sample_of_every_vertex() {
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut seed = Xoshiro256PlusPlus::seed_from_u64(0x9e37_79b9_7f4a_7c15);
         // Spread over several bricks (20 cubes ≈ 3 bricks a side), with
         // duplicates so that ties occur.
         let mut s = random_samples(&mut seed, 3000, 1.0);
@@ -709,13 +706,8 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn sse2_and_scalar_stamping_agree() {
-        let mut seed = 0x0123_4567_89ab_cdefu64;
-        let mut next = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
-        };
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(0x0123_4567_89ab_cdef);
+        let mut next = move || rng.next_u64();
         let mut f = move || (next() >> 40) as f32 / (1u64 << 24) as f32;
         for round in 0..20_000u32 {
             let mut dist2: Vec<f32> = (0..8).map(|_| 3.0 * f()).collect();
