@@ -55,8 +55,7 @@
 //! branches (each record is written, and the write position advances by
 //! `3 · (death > k)`; skipped when the whole bucket died by `k`, as at full
 //! size). Buckets are sized so that this one holds at most a sixteenth as
-//! many records as the output, and there are `O(log n)` of them (69 on the
-//! real-scan bunny, 107 on a 1M-triangle blob), so an extraction costs
+//! many records as the output, and there are `O(log n)` of them, so an extraction costs
 //! little more than copying its output (`lodkit bench mco`). The
 //! prefix ends are found through a birth table sampled every
 //! [`BIRTH_STRIDE`] LOD numbers and a short binary search.
@@ -92,11 +91,9 @@ pub(crate) const BIRTH_STRIDE: u32 = 16;
 /// LOD number where it starts draws triangles (and up to `MIN_BUCKET`
 /// records anyway): the one bucket an extraction filters then costs a small
 /// fraction of its output, and the buckets stay few (`O(log)` of the
-/// triangle count; 107 on a 1M-triangle blob) so the copies of the others
-/// stay cheap. Measured on that blob (extraction and memcpy in one
-/// process, best of 30 batches), shares of 8, 16 and 32 cost 1.46, 1.18
-/// and 1.15 times a memcpy at 40k triangles and 1.37, 1.48 and 1.53 at
-/// 10k: 16 is the knee.
+/// triangle count) so the copies of the others stay cheap. 16 is the knee
+/// between the two (`lodkit bench mco`: smaller shares filter more, larger
+/// ones copy more buckets).
 const BUCKET_SHARE: u64 = 16;
 const MIN_BUCKET: u64 = 512;
 

@@ -149,9 +149,7 @@ fn long_edged_faces(m: &TriMesh, cube: f32) -> impl Iterator<Item = (&[u32; 3], 
 /// cube, points on a barycentric grid of half a cube, with normals
 /// interpolated from the area-weighted vertex normals. Beyond the thesis
 /// (which samples vertices only): a mesh with long edges would otherwise
-/// leave cubes the surface crosses with no sample near, hence holes (14
-/// hole edges on the closed bunny at the default resolution, none with
-/// this).
+/// leave cubes the surface crosses with no sample near, hence holes.
 /// `normals` are the mesh's vertex normals.
 pub(crate) fn densify_mesh_samples(m: &TriMesh, normals: &[Vec3], cube: f32, s: &mut PointCloud) {
     let out_normals = s.normals.get_or_insert_default();

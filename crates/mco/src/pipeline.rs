@@ -104,12 +104,10 @@ fn median(v: Vec<f32>) -> Option<f32> {
 /// they come in. On a square lattice (a cloud taken from a range image) the
 /// four nearest are the lattice neighbours, so this is the lattice step —
 /// the range-image rule. On irregular samples it is close to the median
-/// edge of their triangulation — the mesh rule (0.97× on `shapes::blob`'s
-/// vertices at 20k and 320k points). The nearest neighbour alone is the
-/// shortest of a point's edges: 0.81× the median edge on those vertices,
-/// which built a 1.22× finer lattice (1.48× the octree nodes) for a cloud
-/// than for the mesh of the same points, no better closed (no hole edges
-/// at either lattice on `blob`) and half again the build time.
+/// edge of their triangulation — the mesh rule. The nearest neighbour
+/// alone is the shortest of a point's edges, which would build a finer
+/// lattice for a cloud than for the mesh of the same points, no better
+/// closed and slower.
 pub(crate) const CLOUD_SPACING_NEIGHBOUR: usize = 4;
 
 /// A borrowed input model: what the build reads, without copying a mesh

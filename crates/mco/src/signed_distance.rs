@@ -12,26 +12,20 @@
 //! - **Sparse band, no search structure.** Each sample *stamps* the 4×4×4
 //!   lattice vertices of its cube and the 26 cubes around it, and a vertex
 //!   keeps the closest sample seen, so the field is a band about two cubes
-//!   wide around the data (never a dense n³ grid). Stamping only the
-//!   sample's own cube (8 corners) was tried first: a cube the surface
-//!   merely clips often holds no sample, misses a corner and leaves a hole
-//!   (half the edges of a sphere at resolution 24 were on holes). Every
-//!   sample within one cube size of a vertex is a candidate — the only ones
-//!   the thesis's "closest range point" can sensibly be for a vertex that
-//!   marching cubes will use. Stamping needs no kd-tree and makes adding a
-//!   new range image touch only the cubes around its samples (the
-//!   incremental API).
+//!   wide around the data (never a dense n³ grid). The 26 neighbours are
+//!   needed: a cube the surface merely clips often holds no sample, and
+//!   stamping only a sample's own 8 corners leaves such cubes with a
+//!   missing corner, hence holes. Every sample within one cube size of a
+//!   vertex is a candidate — the only ones the thesis's "closest range
+//!   point" can sensibly be for a vertex that marching cubes will use.
+//!   Stamping needs no kd-tree and makes adding a new range image touch
+//!   only the cubes around its samples (the incremental API).
 //! - **Storage: a sparse grid of dense 8³ bricks** (see
-//!   [`SignedDistanceField`]). A hash map per lattice vertex was the first
-//!   layout; it cost 64 map operations per sample and was most of the
-//!   build's time. Bricks need 1–8 map lookups per sample and turn the 64
-//!   updates into array writes: the sample's 4 vertices of a brick row are
-//!   compared at once (one SSE2 window), and a window the sample wins is
-//!   updated with blends. Tried and dropped: the whole 8-vertex row per
-//!   compare (twice the lanes, no faster), two aligned 4-vertex halves per
-//!   row instead of one window at the block's offset (7% slower), and
-//!   keeping the last sample's brick numbers to skip the map lookups (no
-//!   measurable gain).
+//!   [`SignedDistanceField`]): 1–8 map lookups per sample instead of one
+//!   per lattice vertex (64), and the 64 updates become array writes. A
+//!   sample's 4 vertices of a brick row are compared at once (one SSE2
+//!   window, [`stamp_window`]), and a window the sample wins is updated
+//!   with blends.
 //! - **Ties** (two samples at exactly the same distance) keep the sample
 //!   added first, so the field does not depend on hash order and adding
 //!   scans one at a time gives the same field as adding them together.
@@ -61,11 +55,9 @@ pub struct FieldVertex {
 /// be defined when the rule is on (see [`SignedDistanceField::slot_defined`]). The
 /// default cube is twice the sample spacing, so on continuous data some
 /// sample is always within half a cube tangentially; 1.5 leaves room for
-/// irregular sampling. Measured on the bunny from its 10 real scans: the
-/// symmetric mean error drops from 0.178 mm to 0.124 mm (spurious sheets
-/// past the scans' edges are gone). On closed meshes the rule opens holes
-/// at thin features (the closed bunny: 52 boundary edges instead of 14 at
-/// full resolution), so mesh inputs build without it.
+/// irregular sampling. On scans the rule removes the spurious sheets past
+/// their edges; on closed meshes it would open holes at thin features, so
+/// mesh inputs build without it.
 pub const TANGENTIAL_LIMIT: f32 = 1.5;
 
 /// Neutral colour for inputs without colours.
@@ -209,7 +201,7 @@ fn stamp_window_sse2(brick: &mut BrickColumns, row: usize, st: Stamp) -> (u32, u
 /// once a sample stamps one of its vertices and then holds all 512 of its
 /// vertices densely (12 bytes each: `dist2`, `distance`, winning sample).
 /// A small map finds a brick by its key. Stamping a sample's `4³` block
-/// touches 1–8 bricks (2.6 on average), so the map is consulted a few
+/// touches 1–8 bricks, so the map is consulted a few
 /// times per sample instead of 64 times, and the 64 vertex updates are
 /// plain array writes. The winning sample's normal and colour are kept
 /// once per sample and read only for the vertices marching cubes uses.
