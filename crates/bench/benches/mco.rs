@@ -18,7 +18,7 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use lodkit_mco::pipeline::{Options, build_from_mesh, build_from_models};
+use lodkit_mco::{Options, build_from_mesh, build_from_models};
 use lodkit_mesh::{Model, PointCloud, shapes};
 
 /// Blob sizes in triangles: about 20k, 80k, 320k and 1M points.

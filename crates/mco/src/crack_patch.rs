@@ -39,12 +39,12 @@
 
 use glam::Vec3;
 
+use crate::lattice::{KEY_BITS, KeyMap, pack, unpack};
 use crate::marching_cubes::{CubeEdges, NO_VERTEX, corner_key, edge_key, node_triangles};
-use crate::mc_table::{EDGES, FACES, Face, face_edges, face_segments_fixed};
+use crate::marching_cubes_cases::{EDGES, FACES, Face, face_edges, face_segments_fixed};
 use crate::model::{McoModel, Patch};
 use crate::neighbours::{FaceNeighbours, NO_NODE};
 use crate::octree_build::{Level, Tree};
-use crate::signed_distance::{KEY_BITS, KeyMap, pack, unpack};
 
 fn closest_on_segment(p: Vec3, a: Vec3, b: Vec3) -> Vec3 {
     let ab = b - a;
@@ -259,7 +259,7 @@ fn leaf_edge_crosses(tree: &Tree, v: u64, axis: usize) -> bool {
 
 /// Same-level node pairs whose shared face cannot be crack-patched (see
 /// `face_patchable`), and the nodes around unpatchable edges: they must
-/// expand in the same LOD step (see [`crate::priority`]). Call after
+/// expand in the same LOD step (see [`crate::priority_numbering`]). Call after
 /// [`crate::octree_build::assemble`].
 pub fn expand_together(tree: &Tree) -> Vec<(u32, u32)> {
     let mut out = Vec::new();

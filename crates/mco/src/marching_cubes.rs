@@ -9,14 +9,15 @@
 //! colours of the samples are carried to the mesh.
 //!
 //! Each crossing edge gets one vertex, shared by the up to 4 cubes around
-//! it, and the table's face rule ([`crate::mc_table`]) makes neighbouring
+//! it, and the table's face rule ([`crate::marching_cubes_cases`]) makes neighbouring
 //! cubes agree on every shared face: the leaf mesh is watertight wherever
 //! the band is complete.
 
 use glam::Vec3;
 
-use crate::mc_table::{EDGES, TABLE};
-use crate::signed_distance::{BRICK, BRICK_BITS, Grid, KeyMap, SignedDistanceField, pack, unpack};
+use crate::lattice::{BRICK, BRICK_BITS, Grid, KeyMap, pack, unpack};
+use crate::marching_cubes_cases::{EDGES, TABLE};
+use crate::signed_distance::SignedDistanceField;
 
 /// Where a crossing edge's vertex sits, from `v0`: `|d0| / (|d0| + |d1|)`.
 /// Both zero (never for a crossing edge) gives the midpoint.
@@ -37,9 +38,6 @@ pub struct VertexBuffer {
 impl VertexBuffer {
     pub fn len(&self) -> usize {
         self.positions.len()
-    }
-    pub fn is_empty(&self) -> bool {
-        self.positions.is_empty()
     }
     /// Appends a vertex, returning its index.
     pub fn push(&mut self, p: Vec3, n: Vec3, c: [u8; 4]) -> u32 {
@@ -150,6 +148,7 @@ pub fn corner_key(cube: [u32; 3], level: u32, c: u8) -> u64 {
 /// The configuration of leaf cube `cube` (bit v = corner v inside), or
 /// `None` if a corner is missing from the band. Null configurations (0,
 /// 255) are returned too; callers skip them.
+#[cfg(test)]
 pub fn leaf_config(field: &SignedDistanceField, cube: [u32; 3]) -> Option<u8> {
     let [x, y, z] = cube;
     leaf_config_in(field, field.brick_of(x, y, z)?, cube)
@@ -208,7 +207,7 @@ const COLUMN_0: u64 = 0x0101_0101_0101_0101;
 const ROW_0: u64 = 0xFF;
 
 /// The configurations of every leaf cube whose lowest corner lies in
-/// brick `b`, into `out` (one byte per cube, [`crate::signed_distance::local_index`]
+/// brick `b`, into `out` (one byte per cube, [`crate::lattice::local_index`]
 /// order; 0 where the cube has no surface or a corner outside the band),
 /// from the masks of all bricks: 64 cubes (a brick slice) at a time in bit
 /// operations, then one configuration byte per surface cube. The same
@@ -306,6 +305,7 @@ pub fn brick_configs(
 
 /// All leaf cubes with a surface crossing: `(cube key, configuration)`,
 /// sorted by key. Only cubes touching the band are examined.
+#[cfg(test)]
 pub fn leaf_cubes(field: &SignedDistanceField) -> Vec<(u64, u8)> {
     let cells = field.grid.cells();
     let mut out = Vec::new();
@@ -334,6 +334,7 @@ pub fn leaf_cubes(field: &SignedDistanceField) -> Vec<(u64, u8)> {
 /// Creates (or finds) the vertex of every crossing edge of the given leaf
 /// cubes, in cube order then edge order (so vertex numbering is
 /// deterministic). Returns the edge → vertex map.
+#[cfg(test)]
 pub fn leaf_vertices(
     field: &SignedDistanceField,
     cubes: &[(u64, u8)],
@@ -447,6 +448,7 @@ pub fn node_triangles(cfg: u8, edges: &CubeEdges, out: &mut Vec<u32>) {
 }
 
 /// Triangles of one cube: the table's edge triples mapped to vertices.
+#[cfg(test)]
 pub fn cube_triangles(
     cube: [u32; 3],
     level: u32,
@@ -464,6 +466,7 @@ pub fn cube_triangles(
 
 /// Plain (single-level) marching cubes over the band: the full-resolution
 /// mesh, as positions/normals/colours and triangles.
+#[cfg(test)]
 pub fn march(field: &SignedDistanceField) -> (VertexBuffer, Vec<[u32; 3]>) {
     let cubes = leaf_cubes(field);
     let mut vb = VertexBuffer::default();
@@ -480,13 +483,12 @@ pub fn march(field: &SignedDistanceField) -> (VertexBuffer, Vec<[u32; 3]>) {
 mod tests {
     use super::*;
     use crate::signed_distance::FieldVertex;
+    use rand_xoshiro::Xoshiro256PlusPlus;
+    use rand_xoshiro::rand_core::{Rng, SeedableRng};
     use std::collections::HashMap;
 
-    fn rng(seed: &mut u64) -> f32 {
-        *seed ^= *seed << 13;
-        *seed ^= *seed >> 7;
-        *seed ^= *seed << 17;
-        (*seed >> 40) as f32 / (1u64 << 24) as f32
+    fn rng(seed: &mut Xoshiro256PlusPlus) -> f32 {
+        (seed.next_u64() >> 40) as f32 / (1u64 << 24) as f32
     }
 
     /// A field defined on a whole `n³` vertex block from a closure.
@@ -546,7 +548,7 @@ mod tests {
 
     #[test]
     fn random_fields_are_watertight() {
-        let mut seed = 0x1234_5678_9abc_def1u64;
+        let mut seed = Xoshiro256PlusPlus::seed_from_u64(0x1234_5678_9abc_def1);
         for _ in 0..20 {
             let vals: Vec<f32> = (0..8 * 8 * 8).map(|_| rng(&mut seed) - 0.5).collect();
             let field = block_field(8, |x, y, z| vals[(x * 64 + y * 8 + z) as usize]);
@@ -580,8 +582,8 @@ mod tests {
 
     #[test]
     fn brick_configs_equal_cube_by_cube_configs() {
-        let mut seed = 0x51f1_5eed_0d15_ea5eu64;
-        let mut s = crate::signed_distance::Samples::default();
+        let mut seed = Xoshiro256PlusPlus::seed_from_u64(0x51f1_5eed_0d15_ea5e);
+        let mut s = lodkit_mesh::PointCloud::default();
         for _ in 0..4000 {
             let p = Vec3::new(rng(&mut seed), rng(&mut seed), rng(&mut seed));
             let n = Vec3::new(
@@ -590,7 +592,9 @@ mod tests {
                 rng(&mut seed) - 0.5,
             );
             s.positions.push(p);
-            s.normals.push(n.normalize_or(Vec3::Z));
+            s.normals
+                .get_or_insert_default()
+                .push(n.normalize_or(Vec3::Z));
         }
         // Resolution 20: the lattice's last cells end inside a brick; with
         // and without the tangential rule (defined ≠ reached).
@@ -604,7 +608,7 @@ mod tests {
                 .collect();
             let (mut touched, mut surface) = (0, 0);
             for b in 0..field.brick_count() {
-                let mut out = [0u8; crate::signed_distance::BRICK_VOLUME];
+                let mut out = [0u8; crate::lattice::BRICK_VOLUME];
                 let (t, n) = brick_configs(&field, &masks, b, &mut out);
                 touched += t;
                 surface += n;

@@ -13,30 +13,33 @@ use std::path::Path;
 
 use glam::Vec3;
 
+use crate::lattice::{Grid, KEY_BITS};
 use crate::marching_cubes::VertexBuffer;
 use crate::model::{BuildStats, McoModel, Node, Patch};
-use crate::signed_distance::{Grid, KEY_BITS};
 use crate::{Error, Result};
 
 /// File signature.
-pub const MAGIC: [u8; 8] = *b"LODKMCO\0";
+pub(crate) const MAGIC: [u8; 8] = *b"LODKMCO\0";
 /// The format version this code writes and reads.
-pub const VERSION: u32 = 1;
+pub(crate) const VERSION: u32 = 1;
+/// The `.mco` format version this crate writes and reads
+/// (`docs/formats/mco.md`).
+pub const FORMAT_VERSION: u32 = VERSION;
 /// Bytes before the arrays.
-pub const HEADER_BYTES: usize = 8 + 4 + 4 + 12 + 4 + 4 + 4 + 8 + 8 + 8 + 9 * 4;
+pub(crate) const HEADER_BYTES: usize = 8 + 4 + 4 + 12 + 4 + 4 + 4 + 8 + 8 + 8 + 9 * 4;
 /// Bytes per node record.
-pub const NODE_BYTES: usize = 40;
+pub(crate) const NODE_BYTES: usize = 40;
 /// Most triangles a node can have (the table's maximum is 12; the margin
 /// keeps extraction records far below their 16-bit length field).
-pub const MAX_NODE_TRIANGLES: usize = 16;
+pub(crate) const MAX_NODE_TRIANGLES: usize = 16;
 /// Most substitutions one patch can hold (a face has at most 4 crossing
 /// edges per fine node).
-pub const MAX_PATCH_SUBS: usize = 16;
+pub(crate) const MAX_PATCH_SUBS: usize = 16;
 /// Files larger than this are refused before reading.
-pub const MAX_FILE_BYTES: u64 = 16 << 30;
+pub(crate) const MAX_FILE_BYTES: u64 = 16 << 30;
 
 /// Serialises a model (deterministic: the same model gives the same bytes).
-pub fn encode(m: &McoModel) -> Vec<u8> {
+pub(crate) fn encode(m: &McoModel) -> Vec<u8> {
     let v = m.vertices.len();
     let n = m.nodes.len();
     let mut out = Vec::with_capacity(
@@ -52,7 +55,9 @@ pub fn encode(m: &McoModel) -> Vec<u8> {
     put_u32(&mut out, m.grid.depth);
     put_u32(&mut out, m.grid.resolution);
     out.extend_from_slice(&m.stats.input_samples.to_le_bytes());
-    out.extend_from_slice(&m.stats.build_seconds.to_le_bytes());
+    // Offset 48, reserved: always 0, so that the same model gives the same
+    // bytes (files before it held the build's wall time; readers skip it).
+    out.extend_from_slice(&0u64.to_le_bytes());
     out.extend_from_slice(&m.stats.unpatched.to_le_bytes());
     for count in [
         v,
@@ -170,7 +175,7 @@ impl Reader<'_> {
 }
 
 /// Parses `.mco` bytes; the error says what is wrong (no path).
-pub fn decode(bytes: &[u8]) -> std::result::Result<McoModel, String> {
+pub(crate) fn decode(bytes: &[u8]) -> std::result::Result<McoModel, String> {
     if bytes.len() < HEADER_BYTES + 4 {
         return Err(format!(
             "not an .mco file: {} bytes, shorter than the {}-byte header",
@@ -201,8 +206,10 @@ pub fn decode(bytes: &[u8]) -> std::result::Result<McoModel, String> {
     }
     let stats = BuildStats {
         input_samples: r.u64()?,
-        build_seconds: f64::from_bits(r.u64()?),
-        unpatched: r.u64()?,
+        unpatched: {
+            r.u64()?; // reserved (an old file's build time): skipped
+            r.u64()?
+        },
     };
     let mut c = [0usize; 9];
     for x in &mut c {
@@ -386,14 +393,53 @@ fn validate(m: &McoModel) -> std::result::Result<(), String> {
     Ok(())
 }
 
+impl McoModel {
+    /// The model as `.mco` bytes (`docs/formats/mco.md`, version
+    /// [`FORMAT_VERSION`]): deterministic — the same model always gives
+    /// the same bytes (no time stamps, no paths). Size: about 28 bytes per
+    /// vertex, 48 per node and 4 per stored triangle index. `O(size)`.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        encode(self)
+    }
+
+    /// Reads a model from `.mco` bytes (a file's contents, or an
+    /// in-memory buffer such as a download).
+    ///
+    /// Errors ([`Error::Format`], one line): wrong signature or version,
+    /// a size that differs from what the header's counts imply, a
+    /// checksum mismatch, or any index out of range. Every check runs
+    /// before the model is used, so a model that loads can never make a
+    /// cut panic or read out of bounds; untrusted bytes are safe. Memory
+    /// is allocated only after the size check: at most a small multiple
+    /// of `bytes.len()`. Cost: `O(size)`, plus building the extraction
+    /// tables (`O(n log n)` in the triangles).
+    pub fn from_bytes(bytes: &[u8]) -> Result<McoModel> {
+        decode(bytes).map_err(Error::Format)
+    }
+
+    /// Writes the model to `path` as `.mco` bytes ([`McoModel::to_bytes`]),
+    /// atomically: a failed write leaves no partial file. Errors name the
+    /// file.
+    pub fn save(&self, path: &Path) -> Result<()> {
+        save(path, self)
+    }
+
+    /// Reads a `.mco` file ([`McoModel::from_bytes`]); files over 16 GiB
+    /// are refused before reading. Errors ([`Error::File`]) name the file
+    /// and say what is wrong, one line.
+    pub fn load(path: &Path) -> Result<McoModel> {
+        load(path)
+    }
+}
+
 /// Writes `model` to `path` atomically.
-pub fn save(path: &Path, model: &McoModel) -> Result<()> {
+fn save(path: &Path, model: &McoModel) -> Result<()> {
     lodkit_mesh::io::write_atomic(path, &encode(model))?;
     Ok(())
 }
 
 /// Reads a `.mco` file; errors name the file.
-pub fn load(path: &Path) -> Result<McoModel> {
+fn load(path: &Path) -> Result<McoModel> {
     let named = |message: String| Error::File {
         path: path.display().to_string(),
         message,
@@ -413,6 +459,8 @@ pub fn load(path: &Path) -> Result<McoModel> {
 mod tests {
     use super::*;
     use crate::pipeline::{Options, build_from_mesh};
+    use rand_xoshiro::Xoshiro256PlusPlus;
+    use rand_xoshiro::rand_core::{Rng, SeedableRng};
 
     fn model() -> McoModel {
         build_from_mesh(
@@ -468,13 +516,8 @@ mod tests {
     fn mutated_files_never_panic() {
         let m = model();
         let bytes = encode(&m);
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
-        };
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(0x2545_f491_4f6c_dd1d);
+        let mut next = || rng.next_u64();
         let mut idx = Vec::new();
         for _ in 0..3000 {
             let mut b = bytes.clone();

@@ -7,13 +7,15 @@
 //! question on large models (the maps outgrow the caches), and those two
 //! stages were a fifth of the build at a million points.
 //!
-//! A level's keys ([`crate::signed_distance::pack`]: `x | y << 20 | z <<
+//! A level's keys ([`crate::lattice::pack`]: `x | y << 20 | z <<
 //! 40`) are sorted, so the keys of the `+axis` neighbours, `key + stride`,
 //! are sorted too: one merge of the level with itself per axis finds every
 //! `+axis` neighbour (and so every `−axis` one) in linear time, reading
 //! both sequences front to back.
 
-use crate::signed_distance::{KEY_BITS, unpack};
+use crate::lattice::KEY_BITS;
+#[cfg(test)]
+use crate::lattice::unpack;
 
 /// Marks a face without a neighbour in [`FaceNeighbours`].
 pub const NO_NODE: u32 = u32::MAX;
@@ -54,12 +56,13 @@ pub fn face_neighbours(keys: &[u64]) -> Vec<FaceNeighbours> {
 /// The node of `keys` (sorted) at `cell`, if any, by binary search: for
 /// the rare lookups the face tables do not answer.
 pub fn find(keys: &[u64], cell: [u32; 3]) -> Option<u32> {
-    let k = crate::signed_distance::pack(cell[0], cell[1], cell[2]);
+    let k = crate::lattice::pack(cell[0], cell[1], cell[2]);
     keys.binary_search(&k).ok().map(|i| i as u32)
 }
 
 /// Coordinates of node `i` of `keys`.
 #[inline]
+#[cfg(test)]
 pub fn cell(keys: &[u64], i: u32) -> [u32; 3] {
     unpack(keys[i as usize])
 }
@@ -67,18 +70,15 @@ pub fn cell(keys: &[u64], i: u32) -> [u32; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::signed_distance::pack;
+    use crate::lattice::pack;
+    use rand_xoshiro::Xoshiro256PlusPlus;
+    use rand_xoshiro::rand_core::{Rng, SeedableRng};
     use std::collections::HashMap;
 
     #[test]
     fn merge_finds_the_same_neighbours_as_a_map() {
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut next = |m: u64| {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed % m) as u32
-        };
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(0x2545_f491_4f6c_dd1d);
+        let mut next = |m: u64| (rng.next_u64() % m) as u32;
         let mut keys: Vec<u64> = (0..3000)
             .map(|_| pack(next(20), next(20), next(20)))
             .collect();

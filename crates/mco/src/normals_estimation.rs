@@ -26,14 +26,13 @@ use glam::{Mat3, Vec3};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use lodkit_mesh::{PointCloud, RangeImage, TriMesh};
 
-use crate::signed_distance::Samples;
 use crate::{Error, Result};
 
 /// Neighbours used by the PCA normal estimate (Hoppe et al. use 10–20).
 pub const PCA_NEIGHBOURS: usize = 12;
 
 /// Oriented samples of a range image (Fig. 4.2), in world space.
-pub fn range_image_samples(r: &RangeImage) -> Samples {
+pub fn range_image_samples(r: &RangeImage) -> PointCloud {
     let (rows, cols) = (r.rows, r.cols);
     let at = |row: isize, col: isize| -> Option<Vec3> {
         if row < 0 || col < 0 || row as usize >= rows || col as usize >= cols {
@@ -70,12 +69,13 @@ pub fn range_image_samples(r: &RangeImage) -> Samples {
     let facing = raw.iter().filter(|(_, n)| n.z > 0.0).count();
     let flip = if facing * 2 < raw.len() { -1.0 } else { 1.0 };
     let pose = r.pose.unwrap_or(lodkit_mesh::Pose::IDENTITY);
-    Samples {
+    PointCloud {
         positions: raw.iter().map(|&(i, _)| pose.apply(r.points[i])).collect(),
-        normals: raw
-            .iter()
-            .map(|&(_, n)| pose.apply_vector(n * flip).normalize())
-            .collect(),
+        normals: Some(
+            raw.iter()
+                .map(|&(_, n)| pose.apply_vector(n * flip).normalize())
+                .collect(),
+        ),
         colors: r
             .colors
             .as_ref()
@@ -86,12 +86,12 @@ pub fn range_image_samples(r: &RangeImage) -> Samples {
 /// Oriented samples of a mesh: referenced vertices with area-weighted
 /// normals. Vertices whose normal is zero (only degenerate faces) are
 /// dropped.
-pub fn mesh_samples(m: &TriMesh) -> Samples {
+pub fn mesh_samples(m: &TriMesh) -> PointCloud {
     mesh_samples_with(m, &lodkit_mesh::normals::vertex_normals(m))
 }
 
 /// [`mesh_samples`] with the mesh's vertex normals already computed.
-pub(crate) fn mesh_samples_with(m: &TriMesh, normals: &[Vec3]) -> Samples {
+pub(crate) fn mesh_samples_with(m: &TriMesh, normals: &[Vec3]) -> PointCloud {
     let mut used = vec![false; m.positions.len()];
     for f in &m.faces {
         for &i in f {
@@ -103,9 +103,9 @@ pub(crate) fn mesh_samples_with(m: &TriMesh, normals: &[Vec3]) -> Samples {
     let keep: Vec<usize> = (0..m.positions.len())
         .filter(|&i| used[i] && normals[i].length_squared() > 0.5 && m.positions[i].is_finite())
         .collect();
-    Samples {
+    PointCloud {
         positions: keep.iter().map(|&i| m.positions[i]).collect(),
-        normals: keep.iter().map(|&i| normals[i]).collect(),
+        normals: Some(keep.iter().map(|&i| normals[i]).collect()),
         colors: m
             .colors
             .as_ref()
@@ -113,25 +113,10 @@ pub(crate) fn mesh_samples_with(m: &TriMesh, normals: &[Vec3]) -> Samples {
     }
 }
 
-/// Mesh samples dense enough for a lattice of cube `cube`: the vertices
-/// (as [`mesh_samples`]) plus, on every triangle with an edge longer than a
-/// cube, points on a barycentric grid of half a cube, with normals
-/// interpolated from the area-weighted vertex normals. Beyond the thesis
-/// (which samples vertices only): a mesh with long edges would otherwise
-/// leave cubes the surface crosses with no sample near, hence holes (14
-/// hole edges on the closed bunny at the default resolution, none with
-/// this).
-pub fn mesh_samples_for_cube(m: &TriMesh, cube: f32) -> Samples {
-    let normals = lodkit_mesh::normals::vertex_normals(m);
-    let mut s = mesh_samples_with(m, &normals);
-    densify_mesh_samples(m, &normals, cube, &mut s);
-    s
-}
-
-/// Turns `s`, the [`mesh_samples`] of `m`, into its
-/// [`mesh_samples_for_cube`] (appends the triangle samples), computing the
-/// vertex normals once more only if some triangle needs them.
-pub fn densify_mesh_samples_of(m: &TriMesh, cube: f32, s: &mut Samples) {
+/// Makes `s`, the [`mesh_samples`] of `m`, dense enough for cube `cube`
+/// ([`densify_mesh_samples`]), computing the vertex normals once more only
+/// if some triangle needs them.
+pub fn densify_mesh_samples_of(m: &TriMesh, cube: f32, s: &mut PointCloud) {
     if long_edged_faces(m, cube).next().is_none() {
         return;
     }
@@ -159,9 +144,15 @@ fn long_edged_faces(m: &TriMesh, cube: f32) -> impl Iterator<Item = (&[u32; 3], 
     })
 }
 
-/// Appends the triangle samples of [`mesh_samples_for_cube`] to `s`, with
-/// `normals` the mesh's vertex normals.
-pub(crate) fn densify_mesh_samples(m: &TriMesh, normals: &[Vec3], cube: f32, s: &mut Samples) {
+/// Makes mesh samples `s` dense enough for a lattice of cube `cube`: to
+/// the vertices (as [`mesh_samples`]) it appends, on every triangle with an edge longer than a
+/// cube, points on a barycentric grid of half a cube, with normals
+/// interpolated from the area-weighted vertex normals. Beyond the thesis
+/// (which samples vertices only): a mesh with long edges would otherwise
+/// leave cubes the surface crosses with no sample near, hence holes.
+/// `normals` are the mesh's vertex normals.
+pub(crate) fn densify_mesh_samples(m: &TriMesh, normals: &[Vec3], cube: f32, s: &mut PointCloud) {
+    let out_normals = s.normals.get_or_insert_default();
     for (f, [a, b, c], longest) in long_edged_faces(m, cube) {
         let [na, nb, nc] = f.map(|i| normals[i as usize]);
         // Half-cube spacing, at most 64 subdivisions per side (bounded work).
@@ -183,7 +174,7 @@ pub(crate) fn densify_mesh_samples(m: &TriMesh, normals: &[Vec3], cube: f32, s: 
                     continue;
                 }
                 s.positions.push(a * u + b * v + c * w);
-                s.normals.push(nrm);
+                out_normals.push(nrm);
                 if let (Some(cs), Some(col)) = (s.colors.as_mut(), color) {
                     cs.push(col);
                 }
@@ -194,7 +185,7 @@ pub(crate) fn densify_mesh_samples(m: &TriMesh, normals: &[Vec3], cube: f32, s: 
 
 /// Oriented samples of a point cloud: its own normals when it has them,
 /// else PCA normals oriented consistently (see the module docs).
-pub fn point_cloud_samples(pc: &PointCloud) -> Result<Samples> {
+pub fn point_cloud_samples(pc: &PointCloud) -> Result<PointCloud> {
     let normals = match &pc.normals {
         Some(n) => n.iter().map(|v| v.normalize_or_zero()).collect(),
         None => estimate_normals(&pc.positions, PCA_NEIGHBOURS)?,
@@ -202,9 +193,9 @@ pub fn point_cloud_samples(pc: &PointCloud) -> Result<Samples> {
     let keep: Vec<usize> = (0..pc.positions.len())
         .filter(|&i| normals[i].length_squared() > 0.5 && pc.positions[i].is_finite())
         .collect();
-    Ok(Samples {
+    Ok(PointCloud {
         positions: keep.iter().map(|&i| pc.positions[i]).collect(),
-        normals: keep.iter().map(|&i| normals[i]).collect(),
+        normals: Some(keep.iter().map(|&i| normals[i]).collect()),
         colors: pc
             .colors
             .as_ref()
@@ -380,7 +371,7 @@ mod tests {
             "{}",
             s.len()
         );
-        for n in &s.normals {
+        for n in s.normals.as_deref().unwrap() {
             assert!((n.z - 1.0).abs() < 1e-5, "{n}");
         }
     }

@@ -38,14 +38,15 @@
 //!   midpoint (or the edge's midpoint when the midpoint's sign is unknown),
 //!   the original algorithm's choice.
 
+use crate::lattice::{KeyMap, pack, unpack};
 use crate::marching_cubes::{
     BandSigns, Corner, CubeEdges, NO_VERTEX, VertexBuffer, blend, corner_key, edge_key,
     leaf_vertices_by_cube, node_triangles,
 };
-use crate::mc_table::EDGES;
+use crate::marching_cubes_cases::EDGES;
 use crate::model::{McoModel, Node};
 use crate::neighbours::{FaceNeighbours, face_neighbours};
-use crate::signed_distance::{KeyMap, SignedDistanceField, pack, unpack};
+use crate::signed_distance::SignedDistanceField;
 use crate::{Error, Result};
 
 /// One level of the octree under construction.
@@ -129,7 +130,7 @@ fn offset_key(v: u64, d: [i32; 3], step: u32) -> Option<u64> {
     let mut o = [0u32; 3];
     for i in 0..3 {
         let x = c[i] as i64 + d[i] as i64 * step as i64;
-        if !(0..1 << crate::signed_distance::KEY_BITS).contains(&x) {
+        if !(0..1 << crate::lattice::KEY_BITS).contains(&x) {
             return None;
         }
         o[i] = x as u32;
@@ -143,12 +144,8 @@ const UNSET: Corner = Corner {
     at: u64::MAX,
 };
 
-/// Builds every level from the leaf cubes up to the single root.
-pub fn build_levels<'f>(field: &'f SignedDistanceField, leaves: &[(u64, u8)]) -> Result<Tree<'f>> {
-    build_levels_with(field, BandSigns::new(field), leaves)
-}
-
-/// [`build_levels`] with the band's sides already at hand.
+/// Builds every level from the leaf cubes up to the single root, with the
+/// band's sides `signs` already at hand.
 pub fn build_levels_with<'f>(
     field: &'f SignedDistanceField,
     signs: BandSigns,
@@ -352,7 +349,7 @@ pub fn is_null(cfg: u8) -> bool {
 
 /// Numbers the nodes breadth-first from the root (children contiguous) and
 /// fills the model's node, triangle, metric and balance arrays. The LOD
-/// array and crack patches are filled by [`crate::priority`] and
+/// array and crack patches are filled by [`crate::priority_numbering`] and
 /// [`crate::crack_patch`].
 pub fn assemble(tree: &mut Tree) -> McoModel {
     let depth = tree.levels.len() - 1;

@@ -2,9 +2,9 @@
 //! incremental builder (range images added one at a time).
 //!
 //! Stages, in order: oriented samples ([`crate::normals_estimation`]) →
-//! signed-distance band ([`crate::signed_distance`]) → leaf marching cubes
+//! lattice ([`crate::lattice`]) → signed-distance band ([`crate::signed_distance`]) → leaf marching cubes
 //! ([`crate::marching_cubes`]) → octree ([`crate::octree_build`]) →
-//! priority numbering ([`crate::priority`]) → crack patches
+//! priority numbering ([`crate::priority_numbering`]) → crack patches
 //! ([`crate::crack_patch`]).
 //!
 //! **Default resolution** (§4.4): the thesis found that cubes finer than
@@ -24,29 +24,38 @@
 //! rebuilt by [`IncrementalBuilder::build`] (bottom-up, `O(n log n)`).
 
 use std::num::NonZero;
-use std::time::Instant;
+use std::path::Path;
 
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
-use lodkit_mesh::{Aabb, Model, RangeImage, TriMesh};
+use lodkit_mesh::{Aabb, Model, PointCloud, RangeImage, TriMesh};
 
+use crate::lattice::{BRICK, BRICK_BITS, BRICK_VOLUME, Grid, local_index, pack};
 use crate::marching_cubes::{BandSigns, BrickMasks, brick_configs, leaf_config_in};
 use crate::model::McoModel;
 use crate::normals_estimation::{mesh_samples, point_cloud_samples, range_image_samples};
-use crate::signed_distance::{
-    BRICK, BRICK_BITS, BRICK_VOLUME, Grid, Samples, SignedDistanceField, local_index, pack,
-};
+use crate::signed_distance::SignedDistanceField;
 use crate::{Error, Result};
 
 /// Build options.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Options {
-    /// Leaf cubes along the longest axis; `None` = twice the sample spacing
-    /// (see the module docs).
+    /// Leaf cubes along the longest axis of the inputs' bounding box,
+    /// `2..=`[`crate::MAX_RESOLUTION`]; `None` (the default) = a cube
+    /// edge of twice the inputs' sample spacing, clamped to 8..=1024 (see
+    /// the module docs). Memory and time grow with the surface's area in
+    /// cubes, about the square of the resolution.
     pub resolution: Option<u32>,
 }
 
-/// Oriented samples of any model (see [`crate::normals_estimation`]).
-pub fn samples_of(model: &Model) -> Result<Samples> {
+/// Oriented samples of any model: positions with unit outward normals
+/// (always `Some`) and the model's colours if it has them, as the build
+/// adds them. Range images: Fig. 4.2 normals from the lattice
+/// neighbours, pose applied; meshes: the referenced vertices with
+/// area-weighted normals; point clouds: their own normals, else PCA
+/// normals oriented consistently. Samples without a usable normal are
+/// dropped. Errors: a point cloud without normals that has too few points
+/// to estimate them. `O(n log n)` for bare point clouds, `O(n)` otherwise.
+pub fn samples_of(model: &Model) -> Result<PointCloud> {
     input_samples(Input::from(model))
 }
 
@@ -95,25 +104,18 @@ fn median(v: Vec<f32>) -> Option<f32> {
 /// they come in. On a square lattice (a cloud taken from a range image) the
 /// four nearest are the lattice neighbours, so this is the lattice step —
 /// the range-image rule. On irregular samples it is close to the median
-/// edge of their triangulation — the mesh rule (0.97× on `shapes::blob`'s
-/// vertices at 20k and 320k points). The nearest neighbour alone is the
-/// shortest of a point's edges: 0.81× the median edge on those vertices,
-/// which built a 1.22× finer lattice (1.48× the octree nodes) for a cloud
-/// than for the mesh of the same points, no better closed (no hole edges
-/// at either lattice on `blob`) and half again the build time.
-pub const CLOUD_SPACING_NEIGHBOUR: usize = 4;
-
-/// The input's sample spacing (object units), if it can be measured.
-pub fn sample_spacing(model: &Model) -> Option<f32> {
-    spacing_of(Input::from(model))
-}
+/// edge of their triangulation — the mesh rule. The nearest neighbour
+/// alone is the shortest of a point's edges, which would build a finer
+/// lattice for a cloud than for the mesh of the same points, no better
+/// closed and slower.
+pub(crate) const CLOUD_SPACING_NEIGHBOUR: usize = 4;
 
 /// A borrowed input model: what the build reads, without copying a mesh
 /// into a [`Model`].
 #[derive(Debug, Clone, Copy)]
 enum Input<'a> {
     Mesh(&'a TriMesh),
-    Points(&'a lodkit_mesh::PointCloud),
+    Points(&'a PointCloud),
     Range(&'a RangeImage),
 }
 
@@ -127,7 +129,7 @@ impl<'a> From<&'a Model> for Input<'a> {
     }
 }
 
-fn input_samples(input: Input) -> Result<Samples> {
+fn input_samples(input: Input) -> Result<PointCloud> {
     match input {
         Input::Mesh(m) => Ok(mesh_samples(m)),
         Input::Points(p) => point_cloud_samples(p),
@@ -196,7 +198,7 @@ fn range_spacings(r: &RangeImage) -> Vec<f32> {
 }
 
 /// The default resolution for samples in `bbox` spaced `spacing` apart.
-pub fn default_resolution(bbox: Aabb, spacing: f32) -> u32 {
+pub(crate) fn default_resolution(bbox: Aabb, spacing: f32) -> u32 {
     let longest = bbox.size().max_element();
     if spacing.is_nan() || spacing <= 0.0 || !longest.is_finite() {
         return 64;
@@ -207,6 +209,7 @@ pub fn default_resolution(bbox: Aabb, spacing: f32) -> u32 {
 /// What one [`IncrementalBuilder::add`] changed.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct AddReport {
+    /// Samples in the batch (the points of the cloud passed in).
     pub samples: usize,
     /// Lattice vertices whose signed distance changed.
     pub vertices_changed: usize,
@@ -216,8 +219,19 @@ pub struct AddReport {
     pub surface_cubes: usize,
 }
 
-/// Builds a model from samples added one batch (e.g. one range image) at a
-/// time on a fixed lattice.
+/// Builds a model from oriented samples added one batch (e.g. one range
+/// image) at a time on a fixed lattice (§4.4's incremental
+/// reconstruction): each [`IncrementalBuilder::add`] recomputes only the
+/// leaf cubes around what it changed, and [`IncrementalBuilder::build`]
+/// makes a model of everything added so far (and may be called again
+/// after more adds). Adding batches one at a time gives the same model as
+/// adding them together.
+///
+/// The usual sequence, as `lodkit mco build` runs it: [`samples_of`] each
+/// input, [`grid_for`] all of them, [`densify_meshes`], then
+/// [`IncrementalBuilder::new`] (with [`IncrementalBuilder::with_tangential_rule`]
+/// when some input is a scan or a point cloud), one `add` per input, and
+/// `build`. [`build_from_models`] does exactly that.
 ///
 /// Leaf configurations are kept beside the band's bricks: leaf cube
 /// `(x, y, z)` lives in the brick of its lowest corner `(x, y, z)`, one
@@ -236,13 +250,18 @@ pub struct IncrementalBuilder {
 
 impl IncrementalBuilder {
     /// Turns on Hoppe's tangential rule ([`crate::signed_distance::TANGENTIAL_LIMIT`]
-    /// cubes), for scan data with edges. Call before adding samples.
+    /// = 1.5 cubes): a lattice vertex counts only where its closest
+    /// sample's tangent plane is a fair estimate, so scans and point
+    /// clouds get no spurious sheets past their edges. For scan data; closed
+    /// meshes build without it (it opens holes at thin features). Call
+    /// before adding samples.
     pub fn with_tangential_rule(mut self) -> Self {
         self.field.tangential_limit =
             crate::signed_distance::TANGENTIAL_LIMIT * self.field.grid.cube;
         self
     }
 
+    /// An empty builder on `grid` (from [`grid_for`] or [`Grid::new`]).
     pub fn new(grid: Grid) -> Self {
         IncrementalBuilder {
             field: SignedDistanceField::new(grid),
@@ -254,16 +273,13 @@ impl IncrementalBuilder {
         }
     }
 
+    /// The lattice this builder works on.
     pub fn grid(&self) -> Grid {
         self.field.grid
     }
 
-    pub fn field(&self) -> &SignedDistanceField {
-        &self.field
-    }
-
     /// Leaf cubes with a surface, `(key, configuration)` in key order.
-    pub fn leaves(&self) -> Vec<(u64, u8)> {
+    pub(crate) fn leaves(&self) -> Vec<(u64, u8)> {
         let mut out = Vec::with_capacity(self.surface_cubes);
         for (b, cfgs) in self.configs.chunks_exact(BRICK_VOLUME).enumerate() {
             let [bx, by, bz] = self.field.brick_coords(b).map(|c| c << BRICK_BITS);
@@ -283,9 +299,13 @@ impl IncrementalBuilder {
         out
     }
 
-    /// Adds a batch of samples; only cubes around changed vertices are
-    /// recomputed.
-    pub fn add(&mut self, s: &Samples) -> AddReport {
+    /// Adds a batch of oriented samples (a [`samples_of`] result: unit
+    /// normals present; a cloud without normals adds nothing). Samples
+    /// outside the lattice are clamped into its border cubes; non-finite
+    /// ones are skipped. Only the leaf cubes around lattice vertices whose
+    /// value changed are recomputed. Cost: `O(samples)` stamping (64
+    /// lattice vertices each) plus the recomputed cubes.
+    pub fn add(&mut self, s: &PointCloud) -> AddReport {
         let colors = s.colors.is_some();
         self.has_colors = Some(self.has_colors.unwrap_or(colors) && colors);
         self.samples += s.len() as u64;
@@ -377,15 +397,17 @@ impl IncrementalBuilder {
         }
     }
 
-    /// Adds one range image (Fig. 4.2 normals, pose applied).
+    /// Adds one posed range image ([`samples_of`]'s Fig. 4.2 normals,
+    /// pose applied).
     pub fn add_range_image(&mut self, r: &RangeImage) -> AddReport {
         self.add(&range_image_samples(r))
     }
 
-    /// Builds the octree, priorities and crack patches from the current
-    /// band.
+    /// Builds the model from everything added so far: octree, priority
+    /// numbering, crack patches and extraction tables. Errors
+    /// ([`Error::Input`]): nothing added reached the lattice, or no leaf
+    /// cube holds a surface. Cost: `O(n log n)` in the surface cubes.
     pub fn build(&self) -> Result<McoModel> {
-        let t0 = Instant::now();
         let leaves = self.leaves();
         let signs = self
             .signs
@@ -394,25 +416,27 @@ impl IncrementalBuilder {
         let mut tree = crate::octree_build::build_levels_with(&self.field, signs, &leaves)?;
         let mut model = crate::octree_build::assemble(&mut tree);
         let together = crate::crack_patch::expand_together(&tree);
-        crate::priority::number(&mut model, &together);
+        crate::priority_numbering::number(&mut model, &together);
         crate::crack_patch::patch(&mut tree, &mut model);
         model.vertices = tree.vertices;
         model.prepare_extraction();
         model.has_colors = self.has_colors.unwrap_or(false);
         model.stats.input_samples = self.samples;
-        model.stats.build_seconds = t0.elapsed().as_secs_f64();
         Ok(model)
     }
 }
 
-/// The lattice for several inputs: their union box, the given or default
-/// resolution.
-pub fn grid_for(models: &[Model], samples: &[Samples], opts: &Options) -> Result<Grid> {
+/// The lattice for several inputs: the union box of their `samples`
+/// (`samples[i]` = [`samples_of`]`(&models[i])`) and the resolution of
+/// `opts` (default: from the inputs' median sample spacing). Errors: no
+/// finite sample, a box without extent, or a resolution outside
+/// `2..=`[`crate::MAX_RESOLUTION`].
+pub fn grid_for(models: &[Model], samples: &[PointCloud], opts: &Options) -> Result<Grid> {
     let inputs: Vec<Input> = models.iter().map(Input::from).collect();
     grid_for_inputs(&inputs, samples, opts)
 }
 
-fn grid_for_inputs(inputs: &[Input], samples: &[Samples], opts: &Options) -> Result<Grid> {
+fn grid_for_inputs(inputs: &[Input], samples: &[PointCloud], opts: &Options) -> Result<Grid> {
     let bbox = samples.iter().fold(Aabb::EMPTY, |b, s| b.union(&s.bbox()));
     let resolution = match opts.resolution {
         Some(r) => r,
@@ -424,15 +448,17 @@ fn grid_for_inputs(inputs: &[Input], samples: &[Samples], opts: &Options) -> Res
     Grid::new(bbox, resolution)
 }
 
-/// Mesh samples made dense enough for `grid` (see
-/// [`crate::normals_estimation::mesh_samples_for_cube`]); other inputs'
-/// samples are kept. `samples[i]` must be [`samples_of`]`(&models[i])`.
-pub fn densify_meshes(models: &[Model], samples: Vec<Samples>, grid: &Grid) -> Vec<Samples> {
+/// Mesh samples made dense enough for `grid`: a mesh's triangles with an
+/// edge longer than a cube get samples on a half-cube barycentric grid,
+/// normals interpolated (without them, long edges leave holes); other
+/// inputs' samples are kept. `samples[i]` must be
+/// [`samples_of`]`(&models[i])`.
+pub fn densify_meshes(models: &[Model], samples: Vec<PointCloud>, grid: &Grid) -> Vec<PointCloud> {
     let inputs: Vec<Input> = models.iter().map(Input::from).collect();
     densify_inputs(&inputs, samples, grid)
 }
 
-fn densify_inputs(inputs: &[Input], samples: Vec<Samples>, grid: &Grid) -> Vec<Samples> {
+fn densify_inputs(inputs: &[Input], samples: Vec<PointCloud>, grid: &Grid) -> Vec<PointCloud> {
     inputs
         .iter()
         .zip(samples)
@@ -445,19 +471,29 @@ fn densify_inputs(inputs: &[Input], samples: Vec<Samples>, grid: &Grid) -> Vec<S
         .collect()
 }
 
-/// Builds from several models (range images, meshes, point clouds), adding
-/// them one at a time.
+/// Builds a model from several inputs (posed range images, meshes, point
+/// clouds, in any mix), on one lattice (see [`Options::resolution`]),
+/// adding them one at a time as [`IncrementalBuilder`] does; Hoppe's
+/// tangential rule is on when any input is not a mesh.
+///
+/// Guarantees: deterministic (same inputs and options, same model and
+/// `.mco` bytes); every cut of the model is crack-free. Errors
+/// ([`Error::Input`], one line): no usable sample, a bounding box without
+/// extent, a resolution out of range, no surface crossing the lattice.
+/// Cost: roughly linear in the samples and the surface cubes (about 1 M
+/// input points per second per core at the default resolution; the
+/// `mco_build` bench); memory about 12 bytes per lattice vertex of the
+/// band.
 pub fn build_from_models(models: &[Model], opts: &Options) -> Result<McoModel> {
     let inputs: Vec<Input> = models.iter().map(Input::from).collect();
     build_from_inputs(&inputs, opts)
 }
 
 fn build_from_inputs(inputs: &[Input], opts: &Options) -> Result<McoModel> {
-    let t0 = Instant::now();
     // Meshes' vertex normals are computed once, for the vertex samples and
     // again for the triangle samples that densify them.
     let mut mesh_normals: Vec<Option<Vec<glam::Vec3>>> = Vec::with_capacity(inputs.len());
-    let mut samples: Vec<Samples> = Vec::with_capacity(inputs.len());
+    let mut samples: Vec<PointCloud> = Vec::with_capacity(inputs.len());
     for &input in inputs {
         if let Input::Mesh(m) = input {
             let normals = lodkit_mesh::normals::vertex_normals(m);
@@ -468,7 +504,7 @@ fn build_from_inputs(inputs: &[Input], opts: &Options) -> Result<McoModel> {
             mesh_normals.push(None);
         }
     }
-    if samples.iter().all(Samples::is_empty) {
+    if samples.iter().all(PointCloud::is_empty) {
         return Err(Error::Input("the input has no usable samples".into()));
     }
     let grid = grid_for_inputs(inputs, &samples, opts)?;
@@ -484,26 +520,51 @@ fn build_from_inputs(inputs: &[Input], opts: &Options) -> Result<McoModel> {
     for s in &samples {
         b.add(s);
     }
-    let mut m = b.build()?;
-    m.stats.build_seconds = t0.elapsed().as_secs_f64();
-    Ok(m)
+    b.build()
 }
 
-/// Builds from a triangle mesh (its vertices with area-weighted normals,
-/// §4.3.1). The entry point `lodkit build` calls.
+/// Builds a model from a triangle mesh (object units; faces
+/// counter-clockwise seen from outside): its vertices with area-weighted
+/// normals (§4.3.1), densified on triangles longer than a cube. A closed
+/// mesh gives a closed model at every cut. Otherwise as
+/// [`build_from_models`].
 pub fn build_from_mesh(mesh: &TriMesh, opts: &Options) -> Result<McoModel> {
     build_from_inputs(&[Input::Mesh(mesh)], opts)
 }
 
-/// Builds from posed range images (e.g. from a `.conf`).
+/// Builds a model from posed range images (e.g. the scans a Stanford
+/// `.conf` lists, or [`crate::scan_mesh`]'s), with Hoppe's tangential
+/// rule. Otherwise as [`build_from_models`].
 pub fn build_from_range_images(images: &[RangeImage], opts: &Options) -> Result<McoModel> {
     let inputs: Vec<Input> = images.iter().map(Input::Range).collect();
     build_from_inputs(&inputs, opts)
 }
 
+/// Builds a model from a point cloud: its own normals when it has them
+/// (one per point, need not be unit length), else PCA normals over the 12
+/// nearest neighbours, oriented consistently; Hoppe's tangential rule is
+/// on. Errors also when normals must be estimated from fewer than 3
+/// points. Otherwise as [`build_from_models`].
+pub fn build_from_points(cloud: &PointCloud, opts: &Options) -> Result<McoModel> {
+    build_from_inputs(&[Input::Points(cloud)], opts)
+}
+
+/// Builds a model from the range scans a Stanford `.conf` lists (range-grid
+/// PLY files beside it, each posed as the `.conf` says), as
+/// [`build_from_range_images`]. Errors name the file that cannot be read.
+pub fn build_from_conf(conf: &Path, opts: &Options) -> Result<McoModel> {
+    let images: Vec<RangeImage> = lodkit_mesh::io::conf::load_scans(conf)?
+        .into_iter()
+        .map(|(_, r)| r)
+        .collect();
+    build_from_range_images(&images, opts)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rand_xoshiro::Xoshiro256PlusPlus;
+    use rand_xoshiro::rand_core::{Rng, SeedableRng};
 
     /// The median as sorting finds it.
     fn sorted_median(mut v: Vec<f32>) -> Option<f32> {
@@ -514,13 +575,8 @@ mod tests {
 
     #[test]
     fn radix_median_equals_the_sorted_median() {
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
-        };
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(0x2545_f491_4f6c_dd1d);
+        let mut next = || rng.next_u64();
         for n in [1usize, 2, 3, 10, 1001, 20_000] {
             // Lengths around one value (one bucket) and spread widely, with
             // duplicates, zeros, negatives and non-finite values mixed in.

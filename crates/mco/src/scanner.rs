@@ -26,16 +26,20 @@ use std::path::{Path, PathBuf};
 use glam::{Mat3, Quat, Vec3};
 use lodkit_mesh::{Pose, RangeImage, TriMesh};
 use parry3d::query::{Ray, RayCast};
+use rand_xoshiro::Xoshiro256PlusPlus;
+use rand_xoshiro::rand_core::{Rng, SeedableRng};
 
 use crate::{Error, Result};
 
-/// Scanner settings.
+/// Settings of the virtual range scanner ([`scan_mesh`]); the `Default`
+/// is 8 views on the horizon, 256 × 256 samples, no noise.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ScanOptions {
     /// Number of views around the vertical axis.
     pub views: usize,
-    /// Image width and height in samples.
+    /// Image width in samples (2..=8192).
     pub width: usize,
+    /// Image height in samples (2..=8192).
     pub height: usize,
     /// Elevation of every view above the horizontal plane, degrees.
     pub elevation_deg: f32,
@@ -85,8 +89,12 @@ pub fn view_pose(mesh_center: Vec3, i: usize, opts: &ScanOptions) -> Pose {
     }
 }
 
-/// Scans `mesh` from `opts.views` views. Errors on an empty mesh or bad
-/// sizes.
+/// Scans `mesh` (object units) from `opts.views` views around its
+/// vertical axis (see the module docs): one posed range image per view,
+/// in view order, each `width × height` samples with a validity mask.
+/// Deterministic (the noise comes from `opts.seed`). Errors
+/// ([`Error::Input`]): an empty mesh, no views, a side below 2 or above
+/// 8192. Cost: one BVH ray cast per sample.
 pub fn scan_mesh(mesh: &TriMesh, opts: &ScanOptions) -> Result<Vec<RangeImage>> {
     if opts.views == 0 || opts.width < 2 || opts.height < 2 {
         return Err(Error::Input(
@@ -190,9 +198,11 @@ pub fn conf_line(file: &str, pose: &Pose) -> String {
     )
 }
 
-/// Writes `scans` as `{stem}_{i:03}.ply` into `dir` plus `{stem}.conf`;
-/// returns the written paths (the `.conf` last). Files are written
-/// atomically.
+/// Writes `scans` as Stanford range-grid PLY files `{stem}_{i:03}.ply`
+/// into `dir` (created if missing) plus `{stem}.conf` with their poses,
+/// which [`crate::build_from_conf`] and `lodkit_mesh::io::conf` read back;
+/// returns the written paths (the `.conf` last). Each file is written
+/// atomically; errors name the file.
 pub fn write_scans(dir: &Path, stem: &str, scans: &[RangeImage]) -> Result<Vec<PathBuf>> {
     std::fs::create_dir_all(dir).map_err(|e| lodkit_mesh::Error::io(dir, e))?;
     let mut conf = String::from("# written by lodkit scan: bmesh FILE tx ty tz qx qy qz qw\n");
@@ -210,18 +220,17 @@ pub fn write_scans(dir: &Path, stem: &str, scans: &[RangeImage]) -> Result<Vec<P
     Ok(paths)
 }
 
-/// Box–Muller normal deviates from a xorshift generator.
-struct Gauss(u64);
+/// Box–Muller normal deviates from a seeded xoshiro256++ generator.
+struct Gauss(Xoshiro256PlusPlus);
 
 impl Gauss {
     fn new(seed: u64) -> Self {
-        Gauss(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
+        Gauss(Xoshiro256PlusPlus::seed_from_u64(seed))
     }
+    /// Uniform in (0, 1): 24 random bits, centred in their interval, so
+    /// `ln` never sees 0.
     fn uniform(&mut self) -> f32 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        ((self.0 >> 40) as f32 + 0.5) / (1u64 << 24) as f32
+        ((self.0.next_u64() >> 40) as f32 + 0.5) / (1u64 << 24) as f32
     }
     fn next(&mut self) -> f32 {
         let (u, v) = (self.uniform(), self.uniform());

@@ -1,4 +1,5 @@
-//! The cube lattice and the sparse band of signed distances at its vertices.
+//! The sparse band of signed distances at the lattice's vertices
+//! ([`crate::lattice`]), stamped sample by sample.
 //!
 //! Follows the thesis's §4.2 (after Hoppe et al. 1992): the signed distance
 //! of a cube vertex `v` is its distance to the tangent plane of the closest
@@ -11,205 +12,34 @@
 //! - **Sparse band, no search structure.** Each sample *stamps* the 4×4×4
 //!   lattice vertices of its cube and the 26 cubes around it, and a vertex
 //!   keeps the closest sample seen, so the field is a band about two cubes
-//!   wide around the data (never a dense n³ grid). Stamping only the
-//!   sample's own cube (8 corners) was tried first: a cube the surface
-//!   merely clips often holds no sample, misses a corner and leaves a hole
-//!   (half the edges of a sphere at resolution 24 were on holes). Every
-//!   sample within one cube size of a vertex is a candidate — the only ones
-//!   the thesis's "closest range point" can sensibly be for a vertex that
-//!   marching cubes will use. Stamping needs no kd-tree and makes adding a
-//!   new range image touch only the cubes around its samples (the
-//!   incremental API).
+//!   wide around the data (never a dense n³ grid). The 26 neighbours are
+//!   needed: a cube the surface merely clips often holds no sample, and
+//!   stamping only a sample's own 8 corners leaves such cubes with a
+//!   missing corner, hence holes. Every sample within one cube size of a
+//!   vertex is a candidate — the only ones the thesis's "closest range
+//!   point" can sensibly be for a vertex that marching cubes will use.
+//!   Stamping needs no kd-tree and makes adding a new range image touch
+//!   only the cubes around its samples (the incremental API).
 //! - **Storage: a sparse grid of dense 8³ bricks** (see
-//!   [`SignedDistanceField`]). A hash map per lattice vertex was the first
-//!   layout; it cost 64 map operations per sample and was most of the
-//!   build's time. Bricks need 1–8 map lookups per sample and turn the 64
-//!   updates into array writes: the sample's 4 vertices of a brick row are
-//!   compared at once (one SSE2 window), and a window the sample wins is
-//!   updated with blends. Tried and dropped: the whole 8-vertex row per
-//!   compare (twice the lanes, no faster), two aligned 4-vertex halves per
-//!   row instead of one window at the block's offset (7% slower), and
-//!   keeping the last sample's brick numbers to skip the map lookups (no
-//!   measurable gain).
+//!   [`SignedDistanceField`]): 1–8 map lookups per sample instead of one
+//!   per lattice vertex (64), and the 64 updates become array writes. A
+//!   sample's 4 vertices of a brick row are compared at once (one SSE2
+//!   window, [`stamp_window`]), and a window the sample wins is updated
+//!   with blends.
 //! - **Ties** (two samples at exactly the same distance) keep the sample
 //!   added first, so the field does not depend on hash order and adding
 //!   scans one at a time gives the same field as adding them together.
 
-use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
-
 use glam::Vec3;
-use lodkit_mesh::Aabb;
+use lodkit_mesh::PointCloud;
 
-use crate::{Error, Result};
-
-/// Bits per lattice coordinate in a packed key.
-pub const KEY_BITS: u32 = 20;
-const KEY_MASK: u64 = (1 << KEY_BITS) - 1;
-
-/// The finest resolution accepted (cubes along the longest axis). 4096³
-/// leaf cubes is far beyond what fits in memory as a surface band of a
-/// real scan; the cap keeps every lattice coordinate inside a packed key.
-pub const MAX_RESOLUTION: u32 = 4096;
-
-/// Packs lattice coordinates (each below 2²⁰) into one key.
-#[inline]
-pub fn pack(x: u32, y: u32, z: u32) -> u64 {
-    x as u64 | (y as u64) << KEY_BITS | (z as u64) << (2 * KEY_BITS)
-}
-
-/// Inverse of [`pack`].
-#[inline]
-pub fn unpack(k: u64) -> [u32; 3] {
-    [
-        (k & KEY_MASK) as u32,
-        (k >> KEY_BITS & KEY_MASK) as u32,
-        (k >> (2 * KEY_BITS) & KEY_MASK) as u32,
-    ]
-}
-
-/// A multiply-shift hasher for the packed integer keys (the std SipHash is
-/// several times slower on the build's hot maps and buys nothing here:
-/// keys come from geometry, not from an adversary choosing hash inputs).
-///
-/// Tried and rejected: a locality-keeping hash (low bits a linear map of
-/// the key's fields, so neighbouring keys share cache lines): 6% fewer L1
-/// misses on blob(640000) but 4% more instructions from longer probes, and
-/// no measurable gain in time.
-#[derive(Default, Clone, Copy)]
-pub struct KeyHasher(u64);
-
-impl Hasher for KeyHasher {
-    #[inline]
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    #[inline]
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(b as u64);
-        }
-    }
-    #[inline]
-    fn write_u64(&mut self, k: u64) {
-        self.0 = (self.0 ^ k)
-            .wrapping_mul(0x9E37_79B9_7F4A_7C15)
-            .rotate_left(29);
-    }
-}
-
-/// A `HashMap` keyed by packed lattice keys.
-pub type KeyMap<V> = HashMap<u64, V, BuildHasherDefault<KeyHasher>>;
-
-/// The cube lattice: leaf cubes of edge `cube` from `origin`, `2^depth`
-/// along each axis (the octree root covers all of them).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Grid {
-    pub origin: Vec3,
-    /// Leaf cube edge length (object units).
-    pub cube: f32,
-    /// Octree depth: the root is `2^depth` leaf cubes wide.
-    pub depth: u32,
-    /// Requested cubes along the longest axis of the input's box.
-    pub resolution: u32,
-}
-
-impl Grid {
-    /// The lattice for data inside `bbox` with `resolution` cubes along its
-    /// longest axis, plus a margin of one and a half cubes on every side so
-    /// that the band around the outermost samples is complete.
-    pub fn new(bbox: Aabb, resolution: u32) -> Result<Grid> {
-        if bbox.is_empty() || !bbox.min.is_finite() || !bbox.max.is_finite() {
-            return Err(Error::Input("the input has no finite samples".into()));
-        }
-        if !(2..=MAX_RESOLUTION).contains(&resolution) {
-            return Err(Error::Input(format!(
-                "resolution {resolution} is outside 2..={MAX_RESOLUTION}"
-            )));
-        }
-        let size = bbox.size();
-        let longest = size.max_element();
-        if longest <= 0.0 {
-            return Err(Error::Input(
-                "the input's bounding box has no extent".into(),
-            ));
-        }
-        let cube = longest / resolution as f32;
-        let origin = bbox.min - Vec3::splat(1.5 * cube);
-        let cells = (size.max_element() / cube).ceil() as u32 + 4;
-        let depth = 32 - (cells.max(2) - 1).leading_zeros();
-        Ok(Grid {
-            origin,
-            cube,
-            depth,
-            resolution,
-        })
-    }
-
-    /// Leaf cubes along each axis (`2^depth`).
-    pub fn cells(&self) -> u32 {
-        1 << self.depth
-    }
-
-    /// World position of lattice vertex `key` (leaf units).
-    #[inline]
-    pub fn position(&self, key: u64) -> Vec3 {
-        let [x, y, z] = unpack(key);
-        self.origin + Vec3::new(x as f32, y as f32, z as f32) * self.cube
-    }
-
-    /// The leaf cube containing `p`, clamped into the lattice.
-    #[inline]
-    pub fn cell_of(&self, p: Vec3) -> [u32; 3] {
-        let max = self.cells() - 1;
-        let c = (p - self.origin) / self.cube;
-        // `as u32` truncates, saturates and maps NaN to 0: for c ≥ 0 that is
-        // the floor, and anything below 0 clamps to 0 either way (no
-        // libm `floor` call on CPUs without SSE4.1's `roundps`).
-        [
-            (c.x as u32).min(max),
-            (c.y as u32).min(max),
-            (c.z as u32).min(max),
-        ]
-    }
-}
-
-/// Oriented samples: positions with unit normals, optional colours.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct Samples {
-    pub positions: Vec<Vec3>,
-    pub normals: Vec<Vec3>,
-    pub colors: Option<Vec<[u8; 4]>>,
-}
-
-impl Samples {
-    pub fn len(&self) -> usize {
-        self.positions.len()
-    }
-    pub fn is_empty(&self) -> bool {
-        self.positions.is_empty()
-    }
-    pub fn bbox(&self) -> Aabb {
-        Aabb::from_points(&self.positions)
-    }
-    /// Appends `o`'s samples (colours kept only if both have them).
-    pub fn append(&mut self, o: &Samples) {
-        let had = !self.positions.is_empty();
-        self.colors = match (self.colors.take(), &o.colors) {
-            (Some(mut a), Some(b)) => {
-                a.extend_from_slice(b);
-                Some(a)
-            }
-            (None, Some(b)) if !had => Some(b.clone()),
-            _ => None,
-        };
-        self.positions.extend_from_slice(&o.positions);
-        self.normals.extend_from_slice(&o.normals);
-    }
-}
+use crate::lattice::{
+    BRICK, BRICK_BITS, BRICK_VOLUME, Grid, KeyMap, LOCAL_MASK, brick_key, local_index, pack, unpack,
+};
 
 /// One lattice vertex of the band: its closest sample's data.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg(test)]
 pub struct FieldVertex {
     /// Squared distance to the closest sample (selection key).
     pub dist2: f32,
@@ -222,39 +52,16 @@ pub struct FieldVertex {
 }
 
 /// Largest offset along the tangent plane, in cubes, for a band vertex to
-/// be defined when the rule is on (see [`SignedDistanceField::get`]). The
+/// be defined when the rule is on (see [`SignedDistanceField::slot_defined`]). The
 /// default cube is twice the sample spacing, so on continuous data some
 /// sample is always within half a cube tangentially; 1.5 leaves room for
-/// irregular sampling. Measured on the bunny from its 10 real scans: the
-/// symmetric mean error drops from 0.178 mm to 0.124 mm (spurious sheets
-/// past the scans' edges are gone). On closed meshes the rule opens holes
-/// at thin features (the closed bunny: 52 boundary edges instead of 14 at
-/// full resolution), so mesh inputs build without it.
+/// irregular sampling. On scans the rule removes the spurious sheets past
+/// their edges; on closed meshes it would open holes at thin features, so
+/// mesh inputs build without it.
 pub const TANGENTIAL_LIMIT: f32 = 1.5;
 
 /// Neutral colour for inputs without colours.
 pub const NO_COLOR: [u8; 4] = [200, 200, 200, 255];
-
-/// Lattice vertices along each axis of a brick (`2^BRICK_BITS`).
-pub const BRICK_BITS: u32 = 3;
-/// Vertices per brick edge.
-pub const BRICK: u32 = 1 << BRICK_BITS;
-/// Vertices per brick (`BRICK³` = 512).
-pub const BRICK_VOLUME: usize = 1 << (3 * BRICK_BITS);
-const LOCAL_MASK: u32 = BRICK - 1;
-
-/// Index of lattice vertex `(x, y, z)` inside its brick (x fastest).
-#[inline]
-pub fn local_index(x: u32, y: u32, z: u32) -> usize {
-    ((x & LOCAL_MASK) | (y & LOCAL_MASK) << BRICK_BITS | (z & LOCAL_MASK) << (2 * BRICK_BITS))
-        as usize
-}
-
-/// Key of the brick holding lattice vertex `(x, y, z)`.
-#[inline]
-pub fn brick_key(x: u32, y: u32, z: u32) -> u64 {
-    pack(x >> BRICK_BITS, y >> BRICK_BITS, z >> BRICK_BITS)
-}
 
 /// One band vertex as stored: the selection key, the signed distance and
 /// the winning sample (its normal and colour are looked up on demand).
@@ -262,17 +69,12 @@ pub fn brick_key(x: u32, y: u32, z: u32) -> u64 {
 pub struct Slot {
     pub dist2: f32,
     pub distance: f32,
-    /// Index into the field's samples; [`Slot::EMPTY`]'s is `u32::MAX`.
+    /// Index into the field's samples; `u32::MAX` = no sample reached the
+    /// vertex (then `dist2` is `+∞`).
     pub sample: u32,
 }
 
 impl Slot {
-    /// A lattice vertex no sample has reached.
-    pub const EMPTY: Slot = Slot {
-        dist2: f32::INFINITY,
-        distance: 0.0,
-        sample: u32::MAX,
-    };
     #[inline]
     pub fn is_empty(&self) -> bool {
         self.sample == u32::MAX
@@ -286,80 +88,110 @@ struct BrickColumns<'a> {
     sample: &'a mut [u32],
 }
 
-/// Stamps sample `id` into the 4-vertex window at `row` of a brick (a
-/// window inside one brick row): lane `t`'s squared distance is `(x2[t] +
-/// y2) + z2` and its signed distance `(xd[t] + yd) + zd`; lanes where the
-/// squared distance is below the stored one take the sample. Returns the
-/// mask of those lanes and how many of them no sample had reached. IEEE
-/// single precision either way, so the SSE2 path and the portable one give
-/// the same bits.
-#[inline(always)]
-fn stamp_window(
-    brick: &mut BrickColumns,
-    row: usize,
-    (x2, y2, z2): (&[f32; 4], f32, f32),
-    (xd, yd, zd): (&[f32; 4], f32, f32),
+/// One stamp of a sample into a 4-vertex window of a brick row: the
+/// window's squared distances `(x2[t] + y2) + z2` and signed distances
+/// `(xd[t] + yd) + zd` for lanes `t = 0..4`.
+#[derive(Clone, Copy)]
+struct Stamp<'a> {
+    x2: &'a [f32; 4],
+    y2: f32,
+    z2: f32,
+    xd: &'a [f32; 4],
+    yd: f32,
+    zd: f32,
     id: u32,
-) -> (u32, u32) {
-    let dist2 = &mut brick.dist2[row..row + 4];
-    let distance = &mut brick.distance[row..row + 4];
-    let sample = &mut brick.sample[row..row + 4];
+}
+
+/// Stamps sample `st.id` into the 4-vertex window at `row` of a brick (a
+/// window inside one brick row): lanes whose squared distance is below the
+/// stored one take the sample. Returns the mask of those lanes and how
+/// many of them no sample had reached.
+///
+/// On x86_64 this is [`stamp_window_sse2`] (SSE2 is part of that target's
+/// baseline, so no run-time detection); elsewhere, wasm32 included,
+/// [`stamp_window_scalar`]. Both do the same IEEE single-precision
+/// operations in the same order, so they give the same bits (the test
+/// `sse2_and_scalar_stamping_agree` runs both on the same inputs).
+#[inline(always)]
+fn stamp_window(brick: &mut BrickColumns, row: usize, st: Stamp) -> (u32, u32) {
     #[cfg(target_arch = "x86_64")]
     {
-        use std::arch::x86_64::{
-            __m128, __m128i, _mm_add_ps, _mm_and_ps, _mm_and_si128, _mm_andnot_ps,
-            _mm_andnot_si128, _mm_castps_si128, _mm_castsi128_ps, _mm_cmpeq_epi32, _mm_cmplt_ps,
-            _mm_loadu_ps, _mm_loadu_si128, _mm_movemask_ps, _mm_or_ps, _mm_or_si128,
-            _mm_set1_epi32, _mm_set1_ps, _mm_storeu_ps, _mm_storeu_si128,
-        };
-        // SAFETY: SSE2 is part of the x86_64 baseline; every load and
-        // store is an unaligned access to the 4 lanes of a slice of length
-        // 4 (bounds checked above), stores through mutable borrows.
-        unsafe {
-            let d = _mm_add_ps(
-                _mm_add_ps(_mm_loadu_ps(x2.as_ptr()), _mm_set1_ps(y2)),
-                _mm_set1_ps(z2),
-            );
-            let old = _mm_loadu_ps(dist2.as_ptr());
-            let m = _mm_cmplt_ps(d, old);
-            let wins = _mm_movemask_ps(m) as u32;
-            if wins == 0 {
-                return (0, 0);
-            }
-            let blend =
-                |new: __m128, old: __m128| _mm_or_ps(_mm_and_ps(m, new), _mm_andnot_ps(m, old));
-            _mm_storeu_ps(dist2.as_mut_ptr(), blend(d, old));
-            let dn = _mm_add_ps(
-                _mm_add_ps(_mm_loadu_ps(xd.as_ptr()), _mm_set1_ps(yd)),
-                _mm_set1_ps(zd),
-            );
-            let od = _mm_loadu_ps(distance.as_ptr());
-            _mm_storeu_ps(distance.as_mut_ptr(), blend(dn, od));
-            let mi = _mm_castps_si128(m);
-            let os = _mm_loadu_si128(sample.as_ptr() as *const __m128i);
-            let empty = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(os, _mm_set1_epi32(-1))));
-            let ns = _mm_or_si128(
-                _mm_and_si128(mi, _mm_set1_epi32(id as i32)),
-                _mm_andnot_si128(mi, os),
-            );
-            _mm_storeu_si128(sample.as_mut_ptr() as *mut __m128i, ns);
-            (wins, (wins & empty as u32).count_ones())
-        }
+        stamp_window_sse2(brick, row, st)
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
-        let (mut wins, mut reached) = (0u32, 0u32);
-        for t in 0..4 {
-            let d = (x2[t] + y2) + z2;
-            if d < dist2[t] {
-                dist2[t] = d;
-                distance[t] = (xd[t] + yd) + zd;
-                reached += (sample[t] == u32::MAX) as u32;
-                sample[t] = id;
-                wins |= 1 << t;
-            }
+        stamp_window_scalar(brick, row, st)
+    }
+}
+
+/// [`stamp_window`], one lane at a time.
+#[inline(always)]
+#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+fn stamp_window_scalar(brick: &mut BrickColumns, row: usize, st: Stamp) -> (u32, u32) {
+    let dist2 = &mut brick.dist2[row..row + 4];
+    let distance = &mut brick.distance[row..row + 4];
+    let sample = &mut brick.sample[row..row + 4];
+    let (mut wins, mut reached) = (0u32, 0u32);
+    for t in 0..4 {
+        let d = (st.x2[t] + st.y2) + st.z2;
+        if d < dist2[t] {
+            dist2[t] = d;
+            distance[t] = (st.xd[t] + st.yd) + st.zd;
+            reached += (sample[t] == u32::MAX) as u32;
+            sample[t] = st.id;
+            wins |= 1 << t;
         }
-        (wins, reached)
+    }
+    (wins, reached)
+}
+
+/// [`stamp_window`] with SSE2: the four lanes compared at once, and a
+/// window the sample wins updated with blends.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+#[allow(unsafe_code)]
+fn stamp_window_sse2(brick: &mut BrickColumns, row: usize, st: Stamp) -> (u32, u32) {
+    use std::arch::x86_64::{
+        __m128, __m128i, _mm_add_ps, _mm_and_ps, _mm_and_si128, _mm_andnot_ps, _mm_andnot_si128,
+        _mm_castps_si128, _mm_castsi128_ps, _mm_cmpeq_epi32, _mm_cmplt_ps, _mm_loadu_ps,
+        _mm_loadu_si128, _mm_movemask_ps, _mm_or_ps, _mm_or_si128, _mm_set1_epi32, _mm_set1_ps,
+        _mm_storeu_ps, _mm_storeu_si128,
+    };
+    let dist2 = &mut brick.dist2[row..row + 4];
+    let distance = &mut brick.distance[row..row + 4];
+    let sample = &mut brick.sample[row..row + 4];
+    // SAFETY: SSE2 is part of the x86_64 baseline, so the intrinsics are
+    // available; every load and store is an unaligned access to the 4
+    // lanes of a slice of length 4 (bounds checked by the slicing above),
+    // and stores go through mutable borrows.
+    unsafe {
+        let d = _mm_add_ps(
+            _mm_add_ps(_mm_loadu_ps(st.x2.as_ptr()), _mm_set1_ps(st.y2)),
+            _mm_set1_ps(st.z2),
+        );
+        let old = _mm_loadu_ps(dist2.as_ptr());
+        let m = _mm_cmplt_ps(d, old);
+        let wins = _mm_movemask_ps(m) as u32;
+        if wins == 0 {
+            return (0, 0);
+        }
+        let blend = |new: __m128, old: __m128| _mm_or_ps(_mm_and_ps(m, new), _mm_andnot_ps(m, old));
+        _mm_storeu_ps(dist2.as_mut_ptr(), blend(d, old));
+        let dn = _mm_add_ps(
+            _mm_add_ps(_mm_loadu_ps(st.xd.as_ptr()), _mm_set1_ps(st.yd)),
+            _mm_set1_ps(st.zd),
+        );
+        let od = _mm_loadu_ps(distance.as_ptr());
+        _mm_storeu_ps(distance.as_mut_ptr(), blend(dn, od));
+        let mi = _mm_castps_si128(m);
+        let os = _mm_loadu_si128(sample.as_ptr() as *const __m128i);
+        let empty = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(os, _mm_set1_epi32(-1))));
+        let ns = _mm_or_si128(
+            _mm_and_si128(mi, _mm_set1_epi32(st.id as i32)),
+            _mm_andnot_si128(mi, os),
+        );
+        _mm_storeu_si128(sample.as_mut_ptr() as *mut __m128i, ns);
+        (wins, (wins & empty as u32).count_ones())
     }
 }
 
@@ -369,7 +201,7 @@ fn stamp_window(
 /// once a sample stamps one of its vertices and then holds all 512 of its
 /// vertices densely (12 bytes each: `dist2`, `distance`, winning sample).
 /// A small map finds a brick by its key. Stamping a sample's `4³` block
-/// touches 1–8 bricks (2.6 on average), so the map is consulted a few
+/// touches 1–8 bricks, so the map is consulted a few
 /// times per sample instead of 64 times, and the 64 vertex updates are
 /// plain array writes. The winning sample's normal and colour are kept
 /// once per sample and read only for the vertices marching cubes uses.
@@ -438,14 +270,14 @@ impl SignedDistanceField {
 
     /// Stamps `samples` into the band; returns how many lattice vertices
     /// changed value (their keys: [`SignedDistanceField::changed_keys`]).
-    /// Samples outside the lattice are clamped into its border cubes.
+    /// PointCloud outside the lattice are clamped into its border cubes.
     /// Non-finite samples are skipped.
     ///
     /// Each sample stamps the `4³` lattice vertices of its cube and the 26
     /// cubes around it; a vertex keeps the closest sample, ties to the
     /// sample added first (samples are visited in order, and a later one
     /// wins only when strictly closer).
-    pub fn add(&mut self, samples: &Samples) -> usize {
+    pub fn add(&mut self, samples: &PointCloud) -> usize {
         for c in &mut self.changed {
             *c = [0; BRICK_VOLUME / 64];
         }
@@ -461,7 +293,8 @@ impl SignedDistanceField {
         self.colors.reserve(samples.len());
         let g = self.grid;
         let mut defined = 0usize;
-        for (i, (&p, &n)) in samples.positions.iter().zip(&samples.normals).enumerate() {
+        let normals = samples.normals.as_deref().unwrap_or_default();
+        for (i, (&p, &n)) in samples.positions.iter().zip(normals).enumerate() {
             if !p.is_finite() || !n.is_finite() {
                 continue;
             }
@@ -530,9 +363,15 @@ impl SignedDistanceField {
                                 let (wins, reached) = stamp_window(
                                     &mut brick,
                                     row,
-                                    (&xsq, sq[1][j], sq[2][k]),
-                                    (&xdn, dn[1][j], dn[2][k]),
-                                    id,
+                                    Stamp {
+                                        x2: &xsq,
+                                        y2: sq[1][j],
+                                        z2: sq[2][k],
+                                        xd: &xdn,
+                                        yd: dn[1][j],
+                                        zd: dn[2][k],
+                                        id,
+                                    },
                                 );
                                 if wins != 0 {
                                     defined += reached as usize;
@@ -556,6 +395,7 @@ impl SignedDistanceField {
 
     /// Keys of the lattice vertices changed by the last
     /// [`SignedDistanceField::add`], sorted.
+    #[cfg(test)]
     pub fn changed_keys(&self) -> Vec<u64> {
         let mut out = Vec::new();
         for b in 0..self.brick_count() {
@@ -652,8 +492,14 @@ impl SignedDistanceField {
         }
     }
 
-    /// Whether a stored slot is a defined value (reached, and passing the
-    /// tangential rule when it is on).
+    /// Whether a stored slot is a defined value: reached, and (when the
+    /// rule is on, for scan data) its closest sample's tangent plane is a
+    /// fair estimate there — Hoppe et al.'s rule: the vertex's offset
+    /// *along* the tangent plane from the sample is at most
+    /// [`TANGENTIAL_LIMIT`] cubes. Beyond that the vertex is beside the
+    /// data (past a scan's edge, or across a thin feature) rather than
+    /// above or below it, and its sign is a guess that would draw a
+    /// spurious sheet.
     #[inline]
     pub fn slot_defined(&self, s: &Slot) -> bool {
         let limit = self.tangential_limit;
@@ -684,6 +530,7 @@ impl SignedDistanceField {
 
     /// The full value of a stored slot.
     #[inline]
+    #[cfg(test)]
     pub fn vertex_of(&self, s: &Slot) -> FieldVertex {
         FieldVertex {
             dist2: s.dist2,
@@ -693,21 +540,10 @@ impl SignedDistanceField {
         }
     }
 
-    /// The value of lattice vertex `key`, if it is defined: in the band,
-    /// and (when the rule is on, for scan data) its closest sample's tangent
-    /// plane is a fair estimate there — Hoppe et al.'s rule: the vertex's offset *along* the tangent plane
-    /// from the sample is at most [`TANGENTIAL_LIMIT`] cubes. Beyond that
-    /// the vertex is beside the data (past a scan's edge, or across a thin
-    /// feature) rather than above or below it, and its sign is a guess
-    /// that would draw a spurious sheet.
-    #[inline]
-    pub fn get(&self, key: u64) -> Option<FieldVertex> {
-        self.slot(key).map(|s| self.vertex_of(&s))
-    }
-
     /// Sets lattice vertex `key` to `v` directly, as if a sample with `v`'s
     /// normal and colour had been stamped there (for tests and synthetic
     /// fields). Marks it changed.
+    #[cfg(test)]
     pub fn set(&mut self, key: u64, v: FieldVertex) {
         let [x, y, z] = unpack(key);
         let id = self.normals.len() as u32;
@@ -727,6 +563,7 @@ impl SignedDistanceField {
 
     /// Every stored (reached) vertex and its value, before the tangential
     /// rule, in brick order.
+    #[cfg(test)]
     pub fn iter(&self) -> impl Iterator<Item = (u64, FieldVertex)> + '_ {
         (0..self.brick_count()).flat_map(move |b| {
             let [bx, by, bz] = self.brick_coords[b].map(|c| c << BRICK_BITS);
@@ -745,46 +582,30 @@ impl SignedDistanceField {
     }
 
     /// Number of lattice vertices in the band.
+    #[cfg(test)]
     pub fn len(&self) -> usize {
         self.defined
-    }
-    pub fn is_empty(&self) -> bool {
-        self.defined == 0
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use lodkit_mesh::Aabb;
+    use rand_xoshiro::Xoshiro256PlusPlus;
+    use rand_xoshiro::rand_core::{Rng, SeedableRng};
     use std::collections::HashMap;
-
-    #[test]
-    fn pack_round_trips() {
-        for c in [[0, 0, 0], [1, 2, 3], [KEY_MASK as u32; 3]] {
-            assert_eq!(unpack(pack(c[0], c[1], c[2])), c);
-        }
-    }
-
-    #[test]
-    fn grid_covers_the_box_with_margin() {
-        let b = Aabb {
-            min: Vec3::new(-1.0, 0.0, 0.0),
-            max: Vec3::new(1.0, 0.5, 0.25),
-        };
-        let g = Grid::new(b, 20).unwrap();
-        assert!((g.cube - 0.1).abs() < 1e-6);
-        assert!(g.cells() >= 24);
-        let [x, _, _] = g.cell_of(b.max);
-        assert!(x + 1 < g.cells());
-        assert!(Grid::new(b, 1).is_err());
-        assert!(Grid::new(Aabb::EMPTY, 8).is_err());
-    }
 
     /// The stamping rule written plainly: every sample visits its 64
     /// vertices, a vertex keeps the strictly closest sample, first wins ties.
-    fn reference_field(g: &Grid, s: &Samples) -> HashMap<u64, (f32, f32, u32)> {
+    fn reference_field(g: &Grid, s: &PointCloud) -> HashMap<u64, (f32, f32, u32)> {
         let mut out: HashMap<u64, (f32, f32, u32)> = HashMap::new();
-        for (i, (&p, &n)) in s.positions.iter().zip(&s.normals).enumerate() {
+        for (i, (&p, &n)) in s
+            .positions
+            .iter()
+            .zip(s.normals.as_deref().unwrap())
+            .enumerate()
+        {
             let [cx, cy, cz] = g.cell_of(p);
             for corner in 0..64u32 {
                 let (dx, dy, dz) = (corner & 3, corner >> 2 & 3, corner >> 4);
@@ -803,33 +624,29 @@ mod tests {
         out
     }
 
-    fn random_samples(seed: &mut u64, count: usize, size: f32) -> Samples {
-        let mut next = || {
-            *seed ^= *seed << 13;
-            *seed ^= *seed >> 7;
-            *seed ^= *seed << 17;
-            (*seed >> 40) as f32 / (1u64 << 24) as f32
-        };
-        let mut s = Samples::default();
+    fn random_samples(rng: &mut Xoshiro256PlusPlus, count: usize, size: f32) -> PointCloud {
+        let mut next = || (rng.next_u64() >> 40) as f32 / (1u64 << 24) as f32;
+        let mut s = PointCloud::default();
         for _ in 0..count {
             let p = Vec3::new(next(), next(), next()) * size;
             let n = Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize_or(Vec3::Z);
             s.positions.push(p);
-            s.normals.push(n);
+            s.normals.get_or_insert_default().push(n);
         }
         s
     }
 
     #[test]
     fn bricks_hold_exactly_the_closest_sample_of_every_vertex() {
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut seed = Xoshiro256PlusPlus::seed_from_u64(0x9e37_79b9_7f4a_7c15);
         // Spread over several bricks (20 cubes ≈ 3 bricks a side), with
         // duplicates so that ties occur.
         let mut s = random_samples(&mut seed, 3000, 1.0);
         let dup = s.positions[..200].to_vec();
         s.positions.extend(dup);
-        let dupn: Vec<Vec3> = s.normals[..200].iter().map(|n| -*n).collect();
-        s.normals.extend(dupn);
+        let normals = s.normals.as_mut().unwrap();
+        let dupn: Vec<Vec3> = normals[..200].iter().map(|n| -*n).collect();
+        normals.extend(dupn);
         let g = Grid::new(s.bbox(), 20).unwrap();
         let mut f = SignedDistanceField::new(g);
         assert_eq!(f.add(&s), f.len());
@@ -843,15 +660,15 @@ mod tests {
                 "vertex {:?}",
                 unpack(k)
             );
-            assert_eq!(v.normal, s.normals[i as usize]);
+            assert_eq!(v.normal, s.normals.as_ref().unwrap()[i as usize]);
         }
         // Adding in two batches gives the same field and reports as
         // changed exactly the vertices the second batch improved.
         let (a, b) = s.positions.split_at(1700);
-        let (na, nb) = s.normals.split_at(1700);
-        let part = |p: &[Vec3], n: &[Vec3]| Samples {
+        let (na, nb) = s.normals.as_deref().unwrap().split_at(1700);
+        let part = |p: &[Vec3], n: &[Vec3]| PointCloud {
             positions: p.to_vec(),
-            normals: n.to_vec(),
+            normals: Some(n.to_vec()),
             colors: None,
         };
         let mut two = SignedDistanceField::new(g);
@@ -874,6 +691,76 @@ mod tests {
         assert_eq!(after, one);
     }
 
+    /// The SSE2 window and its scalar twin, on the same windows: random
+    /// distances (infinite lanes included, as outside a block's part),
+    /// stored values half beaten and half not, reached and empty lanes, and
+    /// ties (equal distances never win).
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn sse2_and_scalar_stamping_agree() {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(0x0123_4567_89ab_cdef);
+        let mut next = move || rng.next_u64();
+        let mut f = move || (next() >> 40) as f32 / (1u64 << 24) as f32;
+        for round in 0..20_000u32 {
+            let mut dist2: Vec<f32> = (0..8).map(|_| 3.0 * f()).collect();
+            let mut distance: Vec<f32> = (0..8).map(|_| f() - 0.5).collect();
+            let sample: Vec<u32> = (0..8)
+                .map(|i| if (round >> i) & 1 == 0 { u32::MAX } else { i })
+                .collect();
+            for t in 0..8 {
+                if sample[t] == u32::MAX {
+                    (dist2[t], distance[t]) = (f32::INFINITY, 0.0);
+                }
+            }
+            let mut x2 = [f(), f(), f(), f()];
+            if round % 5 == 0 {
+                x2[(round / 5 % 4) as usize] = f32::INFINITY;
+            }
+            let xd = [f() - 0.5, f() - 0.5, f() - 0.5, f() - 0.5];
+            let (y2, z2, yd, zd) = (f(), f(), f() - 0.5, f() - 0.5);
+            let row = (round % 5) as usize;
+            if round % 7 == 0 {
+                dist2[row] = (x2[0] + y2) + z2; // a tie: the stored sample stays
+            }
+            let st = Stamp {
+                x2: &x2,
+                y2,
+                z2,
+                xd: &xd,
+                yd,
+                zd,
+                id: 1000 + round,
+            };
+            let (mut a, mut b) = (
+                (dist2.clone(), distance.clone(), sample.clone()),
+                (dist2, distance, sample),
+            );
+            let ra = stamp_window_sse2(
+                &mut BrickColumns {
+                    dist2: &mut a.0,
+                    distance: &mut a.1,
+                    sample: &mut a.2,
+                },
+                row,
+                st,
+            );
+            let rb = stamp_window_scalar(
+                &mut BrickColumns {
+                    dist2: &mut b.0,
+                    distance: &mut b.1,
+                    sample: &mut b.2,
+                },
+                row,
+                st,
+            );
+            assert_eq!(ra, rb, "round {round}");
+            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&a.0), bits(&b.0), "round {round}");
+            assert_eq!(bits(&a.1), bits(&b.1), "round {round}");
+            assert_eq!(a.2, b.2, "round {round}");
+        }
+    }
+
     #[test]
     fn plane_samples_give_signed_distances_to_the_plane() {
         let b = Aabb {
@@ -881,12 +768,12 @@ mod tests {
             max: Vec3::ONE,
         };
         let g = Grid::new(b, 10).unwrap();
-        let mut s = Samples::default();
+        let mut s = PointCloud::default();
         for i in 0..30 {
             for j in 0..30 {
                 s.positions
                     .push(Vec3::new(i as f32 / 29.0, j as f32 / 29.0, 0.53));
-                s.normals.push(Vec3::Z);
+                s.normals.get_or_insert_default().push(Vec3::Z);
             }
         }
         let mut f = SignedDistanceField::new(g);

@@ -6,7 +6,7 @@ mod support;
 
 use std::path::Path;
 
-use lodkit_mco::pipeline::{Options, build_from_mesh};
+use lodkit_mco::{Options, build_from_mesh};
 
 /// Worst gap-edge count over 10 budgets, or `None` without the data.
 fn worst_gaps(file: &str) -> Option<usize> {
@@ -27,7 +27,7 @@ fn worst_gaps(file: &str) -> Option<usize> {
         .unwrap();
     eprintln!(
         "{file}: resolution {}, {full} triangles, worst gap edges {worst}",
-        m.grid.resolution
+        m.grid().resolution()
     );
     Some(worst)
 }
@@ -39,9 +39,9 @@ fn no_cracks_on_the_closed_bunny() {
     }
 }
 
-/// Was 4 gap edges at 10 % and 20 %: ambiguous coarse faces that the finer
-/// level joins the other way round, now expanded together
-/// ([`lodkit_mco::crack_patch::expand_together`]).
+/// Pins the ambiguous coarse faces that the finer level joins the other
+/// way round: they cannot be patched, so their nodes expand together
+/// (`crack_patch.rs`, `expand_together`).
 #[test]
 fn no_cracks_on_the_closed_armadillo() {
     if let Some(w) = worst_gaps("stanford_armadillo_cgal26k.ply") {

@@ -4,9 +4,8 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
-use lodkit_mco::extraction_bench::{default_targets, time_extraction};
-use lodkit_mco::pipeline::{Options, build_from_mesh};
-use lodkit_mco::{McoModel, model_file};
+use lodkit_bench::mco::{default_targets, time_extraction};
+use lodkit_mco::{McoModel, Options, build_from_mesh};
 
 use crate::ui::Ui;
 
@@ -23,12 +22,19 @@ pub struct BenchMcoArgs {
     pub budget: f64,
 }
 
-fn table(ui: &Ui, name: &str, m: &McoModel, budget: f64) -> Result<()> {
+/// A model and how long it took to build (`None`: loaded from a file).
+fn timed_build(mesh: &lodkit_mesh::TriMesh, opts: &Options) -> Result<(McoModel, Option<f64>)> {
+    let t = std::time::Instant::now();
+    let m = build_from_mesh(mesh, opts)?;
+    Ok((m, Some(t.elapsed().as_secs_f64())))
+}
+
+fn table(ui: &Ui, name: &str, (m, seconds): &(McoModel, Option<f64>), budget: f64) -> Result<()> {
+    let built = seconds.map_or(String::new(), |s| format!(", built in {s:.2} s"));
     ui.status(format!(
-        "{name}: {} nodes, {} triangles at full resolution, built in {:.2} s",
-        m.nodes.len(),
+        "{name}: {} nodes, {} triangles at full resolution{built}",
+        m.info().nodes,
         m.full_triangles(),
-        m.stats.build_seconds
     ));
     crate::outln!(
         "| model | target | triangles | extract (µs) | 6.1 traversal (µs) | memcpy (µs) | ratio | traversal ratio | Mtris/s |"
@@ -47,13 +53,13 @@ fn table(ui: &Ui, name: &str, m: &McoModel, budget: f64) -> Result<()> {
             r.mtris_per_s()
         )?;
     }
-    let (tables, traversal) = m.extraction_bytes();
+    let info = m.info();
     ui.status(format!(
         "{name}: birth/death tables {:.1} MB in {} death buckets; traversal arrays {:.1} MB (built on first use); stored triangles {:.1} MB",
-        tables as f64 / 1e6,
-        m.lifetimes.death_lo.len(),
-        traversal as f64 / 1e6,
-        (4 * m.tris.len()) as f64 / 1e6
+        info.extraction_table_bytes as f64 / 1e6,
+        info.death_buckets,
+        info.traversal_bytes as f64 / 1e6,
+        info.stored_triangle_bytes as f64 / 1e6
     ));
     Ok(())
 }
@@ -65,12 +71,12 @@ pub fn run(ui: &Ui, args: &BenchMcoArgs) -> Result<()> {
     if args.inputs.is_empty() {
         let step = ui.spinner("building the bunny model");
         let bunny = super::builtin_bunny()?;
-        let m = build_from_mesh(&bunny, &opts)?;
+        let m = timed_build(&bunny, &opts)?;
         step.finish();
         table(ui, "bunny", &m, args.budget)?;
         let step = ui.spinner("building the 1M-triangle blob model");
         let blob = lodkit_mesh::shapes::blob(1_200_000);
-        let m = build_from_mesh(
+        let m = timed_build(
             &blob,
             &Options {
                 resolution: Some(350),
@@ -83,9 +89,9 @@ pub fn run(ui: &Ui, args: &BenchMcoArgs) -> Result<()> {
     for p in &args.inputs {
         let name = p.display().to_string();
         let m = if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("mco")) {
-            model_file::load(p)?
+            (McoModel::load(p)?, None)
         } else {
-            build_from_mesh(&super::load_mesh(ui, p)?, &opts)?
+            timed_build(&super::load_mesh(ui, p)?, &opts)?
         };
         table(ui, &name, &m, args.budget)?;
     }

@@ -267,18 +267,14 @@ fn continuous_lod(
         out,
         samples,
     } = *input;
-    use lodkit_mco::evaluate::{BUILD_SCANS, extraction_errors};
     let step = ui.spinner("scanning the input from 8 virtual views");
-    let scans = lodkit_mco::scanner::scan_mesh(mesh, &BUILD_SCANS)?;
-    let written = lodkit_mco::scanner::write_scans(&out.join("scans"), name, &scans)?;
+    let scans = lodkit_mco::scan_mesh(mesh, &BUILD_SCANS)?;
+    let written = lodkit_mco::write_scans(&out.join("scans"), name, &scans)?;
     step.finish();
     let step = ui.spinner("building the marching cube octree");
-    let mut model = lodkit_mco::build_from_range_images(&scans, &lodkit_mco::Options::default())?;
-    // The build time is the model file's one varying field: zero it so
-    // `build` stays byte-identical (`lodkit mco build` keeps it).
-    model.stats.build_seconds = 0.0;
+    let model = lodkit_mco::build_from_range_images(&scans, &lodkit_mco::Options::default())?;
     let mco_file = format!("{name}.mco");
-    lodkit_mco::model_file::save(&out.join(&mco_file), &model)?;
+    model.save(&out.join(&mco_file))?;
     step.finish();
     let step = ui.spinner("measuring extractions");
     let rows = extraction_errors(&model, mesh, &[50.0, 10.0, 1.0], Some(samples))?;
@@ -330,6 +326,63 @@ fn continuous_lod(
     }
     outputs.push((mco_file, 0));
     Ok(())
+}
+
+/// The virtual scans of `build`'s continuous-LOD section: 8 views,
+/// alternately 30° above and below the horizon, 300 × 300 samples each.
+const BUILD_SCANS: lodkit_mco::ScanOptions = lodkit_mco::ScanOptions {
+    views: 8,
+    width: 300,
+    height: 300,
+    elevation_deg: 30.0,
+    alternate: true,
+    noise: 0.0,
+    seed: 1,
+};
+
+/// One extraction of the continuous model measured against the input.
+struct ExtractionError {
+    /// Requested fraction of the full triangle count, per cent.
+    percent: f64,
+    lod: usize,
+    triangles: usize,
+    /// Symmetric mean and max (Hausdorff) distance, object units.
+    mean: f64,
+    max: f64,
+}
+
+/// Extractions at `percents` of full size, each compared with `reference`
+/// (Metro, `samples` per kind); empty extractions are left out.
+fn extraction_errors(
+    model: &lodkit_mco::McoModel,
+    reference: &TriMesh,
+    percents: &[f64],
+    samples: Option<usize>,
+) -> Result<Vec<ExtractionError>> {
+    let full = model.full_triangles();
+    let opts = CompareOptions {
+        samples,
+        ..Default::default()
+    };
+    let mut out = Vec::with_capacity(percents.len());
+    let mut idx = Vec::new();
+    for &percent in percents {
+        let target = ((full as f64 * percent / 100.0).round() as usize).max(1);
+        let lod = model.extract_triangles(target, &mut idx);
+        let mesh = model.mesh_from_indices(&idx);
+        if mesh.faces.is_empty() {
+            continue;
+        }
+        let r = compare(&mesh, reference, &opts)?.symmetric;
+        out.push(ExtractionError {
+            percent,
+            lod,
+            triangles: mesh.faces.len(),
+            mean: r.mean,
+            max: r.max,
+        });
+    }
+    Ok(out)
 }
 
 /// The input as a progressive octree-particle stream (`NAME.pop`, entropy

@@ -4,8 +4,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand};
-use lodkit_mco::pipeline::{IncrementalBuilder, Options, grid_for, samples_of};
-use lodkit_mco::{Camera, McoModel, model_file};
+use lodkit_mco::{
+    Camera, IncrementalBuilder, McoModel, Options, densify_meshes, grid_for, samples_of,
+};
 use lodkit_mesh::glam::Vec3;
 use lodkit_mesh::io::{WriteOptions, save_mesh};
 use lodkit_mesh::{Model, RangeImage};
@@ -35,7 +36,7 @@ pub enum McoCommand {
         after_help = "Examples:\n  lodkit mco extract bunny.mco --triangles 10000 -o bunny_10k.ply\n  lodkit mco extract bunny.mco --lod 500 -o lod500.ply\n  lodkit mco extract bunny.mco --view 0,0.1,0.4 --look-at 0,0.1,0 --tolerance 1 -o near.ply"
     )]
     Extract(ExtractArgs),
-    /// Nodes and triangles per level, LOD-array length, build time.
+    /// Nodes and triangles per level, LOD-array length, input samples.
     Info {
         model: PathBuf,
         /// Print as JSON.
@@ -124,10 +125,12 @@ fn build(ui: &Ui, inputs: &[PathBuf], output: &Path, resolution: Option<u32>) ->
     }
     let plain: Vec<Model> = models.iter().map(|(_, m)| m.clone()).collect();
     let grid = grid_for(&plain, &samples, &Options { resolution })?;
-    let samples = lodkit_mco::pipeline::densify_meshes(&plain, samples, &grid);
+    let samples = densify_meshes(&plain, samples, &grid);
     ui.status(format!(
         "lattice: resolution {}, cube {:.6}, octree depth {}",
-        grid.resolution, grid.cube, grid.depth
+        grid.resolution(),
+        grid.cube(),
+        grid.depth()
     ));
     let mut builder = IncrementalBuilder::new(grid);
     // Scan data has edges: Hoppe's tangential rule (meshes build without it).
@@ -142,17 +145,18 @@ fn build(ui: &Ui, inputs: &[PathBuf], output: &Path, resolution: Option<u32>) ->
         ));
     }
     let step = ui.spinner("building the octree");
-    let mut model = builder.build()?;
+    let model = builder.build()?;
     step.finish();
-    model.stats.build_seconds = t0.elapsed().as_secs_f64();
-    model_file::save(output, &model)?;
+    let seconds = t0.elapsed().as_secs_f64();
+    model.save(output)?;
     ui.status(format!(
         "wrote {} ({} nodes, {} LOD numbers, {} triangles at full resolution)",
         output.display(),
-        model.nodes.len(),
+        model.info().nodes,
         model.max_lod(),
         model.full_triangles()
     ));
+    ui.status(format!("built in {seconds:.3} s"));
     Ok(())
 }
 
@@ -169,7 +173,7 @@ fn parse_vec3(s: &str, what: &str) -> Result<Vec3> {
 }
 
 fn extract(ui: &Ui, a: &ExtractArgs) -> Result<()> {
-    let model: McoModel = model_file::load(&a.model)?;
+    let model = McoModel::load(&a.model)?;
     let mut idx = Vec::new();
     let step = ui.spinner("extracting");
     let what = if let Some(k) = a.lod {
@@ -188,7 +192,7 @@ fn extract(ui: &Ui, a: &ExtractArgs) -> Result<()> {
     } else {
         let view = a.view.as_deref().expect("clap requires one of the three");
         let position = parse_vec3(view, "--view")?;
-        let (lo, hi) = model.node_box(0);
+        let (lo, hi) = model.bounds();
         let target = match &a.look_at {
             Some(s) => parse_vec3(s, "--look-at")?,
             None => (lo + hi) * 0.5,
@@ -236,33 +240,31 @@ struct Info {
     full_triangles: usize,
     crack_patches: usize,
     input_samples: u64,
-    build_seconds: f64,
     levels: Vec<LevelRow>,
 }
 
 fn info(_ui: &Ui, path: &Path, json: bool) -> Result<()> {
-    let m = model_file::load(path)?;
+    let m = McoModel::load(path)?.info();
     let info = Info {
         file: path.display().to_string(),
-        resolution: m.grid.resolution,
-        cube: m.grid.cube,
-        depth: m.grid.depth,
-        vertices: m.vertices.len(),
-        nodes: m.nodes.len(),
-        lod_array: m.lod.len(),
-        lod_numbers: m.max_lod(),
-        full_triangles: m.full_triangles(),
-        crack_patches: m.subs.len(),
-        input_samples: m.stats.input_samples,
-        build_seconds: m.stats.build_seconds,
+        resolution: m.grid.resolution(),
+        cube: m.grid.cube(),
+        depth: m.grid.depth(),
+        vertices: m.vertices,
+        nodes: m.nodes,
+        lod_array: m.lod_array,
+        lod_numbers: m.lod_numbers,
+        full_triangles: m.full_triangles,
+        crack_patches: m.crack_patches,
+        input_samples: m.input_samples,
         levels: m
-            .level_table()
-            .into_iter()
+            .levels
+            .iter()
             .enumerate()
-            .map(|(level, (nodes, triangles))| LevelRow {
+            .map(|(level, l)| LevelRow {
                 level,
-                nodes,
-                triangles,
+                nodes: l.nodes,
+                triangles: l.triangles,
             })
             .collect(),
     };
@@ -288,11 +290,7 @@ fn info(_ui: &Ui, path: &Path, json: bool) -> Result<()> {
         info.lod_numbers
     )?;
     crate::outln!("triangles at full resolution: {}", info.full_triangles)?;
-    crate::outln!(
-        "built from {} samples in {:.3} s",
-        info.input_samples,
-        info.build_seconds
-    )?;
+    crate::outln!("built from {} samples", info.input_samples)?;
     crate::outln!("level  nodes  triangles (0 = leaf cubes)")?;
     for r in &info.levels {
         crate::outln!("{:>5}  {:>5}  {:>9}", r.level, r.nodes, r.triangles)?;

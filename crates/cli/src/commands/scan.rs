@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use lodkit_mco::scanner::{ScanOptions, scan_mesh, write_scans};
+use lodkit_mco::{ScanOptions, scan_mesh, write_scans};
 
 use crate::ui::Ui;
 

@@ -1,4 +1,4 @@
-//! Fuzzes `model_file::decode`: any bytes must give `Ok` or an error, never
+//! Fuzzes `McoModel::from_bytes`: any bytes must give `Ok` or an error, never
 //! a panic, an abort or a runaway allocation; a model that decodes must
 //! extract at any LOD number and any budget without panicking.
 //! Run: `cargo +nightly fuzz run mco corpus/mco` in this directory. Seeds:
@@ -8,7 +8,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use lodkit_mco::model_file::decode;
+use lodkit_mco::McoModel;
 
 fuzz_target!(|data: &[u8]| {
     let mut bytes = data.to_vec();
@@ -18,7 +18,7 @@ fuzz_target!(|data: &[u8]| {
         let crc = crc32fast::hash(&bytes[..body]);
         bytes[body..].copy_from_slice(&crc.to_le_bytes());
     }
-    if let Ok(m) = decode(&bytes) {
+    if let Ok(m) = McoModel::from_bytes(&bytes) {
         let mut idx = Vec::new();
         for k in [0, 1, m.max_lod() / 2, m.max_lod(), usize::MAX] {
             m.extract_lod(k, &mut idx);

@@ -1,7 +1,6 @@
-//! Measuring extraction speed next to a `memcpy` of the same index buffer
-//! (the yardstick: extraction by referencing should cost little
-//! more than copying its output). Used by `lodkit bench mco` and the
-//! criterion bench.
+//! The marching cube octree's extraction timed next to a `memcpy` of the
+//! same index buffer (extraction by referencing should cost little more
+//! than copying its output). Used by `lodkit bench mco`.
 //!
 //! For each target triangle count the LOD number is looked up once, then
 //! extraction from the birth/death tables, the §6.1 reverse-order
@@ -13,7 +12,7 @@
 use std::hint::black_box;
 use std::time::Instant;
 
-use crate::model::McoModel;
+use lodkit_mco::McoModel;
 
 /// One row of the comparison.
 #[derive(Debug, Clone, Copy, PartialEq)]

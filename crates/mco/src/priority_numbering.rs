@@ -43,32 +43,25 @@
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
+use lodkit_mesh::topology::UnionFind;
+
+use crate::lattice::KeyMap;
 use crate::model::McoModel;
-use crate::signed_distance::KeyMap;
 
 /// Fills `model.lod`, `model.groups`, `model.prio` and `model.acc` from
 /// the nodes, metrics and balance dependencies. `together` lists node
 /// pairs that must expand in the same LOD step (see the module docs).
 pub fn number(model: &mut McoModel, together: &[(u32, u32)]) {
     let n = model.nodes.len();
-    // Union-find over `together`; each class lists its members in order.
-    let mut uf: Vec<u32> = (0..n as u32).collect();
-    fn find(uf: &mut [u32], mut x: u32) -> u32 {
-        while uf[x as usize] != x {
-            uf[x as usize] = uf[uf[x as usize] as usize];
-            x = uf[x as usize];
-        }
-        x
-    }
+    // Union-find over `together` (each class's root is its smallest
+    // member); each class lists its members in order.
+    let mut uf = UnionFind::new(n);
     for &(a, b) in together {
-        let (ra, rb) = (find(&mut uf, a), find(&mut uf, b));
-        if ra != rb {
-            uf[ra.max(rb) as usize] = ra.min(rb);
-        }
+        uf.union(a, b);
     }
     let mut members: KeyMap<Vec<u32>> = KeyMap::default();
     for i in 0..n as u32 {
-        let r = find(&mut uf, i);
+        let r = uf.find(i);
         if r != i {
             members.entry(r as u64).or_insert_with(|| vec![r]).push(i);
         }
@@ -96,7 +89,7 @@ pub fn number(model: &mut McoModel, together: &[(u32, u32)]) {
         if expanded[i as usize] {
             continue;
         }
-        let root = find(&mut uf, i);
+        let root = uf.find(i);
         let group: Vec<u32> = members
             .get(&(root as u64))
             .cloned()

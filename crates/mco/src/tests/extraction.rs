@@ -4,8 +4,8 @@
 //! ([`McoModel::extract_lod_nodes`]), for many LOD numbers on several
 //! shapes; the triangle-count lookup matches the accumulation table's.
 
-use lodkit_mco::McoModel;
-use lodkit_mco::pipeline::{Options, build_from_mesh};
+use crate::McoModel;
+use crate::pipeline::{Options, build_from_mesh};
 use lodkit_mesh::{TriMesh, shapes};
 
 fn model(mesh: &TriMesh, resolution: u32) -> McoModel {
@@ -89,7 +89,7 @@ fn triangle_count_lookup_matches_the_accumulation_table() {
     for target in (0..=full + 10).step_by(7).chain([0, 1, full, usize::MAX]) {
         assert_eq!(
             m.lod_for_triangles(target),
-            lodkit_mco::priority::lod_for_triangles(&m.acc, target),
+            crate::priority_numbering::lod_for_triangles(&m.acc, target),
             "target {target}"
         );
     }

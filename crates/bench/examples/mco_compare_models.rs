@@ -3,20 +3,19 @@
 //! the same triangles — compared by their vertices' positions, normals and
 //! colours, so vertex and node numbering may differ. For speed work that
 //! reorders the build's arrays without meaning to change its output (the
-//! files are then not byte-identical, and `build_driver`'s CRC cannot tell).
+//! files are then not byte-identical, and `mco_build_driver`'s CRC cannot tell).
 //!
 //! ```text
-//! MCO_OUT=/tmp/a.mco cargo run --release -p lodkit-mco --example build_driver -- 640000 1
+//! MCO_OUT=/tmp/a.mco cargo run --release -p lodkit-bench --example mco_build_driver -- 640000 1
 //! # … change the build …
-//! MCO_OUT=/tmp/b.mco cargo run --release -p lodkit-mco --example build_driver -- 640000 1
-//! cargo run --release -p lodkit-mco --example compare_models -- /tmp/a.mco /tmp/b.mco
+//! MCO_OUT=/tmp/b.mco cargo run --release -p lodkit-bench --example mco_build_driver -- 640000 1
+//! cargo run --release -p lodkit-bench --example mco_compare_models -- /tmp/a.mco /tmp/b.mco
 //! ```
 
 use std::path::Path;
 use std::process::ExitCode;
 
 use lodkit_mco::McoModel;
-use lodkit_mco::model_file::load;
 
 /// A triangle as its corners' bits (position, normal, colour), rotated so
 /// the smallest corner comes first (orientation kept).
@@ -25,16 +24,16 @@ type Corner = ([u32; 3], [u32; 3], [u8; 4]);
 fn triangles(m: &McoModel, k: usize) -> Vec<[Corner; 3]> {
     let mut idx = Vec::new();
     m.extract_lod(k, &mut idx);
-    let v = &m.vertices;
+    let (positions, normals, colors) = (m.positions(), m.normals(), m.colors());
     let mut out: Vec<[Corner; 3]> = idx
         .chunks_exact(3)
         .map(|t| {
             let c: [Corner; 3] = std::array::from_fn(|j| {
                 let i = t[j] as usize;
                 (
-                    v.positions[i].to_array().map(f32::to_bits),
-                    v.normals[i].to_array().map(f32::to_bits),
-                    v.colors[i],
+                    positions[i].to_array().map(f32::to_bits),
+                    normals[i].to_array().map(f32::to_bits),
+                    colors[i],
                 )
             });
             let r = (0..3).min_by_key(|&j| c[j]).expect("three corners");
@@ -48,12 +47,17 @@ fn triangles(m: &McoModel, k: usize) -> Vec<[Corner; 3]> {
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().collect();
     if args.len() != 3 {
-        eprintln!("usage: compare_models A.mco B.mco");
+        eprintln!("usage: mco_compare_models A.mco B.mco");
         return ExitCode::FAILURE;
     }
-    let a = load(Path::new(&args[1])).expect("the first model");
-    let b = load(Path::new(&args[2])).expect("the second model");
-    if a.max_lod() != b.max_lod() || a.acc != b.acc {
+    let a = McoModel::load(Path::new(&args[1])).expect("the first model");
+    let b = McoModel::load(Path::new(&args[2])).expect("the second model");
+    let acc = |m: &McoModel| {
+        (0..=m.max_lod())
+            .map(|k| m.triangles_at_lod(k))
+            .collect::<Vec<_>>()
+    };
+    if a.max_lod() != b.max_lod() || acc(&a) != acc(&b) {
         println!(
             "different LOD tables: {} vs {} LOD numbers",
             a.max_lod(),
@@ -81,8 +85,8 @@ fn main() -> ExitCode {
     println!(
         "same meshes at {} LOD numbers of {n} ({} vs {} vertices)",
         ks.len(),
-        a.vertices.len(),
-        b.vertices.len()
+        a.positions().len(),
+        b.positions().len()
     );
     ExitCode::SUCCESS
 }

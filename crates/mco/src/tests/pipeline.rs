@@ -2,11 +2,11 @@
 //! shapes: reconstruction error, no cracks, budget accuracy, incremental
 //! building, view-dependent extraction.
 
-mod support;
+use super::support;
 
-use lodkit_mco::pipeline::{IncrementalBuilder, Options, build_from_mesh, samples_of};
-use lodkit_mco::signed_distance::Grid;
-use lodkit_mco::{Camera, McoModel};
+use crate::lattice::Grid;
+use crate::pipeline::{IncrementalBuilder, Options, build_from_mesh, samples_of};
+use crate::{Camera, McoModel};
 use lodkit_mesh::glam::Vec3;
 use lodkit_mesh::{Model, TriMesh, shapes};
 
@@ -121,9 +121,9 @@ fn adding_scans_one_at_a_time_equals_adding_them_together() {
     let s = samples_of(&Model::Mesh(sphere.clone())).unwrap();
     let grid = Grid::new(s.bbox(), 20).unwrap();
     let half = s.len() / 2;
-    let part = |r: std::ops::Range<usize>| lodkit_mco::signed_distance::Samples {
+    let part = |r: std::ops::Range<usize>| lodkit_mesh::PointCloud {
         positions: s.positions[r.clone()].to_vec(),
-        normals: s.normals[r].to_vec(),
+        normals: Some(s.normals.as_ref().unwrap()[r].to_vec()),
         colors: None,
     };
     let mut one = IncrementalBuilder::new(grid);

@@ -2,23 +2,21 @@
 //! checking that a change keeps the output byte-identical: builds
 //! `shapes::blob(TRIS)` — or, with `bunny`, the Stanford bunny from its 10
 //! real range scans in `../shared/data` — `REPEAT` times and prints the
-//! best time, input points per second and a CRC of the encoded model (its
-//! build time zeroed). Beside the wall time it prints the best thread CPU
+//! best time, input points per second and a CRC of the encoded model. Beside the wall time it prints the best thread CPU
 //! time, which a loaded machine inflates far less (other processes
 //! preempting this one do not count). With `MCO_OUT=PATH` in the
 //! environment the last model is also written there (for
-//! `compare_models`, which checks that two builds draw the same meshes).
+//! `mco_compare_models`, which checks that two builds draw the same meshes).
 //!
 //! ```text
-//! cargo run --release -p lodkit-mco --example build_driver -- 640000 3
-//! cargo run --release -p lodkit-mco --example build_driver -- bunny 3
+//! cargo run --release -p lodkit-bench --example mco_build_driver -- 640000 3
+//! cargo run --release -p lodkit-bench --example mco_build_driver -- bunny 3
 //! ```
 
 use std::time::Instant;
 
-use lodkit_mco::McoModel;
-use lodkit_mco::model_file::encode;
-use lodkit_mco::pipeline::{Options, build_from_mesh, build_from_range_images};
+use lodkit_bench::simplify::thread_cpu_seconds;
+use lodkit_mco::{McoModel, Options, build_from_mesh, build_from_models, build_from_range_images};
 use lodkit_mesh::shapes;
 
 fn main() {
@@ -48,9 +46,7 @@ fn main() {
             normals: Some(lodkit_mesh::normals::vertex_normals(&mesh)),
             colors: None,
         })];
-        build = Box::new(move || {
-            lodkit_mco::pipeline::build_from_models(&cloud, &Options::default()).unwrap()
-        });
+        build = Box::new(move || build_from_models(&cloud, &Options::default()).unwrap());
     } else {
         let mesh = shapes::blob(what.parse().expect("a triangle count or `bunny`"));
         points = mesh.positions.len();
@@ -63,18 +59,17 @@ fn main() {
     for _ in 0..repeat {
         let t = Instant::now();
         let c = thread_cpu_seconds();
-        let mut m = build();
-        best_cpu = best_cpu.min(thread_cpu_seconds() - c);
+        let m = build();
+        best_cpu = best_cpu.min(thread_cpu_seconds().unwrap_or(f64::NAN) - c.unwrap_or(f64::NAN));
         best = best.min(t.elapsed().as_secs_f64());
-        m.stats.build_seconds = 0.0;
         shape = format!(
             "resolution {}, {} nodes, {} triangles",
-            m.grid.resolution,
-            m.nodes.len(),
+            m.grid().resolution(),
+            m.info().nodes,
             m.full_triangles()
         );
         // The file ends with its own CRC; hash what it covers.
-        let bytes = encode(&m);
+        let bytes = m.to_bytes();
         crc = crc32fast::hash(&bytes[..bytes.len() - 4]);
         if let Some(path) = std::env::var_os("MCO_OUT") {
             std::fs::write(path, &bytes).expect("write MCO_OUT");
@@ -86,30 +81,4 @@ fn main() {
         points as f64 / best,
         points as f64 / best_cpu
     );
-}
-
-/// CPU time of the calling thread (`CLOCK_THREAD_CPUTIME_ID`), seconds.
-#[cfg(all(target_os = "linux", target_pointer_width = "64"))]
-fn thread_cpu_seconds() -> f64 {
-    #[repr(C)]
-    struct Timespec {
-        sec: i64,
-        nsec: i64,
-    }
-    unsafe extern "C" {
-        fn clock_gettime(clock: i32, ts: *mut Timespec) -> i32;
-    }
-    const CLOCK_THREAD_CPUTIME_ID: i32 = 3;
-    let mut ts = Timespec { sec: 0, nsec: 0 };
-    // SAFETY: `ts` is a valid, writable timespec (64-bit Linux layout).
-    let rc = unsafe { clock_gettime(CLOCK_THREAD_CPUTIME_ID, &mut ts) };
-    if rc != 0 {
-        return f64::NAN;
-    }
-    ts.sec as f64 + ts.nsec as f64 * 1e-9
-}
-
-#[cfg(not(all(target_os = "linux", target_pointer_width = "64")))]
-fn thread_cpu_seconds() -> f64 {
-    f64::NAN
 }

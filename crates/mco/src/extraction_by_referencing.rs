@@ -55,8 +55,7 @@
 //! branches (each record is written, and the write position advances by
 //! `3 · (death > k)`; skipped when the whole bucket died by `k`, as at full
 //! size). Buckets are sized so that this one holds at most a sixteenth as
-//! many records as the output, and there are `O(log n)` of them (69 on the
-//! real-scan bunny, 107 on a 1M-triangle blob), so an extraction costs
+//! many records as the output, and there are `O(log n)` of them, so an extraction costs
 //! little more than copying its output (`lodkit bench mco`). The
 //! prefix ends are found through a birth table sampled every
 //! [`BIRTH_STRIDE`] LOD numbers and a short binary search.
@@ -68,7 +67,7 @@
 //!
 //! By triangle count, the accumulation table gives the LOD number first
 //! (a binary search over its running maximum, the choice of
-//! [`crate::priority::lod_for_triangles`]).
+//! [`crate::priority_numbering::lod_for_triangles`]).
 
 use lodkit_mesh::TriMesh;
 
@@ -86,23 +85,21 @@ struct Record {
 /// Width, in LOD numbers, of one entry of a death bucket's birth table: a
 /// prefix lookup reads one entry pair and binary-searches the few records
 /// born within this many LOD numbers.
-pub const BIRTH_STRIDE: u32 = 16;
+pub(crate) const BIRTH_STRIDE: u32 = 16;
 
 /// A death bucket holds at most `1 / BUCKET_SHARE` as many records as the
 /// LOD number where it starts draws triangles (and up to `MIN_BUCKET`
 /// records anyway): the one bucket an extraction filters then costs a small
 /// fraction of its output, and the buckets stay few (`O(log)` of the
-/// triangle count; 107 on a 1M-triangle blob) so the copies of the others
-/// stay cheap. Measured on that blob (extraction and memcpy in one
-/// process, best of 30 batches), shares of 8, 16 and 32 cost 1.46, 1.18
-/// and 1.15 times a memcpy at 40k triangles and 1.37, 1.48 and 1.53 at
-/// 10k: 16 is the knee.
+/// triangle count) so the copies of the others stay cheap. 16 is the knee
+/// between the two (`lodkit bench mco`: smaller shares filter more, larger
+/// ones copy more buckets).
 const BUCKET_SHARE: u64 = 16;
 const MIN_BUCKET: u64 = 512;
 
 impl Traversal {
     /// Bytes held by the arrays.
-    pub fn bytes(&self) -> usize {
+    pub(crate) fn bytes(&self) -> usize {
         4 * (self.stream.len()
             + self.step_start.len()
             + self.leaf_block.len()
@@ -244,7 +241,7 @@ impl Lifetimes {
     }
 
     /// Bytes held by the tables.
-    pub fn bytes(&self) -> usize {
+    pub(crate) fn bytes(&self) -> usize {
         4 * (self.tris.len()
             + self.birth.len()
             + self.death.len()
@@ -282,7 +279,7 @@ impl McoModel {
     /// Builds the extraction stream from the nodes, LOD array, priorities
     /// and patches (`O(n)`, a handful of allocations). Called after
     /// building and after loading.
-    pub fn prepare_extraction(&mut self) {
+    pub(crate) fn prepare_extraction(&mut self) {
         self.traversal = LazyTraversal::default();
         self.lifetimes = self.lifetimes();
         let mut best = 0u32;
@@ -478,7 +475,7 @@ impl McoModel {
 
     /// Bytes held by the derived extraction arrays beyond the stored model:
     /// (birth/death tables, the traversal's arrays if built yet).
-    pub fn extraction_bytes(&self) -> (usize, usize) {
+    pub(crate) fn extraction_bytes(&self) -> (usize, usize) {
         (
             self.lifetimes.bytes() + 4 * self.acc_max.len(),
             self.traversal.0.get().map_or(0, Traversal::bytes),
@@ -510,12 +507,23 @@ impl McoModel {
         }
     }
 
-    /// The index buffer of LOD number `k` (clamped to [`McoModel::max_lod`])
-    /// into `out` (cleared first; its allocation is reused), from the
-    /// birth/death tables: every death bucket that starts after `k` gives
-    /// its records born by `k` in one copy, and the one bucket holding `k`
-    /// is filtered on `death > k` without branches. Emits exactly `acc[k]`
-    /// triangles, the same as [`McoModel::extract_lod_traversal`].
+    /// The cut at LOD number `k`: its index buffer into `out`.
+    ///
+    /// - `k`: a LOD number, clamped to [`McoModel::max_lod`]; `0` is the
+    ///   root cube alone, and each step up expands one node (or the few
+    ///   that must expand together) in the thesis's priority order.
+    /// - `out`: cleared, then filled with exactly
+    ///   [`McoModel::triangles_at_lod`]`(k)` triangles, 3 indices each,
+    ///   into [`McoModel::positions`]; its allocation is reused (it grows
+    ///   to at most `3 ×` [`McoModel::full_triangles`]).
+    /// - Crack-free and deterministic (see the crate docs); the same
+    ///   triangle set as [`McoModel::extract_lod_traversal`], in another
+    ///   order.
+    /// - Cost: close to a `memcpy` of the output: every death bucket
+    ///   whose records all outlive `k` gives its records born by `k` in
+    ///   one copy, and only the bucket holding `k` is filtered, without
+    ///   branches. No floating-point operation, no allocation once `out`
+    ///   is large enough.
     pub fn extract_lod(&self, k: usize, out: &mut Vec<u32>) {
         out.clear();
         let lt = &self.lifetimes;
@@ -557,11 +565,14 @@ impl McoModel {
         }
     }
 
-    /// The index buffer of LOD number `k` (clamped to [`McoModel::max_lod`])
-    /// by the §6.1 reverse-order traversal, into `out` (cleared first; its
-    /// allocation is reused). Emits exactly `acc[k]` triangles: the same
-    /// triangles as [`McoModel::extract_lod`], in another order. This is
-    /// the reference the birth/death tables are tested against.
+    /// The cut at LOD number `k` by the thesis's §6.1 reverse-order
+    /// traversal of the LOD array, into `out` (cleared first; its
+    /// allocation is reused): the same triangles as
+    /// [`McoModel::extract_lod`], in another order, with the same bounds.
+    /// The reference the birth/death tables are tested against; slower
+    /// than [`McoModel::extract_lod`] at most sizes. Its arrays are built
+    /// on the first call (`O(n)`, about the size of the stored triangles;
+    /// thread-safe).
     pub fn extract_lod_traversal(&self, k: usize, out: &mut Vec<u32>) {
         out.clear();
         if self.nodes.is_empty() {
@@ -638,20 +649,30 @@ impl McoModel {
         }
     }
 
-    /// The index buffer closest to `triangles` triangles; returns the LOD
-    /// number used.
+    /// The cut closest to a triangle budget: the LOD number whose triangle
+    /// count is nearest to `triangles` ([`McoModel::lod_for_triangles`]),
+    /// extracted as by [`McoModel::extract_lod`] into `out` (cleared; its
+    /// allocation reused). Returns the LOD number used.
+    ///
+    /// The count can miss the budget, above or below, by at most the
+    /// triangles one LOD step adds (one node's expansion, or one group's);
+    /// a budget above [`McoModel::full_triangles`] gives full resolution,
+    /// 0 gives the root. Cost: `O(log n)` lookup plus
+    /// [`McoModel::extract_lod`].
     pub fn extract_triangles(&self, triangles: usize, out: &mut Vec<u32>) -> usize {
         let k = self.lod_for_triangles(triangles);
         self.extract_lod(k, out);
         k
     }
 
-    /// [`crate::priority::lod_for_triangles`] in `O(log n)`: the same
-    /// choice, found by binary search over the running maximum of the
-    /// accumulation table.
+    /// The LOD number whose triangle count is closest to `triangles` (ties
+    /// to the higher one), by binary search over the running maximum of the
+    /// accumulation table (which is not monotone: an expansion can lower
+    /// the count). `O(log n)`. The same choice as
+    /// [`crate::priority_numbering::lod_for_triangles`]'s linear scan.
     pub fn lod_for_triangles(&self, triangles: usize) -> usize {
         if self.acc_max.len() != self.acc.len() || self.acc.is_empty() {
-            return crate::priority::lod_for_triangles(&self.acc, triangles);
+            return crate::priority_numbering::lod_for_triangles(&self.acc, triangles);
         }
         let target = triangles.min(u32::MAX as usize) as u32;
         let k = self.acc_max.partition_point(|&a| a < target);
@@ -672,7 +693,8 @@ impl McoModel {
     /// array from `lod[groups[k] - 1]` back to the root, drawing each
     /// visited node's children that are not expanded. Slow; kept as the
     /// definition the prepared forms are tested against.
-    pub fn extract_lod_nodes(&self, k: usize, out: &mut Vec<u32>) {
+    #[cfg(test)]
+    pub(crate) fn extract_lod_nodes(&self, k: usize, out: &mut Vec<u32>) {
         out.clear();
         if self.nodes.is_empty() {
             return;
@@ -695,8 +717,8 @@ impl McoModel {
 
     /// The index buffer of an arbitrary balanced cut given by per-node
     /// `expanded` flags (parents of expanded nodes expanded, balance kept;
-    /// see [`crate::view_dependent`]).
-    pub fn extract_expanded(&self, expanded: &[bool], out: &mut Vec<u32>) {
+    /// see [`crate::view_dependent_cut`]).
+    pub(crate) fn extract_expanded(&self, expanded: &[bool], out: &mut Vec<u32>) {
         out.clear();
         if self.nodes.is_empty() {
             return;
@@ -718,9 +740,12 @@ impl McoModel {
         }
     }
 
-    /// A standalone mesh of an index buffer: only the referenced vertices,
-    /// numbered in order of first use, with normals and (if the input had
-    /// them) colours.
+    /// A standalone mesh of a cut's index buffer: only the vertices it
+    /// references, numbered in order of first use, with their normals and
+    /// (when [`McoModel::has_colors`]) colours. `indices` must come from
+    /// this model's cuts (every index below `positions().len()`; panics
+    /// otherwise); a trailing partial triangle is ignored. `O(vertices +
+    /// indices)`, one allocation per attribute.
     pub fn mesh_from_indices(&self, indices: &[u32]) -> TriMesh {
         let mut map = vec![u32::MAX; self.vertices.len()];
         let mut used: Vec<u32> = Vec::new();
@@ -749,14 +774,16 @@ impl McoModel {
         }
     }
 
-    /// Convenience: the mesh closest to `triangles` triangles.
+    /// Convenience: [`McoModel::extract_triangles`] then
+    /// [`McoModel::mesh_from_indices`] (allocates every call).
     pub fn mesh_with_triangles(&self, triangles: usize) -> TriMesh {
         let mut idx = Vec::new();
         self.extract_triangles(triangles, &mut idx);
         self.mesh_from_indices(&idx)
     }
 
-    /// Convenience: the mesh at LOD number `k`.
+    /// Convenience: [`McoModel::extract_lod`] then
+    /// [`McoModel::mesh_from_indices`] (allocates every call).
     pub fn mesh_at_lod(&self, k: usize) -> TriMesh {
         let mut idx = Vec::new();
         self.extract_lod(k, &mut idx);

@@ -20,9 +20,12 @@ use glam::Vec3;
 
 use crate::model::McoModel;
 
-/// A perspective camera.
+/// A perspective camera, in the model's object units. Only what decides
+/// which nodes are refined: where it is, where it looks, and how many
+/// pixels a length covers.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Camera {
+    /// Eye position (object units).
     pub position: Vec3,
     /// View direction (need not be unit length).
     pub direction: Vec3,
@@ -32,7 +35,7 @@ pub struct Camera {
     pub vfov_deg: f32,
     /// Viewport height in pixels.
     pub viewport_height: f32,
-    /// Viewport width / height.
+    /// Viewport width / height (1 = square).
     pub aspect: f32,
 }
 
@@ -62,7 +65,7 @@ impl Camera {
 }
 
 /// Per-node expanded flags for `camera` and a tolerance in pixels.
-pub fn select(model: &McoModel, camera: &Camera, tolerance_px: f32) -> Vec<bool> {
+pub(crate) fn select(model: &McoModel, camera: &Camera, tolerance_px: f32) -> Vec<bool> {
     let n = model.nodes.len();
     let mut expanded = vec![false; n];
     if n == 0 {
@@ -122,8 +125,26 @@ pub fn select(model: &McoModel, camera: &Camera, tolerance_px: f32) -> Vec<bool>
 }
 
 impl McoModel {
-    /// The view-dependent index buffer (see [`select`]); returns the number
-    /// of expanded nodes.
+    /// The view-dependent cut for `camera`: nodes inside the view frustum
+    /// whose geometric error would cover more than `tolerance_px` pixels
+    /// on screen are refined, the rest stay coarse; the cut's index
+    /// buffer goes into `out` (cleared; its allocation reused). Returns
+    /// the number of expanded nodes.
+    ///
+    /// - `tolerance_px`: the largest projected error allowed, in pixels of
+    ///   a viewport [`Camera::viewport_height`] high (1.0 is a good
+    ///   default; values below 1e-6 count as 1e-6). A node's error is the
+    ///   square root of its LOD metric (object units), projected at the
+    ///   distance from the eye to the nearest point of its cube.
+    /// - Guarantees: crack-free (the expanded set is closed under parents,
+    ///   balance dependencies and groups that must expand together, so the
+    ///   crack patches apply unchanged); each part of the surface is drawn
+    ///   once, at one level; every index is below `positions().len()`;
+    ///   deterministic. A camera looking away from
+    ///   the model gives a coarse cut, never an empty one (unless the
+    ///   model is empty).
+    /// - Cost: `O(nodes)` per call (one pass over the nodes, then the
+    ///   closure), and one `Vec<bool>` of `nodes` flags allocated per call.
     pub fn extract_view(&self, camera: &Camera, tolerance_px: f32, out: &mut Vec<u32>) -> usize {
         let flags = select(self, camera, tolerance_px);
         self.extract_expanded(&flags, out);
