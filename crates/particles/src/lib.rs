@@ -70,6 +70,9 @@ pub use decode::{DecodeOptions, Decoded, LevelSurface, decode};
 pub use encode::{EncodeOptions, EncodeReport, Encoded, LevelReport, Placement, encode};
 pub use error::{Error, Result};
 pub use octree::Sidedness;
-pub use stats::{LevelStats, ProgressiveLevel, StreamStats, progressive_levels, stream_stats};
+pub use stats::{
+    LevelStats, ProgressiveLevel, StreamStats, non_manifold_flags, non_manifold_triangles,
+    progressive_levels, stream_stats,
+};
 pub use thinning::ThinningOptions;
 pub use triangulate::{TriangulateOptions, Triangulation, TriangulationStats, triangulate};

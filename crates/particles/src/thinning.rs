@@ -175,7 +175,8 @@ pub fn choose_relax_level(tree: &Octree) -> u8 {
 /// level's triangle count.
 fn coarse_non_manifold_share(tree: &Octree, last: usize) -> (f64, Vec<usize>) {
     use crate::decode::LevelSurface;
-    use crate::triangulate::{TriangulateOptions, non_manifold_triangles, triangulate};
+    use crate::stats::non_manifold_triangles;
+    use crate::triangulate::{TriangulateOptions, triangulate};
     let Ok((h, leaf_source)) = crate::ordering::Hierarchy::from_thinned(tree) else {
         return (f64::INFINITY, Vec::new());
     };

@@ -16,7 +16,8 @@
 use std::path::Path;
 use std::time::Instant;
 
-use lodkit_particles::triangulate::{non_manifold_triangles, triangulate_traced};
+use lodkit_particles::non_manifold_triangles;
+use lodkit_particles::triangulate::triangulate_traced;
 use lodkit_particles::{
     DecodeOptions, EncodeOptions, Mode, ThinningOptions, TriangulateOptions, decode, encode,
     triangulate,
@@ -112,7 +113,7 @@ fn main() {
         let (tr, classes) = triangulate_traced(&s, &t);
         let nm = non_manifold_triangles(&tr.mesh);
         let mut hist = [0usize; 256];
-        for (i, bad) in lodkit_particles::triangulate::non_manifold_flags(&tr.mesh)
+        for (i, bad) in lodkit_particles::non_manifold_flags(&tr.mesh)
             .iter()
             .enumerate()
         {
