@@ -11,14 +11,15 @@ use glam::Vec3;
 use lodkit_mesh::{PointCloud, TriMesh};
 
 use crate::attributes::{self, Channel};
+use crate::coding::bit_coder::BitCoder;
+use crate::coding::levels::{self as hc, LevelInput};
+use crate::coding::precision_layers;
+use crate::coding::range_coder::EntropyReader;
+use crate::coding::raw_bits::BitReader;
 use crate::container::{ChunkKind, ChunkReader, Header, Mode, read_header};
-use crate::encode_baseline::BitReader;
-use crate::encode_entropy::EntropyReader;
 use crate::error::{Result, stream_err};
-use crate::hierarchical_coding::{self as hc, BitCoder, LevelInput};
 use crate::octree::{Frame, QBITS};
 use crate::ordering::HLevel;
-use crate::precision_coding;
 
 /// Where to stop reading.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -157,8 +158,8 @@ fn decode_with<'a, R: ChunkRead<'a>>(
         bytes_read: crate::container::HEADER_LEN,
     };
     let mut leaves: Vec<[u32; 3]> = Vec::new();
-    let mut links = hc::Links::root();
-    let mut neighbours = precision_coding::Faces::default();
+    let mut links = crate::coding::links::Links::root();
+    let mut neighbours = precision_layers::Faces::default();
     // The chunk expected next: (kind, index).
     let mut expect = (ChunkKind::Level, 0u8);
     for chunk in ChunkReader::new(bytes) {
@@ -263,13 +264,13 @@ fn decode_with<'a, R: ChunkRead<'a>>(
                 }
                 let mut c = R::open(chunk.payload)?;
                 if entropy && neighbours.is_empty() {
-                    neighbours = precision_coding::particle_faces(
+                    neighbours = precision_layers::particle_faces(
                         &links,
                         &d.levels[depth as usize],
                         d.q.len(),
                     );
                 }
-                precision_coding::code_precision(
+                precision_layers::code_precision(
                     &mut c,
                     depth,
                     u32::from(b),

@@ -4,14 +4,15 @@
 use lodkit_mesh::Model;
 
 use crate::attributes::{self, Averaged, Channel};
+use crate::coding::bit_coder::BitCoder;
+use crate::coding::levels::{self as hc, LevelInput, Truth};
+use crate::coding::precision_layers;
+use crate::coding::range_coder::EntropyWriter;
+use crate::coding::raw_bits::BitWriter;
 use crate::container::{ChunkKind, Header, Mode, write_chunk, write_header};
-use crate::encode_baseline::BitWriter;
-use crate::encode_entropy::EntropyWriter;
 use crate::error::{Error, Result};
-use crate::hierarchical_coding::{self as hc, BitCoder, LevelInput, Truth};
 use crate::octree::{BuildOptions, Octree, QBITS, Sidedness, unmorton};
 use crate::ordering::Hierarchy;
-use crate::precision_coding;
 use crate::thinning::{ThinningOptions, thin_choosing};
 
 /// Default precision `N`: §7.2 finds 12 bits enough for most models.
@@ -24,11 +25,11 @@ pub enum Placement {
     Mean,
     /// On the plane of the leaf's samples (through their mean, across
     /// their mean normal), where the leaf's middle column along the
-    /// [`precision_coding::normal_axis`] the decoder infers from the
+    /// [`precision_layers::normal_axis`] the decoder infers from the
     /// neighbours meets it — or, where that crossing leaves the leaf, the
     /// quarter or eighth column under the mean. The two tangential
     /// coordinates then cost nothing, or one or two bits (see
-    /// [`precision_coding::code_precision`]), and the error across the
+    /// [`precision_layers::code_precision`]), and the error across the
     /// surface is the plane's. Falls back to the mean
     /// where the input has no normals, the plane is steeper than
     /// [`MIN_NORMAL_COSINE`] against that axis, or every column's crossing
@@ -250,7 +251,7 @@ fn encode_with<W: ChunkWriter>(
         ..Default::default()
     };
     let mut coded: Vec<[u32; 3]> = Vec::with_capacity(leaves.len());
-    let mut links = hc::Links::root();
+    let mut links = crate::coding::links::Links::root();
     for r in 0..=dr {
         // Structure.
         let mut w = W::open();
@@ -335,9 +336,9 @@ fn encode_with<W: ChunkWriter>(
         .map(|&l| tree.leaves.q[leaf_source[l as usize] as usize])
         .collect();
     let mut neighbours = if entropy {
-        precision_coding::particle_faces(&links, &h.levels[dr], q.len())
+        precision_layers::particle_faces(&links, &h.levels[dr], q.len())
     } else {
-        precision_coding::Faces::default()
+        precision_layers::Faces::default()
     };
     if entropy
         && precision > depth
@@ -355,7 +356,7 @@ fn encode_with<W: ChunkWriter>(
     }
     for b in (u32::from(depth) + 1)..=u32::from(precision) {
         let mut w = W::open();
-        precision_coding::code_precision(&mut w, depth, b, &mut q, &mut neighbours)?;
+        precision_layers::code_precision(&mut w, depth, b, &mut q, &mut neighbours)?;
         let (payload, bits) = w.close();
         write_chunk(
             ChunkKind::Precision,
@@ -380,7 +381,7 @@ fn encode_with<W: ChunkWriter>(
 /// [`Placement::SurfaceColumn`] for one particle: `mean` (16-bit grid)
 /// and unit `normal` of its samples, `leaf` (`R`-bit), the normal axis
 /// `g` the decoder will infer. Tries columns of depth `k = 0, 1, …` (up
-/// to [`precision_coding::MAX_COLUMN_DEPTH`], and below `N`): the tangential
+/// to [`crate::coding::contexts::MAX_COLUMN_DEPTH`], and below `N`): the tangential
 /// coordinates keep the mean's first `k` bits below `R`, then sit at the
 /// middle of that sub-cell (the centre of its `N`-bit cell there, what a
 /// decoder at full precision draws); the normal one is the plane's height
@@ -400,7 +401,7 @@ fn surface_column(
         return None;
     }
     let half_cell = (1u32 << (QBITS - u32::from(precision))) >> 1;
-    let max_k = precision_coding::MAX_COLUMN_DEPTH.min(precision - depth - 1);
+    let max_k = crate::coding::contexts::MAX_COLUMN_DEPTH.min(precision - depth - 1);
     let lo = f64::from(leaf[g] << s);
     let hi = lo + f64::from((1u32 << s) - 1);
     for k in 0..=max_k {
@@ -500,7 +501,7 @@ mod tests {
         let n = glam::Vec3::new(0.0, 0.6, 0.8);
         let mean = [3 * 4096 + 1000, 5 * 4096 + 2500, 7 * 4096 + 2000];
         // Neighbours across x and y: z is the normal axis.
-        assert_eq!(precision_coding::normal_axis(0b011_011), 2);
+        assert_eq!(precision_layers::normal_axis(0b011_011), 2);
         let (p, k) = surface_column(mean, leaf, n, 2, 4, 12).unwrap();
         assert_eq!(k, 0);
         // Tangential: the 12-bit cell at the leaf's middle, drawn at its centre.

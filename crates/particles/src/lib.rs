@@ -49,17 +49,14 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod attributes;
+pub mod coding;
 pub mod container;
 pub mod decode;
 pub mod encode;
-pub mod encode_baseline;
-pub mod encode_entropy;
 pub mod error;
-pub mod hierarchical_coding;
 pub mod octree;
 pub mod ordering;
 pub mod orientation;
-pub mod precision_coding;
 pub mod stats;
 pub mod thinning;
 pub mod triangulate;

@@ -105,6 +105,7 @@ pub(super) enum EdgeSlots {
 }
 
 impl Uses {
+    #[inline]
     pub(super) fn add(&mut self, t: [u32; 3], face: bool, slots: EdgeSlots) {
         if face {
             let n = self.face_tris.entry(sorted_tri(t)).or_insert(0);
@@ -115,6 +116,7 @@ impl Uses {
         }
         self.touch(t, 1, slots);
     }
+    #[inline]
     pub(super) fn remove(&mut self, t: [u32; 3], face: bool, slots: EdgeSlots) {
         if face {
             let key = sorted_tri(t);
