@@ -29,6 +29,7 @@ pub enum Mode {
 }
 
 impl Mode {
+    /// Its name in reports and on the command line (`baseline`, `entropy`).
     pub fn name(self) -> &'static str {
         match self {
             Mode::Baseline => "baseline",
@@ -40,13 +41,17 @@ impl Mode {
 /// The stream header.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Header {
+    /// How the payloads are coded.
     pub mode: Mode,
     /// Octree resolution `R`.
     pub depth: u8,
     /// Highest precision `N` the stream carries (`R ≤ N ≤ 16`).
     pub precision: u8,
+    /// Whether each level has an attribute chunk with colours.
     pub colours: bool,
+    /// Whether the attribute chunks carry normals.
     pub normals: bool,
+    /// The cube the octree divides (its lower corner and side, in model units).
     pub frame: Frame,
     /// Number of particles (ON leaves at level `R`).
     pub particles: u32,
@@ -66,12 +71,16 @@ pub enum ChunkKind {
 /// One chunk, borrowed from the stream.
 #[derive(Debug, Clone, Copy)]
 pub struct Chunk<'a> {
+    /// What the chunk carries.
     pub kind: ChunkKind,
+    /// Its level or precision layer.
     pub index: u8,
+    /// Nodes, kept nodes or particles it codes (see [`ChunkKind`]).
     pub count: u32,
     /// Level chunks: cubes eliminated by thinning at this level (Table 1,
     /// informative); 0 elsewhere.
     pub aux: u32,
+    /// The coded payload (checksum verified).
     pub payload: &'a [u8],
     /// Offset of the chunk's end in the stream (bytes so far).
     pub end: usize,
@@ -171,7 +180,11 @@ fn f32_at(b: &[u8], i: usize) -> f32 {
     f32::from_le_bytes([b[i], b[i + 1], b[i + 2], b[i + 3]])
 }
 
-/// Parses and checks the header.
+/// Parses and checks a stream's header (magic, version, depth and
+/// precision in range): the first [`HEADER_LEN`] bytes.
+///
+/// Errors: [`Error::Stream`](crate::Error::Stream) naming what is wrong,
+/// for fewer bytes than the header or any field out of range.
 pub fn read_header(bytes: &[u8]) -> Result<Header> {
     if bytes.len() < MAGIC.len() || bytes[..MAGIC.len()] != MAGIC {
         return stream_err("not a .pop stream (bad magic)");
@@ -256,17 +269,35 @@ pub struct ChunkReader<'a> {
     pos: usize,
     number: usize,
     failed: bool,
+    cut: bool,
 }
 
 impl<'a> ChunkReader<'a> {
-    /// Chunks of a stream whose header has been read.
+    /// Chunks of a stream whose header has been read ([`read_header`]): each
+    /// chunk's kind, index, counts and checksum-verified payload, in stream
+    /// order; an error (then the end) at a damaged or cut chunk
+    /// ([`ChunkReader::was_cut`] tells the two apart). Reads no byte twice.
     pub fn new(bytes: &'a [u8]) -> Self {
         ChunkReader {
             bytes,
             pos: HEADER_LEN.min(bytes.len()),
             number: 0,
             failed: false,
+            cut: false,
         }
+    }
+
+    /// Offset of the next chunk: after the last one yielded (the header's
+    /// end before the first).
+    pub fn position(&self) -> usize {
+        self.pos
+    }
+
+    /// Whether the error yielded was the end of the bytes cutting a chunk
+    /// short (its header or its payload), as in a stream still arriving,
+    /// rather than damage.
+    pub fn was_cut(&self) -> bool {
+        self.cut
     }
 }
 
@@ -285,6 +316,7 @@ impl<'a> Iterator for ChunkReader<'a> {
             Some(stream_err(msg))
         };
         if rest.len() < CHUNK_HEADER_LEN {
+            self.cut = true;
             return fail(
                 self,
                 format!(
@@ -301,6 +333,7 @@ impl<'a> Iterator for ChunkReader<'a> {
         };
         let len = u32_at(rest, 12) as usize;
         if rest.len() - CHUNK_HEADER_LEN < len {
+            self.cut = true;
             return fail(
                 self,
                 format!(

@@ -234,6 +234,7 @@ pub struct Octree {
     pub frame: Frame,
     pub levels: Vec<Level>,
     pub leaves: LeafAttributes,
+    #[cfg_attr(not(feature = "internals"), allow(dead_code))] // the bench drivers read it
     pub sidedness: Sidedness,
 }
 

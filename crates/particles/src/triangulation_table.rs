@@ -77,6 +77,7 @@ pub struct Config {
 pub struct Table {
     pub configs: Vec<Config>,
     /// A representative configuration (the smallest mask) of each class.
+    #[cfg_attr(not(test), allow(dead_code))] // the tests read it
     pub representatives: [u8; CLASS_COUNT],
     /// [`Table::configs`] in the 8 bytes per configuration a scan reads
     /// for every neighbourhood (2 KiB in all, where the configurations

@@ -3,7 +3,7 @@
 //! stream or to an error — never a panic — and whatever decodes must
 //! triangulate.
 use lodkit_mesh::Model;
-use lodkit_particles::container::{CHUNK_HEADER_LEN, HEADER_LEN, crc32};
+use lodkit_particles::{CHUNK_HEADER_LEN, HEADER_LEN};
 use lodkit_particles::{
     DecodeOptions, EncodeOptions, Mode, TriangulateOptions, decode, encode, triangulate,
 };
@@ -17,7 +17,10 @@ fn reseal(bytes: &mut [u8]) {
         if end > bytes.len() {
             break;
         }
-        let crc = crc32(&[&bytes[pos..pos + 16], &bytes[pos + CHUNK_HEADER_LEN..end]]);
+        let mut h = crc32fast::Hasher::new();
+        h.update(&bytes[pos..pos + 16]);
+        h.update(&bytes[pos + CHUNK_HEADER_LEN..end]);
+        let crc = h.finalize();
         bytes[pos + 16..pos + 20].copy_from_slice(&crc.to_le_bytes());
         pos = end;
     }

@@ -10,6 +10,7 @@ pub trait BitCoder {
     /// Writes `*b` (encoder) or reads it into `*b` (decoder).
     fn bit(&mut self, b: &mut bool, ctx: usize) -> Result<()>;
     /// Symbols coded so far.
+    #[cfg_attr(not(feature = "internals"), allow(dead_code))] // the bench crate reads it
     fn symbols(&self) -> u64;
     /// `n ≤ 32` bits of `*v`, most significant first, context `ctx + i`
     /// for bit `i` (from the top).

@@ -63,11 +63,13 @@ static NEXT: [[u16; STATES]; 2] = [next_table(false), next_table(true)];
 pub mod model {
     /// `P(false)` of `state`, in `1/2^16`.
     #[inline(always)]
+    #[cfg_attr(not(feature = "internals"), allow(dead_code))] // the bench crate reads it
     pub fn p0(state: u16) -> u32 {
         u32::from(super::P0[usize::from(state)])
     }
     /// The state after coding `bit` in `state`.
     #[inline(always)]
+    #[cfg_attr(not(feature = "internals"), allow(dead_code))] // the bench crate reads it
     pub fn next(state: u16, bit: bool) -> u16 {
         super::NEXT[usize::from(bit)][usize::from(state)]
     }

@@ -73,6 +73,7 @@ impl Default for TriangulateOptions {
 /// Table 1's triangulation columns for one level.
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
 pub struct TriangulationStats {
+    /// Triangles built.
     pub triangles: usize,
     /// Neighbourhoods of each class `C_1..C_17` (index 0 unused).
     pub configurations: Vec<u64>,
@@ -81,6 +82,7 @@ pub struct TriangulationStats {
     /// Ambiguous neighbourhoods triangulated whole (the non-manifold local
     /// triangulations of Table 1).
     pub fallbacks: u64,
+    /// Wall time of the triangulation (seconds; the only field that varies between runs).
     pub seconds: f64,
 }
 
@@ -98,19 +100,41 @@ impl TriangulationStats {
 /// A triangulated level.
 #[derive(Debug, Clone)]
 pub struct Triangulation {
+    /// The particles as vertices, with the triangles.
     pub mesh: TriMesh,
+    /// What the triangulation did.
     pub stats: TriangulationStats,
 }
 
 /// No vertex, no brick.
 const NONE: u32 = u32::MAX;
 
-/// Triangulates one decoded level.
+/// Triangulates one decoded level (§6): one vertex per particle, the
+/// triangles of every 2×2×2 neighbourhood of cells from the 256-case
+/// table.
+///
+/// - **Input**: a [`LevelSurface`] (from [`Decoded::surface`](crate::Decoded::surface),
+///   or made by a caller: cells need not be sorted, duplicates are
+///   ignored); `opts`: §6.3 decimation (off by default) and orientation
+///   (on by default).
+/// - **Output**: a mesh whose vertices are the surface's particles, in
+///   order (attributes carried over), about two triangles per particle
+///   (at most 16 per neighbourhood); with `orient`, triangles wound
+///   counter-clockwise seen from outside (by the particle normals when
+///   present, else consistently across manifold edges and outwards by
+///   signed volume per component).
+/// - **Guarantees**: deterministic (the same triangles in the same order
+///   for the same input); a closed thinned surface gives a hole-free mesh,
+///   non-manifold only where an ambiguous neighbourhood is left whole
+///   ([`TriangulationStats::fallbacks`]; under 1 % of the triangles with
+///   outer thinning). Never panics.
+/// - **Cost**: linear in the cells (a bit-parallel scan of 8×8×8 bricks);
+///   no allocation per neighbourhood.
 pub fn triangulate(s: &LevelSurface, opts: &TriangulateOptions) -> Triangulation {
     triangulate_impl(Cow::Borrowed(s), opts, None)
 }
 
-/// [`triangulate`], the mesh taking over the surface's particles instead
+/// [`triangulate`] (same contract), the mesh taking over the surface's particles instead
 /// of copying them (for a level built only to be triangulated, as
 /// [`crate::Decoded::into_surface`] gives it).
 pub fn triangulate_owned(s: LevelSurface, opts: &TriangulateOptions) -> Triangulation {
