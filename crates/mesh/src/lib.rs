@@ -6,6 +6,9 @@
 //! and the particle coder all need ([`topology`]), synthetic test shapes
 //! ([`shapes`]) and Metro-style surface distances ([`metrics`]).
 
+/// The 48 symmetries of the cube acting on its corners, shared by the
+/// marching-cubes and particle triangulation tables.
+pub mod cube_symmetry;
 pub mod error;
 pub mod info;
 pub mod io;

@@ -86,68 +86,13 @@ pub struct Chunk<'a> {
     pub end: usize,
 }
 
-const CRC_TABLE: [u32; 256] = {
-    let mut t = [0u32; 256];
-    let mut i = 0;
-    while i < 256 {
-        let mut c = i as u32;
-        let mut k = 0;
-        while k < 8 {
-            c = if c & 1 != 0 {
-                0xedb8_8320 ^ (c >> 1)
-            } else {
-                c >> 1
-            };
-            k += 1;
-        }
-        t[i] = c;
-        i += 1;
-    }
-    t
-};
-
-/// `CRC_SLICES[k][i]`: the CRC register after byte `i` and `k` zero bytes,
-/// so eight bytes fold in with eight independent look-ups (slicing by 8)
-/// instead of a chain of eight dependent ones.
-const CRC_SLICES: [[u32; 256]; 8] = {
-    let mut t = [[0u32; 256]; 8];
-    t[0] = CRC_TABLE;
-    let mut k = 1;
-    while k < 8 {
-        let mut i = 0;
-        while i < 256 {
-            let prev = t[k - 1][i];
-            t[k][i] = (prev >> 8) ^ CRC_TABLE[(prev & 0xff) as usize];
-            i += 1;
-        }
-        k += 1;
-    }
-    t
-};
-
 /// CRC-32 (IEEE 802.3, as zlib and PNG) of the concatenation of `parts`.
-pub fn crc32(parts: &[&[u8]]) -> u32 {
-    let t = &CRC_SLICES;
-    let mut c = !0u32;
+pub(crate) fn crc32(parts: &[&[u8]]) -> u32 {
+    let mut h = crc32fast::Hasher::new();
     for part in parts {
-        let mut words = part.chunks_exact(8);
-        for w in &mut words {
-            let lo = c ^ u32::from_le_bytes([w[0], w[1], w[2], w[3]]);
-            let hi = u32::from_le_bytes([w[4], w[5], w[6], w[7]]);
-            c = t[7][(lo & 0xff) as usize]
-                ^ t[6][(lo >> 8 & 0xff) as usize]
-                ^ t[5][(lo >> 16 & 0xff) as usize]
-                ^ t[4][(lo >> 24) as usize]
-                ^ t[3][(hi & 0xff) as usize]
-                ^ t[2][(hi >> 8 & 0xff) as usize]
-                ^ t[1][(hi >> 16 & 0xff) as usize]
-                ^ t[0][(hi >> 24) as usize];
-        }
-        for &b in words.remainder() {
-            c = CRC_TABLE[((c ^ u32::from(b)) & 0xff) as usize] ^ (c >> 8);
-        }
+        h.update(part);
     }
-    !c
+    h.finalize()
 }
 
 /// Appends the header.
@@ -373,8 +318,12 @@ mod tests {
         assert_eq!(crc32(&[b"1234", b"56789"]), 0xcbf4_3926);
         // Long enough for the eight-byte steps, split off their grid.
         let long: Vec<u8> = (0..1000u32).map(|i| (i * 7 + 3) as u8).collect();
+        // The reflected polynomial 0xedb88320, a bit at a time: the
+        // container's checksum since version 1.
         let bytewise = !long.iter().fold(!0u32, |c, &b| {
-            CRC_TABLE[((c ^ u32::from(b)) & 0xff) as usize] ^ (c >> 8)
+            (0..8).fold(c ^ u32::from(b), |c, _| {
+                (c >> 1) ^ (0xedb8_8320 & (c & 1).wrapping_neg())
+            })
         });
         assert_eq!(crc32(&[&long]), bytewise);
         assert_eq!(crc32(&[&long[..13], &long[13..]]), bytewise);

@@ -12,7 +12,6 @@
 //! settling them too changes nothing measurable and costs several times
 //! the triangulation.
 use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
 
 use super::scan::Scanned;
 use super::window::{BRICK_BITS, BrickIndex};
@@ -59,37 +58,12 @@ pub(super) fn on_face(tri: &[u8; 3]) -> bool {
     !((tri[0] ^ tri[1]) | (tri[0] ^ tri[2])) & 7 != 0
 }
 
-/// Hash of a triangle's vertex indices: a multiply per 32-bit word (the
-/// keys are not adversarial; the default SipHash cost more than the
-/// settling it served).
-#[derive(Default)]
-pub(super) struct TriHasher(u64);
-
-impl Hasher for TriHasher {
-    fn finish(&self) -> u64 {
-        self.0 ^ (self.0 >> 32)
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for w in bytes.chunks(4) {
-            let mut b = [0u8; 4];
-            b[..w.len()].copy_from_slice(w);
-            self.write_u32(u32::from_le_bytes(b));
-        }
-    }
-    fn write_u32(&mut self, v: u32) {
-        self.0 = (self.0.rotate_left(26) ^ u64::from(v)).wrapping_mul(0x9e37_79b9_7f4a_7c15);
-    }
-    fn write_usize(&mut self, v: usize) {
-        self.write_u32(v as u32);
-    }
-}
-
 /// Edge and vertex use by the distinct triangles around the trials. Only
 /// triangles on a neighbourhood face can be built twice (by the solids on
 /// both sides; [`dedupe_face_triangles`] later keeps one copy), so only
 /// those are counted by key.
 pub(super) struct Uses {
-    pub(super) face_tris: HashMap<[u32; 3], u32, BuildHasherDefault<TriHasher>>,
+    pub(super) face_tris: HashMap<[u32; 3], u32, rustc_hash::FxBuildHasher>,
     /// The trials' hull edges (by key) → their slot in `edge_uses`.
     pub(super) edges: MortonMap<u32>,
     pub(super) edge_uses: Vec<u32>,
