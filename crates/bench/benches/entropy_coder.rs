@@ -17,8 +17,7 @@ use constriction::stream::model::{DecoderModel, EncoderModel, EntropyModel};
 use constriction::stream::queue::{DefaultRangeDecoder, DefaultRangeEncoder};
 use constriction::stream::{Decode, Encode};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use lodkit_particles::encode_entropy::{EntropyReader, EntropyWriter, PRECISION, model};
-use lodkit_particles::hierarchical_coding::BitCoder;
+use lodkit_particles::internals::{BitCoder, EntropyReader, EntropyWriter, PRECISION, model};
 
 const SYMBOLS: usize = 1 << 21;
 const CONTEXTS: usize = 64;

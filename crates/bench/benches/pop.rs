@@ -15,8 +15,9 @@ use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use lodkit_mesh::Model;
-use lodkit_particles::triangulate::triangulate_owned;
-use lodkit_particles::{DecodeOptions, EncodeOptions, Mode, TriangulateOptions, decode, encode};
+use lodkit_particles::{
+    DecodeOptions, EncodeOptions, Mode, TriangulateOptions, decode, encode, triangulate_owned,
+};
 
 fn decode_and_triangulate(bytes: &[u8], opts: &TriangulateOptions) -> usize {
     let d = decode(bytes, &DecodeOptions::default()).expect("own stream decodes");

@@ -257,62 +257,13 @@ fn fan(lp: &[u8], out: &mut Vec<[u8; 3]>) {
     }
 }
 
-/// One of the 48 symmetries of the cube: new coordinate `i` is old
-/// coordinate `perm[i]`, flipped when bit `i` of `flip` is set.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Symmetry {
-    pub perm: [u8; 3],
-    pub flip: u8,
-}
+/// The 48 symmetries of the cube, shared with the particles' table.
+pub use lodkit_mesh::cube_symmetry::CubeSymmetry as Symmetry;
 
-impl Symmetry {
-    /// All 48, identity first.
-    pub fn all() -> Vec<Symmetry> {
-        const PERMS: [[u8; 3]; 6] = [
-            [0, 1, 2],
-            [1, 2, 0],
-            [2, 0, 1],
-            [0, 2, 1],
-            [2, 1, 0],
-            [1, 0, 2],
-        ];
-        let mut out = Vec::with_capacity(48);
-        for perm in PERMS {
-            for flip in 0..8 {
-                out.push(Symmetry { perm, flip });
-            }
-        }
-        out
-    }
-
-    /// Image of cube vertex `v`.
-    pub fn vertex(&self, v: u8) -> u8 {
-        let mut out = 0;
-        for i in 0..3 {
-            let bit = (v >> self.perm[i]) & 1 ^ (self.flip >> i) & 1;
-            out |= bit << i;
-        }
-        out
-    }
-
-    /// Image of edge `e`.
-    pub fn edge(&self, e: u8) -> u8 {
-        let [a, b] = EDGES[e as usize];
-        edge_between(self.vertex(a), self.vertex(b)).expect("symmetries keep edges")
-    }
-
-    /// Image of a configuration (the inside set mapped vertex by vertex).
-    pub fn config(&self, c: u8) -> u8 {
-        (0..8u8)
-            .filter(|v| c & (1 << v) != 0)
-            .fold(0, |acc, v| acc | 1 << self.vertex(v))
-    }
-
-    /// True when the symmetry is a reflection (reverses orientation).
-    pub fn reverses(&self) -> bool {
-        let odd_perm = matches!(self.perm, [0, 2, 1] | [2, 1, 0] | [1, 0, 2]);
-        odd_perm ^ (self.flip.count_ones() % 2 == 1)
-    }
+/// Image of edge `e` under the symmetry `g`.
+pub fn symmetry_edge(g: &Symmetry, e: u8) -> u8 {
+    let [a, b] = EDGES[e as usize];
+    edge_between(g.vertex(a), g.vertex(b)).expect("symmetries keep edges")
 }
 
 /// The generated table: for each configuration, its triangles as edge
@@ -351,7 +302,7 @@ impl McTable {
             let g = syms[via[c as usize]];
             debug_assert_eq!(g.config(rep), c);
             for t in base {
-                let m = t.map(|e| g.edge(e));
+                let m = t.map(|e| symmetry_edge(&g, e));
                 tris.push(if g.reverses() { [m[0], m[2], m[1]] } else { m });
             }
             offsets[c as usize + 1] = tris.len() as u16;
@@ -430,6 +381,24 @@ mod tests {
             out[f.axis as usize] = if f.side == 1 { 1.0 } else { -1.0 };
             assert!(n.dot(out) > 0.0, "face {f:?} winds clockwise");
         }
+    }
+
+    #[test]
+    fn generated_table_is_the_one_the_mco_files_were_built_with() {
+        // FNV-1a of every configuration's triangles and representative:
+        // a change to the generator (or to the cube symmetries it uses,
+        // `lodkit_mesh::cube_symmetry`) must not move a single triangle.
+        let mut h = 0xcbf2_9ce4_8422_2325u64;
+        let mut eat = |b: u8| h = (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3);
+        for c in 0..=255u8 {
+            let tris = TABLE.triangles(c);
+            eat(tris.len() as u8);
+            for t in tris {
+                t.iter().for_each(|&e| eat(e));
+            }
+            eat(TABLE.representative[c as usize]);
+        }
+        assert_eq!(h, 0x5387_c82d_bca8_c23c);
     }
 
     #[test]
@@ -517,7 +486,7 @@ mod tests {
                     .triangles(c)
                     .iter()
                     .map(|t| {
-                        let m = t.map(|e| g.edge(e));
+                        let m = t.map(|e| symmetry_edge(&g, e));
                         if g.reverses() { [m[0], m[2], m[1]] } else { m }
                     })
                     .collect();

@@ -40,6 +40,9 @@
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
 
+/// The 48 symmetries of the cube acting on its corners, shared by the
+/// marching-cubes and particle triangulation tables.
+pub mod cube_symmetry;
 pub mod error;
 pub mod info;
 pub mod io;

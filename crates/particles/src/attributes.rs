@@ -18,8 +18,9 @@
 //! renormalised for display) — §5.5 leaves the normal's bit size open.
 use glam::Vec3;
 
+use crate::coding::bit_coder::BitCoder;
+use crate::coding::contexts::ATTR;
 use crate::error::{Result, stream_err};
-use crate::hierarchical_coding::{ATTR, BitCoder};
 use crate::ordering::{HLevel, Hierarchy};
 
 /// Bits per colour component (RGB888, §5.5).

@@ -29,6 +29,7 @@ pub enum Mode {
 }
 
 impl Mode {
+    /// Its name in reports and on the command line (`baseline`, `entropy`).
     pub fn name(self) -> &'static str {
         match self {
             Mode::Baseline => "baseline",
@@ -40,13 +41,17 @@ impl Mode {
 /// The stream header.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Header {
+    /// How the payloads are coded.
     pub mode: Mode,
     /// Octree resolution `R`.
     pub depth: u8,
     /// Highest precision `N` the stream carries (`R ≤ N ≤ 16`).
     pub precision: u8,
+    /// Whether each level has an attribute chunk with colours.
     pub colours: bool,
+    /// Whether the attribute chunks carry normals.
     pub normals: bool,
+    /// The cube the octree divides (its lower corner and side, in model units).
     pub frame: Frame,
     /// Number of particles (ON leaves at level `R`).
     pub particles: u32,
@@ -66,79 +71,28 @@ pub enum ChunkKind {
 /// One chunk, borrowed from the stream.
 #[derive(Debug, Clone, Copy)]
 pub struct Chunk<'a> {
+    /// What the chunk carries.
     pub kind: ChunkKind,
+    /// Its level or precision layer.
     pub index: u8,
+    /// Nodes, kept nodes or particles it codes (see [`ChunkKind`]).
     pub count: u32,
     /// Level chunks: cubes eliminated by thinning at this level (Table 1,
     /// informative); 0 elsewhere.
     pub aux: u32,
+    /// The coded payload (checksum verified).
     pub payload: &'a [u8],
     /// Offset of the chunk's end in the stream (bytes so far).
     pub end: usize,
 }
 
-const CRC_TABLE: [u32; 256] = {
-    let mut t = [0u32; 256];
-    let mut i = 0;
-    while i < 256 {
-        let mut c = i as u32;
-        let mut k = 0;
-        while k < 8 {
-            c = if c & 1 != 0 {
-                0xedb8_8320 ^ (c >> 1)
-            } else {
-                c >> 1
-            };
-            k += 1;
-        }
-        t[i] = c;
-        i += 1;
-    }
-    t
-};
-
-/// `CRC_SLICES[k][i]`: the CRC register after byte `i` and `k` zero bytes,
-/// so eight bytes fold in with eight independent look-ups (slicing by 8)
-/// instead of a chain of eight dependent ones.
-const CRC_SLICES: [[u32; 256]; 8] = {
-    let mut t = [[0u32; 256]; 8];
-    t[0] = CRC_TABLE;
-    let mut k = 1;
-    while k < 8 {
-        let mut i = 0;
-        while i < 256 {
-            let prev = t[k - 1][i];
-            t[k][i] = (prev >> 8) ^ CRC_TABLE[(prev & 0xff) as usize];
-            i += 1;
-        }
-        k += 1;
-    }
-    t
-};
-
 /// CRC-32 (IEEE 802.3, as zlib and PNG) of the concatenation of `parts`.
-pub fn crc32(parts: &[&[u8]]) -> u32 {
-    let t = &CRC_SLICES;
-    let mut c = !0u32;
+pub(crate) fn crc32(parts: &[&[u8]]) -> u32 {
+    let mut h = crc32fast::Hasher::new();
     for part in parts {
-        let mut words = part.chunks_exact(8);
-        for w in &mut words {
-            let lo = c ^ u32::from_le_bytes([w[0], w[1], w[2], w[3]]);
-            let hi = u32::from_le_bytes([w[4], w[5], w[6], w[7]]);
-            c = t[7][(lo & 0xff) as usize]
-                ^ t[6][(lo >> 8 & 0xff) as usize]
-                ^ t[5][(lo >> 16 & 0xff) as usize]
-                ^ t[4][(lo >> 24) as usize]
-                ^ t[3][(hi & 0xff) as usize]
-                ^ t[2][(hi >> 8 & 0xff) as usize]
-                ^ t[1][(hi >> 16 & 0xff) as usize]
-                ^ t[0][(hi >> 24) as usize];
-        }
-        for &b in words.remainder() {
-            c = CRC_TABLE[((c ^ u32::from(b)) & 0xff) as usize] ^ (c >> 8);
-        }
+        h.update(part);
     }
-    !c
+    h.finalize()
 }
 
 /// Appends the header.
@@ -171,7 +125,11 @@ fn f32_at(b: &[u8], i: usize) -> f32 {
     f32::from_le_bytes([b[i], b[i + 1], b[i + 2], b[i + 3]])
 }
 
-/// Parses and checks the header.
+/// Parses and checks a stream's header (magic, version, depth and
+/// precision in range): the first [`HEADER_LEN`] bytes.
+///
+/// Errors: [`Error::Stream`](crate::Error::Stream) naming what is wrong,
+/// for fewer bytes than the header or any field out of range.
 pub fn read_header(bytes: &[u8]) -> Result<Header> {
     if bytes.len() < MAGIC.len() || bytes[..MAGIC.len()] != MAGIC {
         return stream_err("not a .pop stream (bad magic)");
@@ -256,17 +214,35 @@ pub struct ChunkReader<'a> {
     pos: usize,
     number: usize,
     failed: bool,
+    cut: bool,
 }
 
 impl<'a> ChunkReader<'a> {
-    /// Chunks of a stream whose header has been read.
+    /// Chunks of a stream whose header has been read ([`read_header`]): each
+    /// chunk's kind, index, counts and checksum-verified payload, in stream
+    /// order; an error (then the end) at a damaged or cut chunk
+    /// ([`ChunkReader::was_cut`] tells the two apart). Reads no byte twice.
     pub fn new(bytes: &'a [u8]) -> Self {
         ChunkReader {
             bytes,
             pos: HEADER_LEN.min(bytes.len()),
             number: 0,
             failed: false,
+            cut: false,
         }
+    }
+
+    /// Offset of the next chunk: after the last one yielded (the header's
+    /// end before the first).
+    pub fn position(&self) -> usize {
+        self.pos
+    }
+
+    /// Whether the error yielded was the end of the bytes cutting a chunk
+    /// short (its header or its payload), as in a stream still arriving,
+    /// rather than damage.
+    pub fn was_cut(&self) -> bool {
+        self.cut
     }
 }
 
@@ -285,6 +261,7 @@ impl<'a> Iterator for ChunkReader<'a> {
             Some(stream_err(msg))
         };
         if rest.len() < CHUNK_HEADER_LEN {
+            self.cut = true;
             return fail(
                 self,
                 format!(
@@ -301,6 +278,7 @@ impl<'a> Iterator for ChunkReader<'a> {
         };
         let len = u32_at(rest, 12) as usize;
         if rest.len() - CHUNK_HEADER_LEN < len {
+            self.cut = true;
             return fail(
                 self,
                 format!(
@@ -340,8 +318,12 @@ mod tests {
         assert_eq!(crc32(&[b"1234", b"56789"]), 0xcbf4_3926);
         // Long enough for the eight-byte steps, split off their grid.
         let long: Vec<u8> = (0..1000u32).map(|i| (i * 7 + 3) as u8).collect();
+        // The reflected polynomial 0xedb88320, a bit at a time: the
+        // container's checksum since version 1.
         let bytewise = !long.iter().fold(!0u32, |c, &b| {
-            CRC_TABLE[((c ^ u32::from(b)) & 0xff) as usize] ^ (c >> 8)
+            (0..8).fold(c ^ u32::from(b), |c, _| {
+                (c >> 1) ^ (0xedb8_8320 & (c & 1).wrapping_neg())
+            })
         });
         assert_eq!(crc32(&[&long]), bytewise);
         assert_eq!(crc32(&[&long[..13], &long[13..]]), bytewise);

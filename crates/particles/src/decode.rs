@@ -11,14 +11,16 @@ use glam::Vec3;
 use lodkit_mesh::{PointCloud, TriMesh};
 
 use crate::attributes::{self, Channel};
+use crate::coding::bit_coder::BitCoder;
+use crate::coding::levels::{self as hc, LevelInput};
+use crate::coding::precision_layers;
+use crate::coding::range_coder::EntropyReader;
+use crate::coding::raw_bits::BitReader;
 use crate::container::{ChunkKind, ChunkReader, Header, Mode, read_header};
-use crate::encode_baseline::BitReader;
-use crate::encode_entropy::EntropyReader;
 use crate::error::{Result, stream_err};
-use crate::hierarchical_coding::{self as hc, BitCoder, LevelInput};
 use crate::octree::{Frame, QBITS};
 use crate::ordering::HLevel;
-use crate::precision_coding;
+use crate::triangulate::{TriangulateOptions, Triangulation};
 
 /// Where to stop reading.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -32,6 +34,7 @@ pub struct DecodeOptions {
 /// What a prefix of a stream holds.
 #[derive(Debug, Clone)]
 pub struct Decoded {
+    /// The stream header.
     pub header: Header,
     /// Levels `0..levels.len()` decoded.
     pub levels: Vec<HLevel>,
@@ -50,19 +53,41 @@ pub struct Decoded {
     pub eliminated: Vec<u32>,
     /// Bytes of each level's structure chunk payload.
     pub structure_bytes: Vec<usize>,
-    /// Stream bytes read in all.
+    /// Stream bytes used in all: the end of the last chunk decoded (a
+    /// prefix of the bytes given).
     pub bytes_read: usize,
+    /// The chunk the end of the bytes cut short, when [`decode_prefix`]
+    /// stopped there; `None` when every chunk up to the options' limits was
+    /// whole (and always from [`decode`], which refuses a cut chunk).
+    pub cut: Option<Cut>,
+}
+
+/// A chunk cut short by the end of the bytes given: where
+/// [`decode_prefix`] stopped.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Cut {
+    /// Chunk number in the stream (0: the first after the header).
+    pub chunk: usize,
+    /// Offset of the cut chunk's first byte (= [`Decoded::bytes_read`]).
+    pub offset: usize,
+    /// What is missing, in words (as [`decode`]'s error would say).
+    pub message: String,
 }
 
 /// One decoded octree surface `S^r` ready for triangulation or display.
 #[derive(Debug, Clone)]
 pub struct LevelSurface {
+    /// Octree level `r` (cubes of side `frame.size / 2^r`).
     pub level: u8,
+    /// The octree cube, as in the header.
     pub frame: Frame,
     /// Kept cells, sorted Morton codes.
     pub cells: Vec<u64>,
+    /// One vertex per cell (its particle), in model units.
     pub positions: Vec<Vec3>,
+    /// RGBA8 colours per vertex, when the stream has them.
     pub colours: Option<Vec<[u8; 4]>>,
+    /// Unit normals per vertex, when the stream has them.
     pub normals: Option<Vec<Vec3>>,
 }
 
@@ -116,12 +141,44 @@ impl<'a> ChunkRead<'a> for EntropyReader<'a> {
     }
 }
 
-/// Decodes the chunks of `bytes` up to the limits of `opts`.
+/// Decodes a whole `.pop` stream, or a prefix of whole chunks, up to the
+/// limits of `opts` (strict: a chunk cut short is an error).
+///
+/// - **Input**: `bytes`, the stream from its first byte (header, then
+///   chunks); `opts` stops after a level or a precision layer.
+/// - **Output**: every level up to the limit, vertex coordinates at the
+///   precision of the last layer read ([`Decoded::precision`] bits), and
+///   attributes where the stream has them. Allocation is bounded by the
+///   counts the chunks declare, each checked against the bytes present.
+/// - **Errors**: [`Error::Stream`](crate::Error::Stream), naming the chunk
+///   and what is wrong, for a bad header, a damaged or cut chunk, chunks
+///   out of order, or a stream with no level. Never panics on any bytes.
+/// - **Cost**: linear in the bytes decoded; about a dozen binary
+///   decisions per particle in the entropy mode.
+/// - Deterministic: the same bytes and options give the same result.
 pub fn decode(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
+    decode_impl(bytes, opts, false)
+}
+
+/// Decodes what has arrived of a stream: every complete chunk of the
+/// prefix `bytes`, stopping quietly at a chunk the end of `bytes` cuts
+/// short ([`Decoded::cut`] says which and where).
+///
+/// Same contract as [`decode`] otherwise: damage (a checksum mismatch,
+/// unknown kinds, chunks out of order) is still an error, and so is a
+/// prefix holding no complete level (fewer bytes than the header and the
+/// root's chunk). [`Decoded::finest_level`] is then the finest level a
+/// viewer can show, and [`Decoded::bytes_read`] the bytes it used; feeding
+/// a longer prefix later decodes from the start again.
+pub fn decode_prefix(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
+    decode_impl(bytes, opts, true)
+}
+
+fn decode_impl(bytes: &[u8], opts: &DecodeOptions, prefix: bool) -> Result<Decoded> {
     let header = read_header(bytes)?;
     match header.mode {
-        Mode::Baseline => decode_with::<BitReader>(bytes, header, opts),
-        Mode::Entropy => decode_with::<EntropyReader>(bytes, header, opts),
+        Mode::Baseline => decode_with::<BitReader>(bytes, header, opts, prefix),
+        Mode::Entropy => decode_with::<EntropyReader>(bytes, header, opts, prefix),
     }
 }
 
@@ -129,6 +186,7 @@ fn decode_with<'a, R: ChunkRead<'a>>(
     bytes: &'a [u8],
     header: Header,
     opts: &DecodeOptions,
+    prefix: bool,
 ) -> Result<Decoded> {
     let depth = header.depth;
     let max_level = opts.max_level.unwrap_or(depth).min(depth);
@@ -155,14 +213,29 @@ fn decode_with<'a, R: ChunkRead<'a>>(
         eliminated: Vec::new(),
         structure_bytes: Vec::new(),
         bytes_read: crate::container::HEADER_LEN,
+        cut: None,
     };
     let mut leaves: Vec<[u32; 3]> = Vec::new();
-    let mut links = hc::Links::root();
-    let mut neighbours = precision_coding::Faces::default();
+    let mut links = crate::coding::links::Links::root();
+    let mut neighbours = precision_layers::Faces::default();
     // The chunk expected next: (kind, index).
     let mut expect = (ChunkKind::Level, 0u8);
-    for chunk in ChunkReader::new(bytes) {
-        let chunk = chunk?;
+    let mut reader = ChunkReader::new(bytes);
+    let mut number = 0;
+    while let Some(chunk) = reader.next() {
+        let chunk = match chunk {
+            Ok(c) => c,
+            Err(crate::Error::Stream(message)) if prefix && reader.was_cut() => {
+                d.cut = Some(Cut {
+                    chunk: number,
+                    offset: d.bytes_read,
+                    message,
+                });
+                break;
+            }
+            Err(e) => return Err(e),
+        };
+        number += 1;
         if (chunk.kind, chunk.index) != expect {
             return stream_err(format!(
                 "chunk {:?} {} found where {:?} {} was expected",
@@ -263,13 +336,13 @@ fn decode_with<'a, R: ChunkRead<'a>>(
                 }
                 let mut c = R::open(chunk.payload)?;
                 if entropy && neighbours.is_empty() {
-                    neighbours = precision_coding::particle_faces(
+                    neighbours = precision_layers::particle_faces(
                         &links,
                         &d.levels[depth as usize],
                         d.q.len(),
                     );
                 }
-                precision_coding::code_precision(
+                precision_layers::code_precision(
                     &mut c,
                     depth,
                     u32::from(b),
@@ -314,6 +387,21 @@ impl Decoded {
     /// Number of levels decoded (`r` runs over `0..levels()`).
     pub fn level_count(&self) -> usize {
         self.levels.len()
+    }
+
+    /// The finest level decoded (every stream that decodes holds level 0).
+    pub fn finest_level(&self) -> u8 {
+        (self.levels.len() - 1) as u8
+    }
+
+    /// Level `r` triangulated ([`crate::triangulate`] of
+    /// [`surface`](Self::surface)): with [`TriangulateOptions::DEFAULT`]
+    /// an oriented mesh whose vertices are the level's particles, in
+    /// Morton order of their cells.
+    ///
+    /// Errors: `r` beyond [`finest_level`](Self::finest_level).
+    pub fn triangulate(&self, r: u8, opts: &TriangulateOptions) -> Result<Triangulation> {
+        Ok(crate::triangulate::triangulate(&self.surface(r)?, opts))
     }
 
     /// [`surface`](Self::surface), consuming the decoded stream so the

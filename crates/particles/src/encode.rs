@@ -4,14 +4,15 @@
 use lodkit_mesh::Model;
 
 use crate::attributes::{self, Averaged, Channel};
+use crate::coding::bit_coder::BitCoder;
+use crate::coding::levels::{self as hc, LevelInput, Truth};
+use crate::coding::precision_layers;
+use crate::coding::range_coder::EntropyWriter;
+use crate::coding::raw_bits::BitWriter;
 use crate::container::{ChunkKind, Header, Mode, write_chunk, write_header};
-use crate::encode_baseline::BitWriter;
-use crate::encode_entropy::EntropyWriter;
 use crate::error::{Error, Result};
-use crate::hierarchical_coding::{self as hc, BitCoder, LevelInput, Truth};
 use crate::octree::{BuildOptions, Octree, QBITS, Sidedness, unmorton};
 use crate::ordering::Hierarchy;
-use crate::precision_coding;
 use crate::thinning::{ThinningOptions, thin_choosing};
 
 /// Default precision `N`: §7.2 finds 12 bits enough for most models.
@@ -24,11 +25,11 @@ pub enum Placement {
     Mean,
     /// On the plane of the leaf's samples (through their mean, across
     /// their mean normal), where the leaf's middle column along the
-    /// [`precision_coding::normal_axis`] the decoder infers from the
+    /// [`precision_layers::normal_axis`] the decoder infers from the
     /// neighbours meets it — or, where that crossing leaves the leaf, the
     /// quarter or eighth column under the mean. The two tangential
     /// coordinates then cost nothing, or one or two bits (see
-    /// [`precision_coding::code_precision`]), and the error across the
+    /// [`precision_layers::code_precision`]), and the error across the
     /// surface is the plane's. Falls back to the mean
     /// where the input has no normals, the plane is steeper than
     /// [`MIN_NORMAL_COSINE`] against that axis, or every column's crossing
@@ -48,7 +49,9 @@ pub struct EncodeOptions {
     pub depth: Option<u8>,
     /// Highest precision `N` coded (raised to `R` when below it, at most 16).
     pub precision: u8,
+    /// How the chunks are coded.
     pub mode: Mode,
+    /// §4.3 thinning of the octree before ordering.
     pub thinning: ThinningOptions,
     /// IN/OUT labelling; `None` chooses (see [`BuildOptions`]).
     pub sidedness: Option<Sidedness>,
@@ -84,6 +87,7 @@ impl Default for EncodeOptions {
 /// Per-level figures of an encoding.
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
 pub struct LevelReport {
+    /// Octree level `r`.
     pub level: u8,
     /// ON nodes after thinning, `k_r`.
     pub kept: usize,
@@ -105,13 +109,19 @@ pub struct LevelReport {
 /// Figures of an encoding.
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
 pub struct EncodeReport {
+    /// Coding mode name (`baseline`, `entropy`).
     pub mode: String,
+    /// Octree resolution `R`.
     pub depth: u8,
+    /// Vertex precision `N` (bits per coordinate).
     pub precision: u8,
+    /// Particles (ON leaves at level `R`).
     pub particles: usize,
+    /// Per level, coarsest first.
     pub levels: Vec<LevelReport>,
     /// Bits of each precision layer `R+1..=N`.
     pub precision_bits: Vec<u64>,
+    /// Stream size in bytes.
     pub total_bytes: usize,
     /// Level below which outer thinning was relaxed (`None`: inner
     /// thinning only, or an octree thinned before [`encode_thinned`]).
@@ -133,7 +143,9 @@ impl EncodeReport {
 /// A `.pop` stream and its figures.
 #[derive(Debug, Clone)]
 pub struct Encoded {
+    /// The `.pop` stream.
     pub bytes: Vec<u8>,
+    /// What went into it.
     pub report: EncodeReport,
     /// The 16-bit grid vertex of every particle (stream order) as a
     /// decoder at full precision `N` reads it (bits below `N` zero).
@@ -168,7 +180,26 @@ impl ChunkWriter for EntropyWriter {
     }
 }
 
-/// Encodes a mesh, point cloud or range image.
+/// Encodes a mesh, point cloud or range image as a progressive `.pop`
+/// stream.
+///
+/// - **Input**: `model` in any units (the octree's cube is fitted around
+///   it); a mesh is sampled on its faces, points and range samples are
+///   used as they are. `opts`: octree depth `R` (`None`: chosen from the
+///   sample count), vertex precision `N` (`R ≤ N ≤ 16` bits per
+///   coordinate), coding mode, thinning, attributes.
+/// - **Output**: [`Encoded::bytes`], the stream (header, then one chunk
+///   per level, attribute set and precision layer, coarsest first: any
+///   prefix of whole chunks decodes); [`Encoded::report`], the bits spent
+///   per level.
+/// - **Guarantees**: deterministic (the same model and options give the
+///   same bytes); [`decode`](crate::decode) of the bytes gives back
+///   [`Encoded::vertices`] exactly.
+/// - **Errors**: [`Error::Input`](crate::Error::Input) for an empty or
+///   non-finite model or an option out of range.
+/// - **Cost**: about linear in the samples and in the surface cells of the
+///   finest level (some `4^R` for a closed surface); memory a few dozen
+///   bytes per cell.
 pub fn encode(model: &Model, opts: &EncodeOptions) -> Result<Encoded> {
     let mut tree = Octree::build(
         model,
@@ -250,7 +281,7 @@ fn encode_with<W: ChunkWriter>(
         ..Default::default()
     };
     let mut coded: Vec<[u32; 3]> = Vec::with_capacity(leaves.len());
-    let mut links = hc::Links::root();
+    let mut links = crate::coding::links::Links::root();
     for r in 0..=dr {
         // Structure.
         let mut w = W::open();
@@ -335,9 +366,9 @@ fn encode_with<W: ChunkWriter>(
         .map(|&l| tree.leaves.q[leaf_source[l as usize] as usize])
         .collect();
     let mut neighbours = if entropy {
-        precision_coding::particle_faces(&links, &h.levels[dr], q.len())
+        precision_layers::particle_faces(&links, &h.levels[dr], q.len())
     } else {
-        precision_coding::Faces::default()
+        precision_layers::Faces::default()
     };
     if entropy
         && precision > depth
@@ -355,7 +386,7 @@ fn encode_with<W: ChunkWriter>(
     }
     for b in (u32::from(depth) + 1)..=u32::from(precision) {
         let mut w = W::open();
-        precision_coding::code_precision(&mut w, depth, b, &mut q, &mut neighbours)?;
+        precision_layers::code_precision(&mut w, depth, b, &mut q, &mut neighbours)?;
         let (payload, bits) = w.close();
         write_chunk(
             ChunkKind::Precision,
@@ -380,7 +411,7 @@ fn encode_with<W: ChunkWriter>(
 /// [`Placement::SurfaceColumn`] for one particle: `mean` (16-bit grid)
 /// and unit `normal` of its samples, `leaf` (`R`-bit), the normal axis
 /// `g` the decoder will infer. Tries columns of depth `k = 0, 1, …` (up
-/// to [`precision_coding::MAX_COLUMN_DEPTH`], and below `N`): the tangential
+/// to [`crate::coding::contexts::MAX_COLUMN_DEPTH`], and below `N`): the tangential
 /// coordinates keep the mean's first `k` bits below `R`, then sit at the
 /// middle of that sub-cell (the centre of its `N`-bit cell there, what a
 /// decoder at full precision draws); the normal one is the plane's height
@@ -400,7 +431,7 @@ fn surface_column(
         return None;
     }
     let half_cell = (1u32 << (QBITS - u32::from(precision))) >> 1;
-    let max_k = precision_coding::MAX_COLUMN_DEPTH.min(precision - depth - 1);
+    let max_k = crate::coding::contexts::MAX_COLUMN_DEPTH.min(precision - depth - 1);
     let lo = f64::from(leaf[g] << s);
     let hi = lo + f64::from((1u32 << s) - 1);
     for k in 0..=max_k {
@@ -500,7 +531,7 @@ mod tests {
         let n = glam::Vec3::new(0.0, 0.6, 0.8);
         let mean = [3 * 4096 + 1000, 5 * 4096 + 2500, 7 * 4096 + 2000];
         // Neighbours across x and y: z is the normal axis.
-        assert_eq!(precision_coding::normal_axis(0b011_011), 2);
+        assert_eq!(precision_layers::normal_axis(0b011_011), 2);
         let (p, k) = surface_column(mean, leaf, n, 2, 4, 12).unwrap();
         assert_eq!(k, 0);
         // Tangential: the 12-bit cell at the leaf's middle, drawn at its centre.

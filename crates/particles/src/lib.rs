@@ -9,67 +9,107 @@
 //! precision (§7), and a viewer triangulates each decoded level directly
 //! from a 256-case table (§6).
 //!
-//! The pipeline reads top to bottom in the file names:
-//! [`octree`] → [`thinning`] → [`ordering`] → [`attributes`] →
-//! [`hierarchical_coding`] (levels) and [`precision_coding`] (precision
-//! layers) over [`encode_baseline`] or [`encode_entropy`] → [`container`];
-//! and back: [`decode`](mod@decode) → [`triangulate`](mod@triangulate)
-//! (with [`triangulation_table`], then [`orientation`]) → [`stats`].
+//! ## Entry points
 //!
-//! ## What to expect (release build, shared 2-core machine)
+//! | call | does |
+//! |---|---|
+//! | [`encode`] | mesh, points or range image → `.pop` bytes ([`EncodeOptions`]) |
+//! | [`read_header`], [`ChunkReader`] | parse the container: header, then chunks |
+//! | [`decode`] | a whole stream, or a prefix of whole chunks, up to a level / precision ([`DecodeOptions`]); strict |
+//! | [`decode_prefix`] | what has arrived: every complete chunk of a byte prefix, and where it stopped ([`Decoded::cut`]) |
+//! | [`Decoded::surface`], [`Decoded::triangulate`] | one level's particles, or its oriented mesh |
+//! | [`triangulate`], [`triangulate_owned`] | a level's particles → [`lodkit_mesh::TriMesh`] ([`TriangulateOptions`]) |
+//! | [`orient`] | turns a mesh's triangles outwards |
+//! | [`stream_stats`], [`progressive_levels`] | Table 1 per level; every level's mesh with the bytes it needs |
 //!
-//! | input | R | particles | baseline structure bits/particle (paper: 5.1) | entropy structure | all bits/particle at N = 12, entropy |
-//! |---|---|---|---|---|---|
-//! | Stanford bunny (35,947 vertices) | 7 | 33,712 | 4.72 | 2.08 | 8.68 |
-//! | Armadillo (CGAL 26k) | 7 | 23,353 | 4.82 | 2.42 | 9.78 |
-//! | Stanford bunny, dense, R = N = 10 | 10 | 2,118,241 | 4.78 | 1.49 | 1.49 |
+//! Every call is deterministic (same input and options, same bytes or
+//! triangles), and no byte sequence makes a decoder panic or allocate more
+//! than its counts, checked against the bytes present, allow (the decoder
+//! is fuzzed: `crates/particles/fuzz`). Errors are [`Error`]: bad input
+//! to the encoder, or an invalid stream with the chunk and the reason.
 //!
-//! The entropy mode's vertices sit on their samples' plane at their
-//! leaf's middle column ([`encode::Placement`]), so the precision layers
-//! code little more than the coordinate across the surface. Triangles ≈
-//! 2.0–2.1 × particles per level; decode + triangulate of the finest level
-//! (criterion, 2-core machine at load < 1, `cargo bench -p lodkit-bench
-//! --bench pop`) 15–18 M triangles/s in the baseline mode and 8.6–9.6 M in
-//! the entropy mode, whose decoder makes about 12 binary decisions per
-//! particle at R = 8 (per stage: `cargo run --release -p lodkit-particles
-//! --example pop_profile -- icosphere6:8:12`; decoding alone: `cargo run
-//! --release -p lodkit-particles --example pop_decode_time`);
-//! `lodkit pop stats FILE` prints the paper's Table 1 for any stream.
+//! ## Pipeline
+//!
+//! Octree and labels (`octree.rs`) → thinning (`thinning.rs`) →
+//! progressive ordering (`ordering.rs`) → attributes (`attributes.rs`) →
+//! coding (`coding/`: `levels.rs` and `precision_layers.rs` over the
+//! symbol interface `bit_coder.rs`, with `raw_bits.rs` or `range_coder.rs`
+//! and the entropy mode's `contexts.rs` and `links.rs`) → container
+//! (`container.rs`); and back: `decode.rs` → `triangulate/` (the 256
+//! cases in `triangulation_table.rs`, then `orientation.rs`) → `stats.rs`.
+//!
+//! ## What to expect
+//!
+//! About 5 structure bits per particle in the baseline mode (the paper's
+//! 5.1) and about half that in the entropy mode; triangles ≈ 2 × particles
+//! per level. Figures and the commands that reproduce them:
+//! `docs/benchmarks.md` (`cargo bench -p lodkit-bench --bench pop`);
+//! `lodkit pop stats FILE` prints Table 1 for any stream.
 //!
 //! ```no_run
-//! use lodkit_particles::{encode, EncodeOptions, decode, DecodeOptions, triangulate, TriangulateOptions};
+//! use lodkit_particles::{DecodeOptions, EncodeOptions, TriangulateOptions, decode_prefix, encode};
 //! let bunny = lodkit_mesh::io::load(std::path::Path::new("bunny.ply")).unwrap();
 //! let pop = encode(&bunny, &EncodeOptions::DEFAULT).unwrap();
-//! let dec = decode(&pop.bytes, &DecodeOptions::default()).unwrap();
-//! let level = dec.surface(6).unwrap();
-//! let mesh = triangulate(&level, &TriangulateOptions::DEFAULT).mesh;
+//! // The first half of the stream, as a viewer receiving it has it.
+//! let arrived = &pop.bytes[..pop.bytes.len() / 2];
+//! let d = decode_prefix(arrived, &DecodeOptions::default()).unwrap();
+//! let mesh = d.triangulate(d.finest_level(), &TriangulateOptions::DEFAULT).unwrap().mesh;
 //! ```
 // Octree code walks parallel per-node arrays (cells, labels, particles)
 // by index; iterator chains over three of them read worse.
 #![allow(clippy::needless_range_loop)]
+// Every public item is documented; the unstable `internals` (bench only)
+// re-export stages that are not.
+#![cfg_attr(not(feature = "internals"), deny(missing_docs))]
+#![forbid(unsafe_code)]
 
-pub mod attributes;
-pub mod container;
-pub mod decode;
-pub mod encode;
-pub mod encode_baseline;
-pub mod encode_entropy;
-pub mod error;
-pub mod hierarchical_coding;
-pub mod octree;
-pub mod ordering;
-pub mod orientation;
-pub mod precision_coding;
-pub mod stats;
-pub mod thinning;
-pub mod triangulate;
-pub mod triangulation_table;
+pub(crate) mod attributes;
+pub(crate) mod coding;
+pub(crate) mod container;
+pub(crate) mod decode;
+pub(crate) mod encode;
+pub(crate) mod error;
+pub(crate) mod octree;
+pub(crate) mod ordering;
+pub(crate) mod orientation;
+#[cfg(test)]
+mod progressive_tests;
+pub(crate) mod stats;
+pub(crate) mod thinning;
+pub(crate) mod triangulate;
+pub(crate) mod triangulation_table;
 
-pub use container::Mode;
-pub use decode::{DecodeOptions, Decoded, LevelSurface, decode};
-pub use encode::{EncodeOptions, EncodeReport, Encoded, LevelReport, Placement, encode};
+pub use container::{
+    CHUNK_HEADER_LEN, Chunk, ChunkKind, ChunkReader, HEADER_LEN, Header, MAGIC, Mode, VERSION,
+    read_header,
+};
+pub use decode::{Cut, DecodeOptions, Decoded, LevelSurface, decode, decode_prefix};
+pub use encode::{
+    DEFAULT_PRECISION, EncodeOptions, EncodeReport, Encoded, LevelReport, Placement, encode,
+};
 pub use error::{Error, Result};
-pub use octree::Sidedness;
-pub use stats::{LevelStats, ProgressiveLevel, StreamStats, progressive_levels, stream_stats};
+pub use octree::{Frame, Sidedness};
+pub use ordering::HLevel;
+pub use orientation::orient;
+pub use stats::{
+    LevelStats, ProgressiveLevel, StreamStats, non_manifold_flags, non_manifold_triangles,
+    progressive_levels, stream_stats,
+};
 pub use thinning::ThinningOptions;
-pub use triangulate::{TriangulateOptions, Triangulation, TriangulationStats, triangulate};
+pub use triangulate::{
+    TriangulateOptions, Triangulation, TriangulationStats, triangulate, triangulate_owned,
+    triangulate_traced,
+};
+
+/// The pipeline's stages, for the bench crate's profiling drivers and the
+/// range coder's benchmark only (feature `internals`): no stability
+/// promise, not part of the contract above.
+#[cfg(feature = "internals")]
+#[doc(hidden)]
+#[allow(missing_docs)]
+pub mod internals {
+    pub use crate::coding::bit_coder::BitCoder;
+    pub use crate::coding::range_coder::{EntropyReader, EntropyWriter, PRECISION, model};
+    pub use crate::octree::{BuildOptions, FACES, Label, Octree, morton, unmorton};
+    pub use crate::thinning::thin;
+}

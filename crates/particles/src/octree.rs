@@ -28,7 +28,6 @@
 //! empty band cell is OUT when it lies on the positive side of the
 //! adjacent ON cells' mean sample planes.
 use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
 
 use glam::{DVec3, Vec3};
 use lodkit_mesh::{Model, PointCloud, TriMesh};
@@ -46,27 +45,10 @@ const FALLBACK_DEPTH: u8 = 6;
 /// clouds: fewer and the leaves of a uniform scan start to miss samples.
 const POINTS_PER_LEAF: usize = 3;
 
-/// Fast hash for Morton codes (a multiply-shift, enough for well-spread keys).
-#[derive(Default, Clone, Copy)]
-pub struct MortonHasher(u64);
-
-impl Hasher for MortonHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.0 = (self.0.rotate_left(5) ^ u64::from(b)).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-        }
-    }
-    fn write_u64(&mut self, v: u64) {
-        self.0 = (v ^ (v >> 29)).wrapping_mul(0x9e37_79b9_7f4a_7c15);
-        self.0 ^= self.0 >> 32;
-    }
-}
-
-/// A hash map keyed by Morton code.
-pub type MortonMap<V> = HashMap<u64, V, BuildHasherDefault<MortonHasher>>;
+/// A hash map keyed by Morton code (Fx hashing: the keys are not
+/// adversarial, and SipHash costs more than the work the maps serve; no
+/// map is iterated in hash order where the order reaches an output).
+pub type MortonMap<V> = HashMap<u64, V, rustc_hash::FxBuildHasher>;
 
 fn spread(v: u32) -> u64 {
     let mut x = u64::from(v) & 0xffff;
@@ -234,6 +216,7 @@ pub struct Octree {
     pub frame: Frame,
     pub levels: Vec<Level>,
     pub leaves: LeafAttributes,
+    #[cfg_attr(not(feature = "internals"), allow(dead_code))] // the bench drivers read it
     pub sidedness: Sidedness,
 }
 

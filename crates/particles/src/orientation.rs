@@ -16,7 +16,13 @@
 //! with the same windings on every reference stream.
 use lodkit_mesh::TriMesh;
 
-/// See the module docs.
+/// Orients the triangles of `mesh` in place (what
+/// [`TriangulateOptions::orient`](crate::TriangulateOptions::orient) does
+/// after a triangulation): by the vertex normals when the mesh has them,
+/// else consistently across manifold edges, each connected component
+/// turned outwards by its signed volume. Deterministic; vertices are not
+/// touched. Linear in the triangles apart from a sort of each vertex's
+/// sides; meshes of more than 2^30 triangles are left as they are.
 pub fn orient(mesh: &mut TriMesh) {
     if let Some(n) = &mesh.normals {
         for f in &mut mesh.faces {

@@ -79,6 +79,7 @@ impl Default for ThinningOptions {
 /// Counts of eliminated cubes per level (Table 1's "eliminated nodes"):
 /// cubes relabelled by their own occlusion test, plus parents relabelled
 /// because they lost every ON child.
+#[cfg_attr(not(any(test, feature = "internals")), allow(dead_code))] // tests, bench drivers
 pub fn thin(tree: &mut Octree, opts: &ThinningOptions) -> Vec<usize> {
     thin_choosing(tree, opts).0
 }
@@ -158,6 +159,7 @@ pub const MAX_AUTO_RELAX: u8 = 6;
 /// the coarse shapes. Measured: the open
 /// bunny gets 4 (relaxed below 5 its levels 3–4 reach 3.7 % and 2.3 %),
 /// the armadillo 5 (relaxed below 4 its levels 2–3 reach 24–25 %).
+#[cfg(test)]
 pub fn choose_relax_level(tree: &Octree) -> u8 {
     let mut t = tree.clone();
     thin_choosing(
@@ -175,7 +177,8 @@ pub fn choose_relax_level(tree: &Octree) -> u8 {
 /// level's triangle count.
 fn coarse_non_manifold_share(tree: &Octree, last: usize) -> (f64, Vec<usize>) {
     use crate::decode::LevelSurface;
-    use crate::triangulate::{TriangulateOptions, non_manifold_triangles, triangulate};
+    use crate::stats::non_manifold_triangles;
+    use crate::triangulate::{TriangulateOptions, triangulate};
     let Ok((h, leaf_source)) = crate::ordering::Hierarchy::from_thinned(tree) else {
         return (f64::INFINITY, Vec::new());
     };

@@ -25,6 +25,8 @@
 //! mesh").
 use std::sync::OnceLock;
 
+use lodkit_mesh::cube_symmetry::canonical;
+
 /// Number of classes with at least three ON cubes.
 pub const CLASS_COUNT: usize = 17;
 
@@ -77,6 +79,7 @@ pub struct Config {
 pub struct Table {
     pub configs: Vec<Config>,
     /// A representative configuration (the smallest mask) of each class.
+    #[cfg_attr(not(test), allow(dead_code))] // the tests read it
     pub representatives: [u8; CLASS_COUNT],
     /// [`Table::configs`] in the 8 bytes per configuration a scan reads
     /// for every neighbourhood (2 KiB in all, where the configurations
@@ -105,51 +108,6 @@ impl Compact {
     pub const TRIANGLE: u8 = 1;
     pub const QUAD: u8 = 2;
     pub const SOLID: u8 = 3;
-}
-
-/// The 48 symmetries as corner permutations.
-pub fn symmetries() -> Vec<[u8; 8]> {
-    let perms = [
-        [0, 1, 2],
-        [0, 2, 1],
-        [1, 0, 2],
-        [1, 2, 0],
-        [2, 0, 1],
-        [2, 1, 0],
-    ];
-    let mut out = Vec::with_capacity(48);
-    for p in perms {
-        for flip in 0..8u8 {
-            let mut map = [0u8; 8];
-            for j in 0..8u8 {
-                let c = corner(j);
-                let mut n = 0u8;
-                for a in 0..3 {
-                    let v = c[p[a]] as u8 ^ ((flip >> a) & 1);
-                    n |= v << a;
-                }
-                map[j as usize] = n;
-            }
-            out.push(map);
-        }
-    }
-    out
-}
-
-/// Applies a corner permutation to a configuration mask.
-pub fn apply(map: &[u8; 8], mask: u8) -> u8 {
-    let mut out = 0u8;
-    for j in 0..8 {
-        if mask & (1 << j) != 0 {
-            out |= 1 << map[j];
-        }
-    }
-    out
-}
-
-/// Smallest image of `mask` under the 48 symmetries.
-pub fn canonical(syms: &[[u8; 8]], mask: u8) -> u8 {
-    syms.iter().map(|s| apply(s, mask)).min().unwrap_or(mask)
 }
 
 fn nodes(mask: u8) -> Vec<u8> {
@@ -309,10 +267,9 @@ fn distance_key(ns: &[u8]) -> Vec<i32> {
 }
 
 fn build() -> Table {
-    let syms = symmetries();
     let mut canon: Vec<u8> = (0..=255u8)
         .filter(|m| m.count_ones() >= 3)
-        .map(|m| canonical(&syms, m))
+        .map(|m| canonical(m))
         .collect();
     canon.sort_unstable();
     canon.dedup();
@@ -344,7 +301,7 @@ fn build() -> Table {
             });
             continue;
         }
-        let c = canonical(&syms, mask);
+        let c = canonical(mask);
         let class = canon
             .iter()
             .position(|&x| x == c)
@@ -445,23 +402,28 @@ mod tests {
     use super::*;
 
     #[test]
-    fn symmetry_maps_every_configuration_to_one_of_17_classes() {
-        let syms = symmetries();
-        assert_eq!(syms.len(), 48);
-        let mut distinct = syms.clone();
-        distinct.sort_unstable();
-        distinct.dedup();
-        assert_eq!(
-            distinct.len(),
-            48,
-            "the 48 symmetries are distinct permutations"
+    fn generated_table_is_the_one_the_streams_were_triangulated_with() {
+        // FNV-1a of the whole table's debug text: a change to the generator
+        // (or to `lodkit_mesh::cube_symmetry`) must not move one triangle.
+        let t = table();
+        let s = format!(
+            "{:?}{:?}{:?}{:?}",
+            t.configs, t.representatives, t.compact, t.solid
         );
+        let h = s.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+            (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3)
+        });
+        assert_eq!((h, s.len()), (0xe914_5086_7a98_0deb, 57584));
+    }
+
+    #[test]
+    fn symmetry_maps_every_configuration_to_one_of_17_classes() {
         let mut classes = std::collections::BTreeSet::new();
         let mut all = std::collections::BTreeSet::new();
         for m in 0..=255u8 {
-            all.insert(canonical(&syms, m));
+            all.insert(canonical(m));
             if m.count_ones() >= 3 {
-                classes.insert(canonical(&syms, m));
+                classes.insert(canonical(m));
             }
         }
         assert_eq!(
@@ -477,7 +439,7 @@ mod tests {
                 assert!((1..=17).contains(&c.class), "config {m:08b}");
                 // Same class as its canonical representative.
                 let rep = t.representatives[c.class as usize - 1];
-                assert_eq!(canonical(&syms, m), rep);
+                assert_eq!(canonical(m), rep);
             } else {
                 assert_eq!(c.class, 0);
             }

@@ -3,10 +3,12 @@
 //! stream or to an error — never a panic — and whatever decodes must
 //! triangulate.
 use lodkit_mesh::Model;
-use lodkit_particles::container::{CHUNK_HEADER_LEN, HEADER_LEN, crc32};
+use lodkit_particles::{CHUNK_HEADER_LEN, HEADER_LEN};
 use lodkit_particles::{
     DecodeOptions, EncodeOptions, Mode, TriangulateOptions, decode, encode, triangulate,
 };
+use rand_xoshiro::Xoshiro256PlusPlus;
+use rand_xoshiro::rand_core::{Rng, SeedableRng};
 
 /// Rewrites every chunk's checksum so damaged payloads pass the container.
 fn reseal(bytes: &mut [u8]) {
@@ -17,7 +19,10 @@ fn reseal(bytes: &mut [u8]) {
         if end > bytes.len() {
             break;
         }
-        let crc = crc32(&[&bytes[pos..pos + 16], &bytes[pos + CHUNK_HEADER_LEN..end]]);
+        let mut h = crc32fast::Hasher::new();
+        h.update(&bytes[pos..pos + 16]);
+        h.update(&bytes[pos + CHUNK_HEADER_LEN..end]);
+        let crc = h.finalize();
         bytes[pos + 16..pos + 20].copy_from_slice(&crc.to_le_bytes());
         pos = end;
     }
@@ -49,13 +54,8 @@ fn damaged_payloads_with_valid_checksums_decode_or_fail_cleanly() {
         };
         let clean = encode(&model, &opts).unwrap().bytes;
         let ranges = payload_ranges(&clean);
-        let mut state = 0x9E37_79B9_7F4A_7C15u64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            state
-        };
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(0x9E37_79B9_7F4A_7C15);
+        let mut next = move || rng.next_u64();
         for trial in 0..300 {
             let mut bytes = clean.clone();
             let (lo, hi) = ranges[trial % ranges.len()];

@@ -86,7 +86,7 @@ fn with_outer_thinning_non_manifold_local_triangulations_stay_under_one_percent(
     for r in 3..=7u8 {
         let t = triangulate(&d.surface(r).unwrap(), &TriangulateOptions::DEFAULT);
         let share = t.stats.fallbacks as f64 / t.stats.triangles as f64;
-        let strict = lodkit_particles::triangulate::non_manifold_triangles(&t.mesh);
+        let strict = lodkit_particles::non_manifold_triangles(&t.mesh);
         // The strict count too: triangles on an edge used more than twice.
         assert!(
             strict * 100 <= t.stats.triangles,
@@ -128,7 +128,7 @@ fn thinning_on_keeps_every_level_of_the_scanned_bunny_under_one_percent_non_mani
     let d = decode(&e.bytes, &DecodeOptions::default()).unwrap();
     for r in 0..=7u8 {
         let t = triangulate(&d.surface(r).unwrap(), &TriangulateOptions::DEFAULT);
-        let strict = lodkit_particles::triangulate::non_manifold_triangles(&t.mesh);
+        let strict = lodkit_particles::non_manifold_triangles(&t.mesh);
         assert!(
             strict * 100 <= t.stats.triangles,
             "level {r}: {strict} non-manifold triangles of {}",

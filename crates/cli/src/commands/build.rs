@@ -401,8 +401,8 @@ fn progressive_stream(
         out,
         samples,
     } = *input;
-    use lodkit_particles::thinning::ThinningOptions;
-    use lodkit_particles::triangulate::TriangulateOptions;
+    use lodkit_particles::ThinningOptions;
+    use lodkit_particles::TriangulateOptions;
     use lodkit_particles::{EncodeOptions, encode, progressive_levels};
     let step = ui.spinner("encoding the progressive particle stream");
     // Outer thinning keeps non-manifold triangles rare (see crates/particles).

@@ -64,7 +64,7 @@ pub struct EncodeArgs {
     #[arg(long)]
     pub depth: Option<u8>,
     /// Vertex precision N in bits (R..=16).
-    #[arg(long, default_value_t = lodkit_particles::encode::DEFAULT_PRECISION)]
+    #[arg(long, default_value_t = lodkit_particles::DEFAULT_PRECISION)]
     pub precision: u8,
     #[arg(long, value_enum, default_value_t = ModeArg::Entropy)]
     pub mode: ModeArg,

@@ -1,7 +1,7 @@
 //! The entropy-coded bit layer — beyond the paper (its §10 leaves entropy
 //! coding for future work).
 //!
-//! Every symbol of [`crate::hierarchical_coding`] is a binary decision
+//! Every symbol of [`crate::coding::levels`] is a binary decision
 //! coded with an adaptive model chosen by its context (child occupancy is
 //! conditioned on the already-coded face neighbours at the same level and
 //! on the parent's face neighbours, in the spirit of MPEG G-PCC's
@@ -26,8 +26,9 @@
 //! symbols/s; encoding is on par, 192–303 M/s either way).
 //!
 //! Each chunk restarts from fresh models so chunks decode independently.
+use super::bit_coder::BitCoder;
+use super::contexts::NUM_CONTEXTS;
 use crate::error::{Result, stream_err};
-use crate::hierarchical_coding::{BitCoder, NUM_CONTEXTS};
 
 /// Fixed-point precision of the binary model.
 pub const PRECISION: usize = 16;
@@ -62,11 +63,13 @@ static NEXT: [[u16; STATES]; 2] = [next_table(false), next_table(true)];
 pub mod model {
     /// `P(false)` of `state`, in `1/2^16`.
     #[inline(always)]
+    #[cfg_attr(not(feature = "internals"), allow(dead_code))] // the bench crate reads it
     pub fn p0(state: u16) -> u32 {
         u32::from(super::P0[usize::from(state)])
     }
     /// The state after coding `bit` in `state`.
     #[inline(always)]
+    #[cfg_attr(not(feature = "internals"), allow(dead_code))] // the bench crate reads it
     pub fn next(state: u16, bit: bool) -> u16 {
         super::NEXT[usize::from(bit)][usize::from(state)]
     }

@@ -5,7 +5,7 @@
 //! level in CPU time (the development machine is shared, so wall time
 //! overstates the work; criterion's `--bench pop` gives wall time).
 //!
-//! `cargo run --release -p lodkit-particles --example pop_probe -- FILE R
+//! `cargo run --release -p lodkit-bench --example pop_probe -- FILE R
 //! [baseline|entropy] [inner|outer] [relax_below] [iterations]`; FILE
 //! `icosphere` is the bench's icosphere. `POP_PROBE_QUICK=1` skips the
 //! per-level table and orientation, `POP_PROBE_EDGES=1` adds, per level,
@@ -16,7 +16,8 @@
 use std::path::Path;
 use std::time::Instant;
 
-use lodkit_particles::triangulate::{non_manifold_triangles, triangulate_traced};
+use lodkit_particles::non_manifold_triangles;
+use lodkit_particles::triangulate_traced;
 use lodkit_particles::{
     DecodeOptions, EncodeOptions, Mode, ThinningOptions, TriangulateOptions, decode, encode,
     triangulate,
@@ -112,7 +113,7 @@ fn main() {
         let (tr, classes) = triangulate_traced(&s, &t);
         let nm = non_manifold_triangles(&tr.mesh);
         let mut hist = [0usize; 256];
-        for (i, bad) in lodkit_particles::triangulate::non_manifold_flags(&tr.mesh)
+        for (i, bad) in lodkit_particles::non_manifold_flags(&tr.mesh)
             .iter()
             .enumerate()
         {
@@ -217,7 +218,7 @@ fn main() {
 /// (kept by the topology test, or where outer thinning is off), and
 /// 2×2×2 blocks by ON count (6, 7–8).
 fn thinning_report(model: &lodkit_mesh::Model, depth: u8, t: &ThinningOptions) {
-    use lodkit_particles::octree::{BuildOptions, FACES, Label, Octree, morton, unmorton};
+    use lodkit_particles::internals::{BuildOptions, FACES, Label, Octree, morton, unmorton};
     let mut tree = Octree::build(
         model,
         &BuildOptions {
@@ -226,7 +227,7 @@ fn thinning_report(model: &lodkit_mesh::Model, depth: u8, t: &ThinningOptions) {
         },
     )
     .expect("octree");
-    lodkit_particles::thinning::thin(&mut tree, t);
+    lodkit_particles::internals::thin(&mut tree, t);
     println!(
         "{:>2} {:>8} {:>8} {:>8} {:>8}",
         "r", "on", "no-in", "blk6", "blk7+"

@@ -1,5 +1,5 @@
 //! The baseline bit layer — §7.1 of Yemez & Schmitt, exactly: every symbol
-//! of [`crate::hierarchical_coding`] is one raw bit (7-bit child masks under
+//! of [`crate::coding::levels`] is one raw bit (7-bit child masks under
 //! a parent with a particle, 8-bit masks under a phantom, one phantom flag
 //! per new child below level `R`, `R − r` bits per coordinate for each new
 //! particle of `P^r`, then the `N − R` precision bits of §7.2). The
@@ -8,8 +8,8 @@
 //!
 //! Bits are packed most significant first; the last byte of a chunk is
 //! padded with zeros.
+use super::bit_coder::BitCoder;
 use crate::error::{Result, stream_err};
-use crate::hierarchical_coding::BitCoder;
 
 /// Writes raw bits.
 #[derive(Debug, Default)]

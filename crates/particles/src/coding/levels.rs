@@ -24,108 +24,12 @@
 //!
 //! Precision layers (bits `R + 1 ..= N`, §7.2) are the next stage,
 //! [`crate::precision_coding`]; the context layout below serves both.
+use super::bit_coder::BitCoder;
+use super::contexts::{BACK, COARSE, FLAG, OCC, OCC_BASE, OCC_KNOWN, PATH, SIBLINGS};
+use super::links::{Links, NONE, Pending, RANK, child_links};
 use crate::error::{Result, stream_err};
 use crate::octree::unmorton;
 use crate::ordering::{HLevel, NO_PARTICLE};
-use crate::precision_coding::MAX_COLUMN_DEPTH;
-
-/// One binary symbol at a time, with a context for adaptive layers.
-pub trait BitCoder {
-    /// Writes `*b` (encoder) or reads it into `*b` (decoder).
-    fn bit(&mut self, b: &mut bool, ctx: usize) -> Result<()>;
-    /// Symbols coded so far.
-    fn symbols(&self) -> u64;
-    /// `n ≤ 32` bits of `*v`, most significant first, context `ctx + i`
-    /// for bit `i` (from the top).
-    fn bits(&mut self, v: &mut u32, n: u32, ctx: usize) -> Result<()> {
-        let mut out = 0u32;
-        for i in 0..n {
-            let mut b = (*v >> (n - 1 - i)) & 1 == 1;
-            self.bit(&mut b, ctx + i as usize)?;
-            out = (out << 1) | u32::from(b);
-        }
-        *v = out;
-        Ok(())
-    }
-    /// Checks that `n` more symbols may be coded. A decoder refuses more
-    /// symbols than its payload can carry (a hostile payload must not
-    /// expand without bound); checking once for a run of symbols keeps the
-    /// test off the per-symbol path of [`BitCoder::bit_reserved`].
-    fn reserve(&mut self, _n: u64) -> Result<()> {
-        Ok(())
-    }
-    /// [`BitCoder::bit`] for a symbol that a successful
-    /// [`BitCoder::reserve`] covers: a decoder need not check its budget
-    /// again (the raw reader still fails at the end of its payload).
-    #[inline(always)]
-    fn bit_reserved(&mut self, b: &mut bool, ctx: usize) -> Result<()> {
-        self.bit(b, ctx)
-    }
-    /// Codes bit `k` of `*bits` for each `k` set in `todo` (`todo < 2^8`),
-    /// lowest first, each with context `ctx(k, *bits & (2^k − 1))`: the
-    /// context may depend on the decisions below `k` (and on bits of
-    /// `*bits` outside `todo`, which stay as they are), never on those
-    /// above. The encoder's `*bits` holds the truth; the decoder's bits in
-    /// `todo` are zero on entry. `ctx` must be a pure function; a decoder
-    /// may evaluate it ahead, for both values of the pending bit, to take
-    /// the context's table look-ups off the chain from one decoded bit to
-    /// the next. Reserves its symbols itself.
-    #[inline(always)]
-    fn bits_chained(
-        &mut self,
-        bits: &mut u32,
-        todo: u32,
-        ctx: impl Fn(u32, u32) -> usize,
-    ) -> Result<()> {
-        let mut rest = todo;
-        while rest != 0 {
-            let k = rest.trailing_zeros();
-            rest &= rest - 1;
-            let mut b = (*bits >> k) & 1 == 1;
-            self.bit(&mut b, ctx(k, *bits & ((1 << k) - 1)))?;
-            *bits = (*bits & !(1 << k)) | (u32::from(b) << k);
-        }
-        Ok(())
-    }
-    /// Whether the contexts are ignored (the baseline's raw bits): symbols
-    /// with different contexts may then be coded together with
-    /// [`BitCoder::bits`], which a raw reader does with one shift.
-    fn context_free(&self) -> bool {
-        false
-    }
-}
-
-// Context layout (the baseline ignores contexts).
-const OCC_STATES: usize = 3 * 8 * 8 * 8 * 3;
-const OCC: usize = 0;
-const FLAG: usize = OCC + OCC_STATES;
-const FLAG_STATES: usize = 2 * 8 * 4;
-const PATH: usize = FLAG + FLAG_STATES;
-const PATH_STATES: usize = 3 * 3 * 3 * 2;
-pub(crate) const PREC: usize = PATH + PATH_STATES;
-/// Entropy mode: axis × layer bucket × neighbours along it × normal axis
-/// or not × 2 bits above (216); the plain layout, axis × 16 bits × 2 bits
-/// above (192), fits inside.
-const PREC_STATES: usize = 3 * 3 * 3 * 2 * 4;
-/// Column flags: face neighbours along x, y, z (0–2 each).
-pub(crate) const COL: usize = PREC + PREC_STATES;
-const COL_STATES: usize = 27;
-/// Column depth, unary: one context per step.
-pub(crate) const COLK: usize = COL + COL_STATES;
-/// Normal-axis bits of column particles: layer bucket × predicted height
-/// bin × 2 bits above.
-pub(crate) const PRED: usize = COLK + MAX_COLUMN_DEPTH as usize;
-const PRED_STATES: usize = 3 * PRED_BINS * 4;
-/// Bins of the height a column particle's neighbours predict
-/// ([`crate::precision_coding`]).
-pub(crate) const PRED_BINS: usize = 7;
-/// First context of the attribute bits (see [`crate::attributes`]).
-pub const ATTR: usize = PRED + PRED_STATES;
-/// Contexts reserved for attributes: channel × component × 16 bit places,
-/// plus correction bits.
-pub const ATTR_STATES: usize = 2 * 3 * 16 + 2 * 3 * 3;
-/// Total number of contexts an adaptive layer needs.
-pub const NUM_CONTEXTS: usize = ATTR + ATTR_STATES;
 
 /// What a level coder needs besides the bits.
 pub struct LevelInput<'a> {
@@ -139,184 +43,6 @@ pub struct LevelInput<'a> {
     pub parents: &'a HLevel,
     /// Refuse to build more nodes than this (decoder guard).
     pub max_nodes: usize,
-}
-
-/// No node across this face (a [`Links`] row's marker).
-pub(crate) const NONE: u32 = u32::MAX;
-
-/// The children (bit `k`: child `k`) on the upper side of their parent
-/// along x, y, z.
-const UPPER: [u8; 3] = [0xaa, 0xcc, 0xf0];
-
-/// Per child `k` and set `known` of children below it (index `256k +
-/// known`): bit `a` set when `k` is on the upper side of axis `a` and its
-/// face neighbour towards −a, child `k − 2^a`, is in `known`.
-static SIBLINGS: [u8; 2048] = {
-    let mut t = [0u8; 2048];
-    let mut i = 0;
-    while i < 2048 {
-        let (k, known) = (i >> 8, i & 0xff);
-        let mut a = 0;
-        while a < 3 {
-            let bit = 1 << a;
-            if k & bit != 0 && known >> (k ^ bit) & 1 != 0 {
-                t[i] |= bit as u8;
-            }
-            a += 1;
-        }
-        i += 1;
-    }
-    t
-};
-
-/// The part of child `k`'s occupancy context that the decisions below it
-/// decide (index as [`SIBLINGS`]): its siblings behind it and how many
-/// children are present so far (0, 1, 2 or more), in the layout of
-/// [`code_level`]'s occupancy contexts.
-static OCC_KNOWN: [u16; 2048] = {
-    let mut t = [0u16; 2048];
-    let mut i = 0;
-    while i < 2048 {
-        let count = ((i & 0xff) as u32).count_ones();
-        let count = if count > 2 { 2 } else { count };
-        t[i] = SIBLINGS[i] as u16 * 24 + count as u16;
-        i += 1;
-    }
-    t
-};
-
-/// Bit `k` of the index moved to bit `8k`: one byte per child.
-static SPREAD: [u64; 256] = {
-    let mut t = [0u64; 256];
-    let mut i = 0;
-    while i < 256 {
-        let mut k = 0;
-        while k < 8 {
-            t[i] |= ((i as u64 >> k) & 1) << (8 * k);
-            k += 1;
-        }
-        i += 1;
-    }
-    t
-};
-
-/// Per axis `a` and children `m` of the parent's neighbour towards −a: in
-/// byte `k`, bit `3 + a` set when child `k` is on the lower side of `a`
-/// and its neighbour towards −a, that neighbour's child `k + 2^a`, is in
-/// `m`.
-static BACK: [[u64; 256]; 3] = {
-    let mut t = [[0u64; 256]; 3];
-    let mut a = 0;
-    while a < 3 {
-        let mut m = 0;
-        while m < 256 {
-            let lower = !UPPER[a] as usize;
-            t[a][m] = SPREAD[(m >> (1 << a)) & lower] << (3 + a);
-            m += 1;
-        }
-        a += 1;
-    }
-    t
-};
-
-/// Per set of the parent's present face neighbours (bit `d`: across face
-/// `d`): in byte `k`, bit `a` set when the neighbour on child `k`'s side
-/// along `a` is present.
-static COARSE: [u64; 64] = {
-    let mut t = [0u64; 64];
-    let mut f = 0;
-    while f < 64 {
-        let mut a = 0;
-        while a < 3 {
-            let lo = if f >> a & 1 == 1 { !UPPER[a] } else { 0 };
-            let hi = if f >> (a + 3) & 1 == 1 { UPPER[a] } else { 0 };
-            t[f] |= SPREAD[(lo | hi) as usize] << a;
-            a += 1;
-        }
-        f += 1;
-    }
-    t
-};
-
-/// The part of child `k`'s occupancy context that the parent decides,
-/// index `256k + byte` with `byte` as in [`code_level`]'s `near` (state,
-/// neighbours behind, parent's neighbours on its sides).
-static OCC_BASE: [u16; 2048] = {
-    let mut t = [0u16; 2048];
-    let mut i = 0;
-    while i < 2048 {
-        let (k, state, near) = (i >> 8, (i >> 6) & 3, i & 63);
-        if state < 3 {
-            t[i] = (OCC + ((state * 8 + k) * 64 + near) * 3) as u16;
-        }
-        i += 1;
-    }
-    t
-};
-
-/// Face-neighbour links of one level, for the entropy contexts: `nb[i][d]`
-/// is the index of the node across face `d` of node `i` (`d = a` towards
-/// `−a`, `d = 3 + a` towards `+a`) or `NONE`. Built from the parent
-/// level's links while the level is coded (a child's neighbour is a
-/// sibling or a child of its parent's neighbour), so no context needs a
-/// hash or a search: the coder of level `r` reads only arrays.
-///
-/// The links of level `R` serve only
-/// [`crate::precision_coding::particle_faces`], which reads each
-/// once: [`code_level`] leaves them unbuilt there (`pending`), and they are
-/// derived on the fly from what builds them.
-#[derive(Debug, Clone, Default)]
-pub struct Links {
-    nb: Vec<[u32; 6]>,
-    pending: Option<Pending>,
-}
-
-/// What [`child_links`] builds a level's links from.
-#[derive(Debug, Clone)]
-struct Pending {
-    parent_nb: Vec<[u32; 6]>,
-    masks: Vec<u8>,
-    firsts: Vec<u32>,
-    n: usize,
-}
-
-impl Links {
-    /// The links of level 0: the root has no neighbour.
-    pub fn root() -> Links {
-        Links {
-            nb: vec![[NONE; 6]],
-            pending: None,
-        }
-    }
-
-    /// Nodes the links describe.
-    pub(crate) fn len(&self) -> usize {
-        self.pending.as_ref().map_or(self.nb.len(), |p| p.n)
-    }
-
-    /// Calls `f(i, links of node i)` for every node in order, deriving
-    /// pending links on the fly.
-    #[inline(always)]
-    pub(crate) fn for_each_row(&self, mut f: impl FnMut(usize, [u32; 6])) {
-        match &self.pending {
-            Some(p) => each_child_links(&p.parent_nb, &p.masks, &p.firsts, f),
-            None => {
-                for (i, row) in self.nb.iter().enumerate() {
-                    f(i, *row);
-                }
-            }
-        }
-    }
-
-    /// Builds links left pending.
-    fn materialise(&mut self) {
-        if let Some(p) = self.pending.take() {
-            self.nb = Vec::with_capacity(p.n);
-            each_child_links(&p.parent_nb, &p.masks, &p.firsts, |_, row| {
-                self.nb.push(row)
-            });
-        }
-    }
 }
 
 /// The truth an encoder codes from.
@@ -343,7 +69,7 @@ pub fn code_root<C: BitCoder>(
 /// `leaves` (their index is their particle number). In entropy mode
 /// `links` holds the links of level `r − 1` on entry and those of level
 /// `r` on return (those of level `R` serve
-/// [`crate::precision_coding::particle_faces`]); the
+/// [`crate::coding::precision_layers::particle_faces`]); the
 /// baseline leaves it alone.
 pub fn code_level<C: BitCoder>(
     coder: &mut C,
@@ -673,83 +399,12 @@ fn code_level_in<C: BitCoder, const ENTROPY: bool>(
     })
 }
 
-/// The links of the children level: a child's neighbour across a face is
-/// a sibling, or a child of the parent's neighbour across that face.
-fn child_links(parent_nb: &[[u32; 6]], masks: &[u8], firsts: &[u32], n: usize) -> Links {
-    let mut nb = Vec::with_capacity(n);
-    each_child_links(parent_nb, masks, firsts, |_, row| nb.push(row));
-    debug_assert_eq!(nb.len(), n);
-    Links { nb, pending: None }
-}
-
-/// Calls `f(i, links of child i)` for the children level's nodes in order.
-///
-/// Which children exist is data: each link is selected with masks (the
-/// child's rank among its siblings from a table), not branched on.
-#[inline(always)]
-fn each_child_links(
-    parent_nb: &[[u32; 6]],
-    masks: &[u8],
-    firsts: &[u32],
-    mut f: impl FnMut(usize, [u32; 6]),
-) {
-    let mut i = 0;
-    for p in 0..masks.len() {
-        let m = masks[p];
-        if m == 0 {
-            continue;
-        }
-        let first = firsts[p];
-        // Children masks and first indices of the parent's face neighbours
-        // (an empty mask for a missing one; index 0 stands in for it).
-        let mut nm = [0u8; 6];
-        let mut nf = [0u32; 6];
-        for d in 0..6 {
-            let q = parent_nb[p][d];
-            let present = q != NONE;
-            let q = if present { q as usize } else { 0 };
-            nm[d] = masks[q] & u8::from(present).wrapping_neg();
-            nf[d] = firsts[q];
-        }
-        let mut rest = m;
-        while rest != 0 {
-            let k = rest.trailing_zeros() as usize;
-            rest &= rest - 1;
-            let mut row = [NONE; 6];
-            for (d, link) in row.iter_mut().enumerate() {
-                let bit = 1usize << (d % 3);
-                let towards_plus = d >= 3;
-                let inside = (k & bit != 0) != towards_plus;
-                let (qm, qf) = if inside { (m, first) } else { (nm[d], nf[d]) };
-                let j = k ^ bit;
-                let index = qf + u32::from(RANK[usize::from(qm) << 3 | j]);
-                *link = if qm >> j & 1 == 1 { index } else { NONE };
-            }
-            f(i, row);
-            i += 1;
-        }
-    }
-}
-
-/// `RANK[8 · mask + j]`: the children of `mask` below child `j` — the
-/// index of child `j` among its siblings (a population count, which the
-/// baseline x86-64 instruction set lacks).
-static RANK: [u8; 2048] = {
-    let mut t = [0u8; 2048];
-    let mut i = 0;
-    while i < 2048 {
-        t[i] = ((i >> 3) & ((1 << (i & 7)) - 1)).count_ones() as u8;
-        i += 1;
-    }
-    t
-};
-
 #[cfg(test)]
 mod tests {
     use std::collections::HashMap;
 
     use super::*;
-    use crate::encode_baseline::BitWriter;
+    use crate::coding::raw_bits::BitWriter;
     use crate::octree::{BuildOptions, Octree, morton, offset};
     use crate::ordering::Hierarchy;
     use crate::thinning::{ThinningOptions, thin};
@@ -810,7 +465,7 @@ mod tests {
         // The decoder writes a level's nodes by index into room sized from
         // the chunk's node count: hostile payloads, whatever node counts
         // they declare, must end in a level or an error, never a panic.
-        use crate::encode_entropy::EntropyReader;
+        use crate::coding::range_coder::EntropyReader;
         let model = lodkit_mesh::Model::Mesh(lodkit_mesh::shapes::icosphere(2));
         let mut tree = Octree::build(
             &model,
@@ -845,7 +500,7 @@ mod tests {
                     level: &h.levels[q as usize],
                     leaves: &leaves,
                 };
-                let mut w = crate::encode_entropy::EntropyWriter::new();
+                let mut w = crate::coding::range_coder::EntropyWriter::new();
                 code_level(&mut w, &inp, &mut links, &mut coded, Some(&truth)).unwrap();
             }
             let nodes = h.levels[r as usize].cells.len();

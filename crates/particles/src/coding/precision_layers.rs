@@ -12,13 +12,11 @@
 //! particle coding one symbol, so the loop is arranged around that case —
 //! its height predictors are a fixed four-slot row read without branching
 //! on how many there are, and its tangential coordinates are settled once.
+use super::bit_coder::BitCoder;
+use super::contexts::{COL, COLK, MAX_COLUMN_DEPTH, PREC, PRED, PRED_BINS};
+use super::links::{Links, NONE};
 use crate::error::{Result, stream_err};
-use crate::hierarchical_coding::{BitCoder, COL, COLK, Links, NONE, PREC, PRED, PRED_BINS};
 use crate::ordering::HLevel;
-
-/// Deepest column (tangential bits coded below `R` before the implied
-/// middle) the entropy mode signals.
-pub const MAX_COLUMN_DEPTH: u8 = 2;
 
 /// The particles' face neighbourhood at level `R`, for the entropy mode's
 /// precision layers.
@@ -66,7 +64,7 @@ impl Faces {
 }
 
 /// The face neighbourhood of every particle, by particle number, from the
-/// links [`crate::hierarchical_coding::code_level`] leaves after level `R`
+/// links [`crate::coding::levels::code_level`] leaves after level `R`
 /// (entropy mode); empty when `links` does not describe `leaves`.
 pub fn particle_faces(links: &Links, leaves: &HLevel, particles: usize) -> Faces {
     if links.len() != leaves.cells.len() {

@@ -1,16 +1,14 @@
 //! Measurable claims of the paper as tests: every prefix decodes, damage is
 //! an error, the error bound of §6.5, exact attributes (eq. 3–4).
+use crate::attributes::{self, Channel};
+use crate::container::ChunkReader;
+use crate::octree::{BuildOptions, Octree};
+use crate::ordering::Hierarchy;
+use crate::thinning::thin;
+use crate::{DecodeOptions, EncodeOptions, Mode, TriangulateOptions, decode, encode, triangulate};
 use glam::Vec3;
 use lodkit_mesh::metrics::distance::SurfaceIndex;
 use lodkit_mesh::{Model, TriMesh};
-use lodkit_particles::attributes::{self, Channel};
-use lodkit_particles::container::ChunkReader;
-use lodkit_particles::octree::{BuildOptions, Octree};
-use lodkit_particles::ordering::Hierarchy;
-use lodkit_particles::thinning::thin;
-use lodkit_particles::{
-    DecodeOptions, EncodeOptions, Mode, TriangulateOptions, decode, encode, triangulate,
-};
 
 fn coloured_sphere() -> TriMesh {
     let mut m = lodkit_mesh::shapes::icosphere(4);
@@ -43,7 +41,7 @@ fn every_prefix_of_whole_chunks_decodes_and_every_cut_inside_one_is_an_error() {
         // Every chunk end, and cuts just inside, in the middle of and at
         // the last byte of every chunk (and of the header).
         let mut cuts = vec![0, 1, 20];
-        let mut start = lodkit_particles::container::HEADER_LEN;
+        let mut start = crate::container::HEADER_LEN;
         cuts.push(start);
         for &end in &ends {
             cuts.extend([start + 1, start + 10, (start + end) / 2, end - 1, end]);
@@ -53,8 +51,8 @@ fn every_prefix_of_whole_chunks_decodes_and_every_cut_inside_one_is_an_error() {
         cuts.dedup();
         for cut in cuts {
             let got = decode(&e.bytes[..cut], &DecodeOptions::default());
-            if ends.contains(&cut) || cut == lodkit_particles::container::HEADER_LEN {
-                if cut == lodkit_particles::container::HEADER_LEN {
+            if ends.contains(&cut) || cut == crate::container::HEADER_LEN {
+                if cut == crate::container::HEADER_LEN {
                     assert!(got.is_err(), "a header alone holds no level");
                     continue;
                 }
@@ -101,16 +99,16 @@ fn decoded_levels_stay_within_the_interior_diagonal_of_their_cubes() {
     let Model::Mesh(bunny) = lodkit_mesh::io::load(&bunny_path).unwrap() else {
         panic!("the bunny is a mesh")
     };
-    let outer = lodkit_particles::ThinningOptions {
+    let outer = crate::ThinningOptions {
         outer: true,
-        ..lodkit_particles::ThinningOptions::DEFAULT
+        ..crate::ThinningOptions::DEFAULT
     };
     for (name, surface) in [
         ("sphere", lodkit_mesh::shapes::icosphere(5)),
         ("bunny", bunny),
     ] {
         let index = SurfaceIndex::new(&surface).unwrap();
-        for thinning in [lodkit_particles::ThinningOptions::DEFAULT, outer] {
+        for thinning in [crate::ThinningOptions::DEFAULT, outer] {
             let opts = EncodeOptions {
                 depth: Some(7),
                 precision: 14,

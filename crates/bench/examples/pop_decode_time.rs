@@ -1,7 +1,7 @@
 //! Decode time of `.pop` files, structure and precision apart from the
 //! triangulation, best of `--runs` (default 7) in one process:
 //!
-//! `cargo run --release -p lodkit-particles --example pop_decode_time -- INPUT...`
+//! `cargo run --release -p lodkit-bench --example pop_decode_time -- INPUT...`
 //!
 //! An input is a `.pop` file, or `MODEL:R:N[:baseline]` to encode a mesh
 //! or point cloud first (`MODEL` = `icosphereL` for the icosphere of
@@ -16,7 +16,7 @@ use std::time::Instant;
 
 use lodkit_particles::{DecodeOptions, TriangulateOptions, decode, triangulate};
 
-#[path = "shared/stream_input.rs"]
+#[path = "pop_shared/stream_input.rs"]
 mod stream_input;
 use stream_input::load;
 

@@ -2,7 +2,7 @@
 //! loop without criterion, so a profiler (`perf record`, `valgrind
 //! --tool=callgrind`) sees one input and nothing else:
 //!
-//! `cargo run --release -p lodkit-particles --example pop_profile -- INPUT [ITERATIONS] [orient]`
+//! `cargo run --release -p lodkit-bench --example pop_profile -- INPUT [ITERATIONS] [orient]`
 //!
 //! `INPUT` is a `.pop` file or `MODEL:R:N[:baseline]` as for
 //! `pop_decode_time` (`MODEL` = `icosphereL` for the bench's icosphere);
@@ -11,10 +11,9 @@
 //! `surface`, triangulation) and the triangles/s of the three together.
 use std::time::Instant;
 
-use lodkit_particles::triangulate::triangulate_owned;
-use lodkit_particles::{DecodeOptions, TriangulateOptions, decode, triangulate};
+use lodkit_particles::{DecodeOptions, TriangulateOptions, decode, triangulate, triangulate_owned};
 
-#[path = "shared/stream_input.rs"]
+#[path = "pop_shared/stream_input.rs"]
 mod stream_input;
 use stream_input::load;
 
