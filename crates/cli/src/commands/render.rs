@@ -213,7 +213,7 @@ fn load(ui: &Ui, a: &RenderArgs, k: Kind) -> Result<(Drawable, String)> {
     let name = a.input.display().to_string();
     match k {
         Kind::Mco => {
-            let model = lodkit_mco::model_file::load(&a.input)?;
+            let model = lodkit_mco::McoModel::load(&a.input)?;
             let mut idx = Vec::new();
             let what = if let Some(n) = a.triangles {
                 let lod = model.extract_triangles(n, &mut idx);
