@@ -269,7 +269,7 @@ fn distance_key(ns: &[u8]) -> Vec<i32> {
 fn build() -> Table {
     let mut canon: Vec<u8> = (0..=255u8)
         .filter(|m| m.count_ones() >= 3)
-        .map(|m| canonical(m))
+        .map(canonical)
         .collect();
     canon.sort_unstable();
     canon.dedup();
