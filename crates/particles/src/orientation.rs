@@ -10,10 +10,9 @@
 //! traverse it opposite ways. A union-find with parity joins them into
 //! components (each keeps the winding of its lowest triangle, whose
 //! neighbours turn to match it, as a walk from it would), then each
-//! component's signed volume decides whether it faces outwards. It
-//! replaced a depth-first walk over a table of neighbours: on the bunny
-//! at R = 8 (266 k triangles) the orientation went from ≈ 19 to ≈ 8.3 ms,
-//! with the same windings on every reference stream.
+//! component's signed volume decides whether it faces outwards: the same
+//! windings as a depth-first walk over a table of neighbours, without the
+//! table.
 use lodkit_mesh::TriMesh;
 
 /// Orients the triangles of `mesh` in place (what
@@ -180,8 +179,7 @@ fn manifold_pairs(faces: &[[u32; 3]], vertices: usize, mut f: impl FnMut(u32, u3
 
 /// Up to 8 words, then the padding (`u64::MAX`, sorted last), copied in
 /// eight fixed steps, unrolled: a copy of the slice's length
-/// (`copy_from_slice`, a zip) calls `memcpy` (bunny at R = 8: orientation
-/// 10.35 → 9.96 ms).
+/// (`copy_from_slice`, a zip) would call `memcpy` per vertex.
 #[inline]
 fn padded(s: &[u64]) -> [u64; 8] {
     let mut p = [u64::MAX; 8];
@@ -194,9 +192,8 @@ fn padded(s: &[u64]) -> [u64; 8] {
 }
 
 /// Sorts 8 words with Knuth's network of 19 compare-exchanges (depth 6),
-/// each a min and a max without a branch: the insertion sort it replaced
-/// on the vertices of up to 8 sides mispredicted its inner loop's exit
-/// (bunny at R = 8: pairing 5.3 → 4.6 ms).
+/// each a min and a max without a branch: an insertion sort's inner loop
+/// exit is mispredicted on the vertices of up to 8 sides.
 #[inline]
 fn sort8(v: [u64; 8]) -> [u64; 8] {
     let [
@@ -237,9 +234,8 @@ fn sort8(v: [u64; 8]) -> [u64; 8] {
 }
 
 /// Merges two sorted runs of 8 words, each step taking the lower head
-/// without a branch (a run's end reads as the padding, `u64::MAX`): the
-/// vertices of 9 to 16 sides were insertion-sorted before (bunny at
-/// R = 8: orientation 9.59 → 9.22 ms).
+/// without a branch (a run's end reads as the padding, `u64::MAX`), for
+/// the vertices of 9 to 16 sides.
 #[inline]
 fn merge(a: [u64; 8], b: [u64; 8]) -> [u64; 16] {
     let pad = |r: [u64; 8]| {
@@ -261,9 +257,8 @@ fn merge(a: [u64; 8], b: [u64; 8]) -> [u64; 16] {
     out
 }
 
-/// The vertices of more than 16 sides (a handful on the bunny at R = 8,
-/// none on the icosphere): insertion sort beats the general sort on
-/// them.
+/// The vertices of more than 16 sides (rare): insertion sort beats the
+/// general sort on so few.
 #[inline]
 fn insertion_sort(v: &mut [u64]) {
     for i in 1..v.len() {

@@ -22,17 +22,16 @@
 //! Eliminated nodes that still have ON descendants are the phantom nodes of
 //! §4.3/§7.1; see [`crate::ordering`].
 //!
-//! **Measured (issue 5).** The passes reach the fixed point §4.3 asks for:
-//! at the outer-thinned levels of the bunny and the armadillo (R = 7, 8)
-//! no kept cube lacks an IN face neighbour (so none is held by the
-//! topology test) and no 2×2×2 block holds six or more cubes
-//! (`pop_probe` with `POP_PROBE_THIN=1`). Every kept cube then separates IN
-//! from OUT along a face, which a stricter rule could not remove without
-//! making IN and OUT face-adjacent; the four-cube tetrahedra (`C_6`, ≈ 17 %
-//! of neighbourhoods against Table 1's ≈ 10 %) are the staircases of a
-//! curved, noisy surface at this resolution, not cubes left behind. The
-//! non-manifold triangles they caused are handled by the triangulation
-//! (see [`crate::triangulate`](mod@crate::triangulate), "Settling").
+//! **Invariant.** The passes reach the fixed point §4.3 asks for: at an
+//! outer-thinned level no kept cube lacks an IN face neighbour (none is
+//! held by the topology test) and no 2×2×2 block holds six or more cubes
+//! (`lodkit-bench`'s `pop_probe` with `POP_PROBE_THIN=1` checks a model).
+//! Every kept cube then separates IN from OUT along a face, which a
+//! stricter rule could not remove without making IN and OUT
+//! face-adjacent; the four-cube tetrahedra (`C_6`) are the staircases of a
+//! curved, noisy surface at this resolution, not cubes left behind, and
+//! the triangulation's settling handles the non-manifold triangles they
+//! cause ([`crate::triangulate`](mod@crate::triangulate)).
 use crate::octree::{FACES, Label, Octree, offset, unmorton};
 
 /// Options of [`thin`].
@@ -49,16 +48,12 @@ pub struct ThinningOptions {
 impl ThinningOptions {
     /// Inner thinning only; outer thinning, when asked for, relaxed below a
     /// level chosen per object ([`choose_relax_level`]). Outer thinning
-    /// makes smaller streams (−4 % on the closed bunny at R = 7) with fewer
-    /// particles, but it loses features thinner than a cube at coarse
-    /// levels, so it stays an option. The relax level is object-dependent
-    /// (§8.2) and matters at the coarse levels: on the open bunny relaxing
-    /// below 5 leaves levels 3 and 4 at 3.7 % and 2.3 % non-manifold
-    /// triangles and below 4 none; on the armadillo below 4 leaves levels 2
-    /// and 3 at 24–25 % and below 5 none. With the chosen level every level
-    /// of the open and closed bunny and the armadillo (R = 7, 8) stays
-    /// under 1 %; inner thinning alone reaches 1.2–1.4 % at level 5 and up
-    /// to 7 % at 3.
+    /// makes smaller streams with fewer particles, but it loses features
+    /// thinner than a cube at coarse levels, so it stays an option. The
+    /// relax level is object-dependent (§8.2) and decides the coarse
+    /// levels' non-manifold triangles; the chosen one keeps every level
+    /// under 1 % on the shipped models (a test pins it), which inner
+    /// thinning alone does not.
     pub const DEFAULT: ThinningOptions = ThinningOptions {
         outer: false,
         relax_below: ThinningOptions::AUTO_RELAX,
@@ -121,8 +116,8 @@ pub fn thin_choosing(tree: &mut Octree, opts: &ThinningOptions) -> (Vec<usize>, 
         let (share, triangles) = coarse_non_manifold_share(tree, top - 1);
         // The least thinned candidate (the first) says which levels have
         // a surface; one that thinning emptied (a torus's tube thinner
-        // than a level-3 cube, the armadillo's levels 1–2 thinned from 2
-        // up) has no non-manifold triangle left to count against it.
+        // than a level-3 cube, a model's coarsest levels thinned away) has
+        // no non-manifold triangle left to count against it.
         if surfaced.is_empty() {
             surfaced = triangles.iter().map(|&n| n > 0).collect();
         }
@@ -156,9 +151,7 @@ pub const MAX_AUTO_RELAX: u8 = 6;
 /// the baseline codes them) and scored by their worst share of
 /// non-manifold triangles (edges used more than twice). The lowest score
 /// wins; a tie goes to the higher `L`, which thins less and keeps more of
-/// the coarse shapes. Measured: the open
-/// bunny gets 4 (relaxed below 5 its levels 3–4 reach 3.7 % and 2.3 %),
-/// the armadillo 5 (relaxed below 4 its levels 2–3 reach 24–25 %).
+/// the coarse shapes.
 #[cfg(test)]
 pub fn choose_relax_level(tree: &Octree) -> u8 {
     let mut t = tree.clone();

@@ -14,8 +14,8 @@
 //! `C_4, C_5` the two planar four-cube cases with two possible
 //! triangulations (a face square and a diagonal rectangle); `C_6 … C_17`
 //! are the ambiguous ones, `C_6` being the frequent one Table 1 singles
-//! out (a face triangle plus the opposite corner — we measured it at the
-//! paper's frequency; see `build`).
+//! out (a face triangle plus the opposite corner, the most frequent
+//! ambiguous case on thinned surfaces; see `build`).
 //!
 //! For each configuration the table holds its class, its mesh graph `G_i`
 //! (edges as a bit mask over the 28 corner pairs) and its triangle list
@@ -269,7 +269,7 @@ fn distance_key(ns: &[u8]) -> Vec<i32> {
 fn build() -> Table {
     let mut canon: Vec<u8> = (0..=255u8)
         .filter(|m| m.count_ones() >= 3)
-        .map(|m| canonical(m))
+        .map(canonical)
         .collect();
     canon.sort_unstable();
     canon.dedup();
@@ -278,8 +278,7 @@ fn build() -> Table {
         let d = distance_key(&ns);
         // Among the ambiguous four-cube classes, the face triangle plus its
         // opposite corner comes first: it is by far the most frequent on
-        // thinned surfaces (≈ 15 % of neighbourhoods on the bunny, the
-        // ≈ 10 % Table 1 reports for C_6), so it is our C_6.
+        // thinned surfaces (as Table 1 reports for C_6), so it is our C_6.
         let first = u8::from(!(ns.len() == 4 && d == [1, 1, 2, 2, 2, 3]));
         (m.count_ones(), !coplanar(&ns), first, d, m)
     };

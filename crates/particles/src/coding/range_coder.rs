@@ -17,13 +17,10 @@
 //! The arithmetic coder is a binary range coder (32-bit range, carries
 //! resolved with a cached byte, as in LZMA's coder): a decision splits the
 //! range at `(range >> 16) · p0` — one multiplication — and renormalises a
-//! byte at a time. It replaced `constriction`'s general range coder,
-//! whose 64-bit division per symbol (plus the model's own division) made
-//! entropy decoding 8× slower than the raw bits of the baseline. The kept
-//! benchmark `cargo bench -p lodkit-bench --bench entropy_coder` codes one
-//! stream with both coders on the same adaptive probabilities: the same
-//! bytes within 0.02%, decoding ≈ 2× faster here (227–293 against 112 M
-//! symbols/s; encoding is on par, 192–303 M/s either way).
+//! byte at a time: no division per symbol, which a general range coder
+//! (`constriction`'s) needs. `cargo bench -p lodkit-bench --bench
+//! entropy_coder` codes one stream with both on the same adaptive
+//! probabilities, so the choice stays checked.
 //!
 //! Each chunk restarts from fresh models so chunks decode independently.
 use super::bit_coder::BitCoder;
@@ -38,9 +35,8 @@ const ONE: u32 = 1 << PRECISION;
 /// floor bounds how many symbols a hostile payload can expand to.
 const MIN_P: u32 = 128;
 /// Counts are halved when their sum passes this: old statistics fade.
-/// Fast adaptation pays — Morton order walks from one surface patch to
-/// the next — measured on the dense 10-bit bunny: 1024 → 1.65, 256 →
-/// 1.57, 64 → 1.49 structure bits per particle.
+/// Fast adaptation pays: Morton order walks from one surface patch to
+/// the next (smaller limits code fewer structure bits per particle).
 pub const COUNT_LIMIT: u32 = 64;
 /// Most symbols one payload bit can carry: each costs at least
 /// `-log2(1 - MIN_P / 2^16)` ≈ 0.00282 bits, so 360 per bit is a hard

@@ -81,8 +81,8 @@ pub(super) fn overlaps() -> &'static Overlaps {
 }
 
 /// Slots of the `shared_edges` memo, as a power of two: 8192 (128 KiB)
-/// measured fastest on the bunny and the icosphere at R = 8 (2048 and
-/// 4096 miss more, 32768 costs its fresh pages and cache).
+/// fits the second-level cache; fewer slots miss more, more cost fresh
+/// pages (the `pop` bench decides).
 pub(super) const SHARED_MEMO_BITS: u32 = 13;
 
 /// Edges of `G_i` (as pair bits) of the configuration `mask` also in the
