@@ -156,10 +156,7 @@ mod tests {
         for dev in ["/dev/zero", "/dev/urandom", "/dev/null"] {
             if Path::new(dev).exists() {
                 let e = read_file(Path::new(dev)).unwrap_err().to_string();
-                assert!(
-                    e.contains(dev) && e.contains("not a regular file"),
-                    "{e}"
-                );
+                assert!(e.contains(dev) && e.contains("not a regular file"), "{e}");
             }
         }
         let dir = tempfile::tempdir().unwrap();

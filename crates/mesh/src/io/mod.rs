@@ -150,7 +150,11 @@ pub fn load_mesh(path: &Path) -> Result<TriMesh> {
 
 /// Encodes a model in `format`. Point clouds and range images written to a
 /// mesh-only format are refused with a clear message.
+///
+/// lodkit reads back everything it writes: a model that [`decode`] would
+/// refuse in `format` is refused here instead ([`check_readable`]).
 pub fn encode(format: Format, model: &Model, opts: WriteOptions) -> Result<Vec<u8>, ParseError> {
+    check_readable(format, model)?;
     let mut out = Vec::new();
     match (format, model) {
         (Format::Ply, Model::Mesh(m)) => ply::write_mesh(&mut out, m, opts.ascii),
@@ -181,6 +185,59 @@ pub fn encode(format: Format, model: &Model, opts: WriteOptions) -> Result<Vec<u
     }
     .map_err(|e| ParseError(e.to_string()))?;
     Ok(out)
+}
+
+/// Refuses to write what the reader of `format` would refuse to read back:
+/// a model that fails its `validate()` (non-finite values, a face index out
+/// of range or repeated); no faces in a mesh-only format (OBJ, STL, GLB
+/// readers refuse a file without triangles); in STL, no triangle with three
+/// distinct corners (STL stores corners, not indices, and its reader drops
+/// triangles whose corners coincide); no points in XYZ/PTS (an empty file is
+/// not a point cloud). Cost: one pass over the faces.
+pub fn check_readable(format: Format, model: &Model) -> Result<(), ParseError> {
+    let refuse = |why: String| {
+        Err(crate::parse_err!(
+            "cannot write this {} as {}: {why}, so the file could not be read back",
+            model.kind(),
+            format.name()
+        ))
+    };
+    match model {
+        Model::Mesh(m) => m.validate()?,
+        Model::Points(p) => p.validate()?,
+        Model::Range(r) => r.validate()?,
+    }
+    match (format, model) {
+        (Format::Obj | Format::Stl | Format::Glb, Model::Mesh(m)) if m.faces.is_empty() => {
+            refuse("it has no faces".into())
+        }
+        (Format::Stl, Model::Mesh(m)) => {
+            // The STL reader welds bitwise-equal corners (`-0 == 0`).
+            let key = |v: glam::Vec3| (v + glam::Vec3::ZERO).to_array().map(f32::to_bits);
+            let proper = m.faces.iter().any(|f| {
+                let [a, b, c] = f.map(|i| key(m.positions[i as usize]));
+                a != b && b != c && a != c
+            });
+            if proper {
+                Ok(())
+            } else {
+                refuse("every triangle has coincident corners".into())
+            }
+        }
+        (Format::Xyz | Format::Pts, m) => {
+            let n = match m {
+                Model::Mesh(m) => m.positions.len(),
+                Model::Points(p) => p.positions.len(),
+                Model::Range(r) => r.valid_count(),
+            };
+            if n == 0 {
+                refuse("it has no points".into())
+            } else {
+                Ok(())
+            }
+        }
+        _ => Ok(()),
+    }
 }
 
 fn as_points(m: &Model) -> PointCloud {
