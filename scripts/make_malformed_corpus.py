@@ -211,6 +211,32 @@ add("pts_nan.pts", "2\n0 0 0 10 1 2 3\nNaN 1 1 10 1 2 3\n")
 add("pts_non_numeric.pts", "1\n0 0 zero\n")
 add("pts_count_only.pts", "3\n")
 
+# ------------------------------------------------- issue 14's probe classes
+# ASCII PLY is line-structured: values never run across lines.
+add("ply_ascii_values_across_lines.ply",
+    ply_header("ascii", 3, 1) + "0 0 0 1\n0 0 0 1\n0 3 0 1 2\n")
+add("ply_ascii_too_few_values.ply", ply_header("ascii", 3, 1) + "0 0 0\n1 0\n0 1 0\n3 0 1 2\n")
+add("ply_ascii_too_many_values.ply",
+    ply_header("ascii", 3, 1) + "0 0 0\n1 0 0 7\n0 1 0\n3 0 1 2\n")
+add("ply_ascii_vertex_count_too_small.ply", ply_header("ascii", 2, 1) + TRI_ASCII_BODY)
+add("ply_ascii_vertex_count_too_large.ply",
+    ply_header("ascii", 4, 1) + TRI_ASCII_BODY + "3 0 1 2\n")
+add("ply_ascii_extra_lines.ply", ply_header("ascii", 3, 1) + TRI_ASCII_BODY + "3 2 1 0\n")
+add("ply_face_two_indices.ply", ply_header("ascii", 3, 1) + "0 0 0\n1 0 0\n0 1 0\n2 0 1\n")
+add("ply_face_two_indices_binary.ply",
+    ply_header("binary_little_endian", 3, 1).encode() + ply_bin_tri(faces=((0, 1),)))
+# Bytes that would act on a terminal (ESC, BEL) must come out escaped.
+add("ply_header_control_chars.ply",
+    ply_header("ascii", 3, 1).replace("end_header", "\x1b[31mevil\x07\nend_header")
+    + TRI_ASCII_BODY)
+# Buffer URIs: percent-decoded, then relative inside the glTF's folder only.
+add("gltf_buffer_uri_percent_absolute.gltf", gltf_doc(uri="%2Fetc%2Fpasswd"))
+add("gltf_buffer_uri_parent_dir.gltf", gltf_doc(uri="../../../../proc/self/environ"))
+add("gltf_buffer_uri_percent_parent_dir.gltf", gltf_doc(uri="%2E%2E/%2E%2E/etc/passwd"))
+add("gltf_buffer_uri_file_scheme.gltf", gltf_doc(uri="file:///etc/passwd"))
+add("gltf_buffer_uri_percent_file_scheme.gltf", gltf_doc(uri="file%3A%2F%2F%2Fetc%2Fpasswd"))
+add("gltf_buffer_uri_device.gltf", gltf_doc(uri="%2Fdev%2Fzero"))
+
 
 def main():
     os.makedirs(OUT, exist_ok=True)

@@ -40,7 +40,10 @@ impl Ui {
                 line.push_str(&cause);
             }
         }
-        eprintln!("lodkit: error: {}", line.replace('\n', " "));
+        // Control bytes from file names or contents never reach the
+        // terminal raw.
+        let line = line.replace('\n', " ");
+        eprintln!("lodkit: error: {}", lodkit_mesh::error::escape(&line));
     }
 
     /// A spinner for a step of unknown length; hidden unless stderr is a

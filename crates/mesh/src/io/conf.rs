@@ -33,6 +33,7 @@ pub struct ConfEntry {
 /// number, a zero quaternion) or an unknown keyword. The quaternion is
 /// normalised before its conjugate becomes `pose.rotation`.
 pub fn read(text: &str) -> Result<Vec<ConfEntry>, ParseError> {
+    let text = text.strip_prefix('\u{FEFF}').unwrap_or(text);
     let mut entries = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let line_no = i + 1;
@@ -95,16 +96,27 @@ pub fn read(text: &str) -> Result<Vec<ConfEntry>, ParseError> {
 /// Loads every scan a `.conf` file lists, as range images with their pose
 /// set, paired with the scan's path (the `.conf` folder joined with FILE).
 ///
-/// Fails if the `.conf` cannot be read or parsed, or if a scan cannot be
-/// loaded or is not a range image (a PLY with a `range_grid` element).
+/// Fails if the `.conf` cannot be read or parsed, if a scan name is not a
+/// relative path inside the `.conf`'s folder
+/// ([`super::input::resolve_inside`]: no `..`, no absolute path, no URI),
+/// or if a scan cannot be loaded or is not a range image (a PLY with a
+/// `range_grid` element). The `.conf` and every scan are read through
+/// [`super::input::read_file`] (regular files only, size-capped).
 pub fn load_scans(conf_path: &Path) -> Result<Vec<(PathBuf, RangeImage)>> {
-    let text = std::fs::read_to_string(conf_path).map_err(|e| Error::io(conf_path, e))?;
-    let entries = read(&text).map_err(|e| Error::parse(conf_path, e))?;
+    let bytes = super::input::read_file(conf_path)?;
+    let text = std::str::from_utf8(super::input::strip_bom(&bytes)).map_err(|e| {
+        Error::parse(
+            conf_path,
+            parse_err!("not a text file: invalid UTF-8 at byte {}", e.valid_up_to()),
+        )
+    })?;
+    let entries = read(text).map_err(|e| Error::parse(conf_path, e))?;
     let dir = conf_path.parent().unwrap_or(Path::new(""));
     entries
         .into_iter()
         .map(|entry| {
-            let path = dir.join(&entry.file);
+            let path = super::input::resolve_inside(dir, &entry.file)
+                .map_err(|why| Error::parse(conf_path, parse_err!("scan {why}")))?;
             match super::load(&path)? {
                 Model::Range(mut scan) => {
                     scan.pose = Some(entry.pose);

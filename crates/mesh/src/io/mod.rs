@@ -12,7 +12,9 @@
 //!
 //! - [`load`] / [`load_mesh`]: a file → [`Model`] / [`TriMesh`]. The format
 //!   comes from the extension ([`Format::from_path`]); files over
-//!   [`MAX_FILE_BYTES`] and directories are refused before reading. Errors
+//!   [`MAX_FILE_BYTES`] and anything that is not a regular file (a
+//!   directory, FIFO or device) are refused before reading
+//!   ([`input::read_file`], the one door of every path-based read). Errors
 //!   name the file and what is wrong, on one line ([`Error`]). Cost: one
 //!   read of the file plus one linear decode; memory: the file's bytes plus
 //!   the model.
@@ -30,11 +32,13 @@
 
 pub mod conf;
 pub mod gltf;
+pub mod input;
 pub mod obj;
 pub mod ply;
 pub mod stl;
 pub mod xyz;
 
+#[cfg(not(target_arch = "wasm32"))]
 use std::io::Write;
 use std::path::Path;
 
@@ -97,8 +101,9 @@ pub struct WriteOptions {
     pub ascii: bool,
 }
 
-/// Files larger than this are refused before reading (a guard against
-/// reading a device or a runaway file into memory).
+/// Files larger than this (16 GiB) are refused before reading, and no read
+/// goes past it (a guard against a runaway file filling memory); files
+/// that are not regular files are refused outright ([`input::read_file`]).
 pub const MAX_FILE_BYTES: u64 = 16 << 30;
 
 /// Reads a geometry file of any supported format.
@@ -109,20 +114,7 @@ pub fn load(path: &Path) -> Result<Model> {
             "unknown file extension (expected .ply, .obj, .stl, .gltf, .glb, .xyz or .pts)",
         )
     })?;
-    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
-    if meta.is_dir() {
-        return Err(Error::unsupported(path, "is a directory"));
-    }
-    if meta.len() > MAX_FILE_BYTES {
-        return Err(Error::unsupported(
-            path,
-            format!(
-                "file is {} bytes, over the {MAX_FILE_BYTES}-byte limit",
-                meta.len()
-            ),
-        ));
-    }
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = input::read_file(path)?;
     decode(format, &bytes, path.parent()).map_err(|e| Error::parse(path, e))
 }
 
@@ -158,7 +150,11 @@ pub fn load_mesh(path: &Path) -> Result<TriMesh> {
 
 /// Encodes a model in `format`. Point clouds and range images written to a
 /// mesh-only format are refused with a clear message.
+///
+/// lodkit reads back everything it writes: a model that [`decode`] would
+/// refuse in `format` is refused here instead ([`check_readable`]).
 pub fn encode(format: Format, model: &Model, opts: WriteOptions) -> Result<Vec<u8>, ParseError> {
+    check_readable(format, model)?;
     let mut out = Vec::new();
     match (format, model) {
         (Format::Ply, Model::Mesh(m)) => ply::write_mesh(&mut out, m, opts.ascii),
@@ -191,6 +187,59 @@ pub fn encode(format: Format, model: &Model, opts: WriteOptions) -> Result<Vec<u
     Ok(out)
 }
 
+/// Refuses to write what the reader of `format` would refuse to read back:
+/// a model that fails its `validate()` (non-finite values, a face index out
+/// of range or repeated); no faces in a mesh-only format (OBJ, STL, GLB
+/// readers refuse a file without triangles); in STL, no triangle with three
+/// distinct corners (STL stores corners, not indices, and its reader drops
+/// triangles whose corners coincide); no points in XYZ/PTS (an empty file is
+/// not a point cloud). Cost: one pass over the faces.
+pub fn check_readable(format: Format, model: &Model) -> Result<(), ParseError> {
+    let refuse = |why: String| {
+        Err(crate::parse_err!(
+            "cannot write this {} as {}: {why}, so the file could not be read back",
+            model.kind(),
+            format.name()
+        ))
+    };
+    match model {
+        Model::Mesh(m) => m.validate()?,
+        Model::Points(p) => p.validate()?,
+        Model::Range(r) => r.validate()?,
+    }
+    match (format, model) {
+        (Format::Obj | Format::Stl | Format::Glb, Model::Mesh(m)) if m.faces.is_empty() => {
+            refuse("it has no faces".into())
+        }
+        (Format::Stl, Model::Mesh(m)) => {
+            // The STL reader welds bitwise-equal corners (`-0 == 0`).
+            let key = |v: glam::Vec3| (v + glam::Vec3::ZERO).to_array().map(f32::to_bits);
+            let proper = m.faces.iter().any(|f| {
+                let [a, b, c] = f.map(|i| key(m.positions[i as usize]));
+                a != b && b != c && a != c
+            });
+            if proper {
+                Ok(())
+            } else {
+                refuse("every triangle has coincident corners".into())
+            }
+        }
+        (Format::Xyz | Format::Pts, m) => {
+            let n = match m {
+                Model::Mesh(m) => m.positions.len(),
+                Model::Points(p) => p.positions.len(),
+                Model::Range(r) => r.valid_count(),
+            };
+            if n == 0 {
+                refuse("it has no points".into())
+            } else {
+                Ok(())
+            }
+        }
+        _ => Ok(()),
+    }
+}
+
 fn as_points(m: &Model) -> PointCloud {
     match m {
         Model::Mesh(m) => PointCloud {
@@ -204,6 +253,7 @@ fn as_points(m: &Model) -> PointCloud {
 }
 
 /// Writes a model to `path` (format from the extension), atomically.
+#[cfg(not(target_arch = "wasm32"))]
 pub fn save(path: &Path, model: &Model, opts: WriteOptions) -> Result<()> {
     let format = Format::from_path(path).ok_or_else(|| {
         Error::unsupported(
@@ -216,12 +266,25 @@ pub fn save(path: &Path, model: &Model, opts: WriteOptions) -> Result<()> {
 }
 
 /// Writes a mesh to `path`, atomically.
+#[cfg(not(target_arch = "wasm32"))]
 pub fn save_mesh(path: &Path, mesh: &TriMesh, opts: WriteOptions) -> Result<()> {
     save(path, &Model::Mesh(mesh.clone()), opts)
 }
 
 /// Writes `bytes` to a temp file beside `path`, syncs it and renames it
 /// over `path`: readers see either the old file or the whole new one.
+///
+/// The temp file is created exclusively (`O_EXCL`) under an unpredictable
+/// name in `path`'s folder (the `tempfile` crate), so it never follows or
+/// overwrites a file or symlink someone else planted. The rename replaces
+/// `path` itself: if `path` is a symlink, the link is replaced, never the
+/// file it points to. An existing regular file's permissions are kept; a
+/// new file gets the usual `0666` minus the umask. On any error (and when
+/// the temp file is dropped) the temp file is removed, so a failed write
+/// leaves the old file untouched and nothing else. A process killed by a
+/// signal runs no destructor: its temp file (`.NAME.XXXXXX.tmp`) stays
+/// behind; removing it on Ctrl-C is the CLI's job.
+#[cfg(not(target_arch = "wasm32"))]
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
@@ -230,22 +293,33 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let name = path
         .file_name()
         .ok_or_else(|| Error::unsupported(path, "output path has no file name"))?;
-    let tmp = dir.join(format!(
-        ".{}.{}.tmp",
-        name.to_string_lossy(),
-        std::process::id()
-    ));
+    let kept = std::fs::symlink_metadata(path)
+        .ok()
+        .filter(|m| m.is_file())
+        .map(|m| m.permissions());
+    let prefix = format!(".{}.", name.to_string_lossy());
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(&prefix).suffix(".tmp");
+    #[cfg(unix)]
+    let default_mode = {
+        use std::os::unix::fs::PermissionsExt as _;
+        // Applied at creation, so the umask still applies, as with
+        // `File::create`.
+        std::fs::Permissions::from_mode(0o666)
+    };
+    #[cfg(unix)]
+    builder.permissions(default_mode);
     let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
+        let mut tmp = builder.tempfile_in(dir)?;
+        tmp.write_all(bytes)?;
+        if let Some(perms) = kept {
+            tmp.as_file().set_permissions(perms)?;
+        }
+        tmp.as_file().sync_all()?;
+        tmp.persist(path).map_err(|e| e.error)?;
+        Ok(())
     })();
-    if let Err(e) = result {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(Error::io(path, e));
-    }
-    Ok(())
+    result.map_err(|e: std::io::Error| Error::io(path, e))
 }
 
 #[cfg(test)]

@@ -220,6 +220,7 @@ fn without_polylines(text: &str) -> String {
 /// Errors: invalid UTF-8, any problem `prescan` finds (with its line),
 /// anything else `tobj` refuses, and a file with no faces.
 pub fn read(bytes: &[u8]) -> Result<TriMesh, ParseError> {
+    let bytes = crate::io::input::strip_bom(bytes);
     let text = std::str::from_utf8(bytes)
         .map_err(|e| parse_err!("not a text file: invalid UTF-8 at byte {}", e.valid_up_to()))?;
     let scan = prescan(text)?;

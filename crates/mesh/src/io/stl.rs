@@ -58,8 +58,11 @@ pub fn read(bytes: &[u8]) -> Result<TriMesh, ParseError> {
     }
     let corners = if is_binary(bytes) {
         read_binary(bytes)?
-    } else if bytes.trim_ascii_start().starts_with(b"solid") {
-        match read_ascii(bytes) {
+    } else if crate::io::input::strip_bom(bytes)
+        .trim_ascii_start()
+        .starts_with(b"solid")
+    {
+        match read_ascii(crate::io::input::strip_bom(bytes)) {
             Ok(c) => c,
             // A binary file whose size disagrees with its count, but whose
             // header happens to start with `solid`: say what is really wrong.

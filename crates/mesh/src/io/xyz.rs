@@ -54,7 +54,7 @@ impl<'a> DataLine<'a> {
 }
 
 fn as_text(bytes: &[u8]) -> Result<&str, ParseError> {
-    std::str::from_utf8(bytes)
+    std::str::from_utf8(crate::io::input::strip_bom(bytes))
         .map_err(|e| parse_err!("not a text file: invalid UTF-8 at byte {}", e.valid_up_to()))
 }
 

@@ -36,8 +36,16 @@ pub struct Closest {
 /// Degenerate faces are kept: a zero-area face is measured as its longest
 /// edge (a face repeating an index as the segment it spans). Unreferenced
 /// vertices play no part.
+///
+/// Duplicate triangles (the same three corner positions, in any order and
+/// through any vertex indices) are indexed once: they change no distance,
+/// and a hierarchy over many identical boxes cannot prune any of them, so
+/// every query would visit all copies (a linear scan per query on a file of
+/// one triangle repeated a million times).
 pub struct SurfaceIndex {
     shape: parry3d::shape::TriMesh,
+    /// For each indexed triangle, its first face in the source mesh.
+    source_face: Vec<u32>,
     face_count: usize,
     bbox: Aabb,
 }
@@ -52,16 +60,19 @@ impl std::fmt::Debug for SurfaceIndex {
 }
 
 impl SurfaceIndex {
-    /// Builds the hierarchy over `mesh`'s faces (`O(F log F)`).
+    /// Builds the hierarchy over `mesh`'s distinct triangles (`O(F log F)`,
+    /// plus one hash of each face to drop duplicates).
     ///
     /// Errors ([`Error::Invalid`]) if the mesh has no face, a face index is
     /// out of range, or a referenced vertex is not finite.
     pub fn new(mesh: &TriMesh) -> Result<Self> {
         check_surface(mesh)?;
-        let shape = parry3d::shape::TriMesh::new(mesh.positions.clone(), mesh.faces.clone())
+        let (faces, source_face) = distinct_triangles(mesh);
+        let shape = parry3d::shape::TriMesh::new(mesh.positions.clone(), faces)
             .map_err(|e| Error::Invalid(format!("cannot index the mesh: {e}")))?;
         Ok(SurfaceIndex {
             shape,
+            source_face,
             face_count: mesh.faces.len(),
             bbox: super::sample::surface_bbox(mesh),
         })
@@ -70,6 +81,12 @@ impl SurfaceIndex {
     /// Number of faces indexed.
     pub fn face_count(&self) -> usize {
         self.face_count
+    }
+
+    /// Number of distinct triangles in the hierarchy (≤ [`Self::face_count`]):
+    /// what a query's cost grows with, logarithmically.
+    pub fn indexed_triangle_count(&self) -> usize {
+        self.source_face.len()
     }
 
     /// Bounding box of the indexed surface (its referenced vertices).
@@ -85,7 +102,7 @@ impl SurfaceIndex {
             Some((face, proj)) => Closest {
                 point: proj.point,
                 distance: proj.point.distance(p),
-                face,
+                face: self.source_face[face as usize],
             },
             None => Closest {
                 point: p,
@@ -105,6 +122,33 @@ impl SurfaceIndex {
         use rayon::prelude::*;
         points.par_iter().map(|&p| self.distance(p)).collect()
     }
+}
+
+/// The faces of `mesh` with duplicate triangles removed (the first of each
+/// kept, in order), and each kept face's index in `mesh.faces`. Two faces
+/// are duplicates when their corner positions are the same set of bit
+/// patterns (`-0` and `0` counted equal).
+fn distinct_triangles(mesh: &TriMesh) -> (Vec<[u32; 3]>, Vec<u32>) {
+    let key = |f: &[u32; 3]| {
+        let mut k = f.map(|i| {
+            (mesh.positions[i as usize] + Vec3::ZERO)
+                .to_array()
+                .map(f32::to_bits)
+        });
+        k.sort_unstable();
+        k
+    };
+    let mut seen = rustc_hash::FxHashSet::default();
+    seen.reserve(mesh.faces.len());
+    let mut faces = Vec::with_capacity(mesh.faces.len());
+    let mut source = Vec::with_capacity(mesh.faces.len());
+    for (i, f) in mesh.faces.iter().enumerate() {
+        if seen.insert(key(f)) {
+            faces.push(*f);
+            source.push(i as u32);
+        }
+    }
+    (faces, source)
 }
 
 /// Checks that `mesh` has a surface to sample or index: at least one face,
@@ -189,6 +233,45 @@ mod tests {
             idx.distances(&[Vec3::new(0.5, 0.5, 0.3), Vec3::new(0.5, 0.5, 2.0)]),
             vec![0.3, 1.0]
         );
+    }
+
+    /// One triangle repeated many times (in every corner order, through
+    /// copies of its vertices) is indexed once, so queries stay
+    /// logarithmic; distances and face numbers are those of the original.
+    #[test]
+    fn duplicate_faces_are_indexed_once() {
+        let base = triangle();
+        let mut positions = base.positions.clone();
+        let mut faces = vec![];
+        for i in 0..100_000u32 {
+            match i % 3 {
+                0 => faces.push([0, 1, 2]),
+                1 => faces.push([2, 0, 1]),
+                _ => {
+                    let o = positions.len() as u32;
+                    positions.extend_from_slice(&base.positions);
+                    faces.push([o + 1, o, o + 2]);
+                }
+            }
+        }
+        // Plus one distinct face, and -0 against 0.
+        let o = positions.len() as u32;
+        positions.extend([
+            Vec3::new(5.0, 0.0, 0.0),
+            Vec3::new(6.0, 0.0, 0.0),
+            Vec3::new(5.0, 1.0, 0.0),
+        ]);
+        faces.push([o, o + 1, o + 2]);
+        positions.push(-base.positions[0]);
+        faces.push([positions.len() as u32 - 1, 1, 2]);
+        let m = TriMesh::new(positions, faces);
+        let idx = SurfaceIndex::new(&m).unwrap();
+        assert_eq!(idx.face_count(), 100_002);
+        assert_eq!(idx.indexed_triangle_count(), 2);
+        let c = idx.closest(Vec3::new(0.2, 0.2, 1.0));
+        assert_eq!(c.face, 0);
+        assert!((c.distance - 1.0).abs() < 1e-6);
+        assert_eq!(idx.closest(Vec3::new(5.2, 0.2, 0.0)).face, 100_000);
     }
 
     #[test]

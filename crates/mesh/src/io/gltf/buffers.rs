@@ -71,17 +71,8 @@ pub(super) fn load_buffer<'a>(
             .map(Cow::Owned)
             .map_err(|e| parse_err!("buffer {i}: data URI is not valid base64: {e}"));
     }
-    let has_scheme = uri.split_once(':').is_some_and(|(s, _)| {
-        !s.is_empty()
-            && s.bytes()
-                .all(|c| c.is_ascii_alphanumeric() || b"+.-".contains(&c))
-    });
-    if has_scheme || uri.starts_with('/') || uri.starts_with('\\') {
-        return Err(parse_err!(
-            "buffer {i}: '{}' is not a relative path (URLs and absolute paths are refused)",
-            clip(uri, 48)
-        ));
-    }
+    // Decode first, so that `%2F`, `%2E%2E` or `file%3A` cannot slip past
+    // the path rule; then the one rule for paths named inside a file.
     let rel = percent_decode(uri)?;
     let dir = base_dir.ok_or_else(|| {
         parse_err!(
@@ -89,16 +80,9 @@ pub(super) fn load_buffer<'a>(
             clip(&rel, 48)
         )
     })?;
-    let path = dir.join(&rel);
-    let meta = std::fs::metadata(&path)
-        .map_err(|e| parse_err!("buffer {i}: cannot open '{}': {e}", clip(&rel, 48)))?;
-    if !meta.is_file() || meta.len() > crate::io::MAX_FILE_BYTES {
-        return Err(parse_err!(
-            "buffer {i}: '{}' is not a regular file within the size limit",
-            clip(&rel, 48)
-        ));
-    }
-    std::fs::read(&path)
+    let path = crate::io::input::resolve_inside(dir, &rel)
+        .map_err(|why| parse_err!("buffer {i}: URI {why}"))?;
+    crate::io::input::read_file(&path)
         .map(Cow::Owned)
-        .map_err(|e| parse_err!("buffer {i}: cannot read '{}': {e}", clip(&rel, 48)))
+        .map_err(|e| parse_err!("buffer {i}: {e}"))
 }

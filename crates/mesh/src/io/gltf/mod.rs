@@ -23,8 +23,11 @@
 //!   other texture coordinate / colour sets are ignored.
 //!
 //! Buffers come from the GLB `BIN` chunk, `data:` URIs (base64 only), or
-//! files relative to `base_dir` (percent-decoded; `None` refuses them);
-//! URLs with a scheme (`http:`, `file:`…) and absolute paths are refused.
+//! files relative to `base_dir` (`None` refuses them). A file URI is
+//! percent-decoded first, then must pass [`crate::io::input::resolve_inside`]:
+//! relative, no `..`, no scheme (`http:`, `file:`…), so it stays inside the
+//! glTF file's own folder; it is read through
+//! [`crate::io::input::read_file`] (regular files only, size-capped).
 //! Only the buffers that the primitives read actually use are resolved.
 //!
 //! **Guarantees on bad input**: the GLB container is parsed here, not by

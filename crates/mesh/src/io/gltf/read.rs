@@ -45,7 +45,7 @@ fn parse_document(bytes: &[u8]) -> Result<(gltf::Document, Option<&[u8]>), Parse
         return Err(ParseError::new("empty file"));
     }
     // A UTF-8 byte-order mark is not allowed by the spec but is tolerated.
-    let unbom = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    let unbom = crate::io::input::strip_bom(bytes);
     let (json_bytes, bin) = if bytes.starts_with(GLB_MAGIC) {
         split_glb(bytes)?
     } else if unbom.trim_ascii_start().starts_with(b"{") {

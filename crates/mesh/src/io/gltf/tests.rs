@@ -260,7 +260,7 @@ fn external_buffer_resolved_against_base_dir() {
     let e = read(http.as_bytes(), Some(dir.path()))
         .unwrap_err()
         .to_string();
-    assert!(e.contains("not a relative path"), "{e}");
+    assert!(e.contains("is a URI"), "{e}");
 }
 
 #[test]

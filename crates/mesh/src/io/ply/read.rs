@@ -26,6 +26,7 @@ use crate::parse_err;
 /// Decodes a whole PLY file; see the module docs of [`super`] for what is
 /// accepted. Never panics; every allocation is bounded by the file size.
 pub fn read(bytes: &[u8]) -> Result<Model, ParseError> {
+    let bytes = crate::io::input::strip_bom(bytes);
     let header = header::parse(bytes)?;
     let body = bytes.get(header.body_start..).unwrap_or_default();
     header.check_counts(body.len())?;
@@ -33,10 +34,16 @@ pub fn read(bytes: &[u8]) -> Result<Model, ParseError> {
     let mut data = Decoded::default();
     match header.encoding {
         Encoding::Ascii => {
-            let mut src = AsciiSource { data: body, pos: 0 };
+            // Line numbers count from the file's first line.
+            let header_lines = bytes[..header.body_start.min(bytes.len())]
+                .iter()
+                .filter(|&&b| b == b'\n')
+                .count();
+            let mut src = AsciiSource::new(body, header_lines + 1);
             for (el, role) in header.elements.iter().zip(&plan.roles) {
                 decode_general(&mut src, el, role, &mut data)?;
             }
+            src.finish()?;
         }
         Encoding::BinaryLittleEndian | Encoding::BinaryBigEndian => {
             let big = header.encoding == Encoding::BinaryBigEndian;
@@ -391,12 +398,20 @@ fn color_channel(v: f64, ty: ScalarType) -> u8 {
     scaled.round().clamp(0.0, 255.0) as u8
 }
 
-/// Turns a polygon into triangles `(p0, pi, pi+1)` (a fan); polygons with
-/// fewer than 3 corners add nothing.
-fn push_fan(faces: &mut Vec<[u32; 3]>, poly: &[u32]) {
-    if let Some((&first, rest)) = poly.split_first() {
-        faces.extend(rest.windows(2).map(|w| [first, w[0], w[1]]));
+/// Turns a polygon into triangles `(p0, pi, pi+1)` (a fan); a polygon with
+/// fewer than 3 corners is an error, as in OBJ.
+fn push_fan(faces: &mut Vec<[u32; 3]>, poly: &[u32]) -> Result<(), String> {
+    let [first, rest @ ..] = poly else {
+        return Err("has no vertex indices (a face needs at least 3)".into());
+    };
+    if rest.len() < 2 {
+        return Err(format!(
+            "has {} vertex indices (a face needs at least 3)",
+            poly.len()
+        ));
     }
+    faces.extend(rest.windows(2).map(|w| [*first, w[0], w[1]]));
+    Ok(())
 }
 
 /// Converts a decoded list item to a vertex index.
@@ -422,6 +437,18 @@ trait Source {
     fn list_len(&mut self, count: ScalarType, item: ScalarType) -> Result<usize, String>;
     /// Skips `n` values of type `ty`.
     fn skip(&mut self, n: usize, ty: ScalarType) -> Result<(), String>;
+    /// Called before each record (ASCII: moves to the record's line).
+    fn begin_record(&mut self) -> Result<(), String> {
+        Ok(())
+    }
+    /// Called after each record (ASCII: the line must hold nothing more).
+    fn end_record(&mut self) -> Result<(), String> {
+        Ok(())
+    }
+    /// The file line the current record is on (ASCII only).
+    fn line(&self) -> Option<usize> {
+        None
+    }
 }
 
 struct BinarySource<'a> {
@@ -525,19 +552,42 @@ impl Source for BinarySource<'_> {
     }
 }
 
+/// ASCII PLY is line-structured: each record is one line (blank lines
+/// are skipped), and a record's values never continue onto the next line.
 struct AsciiSource<'a> {
     data: &'a [u8],
     pos: usize,
+    /// End (exclusive, before the `\n`) of the current record's line.
+    line_end: usize,
+    /// 1-based file line number of the line at `pos`.
+    line_no: usize,
 }
 
 impl<'a> AsciiSource<'a> {
-    /// The next whitespace-separated token.
+    fn new(data: &'a [u8], first_line: usize) -> Self {
+        AsciiSource {
+            data,
+            pos: 0,
+            line_end: 0,
+            line_no: first_line,
+        }
+    }
+
+    /// The end of the line starting at `from` (before its `\n`).
+    fn end_of_line(&self, from: usize) -> usize {
+        self.data[from..]
+            .iter()
+            .position(|&b| b == b'\n')
+            .map_or(self.data.len(), |i| from + i)
+    }
+
+    /// The next whitespace-separated token of the current line.
     fn token(&mut self) -> Result<&'a str, String> {
-        let rest = self.data.get(self.pos..).unwrap_or_default();
+        let rest = self.data.get(self.pos..self.line_end).unwrap_or_default();
         let start = rest
             .iter()
             .position(|b| !b.is_ascii_whitespace())
-            .ok_or(TRUNCATED)?;
+            .ok_or("has too few values on its line")?;
         let len = rest[start..]
             .iter()
             .position(|b| b.is_ascii_whitespace())
@@ -545,6 +595,22 @@ impl<'a> AsciiSource<'a> {
         self.pos += start + len;
         let tok = &rest[start..start + len];
         std::str::from_utf8(tok).map_err(|_| "holds a value that is not text".to_string())
+    }
+
+    /// After the last element: only blank lines may remain.
+    fn finish(&mut self) -> Result<(), ParseError> {
+        while self.pos < self.data.len() {
+            let end = self.end_of_line(self.pos);
+            if !self.data[self.pos..end].trim_ascii().is_empty() {
+                return Err(parse_err!(
+                    "line {}: more data lines than the header's element counts declare",
+                    self.line_no
+                ));
+            }
+            self.pos = end + 1;
+            self.line_no += 1;
+        }
+        Ok(())
     }
 }
 
@@ -592,10 +658,10 @@ impl Source for AsciiSource<'_> {
             return Err(format!("has negative list length {n}"));
         }
         // Every item is a token plus a separator: at least 2 bytes.
-        let remaining = self.data.len().saturating_sub(self.pos) as f64;
+        let remaining = self.line_end.saturating_sub(self.pos) as f64;
         if n * 2.0 > remaining + 1.0 {
             return Err(format!(
-                "has a list of {n} items that runs past the end of the file"
+                "has a list of {n} items but its line holds fewer values"
             ));
         }
         Ok(n as usize)
@@ -607,15 +673,56 @@ impl Source for AsciiSource<'_> {
         }
         Ok(())
     }
+
+    fn begin_record(&mut self) -> Result<(), String> {
+        loop {
+            if self.pos >= self.data.len() {
+                return Err(
+                    "is missing: the file has fewer data lines than the header declares".into(),
+                );
+            }
+            let end = self.end_of_line(self.pos);
+            if !self.data[self.pos..end].trim_ascii().is_empty() {
+                self.line_end = end;
+                return Ok(());
+            }
+            self.pos = end + 1;
+            self.line_no += 1;
+        }
+    }
+
+    fn end_record(&mut self) -> Result<(), String> {
+        let rest = &self.data[self.pos.min(self.line_end)..self.line_end];
+        if let Some(extra) = rest
+            .split(|b| b.is_ascii_whitespace())
+            .find(|t| !t.is_empty())
+        {
+            let shown: String = String::from_utf8_lossy(extra).chars().take(40).collect();
+            return Err(format!(
+                "has more values on its line than the header declares ('{shown}' is extra)"
+            ));
+        }
+        self.pos = self.line_end + 1;
+        self.line_no += 1;
+        Ok(())
+    }
+
+    fn line(&self) -> Option<usize> {
+        Some(self.line_no)
+    }
 }
 
 // ---------------------------------------------------------------------------
 // Element decoders
 // ---------------------------------------------------------------------------
 
-/// Prefixes a source error with the element and record it happened in.
-fn at(el: &Element, record: u64) -> impl Fn(String) -> ParseError + '_ {
-    move |msg| parse_err!("{} {record}: {msg}", el.name)
+/// Prefixes a source error with the line (ASCII), element and record it
+/// happened in.
+fn at(el: &Element, record: u64, line: Option<usize>, msg: String) -> ParseError {
+    match line {
+        Some(l) => parse_err!("line {l}: {} {record}: {msg}", el.name),
+        None => parse_err!("{} {record}: {msg}", el.name),
+    }
 }
 
 /// Decodes a binary element, through the fast paths where the layout
@@ -770,29 +877,36 @@ fn decode_general<S: Source>(
     let mut vals = vec![0.0f64; el.properties.len()];
     let mut poly: Vec<u32> = Vec::new();
     for record in 0..el.count {
-        let err = at(el, record);
-        for (i, (p, val)) in el.properties.iter().zip(vals.iter_mut()).enumerate() {
-            match p.kind {
-                PropertyKind::Scalar(ty) => *val = src.scalar(ty).map_err(&err)?,
-                PropertyKind::List { count, item } => {
-                    let n = src.list_len(count, item).map_err(&err)?;
-                    if Some(i) == list_index {
-                        poly.clear();
-                        for _ in 0..n {
-                            let v = src.scalar(item).map_err(&err)?;
-                            poly.push(to_index(v).map_err(&err)?);
+        let mut one = || -> Result<(), String> {
+            src.begin_record()?;
+            for (i, (p, val)) in el.properties.iter().zip(vals.iter_mut()).enumerate() {
+                match p.kind {
+                    PropertyKind::Scalar(ty) => *val = src.scalar(ty)?,
+                    PropertyKind::List { count, item } => {
+                        let n = src.list_len(count, item)?;
+                        if Some(i) == list_index {
+                            poly.clear();
+                            for _ in 0..n {
+                                poly.push(to_index(src.scalar(item)?)?);
+                            }
+                        } else {
+                            src.skip(n, item)?;
                         }
-                    } else {
-                        src.skip(n, item).map_err(&err)?;
                     }
                 }
             }
-        }
-        match role {
-            Role::Vertex(plan) => out.push_vertex(plan, &vals),
-            Role::Face(_) => push_fan(&mut out.faces, &poly),
-            Role::RangeGrid(_) => out.cells.push(poly.first().copied()),
-            Role::Skip => {}
+            match role {
+                Role::Vertex(plan) => out.push_vertex(plan, &vals),
+                Role::Face(_) => push_fan(&mut out.faces, &poly)?,
+                Role::RangeGrid(_) => out.cells.push(poly.first().copied()),
+                Role::Skip => {}
+            }
+            src.end_record()
+        };
+        // The line is read before `one`'s error is mapped; `end_record`
+        // only advances it on success.
+        if let Err(msg) = one() {
+            return Err(at(el, record, src.line(), msg));
         }
     }
     Ok(())

@@ -483,7 +483,7 @@ fn faces_win_over_a_range_grid_and_an_empty_face_element_gives_points() {
     ];
     let mut h = base.to_vec();
     h.extend(["element face 0", "property list uchar int vertex_indices"]);
-    assert_eq!(points(&ply(&h, b"0 0 0 1 0 0 0 1 0\n")).len(), 3);
+    assert_eq!(points(&ply(&h, b"0 0 0\n1 0 0\n0 1 0\n")).len(), 3);
     let mut h = base.to_vec();
     h.extend([
         "obj_info num_cols 1",
@@ -494,7 +494,7 @@ fn faces_win_over_a_range_grid_and_an_empty_face_element_gives_points() {
         "property list uchar int vertex_indices",
     ]);
     assert_eq!(
-        mesh(&ply(&h, b"0 0 0 1 0 0 0 1 0\n3 0 1 2\n1 0\n")).faces,
+        mesh(&ply(&h, b"0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n1 0\n")).faces,
         vec![[0, 1, 2]]
     );
 }
@@ -646,7 +646,7 @@ fn list_counts_that_overrun() {
     fails(&ply(&h, &body), "list of 4000000000 items");
     h[1] = "format ascii 1.0";
     fails(
-        &ply(&h, b"0 0 0 1 1 1\n2000000000 1 2 3\n"),
+        &ply(&h, b"0 0 0\n1 1 1\n2000000000 1 2 3\n"),
         "list of 2000000000 items",
     );
     let mut h = XYZ.to_vec();
@@ -755,7 +755,10 @@ fn bad_ascii_values() {
         &ply(&h, b"0 0 0\n1 zero 0\n"),
         "vertex 1: expected a number, found 'zero'",
     );
-    fails(&ply(&h, b"0 0 0\n1 0     \n"), "vertex 1: data ends early");
+    fails(
+        &ply(&h, b"0 0 0\n1 0     \n"),
+        "vertex 1: has too few values on its line",
+    );
     h.push("property uchar red");
     fails(
         &ply(&h, b"0 0 0 255\n1 0 0 256\n"),
@@ -802,7 +805,7 @@ fn elements_without_properties_cost_nothing_whatever_their_count() {
     let mut h = XYZ.to_vec();
     h.insert(2, "element nothing 18446744073709551615");
     h[1] = "format ascii 1.0";
-    assert_eq!(points(&ply(&h, b"0 0 0 1 1 1")).len(), 2);
+    assert_eq!(points(&ply(&h, b"0 0 0\n1 1 1")).len(), 2);
 }
 
 /// Every prefix and many single-byte corruptions of valid files decode to
@@ -910,4 +913,52 @@ fn shared_range_images() {
                 .all(|p| p.z > 0.0 && p.z < 5.0)
         );
     }
+}
+
+/// ASCII PLY is line-structured: one record per line, never spread over
+/// several, and every error names the file line (issue 14, item 6).
+#[test]
+fn ascii_records_are_lines() {
+    let mut h = XYZ.to_vec();
+    h[1] = "format ascii 1.0";
+    // XYZ is 6 header lines + "end_header": the body starts on line 8.
+    assert_eq!(points(&ply(&h, b"0 0 0\n\n1 1 1\r\n\n")).len(), 2);
+    fails(
+        &ply(&h, b"0 0 0 1\n1 1\n"),
+        "line 8: vertex 0: has more values",
+    );
+    fails(
+        &ply(&h, b"0 0\n0 1 1 1\n"),
+        "line 8: vertex 0: has too few values",
+    );
+    fails(
+        &ply(&h, b"0 0 0\n\n1 1\n"),
+        "line 10: vertex 1: has too few values",
+    );
+    fails(
+        &ply(&h, b"0 0 0\n1 1 1\n2 2 2\n"),
+        "line 10: more data lines",
+    );
+    fails(&ply(&h, b"0 0 0\n\n\n\n\n\n\n\n"), "vertex 1: is missing");
+    h.extend(["element face 1", "property list uchar int vertex_indices"]);
+    let h = {
+        let mut h = h;
+        h[2] = "element vertex 3";
+        h
+    };
+    // The body starts on line 10 now.
+    fails(
+        &ply(&h, b"0 0 0\n1 0 0\n0 1 0\n3 0 1\n2\n"),
+        "line 13: face 0: has a list of 3 items but its line holds fewer",
+    );
+    fails(
+        &ply(&h, b"0 0 0\n1 0 0\n0 1 0\n2 0 1\n"),
+        "line 13: face 0: has 2 vertex indices",
+    );
+    fails(
+        &ply(&h, b"0 0 0\n1 0 0\n0 1 0\n0\n"),
+        "face 0: has no vertex indices",
+    );
+    let m = mesh(&ply(&h, b"0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"));
+    assert_eq!(m.faces, vec![[0, 1, 2]]);
 }
