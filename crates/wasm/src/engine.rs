@@ -1,0 +1,175 @@
+//! The one place this crate binds to the lodkit libraries.
+//!
+//! Everything the browser runs goes through the functions here, and they use
+//! only the crates' high-level entry points: `lodkit_particles::{decode,
+//! DecodeOptions, triangulate, TriangulateOptions}`, `Decoded::surface`, the
+//! `.pop` container reader, and `lodkit_mco::{McoModel, Camera}` with
+//! `model_file::decode`. When those APIs move, this file is the only one to
+//! re-point.
+//!
+//! `.pop` prefixes: a stream arriving over the network is cut at the end of
+//! its last complete chunk before it is decoded (see [`complete_prefix`]), so
+//! the decoder only ever sees whole chunks. A level chunk whose attribute
+//! chunk has not arrived yet is left out with it: a level is usable once its
+//! colours and normals are there too.
+
+use glam::Vec3;
+use lodkit_mco::{Camera, McoModel};
+use lodkit_particles::container::{ChunkKind, ChunkReader, HEADER_LEN, read_header};
+use lodkit_particles::{DecodeOptions, Decoded, TriangulateOptions};
+
+/// A mesh ready to be copied into GPU buffers: positions (and normals,
+/// colours where present) per vertex, three indices per triangle.
+#[derive(Debug, Default, Clone, PartialEq)]
+pub struct MeshOut {
+    pub positions: Vec<Vec3>,
+    pub normals: Option<Vec<Vec3>>,
+    pub colors: Option<Vec<[u8; 4]>>,
+    pub indices: Vec<u32>,
+}
+
+/// What the complete chunks of a `.pop` prefix hold.
+pub struct PopPrefix {
+    pub decoded: Decoded,
+    /// Bytes of the prefix that were decoded (the end of its last usable
+    /// chunk); the rest waits for more bytes.
+    pub bytes_used: usize,
+}
+
+/// Length of the longest prefix of `bytes` that ends on a usable chunk
+/// boundary: after the header and whole chunks only, and never between a
+/// level chunk and its attribute chunk. `Ok(0)` when even the header is
+/// incomplete; `Err` when the bytes present are not a `.pop` stream.
+pub fn complete_prefix(bytes: &[u8]) -> Result<usize, String> {
+    if bytes.len() < HEADER_LEN {
+        return Ok(0); // the header has not arrived yet
+    }
+    let header = read_header(bytes).map_err(|e| e.to_string())?;
+    let attributes = header.colours || header.normals;
+    let mut end = HEADER_LEN;
+    for chunk in ChunkReader::new(bytes) {
+        let Ok(chunk) = chunk else {
+            // Truncated (or damaged) from here on: the decoder reports
+            // damage once the stream is complete.
+            break;
+        };
+        let waits_for_attributes = attributes && chunk.kind == ChunkKind::Level;
+        if !waits_for_attributes {
+            end = chunk.end;
+        }
+    }
+    Ok(end)
+}
+
+/// Decodes every usable chunk of a stream prefix (any number of bytes
+/// received so far). `max_level` stops at that level as `lodkit pop decode
+/// --level` does (no precision layers after it).
+pub fn pop_decode_prefix(bytes: &[u8], max_level: Option<u8>) -> Result<Option<PopPrefix>, String> {
+    let end = complete_prefix(bytes)?;
+    if end == 0 {
+        return Ok(None);
+    }
+    let opts = DecodeOptions {
+        max_level,
+        max_precision: None,
+    };
+    let decoded = lodkit_particles::decode(&bytes[..end], &opts).map_err(|e| e.to_string())?;
+    if decoded.levels.is_empty() {
+        return Ok(None);
+    }
+    Ok(Some(PopPrefix {
+        decoded,
+        bytes_used: end,
+    }))
+}
+
+/// Triangulates (and orients) level `r` of a decoded prefix with the
+/// defaults of `lodkit pop decode`.
+pub fn pop_level_mesh(d: &Decoded, r: u8) -> Result<MeshOut, String> {
+    let s = d.surface(r).map_err(|e| e.to_string())?;
+    let t = lodkit_particles::triangulate(&s, &TriangulateOptions::DEFAULT);
+    let m = t.mesh;
+    Ok(MeshOut {
+        positions: m.positions,
+        normals: m.normals,
+        colors: m.colors,
+        indices: m.faces.into_flattened(),
+    })
+}
+
+/// Octree depth `R` of a decoded stream (its finest level).
+pub fn pop_depth(d: &Decoded) -> u8 {
+    d.header.depth
+}
+
+/// Bits of precision of the decoded positions.
+pub fn pop_precision(d: &Decoded) -> u8 {
+    d.precision
+}
+
+/// Loads a whole `.mco` file held in memory.
+pub fn mco_load(bytes: &[u8]) -> Result<McoModel, String> {
+    lodkit_mco::model_file::decode(bytes)
+}
+
+/// The model's whole vertex buffer (every cut indexes into it).
+pub fn mco_vertices(m: &McoModel) -> MeshOut {
+    let vb = &m.vertices;
+    MeshOut {
+        positions: vb.positions.clone(),
+        normals: Some(vb.normals.clone()),
+        colors: m.has_colors.then(|| vb.colors.clone()),
+        indices: Vec::new(),
+    }
+}
+
+/// Highest LOD number (every leaf drawn).
+pub fn mco_max_lod(m: &McoModel) -> usize {
+    m.max_lod()
+}
+
+/// Triangles at full resolution.
+pub fn mco_full_triangles(m: &McoModel) -> usize {
+    m.full_triangles()
+}
+
+/// The model's bounding cube as (min corner, max corner).
+pub fn mco_bounds(m: &McoModel) -> (Vec3, Vec3) {
+    m.node_box(0)
+}
+
+/// Index buffer at LOD number `k` (clamped to the highest).
+pub fn mco_extract_lod(m: &McoModel, k: usize, out: &mut Vec<u32>) -> usize {
+    let k = k.min(m.max_lod());
+    m.extract_lod(k, out);
+    k
+}
+
+/// Index buffer closest to `triangles` triangles; returns the LOD number.
+pub fn mco_extract_triangles(m: &McoModel, triangles: usize, out: &mut Vec<u32>) -> usize {
+    m.extract_triangles(triangles, out)
+}
+
+/// A perspective camera as `lodkit_mco::Camera` wants it.
+pub struct View {
+    pub position: Vec3,
+    pub direction: Vec3,
+    pub up: Vec3,
+    pub vfov_deg: f32,
+    pub viewport_height: f32,
+    pub aspect: f32,
+}
+
+/// View-dependent index buffer at `tolerance_px` pixels of projected error;
+/// returns the number of expanded nodes.
+pub fn mco_extract_view(m: &McoModel, v: &View, tolerance_px: f32, out: &mut Vec<u32>) -> usize {
+    let cam = Camera {
+        position: v.position,
+        direction: v.direction,
+        up: v.up,
+        vfov_deg: v.vfov_deg,
+        viewport_height: v.viewport_height,
+        aspect: v.aspect,
+    };
+    m.extract_view(&cam, tolerance_px, out)
+}
