@@ -36,51 +36,84 @@ pub struct PopPrefix {
     pub bytes_used: usize,
 }
 
-/// Length of the longest prefix of `bytes` that ends on a usable chunk
-/// boundary: after the header and whole chunks only, and never between a
-/// level chunk and its attribute chunk. `Ok(0)` when even the header is
-/// incomplete; `Err` when the bytes present are not a `.pop` stream.
-pub fn complete_prefix(bytes: &[u8]) -> Result<usize, String> {
+/// How far a `.pop` prefix has been scanned: the end of its last whole
+/// chunk (`raw`), and of its last *usable* one (`usable`: never between a
+/// level chunk and its attribute chunk). Zero before the header is whole.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct Scan {
+    pub raw: usize,
+    pub usable: usize,
+}
+
+/// Extends `prev` (a scan of a shorter prefix of the same stream, or
+/// `Scan::default()`) over `bytes`: only the chunks after `prev.raw` are
+/// read, so a stream scanned as it arrives costs one pass in all.
+/// `Err` when the header is there and is not a `.pop` header.
+pub fn scan_prefix(bytes: &[u8], prev: Scan) -> Result<Scan, String> {
     if bytes.len() < HEADER_LEN {
-        return Ok(0); // the header has not arrived yet
+        return Ok(Scan::default()); // the header has not arrived yet
     }
     let header = read_header(bytes).map_err(|e| e.to_string())?;
     let attributes = header.colours || header.normals;
-    let mut end = HEADER_LEN;
-    for chunk in ChunkReader::new(bytes) {
+    let mut scan = prev;
+    if scan.raw < HEADER_LEN {
+        scan = Scan {
+            raw: HEADER_LEN,
+            usable: HEADER_LEN,
+        };
+    }
+    // `ChunkReader` starts reading `HEADER_LEN` bytes into its slice: hand
+    // it the stream from `HEADER_LEN` before the first unread chunk.
+    let base = scan.raw - HEADER_LEN;
+    for chunk in ChunkReader::new(&bytes[base..]) {
         let Ok(chunk) = chunk else {
             // Truncated (or damaged) from here on: the decoder reports
             // damage once the stream is complete.
             break;
         };
-        let waits_for_attributes = attributes && chunk.kind == ChunkKind::Level;
-        if !waits_for_attributes {
-            end = chunk.end;
+        scan.raw = base + chunk.end;
+        if !(attributes && chunk.kind == ChunkKind::Level) {
+            scan.usable = scan.raw;
         }
     }
-    Ok(end)
+    Ok(scan)
 }
 
-/// Decodes every usable chunk of a stream prefix (any number of bytes
-/// received so far). `max_level` stops at that level as `lodkit pop decode
+/// Length of the longest usable prefix of `bytes` (see [`Scan`]).
+pub fn complete_prefix(bytes: &[u8]) -> Result<usize, String> {
+    Ok(scan_prefix(bytes, Scan::default())?.usable)
+}
+
+/// Decodes the first `usable` bytes of a stream (a length from
+/// [`scan_prefix`]); `max_level` stops at that level as `lodkit pop decode
 /// --level` does (no precision layers after it).
-pub fn pop_decode_prefix(bytes: &[u8], max_level: Option<u8>) -> Result<Option<PopPrefix>, String> {
-    let end = complete_prefix(bytes)?;
-    if end == 0 {
+pub fn pop_decode_usable(
+    bytes: &[u8],
+    usable: usize,
+    max_level: Option<u8>,
+) -> Result<Option<PopPrefix>, String> {
+    if usable < HEADER_LEN {
         return Ok(None);
     }
     let opts = DecodeOptions {
         max_level,
         max_precision: None,
     };
-    let decoded = lodkit_particles::decode(&bytes[..end], &opts).map_err(|e| e.to_string())?;
+    let decoded = lodkit_particles::decode(&bytes[..usable], &opts).map_err(|e| e.to_string())?;
     if decoded.levels.is_empty() {
         return Ok(None);
     }
     Ok(Some(PopPrefix {
         decoded,
-        bytes_used: end,
+        bytes_used: usable,
     }))
+}
+
+/// Decodes every usable chunk of a stream prefix (any number of bytes
+/// received so far). `max_level` stops at that level as `lodkit pop decode
+/// --level` does (no precision layers after it).
+pub fn pop_decode_prefix(bytes: &[u8], max_level: Option<u8>) -> Result<Option<PopPrefix>, String> {
+    pop_decode_usable(bytes, complete_prefix(bytes)?, max_level)
 }
 
 /// Triangulates (and orients) level `r` of a decoded prefix with the

@@ -17,6 +17,7 @@
 //!   stream by `len` bytes and returns where to write them;
 //!   `lk_pop_decode(h, max_level) -> levels` decodes every complete chunk
 //!   received so far (`max_level < 0`: all), `-1` on a damaged stream;
+//!   `lk_pop_usable(h)` is the byte count that decode would use now;
 //!   `lk_pop_depth`, `lk_pop_precision`, `lk_pop_bytes_used` describe the
 //!   decoded prefix; `lk_pop_mesh(h, level) -> triangles` triangulates and
 //!   orients a decoded level into the handle's mesh.
@@ -43,7 +44,7 @@ pub mod engine;
 
 use std::cell::RefCell;
 
-use engine::{MeshOut, PopPrefix, View};
+use engine::{MeshOut, PopPrefix, Scan, View};
 use glam::Vec3;
 use lodkit_mco::McoModel;
 
@@ -72,6 +73,7 @@ pub fn digest(indices: &[u32], positions: &[Vec3]) -> u64 {
 enum Slot {
     Pop {
         bytes: Vec<u8>,
+        scan: Scan,
         prefix: Option<PopPrefix>,
         mesh: MeshOut,
     },
@@ -183,6 +185,7 @@ pub extern "C" fn lk_close(h: u32) {
 pub extern "C" fn lk_pop_new() -> u32 {
     insert(Slot::Pop {
         bytes: Vec::new(),
+        scan: Scan::default(),
         prefix: None,
         mesh: MeshOut::default(),
     })
@@ -210,8 +213,14 @@ pub extern "C" fn lk_pop_push(h: u32, len: usize) -> *mut u8 {
 pub extern "C" fn lk_pop_decode(h: u32, max_level: i32) -> i32 {
     let max_level = u8::try_from(max_level).ok();
     let r = with_slot(h, |slot| match slot {
-        Slot::Pop { bytes, prefix, .. } => {
-            let p = engine::pop_decode_prefix(bytes, max_level)?;
+        Slot::Pop {
+            bytes,
+            scan,
+            prefix,
+            ..
+        } => {
+            *scan = engine::scan_prefix(bytes, *scan)?;
+            let p = engine::pop_decode_usable(bytes, scan.usable, max_level)?;
             let n = p.as_ref().map_or(0, |p| p.decoded.levels.len());
             if p.is_some() {
                 *prefix = p;
@@ -238,6 +247,28 @@ fn pop_query(h: u32, f: impl FnOnce(&PopPrefix) -> usize) -> i32 {
         _ => -1,
     })
     .unwrap_or(-1)
+}
+
+/// Bytes of stream `h` a decode would use now (the end of its last usable
+/// chunk; see [`engine::complete_prefix`]), -1 on a damaged header. Cheap
+/// (reads chunk headers only): the worker decodes again only when it grows.
+#[unsafe(no_mangle)]
+pub extern "C" fn lk_pop_usable(h: u32) -> i32 {
+    let r = with_slot(h, |slot| match slot {
+        Slot::Pop { bytes, scan, .. } => {
+            *scan = engine::scan_prefix(bytes, *scan)?;
+            Ok(scan.usable)
+        }
+        Slot::Mco { .. } => Err("not a .pop handle".to_string()),
+    });
+    match r {
+        Some(Ok(n)) => n as i32,
+        Some(Err(e)) => {
+            fail(e);
+            -1
+        }
+        None => -1,
+    }
 }
 
 /// Octree depth `R` (the finest level's number), -1 before the first level.
