@@ -49,12 +49,12 @@ export class McoModel extends THREE.Mesh {
   constructor(options = {}) {
     super(
       new THREE.BufferGeometry(),
-      new THREE.MeshStandardMaterial({ color: 0xd8d0c0, roughness: 0.8, metalness: 0.0 }),
+      new THREE.MeshStandardMaterial({ color: 0xd8d0c0, roughness: 0.8, metalness: 0.0, side: THREE.DoubleSide }),
     );
     this.tolerance = options.tolerance ?? 1;
     this.wasmUrl = options.wasmUrl;
     this.initialTriangles = options.initialTriangles ?? 20000;
-    this.id = newId();
+    this.workerId = newId();
     this.worker = null;
     this.seq = 0;
     this.inFlight = null; // seq of the cut being made
@@ -69,7 +69,7 @@ export class McoModel extends THREE.Mesh {
     let ready;
     const opened = new Promise((res, rej) => (ready = { res, rej }));
     this.worker = await startWorker(this.wasmUrl, (m) => this._message(m, ready));
-    this.worker.postMessage({ type: 'mco-open', id: this.id, bytes: buffer }, [buffer]);
+    this.worker.postMessage({ type: 'mco-open', id: this.workerId, bytes: buffer }, [buffer]);
     await opened.catch((e) => {
       throw new Error(`${url}: ${e.message}`);
     });
@@ -125,7 +125,7 @@ export class McoModel extends THREE.Mesh {
   _send(msg) {
     const seq = ++this.seq;
     this.inFlight = seq;
-    this.worker.postMessage({ ...msg, id: this.id, seq });
+    this.worker.postMessage({ ...msg, id: this.workerId, seq });
     return new Promise((res) => this.waiters.set(seq, res));
   }
 
@@ -181,7 +181,7 @@ export class McoModel extends THREE.Mesh {
   /** Frees the worker and the GPU buffers. */
   dispose() {
     if (this.worker) {
-      this.worker.postMessage({ type: 'close', id: this.id });
+      this.worker.postMessage({ type: 'close', id: this.workerId });
       this.worker.terminate();
     }
     this.worker = null;

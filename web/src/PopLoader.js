@@ -59,7 +59,7 @@ export class PopLoader extends THREE.Loader {
     const fullUrl = this.manager.resolveURL(this.path + url);
     const mesh = new THREE.Mesh(
       new THREE.BufferGeometry(),
-      new THREE.MeshStandardMaterial({ color: 0xd8d0c0, roughness: 0.8, metalness: 0.0 }),
+      new THREE.MeshStandardMaterial({ color: 0xd8d0c0, roughness: 0.8, metalness: 0.0, side: THREE.DoubleSide }),
     );
     const state = {
       url: fullUrl,

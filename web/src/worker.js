@@ -87,7 +87,7 @@ function sendLevel(id, s, level, levels, precision, decodeMs) {
   const triangles = wasm.lk_pop_mesh(s.h, level);
   const triangulateMs = performance.now() - t1;
   if (triangles < 0) throw new Error(errorText());
-  const digest = wasm.lk_mesh_digest(s.h).toString(16).padStart(16, '0');
+  const digest = BigInt.asUintN(64, wasm.lk_mesh_digest(s.h)).toString(16).padStart(16, '0');
   const mesh = meshOf(s.h, true, true);
   s.sentLevel = level;
   s.precision = precision;
@@ -112,7 +112,7 @@ function sendLevel(id, s, level, levels, precision, decodeMs) {
 
 function mcoCut(id, seq, h, lod, expanded, ms) {
   const mesh = meshOf(h, false, true);
-  const digest = wasm.lk_mesh_digest(h).toString(16).padStart(16, '0');
+  const digest = BigInt.asUintN(64, wasm.lk_mesh_digest(h)).toString(16).padStart(16, '0');
   postMessage(
     {
       type: 'mco-cut',

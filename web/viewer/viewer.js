@@ -53,7 +53,25 @@ const state = {
   complete: false,
   error: '',
 };
-const viewer = { state, scene, camera, renderer, controls, model: null, ready: null, render: () => renderNow() };
+const viewer = {
+  state,
+  scene,
+  camera,
+  renderer,
+  controls,
+  model: null,
+  ready: null,
+  render: () => renderNow(),
+  /** Opens a model (what ?model= does). */
+  open: (url, kind) => open(url, kind),
+  /** Puts the camera at `position` looking at `target` and draws a frame. */
+  setCamera(position, target) {
+    camera.position.fromArray(position);
+    controls.target.fromArray(target);
+    controls.update();
+    renderNow();
+  },
+};
 window.lodkitViewer = viewer;
 
 window.addEventListener('error', (e) => showError(e.message));
@@ -109,7 +127,7 @@ function hud() {
     `bytes     ${fmtBytes(state.loaded)} / ${fmtBytes(state.total)}`,
   ];
   if (state.kind === 'pop') lines.push(`level     ${state.level} of ${state.levels ? state.levels - 1 : '?'}  (${state.precision} bits)`);
-  if (state.kind === 'mco') lines.push(`LOD       ${state.level}`);
+  if (state.kind === 'mco') lines.push(state.level >= 0 ? `LOD       ${state.level}` : `view cut  ${state.expanded} nodes refined`);
   if (state.kind === 'chain') lines.push(`level     ${state.level} of ${state.levels} (lod${state.level})`);
   lines.push(`triangles ${state.triangles.toLocaleString('en')}`);
   lines.push(`decode    ${state.decodeMs.toFixed(1)} ms`);
@@ -194,7 +212,7 @@ async function openPop(url) {
         bytesUsed: pending.bytesUsed,
         latencyMs: now - pending.receivedAt,
       });
-      if (state.firstDrawLoaded < 0) {
+      if (state.firstDrawLoaded < 0 && pending.triangles > 0) {
         state.firstDrawLoaded = s.loaded;
         state.firstDrawMs = now;
       }
@@ -223,10 +241,11 @@ async function openMco(url) {
   scene.add(model);
   const b = model.bounds;
   const box = new THREE.Box3(new THREE.Vector3(b[0], b[1], b[2]), new THREE.Vector3(b[3], b[4], b[5]));
-  frameSphere(box.getBoundingSphere(new THREE.Sphere()));
+  viewer.bounds = box;
+  frameSphere(model.geometry.boundingSphere);
   model.addEventListener('cut', () => {
     const m = model.state;
-    Object.assign(state, { level: m.lod, triangles: m.triangles, decodeMs: m.cutMs, cuts: m.cuts, digest: m.digest });
+    Object.assign(state, { level: m.lod, expanded: m.expanded, triangles: m.triangles, decodeMs: m.cutMs, cuts: m.cuts, digest: m.digest });
     setWireframe(model, state.wireframe);
     requestRender();
   });
@@ -272,7 +291,7 @@ async function openGlb(url) {
     if (o.isMesh) meshes.push(o);
   });
   const chain = meshes
-    .map((m) => ({ mesh: m, n: /_lod(\d+)$/i.exec(m.name || (m.parent && m.parent.name) || '') }))
+    .map((m) => ({ mesh: m, n: /_lod(\d+)(?!\d)/i.exec(m.name || (m.parent && m.parent.name) || '') }))
     .filter((e) => e.n);
   const box = new THREE.Box3().setFromObject(root);
   const sphere = box.getBoundingSphere(new THREE.Sphere());
