@@ -131,7 +131,10 @@ export class PopLoader extends THREE.Loader {
           bytesUsed: m.bytesUsed,
           triangles: m.triangles,
           receivedAt: arrived ? arrived[1] : performance.now(),
+          postedAt: m.postedAt - performance.timeOrigin,
           meshAt: performance.now(),
+          decodeMs: m.decodeMs,
+          triangulateMs: m.triangulateMs,
           shownAt: null,
         });
         mesh.dispatchEvent({ type: 'level', level: m.level, precision: m.precision });
@@ -149,8 +152,22 @@ export class PopLoader extends THREE.Loader {
       }
     });
     (async () => {
-      const worker = await this._worker();
-      worker.postMessage({ type: 'pop-open', id });
+      // The stream starts while the worker starts: reads made before it is
+      // ready are queued and sent in order.
+      const workerReady = this._worker().then((w) => {
+        w.postMessage({ type: 'pop-open', id });
+        return w;
+      });
+      let worker = null;
+      const queued = [];
+      const send = (bytes, done) => {
+        if (worker) worker.postMessage({ type: 'pop-data', id, bytes, done }, [bytes]);
+        else queued.push([bytes, done]);
+      };
+      workerReady.then((w) => {
+        worker = w;
+        for (const [bytes, done] of queued.splice(0)) w.postMessage({ type: 'pop-data', id, bytes, done }, [bytes]);
+      }, fail);
       const res = await fetch(fullUrl, { headers: this.requestHeader, credentials: this.withCredentials ? 'include' : 'same-origin' });
       if (!res.ok) throw new Error(`${fullUrl}: HTTP ${res.status}`);
       state.total = Number(res.headers.get('content-length')) || 0;
@@ -165,15 +182,22 @@ export class PopLoader extends THREE.Loader {
         state.loaded += value.byteLength;
         arrivals.push([state.loaded, performance.now()]);
         // The reader's chunk may view a larger buffer: move a copy.
-        const bytes = value.slice().buffer;
-        worker.postMessage({ type: 'pop-data', id, bytes, done: false }, [bytes]);
+        send(value.slice().buffer, false);
         if (onProgress) onProgress({ loaded: state.loaded, total: state.total, level: state.level, triangles: state.triangles });
       }
       if (!state.total) state.total = state.loaded;
-      const empty = new ArrayBuffer(0);
-      worker.postMessage({ type: 'pop-data', id, bytes: empty, done: true }, [empty]);
+      send(new ArrayBuffer(0), true);
     })().catch(fail);
     return mesh;
+  }
+
+  /**
+   * Starts the worker (and the wasm download) now, so that the first
+   * stream's first level is not kept waiting for them.
+   */
+  preload() {
+    this._worker();
+    return this;
   }
 
   /** Frees the worker (meshes already made stay usable). */

@@ -104,6 +104,8 @@ function sendLevel(id, s, level, levels, precision, decodeMs) {
       decodeMs,
       triangulateMs,
       digest,
+      // Absolute time (ms since the epoch) the level left the worker.
+      postedAt: performance.timeOrigin + performance.now(),
       mesh,
     },
     transfers(mesh),

@@ -37,7 +37,8 @@ for (const name of pops) {
       let tris = 0;
       for (let i = 0; i < rounds + 2; i++) {
         const h = w.lk_pop_new();
-        new Uint8Array(w.memory.buffer, w.lk_pop_push(h, bytes.length), bytes.length).set(bytes);
+        const at = w.lk_pop_push(h, bytes.length); // may grow (detach) memory
+        new Uint8Array(w.memory.buffer, at, bytes.length).set(bytes);
         const t0 = performance.now();
         const levels = w.lk_pop_decode(h, -1);
         tris = w.lk_pop_mesh(h, levels - 1);

@@ -8,7 +8,7 @@ import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { PLYLoader } from 'three/addons/loaders/PLYLoader.js';
-import { PopLoader, McoModel } from './lodkit/index.js';
+import { PopLoader, McoModel, wasmModule } from './lodkit/index.js';
 
 // The LOD-chain switch uses a level's mean edge length as its error; an
 // edge this many times the pixel tolerance on screen is still accepted
@@ -170,8 +170,11 @@ async function headSize(url) {
   }
 }
 
+// One loader (one worker) for the page, started with the page.
+const popLoader = new PopLoader();
+
 async function openPop(url) {
-  const loader = new PopLoader();
+  const loader = popLoader.preload();
   viewer.loader = loader;
   let framed = false;
   let pending = null; // the refinement waiting for its first frame
@@ -202,8 +205,11 @@ async function openPop(url) {
     afterFrame = () => {
       if (!pending) return;
       // The level is on screen once the GPU has drawn this frame.
+      const f0 = performance.now();
       renderer.getContext().finish();
       const now = performance.now();
+      pending.finishMs = now - f0;
+      pending.frameMs = state.frameMs;
       pending.shownAt = now;
       state.levelsShown.push({
         level: pending.level,
@@ -387,7 +393,31 @@ function controlsUi() {
   });
 }
 
+// Draws the loaders' material (plain and with vertex colours) once before
+// any model arrives, so that the first level is not kept off the screen by
+// shader compilation (a software GL such as SwiftShader also compiles its
+// draw routines on the first draw).
+function warmShaders() {
+  const warm = new THREE.Scene();
+  warm.add(...scene.children.filter((o) => o.isLight).map((l) => l.clone()));
+  for (const vertexColors of [false, true]) {
+    const g = new THREE.BufferGeometry();
+    g.setAttribute('position', new THREE.Float32BufferAttribute([0, 0, -2, 1, 0, -2, 0, 1, -2], 3));
+    g.setAttribute('normal', new THREE.Float32BufferAttribute([0, 0, 1, 0, 0, 1, 0, 0, 1], 3));
+    if (vertexColors) g.setAttribute('color', new THREE.Uint8BufferAttribute([255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255], 4, true));
+    warm.add(new THREE.Mesh(g, new THREE.MeshStandardMaterial({ roughness: 0.8, metalness: 0.0, side: THREE.DoubleSide, vertexColors })));
+  }
+  renderer.render(warm, camera);
+  renderer.getContext().finish();
+  for (const m of warm.children) if (m.isMesh) m.geometry.dispose();
+}
+
 async function main() {
+  resize();
+  warmShaders();
+  // The decoders download while the page sets up (shared by all models).
+  wasmModule().catch(() => {});
+  popLoader.preload();
   controlsUi();
   resize();
   const params = new URLSearchParams(location.search);

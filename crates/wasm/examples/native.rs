@@ -24,7 +24,14 @@ use lodkit_particles::{DecodeOptions, TriangulateOptions, decode, triangulate};
 use lodkit_wasm::digest;
 
 fn pop_level(bytes: &[u8], level: Option<u8>) -> (usize, u64) {
-    let d = decode(bytes, &DecodeOptions { max_level: level, max_precision: None }).expect("a valid .pop");
+    let d = decode(
+        bytes,
+        &DecodeOptions {
+            max_level: level,
+            max_precision: None,
+        },
+    )
+    .expect("a valid .pop");
     let r = level.unwrap_or(d.header.depth);
     let s = d.surface(r).expect("level present");
     let t = triangulate(&s, &TriangulateOptions::DEFAULT);
@@ -74,7 +81,9 @@ fn main() {
         }
         Some("time") => {
             let pop = std::fs::read(&args[1]).expect("readable .pop");
-            let rounds: usize = args.get(2).map_or(10, |r| r.parse().expect("a round count"));
+            let rounds: usize = args
+                .get(2)
+                .map_or(10, |r| r.parse().expect("a round count"));
             let mut best = f64::INFINITY;
             let mut tris = 0;
             for _ in 0..rounds {
@@ -93,7 +102,9 @@ fn main() {
         Some("time-mco") => {
             let model = model_file::load(args[1].as_ref()).expect("a valid .mco");
             let budget: usize = args[2].parse().expect("a triangle budget");
-            let rounds: usize = args.get(3).map_or(20, |r| r.parse().expect("a round count"));
+            let rounds: usize = args
+                .get(3)
+                .map_or(20, |r| r.parse().expect("a round count"));
             let (lo, hi) = model.node_box(0);
             // The tolerance that gives about `budget` triangles at this view.
             let cam = camera_for(lo, hi, 1.5);
@@ -119,7 +130,9 @@ fn main() {
             );
         }
         _ => {
-            eprintln!("usage: native digest FILE.pop LEVEL FILE.mco BUDGET | time FILE.pop [ROUNDS] | time-mco FILE.mco BUDGET [ROUNDS]");
+            eprintln!(
+                "usage: native digest FILE.pop LEVEL FILE.mco BUDGET | time FILE.pop [ROUNDS] | time-mco FILE.mco BUDGET [ROUNDS]"
+            );
             std::process::exit(2);
         }
     }

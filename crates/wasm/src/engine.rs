@@ -206,3 +206,67 @@ pub fn mco_extract_view(m: &McoModel, v: &View, tolerance_px: f32, out: &mut Vec
     };
     m.extract_view(&cam, tolerance_px, out)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use lodkit_mesh::Model;
+    use lodkit_particles::{EncodeOptions, encode};
+
+    fn stream(normals: bool) -> Vec<u8> {
+        let mesh = lodkit_mesh::shapes::icosphere(3);
+        let opts = EncodeOptions {
+            depth: Some(5),
+            normals,
+            ..EncodeOptions::DEFAULT
+        };
+        encode(&Model::Mesh(mesh), &opts).expect("encodes").bytes
+    }
+
+    #[test]
+    fn every_prefix_decodes_its_complete_chunks() {
+        for normals in [false, true] {
+            let bytes = stream(normals);
+            let full = pop_decode_prefix(&bytes, None).unwrap().expect("levels");
+            assert_eq!(full.bytes_used, bytes.len());
+            let mut levels = 0;
+            let mut scan = Scan::default();
+            for cut in 0..=bytes.len() {
+                scan = scan_prefix(&bytes[..cut], scan).expect("a prefix is no error");
+                assert_eq!(scan.usable, complete_prefix(&bytes[..cut]).unwrap());
+                let Some(p) = pop_decode_usable(&bytes, scan.usable, None).unwrap() else {
+                    continue;
+                };
+                assert!(p.bytes_used <= cut);
+                assert!(p.decoded.levels.len() >= levels, "levels never go back");
+                levels = p.decoded.levels.len();
+                // A level with attributes is usable only with them.
+                if let Some(n) = &p.decoded.normals {
+                    assert_eq!(n.len(), levels);
+                }
+            }
+            assert_eq!(levels, full.decoded.levels.len());
+        }
+    }
+
+    #[test]
+    fn the_finest_level_matches_a_plain_decode() {
+        let bytes = stream(false);
+        let p = pop_decode_prefix(&bytes, None).unwrap().unwrap();
+        let r = pop_depth(&p.decoded);
+        let mesh = pop_level_mesh(&p.decoded, r).unwrap();
+        let d = lodkit_particles::decode(&bytes, &DecodeOptions::default()).unwrap();
+        let s = d.surface(r).unwrap();
+        let t = lodkit_particles::triangulate(&s, &TriangulateOptions::DEFAULT);
+        assert_eq!(mesh.indices, t.mesh.faces.into_flattened());
+        assert_eq!(mesh.positions, t.mesh.positions);
+    }
+
+    #[test]
+    fn a_damaged_header_is_an_error_not_a_panic() {
+        let mut bytes = stream(false);
+        bytes[0] ^= 0xff;
+        assert!(scan_prefix(&bytes, Scan::default()).is_err());
+        assert!(mco_load(&bytes).is_err());
+    }
+}

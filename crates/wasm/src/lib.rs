@@ -74,7 +74,7 @@ enum Slot {
     Pop {
         bytes: Vec<u8>,
         scan: Scan,
-        prefix: Option<PopPrefix>,
+        prefix: Option<Box<PopPrefix>>,
         mesh: MeshOut,
     },
     Mco {
@@ -222,8 +222,8 @@ pub extern "C" fn lk_pop_decode(h: u32, max_level: i32) -> i32 {
             *scan = engine::scan_prefix(bytes, *scan)?;
             let p = engine::pop_decode_usable(bytes, scan.usable, max_level)?;
             let n = p.as_ref().map_or(0, |p| p.decoded.levels.len());
-            if p.is_some() {
-                *prefix = p;
+            if let Some(p) = p {
+                *prefix = Some(Box::new(p));
             }
             Ok(n as i32)
         }
@@ -299,7 +299,8 @@ pub extern "C" fn lk_pop_mesh(h: u32, level: u32) -> i32 {
             mesh,
             ..
         } => {
-            let level = u8::try_from(level).map_err(|_| format!("level {level} is out of range"))?;
+            let level =
+                u8::try_from(level).map_err(|_| format!("level {level} is out of range"))?;
             *mesh = engine::pop_level_mesh(&p.decoded, level)?;
             Ok((mesh.indices.len() / 3) as i32)
         }
@@ -465,14 +466,18 @@ pub extern "C" fn lk_mesh_positions(h: u32) -> *const f32 {
 #[unsafe(no_mangle)]
 pub extern "C" fn lk_mesh_normals(h: u32) -> *const f32 {
     mesh_query(h, std::ptr::null(), |m| {
-        m.normals.as_ref().map_or(std::ptr::null(), |n| n.as_ptr().cast())
+        m.normals
+            .as_ref()
+            .map_or(std::ptr::null(), |n| n.as_ptr().cast())
     })
 }
 
 #[unsafe(no_mangle)]
 pub extern "C" fn lk_mesh_colors(h: u32) -> *const u8 {
     mesh_query(h, std::ptr::null(), |m| {
-        m.colors.as_ref().map_or(std::ptr::null(), |c| c.as_ptr().cast())
+        m.colors
+            .as_ref()
+            .map_or(std::ptr::null(), |c| c.as_ptr().cast())
     })
 }
 
