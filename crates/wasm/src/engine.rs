@@ -92,8 +92,8 @@ pub fn pop_decode_usable(
     usable: usize,
     max_level: Option<u8>,
 ) -> Result<Option<PopPrefix>, String> {
-    if usable < HEADER_LEN {
-        return Ok(None);
+    if usable <= HEADER_LEN {
+        return Ok(None); // no whole chunk yet
     }
     let opts = DecodeOptions {
         max_level,
@@ -117,11 +117,15 @@ pub fn pop_decode_prefix(bytes: &[u8], max_level: Option<u8>) -> Result<Option<P
 }
 
 /// Triangulates (and orients) level `r` of a decoded prefix with the
-/// defaults of `lodkit pop decode`.
+/// defaults of `lodkit pop decode`. A stream without coded normals gets
+/// area-weighted vertex normals, so the page does no per-vertex work.
 pub fn pop_level_mesh(d: &Decoded, r: u8) -> Result<MeshOut, String> {
     let s = d.surface(r).map_err(|e| e.to_string())?;
     let t = lodkit_particles::triangulate(&s, &TriangulateOptions::DEFAULT);
-    let m = t.mesh;
+    let mut m = t.mesh;
+    if m.normals.is_none() {
+        m.normals = Some(lodkit_mesh::normals::vertex_normals(&m));
+    }
     Ok(MeshOut {
         positions: m.positions,
         normals: m.normals,
