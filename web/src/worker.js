@@ -136,6 +136,8 @@ function handle(m) {
     case 'init': {
       const instance = new WebAssembly.Instance(m.module, {});
       wasm = instance.exports;
+      // Compile the decoder's code paths before the first stream needs them.
+      wasm.lk_warm_up();
       return;
     }
     case 'pop-open':

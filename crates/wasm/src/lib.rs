@@ -34,7 +34,8 @@
 //!   `lk_mesh_indices` (u32), `lk_mesh_digest` (see [`digest`]). The
 //!   pointers stay valid until the next call on that handle; memory growth
 //!   detaches JavaScript views, so views are made after each call.
-//! * `lk_close(h)` frees a handle.
+//! * `lk_close(h)` frees a handle; `lk_warm_up()` runs a built-in small
+//!   stream through the decoder once (call it when a worker starts).
 //!
 //! Cost: each `lk_pop_decode` decodes the usable prefix from its start (a
 //! `.pop` decodes at tens of MB/s, so the viewer calls it once per newly
@@ -180,6 +181,29 @@ pub extern "C" fn lk_close(h: u32) {
 }
 
 // ---- .pop -----------------------------------------------------------------
+
+/// A small stream (a 2,000-triangle blob, `R = 5`) run through decode and
+/// triangulation once when a worker starts, so that the engine has compiled
+/// those functions before the first real level arrives.
+const WARM_UP_STREAM: &[u8] = include_bytes!("warm_up.pop");
+
+/// Decodes and triangulates [`WARM_UP_STREAM`]; returns its triangle count
+/// (-1 if that failed, which would be a bug).
+#[unsafe(no_mangle)]
+pub extern "C" fn lk_warm_up() -> i32 {
+    let run = || -> Result<usize, String> {
+        let p = engine::pop_decode_prefix(WARM_UP_STREAM, None)?.ok_or("no level")?;
+        let r = engine::pop_depth(&p.decoded);
+        Ok(engine::pop_level_mesh(&p.decoded, r)?.indices.len() / 3)
+    };
+    match run() {
+        Ok(n) => n as i32,
+        Err(e) => {
+            fail(e);
+            -1
+        }
+    }
+}
 
 #[unsafe(no_mangle)]
 pub extern "C" fn lk_pop_new() -> u32 {
