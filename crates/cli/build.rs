@@ -56,7 +56,12 @@ fn main() {
     if let Some(dir) = &built {
         for rel in &files {
             let abs = dir.join(rel).canonicalize().expect("listed file exists");
-            writeln!(table, "    ({rel:?}, include_bytes!({:?})),", abs.display().to_string()).unwrap();
+            writeln!(
+                table,
+                "    ({rel:?}, include_bytes!({:?})),",
+                abs.display().to_string()
+            )
+            .unwrap();
         }
     }
     table.push_str("];\n");
@@ -71,7 +76,9 @@ fn build(root: &Path, viewer: &Path) -> Option<PathBuf> {
     match status {
         Ok(s) if s.success() && viewer.join("index.html").is_file() => Some(viewer.to_path_buf()),
         Ok(s) => {
-            println!("cargo:warning=scripts/build-web.sh failed ({s}): is npm installed, and can rustup add wasm32-unknown-unknown?");
+            println!(
+                "cargo:warning=scripts/build-web.sh failed ({s}): is npm installed, and can rustup add wasm32-unknown-unknown?"
+            );
             None
         }
         Err(e) => {
@@ -94,7 +101,10 @@ fn list_files(dir: &Path) -> Vec<String> {
             if p.is_dir() {
                 stack.push(p);
             } else if let Ok(rel) = p.strip_prefix(dir) {
-                let parts: Vec<_> = rel.components().map(|c| c.as_os_str().to_string_lossy().into_owned()).collect();
+                let parts: Vec<_> = rel
+                    .components()
+                    .map(|c| c.as_os_str().to_string_lossy().into_owned())
+                    .collect();
                 out.push(parts.join("/"));
             }
         }
