@@ -1,0 +1,276 @@
+//! The one place this crate binds to the lodkit libraries.
+//!
+//! Everything the browser runs goes through the functions here, and they use
+//! only the crates' high-level entry points: `lodkit_particles::{decode,
+//! DecodeOptions, triangulate, TriangulateOptions}`, `Decoded::surface`, the
+//! `.pop` container reader, and `lodkit_mco::{McoModel, Camera}` with
+//! `model_file::decode`. When those APIs move, this file is the only one to
+//! re-point.
+//!
+//! `.pop` prefixes: a stream arriving over the network is cut at the end of
+//! its last complete chunk before it is decoded (see [`complete_prefix`]), so
+//! the decoder only ever sees whole chunks. A level chunk whose attribute
+//! chunk has not arrived yet is left out with it: a level is usable once its
+//! colours and normals are there too.
+
+use glam::Vec3;
+use lodkit_mco::{Camera, McoModel};
+use lodkit_particles::container::{ChunkKind, ChunkReader, HEADER_LEN, read_header};
+use lodkit_particles::{DecodeOptions, Decoded, TriangulateOptions};
+
+/// A mesh ready to be copied into GPU buffers: positions (and normals,
+/// colours where present) per vertex, three indices per triangle.
+#[derive(Debug, Default, Clone, PartialEq)]
+pub struct MeshOut {
+    pub positions: Vec<Vec3>,
+    pub normals: Option<Vec<Vec3>>,
+    pub colors: Option<Vec<[u8; 4]>>,
+    pub indices: Vec<u32>,
+}
+
+/// What the complete chunks of a `.pop` prefix hold.
+pub struct PopPrefix {
+    pub decoded: Decoded,
+    /// Bytes of the prefix that were decoded (the end of its last usable
+    /// chunk); the rest waits for more bytes.
+    pub bytes_used: usize,
+}
+
+/// How far a `.pop` prefix has been scanned: the end of its last whole
+/// chunk (`raw`), and of its last *usable* one (`usable`: never between a
+/// level chunk and its attribute chunk). Zero before the header is whole.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct Scan {
+    pub raw: usize,
+    pub usable: usize,
+}
+
+/// Extends `prev` (a scan of a shorter prefix of the same stream, or
+/// `Scan::default()`) over `bytes`: only the chunks after `prev.raw` are
+/// read, so a stream scanned as it arrives costs one pass in all.
+/// `Err` when the header is there and is not a `.pop` header.
+pub fn scan_prefix(bytes: &[u8], prev: Scan) -> Result<Scan, String> {
+    if bytes.len() < HEADER_LEN {
+        return Ok(Scan::default()); // the header has not arrived yet
+    }
+    let header = read_header(bytes).map_err(|e| e.to_string())?;
+    let attributes = header.colours || header.normals;
+    let mut scan = prev;
+    if scan.raw < HEADER_LEN {
+        scan = Scan {
+            raw: HEADER_LEN,
+            usable: HEADER_LEN,
+        };
+    }
+    // `ChunkReader` starts reading `HEADER_LEN` bytes into its slice: hand
+    // it the stream from `HEADER_LEN` before the first unread chunk.
+    let base = scan.raw - HEADER_LEN;
+    for chunk in ChunkReader::new(&bytes[base..]) {
+        let Ok(chunk) = chunk else {
+            // Truncated (or damaged) from here on: the decoder reports
+            // damage once the stream is complete.
+            break;
+        };
+        scan.raw = base + chunk.end;
+        if !(attributes && chunk.kind == ChunkKind::Level) {
+            scan.usable = scan.raw;
+        }
+    }
+    Ok(scan)
+}
+
+/// Length of the longest usable prefix of `bytes` (see [`Scan`]).
+pub fn complete_prefix(bytes: &[u8]) -> Result<usize, String> {
+    Ok(scan_prefix(bytes, Scan::default())?.usable)
+}
+
+/// Decodes the first `usable` bytes of a stream (a length from
+/// [`scan_prefix`]); `max_level` stops at that level as `lodkit pop decode
+/// --level` does (no precision layers after it).
+pub fn pop_decode_usable(
+    bytes: &[u8],
+    usable: usize,
+    max_level: Option<u8>,
+) -> Result<Option<PopPrefix>, String> {
+    if usable <= HEADER_LEN {
+        return Ok(None); // no whole chunk yet
+    }
+    let opts = DecodeOptions {
+        max_level,
+        max_precision: None,
+    };
+    let decoded = lodkit_particles::decode(&bytes[..usable], &opts).map_err(|e| e.to_string())?;
+    if decoded.levels.is_empty() {
+        return Ok(None);
+    }
+    Ok(Some(PopPrefix {
+        decoded,
+        bytes_used: usable,
+    }))
+}
+
+/// Decodes every usable chunk of a stream prefix (any number of bytes
+/// received so far). `max_level` stops at that level as `lodkit pop decode
+/// --level` does (no precision layers after it).
+pub fn pop_decode_prefix(bytes: &[u8], max_level: Option<u8>) -> Result<Option<PopPrefix>, String> {
+    pop_decode_usable(bytes, complete_prefix(bytes)?, max_level)
+}
+
+/// Triangulates (and orients) level `r` of a decoded prefix with the
+/// defaults of `lodkit pop decode`. A stream without coded normals gets
+/// area-weighted vertex normals, so the page does no per-vertex work.
+pub fn pop_level_mesh(d: &Decoded, r: u8) -> Result<MeshOut, String> {
+    let s = d.surface(r).map_err(|e| e.to_string())?;
+    let t = lodkit_particles::triangulate(&s, &TriangulateOptions::DEFAULT);
+    let mut m = t.mesh;
+    if m.normals.is_none() {
+        m.normals = Some(lodkit_mesh::normals::vertex_normals(&m));
+    }
+    Ok(MeshOut {
+        positions: m.positions,
+        normals: m.normals,
+        colors: m.colors,
+        indices: m.faces.into_flattened(),
+    })
+}
+
+/// Octree depth `R` of a decoded stream (its finest level).
+pub fn pop_depth(d: &Decoded) -> u8 {
+    d.header.depth
+}
+
+/// Bits of precision of the decoded positions.
+pub fn pop_precision(d: &Decoded) -> u8 {
+    d.precision
+}
+
+/// Loads a whole `.mco` file held in memory.
+pub fn mco_load(bytes: &[u8]) -> Result<McoModel, String> {
+    lodkit_mco::model_file::decode(bytes)
+}
+
+/// The model's whole vertex buffer (every cut indexes into it).
+pub fn mco_vertices(m: &McoModel) -> MeshOut {
+    let vb = &m.vertices;
+    MeshOut {
+        positions: vb.positions.clone(),
+        normals: Some(vb.normals.clone()),
+        colors: m.has_colors.then(|| vb.colors.clone()),
+        indices: Vec::new(),
+    }
+}
+
+/// Highest LOD number (every leaf drawn).
+pub fn mco_max_lod(m: &McoModel) -> usize {
+    m.max_lod()
+}
+
+/// Triangles at full resolution.
+pub fn mco_full_triangles(m: &McoModel) -> usize {
+    m.full_triangles()
+}
+
+/// The model's bounding cube as (min corner, max corner).
+pub fn mco_bounds(m: &McoModel) -> (Vec3, Vec3) {
+    m.node_box(0)
+}
+
+/// Index buffer at LOD number `k` (clamped to the highest).
+pub fn mco_extract_lod(m: &McoModel, k: usize, out: &mut Vec<u32>) -> usize {
+    let k = k.min(m.max_lod());
+    m.extract_lod(k, out);
+    k
+}
+
+/// Index buffer closest to `triangles` triangles; returns the LOD number.
+pub fn mco_extract_triangles(m: &McoModel, triangles: usize, out: &mut Vec<u32>) -> usize {
+    m.extract_triangles(triangles, out)
+}
+
+/// A perspective camera as `lodkit_mco::Camera` wants it.
+pub struct View {
+    pub position: Vec3,
+    pub direction: Vec3,
+    pub up: Vec3,
+    pub vfov_deg: f32,
+    pub viewport_height: f32,
+    pub aspect: f32,
+}
+
+/// View-dependent index buffer at `tolerance_px` pixels of projected error;
+/// returns the number of expanded nodes.
+pub fn mco_extract_view(m: &McoModel, v: &View, tolerance_px: f32, out: &mut Vec<u32>) -> usize {
+    let cam = Camera {
+        position: v.position,
+        direction: v.direction,
+        up: v.up,
+        vfov_deg: v.vfov_deg,
+        viewport_height: v.viewport_height,
+        aspect: v.aspect,
+    };
+    m.extract_view(&cam, tolerance_px, out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use lodkit_mesh::Model;
+    use lodkit_particles::{EncodeOptions, encode};
+
+    fn stream(normals: bool) -> Vec<u8> {
+        let mesh = lodkit_mesh::shapes::icosphere(3);
+        let opts = EncodeOptions {
+            depth: Some(5),
+            normals,
+            ..EncodeOptions::DEFAULT
+        };
+        encode(&Model::Mesh(mesh), &opts).expect("encodes").bytes
+    }
+
+    #[test]
+    fn every_prefix_decodes_its_complete_chunks() {
+        for normals in [false, true] {
+            let bytes = stream(normals);
+            let full = pop_decode_prefix(&bytes, None).unwrap().expect("levels");
+            assert_eq!(full.bytes_used, bytes.len());
+            let mut levels = 0;
+            let mut scan = Scan::default();
+            for cut in 0..=bytes.len() {
+                scan = scan_prefix(&bytes[..cut], scan).expect("a prefix is no error");
+                assert_eq!(scan.usable, complete_prefix(&bytes[..cut]).unwrap());
+                let Some(p) = pop_decode_usable(&bytes, scan.usable, None).unwrap() else {
+                    continue;
+                };
+                assert!(p.bytes_used <= cut);
+                assert!(p.decoded.levels.len() >= levels, "levels never go back");
+                levels = p.decoded.levels.len();
+                // A level with attributes is usable only with them.
+                if let Some(n) = &p.decoded.normals {
+                    assert_eq!(n.len(), levels);
+                }
+            }
+            assert_eq!(levels, full.decoded.levels.len());
+        }
+    }
+
+    #[test]
+    fn the_finest_level_matches_a_plain_decode() {
+        let bytes = stream(false);
+        let p = pop_decode_prefix(&bytes, None).unwrap().unwrap();
+        let r = pop_depth(&p.decoded);
+        let mesh = pop_level_mesh(&p.decoded, r).unwrap();
+        let d = lodkit_particles::decode(&bytes, &DecodeOptions::default()).unwrap();
+        let s = d.surface(r).unwrap();
+        let t = lodkit_particles::triangulate(&s, &TriangulateOptions::DEFAULT);
+        assert_eq!(mesh.indices, t.mesh.faces.into_flattened());
+        assert_eq!(mesh.positions, t.mesh.positions);
+    }
+
+    #[test]
+    fn a_damaged_header_is_an_error_not_a_panic() {
+        let mut bytes = stream(false);
+        bytes[0] ^= 0xff;
+        assert!(scan_prefix(&bytes, Scan::default()).is_err());
+        assert!(mco_load(&bytes).is_err());
+    }
+}

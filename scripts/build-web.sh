@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# Builds the browser viewer into a folder laid out as it is served:
+#   index.html viewer.js                    the page (web/viewer/)
+#   lodkit/*.js lodkit/lodkit.wasm          the loaders, the worker, the decoders
+#   three/build/… three/examples/jsm/…      the three.js files the page imports
+# Usage: scripts/build-web.sh [OUT_DIR]   (default web/dist)
+# Installs what it needs: the wasm32-unknown-unknown target (rustup) and the
+# npm packages of web/package-lock.json (npm ci). crates/cli/build.rs runs it
+# when the viewer is missing or stale; it may also be run by hand.
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+out=${1:-$root/web/dist}
+cargo_bin=${CARGO:-cargo}
+
+# Run from a build script, this inherits the outer cargo's variables (its
+# target, profile, flags, jobserver): clear them so the nested build is an
+# ordinary one. CARGO_HOME and RUSTUP_* stay (where the toolchain lives).
+for v in $(env | sed -n 's/^\(CARGO_[A-Za-z0-9_]*\)=.*/\1/p'); do
+  [ "$v" = CARGO_HOME ] || unset "$v"
+done
+unset CARGO RUSTC RUSTDOC RUSTC_WRAPPER RUSTC_WORKSPACE_WRAPPER RUSTFLAGS RUSTDOCFLAGS \
+  RUSTC_LINKER TARGET HOST OUT_DIR PROFILE OPT_LEVEL DEBUG NUM_JOBS MAKEFLAGS MFLAGS 2>/dev/null || true
+
+if command -v rustup >/dev/null 2>&1; then
+  if ! rustup target list --installed 2>/dev/null | grep -qx wasm32-unknown-unknown; then
+    echo "build-web: rustup target add wasm32-unknown-unknown" >&2
+    rustup target add wasm32-unknown-unknown >&2
+  fi
+fi
+
+# Its own target folder: the outer build holds the lock on target/.
+echo "build-web: building lodkit-wasm (release, wasm32-unknown-unknown)" >&2
+CARGO_PROFILE_RELEASE_DEBUG=false CARGO_PROFILE_RELEASE_STRIP=true \
+  "$cargo_bin" build --release --quiet -p lodkit-wasm --target wasm32-unknown-unknown \
+  --manifest-path "$root/Cargo.toml" --target-dir "$root/target/web-wasm" >&2
+wasm=$root/target/web-wasm/wasm32-unknown-unknown/release/lodkit_wasm.wasm
+
+web=$root/web
+if [ ! -f "$web/node_modules/three/package.json" ] || [ "$web/package-lock.json" -nt "$web/node_modules/.package-lock.json" ]; then
+  echo "build-web: npm ci in web/" >&2
+  (cd "$web" && npm ci --no-audit --no-fund --ignore-scripts --loglevel=error) >&2
+fi
+
+three=$web/node_modules/three
+tmp=$(mktemp -d "${out%/}.tmp.XXXXXX")
+trap 'rm -rf "$tmp"' EXIT
+mkdir -p "$tmp/lodkit" "$tmp/three/build" "$tmp/three/examples/jsm/controls" \
+  "$tmp/three/examples/jsm/loaders" "$tmp/three/examples/jsm/utils"
+cp "$web/viewer/index.html" "$web/viewer/viewer.js" "$tmp/"
+cp "$web"/src/*.js "$tmp/lodkit/"
+cp "$wasm" "$tmp/lodkit/lodkit.wasm"
+cp "$three/LICENSE" "$tmp/three/LICENSE"
+cp "$three/build/three.module.js" "$three/build/three.core.js" "$tmp/three/build/"
+cp "$three/examples/jsm/controls/OrbitControls.js" "$tmp/three/examples/jsm/controls/"
+cp "$three/examples/jsm/loaders/GLTFLoader.js" "$three/examples/jsm/loaders/PLYLoader.js" "$tmp/three/examples/jsm/loaders/"
+cp "$three/examples/jsm/utils/BufferGeometryUtils.js" "$three/examples/jsm/utils/SkeletonUtils.js" "$tmp/three/examples/jsm/utils/"
+rm -rf "$out"
+chmod 755 "$tmp"
+mv "$tmp" "$out"
+trap - EXIT
+echo "build-web: viewer in $out" >&2

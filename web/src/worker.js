@@ -1,0 +1,234 @@
+// The decoder worker: lodkit's own Rust decoders (lodkit-wasm) run here, off
+// the main thread. It imports nothing: the page compiles the wasm module
+// once (wasm.js) and posts the compiled module in the 'init' message.
+//
+// Messages in (each carries `id`, the stream or model it is about):
+//   {type:'init', module}                       compiled WebAssembly.Module
+//   {type:'pop-open', id}
+//   {type:'pop-data', id, bytes, done}          bytes: ArrayBuffer (moved)
+//   {type:'pop-level', id, level}               re-send a decoded level
+//   {type:'mco-open', id, bytes}                the whole .mco file
+//   {type:'mco-view', id, seq, camera, tolerance}
+//   {type:'mco-triangles', id, seq, triangles}
+//   {type:'mco-lod', id, seq, lod}
+//   {type:'close', id}
+// Messages out:
+//   {type:'pop-level', id, level, depth, precision, levels, bytesUsed,
+//    triangles, decodeMs, triangulateMs, digest, mesh}
+//   {type:'pop-done', id, levels, bytesUsed}
+//   {type:'mco-model', id, maxLod, fullTriangles, bounds, mesh}
+//   {type:'mco-cut', id, seq, lod, expanded, triangles, ms, digest, indices}
+//   {type:'error', id, message}
+// A `mesh` is {positions: Float32Array, normals?: Float32Array,
+// colors?: Uint8Array, indices?: Uint32Array}, its buffers transferred.
+
+let wasm = null; // the instance's exports
+const streams = new Map(); // id -> {h, decodedTo, levels, sentLevel, precision}
+const models = new Map(); // id -> handle
+
+function errorText() {
+  const p = wasm.lk_error_ptr();
+  const n = wasm.lk_error_len();
+  return new TextDecoder().decode(new Uint8Array(wasm.memory.buffer, p, n).slice());
+}
+
+// Copies the handle's mesh out of wasm memory (views are made after the
+// call: memory growth detaches older views).
+function meshOf(h, withVertices, withIndices) {
+  const out = {};
+  const buf = wasm.memory.buffer;
+  if (withVertices) {
+    const n = wasm.lk_mesh_vertex_count(h);
+    out.positions = new Float32Array(buf, wasm.lk_mesh_positions(h), n * 3).slice();
+    const pn = wasm.lk_mesh_normals(h);
+    if (pn) out.normals = new Float32Array(buf, pn, n * 3).slice();
+    const pc = wasm.lk_mesh_colors(h);
+    if (pc) out.colors = new Uint8Array(buf, pc, n * 4).slice();
+  }
+  if (withIndices) {
+    const n = wasm.lk_mesh_index_count(h);
+    out.indices = new Uint32Array(buf, wasm.lk_mesh_indices(h), n).slice();
+  }
+  return out;
+}
+
+function transfers(mesh) {
+  return Object.values(mesh).map((a) => a.buffer);
+}
+
+function popDecode(id, s, done) {
+  // Decode again only when a whole new chunk run has arrived.
+  const usable = wasm.lk_pop_usable(s.h);
+  if (usable < 0) throw new Error(errorText());
+  if (usable <= s.decodedTo) {
+    if (done) postMessage({ type: 'pop-done', id, levels: s.levels, bytesUsed: s.decodedTo });
+    return;
+  }
+  s.decodedTo = usable;
+  const t0 = performance.now();
+  const levels = wasm.lk_pop_decode(s.h, -1);
+  const decodeMs = performance.now() - t0;
+  if (levels < 0) throw new Error(errorText());
+  s.levels = levels;
+  if (levels === 0) return;
+  const precision = wasm.lk_pop_precision(s.h);
+  const finest = levels - 1;
+  // A new level, or finer positions for the finest one (precision layers).
+  if (finest > s.sentLevel || (finest === s.sentLevel && precision > s.precision)) {
+    sendLevel(id, s, finest, levels, precision, decodeMs);
+  }
+  if (done) {
+    postMessage({ type: 'pop-done', id, levels, bytesUsed: wasm.lk_pop_bytes_used(s.h) });
+  }
+}
+
+function sendLevel(id, s, level, levels, precision, decodeMs) {
+  const t1 = performance.now();
+  const triangles = wasm.lk_pop_mesh(s.h, level);
+  const triangulateMs = performance.now() - t1;
+  if (triangles < 0) throw new Error(errorText());
+  const digest = BigInt.asUintN(64, wasm.lk_mesh_digest(s.h)).toString(16).padStart(16, '0');
+  const mesh = meshOf(s.h, true, true);
+  s.sentLevel = level;
+  s.precision = precision;
+  postMessage(
+    {
+      type: 'pop-level',
+      id,
+      level,
+      depth: wasm.lk_pop_depth(s.h),
+      precision,
+      levels,
+      bytesUsed: wasm.lk_pop_bytes_used(s.h),
+      triangles,
+      decodeMs,
+      triangulateMs,
+      digest,
+      // Absolute time (ms since the epoch) the level left the worker.
+      postedAt: performance.timeOrigin + performance.now(),
+      mesh,
+    },
+    transfers(mesh),
+  );
+}
+
+function mcoCut(id, seq, h, lod, expanded, ms) {
+  const mesh = meshOf(h, false, true);
+  const digest = BigInt.asUintN(64, wasm.lk_mesh_digest(h)).toString(16).padStart(16, '0');
+  postMessage(
+    {
+      type: 'mco-cut',
+      id,
+      seq,
+      lod,
+      expanded,
+      triangles: mesh.indices.length / 3,
+      ms,
+      digest,
+      indices: mesh.indices,
+    },
+    [mesh.indices.buffer],
+  );
+}
+
+function handle(m) {
+  switch (m.type) {
+    case 'init': {
+      const instance = new WebAssembly.Instance(m.module, {});
+      wasm = instance.exports;
+      // Compile the decoder's code paths before the first stream needs them.
+      wasm.lk_warm_up();
+      return;
+    }
+    case 'pop-open':
+      streams.set(m.id, { h: wasm.lk_pop_new(), decodedTo: 0, levels: 0, sentLevel: -1, precision: -1 });
+      return;
+    case 'pop-data': {
+      const s = streams.get(m.id);
+      const bytes = new Uint8Array(m.bytes);
+      if (bytes.length > 0) {
+        const p = wasm.lk_pop_push(s.h, bytes.length);
+        new Uint8Array(wasm.memory.buffer, p, bytes.length).set(bytes);
+      }
+      popDecode(m.id, s, m.done);
+      return;
+    }
+    case 'pop-level': {
+      const s = streams.get(m.id);
+      sendLevel(m.id, s, m.level, wasm.lk_pop_decode(s.h, -1), wasm.lk_pop_precision(s.h), 0);
+      return;
+    }
+    case 'mco-open': {
+      const bytes = new Uint8Array(m.bytes);
+      const p = wasm.lk_alloc(bytes.length);
+      new Uint8Array(wasm.memory.buffer, p, bytes.length).set(bytes);
+      const h = wasm.lk_mco_open(p, bytes.length);
+      wasm.lk_free(p, bytes.length);
+      if (h === 0) throw new Error(errorText());
+      models.set(m.id, h);
+      wasm.lk_mco_vertices(h);
+      const mesh = meshOf(h, true, false);
+      const b = new Float32Array(wasm.memory.buffer, wasm.lk_mco_bounds(h), 6).slice();
+      postMessage(
+        {
+          type: 'mco-model',
+          id: m.id,
+          maxLod: wasm.lk_mco_max_lod(h),
+          fullTriangles: wasm.lk_mco_full_triangles(h),
+          bounds: Array.from(b),
+          mesh,
+        },
+        transfers(mesh),
+      );
+      return;
+    }
+    case 'mco-view': {
+      const h = models.get(m.id);
+      const c = m.camera;
+      const t0 = performance.now();
+      const expanded = wasm.lk_mco_extract_view(
+        h,
+        c.position[0], c.position[1], c.position[2],
+        c.direction[0], c.direction[1], c.direction[2],
+        c.up[0], c.up[1], c.up[2],
+        c.vfov, c.viewportHeight, c.aspect,
+        m.tolerance,
+      );
+      mcoCut(m.id, m.seq, h, -1, expanded, performance.now() - t0);
+      return;
+    }
+    case 'mco-triangles': {
+      const h = models.get(m.id);
+      const t0 = performance.now();
+      const lod = wasm.lk_mco_extract_triangles(h, m.triangles);
+      mcoCut(m.id, m.seq, h, lod, -1, performance.now() - t0);
+      return;
+    }
+    case 'mco-lod': {
+      const h = models.get(m.id);
+      const t0 = performance.now();
+      const lod = wasm.lk_mco_extract_lod(h, m.lod);
+      mcoCut(m.id, m.seq, h, lod, -1, performance.now() - t0);
+      return;
+    }
+    case 'close': {
+      const s = streams.get(m.id);
+      if (s) wasm.lk_close(s.h);
+      streams.delete(m.id);
+      const h = models.get(m.id);
+      if (h) wasm.lk_close(h);
+      models.delete(m.id);
+      return;
+    }
+    default:
+      throw new Error(`unknown message ${m.type}`);
+  }
+}
+
+self.onmessage = (e) => {
+  try {
+    handle(e.data);
+  } catch (err) {
+    postMessage({ type: 'error', id: e.data.id, message: String(err && err.message ? err.message : err) });
+  }
+};

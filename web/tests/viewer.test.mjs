@@ -1,0 +1,191 @@
+// Browser tests of the viewer: for a .pop, a .mco, an LOD-chain .glb and a
+// plain mesh, the page shows the model with no console error, and its HUD
+// agrees with the CLI (triangle counts and buffer digests from
+// crates/wasm/examples/native.rs). Then the .pop streamed at 1 Mbit/s draws
+// its first level before a tenth of the stream is in, and a camera move
+// re-cuts the .mco.
+//
+// Environment (scripts/ci-web.sh sets it):
+//   LODKIT_WEB_SITE    the built viewer (scripts/build-web.sh)
+//   LODKIT_WEB_MODELS  the models (lodkit build output)
+//   LODKIT_WEB_REF     JSON from `native digest` (+ "ply_faces", "chain")
+//   LODKIT_WEB_BASE    a running server to test instead of the built-in one
+//                      (nginx, lodkit serve); models under /models/
+//   LODKIT_WEB_OUT     where screenshots and results go
+
+import fs from 'node:fs';
+import path from 'node:path';
+import { staticServer, launch, openPage, coverage, assert } from './lib.mjs';
+
+const env = (k) => {
+  const v = process.env[k];
+  if (!v) throw new Error(`${k} is not set (run scripts/ci-web.sh)`);
+  return v;
+};
+const ref = JSON.parse(fs.readFileSync(env('LODKIT_WEB_REF'), 'utf8'));
+const outDir = env('LODKIT_WEB_OUT');
+fs.mkdirSync(outDir, { recursive: true });
+
+const MIN_COVERAGE = 0.02; // a model framed in the view covers far more
+
+let server = null;
+let base = process.env.LODKIT_WEB_BASE;
+if (!base) {
+  server = await staticServer(path.resolve(env('LODKIT_WEB_SITE')), path.resolve(env('LODKIT_WEB_MODELS')));
+  base = server.url;
+}
+const browser = await launch();
+const results = { base, checks: [] };
+let failures = 0;
+
+// The listing probe answers 404 on a static server, by design.
+const expected404 = (page, errors) => errors.filter((e) => !/status of 404/.test(e.text) || !/\/api\/models$/.test(e.url));
+
+async function check(name, fn) {
+  const t0 = Date.now();
+  try {
+    const r = await fn();
+    results.checks.push({ name, ok: true, ms: Date.now() - t0, ...r });
+    console.log(`ok   ${name} ${JSON.stringify(r)}`);
+  } catch (e) {
+    failures++;
+    results.checks.push({ name, ok: false, ms: Date.now() - t0, error: String(e.stack || e) });
+    console.log(`FAIL ${name}: ${e.stack || e}`);
+  }
+}
+
+async function page() {
+  const { page, errors } = await openPage(browser.context);
+  const located = [];
+  page.on('console', (m) => {
+    if (m.type() === 'error') located.push({ text: m.text(), url: m.location().url || '' });
+  });
+  page.on('pageerror', (e) => located.push({ text: String(e), url: '' }));
+  return { page, errors: located, raw: errors };
+}
+
+async function openModel(url, shot) {
+  const { page: p, errors } = await page();
+  await p.goto(`${base}/?model=${encodeURIComponent(url)}`);
+  await p.waitForFunction(() => window.lodkitViewer && (window.lodkitViewer.state.complete || window.lodkitViewer.state.error), null, { timeout: 120000 });
+  // Let the last cut or level reach the screen.
+  await p.waitForTimeout(300);
+  await p.evaluate(() => window.lodkitViewer.render());
+  const state = await p.evaluate(() => window.lodkitViewer.state);
+  const cov = await coverage(p);
+  await p.screenshot({ path: path.join(outDir, shot) });
+  const bad = expected404(p, errors);
+  assert(!state.error, `viewer error: ${state.error}`);
+  assert(bad.length === 0, `console errors: ${JSON.stringify(bad)}`);
+  assert(cov > MIN_COVERAGE, `only ${(cov * 100).toFixed(2)} % of the canvas shows the model`);
+  return { p, state, cov };
+}
+
+const pop = `/models/${ref.files.pop}`;
+const mco = `/models/${ref.files.mco}`;
+const chain = `/models/${ref.files.chain}`;
+const plain = `/models/${ref.files.ply}`;
+
+await check('pop: streamed levels, finest level equals lodkit pop decode', async () => {
+  const { p, state, cov } = await openModel(pop, 'pop.png');
+  assert(state.level === ref.pop.level, `finest level ${state.level}, expected ${ref.pop.level}`);
+  assert(state.triangles === ref.pop.triangles, `HUD ${state.triangles} triangles, CLI ${ref.pop.triangles}`);
+  assert(state.digest === ref.pop.digest, `wasm digest ${state.digest}, native ${ref.pop.digest}`);
+  await p.close();
+  return { triangles: state.triangles, digest: state.digest, coverage: +cov.toFixed(3) };
+});
+
+await check('mco: budget cut equals lodkit mco extract --triangles', async () => {
+  const { p, state, cov } = await openModel(mco, 'mco.png');
+  const cut = await p.evaluate(async (n) => {
+    const s = await window.lodkitViewer.model.extractTriangles(n);
+    return { ...s };
+  }, ref.mco.budget);
+  assert(cut.triangles === ref.mco.triangles, `wasm ${cut.triangles} triangles, CLI ${ref.mco.triangles}`);
+  assert(cut.lod === ref.mco.lod, `wasm LOD ${cut.lod}, native ${ref.mco.lod}`);
+  assert(cut.digest === ref.mco.digest, `wasm digest ${cut.digest}, native ${ref.mco.digest}`);
+  await p.close();
+  return { viewTriangles: state.triangles, budgetTriangles: cut.triangles, digest: cut.digest, coverage: +cov.toFixed(3) };
+});
+
+await check('mco: a camera move changes the cut', async () => {
+  const { p, state } = await openModel(mco, 'mco-far.png');
+  const before = state.triangles;
+  const cuts = state.cuts;
+  await p.evaluate(() => {
+    const v = window.lodkitViewer;
+    const s = v.model.geometry.boundingSphere;
+    const c = s.center;
+    // Close up on one side: near nodes refine, the rest coarsens.
+    v.setCamera([c.x + s.radius * 0.6, c.y + s.radius * 0.2, c.z + s.radius * 0.6], [c.x, c.y, c.z]);
+  });
+  await p.waitForFunction((n) => window.lodkitViewer.state.cuts > n, cuts, { timeout: 30000 });
+  await p.waitForTimeout(200);
+  await p.evaluate(() => window.lodkitViewer.render());
+  const after = await p.evaluate(() => window.lodkitViewer.state.triangles);
+  await p.screenshot({ path: path.join(outDir, 'mco-near.png') });
+  assert(after !== before, `still ${after} triangles after the move`);
+  await p.close();
+  return { before, after };
+});
+
+await check('chain glb: levels switch by screen-space error', async () => {
+  const { p, state, cov } = await openModel(chain, 'chain.png');
+  const want = ref.chain.find((l) => l.level === state.level);
+  assert(want, `active level ${state.level} is not in lods.json`);
+  assert(state.triangles === want.triangles, `HUD ${state.triangles} triangles, lods.json ${want.triangles}`);
+  const far = await p.evaluate(() => {
+    const v = window.lodkitViewer;
+    const t = v.controls.target;
+    const d = v.camera.position.clone().sub(t).multiplyScalar(12).add(t);
+    v.setCamera(d.toArray(), t.toArray());
+    return { level: v.state.level, triangles: v.state.triangles };
+  });
+  await p.screenshot({ path: path.join(outDir, 'chain-far.png') });
+  assert(far.level > state.level, `level ${far.level} from afar, ${state.level} near`);
+  const wantFar = ref.chain.find((l) => l.level === far.level);
+  assert(wantFar && wantFar.triangles === far.triangles, `far level ${far.level}: HUD ${far.triangles}`);
+  await p.close();
+  return { near: state.level, far: far.level, coverage: +cov.toFixed(3) };
+});
+
+await check('plain ply shown as it is', async () => {
+  const { p, state, cov } = await openModel(plain, 'ply.png');
+  assert(state.triangles === ref.ply_faces, `HUD ${state.triangles} triangles, lodkit info ${ref.ply_faces}`);
+  await p.close();
+  return { triangles: state.triangles, coverage: +cov.toFixed(3) };
+});
+
+await check('pop at 1 Mbit/s: first level drawn before a tenth of the stream', async () => {
+  const { page: p, errors } = await page();
+  await p.goto(`${base}/`);
+  await p.waitForFunction(() => window.lodkitViewer && window.lodkitViewer.ready);
+  await p.evaluate(() => window.lodkitViewer.ready);
+  const cdp = await p.context().newCDPSession(p);
+  await cdp.send('Network.enable');
+  // The earlier checks loaded the same stream: fetch it again, over the throttle.
+  await cdp.send('Network.setCacheDisabled', { cacheDisabled: true });
+  await cdp.send('Network.emulateNetworkConditions', {
+    offline: false,
+    latency: 20,
+    downloadThroughput: 1e6 / 8,
+    uploadThroughput: 1e6 / 8,
+  });
+  await p.evaluate((u) => window.lodkitViewer.open(u), pop);
+  await p.waitForFunction(() => window.lodkitViewer.state.complete || window.lodkitViewer.state.error, null, { timeout: 120000 });
+  await p.waitForTimeout(200);
+  const s = await p.evaluate(() => window.lodkitViewer.state);
+  await p.screenshot({ path: path.join(outDir, 'pop-throttled.png') });
+  const bad = expected404(p, errors);
+  assert(bad.length === 0, `console errors: ${JSON.stringify(bad)}`);
+  const shown = s.levelsShown.map((l) => ({ level: l.level, bits: l.precision, bytes: l.bytesUsed, tris: l.triangles, ms: +l.latencyMs.toFixed(1) }));
+  assert(s.firstDrawLoaded > 0 && s.firstDrawLoaded < s.total / 10, `first level drawn at ${s.firstDrawLoaded} of ${s.total} bytes (shown: ${JSON.stringify(shown)})`);
+  await p.close();
+  return { firstDrawBytes: s.firstDrawLoaded, total: s.total, shown };
+});
+
+await browser.close();
+if (server) await server.close();
+fs.writeFileSync(path.join(outDir, 'results.json'), JSON.stringify(results, null, 2));
+console.log(`${results.checks.length - failures} of ${results.checks.length} browser checks passed (${base})`);
+process.exit(failures ? 1 : 0);

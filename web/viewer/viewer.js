@@ -1,0 +1,448 @@
+// The lodkit viewer: one page for the three LOD forms and plain meshes.
+//   ?model=URL            the model to open (kind from its extension, or &kind=)
+//   GET /api/models       the server's listing (lodkit serve), if there is one
+// The HUD's figures are on window.lodkitViewer.state (the browser tests read
+// them there).
+
+import * as THREE from 'three';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
+import { PLYLoader } from 'three/addons/loaders/PLYLoader.js';
+import { PopLoader, McoModel, wasmModule } from './lodkit/index.js';
+
+// The LOD-chain switch uses a level's mean edge length as its error; an
+// edge this many times the pixel tolerance on screen is still accepted
+// (edges are longer than the geometric deviation they cause).
+const CHAIN_EDGE_PER_PX = 4;
+
+const $ = (id) => document.getElementById(id);
+const view = $('view');
+const renderer = new THREE.WebGLRenderer({ antialias: false, preserveDrawingBuffer: true });
+renderer.setPixelRatio(window.devicePixelRatio || 1);
+renderer.setClearColor(0x20232a);
+view.appendChild(renderer.domElement);
+const scene = new THREE.Scene();
+scene.add(new THREE.HemisphereLight(0xffffff, 0x404050, 1.6));
+const sun = new THREE.DirectionalLight(0xffffff, 1.8);
+sun.position.set(1, 2, 1.5);
+scene.add(sun);
+const camera = new THREE.PerspectiveCamera(45, 1, 0.001, 1000);
+scene.add(camera);
+const controls = new OrbitControls(camera, renderer.domElement);
+controls.addEventListener('change', () => requestRender());
+
+const state = {
+  kind: '',
+  url: '',
+  loaded: 0,
+  total: 0,
+  level: -1, // .pop level, chain level (1 = finest), .mco LOD number
+  levels: 0,
+  precision: -1,
+  triangles: 0,
+  decodeMs: 0,
+  frameMs: 0,
+  frames: 0,
+  tolerance: 1,
+  wireframe: false,
+  firstDrawLoaded: -1, // bytes received when the model was first drawn
+  firstDrawMs: -1,
+  levelsShown: [], // .pop: {level, precision, triangles, bytesUsed, latencyMs}
+  cuts: 0,
+  digest: '',
+  complete: false,
+  error: '',
+};
+const viewer = {
+  state,
+  scene,
+  camera,
+  renderer,
+  controls,
+  model: null,
+  ready: null,
+  render: () => renderNow(),
+  /** Opens a model (what ?model= does). */
+  open: (url, kind) => open(url, kind),
+  /** Puts the camera at `position` looking at `target` and draws a frame. */
+  setCamera(position, target) {
+    camera.position.fromArray(position);
+    controls.target.fromArray(target);
+    controls.update();
+    renderNow();
+  },
+};
+window.lodkitViewer = viewer;
+
+window.addEventListener('error', (e) => showError(e.message));
+window.addEventListener('unhandledrejection', (e) => showError(String(e.reason && e.reason.message ? e.reason.message : e.reason)));
+
+function showError(msg) {
+  state.error = msg;
+  $('error').textContent = msg;
+  console.error(msg);
+}
+
+function resize() {
+  const w = view.clientWidth || 800;
+  const h = view.clientHeight || 600;
+  renderer.setSize(w, h, false);
+  camera.aspect = w / h;
+  camera.updateProjectionMatrix();
+  requestRender();
+}
+window.addEventListener('resize', resize);
+
+let renderQueued = false;
+function requestRender() {
+  if (renderQueued) return;
+  renderQueued = true;
+  requestAnimationFrame(() => {
+    renderQueued = false;
+    renderNow();
+  });
+}
+
+let onFrame = null; // per-kind work before each frame (cuts, level switch)
+let afterFrame = null;
+function renderNow() {
+  if (onFrame) onFrame();
+  const t0 = performance.now();
+  renderer.render(scene, camera);
+  state.frameMs = performance.now() - t0;
+  state.frames += 1;
+  if (afterFrame) afterFrame();
+  hud();
+}
+
+function fmtBytes(n) {
+  if (n >= 1 << 20) return `${(n / (1 << 20)).toFixed(2)} MiB`;
+  if (n >= 1 << 10) return `${(n / (1 << 10)).toFixed(1)} KiB`;
+  return `${n} B`;
+}
+
+function hud() {
+  const lines = [
+    `${state.kind || '-'}  ${state.url.split('/').pop()}`,
+    `bytes     ${fmtBytes(state.loaded)} / ${fmtBytes(state.total)}`,
+  ];
+  if (state.kind === 'pop') lines.push(`level     ${state.level} of ${state.levels ? state.levels - 1 : '?'}  (${state.precision} bits)`);
+  if (state.kind === 'mco') lines.push(state.level >= 0 ? `LOD       ${state.level}` : `view cut  ${state.expanded} nodes refined`);
+  if (state.kind === 'chain') lines.push(`level     ${state.level} of ${state.levels} (lod${state.level})`);
+  lines.push(`triangles ${state.triangles.toLocaleString('en')}`);
+  lines.push(`decode    ${state.decodeMs.toFixed(1)} ms`);
+  lines.push(`frame     ${state.frameMs.toFixed(1)} ms`);
+  $('hud').textContent = lines.join('\n');
+}
+
+// Frames the camera on a bounding sphere (once per model).
+function frameSphere(sphere) {
+  const r = sphere.radius || 1;
+  const dist = r / Math.sin((camera.fov * Math.PI) / 360) * 1.1;
+  controls.target.copy(sphere.center);
+  camera.position.copy(sphere.center).add(new THREE.Vector3(0, r * 0.15, dist));
+  camera.near = dist / 100;
+  camera.far = dist * 100;
+  camera.updateProjectionMatrix();
+  controls.update();
+  requestRender();
+}
+
+function setWireframe(obj, on) {
+  obj.traverse((o) => {
+    if (o.material) for (const m of [o.material].flat()) m.wireframe = on;
+  });
+}
+
+function kindOf(url, given) {
+  if (given) return given;
+  const ext = url.split('?')[0].split('.').pop().toLowerCase();
+  return { pop: 'pop', mco: 'mco', glb: 'glb', gltf: 'glb', ply: 'ply' }[ext] || ext;
+}
+
+// Total size from a HEAD request, for the HUD while a whole-file loader runs.
+async function headSize(url) {
+  try {
+    const r = await fetch(url, { method: 'HEAD' });
+    return Number(r.headers.get('content-length')) || 0;
+  } catch {
+    return 0;
+  }
+}
+
+// One loader (one worker) for the page, started with the page.
+const popLoader = new PopLoader();
+
+async function openPop(url) {
+  const loader = popLoader.preload();
+  viewer.loader = loader;
+  let framed = false;
+  let pending = null; // the refinement waiting for its first frame
+  return new Promise((resolve, reject) => {
+    const mesh = loader.load(
+      url,
+      () => {},
+      (p) => {
+        state.loaded = p.loaded;
+        state.total = p.total;
+        hud();
+      },
+      (err) => reject(err),
+    );
+    viewer.model = mesh;
+    scene.add(mesh);
+    const s = mesh.userData.pop;
+    mesh.addEventListener('level', () => {
+      Object.assign(state, { level: s.level, levels: s.levels, precision: s.precision, triangles: s.triangles, decodeMs: s.decodeMs + s.triangulateMs, digest: s.digest });
+      setWireframe(mesh, state.wireframe);
+      pending = s.history[s.history.length - 1];
+      if (!framed) {
+        framed = true;
+        frameSphere(mesh.geometry.boundingSphere);
+      }
+      renderNow();
+    });
+    afterFrame = () => {
+      if (!pending) return;
+      // The level is on screen once the GPU has drawn this frame.
+      const f0 = performance.now();
+      renderer.getContext().finish();
+      const now = performance.now();
+      pending.finishMs = now - f0;
+      pending.frameMs = state.frameMs;
+      pending.shownAt = now;
+      state.levelsShown.push({
+        level: pending.level,
+        precision: pending.precision,
+        triangles: pending.triangles,
+        bytesUsed: pending.bytesUsed,
+        latencyMs: now - pending.receivedAt,
+      });
+      if (state.firstDrawLoaded < 0 && pending.triangles > 0) {
+        state.firstDrawLoaded = s.loaded;
+        state.firstDrawMs = now;
+      }
+      pending = null;
+    };
+    s.done.then(() => {
+      state.complete = true;
+      state.loaded = s.loaded;
+      state.total = s.total;
+      hud();
+      resolve();
+    }, reject);
+  });
+}
+
+async function openMco(url) {
+  const model = await McoModel.load(url, {
+    tolerance: state.tolerance,
+    onProgress: (p) => {
+      state.loaded = p.loaded;
+      state.total = p.total;
+      hud();
+    },
+  });
+  viewer.model = model;
+  scene.add(model);
+  const b = model.bounds;
+  const box = new THREE.Box3(new THREE.Vector3(b[0], b[1], b[2]), new THREE.Vector3(b[3], b[4], b[5]));
+  viewer.bounds = box;
+  frameSphere(model.geometry.boundingSphere);
+  model.addEventListener('cut', () => {
+    const m = model.state;
+    Object.assign(state, { level: m.lod, expanded: m.expanded, triangles: m.triangles, decodeMs: m.cutMs, cuts: m.cuts, digest: m.digest });
+    setWireframe(model, state.wireframe);
+    requestRender();
+  });
+  onFrame = () => {
+    model.tolerance = state.tolerance;
+    model.update(camera, renderer);
+  };
+  state.complete = true;
+  requestRender();
+}
+
+function triangleCount(g) {
+  return (g.index ? g.index.count : g.attributes.position.count) / 3;
+}
+
+function surfaceArea(g) {
+  const p = g.attributes.position;
+  const idx = g.index;
+  const n = triangleCount(g);
+  const a = new THREE.Vector3(), b = new THREE.Vector3(), c = new THREE.Vector3();
+  let area = 0;
+  for (let t = 0; t < n; t++) {
+    const i = idx ? idx.getX(3 * t) : 3 * t, j = idx ? idx.getX(3 * t + 1) : 3 * t + 1, k = idx ? idx.getX(3 * t + 2) : 3 * t + 2;
+    a.fromBufferAttribute(p, i);
+    b.fromBufferAttribute(p, j).sub(a);
+    c.fromBufferAttribute(p, k).sub(a);
+    area += b.cross(c).length() / 2;
+  }
+  return area;
+}
+
+async function openGlb(url) {
+  const gltf = await new GLTFLoader().loadAsync(url, (p) => {
+    state.loaded = p.loaded;
+    state.total = p.total || state.total;
+    hud();
+  });
+  const root = gltf.scene;
+  scene.add(root);
+  viewer.model = root;
+  const meshes = [];
+  root.traverse((o) => {
+    if (o.isMesh) meshes.push(o);
+  });
+  const chain = meshes
+    .map((m) => ({ mesh: m, n: /_lod(\d+)(?!\d)/i.exec(m.name || (m.parent && m.parent.name) || '') }))
+    .filter((e) => e.n);
+  const box = new THREE.Box3().setFromObject(root);
+  const sphere = box.getBoundingSphere(new THREE.Sphere());
+  if (chain.length >= 2 && chain.length === meshes.length) {
+    state.kind = 'chain';
+    // Finest first; each level's error is its mean edge length.
+    const levels = chain
+      .map((e) => {
+        const g = e.mesh.geometry;
+        const tris = triangleCount(g);
+        return { mesh: e.mesh, number: Number(e.n[1]), tris, edge: Math.sqrt((4 * surfaceArea(g)) / Math.sqrt(3) / Math.max(tris, 1)) };
+      })
+      .sort((x, y) => y.tris - x.tris);
+    viewer.chain = levels;
+    state.levels = levels.length;
+    onFrame = () => {
+      const d = Math.max(camera.position.distanceTo(sphere.center) - sphere.radius, sphere.radius * 0.05);
+      const pxPerUnit = renderer.domElement.height / (2 * d * Math.tan((camera.fov * Math.PI) / 360) / (camera.zoom || 1));
+      // The coarsest level whose edges stay under the tolerance on screen.
+      let pick = levels[0];
+      for (const l of levels) if (l.edge * pxPerUnit <= state.tolerance * CHAIN_EDGE_PER_PX) pick = l;
+      for (const l of levels) l.mesh.visible = l === pick;
+      state.level = pick.number;
+      state.triangles = pick.tris;
+    };
+  } else {
+    state.kind = 'glb';
+    state.triangles = meshes.reduce((s, m) => s + triangleCount(m.geometry), 0);
+  }
+  setWireframe(root, state.wireframe);
+  frameSphere(sphere);
+  state.complete = true;
+}
+
+async function openPly(url) {
+  const g = await new PLYLoader().loadAsync(url, (p) => {
+    state.loaded = p.loaded;
+    state.total = p.total || state.total;
+    hud();
+  });
+  if (!g.attributes.normal) g.computeVertexNormals();
+  const colours = !!g.attributes.color;
+  const mat = new THREE.MeshStandardMaterial({ color: colours ? 0xffffff : 0xd8d0c0, vertexColors: colours, roughness: 0.8 });
+  const mesh = new THREE.Mesh(g, mat);
+  scene.add(mesh);
+  viewer.model = mesh;
+  state.triangles = triangleCount(g);
+  g.computeBoundingSphere();
+  frameSphere(g.boundingSphere);
+  setWireframe(mesh, state.wireframe);
+  state.complete = true;
+}
+
+async function open(url, kind) {
+  Object.assign(state, { url, kind: kindOf(url, kind), loaded: 0, total: 0 });
+  const t0 = performance.now();
+  headSize(url).then((n) => {
+    if (!state.total) state.total = n;
+  });
+  const openers = { pop: openPop, mco: openMco, glb: openGlb, ply: openPly };
+  const opener = openers[state.kind];
+  if (!opener) throw new Error(`${url}: cannot show a .${state.kind} file`);
+  await opener(url);
+  if (state.kind !== 'pop') state.decodeMs = state.decodeMs || performance.now() - t0;
+  if (state.firstDrawLoaded < 0) {
+    state.firstDrawLoaded = state.loaded;
+    state.firstDrawMs = performance.now();
+  }
+  renderNow();
+}
+
+async function listModels() {
+  try {
+    const r = await fetch('/api/models');
+    if (!r.ok || !(r.headers.get('content-type') || '').includes('json')) return [];
+    const list = await r.json();
+    return Array.isArray(list) ? list : [];
+  } catch {
+    return [];
+  }
+}
+
+function controlsUi() {
+  $('tolerance').addEventListener('input', (e) => {
+    state.tolerance = Number(e.target.value);
+    $('tolerance-value').textContent = `${state.tolerance} px`;
+    requestRender();
+  });
+  $('wireframe').addEventListener('change', (e) => {
+    state.wireframe = e.target.checked;
+    if (viewer.model) setWireframe(viewer.model, state.wireframe);
+    requestRender();
+  });
+}
+
+// Draws the loaders' material (plain and with vertex colours) once before
+// any model arrives, so that the first level is not kept off the screen by
+// shader compilation (a software GL such as SwiftShader also compiles its
+// draw routines on the first draw).
+function warmShaders() {
+  const warm = new THREE.Scene();
+  warm.add(...scene.children.filter((o) => o.isLight).map((l) => l.clone()));
+  for (const vertexColors of [false, true]) {
+    const g = new THREE.BufferGeometry();
+    g.setAttribute('position', new THREE.Float32BufferAttribute([0, 0, -2, 1, 0, -2, 0, 1, -2], 3));
+    g.setAttribute('normal', new THREE.Float32BufferAttribute([0, 0, 1, 0, 0, 1, 0, 0, 1], 3));
+    if (vertexColors) g.setAttribute('color', new THREE.Uint8BufferAttribute([255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255], 4, true));
+    warm.add(new THREE.Mesh(g, new THREE.MeshStandardMaterial({ roughness: 0.8, metalness: 0.0, side: THREE.DoubleSide, vertexColors })));
+  }
+  renderer.render(warm, camera);
+  renderer.getContext().finish();
+  for (const m of warm.children) if (m.isMesh) m.geometry.dispose();
+}
+
+async function main() {
+  resize();
+  warmShaders();
+  // The decoders download while the page sets up (shared by all models).
+  wasmModule().catch(() => {});
+  popLoader.preload();
+  controlsUi();
+  resize();
+  const params = new URLSearchParams(location.search);
+  const models = await listModels();
+  let url = params.get('model');
+  if (models.length) {
+    const sel = $('models');
+    for (const m of models) {
+      const o = document.createElement('option');
+      o.value = m.url;
+      o.textContent = `${m.name} (${m.kind}, ${fmtBytes(m.bytes)})`;
+      sel.appendChild(o);
+    }
+    $('models-row').hidden = false;
+    if (!url) url = (models.find((m) => m.kind === 'pop') || models[0]).url;
+    sel.value = url;
+    sel.addEventListener('change', () => {
+      location.search = `?model=${encodeURIComponent(sel.value)}`;
+    });
+  }
+  if (!url) {
+    $('error').textContent = 'No model: open ?model=URL (a .pop, .mco, .glb or .ply).';
+    return;
+  }
+  await open(url, params.get('kind'));
+}
+
+viewer.ready = main().catch((e) => showError(String(e && e.message ? e.message : e)));
