@@ -19,7 +19,7 @@
 use std::time::Instant;
 
 use glam::Vec3;
-use lodkit_mco::{Camera, model_file};
+use lodkit_mco::{Camera, McoModel};
 use lodkit_particles::{DecodeOptions, TriangulateOptions, decode, triangulate};
 use lodkit_wasm::digest;
 
@@ -59,11 +59,11 @@ fn main() {
             let pop = std::fs::read(&args[1]).expect("readable .pop");
             let level: u8 = args[2].parse().expect("a level number");
             let (pop_tris, pop_digest) = pop_level(&pop, Some(level));
-            let model = model_file::load(args[3].as_ref()).expect("a valid .mco");
+            let model = McoModel::load(args[3].as_ref()).expect("a valid .mco");
             let budget: usize = args[4].parse().expect("a triangle budget");
             let mut idx = Vec::new();
             let lod = model.extract_triangles(budget, &mut idx);
-            let mco_digest = digest(&idx, &model.vertices.positions);
+            let mco_digest = digest(&idx, model.positions());
             println!(
                 "{{\"pop\":{{\"level\":{level},\"triangles\":{pop_tris},\"digest\":\"{pop_digest:016x}\"}},\"mco\":{{\"budget\":{budget},\"lod\":{lod},\"triangles\":{},\"digest\":\"{mco_digest:016x}\"}}}}",
                 idx.len() / 3
@@ -100,12 +100,12 @@ fn main() {
             );
         }
         Some("time-mco") => {
-            let model = model_file::load(args[1].as_ref()).expect("a valid .mco");
+            let model = McoModel::load(args[1].as_ref()).expect("a valid .mco");
             let budget: usize = args[2].parse().expect("a triangle budget");
             let rounds: usize = args
                 .get(3)
                 .map_or(20, |r| r.parse().expect("a round count"));
-            let (lo, hi) = model.node_box(0);
+            let (lo, hi) = model.bounds();
             // The tolerance that gives about `budget` triangles at this view.
             let cam = camera_for(lo, hi, 1.5);
             let mut idx = Vec::new();

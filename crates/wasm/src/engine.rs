@@ -4,7 +4,7 @@
 //! only the crates' high-level entry points: `lodkit_particles::{decode,
 //! DecodeOptions, triangulate, TriangulateOptions}`, `Decoded::surface`, the
 //! `.pop` container reader, and `lodkit_mco::{McoModel, Camera}` with
-//! `model_file::decode`. When those APIs move, this file is the only one to
+//! `McoModel::from_bytes`. When those APIs move, this file is the only one to
 //! re-point.
 //!
 //! `.pop` prefixes: a stream arriving over the network is cut at the end of
@@ -15,7 +15,7 @@
 
 use glam::Vec3;
 use lodkit_mco::{Camera, McoModel};
-use lodkit_particles::container::{ChunkKind, ChunkReader, HEADER_LEN, read_header};
+use lodkit_particles::{ChunkKind, ChunkReader, HEADER_LEN, read_header};
 use lodkit_particles::{DecodeOptions, Decoded, TriangulateOptions};
 
 /// A mesh ready to be copied into GPU buffers: positions (and normals,
@@ -146,16 +146,15 @@ pub fn pop_precision(d: &Decoded) -> u8 {
 
 /// Loads a whole `.mco` file held in memory.
 pub fn mco_load(bytes: &[u8]) -> Result<McoModel, String> {
-    lodkit_mco::model_file::decode(bytes)
+    McoModel::from_bytes(bytes).map_err(|e| e.to_string())
 }
 
 /// The model's whole vertex buffer (every cut indexes into it).
 pub fn mco_vertices(m: &McoModel) -> MeshOut {
-    let vb = &m.vertices;
     MeshOut {
-        positions: vb.positions.clone(),
-        normals: Some(vb.normals.clone()),
-        colors: m.has_colors.then(|| vb.colors.clone()),
+        positions: m.positions().to_vec(),
+        normals: Some(m.normals().to_vec()),
+        colors: m.has_colors().then(|| m.colors().to_vec()),
         indices: Vec::new(),
     }
 }
@@ -172,7 +171,7 @@ pub fn mco_full_triangles(m: &McoModel) -> usize {
 
 /// The model's bounding cube as (min corner, max corner).
 pub fn mco_bounds(m: &McoModel) -> (Vec3, Vec3) {
-    m.node_box(0)
+    m.bounds()
 }
 
 /// Index buffer at LOD number `k` (clamped to the highest).
