@@ -41,6 +41,7 @@
 
 pub(crate) mod header;
 mod read;
+mod sources;
 mod write;
 
 #[cfg(test)]
