@@ -253,7 +253,6 @@ fn as_points(m: &Model) -> PointCloud {
 }
 
 /// Writes a model to `path` (format from the extension), atomically.
-#[cfg(not(target_arch = "wasm32"))]
 pub fn save(path: &Path, model: &Model, opts: WriteOptions) -> Result<()> {
     let format = Format::from_path(path).ok_or_else(|| {
         Error::unsupported(
@@ -266,9 +265,18 @@ pub fn save(path: &Path, model: &Model, opts: WriteOptions) -> Result<()> {
 }
 
 /// Writes a mesh to `path`, atomically.
-#[cfg(not(target_arch = "wasm32"))]
 pub fn save_mesh(path: &Path, mesh: &TriMesh, opts: WriteOptions) -> Result<()> {
     save(path, &Model::Mesh(mesh.clone()), opts)
+}
+
+/// On `wasm32` there is no file system to write to (the browser build
+/// only reads bytes it is given): every write is refused with one line.
+#[cfg(target_arch = "wasm32")]
+pub fn write_atomic(path: &Path, _bytes: &[u8]) -> Result<()> {
+    Err(Error::unsupported(
+        path,
+        "writing files is not available on wasm32",
+    ))
 }
 
 /// Writes `bytes` to a temp file beside `path`, syncs it and renames it
