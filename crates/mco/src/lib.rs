@@ -18,6 +18,7 @@
 //! | view-dependent extraction | `view_dependent.rs` | §8.2 (future work) |
 //! | virtual range scanner | `scanner.rs` | §4.4 (the experiment) |
 //! | `.mco` files | `model_file.rs` | — (`docs/formats/mco.md`) |
+//! | `.mco` version 2: LOD-ordered chunks, prefix reader | `model_file_v2.rs` | — (`docs/formats/mco.md`) |
 //! | entry points, incremental builder | `pipeline.rs` | §4.4 |
 //! | `lodkit build`'s continuous-LOD section | `evaluate.rs` | §4.4, §6.3 |
 //!
@@ -47,6 +48,7 @@ pub mod marching_cubes;
 pub mod mc_table;
 pub mod model;
 pub mod model_file;
+pub mod model_file_v2;
 pub mod neighbours;
 pub mod normals_estimation;
 pub mod octree_build;
@@ -57,6 +59,7 @@ pub mod signed_distance;
 pub mod view_dependent;
 
 pub use model::McoModel;
+pub use model_file_v2::{McoStream, PartialModel};
 pub use pipeline::{
     IncrementalBuilder, Options, build_from_mesh, build_from_models, build_from_range_images,
 };

@@ -1,6 +1,8 @@
 //! `.mco` files: a built marching cube octree, saved and loaded as flat
 //! arrays. The byte layout is specified in `docs/formats/mco.md`
-//! (version 1); this module is its only reader and writer.
+//! (version 1); this module is its only reader and writer. [`save`] writes
+//! version 2 ([`crate::model_file_v2`], the compact, streamable layout);
+//! [`decode`] and [`load`] read both versions.
 //!
 //! Reading is defensive: the file size must equal the size the header's
 //! counts imply (checked in 64-bit arithmetic before anything is
@@ -20,7 +22,7 @@ use crate::{Error, Result};
 
 /// File signature.
 pub const MAGIC: [u8; 8] = *b"LODKMCO\0";
-/// The format version this code writes and reads.
+/// The format version [`encode`] writes (version 1, the flat arrays).
 pub const VERSION: u32 = 1;
 /// Bytes before the arrays.
 pub const HEADER_BYTES: usize = 8 + 4 + 4 + 12 + 4 + 4 + 4 + 8 + 8 + 8 + 9 * 4;
@@ -169,8 +171,12 @@ impl Reader<'_> {
     }
 }
 
-/// Parses `.mco` bytes; the error says what is wrong (no path).
+/// Parses `.mco` bytes of version 1 or 2; the error says what is wrong
+/// (no path).
 pub fn decode(bytes: &[u8]) -> std::result::Result<McoModel, String> {
+    if crate::model_file_v2::file_version(bytes) == Some(crate::model_file_v2::VERSION) {
+        return crate::model_file_v2::decode(bytes);
+    }
     if bytes.len() < HEADER_BYTES + 4 {
         return Err(format!(
             "not an .mco file: {} bytes, shorter than the {}-byte header",
@@ -185,7 +191,7 @@ pub fn decode(bytes: &[u8]) -> std::result::Result<McoModel, String> {
     let version = r.u32()?;
     if version != VERSION {
         return Err(format!(
-            "unsupported .mco version {version} (this lodkit reads version {VERSION})"
+            "unsupported .mco version {version} (this lodkit reads versions 1 and 2)"
         ));
     }
     let flags = r.u32()?;
@@ -310,7 +316,7 @@ pub fn decode(bytes: &[u8]) -> std::result::Result<McoModel, String> {
 }
 
 /// Every index extraction follows must be in range.
-fn validate(m: &McoModel) -> std::result::Result<(), String> {
+pub(crate) fn validate(m: &McoModel) -> std::result::Result<(), String> {
     let (v, n) = (m.vertices.len() as u64, m.nodes.len() as u64);
     if n == 0 {
         return Err("the model has no nodes".into());
@@ -386,9 +392,10 @@ fn validate(m: &McoModel) -> std::result::Result<(), String> {
     Ok(())
 }
 
-/// Writes `model` to `path` atomically.
+/// Writes `model` to `path` atomically, as version 2
+/// ([`crate::model_file_v2::encode`]).
 pub fn save(path: &Path, model: &McoModel) -> Result<()> {
-    lodkit_mesh::io::write_atomic(path, &encode(model))?;
+    lodkit_mesh::io::write_atomic(path, &crate::model_file_v2::encode(model))?;
     Ok(())
 }
 
@@ -433,7 +440,7 @@ mod tests {
         assert_eq!(back, m);
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("s.mco");
-        save(&path, &m).unwrap();
+        std::fs::write(&path, &bytes).unwrap();
         assert_eq!(load(&path).unwrap(), m);
     }
 

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand};
 use lodkit_mco::pipeline::{IncrementalBuilder, Options, grid_for, samples_of};
-use lodkit_mco::{Camera, McoModel, model_file};
+use lodkit_mco::{Camera, McoModel, model_file, model_file_v2};
 use lodkit_mesh::glam::Vec3;
 use lodkit_mesh::io::{WriteOptions, save_mesh};
 use lodkit_mesh::{Model, RangeImage};
@@ -224,8 +224,25 @@ struct LevelRow {
 }
 
 #[derive(Serialize)]
+struct ChunkRow {
+    offset: u64,
+    bytes: u64,
+    first_lod: u32,
+    last_lod: u32,
+    nodes: u32,
+    vertices: u32,
+    triangles: u32,
+}
+
+#[derive(Serialize)]
 struct Info {
     file: String,
+    /// `.mco` format version (1: flat arrays, 2: LOD-ordered chunks).
+    version: u32,
+    file_bytes: u64,
+    /// Version 2: the chunks in file order (a prefix through chunk `c`
+    /// serves LOD numbers up to its `last_lod`).
+    chunks: Vec<ChunkRow>,
     resolution: u32,
     cube: f32,
     depth: u32,
@@ -242,8 +259,30 @@ struct Info {
 
 fn info(_ui: &Ui, path: &Path, json: bool) -> Result<()> {
     let m = model_file::load(path)?;
+    let bytes = std::fs::read(path).with_context(|| path.display().to_string())?;
+    let version = model_file_v2::file_version(&bytes).unwrap_or(0);
+    let chunks = if version == model_file_v2::VERSION {
+        model_file_v2::chunk_table(&bytes)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?
+            .into_iter()
+            .map(|c| ChunkRow {
+                offset: c.offset,
+                bytes: c.bytes,
+                first_lod: c.first_lod,
+                last_lod: c.last_lod,
+                nodes: c.nodes,
+                vertices: c.vertices,
+                triangles: c.triangle_indices / 3,
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
     let info = Info {
         file: path.display().to_string(),
+        version,
+        file_bytes: bytes.len() as u64,
+        chunks,
         resolution: m.grid.resolution,
         cube: m.grid.cube,
         depth: m.grid.depth,
@@ -271,6 +310,16 @@ fn info(_ui: &Ui, path: &Path, json: bool) -> Result<()> {
     }
     crate::outln!("file: {}", info.file)?;
     crate::outln!(
+        "format: version {}, {} bytes{}",
+        info.version,
+        info.file_bytes,
+        if info.chunks.is_empty() {
+            String::new()
+        } else {
+            format!(" in {} chunks", info.chunks.len())
+        }
+    )?;
+    crate::outln!(
         "lattice: resolution {}, cube {:.6}, octree depth {}",
         info.resolution,
         info.cube,
@@ -288,14 +337,36 @@ fn info(_ui: &Ui, path: &Path, json: bool) -> Result<()> {
         info.lod_numbers
     )?;
     crate::outln!("triangles at full resolution: {}", info.full_triangles)?;
-    crate::outln!(
-        "built from {} samples in {:.3} s",
-        info.input_samples,
-        info.build_seconds
-    )?;
+    if info.version == 1 {
+        crate::outln!(
+            "built from {} samples in {:.3} s",
+            info.input_samples,
+            info.build_seconds
+        )?;
+    } else {
+        // Version 2 stores no wall time (the file is byte-identical for
+        // the same input).
+        crate::outln!("built from {} samples", info.input_samples)?;
+    }
     crate::outln!("level  nodes  triangles (0 = leaf cubes)")?;
     for r in &info.levels {
         crate::outln!("{:>5}  {:>5}  {:>9}", r.level, r.nodes, r.triangles)?;
+    }
+    if !info.chunks.is_empty() {
+        crate::outln!("chunk     offset     bytes  LOD numbers      nodes  vertices  triangles")?;
+        for (i, c) in info.chunks.iter().enumerate() {
+            crate::outln!(
+                "{:>5} {:>10} {:>9}  {:>5}..={:<5} {:>8} {:>9} {:>10}",
+                i,
+                c.offset,
+                c.bytes,
+                c.first_lod,
+                c.last_lod,
+                c.nodes,
+                c.vertices,
+                c.triangles
+            )?;
+        }
     }
     Ok(())
 }

@@ -1,0 +1,37 @@
+//! `.mco` version 2 on the shipped bunny: no larger than the bunny's binary
+//! PLY, a first chunk of a few kilobytes, and a whole file that reads back
+//! with the in-memory model's LOD numbers and triangle counts.
+
+use std::path::Path;
+
+use lodkit_mco::model_file_v2::{self, FIRST_CHUNK_BYTES};
+use lodkit_mco::pipeline::{Options, build_from_mesh};
+
+#[test]
+fn bunny_v2_is_no_larger_than_its_binary_ply() {
+    let ply = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/models/stanford_bunny.ply");
+    let ply_bytes = std::fs::metadata(&ply).unwrap().len();
+    let mesh = lodkit_mesh::io::load_mesh(&ply).unwrap();
+    let model = build_from_mesh(&mesh, &Options::default()).unwrap();
+    let bytes = model_file_v2::encode(&model);
+    let v1 = lodkit_mco::model_file::encode(&model).len();
+    let chunks = model_file_v2::chunk_table(&bytes).unwrap();
+    eprintln!(
+        "bunny from its mesh: v2 {} bytes, v1 {v1}, PLY {ply_bytes}; {} chunks: {:?}",
+        bytes.len(),
+        chunks.len(),
+        chunks
+            .iter()
+            .map(|c| (c.bytes, c.last_lod))
+            .collect::<Vec<_>>()
+    );
+    assert!(
+        bytes.len() as u64 <= ply_bytes,
+        "{} > {ply_bytes}",
+        bytes.len()
+    );
+    assert!(chunks[0].bytes <= 2 * FIRST_CHUNK_BYTES as u64);
+    let back = model_file_v2::decode(&bytes).unwrap();
+    assert_eq!(back.max_lod(), model.max_lod());
+    assert_eq!(back.acc, model.acc);
+}
