@@ -2,7 +2,8 @@
 //! compact, and readable from any prefix (`docs/formats/mco.md`).
 //!
 //! **Layout.** A 104-byte header (lattice, totals, its own CRC), then
-//! chunks, each `[u32 payload length][u32 CRC-32 of the payload][payload]`.
+//! chunks, each `[u32 stored length][u32 CRC-32][u32 payload length]`
+//! and the payload, deflated (`miniz_oxide`) or stored as it is.
 //! Chunk `c` carries the LOD steps `K[c-1] + 1 ..= K[c]` (chunk 0 also the
 //! root, LOD number 0): for each step, the nodes it expands (their metric,
 //! balance dependencies and child count) and the records of the children
@@ -36,7 +37,8 @@
 //! [`position_error`]), normals octahedral with 2 × 16 bits, colours stored
 //! only when meaningful, indices as LEB128 varints relative to the running
 //! vertex count (0 = a new vertex), node records 3 bytes plus their
-//! triangles and patches. The accumulation table is not stored: it is
+//! triangles and patches; each payload then deflated (a quarter smaller on
+//! the bunny). The accumulation table is not stored: it is
 //! recomputed from the triangle counts, so it always agrees with them.
 //!
 //! **Reading is defensive.** Every count is checked against the bytes left
@@ -56,8 +58,17 @@ use crate::signed_distance::{Grid, KEY_BITS, NO_COLOR};
 pub const VERSION: u32 = 2;
 /// Bytes of the header, its CRC included.
 pub const HEADER_BYTES: usize = 104;
-/// Bytes before each chunk's payload (length and CRC).
-pub const CHUNK_HEAD_BYTES: usize = 8;
+/// Bytes before each chunk's payload (stored length, CRC, raw length).
+pub const CHUNK_HEAD_BYTES: usize = 12;
+/// A deflated payload may expand to at most this many times its stored
+/// length (plus [`EXPANSION_SLACK`]): memory stays proportional to the
+/// file. The writer stores a payload uncompressed when it would deflate
+/// further than that.
+pub const MAX_EXPANSION: u64 = 16;
+/// See [`MAX_EXPANSION`].
+pub const EXPANSION_SLACK: u64 = 4096;
+/// Deflate level of the payloads.
+const DEFLATE_LEVEL: u8 = 6;
 /// Target size of chunk 0; chunk `c` aims at `FIRST_CHUNK_BYTES << c`,
 /// capped at [`MAX_CHUNK_TARGET`]. A chunk closes after the first LOD step
 /// that reaches its target, so it can be larger by one step.
@@ -377,10 +388,21 @@ impl Writer<'_> {
     }
 }
 
+/// Appends a chunk: the payload deflated (raw length recorded), or stored
+/// as it is (raw length 0) when deflating does not help or would expand
+/// past [`MAX_EXPANSION`] on reading.
 fn close_chunk(file: &mut Vec<u8>, payload: &[u8]) {
-    put_u32(file, payload.len() as u32);
-    put_u32(file, crc32fast::hash(payload));
-    file.extend_from_slice(payload);
+    let packed = miniz_oxide::deflate::compress_to_vec(payload, DEFLATE_LEVEL);
+    let fits = (payload.len() as u64) <= MAX_EXPANSION * packed.len() as u64 + EXPANSION_SLACK;
+    let (stored, raw) = if packed.len() < payload.len() && fits {
+        (&packed[..], payload.len() as u32)
+    } else {
+        (payload, 0)
+    };
+    put_u32(file, stored.len() as u32);
+    put_u32(file, crc32fast::hash(stored));
+    put_u32(file, raw);
+    file.extend_from_slice(stored);
 }
 
 /// Serialises a model as version 2 (deterministic: the same model gives
@@ -650,6 +672,8 @@ pub struct ChunkInfo {
     pub offset: u64,
     /// Bytes of the chunk, head included.
     pub bytes: u64,
+    /// Bytes of its payload once inflated.
+    pub payload_bytes: u64,
     /// The LOD numbers it completes: `first_lod..=last_lod`.
     pub first_lod: u32,
     pub last_lod: u32,
@@ -789,15 +813,16 @@ impl McoStream {
                 break;
             }
             let total = CHUNK_HEAD_BYTES + len as usize;
-            let payload = &rest[CHUNK_HEAD_BYTES..total];
-            if crc32fast::hash(payload) != le32(rest, 4) {
+            let stored = &rest[CHUNK_HEAD_BYTES..total];
+            if crc32fast::hash(stored) != le32(rest, 4) {
                 return Err(format!(
                     "chunk {} at byte {}: checksum mismatch (corrupted file)",
                     self.chunks.len(),
                     self.offset
                 ));
             }
-            let payload = payload.to_vec();
+            let payload = inflate(stored, le32(rest, 8))
+                .map_err(|e| format!("chunk {} at byte {}: {e}", self.chunks.len(), self.offset))?;
             let first_lod = self.model.groups.len() as u32;
             read_chunk(
                 &h,
@@ -810,6 +835,7 @@ impl McoStream {
             self.chunks.push(ChunkInfo {
                 offset: self.offset,
                 bytes: total as u64,
+                payload_bytes: payload.len() as u64,
                 first_lod: if self.chunks.is_empty() { 0 } else { first_lod },
                 last_lod: self.model.groups.len() as u32 - 1,
                 nodes: self.model.nodes.len() as u32,
@@ -862,6 +888,27 @@ impl McoStream {
             model,
         })
     }
+}
+
+/// A chunk's payload from its stored bytes: deflated when `raw > 0`
+/// (then exactly `raw` bytes, at most [`MAX_EXPANSION`] times the stored
+/// ones), else stored as it is.
+fn inflate(stored: &[u8], raw: u32) -> Res<Vec<u8>> {
+    if raw == 0 {
+        return Ok(stored.to_vec());
+    }
+    if raw as u64 > MAX_EXPANSION * stored.len() as u64 + EXPANSION_SLACK {
+        return Err(format!(
+            "{raw} bytes deflated into {} (more than {MAX_EXPANSION} times)",
+            stored.len()
+        ));
+    }
+    let out = miniz_oxide::inflate::decompress_to_vec_with_limit(stored, raw as usize)
+        .map_err(|_| format!("bad deflate stream (or more than {raw} bytes)"))?;
+    if out.len() != raw as usize {
+        return Err(format!("inflates to {} bytes, not {raw}", out.len()));
+    }
+    Ok(out)
 }
 
 fn check_totals(h: &Header, m: &McoModel, end: u64) -> Res<()> {

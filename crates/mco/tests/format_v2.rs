@@ -1,23 +1,32 @@
-//! `.mco` version 2 on the shipped bunny: no larger than the bunny's binary
-//! PLY, a first chunk of a few kilobytes, and a whole file that reads back
-//! with the in-memory model's LOD numbers and triangle counts.
+//! `.mco` version 2 on the shipped bunny, built from its mesh and from
+//! `lodkit build`'s 8 virtual scans: no larger than the bunny's binary PLY,
+//! a first chunk of a few kilobytes, and a whole file that reads back with
+//! the in-memory model's LOD numbers and triangle counts.
 
 use std::path::Path;
 
 use lodkit_mco::model_file_v2::{self, FIRST_CHUNK_BYTES};
-use lodkit_mco::pipeline::{Options, build_from_mesh};
+use lodkit_mco::pipeline::{Options, build_from_mesh, build_from_range_images};
+use lodkit_mco::scanner::{ScanOptions, scan_mesh};
 
-#[test]
-fn bunny_v2_is_no_larger_than_its_binary_ply() {
-    let ply = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/models/stanford_bunny.ply");
-    let ply_bytes = std::fs::metadata(&ply).unwrap().len();
-    let mesh = lodkit_mesh::io::load_mesh(&ply).unwrap();
-    let model = build_from_mesh(&mesh, &Options::default()).unwrap();
-    let bytes = model_file_v2::encode(&model);
-    let v1 = lodkit_mco::model_file::encode(&model).len();
+/// `lodkit build`'s scans (its `BUILD_SCANS`): 8 views, alternately 30°
+/// above and below the horizon, 300 × 300 samples each.
+const BUILD_SCANS: ScanOptions = ScanOptions {
+    views: 8,
+    width: 300,
+    height: 300,
+    elevation_deg: 30.0,
+    alternate: true,
+    noise: 0.0,
+    seed: 1,
+};
+
+fn check(what: &str, model: &lodkit_mco::McoModel, ply_bytes: u64) {
+    let bytes = model_file_v2::encode(model);
+    let v1 = lodkit_mco::model_file::encode(model).len();
     let chunks = model_file_v2::chunk_table(&bytes).unwrap();
     eprintln!(
-        "bunny from its mesh: v2 {} bytes, v1 {v1}, PLY {ply_bytes}; {} chunks: {:?}",
+        "bunny {what}: v2 {} bytes, v1 {v1}, PLY {ply_bytes}; {} chunks (bytes, last LOD): {:?}",
         bytes.len(),
         chunks.len(),
         chunks
@@ -27,11 +36,23 @@ fn bunny_v2_is_no_larger_than_its_binary_ply() {
     );
     assert!(
         bytes.len() as u64 <= ply_bytes,
-        "{} > {ply_bytes}",
+        "{what}: {} > {ply_bytes}",
         bytes.len()
     );
     assert!(chunks[0].bytes <= 2 * FIRST_CHUNK_BYTES as u64);
     let back = model_file_v2::decode(&bytes).unwrap();
     assert_eq!(back.max_lod(), model.max_lod());
     assert_eq!(back.acc, model.acc);
+}
+
+#[test]
+fn bunny_v2_is_no_larger_than_its_binary_ply() {
+    let ply = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/models/stanford_bunny.ply");
+    let ply_bytes = std::fs::metadata(&ply).unwrap().len();
+    let mesh = lodkit_mesh::io::load_mesh(&ply).unwrap();
+    let model = build_from_mesh(&mesh, &Options::default()).unwrap();
+    check("from its mesh", &model, ply_bytes);
+    let scans = scan_mesh(&mesh, &BUILD_SCANS).unwrap();
+    let model = build_from_range_images(&scans, &Options::default()).unwrap();
+    check("from the build's 8 scans", &model, ply_bytes);
 }

@@ -151,7 +151,7 @@ fn every_prefix_serves_the_lod_numbers_it_claims() {
     }
     for (c, ch) in table.iter().enumerate().take(table.len() - 1) {
         let target = (FIRST_CHUNK_BYTES << c).min(MAX_CHUNK_TARGET) as u64;
-        assert!(ch.bytes >= target, "chunk {c}: {ch:?}");
+        assert!(ch.payload_bytes >= target, "chunk {c}: {ch:?}");
     }
     let last = table.last().unwrap();
     assert_eq!(last.offset + last.bytes, bytes.len() as u64);
@@ -402,4 +402,86 @@ fn quantisation_error_is_at_most_a_1024th_of_a_leaf_cube() {
         let angle = n.cross(d).length().atan2(n.dot(d)).to_degrees();
         assert!(angle < 0.01, "{n} → {d}: {angle}°");
     }
+}
+
+/// The file with every chunk's payload passed through `mutate` (inflated,
+/// changed, deflated again) and the header's size and checksum fixed: the
+/// mutations reach the record parser.
+fn remutate(bytes: &[u8], mutate: &mut dyn FnMut(usize, &mut Vec<u8>)) -> Vec<u8> {
+    let mut out = bytes[..HEADER_BYTES].to_vec();
+    let mut at = HEADER_BYTES;
+    let mut c = 0;
+    while at + CHUNK_HEAD_BYTES <= bytes.len() {
+        let len = le32(bytes, at) as usize;
+        let stored = &bytes[at + CHUNK_HEAD_BYTES..at + CHUNK_HEAD_BYTES + len];
+        let mut payload = inflate(stored, le32(bytes, at + 8)).unwrap();
+        mutate(c, &mut payload);
+        close_chunk(&mut out, &payload);
+        at += CHUNK_HEAD_BYTES + len;
+        c += 1;
+    }
+    let size = out.len() as u64;
+    out[92..100].copy_from_slice(&size.to_le_bytes());
+    fix_checksums(&mut out);
+    out
+}
+
+/// Mutations of the inflated payloads: the structural checks, not the
+/// checksums or the deflate stream, must refuse them or give a model that
+/// extracts safely.
+#[test]
+fn mutated_payloads_never_panic() {
+    let m = small();
+    let bytes = encode(&m);
+    assert_eq!(remutate(&bytes, &mut |_, _| {}), bytes);
+    let chunks = chunk_table(&bytes).unwrap().len();
+    let mut seed = 0x2545_f491_4f6c_dd1du64;
+    let mut next = move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        seed
+    };
+    let cam = Camera::looking_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO);
+    let mut idx = Vec::new();
+    let (mut accepted, mut refused) = (0, 0);
+    for _ in 0..1500 {
+        let target = (next() as usize) % chunks;
+        let edits: Vec<(u64, u8)> = (0..1 + next() % 3)
+            .map(|_| (next(), next() as u8))
+            .collect();
+        let b = remutate(&bytes, &mut |c, p| {
+            if c == target && !p.is_empty() {
+                for &(at, v) in &edits {
+                    let n = p.len();
+                    p[at as usize % n] = v;
+                }
+            }
+        });
+        for r in [
+            decode(&b).map(Some),
+            decode_prefix(&b).map(|p| Some(p.model)),
+        ] {
+            match r {
+                Ok(Some(back)) => {
+                    accepted += 1;
+                    for k in [0, 1, back.max_lod() / 2, back.max_lod(), usize::MAX] {
+                        back.extract_lod(k, &mut idx);
+                        back.extract_lod_traversal(k, &mut idx);
+                    }
+                    back.extract_triangles(100, &mut idx);
+                    back.extract_view(&cam, 1.0, &mut idx);
+                }
+                Ok(None) => {}
+                Err(e) => {
+                    assert!(!e.contains('\n'));
+                    refused += 1;
+                }
+            }
+        }
+    }
+    assert!(
+        accepted > 50 && refused > 50,
+        "{accepted} accepted, {refused} refused"
+    );
 }
