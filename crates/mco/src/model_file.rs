@@ -174,8 +174,14 @@ impl Reader<'_> {
 /// Parses `.mco` bytes of version 1 or 2; the error says what is wrong
 /// (no path).
 pub fn decode(bytes: &[u8]) -> std::result::Result<McoModel, String> {
-    if crate::model_file_v2::file_version(bytes) == Some(crate::model_file_v2::VERSION) {
-        return crate::model_file_v2::decode(bytes);
+    match crate::model_file_v2::file_version(bytes) {
+        Some(crate::model_file_v2::VERSION) => return crate::model_file_v2::decode(bytes),
+        Some(v) if v != VERSION => {
+            return Err(format!(
+                "unsupported .mco version {v} (this lodkit reads versions 1 and 2)"
+            ));
+        }
+        _ => {}
     }
     if bytes.len() < HEADER_BYTES + 4 {
         return Err(format!(

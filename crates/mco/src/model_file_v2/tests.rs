@@ -274,6 +274,8 @@ fn errors_are_one_line_and_version_1_still_reads() {
             .unwrap_err()
             .contains("version 3")
     );
+    let e = crate::model_file::decode(&v3[..20]).unwrap_err();
+    assert!(e.contains("version 3"), "{e}");
     let mut flipped = bytes.clone();
     flipped[HEADER_BYTES + 20] ^= 0x10;
     assert!(decode(&flipped).unwrap_err().contains("checksum"));
