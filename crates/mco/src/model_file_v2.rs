@@ -882,7 +882,8 @@ impl McoStream {
 
     /// The model truncated to the LOD numbers read so far (see the module
     /// docs), prepared for extraction; `None` before chunk 0 is complete.
-    /// Cost: a copy of the arrays read and [`McoModel::prepare_extraction`].
+    /// Cost: a copy of the arrays read, and building the extraction tables
+    /// (`O(n log n)` in the triangles).
     pub fn model(&self) -> Option<McoModel> {
         self.snapshot().ok()
     }
