@@ -3,7 +3,7 @@
 # refactor can show that it changed no byte. Usage:
 #   scripts/output_digests.sh [LODKIT_BINARY]            # print the digests
 #   scripts/output_digests.sh --check [LODKIT_BINARY]    # compare with scripts/output_digests.txt
-# `lods.json` and `.mco` hold wall times: they are stripped or masked before hashing.
+# `lods.json` holds wall times: they are stripped before hashing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 check=0
@@ -34,10 +34,6 @@ def strip(o):
     if isinstance(o, list): return [strip(v) for v in o]
     return o
 print(json.dumps(strip(d), sort_keys=True))' "$f" | sha256sum | sed "s|-|$f (times stripped)|" ;;
-      *.mco) python3 -c 'import hashlib,sys
-b=bytearray(open(sys.argv[1],"rb").read())
-b[48:56]=bytes(8)  # build_seconds, a wall time
-print(hashlib.sha256(bytes(b[:-4])).hexdigest() + "  " + sys.argv[1] + " (build time and checksum masked)")' "$f" ;;
       *) sha256sum "$f" ;;
     esac
   done

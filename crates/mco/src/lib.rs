@@ -12,7 +12,11 @@
 //! or scan by scan with [`IncrementalBuilder`] —, keep it as a `.mco` file
 //! ([`McoModel::save`] / [`McoModel::load`], or [`McoModel::to_bytes`] /
 //! [`McoModel::from_bytes`] for an in-memory buffer), then cut it as often
-//! as needed:
+//! as needed. The file is LOD-ordered (`.mco` version 2, quantised and
+//! deflated chunks): any prefix of it serves every cut up to some LOD
+//! number, read with [`McoModel::from_prefix`], or with [`McoStream`] as
+//! the bytes arrive; [`McoModel::chunk_table`] lists what each chunk adds.
+//! Cuts:
 //!
 //! - by triangle budget: [`McoModel::extract_triangles`];
 //! - by LOD number: [`McoModel::extract_lod`] (`0` = the root cube,
@@ -63,6 +67,7 @@
 //! | view-dependent cut | `view_dependent_cut.rs` | §8.2 (future work) |
 //! | the model's arrays, its info | `model.rs` | Fig. 6.1 |
 //! | `.mco` files | `model_file.rs` | — (`docs/formats/mco.md`) |
+//! | `.mco` version 2: LOD-ordered chunks, prefix reader | `model_file_v2.rs` | — (`docs/formats/mco.md`) |
 //! | entry points, incremental builder | `pipeline.rs` | §4.4 |
 //! | virtual range scanner | `scanner.rs` | §4.4 (the experiment) |
 //!
@@ -104,6 +109,7 @@ mod marching_cubes;
 mod marching_cubes_cases;
 mod model;
 mod model_file;
+mod model_file_v2;
 mod neighbours;
 mod normals_estimation;
 mod octree_build;
@@ -119,6 +125,7 @@ mod tests;
 pub use lattice::{Grid, MAX_RESOLUTION};
 pub use model::{LevelInfo, McoModel, ModelInfo};
 pub use model_file::FORMAT_VERSION;
+pub use model_file_v2::{ChunkInfo, Header as McoHeader, McoStream, PartialModel};
 pub use pipeline::{
     AddReport, IncrementalBuilder, Options, build_from_conf, build_from_mesh, build_from_models,
     build_from_points, build_from_range_images, densify_meshes, grid_for, samples_of,

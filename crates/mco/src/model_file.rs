@@ -1,6 +1,8 @@
-//! `.mco` files: a built marching cube octree, saved and loaded as flat
-//! arrays. The byte layout is specified in `docs/formats/mco.md`
-//! (version 1); this module is its only reader and writer.
+//! `.mco` files: the public load/save entry points, and the version-1
+//! layout (flat arrays). Byte layouts are specified in
+//! `docs/formats/mco.md`. [`save`] and [`McoModel::to_bytes`] write
+//! version 2 ([`crate::model_file_v2`], the compact, streamable layout);
+//! [`decode`] and [`load`] read both versions.
 //!
 //! Reading is defensive: the file size must equal the size the header's
 //! counts imply (checked in 64-bit arithmetic before anything is
@@ -16,15 +18,17 @@ use glam::Vec3;
 use crate::lattice::{Grid, KEY_BITS};
 use crate::marching_cubes::VertexBuffer;
 use crate::model::{BuildStats, McoModel, Node, Patch};
+use crate::model_file_v2::{ChunkInfo, PartialModel};
 use crate::{Error, Result};
 
 /// File signature.
 pub(crate) const MAGIC: [u8; 8] = *b"LODKMCO\0";
-/// The format version this code writes and reads.
+/// The version-1 layout's number (the flat arrays), which [`encode`]
+/// writes and [`decode`] still reads.
 pub(crate) const VERSION: u32 = 1;
-/// The `.mco` format version this crate writes and reads
-/// (`docs/formats/mco.md`).
-pub const FORMAT_VERSION: u32 = VERSION;
+/// The `.mco` format version this crate writes ([`McoModel::to_bytes`],
+/// `docs/formats/mco.md`); it reads this one and version 1.
+pub const FORMAT_VERSION: u32 = crate::model_file_v2::VERSION;
 /// Bytes before the arrays.
 pub(crate) const HEADER_BYTES: usize = 8 + 4 + 4 + 12 + 4 + 4 + 4 + 8 + 8 + 8 + 9 * 4;
 /// Bytes per node record.
@@ -38,7 +42,10 @@ pub(crate) const MAX_PATCH_SUBS: usize = 16;
 /// Files larger than this are refused before reading.
 pub(crate) const MAX_FILE_BYTES: u64 = 16 << 30;
 
-/// Serialises a model (deterministic: the same model gives the same bytes).
+/// Serialises a model as version 1 (deterministic: the same model gives
+/// the same bytes). Only the tests write version 1 now (to check that it
+/// still reads); [`McoModel::to_bytes`] writes version 2.
+#[cfg_attr(not(test), allow(dead_code))]
 pub(crate) fn encode(m: &McoModel) -> Vec<u8> {
     let v = m.vertices.len();
     let n = m.nodes.len();
@@ -118,9 +125,11 @@ pub(crate) fn encode(m: &McoModel) -> Vec<u8> {
     out
 }
 
+#[cfg_attr(not(test), allow(dead_code))]
 fn put_u32(out: &mut Vec<u8>, x: u32) {
     out.extend_from_slice(&x.to_le_bytes());
 }
+#[cfg_attr(not(test), allow(dead_code))]
 fn put_f32(out: &mut Vec<u8>, x: f32) {
     out.extend_from_slice(&x.to_le_bytes());
 }
@@ -174,8 +183,18 @@ impl Reader<'_> {
     }
 }
 
-/// Parses `.mco` bytes; the error says what is wrong (no path).
+/// Parses `.mco` bytes of version 1 or 2; the error says what is wrong
+/// (no path).
 pub(crate) fn decode(bytes: &[u8]) -> std::result::Result<McoModel, String> {
+    match crate::model_file_v2::file_version(bytes) {
+        Some(crate::model_file_v2::VERSION) => return crate::model_file_v2::decode(bytes),
+        Some(v) if v != VERSION => {
+            return Err(format!(
+                "unsupported .mco version {v} (this lodkit reads versions 1 and 2)"
+            ));
+        }
+        _ => {}
+    }
     if bytes.len() < HEADER_BYTES + 4 {
         return Err(format!(
             "not an .mco file: {} bytes, shorter than the {}-byte header",
@@ -190,7 +209,7 @@ pub(crate) fn decode(bytes: &[u8]) -> std::result::Result<McoModel, String> {
     let version = r.u32()?;
     if version != VERSION {
         return Err(format!(
-            "unsupported .mco version {version} (this lodkit reads version {VERSION})"
+            "unsupported .mco version {version} (this lodkit reads versions 1 and 2)"
         ));
     }
     let flags = r.u32()?;
@@ -317,7 +336,7 @@ pub(crate) fn decode(bytes: &[u8]) -> std::result::Result<McoModel, String> {
 }
 
 /// Every index extraction follows must be in range.
-fn validate(m: &McoModel) -> std::result::Result<(), String> {
+pub(crate) fn validate(m: &McoModel) -> std::result::Result<(), String> {
     let (v, n) = (m.vertices.len() as u64, m.nodes.len() as u64);
     if n == 0 {
         return Err("the model has no nodes".into());
@@ -395,17 +414,19 @@ fn validate(m: &McoModel) -> std::result::Result<(), String> {
 
 impl McoModel {
     /// The model as `.mco` bytes (`docs/formats/mco.md`, version
-    /// [`FORMAT_VERSION`]): deterministic — the same model always gives
-    /// the same bytes (no time stamps, no paths). Size: about 28 bytes per
-    /// vertex, 48 per node and 4 per stored triangle index. `O(size)`.
+    /// [`FORMAT_VERSION`]: LOD-ordered, quantised, deflated chunks, so any
+    /// prefix serves a coarse cut): deterministic — the same model always
+    /// gives the same bytes (no time stamps, no paths). Smaller than the
+    /// model's binary PLY on the shipped bunny. `O(size)`.
     pub fn to_bytes(&self) -> Vec<u8> {
-        encode(self)
+        crate::model_file_v2::encode(self)
     }
 
     /// Reads a model from `.mco` bytes (a file's contents, or an
     /// in-memory buffer such as a download).
     ///
-    /// Errors ([`Error::Format`], one line): wrong signature or version,
+    /// Reads versions 1 and 2. Errors ([`Error::Format`], one line):
+    /// wrong signature or version,
     /// a size that differs from what the header's counts imply, a
     /// checksum mismatch, or any index out of range. Every check runs
     /// before the model is used, so a model that loads can never make a
@@ -430,11 +451,39 @@ impl McoModel {
     pub fn load(path: &Path) -> Result<McoModel> {
         load(path)
     }
+
+    /// The `.mco` format version `bytes` declare (1 or 2), or `None` when
+    /// they are too short or lack the signature. Reads 12 bytes; checks
+    /// nothing else.
+    pub fn file_version(bytes: &[u8]) -> Option<u32> {
+        crate::model_file_v2::file_version(bytes)
+    }
+
+    /// The chunk table of version-2 bytes, in file order: a prefix through
+    /// chunk `c` serves LOD numbers `0..=last_lod` of that chunk. Errors
+    /// ([`Error::Format`], one line) as [`McoModel::from_bytes`], and for
+    /// version-1 bytes (which have no chunks). Cost: `O(size)` (each chunk
+    /// is inflated and checked).
+    pub fn chunk_table(bytes: &[u8]) -> Result<Vec<ChunkInfo>> {
+        crate::model_file_v2::chunk_table(bytes).map_err(Error::Format)
+    }
+
+    /// Reads a prefix of version-2 bytes (a partial download) as far as its
+    /// complete chunks go: the model serves every LOD number up to
+    /// [`PartialModel::max_lod`] exactly as the whole file would. Errors
+    /// ([`Error::Format`], one line) on a bad header or chunk, or a prefix
+    /// without one complete chunk; the checks of [`McoModel::from_bytes`]
+    /// run on what was read. Cost: `O(prefix)`. For bytes arriving in
+    /// pieces, [`McoStream`](crate::McoStream) reads each chunk once.
+    pub fn from_prefix(bytes: &[u8]) -> Result<PartialModel> {
+        crate::model_file_v2::decode_prefix(bytes).map_err(Error::Format)
+    }
 }
 
-/// Writes `model` to `path` atomically.
+/// Writes `model` to `path` atomically, as version 2
+/// ([`McoModel::to_bytes`]).
 fn save(path: &Path, model: &McoModel) -> Result<()> {
-    lodkit_mesh::io::write_atomic(path, &encode(model))?;
+    lodkit_mesh::io::write_atomic(path, &model.to_bytes())?;
     Ok(())
 }
 
@@ -481,7 +530,7 @@ mod tests {
         assert_eq!(back, m);
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("s.mco");
-        save(&path, &m).unwrap();
+        std::fs::write(&path, &bytes).unwrap();
         assert_eq!(load(&path).unwrap(), m);
     }
 

@@ -83,6 +83,9 @@ pub(crate) fn select(model: &McoModel, camera: &Camera, tolerance_px: f32) -> Ve
     ];
     let tol = tolerance_px.max(1e-6);
     let mut stack: Vec<u32> = Vec::new();
+    // A group is pushed once (by its first member to expand), so the
+    // closure is linear even for a group of many nodes (a hostile file).
+    let mut group_pushed = vec![false; model.groups.len()];
     for i in 0..n as u32 {
         if model.nodes[i as usize].child_count == 0 {
             continue;
@@ -117,7 +120,7 @@ pub(crate) fn select(model: &McoModel, camera: &Camera, tolerance_px: f32) -> Ve
         stack.extend_from_slice(&model.deps[nd.deps_start as usize..][..nd.deps_count as usize]);
         // Nodes that expand together (crack-free only as a group).
         let k = model.prio[i as usize];
-        if k != u32::MAX {
+        if k != u32::MAX && !std::mem::replace(&mut group_pushed[k as usize], true) {
             stack.extend_from_slice(model.group(k as usize));
         }
     }

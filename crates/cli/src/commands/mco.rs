@@ -228,8 +228,25 @@ struct LevelRow {
 }
 
 #[derive(Serialize)]
+struct ChunkRow {
+    offset: u64,
+    bytes: u64,
+    first_lod: u32,
+    last_lod: u32,
+    nodes: u32,
+    vertices: u32,
+    triangles: u32,
+}
+
+#[derive(Serialize)]
 struct Info {
     file: String,
+    /// `.mco` format version (1: flat arrays, 2: LOD-ordered chunks).
+    version: u32,
+    file_bytes: u64,
+    /// Version 2: the chunks in file order (a prefix through chunk `c`
+    /// serves LOD numbers up to its `last_lod`).
+    chunks: Vec<ChunkRow>,
     resolution: u32,
     cube: f32,
     depth: u32,
@@ -245,8 +262,30 @@ struct Info {
 
 fn info(_ui: &Ui, path: &Path, json: bool) -> Result<()> {
     let m = McoModel::load(path)?.info();
+    let bytes = std::fs::read(path).with_context(|| path.display().to_string())?;
+    let version = McoModel::file_version(&bytes).unwrap_or(0);
+    let chunks = if version == 1 {
+        Vec::new()
+    } else {
+        McoModel::chunk_table(&bytes)
+            .with_context(|| path.display().to_string())?
+            .into_iter()
+            .map(|c| ChunkRow {
+                offset: c.offset,
+                bytes: c.bytes,
+                first_lod: c.first_lod,
+                last_lod: c.last_lod,
+                nodes: c.nodes,
+                vertices: c.vertices,
+                triangles: c.triangle_indices / 3,
+            })
+            .collect()
+    };
     let info = Info {
         file: path.display().to_string(),
+        version,
+        file_bytes: bytes.len() as u64,
+        chunks,
         resolution: m.grid.resolution(),
         cube: m.grid.cube(),
         depth: m.grid.depth(),
@@ -273,6 +312,16 @@ fn info(_ui: &Ui, path: &Path, json: bool) -> Result<()> {
     }
     crate::outln!("file: {}", info.file)?;
     crate::outln!(
+        "format: version {}, {} bytes{}",
+        info.version,
+        info.file_bytes,
+        if info.chunks.is_empty() {
+            String::new()
+        } else {
+            format!(" in {} chunks", info.chunks.len())
+        }
+    )?;
+    crate::outln!(
         "lattice: resolution {}, cube {:.6}, octree depth {}",
         info.resolution,
         info.cube,
@@ -294,6 +343,22 @@ fn info(_ui: &Ui, path: &Path, json: bool) -> Result<()> {
     crate::outln!("level  nodes  triangles (0 = leaf cubes)")?;
     for r in &info.levels {
         crate::outln!("{:>5}  {:>5}  {:>9}", r.level, r.nodes, r.triangles)?;
+    }
+    if !info.chunks.is_empty() {
+        crate::outln!("chunk     offset     bytes  LOD numbers      nodes  vertices  triangles")?;
+        for (i, c) in info.chunks.iter().enumerate() {
+            crate::outln!(
+                "{:>5} {:>10} {:>9}  {:>5}..={:<5} {:>8} {:>9} {:>10}",
+                i,
+                c.offset,
+                c.bytes,
+                c.first_lod,
+                c.last_lod,
+                c.nodes,
+                c.vertices,
+                c.triangles
+            )?;
+        }
     }
     Ok(())
 }
