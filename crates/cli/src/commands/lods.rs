@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::Args;
 use lodkit_mesh::io::{Format, WriteOptions, encode, gltf::write_glb, write_atomic};
 use lodkit_mesh::metrics::{CompareOptions, compare};
@@ -14,29 +14,31 @@ use lodkit_simplify::{Options, Simplifier, Target, halving_targets};
 
 use super::simplify::SimplifyOpts;
 use crate::ui::Ui;
+use crate::ui::value::{self, Real};
 
 #[derive(Args, Debug)]
 pub struct LodsArgs {
     /// Input mesh.
     pub input: PathBuf,
     /// Output directory (created if missing).
-    #[arg(long)]
+    #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
     /// Comma-separated fractions of the input's triangles, one level each.
     #[arg(
         long,
         value_delimiter = ',',
         value_name = "R,R,...",
-        conflicts_with = "levels"
+        conflicts_with = "levels",
+        value_parser = Real::closed(0.0, 1.0).f32()
     )]
     pub ratios: Option<Vec<f32>>,
-    /// Number of levels, each half the previous one (default 6).
-    #[arg(long, value_name = "N")]
+    /// Number of levels, each half the previous one, in 1..=32 (default 6).
+    #[arg(long, value_name = "N", value_parser = value::int(1usize, value::MAX_LEVELS))]
     pub levels: Option<usize>,
     #[command(flatten)]
     pub opts: SimplifyOpts,
-    /// Samples per kind for the measured error (`compare`).
-    #[arg(long, default_value_t = 1_000_000)]
+    /// Samples per kind for the measured error (`compare`), in 1..=10000000.
+    #[arg(long, default_value_t = 1_000_000, value_parser = value::int(1usize, value::MAX_SAMPLES))]
     pub samples: usize,
     /// Print lods.json on stdout too.
     #[arg(long)]
@@ -68,17 +70,14 @@ pub struct Lods {
 
 pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
     let targets: Vec<Target> = match (&a.ratios, a.levels) {
-        (Some(r), _) => {
-            if let Some(bad) = r.iter().find(|x| !(0.0..=1.0).contains(*x)) {
-                bail!("--ratios must be within 0..1, got {bad}");
-            }
-            r.iter().map(|&x| Target::Ratio(x)).collect()
-        }
+        (Some(r), _) => r.iter().map(|&x| Target::Ratio(x)).collect(),
         (None, Some(n)) => halving_targets(n),
         (None, None) => halving_targets(6),
     };
     if targets.is_empty() {
-        bail!("no levels asked for");
+        return Err(crate::ui::usage(
+            "--ratios: give at least one fraction in [0, 1]",
+        ));
     }
     let opts = a.opts.options(Target::Ratio(1.0))?;
     let mesh: TriMesh = super::load_mesh(ui, &a.input)?;
@@ -141,7 +140,7 @@ pub fn write_chain(
     let mut ws = Simplifier::new();
     let mut levels = Vec::new();
     let mut meshes: Vec<(String, TriMesh)> = Vec::new();
-    let step = ui.spinner("simplifying");
+    let step = ui.stage("simplifying");
     let chain = ws
         .lod_chain(mesh, opts, targets)
         .map_err(|e| anyhow::anyhow!("{input_label}: {e}"))?;
@@ -153,7 +152,7 @@ pub fn write_chain(
     for (i, l) in chain.into_iter().enumerate() {
         let name = format!("{stem}_lod{}", i + 1);
         let file = format!("{name}.ply");
-        let step = ui.spinner(&format!("measuring level {}", i + 1));
+        let step = ui.stage(&format!("measuring level {}", i + 1));
         let (mean, max) = if l.mesh.faces.is_empty() {
             (f64::NAN, f64::NAN)
         } else {
