@@ -16,7 +16,7 @@ pub struct BenchMcoArgs {
     /// Models to measure (.mco, or a mesh to build first); default: the
     /// built-in bunny and a 1M-triangle synthetic blob.
     pub inputs: Vec<PathBuf>,
-    /// Resolution for meshes built here, in 2..=1024 (default: from the sampling).
+    /// Resolution for meshes built here, in 2..=512 (default: from the sampling).
     #[arg(long, value_parser = value::int(2u32, super::mco::MAX_RESOLUTION))]
     pub resolution: Option<u32>,
     /// Seconds spent per measured size (roughly), in (0, 60].

@@ -28,7 +28,7 @@ pub enum McoCommand {
         /// Output .mco file.
         #[arg(short, long, value_parser = value::output(&["mco"], "a continuous-LOD model"))]
         output: PathBuf,
-        /// Leaf cubes along the longest axis, in 2..=1024 (default: cube =
+        /// Leaf cubes along the longest axis, in 2..=512 (default: cube =
         /// twice the sample spacing).
         #[arg(long, value_parser = value::int(2u32, MAX_RESOLUTION))]
         resolution: Option<u32>,
@@ -76,24 +76,25 @@ pub struct ExtractArgs {
         value_parser = Real::FINITE.vec3()
     )]
     pub look_at: Option<[f32; 3]>,
-    /// Vertical field of view, degrees in (0, 180).
-    #[arg(long, default_value_t = 60.0, requires = "view", value_parser = Real::open(0.0, 180.0).f32())]
-    pub fov: f32,
-    /// Viewport height, pixels in [1, 65536].
-    #[arg(long, default_value_t = 1080.0, requires = "view", value_parser = Real::closed(1.0, 65536.0).f32())]
-    pub viewport: f32,
-    /// Largest projected error allowed, pixels (a finite number > 0).
-    #[arg(long, default_value_t = 1.0, requires = "view", value_parser = Real::POSITIVE.f32())]
-    pub tolerance: f32,
+    /// Vertical field of view, degrees in (0, 180) (default 60).
+    #[arg(long, requires = "view", value_parser = Real::open(0.0, 180.0).f32())]
+    pub fov: Option<f32>,
+    /// Viewport height, pixels in [1, 65536] (default 1080).
+    #[arg(long, requires = "view", value_parser = Real::closed(1.0, 65536.0).f32())]
+    pub viewport: Option<f32>,
+    /// Largest projected error allowed, pixels (a finite number > 0; default 1).
+    #[arg(long, requires = "view", value_parser = Real::POSITIVE.f32())]
+    pub tolerance: Option<f32>,
     /// Print what was extracted as JSON.
     #[arg(long)]
     pub json: bool,
 }
 
 /// Largest `--resolution` of `mco build` (and `bench mco`): the library
-/// takes up to [`lodkit_mco::MAX_RESOLUTION`], but a lattice this fine
-/// already needs about a gigabyte on a closed surface that fills it.
-pub const MAX_RESOLUTION: u32 = 1024;
+/// takes up to [`lodkit_mco::MAX_RESOLUTION`], but memory grows with its
+/// square on a surface that fills the lattice (an octahedron at 512 took
+/// 250 MB on the 2-core build machine; 2000 on a small sphere took 6.8 GB).
+pub const MAX_RESOLUTION: u32 = 512;
 
 pub fn run(ui: &Ui, cmd: &McoCommand) -> Result<()> {
     match cmd {
@@ -243,6 +244,28 @@ struct Extracted {
 }
 
 fn extract(ui: &Ui, a: &ExtractArgs) -> Result<()> {
+    // The camera options mean nothing without a camera: refused, not
+    // ignored (checked here too, as clap's `requires` does not fire
+    // inside a satisfied group).
+    if a.view.is_none() {
+        for (given, name) in [
+            (a.look_at.is_some(), "--look-at"),
+            (a.fov.is_some(), "--fov"),
+            (a.viewport.is_some(), "--viewport"),
+            (a.tolerance.is_some(), "--tolerance"),
+        ] {
+            if given {
+                return Err(crate::ui::usage(format!(
+                    "{name} applies to a view-dependent cut: give --view X,Y,Z too"
+                )));
+            }
+        }
+    }
+    let (fov, viewport, tolerance) = (
+        a.fov.unwrap_or(60.0),
+        a.viewport.unwrap_or(1080.0),
+        a.tolerance.unwrap_or(1.0),
+    );
     let model = McoModel::load(&a.model)?;
     let mut idx = Vec::new();
     let step = ui.spinner("extracting");
@@ -269,11 +292,11 @@ fn extract(ui: &Ui, a: &ExtractArgs) -> Result<()> {
             ));
         }
         let cam = Camera {
-            vfov_deg: a.fov,
-            viewport_height: a.viewport,
+            vfov_deg: fov,
+            viewport_height: viewport,
             ..Camera::looking_at(position, target)
         };
-        let n = model.extract_view(&cam, a.tolerance, &mut idx);
+        let n = model.extract_view(&cam, tolerance, &mut idx);
         (format!("view-dependent cut ({n} nodes expanded)"), None)
     };
     step.finish();

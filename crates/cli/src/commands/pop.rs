@@ -21,10 +21,13 @@ use crate::ui::value::{self, Real};
 /// to 16; legal depths too big for the input are refused by
 /// [`check_cost`] before any work.
 const MAX_DEPTH: u8 = 12;
-/// Most surface samples `pop encode` takes on (a few seconds of work).
-const MAX_SAMPLES: f64 = 2e8;
-/// Most octree cells (about 64 bytes each while encoding: under 1 GB).
-const MAX_CELLS: f64 = 1.5e7;
+/// Most surface samples `pop encode` takes on: measured on a 2-core
+/// machine, 8e6 samples (an octahedron at depth 9) encode in about 5 s.
+const MAX_SAMPLES: f64 = 2e7;
+/// Most leaf cubes the surface may occupy (`2 A / side²`, about three
+/// times the particles kept): 3.6e6 of them (the octahedron at depth 10)
+/// took 720 MB, so this stays near 400 MB.
+const MAX_CELLS: f64 = 2e6;
 /// Highest level and precision a stream can hold (the format's 16-bit
 /// coordinates).
 const MAX_BITS: u8 = 16;
@@ -183,7 +186,7 @@ fn check_cost(path: &Path, model: &Model, depth: u8) -> Result<()> {
             })
             .unwrap_or(1);
         return Err(crate::ui::usage(format!(
-            "--depth {depth} on {}: about {:.1e} surface samples and {:.1e} octree cells, past the {:.0e} samples and {:.1e} cells (about 1 GB) this command takes; use --depth {fits} or less",
+            "--depth {depth} on {}: about {:.1e} surface samples and {:.1e} octree cells, past the {:.0e} samples and {:.0e} cells this command takes (well under 1 GB and a minute); use --depth {fits} or less",
             path.display(),
             samples,
             cells,
@@ -340,7 +343,13 @@ fn run_decode(ui: &Ui, a: &DecodeArgs) -> Result<()> {
     } else {
         decode_prefix(&bytes, &opts)
     }
-    .with_context(|| name.clone())?;
+    .with_context(|| {
+        if a.strict {
+            format!("{name} (--strict: a cut chunk is refused)")
+        } else {
+            name.clone()
+        }
+    })?;
     step.finish();
     let finest = d.finest_level();
     let r = a.level.unwrap_or(finest);
@@ -365,7 +374,7 @@ fn run_decode(ui: &Ui, a: &DecodeArgs) -> Result<()> {
     }
     if let Some(c) = &d.cut {
         ui.status(format!(
-            "{name}: stopped at byte {} of {}: chunk {} is cut short ({}); decoded the {} complete chunks before it (levels 0..={finest})",
+            "{name}: stopped at byte {} of {}, where chunk {} is cut short ({}); decoded the {} complete chunks before it (levels 0..={finest})",
             c.offset,
             bytes.len(),
             c.chunk,
