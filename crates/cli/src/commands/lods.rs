@@ -88,7 +88,8 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
         .unwrap_or("mesh")
         .to_string();
     let start = Instant::now();
-    let report = write_chain(
+    let json = a.json;
+    let report = write_chain_reporting(
         ui,
         &mesh,
         &a.input.display().to_string(),
@@ -97,18 +98,20 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
         &targets,
         &opts,
         a.samples,
+        &mut |l| {
+            if !json {
+                ui.status(format!(
+                    "level {}: {} triangles, {} vertices, error est. {:.3e} / measured mean {:.3e} max {:.3e}: {}",
+                    l.level, l.triangles, l.vertices, l.estimated_error, l.measured_mean_error, l.measured_max_error, l.stop
+                ));
+            }
+        },
     )?;
     let total = start.elapsed().as_secs_f64();
     let json = serde_json::to_string_pretty(&report)? + "\n";
     if a.json {
         crate::out!("{json}")?;
         return Ok(());
-    }
-    for l in &report.levels {
-        ui.status(format!(
-            "level {}: {} triangles, {} vertices, error est. {:.3e} / measured mean {:.3e} max {:.3e}: {}",
-            l.level, l.triangles, l.vertices, l.estimated_error, l.measured_mean_error, l.measured_max_error, l.stop
-        ));
     }
     ui.status(format!(
         "wrote {} levels, {} and lods.json to {} ({:.3} s)",
@@ -135,12 +138,40 @@ pub fn write_chain(
     opts: &Options,
     samples: usize,
 ) -> Result<Lods> {
+    write_chain_reporting(
+        ui,
+        mesh,
+        input_label,
+        stem,
+        out,
+        targets,
+        opts,
+        samples,
+        &mut |_| {},
+    )
+}
+
+/// [`write_chain`], calling `on_level` with each level as soon as it is
+/// measured and written (so a long chain reports one line per level as it
+/// goes, on a terminal or not).
+#[allow(clippy::too_many_arguments)]
+pub fn write_chain_reporting(
+    ui: &Ui,
+    mesh: &TriMesh,
+    input_label: &str,
+    stem: &str,
+    out: &Path,
+    targets: &[Target],
+    opts: &Options,
+    samples: usize,
+    on_level: &mut dyn FnMut(&Level),
+) -> Result<Lods> {
     std::fs::create_dir_all(out)
         .with_context(|| format!("{}: cannot create output directory", out.display()))?;
     let mut ws = Simplifier::new();
     let mut levels = Vec::new();
     let mut meshes: Vec<(String, TriMesh)> = Vec::new();
-    let step = ui.stage("simplifying");
+    let step = ui.spinner("simplifying");
     let chain = ws
         .lod_chain(mesh, opts, targets)
         .map_err(|e| anyhow::anyhow!("{input_label}: {e}"))?;
@@ -152,7 +183,7 @@ pub fn write_chain(
     for (i, l) in chain.into_iter().enumerate() {
         let name = format!("{stem}_lod{}", i + 1);
         let file = format!("{name}.ply");
-        let step = ui.stage(&format!("measuring level {}", i + 1));
+        let step = ui.spinner(&format!("measuring level {}", i + 1));
         let (mean, max) = if l.mesh.faces.is_empty() {
             (f64::NAN, f64::NAN)
         } else {
@@ -179,6 +210,7 @@ pub fn write_chain(
             seconds: l.report.seconds,
             stop: l.report.stop.to_string(),
         });
+        on_level(levels.last().expect("just pushed"));
         meshes.push((name, l.mesh));
     }
     let glb_name = format!("{stem}_lods.glb");
