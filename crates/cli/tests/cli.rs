@@ -700,12 +700,21 @@ fn off_a_terminal_long_stages_print_a_line_each_unless_quiet() {
     let e = stderr(&o);
     assert!(o.status.success(), "{e}");
     assert!(
-        e.contains("simplifying") && e.contains("measuring level 1"),
+        e.contains("level 1: ") && e.contains("measured mean"),
         "{e}"
     );
     let mut quiet = vec!["-q"];
     quiet.extend_from_slice(&args);
     let o = lodkit(&quiet);
     assert!(o.status.success());
+    assert!(stderr(&o).is_empty(), "{}", stderr(&o));
+    let o = lodkit(&["compare", &mesh, &mesh, "--samples", "1000"]);
+    assert!(o.status.success());
+    assert!(
+        stderr(&o).contains("measuring (1000 samples"),
+        "{}",
+        stderr(&o)
+    );
+    let o = lodkit(&["-q", "compare", &mesh, &mesh, "--samples", "1000"]);
     assert!(stderr(&o).is_empty(), "{}", stderr(&o));
 }

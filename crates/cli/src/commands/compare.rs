@@ -1,7 +1,7 @@
 //! `lodkit compare A B`: Metro-style distances.
 use std::path::PathBuf;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 use lodkit_mesh::metrics::{CompareOptions, compare};
 
@@ -65,8 +65,18 @@ pub fn run(ui: &Ui, args: &CompareArgs) -> Result<()> {
     };
     let n = n.min(value::MAX_SAMPLES);
     let step = ui.stage(&format!("measuring ({n} samples of each kind per mesh)"));
-    let report = compare(&a, &b, &opts)
-        .with_context(|| format!("comparing {} with {}", args.a.display(), args.b.display()))?;
+    // The library names the meshes "A" and "B"; the user knows their paths.
+    let report = compare(&a, &b, &opts).map_err(|e| {
+        let msg = e
+            .to_string()
+            .replace("mesh A", &args.a.display().to_string())
+            .replace("mesh B", &args.b.display().to_string());
+        anyhow::anyhow!(
+            "comparing {} with {}: {msg}",
+            args.a.display(),
+            args.b.display()
+        )
+    })?;
     step.finish();
     let heat = match &args.heatmap {
         Some(out) => Some(heatmap::write(&a, &b, &args.a, out)?),

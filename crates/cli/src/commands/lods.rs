@@ -196,7 +196,7 @@ pub fn write_chain_reporting(
             &Model::Mesh(l.mesh.clone()),
             WriteOptions::default(),
         )
-        .map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
+        .map_err(|e| anyhow::anyhow!("{}: {e}", out.join(&file).display()))?;
         write_atomic(&out.join(&file), &bytes)?;
         levels.push(Level {
             level: i + 1,
@@ -219,7 +219,8 @@ pub fn write_chain_reporting(
         .filter(|(_, m)| !m.faces.is_empty())
         .map(|(n, m)| (n.as_str(), m))
         .collect();
-    let glb = write_glb(&named).map_err(|e| anyhow::anyhow!("{glb_name}: {e}"))?;
+    let glb =
+        write_glb(&named).map_err(|e| anyhow::anyhow!("{}: {e}", out.join(&glb_name).display()))?;
     write_atomic(&out.join(&glb_name), &glb)?;
     let report = Lods {
         input: input_label.to_string(),

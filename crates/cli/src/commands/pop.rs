@@ -365,11 +365,10 @@ fn run_decode(ui: &Ui, a: &DecodeArgs) -> Result<()> {
     }
     if let Some(n) = a.precision
         && n != d.precision
-        && n > d.precision
     {
         ui.status(format!(
-            "{name}: decoded at {} bits, the most it holds (--precision {n})",
-            d.precision
+            "{name}: decoded at {} bits, not the --precision {n} asked: this stream's positions carry {}..={} bits",
+            d.precision, d.header.depth, d.header.precision
         ));
     }
     if let Some(c) = &d.cut {
