@@ -3,8 +3,8 @@
 //! Everything the browser runs goes through the functions here, and they use
 //! only the crates' high-level entry points: `lodkit_particles::{decode,
 //! DecodeOptions, triangulate, TriangulateOptions}`, `Decoded::surface`, the
-//! `.pop` container reader, and `lodkit_mco::{McoModel, Camera}` with
-//! `McoModel::from_bytes`. When those APIs move, this file is the only one to
+//! `.pop` container reader, and `lodkit_mco::{McoModel, McoStream, Camera}`
+//! with `McoModel::from_bytes`. When those APIs move, this file is the only one to
 //! re-point.
 //!
 //! `.pop` prefixes: a stream arriving over the network is cut at the end of
@@ -14,7 +14,7 @@
 //! colours and normals are there too.
 
 use glam::Vec3;
-use lodkit_mco::{Camera, McoModel};
+use lodkit_mco::{Camera, McoModel, McoStream};
 use lodkit_particles::{ChunkKind, ChunkReader, HEADER_LEN, read_header};
 use lodkit_particles::{DecodeOptions, Decoded, TriangulateOptions};
 
@@ -149,6 +149,36 @@ pub fn mco_load(bytes: &[u8]) -> Result<McoModel, String> {
     McoModel::from_bytes(bytes).map_err(|e| e.to_string())
 }
 
+/// A `.mco` read as its bytes arrive (version 2 only: its chunks are in
+/// LOD-number order, so each complete chunk serves more LOD numbers).
+pub fn mco_stream_new() -> McoStream {
+    McoStream::new()
+}
+
+/// Feeds the next `bytes` of the file to `s`. Returns the model of every
+/// chunk complete so far when these bytes completed at least one (every
+/// cut up to its `max_lod` is the whole file's cut), `None` while the next
+/// chunk is still short. `Err`: a bad header or chunk (the stream stays
+/// failed). Cost: linear in the bytes, plus a copy of the model read so
+/// far and its extraction tables per call that completes a chunk.
+pub fn mco_stream_push(s: &mut McoStream, bytes: &[u8]) -> Result<Option<McoModel>, String> {
+    if !s.push(bytes).map_err(|e| e.to_string())? {
+        return Ok(None);
+    }
+    Ok(s.model())
+}
+
+/// Whether every chunk of the file has been read.
+pub fn mco_stream_complete(s: &McoStream) -> bool {
+    s.is_complete()
+}
+
+/// The `.mco` format version the first bytes of a file declare (`None`:
+/// too short, or no `.mco` signature).
+pub fn mco_file_version(bytes: &[u8]) -> Option<u32> {
+    McoModel::file_version(bytes)
+}
+
 /// The model's whole vertex buffer (every cut indexes into it).
 pub fn mco_vertices(m: &McoModel) -> MeshOut {
     MeshOut {
@@ -263,6 +293,33 @@ mod tests {
         let t = lodkit_particles::triangulate(&s, &TriangulateOptions::DEFAULT);
         assert_eq!(mesh.indices, t.mesh.faces.into_flattened());
         assert_eq!(mesh.positions, t.mesh.positions);
+    }
+
+    #[test]
+    fn a_streamed_mco_serves_more_lod_numbers_as_chunks_arrive() {
+        let mesh = lodkit_mesh::shapes::icosphere(3);
+        let model = lodkit_mco::build_from_mesh(&mesh, &lodkit_mco::Options::default())
+            .expect("builds");
+        let bytes = model.to_bytes();
+        assert_eq!(mco_file_version(&bytes), Some(2));
+        let whole = mco_load(&bytes).unwrap();
+        let mut s = mco_stream_new();
+        let mut last = None;
+        let mut max_lod = 0;
+        for piece in bytes.chunks(97) {
+            if let Some(m) = mco_stream_push(&mut s, piece).unwrap() {
+                assert!(m.max_lod() >= max_lod, "LOD numbers never go back");
+                max_lod = m.max_lod();
+                last = Some(m);
+            }
+        }
+        assert!(mco_stream_complete(&s));
+        let last = last.expect("a model");
+        assert_eq!(last.max_lod(), whole.max_lod());
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        mco_extract_lod(&last, whole.max_lod(), &mut a);
+        mco_extract_lod(&whole, whole.max_lod(), &mut b);
+        assert_eq!(a, b);
     }
 
     #[test]

@@ -28,6 +28,12 @@
 //!   `lk_mco_extract_view` replace the mesh's index buffer and return the
 //!   LOD number (or the expanded node count for a view); `lk_mco_max_lod`,
 //!   `lk_mco_full_triangles`, `lk_mco_bounds(h) -> ptr to 6 f32`.
+//!   Streamed (version 2): `lk_mco_stream_new() -> h`;
+//!   `lk_mco_stream_push(h, ptr, len) -> 1|0|-1` feeds the next bytes and
+//!   says whether a chunk completed (the model then serves more LOD
+//!   numbers: re-read the vertices, re-cut); `lk_mco_complete(h)`;
+//!   `lk_mco_file_version(ptr, len)` (a version-1 file is read whole).
+//!   Before a stream's first chunk the model calls return -1.
 //! * The mesh of a handle: `lk_mesh_vertex_count`, `lk_mesh_positions`
 //!   (f32 × 3 per vertex), `lk_mesh_normals` (f32 × 3, 0 when absent),
 //!   `lk_mesh_colors` (u8 × 4, 0 when absent), `lk_mesh_index_count`,
@@ -47,7 +53,7 @@ use std::cell::RefCell;
 
 use engine::{MeshOut, PopPrefix, Scan, View};
 use glam::Vec3;
-use lodkit_mco::McoModel;
+use lodkit_mco::{McoModel, McoStream};
 
 /// FNV-1a (64 bit) over a mesh's index buffer then its positions' bit
 /// patterns, little-endian: equal digests mean identical buffers. The native
@@ -79,7 +85,10 @@ enum Slot {
         mesh: MeshOut,
     },
     Mco {
-        model: Box<McoModel>,
+        /// `None` until a streamed file's first chunk is in.
+        model: Option<Box<McoModel>>,
+        /// The reader of a file opened with `lk_mco_stream_new`.
+        stream: Option<Box<McoStream>>,
         mesh: MeshOut,
         bounds: [f32; 6],
     },
@@ -357,14 +366,12 @@ pub unsafe extern "C" fn lk_mco_open(ptr: *const u8, len: usize) -> u32 {
         unsafe { std::slice::from_raw_parts(ptr, len) }
     };
     match engine::mco_load(bytes) {
-        Ok(model) => {
-            let (lo, hi) = engine::mco_bounds(&model);
-            insert(Slot::Mco {
-                model: Box::new(model),
-                mesh: MeshOut::default(),
-                bounds: [lo.x, lo.y, lo.z, hi.x, hi.y, hi.z],
-            })
-        }
+        Ok(model) => insert(Slot::Mco {
+            bounds: bounds_of(&model),
+            model: Some(Box::new(model)),
+            stream: None,
+            mesh: MeshOut::default(),
+        }),
         Err(e) => {
             fail(e);
             0
@@ -372,10 +379,100 @@ pub unsafe extern "C" fn lk_mco_open(ptr: *const u8, len: usize) -> u32 {
     }
 }
 
+fn bounds_of(m: &McoModel) -> [f32; 6] {
+    let (lo, hi) = engine::mco_bounds(m);
+    [lo.x, lo.y, lo.z, hi.x, hi.y, hi.z]
+}
+
+/// A `.mco` handle that reads the file as it arrives (version 2); no model
+/// until its first chunk is in ([`lk_mco_stream_push`]).
+#[unsafe(no_mangle)]
+pub extern "C" fn lk_mco_stream_new() -> u32 {
+    insert(Slot::Mco {
+        model: None,
+        stream: Some(Box::new(engine::mco_stream_new())),
+        mesh: MeshOut::default(),
+        bounds: [0.0; 6],
+    })
+}
+
+/// Feeds the next `len` bytes of the file (at `ptr`) to stream `h`.
+/// Returns 1 when they completed a chunk (the handle's model now serves
+/// more LOD numbers: re-read its vertices and re-cut), 0 when not, -1 with
+/// an error message (a bad header or chunk; the stream stays failed).
+///
+/// # Safety
+/// `ptr..ptr + len` must be readable (a buffer from [`lk_alloc`]).
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn lk_mco_stream_push(h: u32, ptr: *const u8, len: usize) -> i32 {
+    let bytes = if len == 0 {
+        &[][..]
+    } else {
+        // SAFETY: the caller passes a buffer of `len` bytes it wrote.
+        unsafe { std::slice::from_raw_parts(ptr, len) }
+    };
+    let r = with_slot(h, |slot| match slot {
+        Slot::Mco {
+            model,
+            stream: Some(s),
+            bounds,
+            ..
+        } => {
+            let Some(m) = engine::mco_stream_push(s, bytes)? else {
+                return Ok(0);
+            };
+            *bounds = bounds_of(&m);
+            *model = Some(Box::new(m));
+            Ok(1)
+        }
+        _ => Err("not a streamed .mco handle".to_string()),
+    });
+    match r {
+        Some(Ok(n)) => n,
+        Some(Err(e)) => {
+            fail(e);
+            -1
+        }
+        None => -1,
+    }
+}
+
+/// 1 when every chunk of stream `h` has been read (or `h` was opened
+/// whole), 0 while chunks are missing, -1 when `h` is not a `.mco` handle.
+#[unsafe(no_mangle)]
+pub extern "C" fn lk_mco_complete(h: u32) -> i32 {
+    with_slot(h, |slot| match slot {
+        Slot::Mco { stream: Some(s), .. } => i32::from(engine::mco_stream_complete(s)),
+        Slot::Mco { .. } => 1,
+        Slot::Pop { .. } => -1,
+    })
+    .unwrap_or(-1)
+}
+
+/// The `.mco` version `len` bytes at `ptr` declare (1 or 2), 0 when they
+/// are too short or lack the signature (a version-1 file does not stream:
+/// the caller reads it whole and opens it with [`lk_mco_open`]).
+///
+/// # Safety
+/// `ptr..ptr + len` must be readable (a buffer from [`lk_alloc`]).
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn lk_mco_file_version(ptr: *const u8, len: usize) -> u32 {
+    if len == 0 {
+        return 0;
+    }
+    // SAFETY: the caller passes a buffer of `len` bytes it wrote.
+    let bytes = unsafe { std::slice::from_raw_parts(ptr, len) };
+    engine::mco_file_version(bytes).unwrap_or(0)
+}
+
 fn mco_do(h: u32, f: impl FnOnce(&McoModel, &mut MeshOut) -> usize) -> i32 {
     with_slot(h, |slot| match slot {
-        Slot::Mco { model, mesh, .. } => f(model, mesh) as i32,
-        Slot::Pop { .. } => -1,
+        Slot::Mco {
+            model: Some(model),
+            mesh,
+            ..
+        } => f(model, mesh) as i32,
+        _ => -1,
     })
     .unwrap_or(-1)
 }
