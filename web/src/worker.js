@@ -16,7 +16,8 @@
 //   {type:'close', id}
 // Messages out:
 //   {type:'pop-level', id, level, depth, precision, levels, bytesUsed,
-//    triangles, decodeMs, triangulateMs, digest, mesh}
+//    triangles, decodeMs, triangulateMs, startedAt, postedAt, mesh}
+//   {type:'pop-digest', id, level, precision, digest}   right after each level
 //   {type:'pop-done', id, levels, bytesUsed}
 //   {type:'mco-model', id, maxLod, fullTriangles, bounds, complete, bytes, mesh}
 //     (a streamed file: once per read that completed chunks, each a model
@@ -65,7 +66,9 @@ function transfers(mesh) {
 }
 
 function popDecode(id, s, done) {
-  // Decode again only when a whole new chunk run has arrived.
+  // Decodes the chunks that arrived (each once); the levels are copied out
+  // only when a whole new chunk run made more of the stream usable.
+  const t0 = performance.now();
   const usable = wasm.lk_pop_usable(s.h);
   if (usable < 0) throw new Error(errorText());
   if (usable <= s.decodedTo) {
@@ -73,8 +76,7 @@ function popDecode(id, s, done) {
     return;
   }
   s.decodedTo = usable;
-  const t0 = performance.now();
-  const levels = wasm.lk_pop_decode(s.h, -1);
+  const levels = wasm.lk_pop_decode(s.h);
   const decodeMs = performance.now() - t0;
   if (levels < 0) throw new Error(errorText());
   s.levels = levels;
@@ -83,22 +85,23 @@ function popDecode(id, s, done) {
   const finest = levels - 1;
   // A new level, or finer positions for the finest one (precision layers).
   if (finest > s.sentLevel || (finest === s.sentLevel && precision > s.precision)) {
-    sendLevel(id, s, finest, levels, precision, decodeMs);
+    sendLevel(id, s, finest, levels, precision, decodeMs, t0);
   }
   if (done) {
     postMessage({ type: 'pop-done', id, levels, bytesUsed: wasm.lk_pop_bytes_used(s.h) });
   }
 }
 
-function sendLevel(id, s, level, levels, precision, decodeMs) {
+// `startedAt`: when the worker took up the bytes that completed the level.
+function sendLevel(id, s, level, levels, precision, decodeMs, startedAt) {
   const t1 = performance.now();
   const triangles = wasm.lk_pop_mesh(s.h, level);
   const triangulateMs = performance.now() - t1;
   if (triangles < 0) throw new Error(errorText());
-  const digest = BigInt.asUintN(64, wasm.lk_mesh_digest(s.h)).toString(16).padStart(16, '0');
   const mesh = meshOf(s.h, true, true);
   s.sentLevel = level;
   s.precision = precision;
+  const now = performance.now();
   postMessage(
     {
       type: 'pop-level',
@@ -111,13 +114,18 @@ function sendLevel(id, s, level, levels, precision, decodeMs) {
       triangles,
       decodeMs,
       triangulateMs,
-      digest,
-      // Absolute time (ms since the epoch) the level left the worker.
-      postedAt: performance.timeOrigin + performance.now(),
+      // Absolute times (ms since the epoch): the worker took the bytes up,
+      // and the level left it.
+      startedAt: performance.timeOrigin + (startedAt ?? t1),
+      postedAt: performance.timeOrigin + now,
       mesh,
     },
     transfers(mesh),
   );
+  // The digest (for tests comparing buffers with the CLI's) after the
+  // level is on its way: it is not on the path to the screen.
+  const digest = BigInt.asUintN(64, wasm.lk_mesh_digest(s.h)).toString(16).padStart(16, '0');
+  postMessage({ type: 'pop-digest', id, level, precision, digest });
 }
 
 function copyIn(bytes) {
@@ -249,7 +257,7 @@ function handle(m) {
     }
     case 'pop-level': {
       const s = streams.get(m.id);
-      sendLevel(m.id, s, m.level, wasm.lk_pop_decode(s.h, -1), wasm.lk_pop_precision(s.h), 0);
+      sendLevel(m.id, s, m.level, wasm.lk_pop_decode(s.h), wasm.lk_pop_precision(s.h), 0);
       return;
     }
     case 'mco-open': {

@@ -195,14 +195,15 @@ await check('pop at 1 Mbit/s: first level drawn before a tenth of the stream, ea
   const bad = expected404(p, errors);
   assert(!s.error, `viewer error: ${s.error}`);
   assert(bad.length === 0, `console errors: ${JSON.stringify(bad)}`);
-  // Per refinement: bytes it needs, and ms from its last byte to the worker
-  // posting it (decode + triangulate), to the page holding it, to drawn.
+  // Per refinement: bytes it needs, and ms from its last byte to on screen:
+  // to the worker, in the worker (decode + triangulate), to the page, drawn.
   const shown = s.levelsShown.map((l) => ({
     level: l.level,
     bits: l.precision,
     bytes: l.bytesUsed,
     tris: l.triangles,
     ms: +l.latencyMs.toFixed(1),
+    queue: +l.queueMs.toFixed(1),
     worker: +l.workerMs.toFixed(1),
     decode: +l.decodeMs.toFixed(1),
     triangulate: +l.triangulateMs.toFixed(1),
@@ -210,7 +211,7 @@ await check('pop at 1 Mbit/s: first level drawn before a tenth of the stream, ea
     draw: +l.drawMs.toFixed(1),
   }));
   console.log(`     pop levels at 1 Mbit/s (${base}):`);
-  for (const l of shown) console.log(`       level ${l.level} ${l.bits} bits  ${l.bytes} B  ${l.tris} tris  ${l.ms} ms from last byte to screen (worker ${l.worker}: decode ${l.decode}, triangulate ${l.triangulate}; post ${l.post}, upload+draw ${l.draw})`);
+  for (const l of shown) console.log(`       level ${l.level} ${l.bits} bits  ${l.bytes} B  ${l.tris} tris  ${l.ms} ms from last byte to screen (to worker ${l.queue}; worker ${l.worker}: decode ${l.decode}, triangulate ${l.triangulate}; post ${l.post}, upload+draw ${l.draw})`);
   assert(s.levelsShown.length > 0 && s.levelsShown[0].level < s.level, `the first refinement shown is level ${s.levelsShown[0] && s.levelsShown[0].level}, not a coarse one`);
   assert(s.firstDrawLoaded > 0 && s.firstDrawLoaded < s.total / 10, `first level drawn at ${s.firstDrawLoaded} of ${s.total} bytes`);
   // Each octree level (its first showing; precision layers refine the

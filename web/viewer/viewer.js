@@ -197,7 +197,7 @@ async function openPop(url) {
     const s = mesh.userData.pop;
     mesh.addEventListener('level', () => {
       if (viewer.model !== mesh) return; // a stream the page has moved on from
-      Object.assign(state, { level: s.level, levels: s.levels, precision: s.precision, triangles: s.triangles, decodeMs: s.decodeMs + s.triangulateMs, digest: s.digest });
+      Object.assign(state, { level: s.level, levels: s.levels, precision: s.precision, triangles: s.triangles, decodeMs: s.decodeMs + s.triangulateMs });
       setWireframe(mesh, state.wireframe);
       pending = s.history[s.history.length - 1];
       if (!framed) {
@@ -221,10 +221,12 @@ async function openPop(url) {
         triangles: pending.triangles,
         bytesUsed: pending.bytesUsed,
         // From the read holding the level's last byte to this frame drawn,
-        // and its parts: the worker (decode, triangulate, copy out), the
-        // message to the page, the upload and draw.
+        // and its parts: to the worker taking the bytes up, the worker
+        // (decode, triangulate, copy out), the message to the page, the
+        // upload and draw.
         latencyMs: now - pending.receivedAt,
-        workerMs: pending.postedAt - pending.receivedAt,
+        queueMs: pending.startedAt - pending.receivedAt,
+        workerMs: pending.postedAt - pending.startedAt,
         decodeMs: pending.decodeMs,
         triangulateMs: pending.triangulateMs,
         postMs: pending.meshAt - pending.postedAt,
@@ -236,7 +238,11 @@ async function openPop(url) {
       }
       pending = null;
     };
+    mesh.addEventListener('digest', () => {
+      if (viewer.model === mesh) state.digest = s.digest;
+    });
     s.done.then(() => {
+      state.digest = s.digest;
       state.complete = true;
       state.loaded = s.loaded;
       state.total = s.total;

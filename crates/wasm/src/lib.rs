@@ -15,9 +15,10 @@
 //!   call that returned a failure (`0` handle or a negative count).
 //! * `.pop`: `lk_pop_new() -> h`; `lk_pop_push(h, len) -> ptr` grows the
 //!   stream by `len` bytes and returns where to write them;
-//!   `lk_pop_decode(h, max_level) -> levels` decodes every complete chunk
-//!   received so far (`max_level < 0`: all), `-1` on a damaged stream;
-//!   `lk_pop_usable(h)` is the byte count that decode would use now;
+//!   `lk_pop_usable(h)` decodes the chunks received since the last call
+//!   (each chunk once) and returns the bytes usable now; `lk_pop_decode(h)
+//!   -> levels` does the same and takes a copy of the usable levels for
+//!   `lk_pop_mesh` when they grew, `-1` on a damaged stream;
 //!   `lk_pop_depth`, `lk_pop_precision`, `lk_pop_bytes_used` describe the
 //!   decoded prefix; `lk_pop_mesh(h, level) -> triangles` triangulates and
 //!   orients a decoded level into the handle's mesh.
@@ -43,15 +44,15 @@
 //! * `lk_close(h)` frees a handle; `lk_warm_up()` runs a built-in small
 //!   stream through the decoder once (call it when a worker starts).
 //!
-//! Cost: each `lk_pop_decode` decodes the usable prefix from its start (a
-//! `.pop` decodes at tens of MB/s, so the viewer calls it once per newly
-//! completed chunk run, not per network packet).
+//! Cost: a stream's chunks are decoded once in all, however many reads it
+//! arrives in; `lk_pop_decode` copies the decoded levels when they grew
+//! (the viewer calls it once per newly completed chunk run).
 
 pub mod engine;
 
 use std::cell::RefCell;
 
-use engine::{MeshOut, PopPrefix, Scan, View};
+use engine::{MeshOut, PopPrefix, PopStream, View};
 use glam::Vec3;
 use lodkit_mco::{McoModel, McoStream};
 
@@ -79,8 +80,9 @@ pub fn digest(indices: &[u32], positions: &[Vec3]) -> u64 {
 
 enum Slot {
     Pop {
-        bytes: Vec<u8>,
-        scan: Scan,
+        stream: Box<PopStream>,
+        /// Bytes usable at the last `lk_pop_decode` (0: none yet).
+        decoded_to: usize,
         prefix: Option<Box<PopPrefix>>,
         mesh: MeshOut,
     },
@@ -201,7 +203,7 @@ const WARM_UP_STREAM: &[u8] = include_bytes!("warm_up.pop");
 #[unsafe(no_mangle)]
 pub extern "C" fn lk_warm_up() -> i32 {
     let run = || -> Result<usize, String> {
-        let p = engine::pop_decode_prefix(WARM_UP_STREAM, None)?.ok_or("no level")?;
+        let p = engine::pop_decode_prefix(WARM_UP_STREAM)?.ok_or("no level")?;
         let r = engine::pop_depth(&p.decoded);
         Ok(engine::pop_level_mesh(&p.decoded, r)?.indices.len() / 3)
     };
@@ -217,8 +219,8 @@ pub extern "C" fn lk_warm_up() -> i32 {
 #[unsafe(no_mangle)]
 pub extern "C" fn lk_pop_new() -> u32 {
     insert(Slot::Pop {
-        bytes: Vec::new(),
-        scan: Scan::default(),
+        stream: Box::new(engine::pop_stream_new()),
+        decoded_to: 0,
         prefix: None,
         mesh: MeshOut::default(),
     })
@@ -229,7 +231,8 @@ pub extern "C" fn lk_pop_new() -> u32 {
 #[unsafe(no_mangle)]
 pub extern "C" fn lk_pop_push(h: u32, len: usize) -> *mut u8 {
     with_slot(h, |slot| match slot {
-        Slot::Pop { bytes, .. } => {
+        Slot::Pop { stream, .. } => {
+            let bytes = &mut stream.bytes;
             let at = bytes.len();
             bytes.resize(at + len, 0);
             bytes[at..].as_mut_ptr()
@@ -239,26 +242,28 @@ pub extern "C" fn lk_pop_push(h: u32, len: usize) -> *mut u8 {
     .unwrap_or(std::ptr::null_mut())
 }
 
-/// Decodes the complete chunks of stream `h` so far, up to `max_level`
-/// (negative: all). Returns the number of levels decoded (0: not even the
-/// first level yet), or -1 with an error message.
+/// Decodes the chunks of stream `h` received since the last call (each
+/// chunk is decoded once) and, when they made more of the stream usable,
+/// takes a new copy of what is decoded for `lk_pop_mesh`. Returns the
+/// number of usable levels (0: not even the first level yet), or -1 with
+/// an error message.
 #[unsafe(no_mangle)]
-pub extern "C" fn lk_pop_decode(h: u32, max_level: i32) -> i32 {
-    let max_level = u8::try_from(max_level).ok();
+pub extern "C" fn lk_pop_decode(h: u32) -> i32 {
     let r = with_slot(h, |slot| match slot {
         Slot::Pop {
-            bytes,
-            scan,
+            stream,
+            decoded_to,
             prefix,
             ..
         } => {
-            *scan = engine::scan_prefix(bytes, *scan)?;
-            let p = engine::pop_decode_usable(bytes, scan.usable, max_level)?;
-            let n = p.as_ref().map_or(0, |p| p.decoded.levels.len());
-            if let Some(p) = p {
-                *prefix = Some(Box::new(p));
+            let usable = engine::pop_stream_read(stream)?;
+            if usable > *decoded_to {
+                *decoded_to = usable;
+                if let Some(p) = engine::pop_stream_decoded(stream)? {
+                    *prefix = Some(Box::new(p));
+                }
             }
-            Ok(n as i32)
+            Ok(prefix.as_ref().map_or(0, |p| p.levels) as i32)
         }
         Slot::Mco { .. } => Err("not a .pop handle".to_string()),
     });
@@ -282,16 +287,14 @@ fn pop_query(h: u32, f: impl FnOnce(&PopPrefix) -> usize) -> i32 {
     .unwrap_or(-1)
 }
 
-/// Bytes of stream `h` a decode would use now (the end of its last usable
-/// chunk; see [`engine::complete_prefix`]), -1 on a damaged header. Cheap
-/// (reads chunk headers only): the worker decodes again only when it grows.
+/// Decodes the chunks of stream `h` received since the last call and
+/// returns the bytes usable now (the end of its last usable chunk: never
+/// between a level chunk and its attribute chunk), -1 on a damaged stream.
+/// The worker calls `lk_pop_decode` only when this grew.
 #[unsafe(no_mangle)]
 pub extern "C" fn lk_pop_usable(h: u32) -> i32 {
     let r = with_slot(h, |slot| match slot {
-        Slot::Pop { bytes, scan, .. } => {
-            *scan = engine::scan_prefix(bytes, *scan)?;
-            Ok(scan.usable)
-        }
+        Slot::Pop { stream, .. } => engine::pop_stream_read(stream),
         Slot::Mco { .. } => Err("not a .pop handle".to_string()),
     });
     match r {
@@ -332,8 +335,13 @@ pub extern "C" fn lk_pop_mesh(h: u32, level: u32) -> i32 {
             mesh,
             ..
         } => {
-            let level =
-                u8::try_from(level).map_err(|_| format!("level {level} is out of range"))?;
+            if level as usize >= p.levels {
+                return Err(format!(
+                    "level {level} has not arrived ({} levels)",
+                    p.levels
+                ));
+            }
+            let level = level as u8;
             *mesh = engine::pop_level_mesh(&p.decoded, level)?;
             Ok((mesh.indices.len() / 3) as i32)
         }
@@ -442,7 +450,9 @@ pub unsafe extern "C" fn lk_mco_stream_push(h: u32, ptr: *const u8, len: usize) 
 #[unsafe(no_mangle)]
 pub extern "C" fn lk_mco_complete(h: u32) -> i32 {
     with_slot(h, |slot| match slot {
-        Slot::Mco { stream: Some(s), .. } => i32::from(engine::mco_stream_complete(s)),
+        Slot::Mco {
+            stream: Some(s), ..
+        } => i32::from(engine::mco_stream_complete(s)),
         Slot::Mco { .. } => 1,
         Slot::Pop { .. } => -1,
     })
