@@ -6,7 +6,8 @@
 #   3. `lodkit serve`, when the binary has that command.
 # Installs what is missing (chromium, nginx-light, npm) with apt-get.
 # Output (screenshots, results.json per server): target/web-test/.
-# LODKIT_WEB_BENCH=1 also runs the wasm-vs-native timings (web/tests/bench.mjs).
+# LODKIT_WEB_BENCH=1 also runs the wasm-vs-native timings (web/tests/bench.mjs)
+# and the load test of `lodkit serve` (web/tests/serve-load.mjs).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
@@ -117,7 +118,8 @@ fi
 
 if [ "${LODKIT_WEB_BENCH:-0}" = 1 ]; then
   echo "== wasm vs native timings"
-  node web/tests/bench.mjs || status=1
+  LODKIT_WEB_NATIVE=$native node web/tests/bench.mjs || status=1
+  node web/tests/serve-load.mjs "$lodkit" "$models" "$stem.mco" 64 200 || status=1
 fi
 echo "== web step: $(( $(date +%s) - start )) s"
 exit $status

@@ -35,9 +35,13 @@ export class McoModel extends THREE.Mesh {
   }
 
   constructor(options = {}) {
+    // Front faces only: every cut is wound counter-clockwise seen from
+    // outside, so a back face is the inside of the surface seen past an
+    // open rim (the bunny's underside): drawn double-sided, those showed as
+    // dark and light speckles, lit with flipped normals, around the holes.
     super(
       new THREE.BufferGeometry(),
-      new THREE.MeshStandardMaterial({ color: 0xd8d0c0, roughness: 0.8, metalness: 0.0, side: THREE.DoubleSide }),
+      new THREE.MeshStandardMaterial({ color: 0xd8d0c0, roughness: 0.8, metalness: 0.0, side: THREE.FrontSide }),
     );
     this.isMcoModel = true;
     this.tolerance = options.tolerance ?? 1;

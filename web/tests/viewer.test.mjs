@@ -132,6 +132,27 @@ await check('mco: a camera move changes the cut', async () => {
   return { before, after };
 });
 
+await check('mco underside: front faces only (no back-face speckles past the open rims)', async () => {
+  const { p } = await openModel(mco, 'mco-underside-start.png');
+  const cuts = await p.evaluate(() => window.lodkitViewer.state.cuts);
+  const side = await p.evaluate(() => {
+    const v = window.lodkitViewer;
+    const s = v.model.geometry.boundingSphere;
+    const c = s.center;
+    v.setCamera([c.x + s.radius * 0.3, c.y - s.radius * 2.2, c.z + s.radius * 1.2], [c.x, c.y, c.z]);
+    return v.model.material.side;
+  });
+  await p.waitForFunction((n) => window.lodkitViewer.state.cuts > n, cuts, { timeout: 30000 });
+  await p.waitForTimeout(200);
+  await p.evaluate(() => window.lodkitViewer.render());
+  const cov = await coverage(p);
+  await p.screenshot({ path: path.join(outDir, 'mco-underside.png') });
+  assert(side === 0, `material side ${side}, expected THREE.FrontSide (0)`);
+  assert(cov > MIN_COVERAGE, `only ${(cov * 100).toFixed(2)} % of the canvas shows the underside`);
+  await p.close();
+  return { coverage: +cov.toFixed(3) };
+});
+
 await check('chain glb: levels switch by screen-space error', async () => {
   const { p, state, cov } = await openModel(chain, 'chain.png');
   const want = ref.chain.find((l) => l.level === state.level);

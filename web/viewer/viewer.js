@@ -471,12 +471,12 @@ function controlsUi() {
 function warmShaders() {
   const warm = new THREE.Scene();
   warm.add(...scene.children.filter((o) => o.isLight).map((l) => l.clone()));
-  for (const vertexColors of [false, true]) {
+  for (const [side, vertexColors] of [[THREE.DoubleSide, false], [THREE.DoubleSide, true], [THREE.FrontSide, false], [THREE.FrontSide, true]]) {
     const g = new THREE.BufferGeometry();
     g.setAttribute('position', new THREE.Float32BufferAttribute([0, 0, -2, 1, 0, -2, 0, 1, -2], 3));
     g.setAttribute('normal', new THREE.Float32BufferAttribute([0, 0, 1, 0, 0, 1, 0, 0, 1], 3));
     if (vertexColors) g.setAttribute('color', new THREE.Uint8BufferAttribute([255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255], 4, true));
-    warm.add(new THREE.Mesh(g, new THREE.MeshStandardMaterial({ roughness: 0.8, metalness: 0.0, side: THREE.DoubleSide, vertexColors })));
+    warm.add(new THREE.Mesh(g, new THREE.MeshStandardMaterial({ roughness: 0.8, metalness: 0.0, side, vertexColors })));
   }
   renderer.render(warm, camera);
   renderer.getContext().finish();
