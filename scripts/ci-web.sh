@@ -126,7 +126,8 @@ fi
 
 if [ "${LODKIT_WEB_BENCH:-0}" = 1 ]; then
   echo "== wasm vs native timings"
-  LODKIT_WEB_NATIVE=$native node web/tests/bench.mjs || status=1
+  LODKIT_WEB_NATIVE=$native LODKIT_WEB_BENCH_POP=${LODKIT_WEB_BENCH_POP:-$stem.pop,blob_1m.pop} \
+    LODKIT_WEB_BENCH_BUDGET=${LODKIT_WEB_BENCH_BUDGET:-20000} node web/tests/bench.mjs || status=1
   node web/tests/serve-load.mjs "$lodkit" "$models" "$stem.mco" 64 200 || status=1
 fi
 echo "== web step: $(( $(date +%s) - start )) s"
