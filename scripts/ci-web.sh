@@ -6,7 +6,8 @@
 #   3. `lodkit serve`, when the binary has that command.
 # Installs what is missing (chromium, nginx-light, npm) with apt-get.
 # Output (screenshots, results.json per server): target/web-test/.
-# LODKIT_WEB_BENCH=1 also runs the wasm-vs-native timings (web/tests/bench.mjs).
+# LODKIT_WEB_BENCH=1 also runs the wasm-vs-native timings (web/tests/bench.mjs)
+# and the load test of `lodkit serve` (web/tests/serve-load.mjs).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
@@ -42,6 +43,14 @@ if [ ! -f "$models/report.md" ] || [ "$lodkit" -nt "$models/report.md" ]; then
   "$lodkit" --quiet build data/models/stanford_bunny.ply --out "$models" >/dev/null
 fi
 stem=stanford_bunny
+# A larger stream (a 1M-triangle blob, ~450 KB): at 1 Mbit/s its first
+# level must show before a tenth of it is in, a margin of a third of a
+# second that the bunny's 35 KB stream (3.5 KB, a few packets) cannot give.
+if [ ! -f "$models/blob_1m.pop" ]; then
+  "$native" blob 1000000 "$work/blob_1m.ply"
+  "$lodkit" --quiet pop encode "$work/blob_1m.ply" -o "$models/blob_1m.pop"
+  rm -f "$work/blob_1m.ply"
+fi
 # The finest level, as the CLI reports it.
 level=$("$lodkit" pop stats "$models/$stem.pop" --json | node -e 'let s="";process.stdin.on("data",d=>s+=d).on("end",()=>{const j=JSON.parse(s);console.log(j.depth)})')
 "$native" digest "$models/$stem.pop" "$level" "$models/$stem.mco" 20000 > "$work/native.json"
@@ -60,7 +69,7 @@ if (mcoCli && +mcoCli[1] !== ref.mco.triangles) throw new Error(`mco extract say
 ref.ply_faces = JSON.parse(fs.readFileSync(info, "utf8")).faces;
 const l = JSON.parse(fs.readFileSync(lods, "utf8"));
 ref.chain = l.levels.map((v, i) => ({ level: i + 1, triangles: v.triangles }));
-ref.files = { pop: "stanford_bunny.pop", mco: "stanford_bunny.mco", chain: "lods/" + l.glb, ply: "stanford_bunny.ply" };
+ref.files = { pop: "stanford_bunny.pop", mco: "stanford_bunny.mco", chain: "lods/" + l.glb, ply: "stanford_bunny.ply", bigPop: "blob_1m.pop" };
 fs.writeFileSync(out, JSON.stringify(ref, null, 1));
 ' "$work/native.json" "$work/ply_info.json" "$models/lods/lods.json" "$work/pop_decode.txt" "$work/mco_extract.txt" "$work/ref.json"
 
@@ -117,7 +126,9 @@ fi
 
 if [ "${LODKIT_WEB_BENCH:-0}" = 1 ]; then
   echo "== wasm vs native timings"
-  node web/tests/bench.mjs || status=1
+  LODKIT_WEB_NATIVE=$native LODKIT_WEB_BENCH_POP=${LODKIT_WEB_BENCH_POP:-$stem.pop,blob_1m.pop} \
+    LODKIT_WEB_BENCH_BUDGET=${LODKIT_WEB_BENCH_BUDGET:-20000} node web/tests/bench.mjs || status=1
+  node web/tests/serve-load.mjs "$lodkit" "$models" "$stem.mco" 64 200 || status=1
 fi
 echo "== web step: $(( $(date +%s) - start )) s"
 exit $status

@@ -123,7 +123,6 @@ export class PopLoader extends THREE.Loader {
           bytesUsed: m.bytesUsed,
           decodeMs: m.decodeMs,
           triangulateMs: m.triangulateMs,
-          digest: m.digest,
         });
         state.history.push({
           level: m.level,
@@ -131,6 +130,7 @@ export class PopLoader extends THREE.Loader {
           bytesUsed: m.bytesUsed,
           triangles: m.triangles,
           receivedAt: arrived ? arrived[1] : performance.now(),
+          startedAt: m.startedAt - performance.timeOrigin,
           postedAt: m.postedAt - performance.timeOrigin,
           meshAt: performance.now(),
           decodeMs: m.decodeMs,
@@ -143,6 +143,9 @@ export class PopLoader extends THREE.Loader {
           first = false;
           onLoad(mesh);
         }
+      } else if (m.type === 'pop-digest') {
+        if (m.level === state.level && m.precision === state.precision) state.digest = m.digest;
+        mesh.dispatchEvent({ type: 'digest', digest: m.digest });
       } else if (m.type === 'pop-done') {
         state.complete = true;
         this.handlers.delete(id);

@@ -40,7 +40,7 @@ for (const name of pops) {
         const at = w.lk_pop_push(h, bytes.length); // may grow (detach) memory
         new Uint8Array(w.memory.buffer, at, bytes.length).set(bytes);
         const t0 = performance.now();
-        const levels = w.lk_pop_decode(h, -1);
+        const levels = w.lk_pop_decode(h);
         tris = w.lk_pop_mesh(h, levels - 1);
         const t = performance.now() - t0;
         w.lk_close(h);

@@ -1,9 +1,10 @@
 // Browser tests of the viewer: for a .pop, a .mco, an LOD-chain .glb and a
 // plain mesh, the page shows the model with no console error, and its HUD
 // agrees with the CLI (triangle counts and buffer digests from
-// crates/wasm/examples/native.rs). Then the .pop streamed at 1 Mbit/s draws
-// its first level before a tenth of the stream is in, and a camera move
-// re-cuts the .mco.
+// crates/wasm/examples/native.rs). A camera move re-cuts the .mco. Then, at
+// 1 Mbit/s: the .pop draws its first level before a tenth of the stream is
+// in and each level within 50 ms of its last byte, and the .mco shows a
+// coarse cut before its file is complete.
 //
 // Environment (scripts/ci-web.sh sets it):
 //   LODKIT_WEB_SITE    the built viewer (scripts/build-web.sh)
@@ -14,6 +15,7 @@
 //   LODKIT_WEB_OUT     where screenshots and results go
 
 import fs from 'node:fs';
+import os from 'node:os';
 import path from 'node:path';
 import { staticServer, launch, openPage, coverage, assert } from './lib.mjs';
 
@@ -41,9 +43,8 @@ let failures = 0;
 // The listing probe answers 404 on a static server, by design.
 const expected404 = (page, errors) => errors.filter((e) => !/status of 404/.test(e.text) || !/\/api\/models$/.test(e.url));
 
-// A `soft` check is a timing measured through the page: on a loaded 2-core
-// machine its main-thread stalls decide it as much as the viewer does, so a
-// miss is reported (WARN, and `ok: false` in results.json) but fails nothing.
+// A `soft` check is reported (WARN, and `ok: false` in results.json) but
+// fails nothing.
 async function check(name, fn, { soft = false } = {}) {
   const t0 = Date.now();
   try {
@@ -132,6 +133,27 @@ await check('mco: a camera move changes the cut', async () => {
   return { before, after };
 });
 
+await check('mco underside: front faces only (no back-face speckles past the open rims)', async () => {
+  const { p } = await openModel(mco, 'mco-underside-start.png');
+  const cuts = await p.evaluate(() => window.lodkitViewer.state.cuts);
+  const side = await p.evaluate(() => {
+    const v = window.lodkitViewer;
+    const s = v.model.geometry.boundingSphere;
+    const c = s.center;
+    v.setCamera([c.x + s.radius * 0.3, c.y - s.radius * 2.2, c.z + s.radius * 1.2], [c.x, c.y, c.z]);
+    return v.model.material.side;
+  });
+  await p.waitForFunction((n) => window.lodkitViewer.state.cuts > n, cuts, { timeout: 30000 });
+  await p.waitForTimeout(200);
+  await p.evaluate(() => window.lodkitViewer.render());
+  const cov = await coverage(p);
+  await p.screenshot({ path: path.join(outDir, 'mco-underside.png') });
+  assert(side === 0, `material side ${side}, expected THREE.FrontSide (0)`);
+  assert(cov > MIN_COVERAGE, `only ${(cov * 100).toFixed(2)} % of the canvas shows the underside`);
+  await p.close();
+  return { coverage: +cov.toFixed(3) };
+});
+
 await check('chain glb: levels switch by screen-space error', async () => {
   const { p, state, cov } = await openModel(chain, 'chain.png');
   const want = ref.chain.find((l) => l.level === state.level);
@@ -159,33 +181,130 @@ await check('plain ply shown as it is', async () => {
   return { triangles: state.triangles, coverage: +cov.toFixed(3) };
 });
 
-await check('pop at 1 Mbit/s: first level drawn before a tenth of the stream', async () => {
+// A page with no model open (`?idle`: even where the server lists models),
+// its network throttled to `mbit` Mbit/s with the cache off. The fetches
+// of .pop and .mco bytes run on the page's main thread (the loaders move
+// them to the worker), so the page's emulation governs them.
+async function throttledPage(mbit) {
   const { page: p, errors } = await page();
-  await p.goto(`${base}/`);
+  await p.goto(`${base}/?idle`);
   await p.waitForFunction(() => window.lodkitViewer && window.lodkitViewer.ready);
   await p.evaluate(() => window.lodkitViewer.ready);
   const cdp = await p.context().newCDPSession(p);
   await cdp.send('Network.enable');
-  // The earlier checks loaded the same stream: fetch it again, over the throttle.
+  // The earlier checks loaded the same files: fetch them again, over the throttle.
   await cdp.send('Network.setCacheDisabled', { cacheDisabled: true });
   await cdp.send('Network.emulateNetworkConditions', {
     offline: false,
     latency: 20,
-    downloadThroughput: 1e6 / 8,
-    uploadThroughput: 1e6 / 8,
+    downloadThroughput: (mbit * 1e6) / 8,
+    uploadThroughput: (mbit * 1e6) / 8,
   });
-  await p.evaluate((u) => window.lodkitViewer.open(u), pop);
-  await p.waitForFunction(() => window.lodkitViewer.state.complete || window.lodkitViewer.state.error, null, { timeout: 120000 });
+  return { p, errors };
+}
+
+// A timing through the page is decided by the machine as much as by the
+// viewer: with more runnable processes than cores (other builds sharing
+// the machine), the page's main thread and the worker wait for a core for
+// tens of ms at a time. Such a run reports a miss (WARN, `ok: false`,
+// with the load) and fails nothing; on a machine with a core to spare a
+// miss fails the test.
+const overloaded = () => os.loadavg()[0] > os.cpus().length;
+
+// Streams `url` at 1 Mbit/s from an idle page; returns the viewer state
+// and the refinements shown with their timings.
+async function throttledPop(url, shot) {
+  const load = os.loadavg()[0];
+  const { p, errors } = await throttledPage(1);
+  await p.evaluate((u) => window.lodkitViewer.open(u), url);
+  await p.waitForFunction(() => window.lodkitViewer.state.complete || window.lodkitViewer.state.error, null, { timeout: 180000 });
   await p.waitForTimeout(200);
   const s = await p.evaluate(() => window.lodkitViewer.state);
-  await p.screenshot({ path: path.join(outDir, 'pop-throttled.png') });
+  await p.screenshot({ path: path.join(outDir, shot) });
   const bad = expected404(p, errors);
-  assert(bad.length === 0, `console errors: ${JSON.stringify(bad)}`);
-  const shown = s.levelsShown.map((l) => ({ level: l.level, bits: l.precision, bytes: l.bytesUsed, tris: l.triangles, ms: +l.latencyMs.toFixed(1) }));
-  assert(s.firstDrawLoaded > 0 && s.firstDrawLoaded < s.total / 10, `first level drawn at ${s.firstDrawLoaded} of ${s.total} bytes (shown: ${JSON.stringify(shown)})`);
   await p.close();
-  return { firstDrawBytes: s.firstDrawLoaded, total: s.total, shown };
-}, { soft: true });
+  assert(!s.error, `viewer error: ${s.error}`);
+  assert(bad.length === 0, `console errors: ${JSON.stringify(bad)}`);
+  // Per refinement: bytes it needs, and ms from its last byte to on screen:
+  // to the worker, in the worker (decode + triangulate), to the page, drawn.
+  const shown = s.levelsShown.map((l) => ({
+    level: l.level,
+    bits: l.precision,
+    bytes: l.bytesUsed,
+    tris: l.triangles,
+    ms: +l.latencyMs.toFixed(1),
+    queue: +l.queueMs.toFixed(1),
+    worker: +l.workerMs.toFixed(1),
+    decode: +l.decodeMs.toFixed(1),
+    triangulate: +l.triangulateMs.toFixed(1),
+    post: +l.postMs.toFixed(1),
+    draw: +l.drawMs.toFixed(1),
+  }));
+  console.log(`     ${url} at 1 Mbit/s (${base}, load ${load.toFixed(1)} on ${os.cpus().length} cores):`);
+  for (const l of shown) console.log(`       level ${l.level} ${l.bits} bits  ${l.bytes} B  ${l.tris} tris  ${l.ms} ms from last byte to screen (to worker ${l.queue}; worker ${l.worker}: decode ${l.decode}, triangulate ${l.triangulate}; post ${l.post}, upload+draw ${l.draw})`);
+  assert(shown.length > 0 && shown[0].level < s.level, `the first refinement shown is level ${shown[0] && shown[0].level}, not a coarse one`);
+  return { s, shown, load };
+}
+
+await check('pop at 1 Mbit/s: first level drawn before a tenth of the stream', async () => {
+  const { s, shown, load } = await throttledPop(`/models/${ref.files.bigPop}`, 'pop-big-throttled.png');
+  const r = { firstDrawBytes: s.firstDrawLoaded, total: s.total, firstLevel: shown[0].level, load: +load.toFixed(1) };
+  assert(s.firstDrawLoaded > 0 && s.firstDrawLoaded < s.total / 10, `first level drawn at ${s.firstDrawLoaded} of ${s.total} bytes (${JSON.stringify(r)})`);
+  return r;
+}, { soft: overloaded() });
+
+// Bound on the time from a .pop level's last byte arriving to that level
+// drawn (the GPU finished the first frame that shows it).
+const LEVEL_LATENCY_MS = 50;
+
+await check('pop at 1 Mbit/s: each bunny level on screen within 50 ms of its last byte', async () => {
+  const { s, shown, load } = await throttledPop(pop, 'pop-throttled.png');
+  // Each octree level at its first showing; the precision layers that
+  // refine the finest one are printed beside them.
+  const levels = [];
+  for (const l of shown) if (!levels.some((x) => x.level === l.level)) levels.push(l);
+  const r = { firstDrawBytes: s.firstDrawLoaded, total: s.total, load: +load.toFixed(1), levels: levels.map((l) => [l.level, l.ms]), maxMs: Math.max(...levels.map((l) => l.ms)) };
+  for (const l of levels) {
+    assert(l.ms <= LEVEL_LATENCY_MS, `level ${l.level} reached the screen ${l.ms} ms after its last byte (bound ${LEVEL_LATENCY_MS} ms; ${JSON.stringify(r)})`);
+  }
+  return r;
+}, { soft: overloaded() });
+
+await check('mco at 1 Mbit/s: a coarse cut on screen before the file is complete', async () => {
+  const { p, errors } = await throttledPage(1);
+  const opened = p.evaluate((u) => window.lodkitViewer.open(u), mco);
+  opened.catch(() => {});
+  await p.waitForFunction(() => {
+    const s = window.lodkitViewer.state;
+    return s.error || (s.kind === 'mco' && s.triangles > 0 && s.cuts > 0 && s.frames > 0);
+  }, null, { timeout: 120000 });
+  await p.evaluate(() => window.lodkitViewer.render());
+  const cov = await coverage(p);
+  // Read after the pixels: the coarse cut was drawn by then.
+  const early = await p.evaluate(() => ({ ...window.lodkitViewer.state }));
+  await p.screenshot({ path: path.join(outDir, 'mco-throttled-coarse.png') });
+  assert(!early.error, `viewer error: ${early.error}`);
+  assert(early.triangles > 0, 'no triangles on the HUD');
+  assert(cov > MIN_COVERAGE, `only ${(cov * 100).toFixed(2)} % of the canvas shows the coarse cut`);
+  assert(!early.complete && early.loaded < early.total, `the cut came only with the whole file (${early.loaded} of ${early.total} bytes)`);
+  await p.waitForFunction(() => window.lodkitViewer.state.complete || window.lodkitViewer.state.error, null, { timeout: 180000 });
+  await p.waitForTimeout(300);
+  await p.evaluate(() => window.lodkitViewer.render());
+  const late = await p.evaluate(() => ({ ...window.lodkitViewer.state }));
+  await p.screenshot({ path: path.join(outDir, 'mco-throttled-complete.png') });
+  const bad = expected404(p, errors);
+  assert(!late.error, `viewer error: ${late.error}`);
+  assert(bad.length === 0, `console errors: ${JSON.stringify(bad)}`);
+  assert(late.models > 1, `the model grew ${late.models} time(s) while streaming`);
+  assert(late.maxLod > early.maxLod, `LOD numbers served: ${early.maxLod} early, ${late.maxLod} at the end`);
+  await p.close();
+  return {
+    firstCutBytes: early.firstCutLoaded,
+    coarse: { bytes: early.loaded, triangles: early.triangles, maxLod: early.maxLod, coverage: +cov.toFixed(3) },
+    total: late.total,
+    final: { triangles: late.triangles, maxLod: late.maxLod, models: late.models },
+  };
+});
 
 await browser.close();
 if (server) await server.close();

@@ -47,6 +47,9 @@ const state = {
   wireframe: false,
   firstDrawLoaded: -1, // bytes received when the model was first drawn
   firstDrawMs: -1,
+  firstCutLoaded: -1, // .mco: file bytes read when a cut first had triangles
+  models: 0, // .mco: models read so far (one per read that completed chunks)
+  maxLod: 0,
   levelsShown: [], // .pop: {level, precision, triangles, bytesUsed, latencyMs}
   cuts: 0,
   digest: '',
@@ -193,7 +196,8 @@ async function openPop(url) {
     scene.add(mesh);
     const s = mesh.userData.pop;
     mesh.addEventListener('level', () => {
-      Object.assign(state, { level: s.level, levels: s.levels, precision: s.precision, triangles: s.triangles, decodeMs: s.decodeMs + s.triangulateMs, digest: s.digest });
+      if (viewer.model !== mesh) return; // a stream the page has moved on from
+      Object.assign(state, { level: s.level, levels: s.levels, precision: s.precision, triangles: s.triangles, decodeMs: s.decodeMs + s.triangulateMs });
       setWireframe(mesh, state.wireframe);
       pending = s.history[s.history.length - 1];
       if (!framed) {
@@ -216,7 +220,17 @@ async function openPop(url) {
         precision: pending.precision,
         triangles: pending.triangles,
         bytesUsed: pending.bytesUsed,
+        // From the read holding the level's last byte to this frame drawn,
+        // and its parts: to the worker taking the bytes up, the worker
+        // (decode, triangulate, copy out), the message to the page, the
+        // upload and draw.
         latencyMs: now - pending.receivedAt,
+        queueMs: pending.startedAt - pending.receivedAt,
+        workerMs: pending.postedAt - pending.startedAt,
+        decodeMs: pending.decodeMs,
+        triangulateMs: pending.triangulateMs,
+        postMs: pending.meshAt - pending.postedAt,
+        drawMs: now - pending.meshAt,
       });
       if (state.firstDrawLoaded < 0 && pending.triangles > 0) {
         state.firstDrawLoaded = s.loaded;
@@ -224,7 +238,11 @@ async function openPop(url) {
       }
       pending = null;
     };
+    mesh.addEventListener('digest', () => {
+      if (viewer.model === mesh) state.digest = s.digest;
+    });
     s.done.then(() => {
+      state.digest = s.digest;
       state.complete = true;
       state.loaded = s.loaded;
       state.total = s.total;
@@ -235,6 +253,8 @@ async function openPop(url) {
 }
 
 async function openMco(url) {
+  // Resolves at the file's first chunk: the coarse cut shows while the rest
+  // streams in, and each chunk re-cuts it with finer LOD numbers.
   const model = await McoModel.load(url, {
     tolerance: state.tolerance,
     onProgress: (p) => {
@@ -248,17 +268,32 @@ async function openMco(url) {
   const b = model.bounds;
   const box = new THREE.Box3(new THREE.Vector3(b[0], b[1], b[2]), new THREE.Vector3(b[3], b[4], b[5]));
   viewer.bounds = box;
+  // Framed on the first chunks' vertices: coarse, but spread as the
+  // model's (the bounding cube is larger than the surface).
   frameSphere(model.geometry.boundingSphere);
-  model.addEventListener('cut', () => {
+  const sync = () => {
     const m = model.state;
-    Object.assign(state, { level: m.lod, expanded: m.expanded, triangles: m.triangles, decodeMs: m.cutMs, cuts: m.cuts, digest: m.digest });
+    Object.assign(state, { level: m.lod, expanded: m.expanded, triangles: m.triangles, decodeMs: m.cutMs, cuts: m.cuts, digest: m.digest, maxLod: m.maxLod, fileBytes: m.bytes });
+  };
+  model.addEventListener('cut', () => {
+    sync();
+    if (state.firstCutLoaded < 0 && model.state.triangles > 0) state.firstCutLoaded = model.state.bytes;
     setWireframe(model, state.wireframe);
     requestRender();
   });
+  model.addEventListener('model', () => {
+    state.models = model.state.models;
+    requestRender();
+  });
+  sync();
+  if (model.state.triangles > 0) state.firstCutLoaded = model.state.bytes;
   onFrame = () => {
     model.tolerance = state.tolerance;
     model.update(camera, renderer);
   };
+  requestRender();
+  await model.done;
+  sync();
   state.complete = true;
   requestRender();
 }
@@ -351,8 +386,44 @@ async function openPly(url) {
   state.complete = true;
 }
 
+// Takes the open model off the scene (its worker and buffers freed).
+function close() {
+  const m = viewer.model;
+  if (!m) return;
+  scene.remove(m);
+  if (m.isMcoModel) m.dispose();
+  else
+    m.traverse((o) => {
+      if (o.geometry) o.geometry.dispose();
+    });
+  viewer.model = null;
+}
+
 async function open(url, kind) {
-  Object.assign(state, { url, kind: kindOf(url, kind), loaded: 0, total: 0 });
+  close();
+  onFrame = null;
+  afterFrame = null;
+  // Every figure is about the model being opened, none about the last one.
+  Object.assign(state, {
+    url,
+    kind: kindOf(url, kind),
+    loaded: 0,
+    total: 0,
+    level: -1,
+    levels: 0,
+    precision: -1,
+    triangles: 0,
+    firstDrawLoaded: -1,
+    firstDrawMs: -1,
+    firstCutLoaded: -1,
+    models: 0,
+    maxLod: 0,
+    levelsShown: [],
+    cuts: 0,
+    digest: '',
+    complete: false,
+    error: '',
+  });
   const t0 = performance.now();
   headSize(url).then((n) => {
     if (!state.total) state.total = n;
@@ -400,12 +471,12 @@ function controlsUi() {
 function warmShaders() {
   const warm = new THREE.Scene();
   warm.add(...scene.children.filter((o) => o.isLight).map((l) => l.clone()));
-  for (const vertexColors of [false, true]) {
+  for (const [side, vertexColors] of [[THREE.DoubleSide, false], [THREE.DoubleSide, true], [THREE.FrontSide, false], [THREE.FrontSide, true]]) {
     const g = new THREE.BufferGeometry();
     g.setAttribute('position', new THREE.Float32BufferAttribute([0, 0, -2, 1, 0, -2, 0, 1, -2], 3));
     g.setAttribute('normal', new THREE.Float32BufferAttribute([0, 0, 1, 0, 0, 1, 0, 0, 1], 3));
     if (vertexColors) g.setAttribute('color', new THREE.Uint8BufferAttribute([255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255], 4, true));
-    warm.add(new THREE.Mesh(g, new THREE.MeshStandardMaterial({ roughness: 0.8, metalness: 0.0, side: THREE.DoubleSide, vertexColors })));
+    warm.add(new THREE.Mesh(g, new THREE.MeshStandardMaterial({ roughness: 0.8, metalness: 0.0, side, vertexColors })));
   }
   renderer.render(warm, camera);
   renderer.getContext().finish();
@@ -438,6 +509,8 @@ async function main() {
       location.search = `?model=${encodeURIComponent(sel.value)}`;
     });
   }
+  // ?idle: open nothing (a test opens its model itself).
+  if (params.has('idle')) return;
   if (!url) {
     $('error').textContent = 'No model: open ?model=URL (a .pop, .mco, .glb or .ply).';
     return;

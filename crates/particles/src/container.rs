@@ -232,6 +232,19 @@ impl<'a> ChunkReader<'a> {
         }
     }
 
+    /// [`ChunkReader::new`] starting at byte `pos` of `bytes` (the end of a
+    /// chunk read before), `number` chunks into the stream (for messages):
+    /// a stream arriving in pieces is read on from where it stopped.
+    pub(crate) fn resume(bytes: &'a [u8], pos: usize, number: usize) -> Self {
+        ChunkReader {
+            bytes,
+            pos: pos.max(HEADER_LEN).min(bytes.len()),
+            number,
+            failed: false,
+            cut: false,
+        }
+    }
+
     /// Offset of the next chunk: after the last one yielded (the header's
     /// end before the first).
     pub fn position(&self) -> usize {

@@ -16,7 +16,7 @@ use crate::coding::levels::{self as hc, LevelInput};
 use crate::coding::precision_layers;
 use crate::coding::range_coder::EntropyReader;
 use crate::coding::raw_bits::BitReader;
-use crate::container::{ChunkKind, ChunkReader, Header, Mode, read_header};
+use crate::container::{Chunk, ChunkKind, ChunkReader, Header, Mode, read_header};
 use crate::error::{Result, stream_err};
 use crate::octree::{Frame, QBITS};
 use crate::ordering::HLevel;
@@ -175,85 +175,138 @@ pub fn decode_prefix(bytes: &[u8], opts: &DecodeOptions) -> Result<Decoded> {
 }
 
 fn decode_impl(bytes: &[u8], opts: &DecodeOptions, prefix: bool) -> Result<Decoded> {
-    let header = read_header(bytes)?;
-    match header.mode {
-        Mode::Baseline => decode_with::<BitReader>(bytes, header, opts, prefix),
-        Mode::Entropy => decode_with::<EntropyReader>(bytes, header, opts, prefix),
-    }
+    let mut p = Progress::new(read_header(bytes)?, opts);
+    p.read(bytes, prefix)?;
+    p.finish()
 }
 
-fn decode_with<'a, R: ChunkRead<'a>>(
-    bytes: &'a [u8],
-    header: Header,
-    opts: &DecodeOptions,
-    prefix: bool,
-) -> Result<Decoded> {
-    let depth = header.depth;
-    let max_level = opts.max_level.unwrap_or(depth).min(depth);
-    let max_precision = opts
-        .max_precision
-        .unwrap_or(header.precision)
-        .min(header.precision);
-    let entropy = header.mode == Mode::Entropy;
-    let mut channels = Vec::new();
-    if header.colours {
-        channels.push(Channel::Colour);
+/// The decoder between two chunks: everything [`decode`] keeps while it
+/// reads, so that a stream arriving in pieces ([`crate::PrefixDecoder`])
+/// reads each chunk once, and a whole stream is one call of [`read`].
+///
+/// Invariant: `d` holds the chunks of `bytes[..d.bytes_read]`, `number` of
+/// them; `leaves` the particles' leaf coordinates until the first precision
+/// layer moves them into `d.q`.
+///
+/// [`read`]: Progress::read
+#[derive(Debug, Clone)]
+pub(crate) struct Progress {
+    pub(crate) d: Decoded,
+    channels: Vec<Channel>,
+    max_level: u8,
+    max_precision: u8,
+    leaves: Vec<[u32; 3]>,
+    links: crate::coding::links::Links,
+    neighbours: precision_layers::Faces,
+    /// The chunk expected next: (kind, index).
+    expect: (ChunkKind, u8),
+    /// Chunks read so far.
+    number: usize,
+    /// A limit of the options was reached: later chunks are not read.
+    stopped: bool,
+}
+
+impl Progress {
+    pub(crate) fn new(header: Header, opts: &DecodeOptions) -> Progress {
+        let depth = header.depth;
+        let mut channels = Vec::new();
+        if header.colours {
+            channels.push(Channel::Colour);
+        }
+        if header.normals {
+            channels.push(Channel::Normal);
+        }
+        Progress {
+            d: Decoded {
+                header,
+                levels: Vec::new(),
+                q: Vec::new(),
+                precision: depth,
+                colours: header.colours.then(Vec::new),
+                normals: header.normals.then(Vec::new),
+                bytes_per_level: Vec::new(),
+                eliminated: Vec::new(),
+                structure_bytes: Vec::new(),
+                bytes_read: crate::container::HEADER_LEN,
+                cut: None,
+            },
+            channels,
+            max_level: opts.max_level.unwrap_or(depth).min(depth),
+            max_precision: opts
+                .max_precision
+                .unwrap_or(header.precision)
+                .min(header.precision),
+            leaves: Vec::new(),
+            links: crate::coding::links::Links::root(),
+            neighbours: precision_layers::Faces::default(),
+            expect: (ChunkKind::Level, 0),
+            number: 0,
+            stopped: false,
+        }
     }
-    if header.normals {
-        channels.push(Channel::Normal);
-    }
-    let mut d = Decoded {
-        header,
-        levels: Vec::new(),
-        q: Vec::new(),
-        precision: depth,
-        colours: header.colours.then(Vec::new),
-        normals: header.normals.then(Vec::new),
-        bytes_per_level: Vec::new(),
-        eliminated: Vec::new(),
-        structure_bytes: Vec::new(),
-        bytes_read: crate::container::HEADER_LEN,
-        cut: None,
-    };
-    let mut leaves: Vec<[u32; 3]> = Vec::new();
-    let mut links = crate::coding::links::Links::root();
-    let mut neighbours = precision_layers::Faces::default();
-    // The chunk expected next: (kind, index).
-    let mut expect = (ChunkKind::Level, 0u8);
-    let mut reader = ChunkReader::new(bytes);
-    let mut number = 0;
-    while let Some(chunk) = reader.next() {
-        let chunk = match chunk {
-            Ok(c) => c,
-            Err(crate::Error::Stream(message)) if prefix && reader.was_cut() => {
-                d.cut = Some(Cut {
-                    chunk: number,
-                    offset: d.bytes_read,
-                    message,
-                });
+
+    /// Reads the chunks of `bytes` (the stream from its first byte, a
+    /// longer prefix of the same stream than any read before) that follow
+    /// the last one read. `prefix`: a chunk cut short by the end of
+    /// `bytes` stops quietly ([`Decoded::cut`]); otherwise it is an error.
+    pub(crate) fn read(&mut self, bytes: &[u8], prefix: bool) -> Result<()> {
+        self.d.cut = None;
+        if self.stopped {
+            return Ok(());
+        }
+        let mut reader = ChunkReader::resume(bytes, self.d.bytes_read, self.number);
+        while let Some(chunk) = reader.next() {
+            let chunk = match chunk {
+                Ok(c) => c,
+                Err(crate::Error::Stream(message)) if prefix && reader.was_cut() => {
+                    self.d.cut = Some(Cut {
+                        chunk: self.number,
+                        offset: self.d.bytes_read,
+                        message,
+                    });
+                    break;
+                }
+                Err(e) => return Err(e),
+            };
+            self.number += 1;
+            let end = chunk.end;
+            let more = match self.d.header.mode {
+                Mode::Baseline => self.chunk::<BitReader>(chunk)?,
+                Mode::Entropy => self.chunk::<EntropyReader>(chunk)?,
+            };
+            if !more {
+                self.stopped = true;
                 break;
             }
-            Err(e) => return Err(e),
-        };
-        number += 1;
-        if (chunk.kind, chunk.index) != expect {
+            self.d.bytes_read = end;
+        }
+        Ok(())
+    }
+
+    /// Decodes one chunk; `false` when it is past the options' limits (and
+    /// so is everything after it).
+    fn chunk<'a, R: ChunkRead<'a>>(&mut self, chunk: Chunk<'a>) -> Result<bool> {
+        let depth = self.d.header.depth;
+        let entropy = self.d.header.mode == Mode::Entropy;
+        let d = &mut self.d;
+        if (chunk.kind, chunk.index) != self.expect {
             return stream_err(format!(
                 "chunk {:?} {} found where {:?} {} was expected",
-                chunk.kind, chunk.index, expect.0, expect.1
+                chunk.kind, chunk.index, self.expect.0, self.expect.1
             ));
         }
         match chunk.kind {
             ChunkKind::Level => {
                 let r = chunk.index;
-                if r > max_level {
-                    break;
+                if r > self.max_level {
+                    return Ok(false);
                 }
                 let mut c = R::open(chunk.payload)?;
                 let level = if r == 0 {
                     if chunk.count != 1 {
                         return stream_err("level 0 must hold the root alone");
                     }
-                    leaves.push(hc::code_root(&mut c, depth, None)?);
+                    self.leaves.push(hc::code_root(&mut c, depth, None)?);
                     HLevel {
                         cells: vec![0],
                         phantom: vec![false],
@@ -268,7 +321,7 @@ fn decode_with<'a, R: ChunkRead<'a>>(
                         parents,
                         max_nodes: chunk.count as usize,
                     };
-                    let lv = hc::code_level(&mut c, &inp, &mut links, &mut leaves, None)?;
+                    let lv = hc::code_level(&mut c, &inp, &mut self.links, &mut self.leaves, None)?;
                     if lv.cells.len() != chunk.count as usize {
                         return stream_err(format!(
                             "level {r} decodes to {} nodes, its chunk declares {}",
@@ -278,14 +331,14 @@ fn decode_with<'a, R: ChunkRead<'a>>(
                     }
                     lv
                 };
-                if leaves.len() > header.particles as usize {
+                if self.leaves.len() > d.header.particles as usize {
                     return stream_err("more particles than the header declares");
                 }
                 d.levels.push(level);
                 d.bytes_per_level.push(chunk.end);
                 d.eliminated.push(chunk.aux);
                 d.structure_bytes.push(chunk.payload.len());
-                expect = if channels.is_empty() {
+                self.expect = if self.channels.is_empty() {
                     next_structure(r, depth)
                 } else {
                     (ChunkKind::Attributes, r)
@@ -294,7 +347,7 @@ fn decode_with<'a, R: ChunkRead<'a>>(
             ChunkKind::Attributes => {
                 let r = chunk.index as usize;
                 let mut c = R::open(chunk.payload)?;
-                for &ch in &channels {
+                for &ch in &self.channels {
                     let store = match ch {
                         Channel::Colour => d.colours.as_mut(),
                         Channel::Normal => d.normals.as_mut(),
@@ -318,15 +371,15 @@ fn decode_with<'a, R: ChunkRead<'a>>(
                     store.push(v);
                 }
                 d.bytes_per_level[r] = chunk.end;
-                expect = next_structure(r as u8, depth);
+                self.expect = next_structure(r as u8, depth);
             }
             ChunkKind::Precision => {
                 let b = chunk.index;
-                if b > max_precision {
-                    break;
+                if b > self.max_precision {
+                    return Ok(false);
                 }
                 if d.q.is_empty() {
-                    d.q = to_grid(std::mem::take(&mut leaves), depth);
+                    d.q = to_grid(std::mem::take(&mut self.leaves), depth);
                 }
                 if chunk.count as usize != d.q.len() {
                     return stream_err(format!(
@@ -335,9 +388,9 @@ fn decode_with<'a, R: ChunkRead<'a>>(
                     ));
                 }
                 let mut c = R::open(chunk.payload)?;
-                if entropy && neighbours.is_empty() {
-                    neighbours = precision_layers::particle_faces(
-                        &links,
+                if entropy && self.neighbours.is_empty() {
+                    self.neighbours = precision_layers::particle_faces(
+                        &self.links,
                         &d.levels[depth as usize],
                         d.q.len(),
                     );
@@ -347,23 +400,49 @@ fn decode_with<'a, R: ChunkRead<'a>>(
                     depth,
                     u32::from(b),
                     &mut d.q,
-                    &mut neighbours,
+                    &mut self.neighbours,
                 )?;
                 d.precision = b;
-                expect = (ChunkKind::Precision, b.saturating_add(1));
+                self.expect = (ChunkKind::Precision, b.saturating_add(1));
             }
         }
-        d.bytes_read = chunk.end;
+        Ok(true)
     }
-    if d.levels.is_empty() {
-        return stream_err("the stream holds no level");
+
+    /// Levels whose chunks have all been read: a level's attribute chunk,
+    /// where the stream has attributes, is part of it.
+    pub(crate) fn whole_levels(&self) -> usize {
+        let n = self.d.levels.len();
+        let waiting = !self.channels.is_empty()
+            && self.expect == (ChunkKind::Attributes, n.wrapping_sub(1) as u8);
+        if waiting && n > 0 { n - 1 } else { n }
     }
-    if d.q.is_empty() {
-        d.q = to_grid(leaves, depth);
+
+    /// What has been read, as [`decode`] returns it.
+    pub(crate) fn finish(mut self) -> Result<Decoded> {
+        if self.d.levels.is_empty() {
+            return stream_err("the stream holds no level");
+        }
+        if self.d.q.is_empty() {
+            self.d.q = to_grid(self.leaves, self.d.header.depth);
+        }
+        // The last level's attribute chunk may be missing from a prefix:
+        // `surface` then returns that level without attributes.
+        Ok(self.d)
     }
-    // The last level's attribute chunk may be missing from a prefix:
-    // `surface` then returns that level without attributes.
-    Ok(d)
+
+    /// [`finish`](Self::finish) without consuming the state (a copy of
+    /// what has been read).
+    pub(crate) fn snapshot(&self) -> Result<Decoded> {
+        if self.d.levels.is_empty() {
+            return stream_err("the stream holds no level");
+        }
+        let mut d = self.d.clone();
+        if d.q.is_empty() {
+            d.q = to_grid(self.leaves.clone(), d.header.depth);
+        }
+        Ok(d)
+    }
 }
 
 /// Leaf coordinates (`depth` bits) as 16-bit grid coordinates, in place.

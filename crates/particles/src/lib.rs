@@ -17,6 +17,7 @@
 //! | [`read_header`], [`ChunkReader`] | parse the container: header, then chunks |
 //! | [`decode`] | a whole stream, or a prefix of whole chunks, up to a level / precision ([`DecodeOptions`]); strict |
 //! | [`decode_prefix`] | what has arrived: every complete chunk of a byte prefix, and where it stopped ([`Decoded::cut`]) |
+//! | [`PrefixDecoder`] | the same for bytes still arriving, each chunk decoded once over all reads |
 //! | [`Decoded::surface`], [`Decoded::triangulate`] | one level's particles, or its oriented mesh |
 //! | [`triangulate`], [`triangulate_owned`] | a level's particles → [`lodkit_mesh::TriMesh`] ([`TriangulateOptions`]) |
 //! | [`orient`] | turns a mesh's triangles outwards |
@@ -67,6 +68,7 @@ pub(crate) mod attributes;
 pub(crate) mod coding;
 pub(crate) mod container;
 pub(crate) mod decode;
+pub(crate) mod decode_stream;
 pub(crate) mod encode;
 pub(crate) mod error;
 pub(crate) mod octree;
@@ -84,6 +86,7 @@ pub use container::{
     read_header,
 };
 pub use decode::{Cut, DecodeOptions, Decoded, LevelSurface, decode, decode_prefix};
+pub use decode_stream::PrefixDecoder;
 pub use encode::{
     DEFAULT_PRECISION, EncodeOptions, EncodeReport, Encoded, LevelReport, Placement, encode,
 };

@@ -2,21 +2,19 @@
 //!
 //! Everything the browser runs goes through the functions here, and they use
 //! only the crates' high-level entry points: `lodkit_particles::{decode,
-//! DecodeOptions, triangulate, TriangulateOptions}`, `Decoded::surface`, the
-//! `.pop` container reader, and `lodkit_mco::{McoModel, Camera}` with
-//! `McoModel::from_bytes`. When those APIs move, this file is the only one to
+//! DecodeOptions, PrefixDecoder, triangulate, TriangulateOptions}`,
+//! `Decoded::surface`, and `lodkit_mco::{McoModel, McoStream, Camera}`
+//! with `McoModel::from_bytes`. When those APIs move, this file is the only one to
 //! re-point.
 //!
-//! `.pop` prefixes: a stream arriving over the network is cut at the end of
-//! its last complete chunk before it is decoded (see [`complete_prefix`]), so
-//! the decoder only ever sees whole chunks. A level chunk whose attribute
-//! chunk has not arrived yet is left out with it: a level is usable once its
-//! colours and normals are there too.
+//! `.pop` prefixes: a stream arriving over the network goes through
+//! `PrefixDecoder`, which decodes each whole chunk once as it arrives. A
+//! level whose attribute chunk has not arrived yet is left out: a level is
+//! usable once its colours and normals are there too.
 
 use glam::Vec3;
-use lodkit_mco::{Camera, McoModel};
-use lodkit_particles::{ChunkKind, ChunkReader, HEADER_LEN, read_header};
-use lodkit_particles::{DecodeOptions, Decoded, TriangulateOptions};
+use lodkit_mco::{Camera, McoModel, McoStream};
+use lodkit_particles::{DecodeOptions, Decoded, PrefixDecoder, TriangulateOptions};
 
 /// A mesh ready to be copied into GPU buffers: positions (and normals,
 /// colours where present) per vertex, three indices per triangle.
@@ -30,90 +28,63 @@ pub struct MeshOut {
 
 /// What the complete chunks of a `.pop` prefix hold.
 pub struct PopPrefix {
+    /// The decoded chunks; its last level may lack its attribute chunk
+    /// (then it is not counted in `levels`).
     pub decoded: Decoded,
-    /// Bytes of the prefix that were decoded (the end of its last usable
-    /// chunk); the rest waits for more bytes.
+    /// Levels usable: `0..levels`, each with its colours and normals where
+    /// the stream has them.
+    pub levels: usize,
+    /// Bytes of the prefix those levels (and precision layers) take; the
+    /// rest waits for more bytes.
     pub bytes_used: usize,
 }
 
-/// How far a `.pop` prefix has been scanned: the end of its last whole
-/// chunk (`raw`), and of its last *usable* one (`usable`: never between a
-/// level chunk and its attribute chunk). Zero before the header is whole.
-#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
-pub struct Scan {
-    pub raw: usize,
-    pub usable: usize,
+/// A `.pop` stream as it arrives: the bytes received so far and
+/// `lodkit_particles::PrefixDecoder`'s state, so each chunk is decoded once.
+pub struct PopStream {
+    pub bytes: Vec<u8>,
+    decoder: PrefixDecoder,
 }
 
-/// Extends `prev` (a scan of a shorter prefix of the same stream, or
-/// `Scan::default()`) over `bytes`: only the chunks after `prev.raw` are
-/// read, so a stream scanned as it arrives costs one pass in all.
-/// `Err` when the header is there and is not a `.pop` header.
-pub fn scan_prefix(bytes: &[u8], prev: Scan) -> Result<Scan, String> {
-    if bytes.len() < HEADER_LEN {
-        return Ok(Scan::default()); // the header has not arrived yet
+/// An empty stream (every level, every precision layer).
+pub fn pop_stream_new() -> PopStream {
+    PopStream {
+        bytes: Vec::new(),
+        decoder: PrefixDecoder::new(&DecodeOptions::default()),
     }
-    let header = read_header(bytes).map_err(|e| e.to_string())?;
-    let attributes = header.colours || header.normals;
-    let mut scan = prev;
-    if scan.raw < HEADER_LEN {
-        scan = Scan {
-            raw: HEADER_LEN,
-            usable: HEADER_LEN,
-        };
-    }
-    // `ChunkReader` starts reading `HEADER_LEN` bytes into its slice: hand
-    // it the stream from `HEADER_LEN` before the first unread chunk.
-    let base = scan.raw - HEADER_LEN;
-    for chunk in ChunkReader::new(&bytes[base..]) {
-        let Ok(chunk) = chunk else {
-            // Truncated (or damaged) from here on: the decoder reports
-            // damage once the stream is complete.
-            break;
-        };
-        scan.raw = base + chunk.end;
-        if !(attributes && chunk.kind == ChunkKind::Level) {
-            scan.usable = scan.raw;
-        }
-    }
-    Ok(scan)
 }
 
-/// Length of the longest usable prefix of `bytes` (see [`Scan`]).
-pub fn complete_prefix(bytes: &[u8]) -> Result<usize, String> {
-    Ok(scan_prefix(bytes, Scan::default())?.usable)
+/// Decodes the chunks of `s.bytes` that arrived since the last call and
+/// returns the bytes usable now: the end of the last chunk that is not a
+/// level waiting for its attribute chunk (a level is usable once its
+/// colours and normals are there too). Zero before the first level.
+/// `Err`: a bad header or a damaged chunk.
+pub fn pop_stream_read(s: &mut PopStream) -> Result<usize, String> {
+    s.decoder.read(&s.bytes).map_err(|e| e.to_string())?;
+    Ok(s.decoder.whole_bytes())
 }
 
-/// Decodes the first `usable` bytes of a stream (a length from
-/// [`scan_prefix`]); `max_level` stops at that level as `lodkit pop decode
-/// --level` does (no precision layers after it).
-pub fn pop_decode_usable(
-    bytes: &[u8],
-    usable: usize,
-    max_level: Option<u8>,
-) -> Result<Option<PopPrefix>, String> {
-    if usable <= HEADER_LEN {
-        return Ok(None); // no whole chunk yet
-    }
-    let opts = DecodeOptions {
-        max_level,
-        max_precision: None,
-    };
-    let decoded = lodkit_particles::decode(&bytes[..usable], &opts).map_err(|e| e.to_string())?;
-    if decoded.levels.is_empty() {
+/// The usable levels decoded so far (`None` before the first); a copy of
+/// the decoder's state. Call after [`pop_stream_read`].
+pub fn pop_stream_decoded(s: &PopStream) -> Result<Option<PopPrefix>, String> {
+    let levels = s.decoder.whole_levels();
+    if levels == 0 {
         return Ok(None);
     }
+    let decoded = s.decoder.decoded().map_err(|e| e.to_string())?;
     Ok(Some(PopPrefix {
         decoded,
-        bytes_used: usable,
+        levels,
+        bytes_used: s.decoder.whole_bytes(),
     }))
 }
 
-/// Decodes every usable chunk of a stream prefix (any number of bytes
-/// received so far). `max_level` stops at that level as `lodkit pop decode
-/// --level` does (no precision layers after it).
-pub fn pop_decode_prefix(bytes: &[u8], max_level: Option<u8>) -> Result<Option<PopPrefix>, String> {
-    pop_decode_usable(bytes, complete_prefix(bytes)?, max_level)
+/// Decodes every usable chunk of a whole buffer (a stream prefix).
+pub fn pop_decode_prefix(bytes: &[u8]) -> Result<Option<PopPrefix>, String> {
+    let mut s = pop_stream_new();
+    s.bytes = bytes.to_vec();
+    pop_stream_read(&mut s)?;
+    pop_stream_decoded(&s)
 }
 
 /// Triangulates (and orients) level `r` of a decoded prefix with the
@@ -147,6 +118,36 @@ pub fn pop_precision(d: &Decoded) -> u8 {
 /// Loads a whole `.mco` file held in memory.
 pub fn mco_load(bytes: &[u8]) -> Result<McoModel, String> {
     McoModel::from_bytes(bytes).map_err(|e| e.to_string())
+}
+
+/// A `.mco` read as its bytes arrive (version 2 only: its chunks are in
+/// LOD-number order, so each complete chunk serves more LOD numbers).
+pub fn mco_stream_new() -> McoStream {
+    McoStream::new()
+}
+
+/// Feeds the next `bytes` of the file to `s`. Returns the model of every
+/// chunk complete so far when these bytes completed at least one (every
+/// cut up to its `max_lod` is the whole file's cut), `None` while the next
+/// chunk is still short. `Err`: a bad header or chunk (the stream stays
+/// failed). Cost: linear in the bytes, plus a copy of the model read so
+/// far and its extraction tables per call that completes a chunk.
+pub fn mco_stream_push(s: &mut McoStream, bytes: &[u8]) -> Result<Option<McoModel>, String> {
+    if !s.push(bytes).map_err(|e| e.to_string())? {
+        return Ok(None);
+    }
+    Ok(s.model())
+}
+
+/// Whether every chunk of the file has been read.
+pub fn mco_stream_complete(s: &McoStream) -> bool {
+    s.is_complete()
+}
+
+/// The `.mco` format version the first bytes of a file declare (`None`:
+/// too short, or no `.mco` signature).
+pub fn mco_file_version(bytes: &[u8]) -> Option<u32> {
+    McoModel::file_version(bytes)
 }
 
 /// The model's whole vertex buffer (every cut indexes into it).
@@ -227,35 +228,36 @@ mod tests {
     }
 
     #[test]
-    fn every_prefix_decodes_its_complete_chunks() {
+    fn a_stream_read_as_it_arrives_shows_only_levels_with_their_attributes() {
         for normals in [false, true] {
             let bytes = stream(normals);
-            let full = pop_decode_prefix(&bytes, None).unwrap().expect("levels");
+            let full = pop_decode_prefix(&bytes).unwrap().expect("levels");
             assert_eq!(full.bytes_used, bytes.len());
+            let mut s = pop_stream_new();
             let mut levels = 0;
-            let mut scan = Scan::default();
-            for cut in 0..=bytes.len() {
-                scan = scan_prefix(&bytes[..cut], scan).expect("a prefix is no error");
-                assert_eq!(scan.usable, complete_prefix(&bytes[..cut]).unwrap());
-                let Some(p) = pop_decode_usable(&bytes, scan.usable, None).unwrap() else {
+            for piece in bytes.chunks(7) {
+                s.bytes.extend_from_slice(piece);
+                let used = pop_stream_read(&mut s).expect("a prefix is no error");
+                assert!(used <= s.bytes.len());
+                let Some(p) = pop_stream_decoded(&s).unwrap() else {
                     continue;
                 };
-                assert!(p.bytes_used <= cut);
-                assert!(p.decoded.levels.len() >= levels, "levels never go back");
-                levels = p.decoded.levels.len();
+                assert!(p.levels >= levels, "levels never go back");
+                levels = p.levels;
                 // A level with attributes is usable only with them.
                 if let Some(n) = &p.decoded.normals {
-                    assert_eq!(n.len(), levels);
+                    assert!(n.len() >= levels);
                 }
+                assert!(pop_level_mesh(&p.decoded, (levels - 1) as u8).is_ok());
             }
-            assert_eq!(levels, full.decoded.levels.len());
+            assert_eq!(levels, full.levels);
         }
     }
 
     #[test]
     fn the_finest_level_matches_a_plain_decode() {
         let bytes = stream(false);
-        let p = pop_decode_prefix(&bytes, None).unwrap().unwrap();
+        let p = pop_decode_prefix(&bytes).unwrap().unwrap();
         let r = pop_depth(&p.decoded);
         let mesh = pop_level_mesh(&p.decoded, r).unwrap();
         let d = lodkit_particles::decode(&bytes, &DecodeOptions::default()).unwrap();
@@ -266,10 +268,39 @@ mod tests {
     }
 
     #[test]
+    fn a_streamed_mco_serves_more_lod_numbers_as_chunks_arrive() {
+        let mesh = lodkit_mesh::shapes::icosphere(3);
+        let model =
+            lodkit_mco::build_from_mesh(&mesh, &lodkit_mco::Options::default()).expect("builds");
+        let bytes = model.to_bytes();
+        assert_eq!(mco_file_version(&bytes), Some(2));
+        let whole = mco_load(&bytes).unwrap();
+        let mut s = mco_stream_new();
+        let mut last = None;
+        let mut max_lod = 0;
+        for piece in bytes.chunks(97) {
+            if let Some(m) = mco_stream_push(&mut s, piece).unwrap() {
+                assert!(m.max_lod() >= max_lod, "LOD numbers never go back");
+                max_lod = m.max_lod();
+                last = Some(m);
+            }
+        }
+        assert!(mco_stream_complete(&s));
+        let last = last.expect("a model");
+        assert_eq!(last.max_lod(), whole.max_lod());
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        mco_extract_lod(&last, whole.max_lod(), &mut a);
+        mco_extract_lod(&whole, whole.max_lod(), &mut b);
+        assert_eq!(a, b);
+    }
+
+    #[test]
     fn a_damaged_header_is_an_error_not_a_panic() {
         let mut bytes = stream(false);
         bytes[0] ^= 0xff;
-        assert!(scan_prefix(&bytes, Scan::default()).is_err());
+        let mut s = pop_stream_new();
+        s.bytes = bytes.clone();
+        assert!(pop_stream_read(&mut s).is_err());
         assert!(mco_load(&bytes).is_err());
     }
 }

@@ -15,9 +15,10 @@
 //!   call that returned a failure (`0` handle or a negative count).
 //! * `.pop`: `lk_pop_new() -> h`; `lk_pop_push(h, len) -> ptr` grows the
 //!   stream by `len` bytes and returns where to write them;
-//!   `lk_pop_decode(h, max_level) -> levels` decodes every complete chunk
-//!   received so far (`max_level < 0`: all), `-1` on a damaged stream;
-//!   `lk_pop_usable(h)` is the byte count that decode would use now;
+//!   `lk_pop_usable(h)` decodes the chunks received since the last call
+//!   (each chunk once) and returns the bytes usable now; `lk_pop_decode(h)
+//!   -> levels` does the same and takes a copy of the usable levels for
+//!   `lk_pop_mesh` when they grew, `-1` on a damaged stream;
 //!   `lk_pop_depth`, `lk_pop_precision`, `lk_pop_bytes_used` describe the
 //!   decoded prefix; `lk_pop_mesh(h, level) -> triangles` triangulates and
 //!   orients a decoded level into the handle's mesh.
@@ -28,6 +29,12 @@
 //!   `lk_mco_extract_view` replace the mesh's index buffer and return the
 //!   LOD number (or the expanded node count for a view); `lk_mco_max_lod`,
 //!   `lk_mco_full_triangles`, `lk_mco_bounds(h) -> ptr to 6 f32`.
+//!   Streamed (version 2): `lk_mco_stream_new() -> h`;
+//!   `lk_mco_stream_push(h, ptr, len) -> 1|0|-1` feeds the next bytes and
+//!   says whether a chunk completed (the model then serves more LOD
+//!   numbers: re-read the vertices, re-cut); `lk_mco_complete(h)`;
+//!   `lk_mco_file_version(ptr, len)` (a version-1 file is read whole).
+//!   Before a stream's first chunk the model calls return -1.
 //! * The mesh of a handle: `lk_mesh_vertex_count`, `lk_mesh_positions`
 //!   (f32 × 3 per vertex), `lk_mesh_normals` (f32 × 3, 0 when absent),
 //!   `lk_mesh_colors` (u8 × 4, 0 when absent), `lk_mesh_index_count`,
@@ -37,17 +44,17 @@
 //! * `lk_close(h)` frees a handle; `lk_warm_up()` runs a built-in small
 //!   stream through the decoder once (call it when a worker starts).
 //!
-//! Cost: each `lk_pop_decode` decodes the usable prefix from its start (a
-//! `.pop` decodes at tens of MB/s, so the viewer calls it once per newly
-//! completed chunk run, not per network packet).
+//! Cost: a stream's chunks are decoded once in all, however many reads it
+//! arrives in; `lk_pop_decode` copies the decoded levels when they grew
+//! (the viewer calls it once per newly completed chunk run).
 
 pub mod engine;
 
 use std::cell::RefCell;
 
-use engine::{MeshOut, PopPrefix, Scan, View};
+use engine::{MeshOut, PopPrefix, PopStream, View};
 use glam::Vec3;
-use lodkit_mco::McoModel;
+use lodkit_mco::{McoModel, McoStream};
 
 /// FNV-1a (64 bit) over a mesh's index buffer then its positions' bit
 /// patterns, little-endian: equal digests mean identical buffers. The native
@@ -73,13 +80,17 @@ pub fn digest(indices: &[u32], positions: &[Vec3]) -> u64 {
 
 enum Slot {
     Pop {
-        bytes: Vec<u8>,
-        scan: Scan,
+        stream: Box<PopStream>,
+        /// Bytes usable at the last `lk_pop_decode` (0: none yet).
+        decoded_to: usize,
         prefix: Option<Box<PopPrefix>>,
         mesh: MeshOut,
     },
     Mco {
-        model: Box<McoModel>,
+        /// `None` until a streamed file's first chunk is in.
+        model: Option<Box<McoModel>>,
+        /// The reader of a file opened with `lk_mco_stream_new`.
+        stream: Option<Box<McoStream>>,
         mesh: MeshOut,
         bounds: [f32; 6],
     },
@@ -192,7 +203,7 @@ const WARM_UP_STREAM: &[u8] = include_bytes!("warm_up.pop");
 #[unsafe(no_mangle)]
 pub extern "C" fn lk_warm_up() -> i32 {
     let run = || -> Result<usize, String> {
-        let p = engine::pop_decode_prefix(WARM_UP_STREAM, None)?.ok_or("no level")?;
+        let p = engine::pop_decode_prefix(WARM_UP_STREAM)?.ok_or("no level")?;
         let r = engine::pop_depth(&p.decoded);
         Ok(engine::pop_level_mesh(&p.decoded, r)?.indices.len() / 3)
     };
@@ -208,8 +219,8 @@ pub extern "C" fn lk_warm_up() -> i32 {
 #[unsafe(no_mangle)]
 pub extern "C" fn lk_pop_new() -> u32 {
     insert(Slot::Pop {
-        bytes: Vec::new(),
-        scan: Scan::default(),
+        stream: Box::new(engine::pop_stream_new()),
+        decoded_to: 0,
         prefix: None,
         mesh: MeshOut::default(),
     })
@@ -220,7 +231,8 @@ pub extern "C" fn lk_pop_new() -> u32 {
 #[unsafe(no_mangle)]
 pub extern "C" fn lk_pop_push(h: u32, len: usize) -> *mut u8 {
     with_slot(h, |slot| match slot {
-        Slot::Pop { bytes, .. } => {
+        Slot::Pop { stream, .. } => {
+            let bytes = &mut stream.bytes;
             let at = bytes.len();
             bytes.resize(at + len, 0);
             bytes[at..].as_mut_ptr()
@@ -230,26 +242,28 @@ pub extern "C" fn lk_pop_push(h: u32, len: usize) -> *mut u8 {
     .unwrap_or(std::ptr::null_mut())
 }
 
-/// Decodes the complete chunks of stream `h` so far, up to `max_level`
-/// (negative: all). Returns the number of levels decoded (0: not even the
-/// first level yet), or -1 with an error message.
+/// Decodes the chunks of stream `h` received since the last call (each
+/// chunk is decoded once) and, when they made more of the stream usable,
+/// takes a new copy of what is decoded for `lk_pop_mesh`. Returns the
+/// number of usable levels (0: not even the first level yet), or -1 with
+/// an error message.
 #[unsafe(no_mangle)]
-pub extern "C" fn lk_pop_decode(h: u32, max_level: i32) -> i32 {
-    let max_level = u8::try_from(max_level).ok();
+pub extern "C" fn lk_pop_decode(h: u32) -> i32 {
     let r = with_slot(h, |slot| match slot {
         Slot::Pop {
-            bytes,
-            scan,
+            stream,
+            decoded_to,
             prefix,
             ..
         } => {
-            *scan = engine::scan_prefix(bytes, *scan)?;
-            let p = engine::pop_decode_usable(bytes, scan.usable, max_level)?;
-            let n = p.as_ref().map_or(0, |p| p.decoded.levels.len());
-            if let Some(p) = p {
-                *prefix = Some(Box::new(p));
+            let usable = engine::pop_stream_read(stream)?;
+            if usable > *decoded_to {
+                *decoded_to = usable;
+                if let Some(p) = engine::pop_stream_decoded(stream)? {
+                    *prefix = Some(Box::new(p));
+                }
             }
-            Ok(n as i32)
+            Ok(prefix.as_ref().map_or(0, |p| p.levels) as i32)
         }
         Slot::Mco { .. } => Err("not a .pop handle".to_string()),
     });
@@ -273,16 +287,14 @@ fn pop_query(h: u32, f: impl FnOnce(&PopPrefix) -> usize) -> i32 {
     .unwrap_or(-1)
 }
 
-/// Bytes of stream `h` a decode would use now (the end of its last usable
-/// chunk; see [`engine::complete_prefix`]), -1 on a damaged header. Cheap
-/// (reads chunk headers only): the worker decodes again only when it grows.
+/// Decodes the chunks of stream `h` received since the last call and
+/// returns the bytes usable now (the end of its last usable chunk: never
+/// between a level chunk and its attribute chunk), -1 on a damaged stream.
+/// The worker calls `lk_pop_decode` only when this grew.
 #[unsafe(no_mangle)]
 pub extern "C" fn lk_pop_usable(h: u32) -> i32 {
     let r = with_slot(h, |slot| match slot {
-        Slot::Pop { bytes, scan, .. } => {
-            *scan = engine::scan_prefix(bytes, *scan)?;
-            Ok(scan.usable)
-        }
+        Slot::Pop { stream, .. } => engine::pop_stream_read(stream),
         Slot::Mco { .. } => Err("not a .pop handle".to_string()),
     });
     match r {
@@ -323,8 +335,13 @@ pub extern "C" fn lk_pop_mesh(h: u32, level: u32) -> i32 {
             mesh,
             ..
         } => {
-            let level =
-                u8::try_from(level).map_err(|_| format!("level {level} is out of range"))?;
+            if level as usize >= p.levels {
+                return Err(format!(
+                    "level {level} has not arrived ({} levels)",
+                    p.levels
+                ));
+            }
+            let level = level as u8;
             *mesh = engine::pop_level_mesh(&p.decoded, level)?;
             Ok((mesh.indices.len() / 3) as i32)
         }
@@ -357,14 +374,12 @@ pub unsafe extern "C" fn lk_mco_open(ptr: *const u8, len: usize) -> u32 {
         unsafe { std::slice::from_raw_parts(ptr, len) }
     };
     match engine::mco_load(bytes) {
-        Ok(model) => {
-            let (lo, hi) = engine::mco_bounds(&model);
-            insert(Slot::Mco {
-                model: Box::new(model),
-                mesh: MeshOut::default(),
-                bounds: [lo.x, lo.y, lo.z, hi.x, hi.y, hi.z],
-            })
-        }
+        Ok(model) => insert(Slot::Mco {
+            bounds: bounds_of(&model),
+            model: Some(Box::new(model)),
+            stream: None,
+            mesh: MeshOut::default(),
+        }),
         Err(e) => {
             fail(e);
             0
@@ -372,10 +387,102 @@ pub unsafe extern "C" fn lk_mco_open(ptr: *const u8, len: usize) -> u32 {
     }
 }
 
+fn bounds_of(m: &McoModel) -> [f32; 6] {
+    let (lo, hi) = engine::mco_bounds(m);
+    [lo.x, lo.y, lo.z, hi.x, hi.y, hi.z]
+}
+
+/// A `.mco` handle that reads the file as it arrives (version 2); no model
+/// until its first chunk is in ([`lk_mco_stream_push`]).
+#[unsafe(no_mangle)]
+pub extern "C" fn lk_mco_stream_new() -> u32 {
+    insert(Slot::Mco {
+        model: None,
+        stream: Some(Box::new(engine::mco_stream_new())),
+        mesh: MeshOut::default(),
+        bounds: [0.0; 6],
+    })
+}
+
+/// Feeds the next `len` bytes of the file (at `ptr`) to stream `h`.
+/// Returns 1 when they completed a chunk (the handle's model now serves
+/// more LOD numbers: re-read its vertices and re-cut), 0 when not, -1 with
+/// an error message (a bad header or chunk; the stream stays failed).
+///
+/// # Safety
+/// `ptr..ptr + len` must be readable (a buffer from [`lk_alloc`]).
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn lk_mco_stream_push(h: u32, ptr: *const u8, len: usize) -> i32 {
+    let bytes = if len == 0 {
+        &[][..]
+    } else {
+        // SAFETY: the caller passes a buffer of `len` bytes it wrote.
+        unsafe { std::slice::from_raw_parts(ptr, len) }
+    };
+    let r = with_slot(h, |slot| match slot {
+        Slot::Mco {
+            model,
+            stream: Some(s),
+            bounds,
+            ..
+        } => {
+            let Some(m) = engine::mco_stream_push(s, bytes)? else {
+                return Ok(0);
+            };
+            *bounds = bounds_of(&m);
+            *model = Some(Box::new(m));
+            Ok(1)
+        }
+        _ => Err("not a streamed .mco handle".to_string()),
+    });
+    match r {
+        Some(Ok(n)) => n,
+        Some(Err(e)) => {
+            fail(e);
+            -1
+        }
+        None => -1,
+    }
+}
+
+/// 1 when every chunk of stream `h` has been read (or `h` was opened
+/// whole), 0 while chunks are missing, -1 when `h` is not a `.mco` handle.
+#[unsafe(no_mangle)]
+pub extern "C" fn lk_mco_complete(h: u32) -> i32 {
+    with_slot(h, |slot| match slot {
+        Slot::Mco {
+            stream: Some(s), ..
+        } => i32::from(engine::mco_stream_complete(s)),
+        Slot::Mco { .. } => 1,
+        Slot::Pop { .. } => -1,
+    })
+    .unwrap_or(-1)
+}
+
+/// The `.mco` version `len` bytes at `ptr` declare (1 or 2), 0 when they
+/// are too short or lack the signature (a version-1 file does not stream:
+/// the caller reads it whole and opens it with [`lk_mco_open`]).
+///
+/// # Safety
+/// `ptr..ptr + len` must be readable (a buffer from [`lk_alloc`]).
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn lk_mco_file_version(ptr: *const u8, len: usize) -> u32 {
+    if len == 0 {
+        return 0;
+    }
+    // SAFETY: the caller passes a buffer of `len` bytes it wrote.
+    let bytes = unsafe { std::slice::from_raw_parts(ptr, len) };
+    engine::mco_file_version(bytes).unwrap_or(0)
+}
+
 fn mco_do(h: u32, f: impl FnOnce(&McoModel, &mut MeshOut) -> usize) -> i32 {
     with_slot(h, |slot| match slot {
-        Slot::Mco { model, mesh, .. } => f(model, mesh) as i32,
-        Slot::Pop { .. } => -1,
+        Slot::Mco {
+            model: Some(model),
+            mesh,
+            ..
+        } => f(model, mesh) as i32,
+        _ => -1,
     })
     .unwrap_or(-1)
 }
