@@ -6,7 +6,7 @@
 //! HQMS), the continuous model ([`continuous`], marching cube octree), the
 //! progressive stream ([`progressive`], octree particles), each measured
 //! against the input through one shared distance index ([`measure`]), then
-//! `report.md` and `report.html` ([`crate::report_html`]).
+//! `report.md` and `report.html` ([`html`], [`html_page`]).
 //!
 //! Every option is checked before anything is written, and the whole
 //! folder is written beside `--out` and moved into place at the end
@@ -17,6 +17,8 @@
 //! `report.html`.
 
 mod continuous;
+mod html;
+mod html_page;
 mod input;
 mod lod_chain;
 mod measure;
@@ -154,28 +156,15 @@ fn write_all(
 
     let mut report = String::new();
     writeln!(report, "# lodkit build report: {name}\n")?;
-    match &args.input {
-        None => writeln!(
-            report,
-            "Input: the built-in Stanford Bunny (Stanford 3D Scanning Repository, Stanford University \
-             Computer Graphics Laboratory).\n"
-        )?,
-        Some(p) => writeln!(report, "Input: `{}`\n", p.display())?,
-    }
-    match &input.path {
-        input::InputPath::Mesh => writeln!(
-            report,
-            "Path: a mesh. The HQMS chain simplifies it, the marching cube octree is rebuilt from \
-             virtual scans of it, the progressive stream encodes it; every error is measured \
-             against it.\n"
-        )?,
-        input::InputPath::Reconstructed(what) => writeln!(
-            report,
-            "Path: a {what}, reconstructed first as a marching cube octree (`lodkit mco build`); \
-             its full-resolution surface (`{name}.ply`) feeds the HQMS chain and is the reference \
-             every error is measured against; the progressive stream encodes the input's points.\n"
-        )?,
-    }
+    let input_sentence = match &args.input {
+        None => "Input: the built-in Stanford Bunny (Stanford 3D Scanning Repository, Stanford University \
+                 Computer Graphics Laboratory)."
+            .to_string(),
+        Some(p) => format!("Input: `{}`", p.display()),
+    };
+    writeln!(report, "{input_sentence}\n")?;
+    let path_sentence = path_sentence(&input.path, name);
+    writeln!(report, "{path_sentence}\n")?;
     writeln!(
         report,
         "## Input\n\n```text\n{}```\n",
@@ -315,6 +304,20 @@ fn write_all(
     }
     write_atomic(&dir.join("report.md"), report.as_bytes())?;
     outputs.push("report.md".into());
+    let step = ui.spinner("rendering report.html");
+    let html = html::report(&html::Inputs {
+        name,
+        intro: vec![input_sentence.replace('`', ""), path_sentence.replace('`', "")],
+        reference: &reference,
+        sampling,
+        chain: &chain,
+        continuous: &cont,
+        progressive: &prog,
+        timings: &timings.0,
+    })?;
+    write_atomic(&dir.join("report.html"), html.as_bytes())?;
+    step.finish();
+    outputs.push("report.html".into());
     outputs
         .into_iter()
         .map(|file| {
@@ -325,4 +328,19 @@ fn write_all(
             Ok((file, len))
         })
         .collect()
+}
+
+/// The report's sentence on which path the input took.
+fn path_sentence(path: &input::InputPath, name: &str) -> String {
+    match path {
+        input::InputPath::Mesh => "Path: a mesh. The HQMS chain simplifies it, the marching cube octree is \
+             rebuilt from virtual scans of it, the progressive stream encodes it; every error is \
+             measured against it."
+            .to_string(),
+        input::InputPath::Reconstructed(what) => format!(
+            "Path: a {what}, reconstructed first as a marching cube octree (`lodkit mco build`); \
+             its full-resolution surface (`{name}.ply`) feeds the HQMS chain and is the reference \
+             every error is measured against; the progressive stream encodes the input's points."
+        ),
+    }
 }
