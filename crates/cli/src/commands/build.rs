@@ -307,7 +307,10 @@ fn write_all(
     let step = ui.spinner("rendering report.html");
     let html = html::report(&html::Inputs {
         name,
-        intro: vec![input_sentence.replace('`', ""), path_sentence.replace('`', "")],
+        intro: vec![
+            input_sentence.replace('`', ""),
+            path_sentence.replace('`', ""),
+        ],
         reference: &reference,
         sampling,
         chain: &chain,
@@ -333,10 +336,12 @@ fn write_all(
 /// The report's sentence on which path the input took.
 fn path_sentence(path: &input::InputPath, name: &str) -> String {
     match path {
-        input::InputPath::Mesh => "Path: a mesh. The HQMS chain simplifies it, the marching cube octree is \
+        input::InputPath::Mesh => {
+            "Path: a mesh. The HQMS chain simplifies it, the marching cube octree is \
              rebuilt from virtual scans of it, the progressive stream encodes it; every error is \
              measured against it."
-            .to_string(),
+                .to_string()
+        }
         input::InputPath::Reconstructed(what) => format!(
             "Path: a {what}, reconstructed first as a marching cube octree (`lodkit mco build`); \
              its full-resolution surface (`{name}.ply`) feeds the HQMS chain and is the reference \

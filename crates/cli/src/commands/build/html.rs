@@ -11,11 +11,11 @@ use lodkit_render::{Camera, RenderOptions, colour_scale, render};
 use plotters::style::{BLUE, GREEN, RED, RGBColor};
 
 use super::continuous::Continuous;
+use super::html_page::{Block, Picture, Table, colour_bar, page};
 use super::lod_chain::Chain;
 use super::measure::{Measured, Sampling};
 use super::progressive::Progressive;
 use crate::chart::{Series, error_chart, log_chart};
-use super::html_page::{Block, Picture, Table, colour_bar, page};
 
 /// Side of every render, pixels: small, so the build stays fast and the
 /// page light.
@@ -74,7 +74,9 @@ pub fn report(i: &Inputs) -> Result<String> {
     )));
 
     // Renders: one view for every picture.
-    b.push(Block::Heading("Every level, seen from the same view".into()));
+    b.push(Block::Heading(
+        "Every level, seen from the same view".into(),
+    ));
     b.push(Block::Text(
         "One camera (azimuth 30°, elevation 20°, framing the input's bounding box) for every picture; \
          flat-shaded, both sides drawn."
@@ -86,7 +88,10 @@ pub fn report(i: &Inputs) -> Result<String> {
     )?]));
     let mut pics = Vec::new();
     for (l, m) in i.chain.lods.levels.iter().zip(&i.chain.meshes) {
-        pics.push(shot(m, format!("HQMS level {}: {} triangles", l.level, l.triangles))?);
+        pics.push(shot(
+            m,
+            format!("HQMS level {}: {} triangles", l.level, l.triangles),
+        )?);
     }
     b.push(Block::Text("Discrete LOD chain (HQMS):".into()));
     b.push(Block::Gallery(pics));
@@ -94,13 +99,23 @@ pub fn report(i: &Inputs) -> Result<String> {
     for c in &i.continuous.cuts {
         pics.push(shot(
             &c.mesh,
-            format!("MCO cut at {} %: LOD {}, {} triangles", c.percent, c.lod, c.mesh.faces.len()),
+            format!(
+                "MCO cut at {} %: LOD {}, {} triangles",
+                c.percent,
+                c.lod,
+                c.mesh.faces.len()
+            ),
         )?);
     }
     b.push(Block::Text("Marching cube octree cuts:".into()));
     b.push(Block::Gallery(pics));
     let mut pics = Vec::new();
-    for l in i.progressive.levels.iter().filter(|l| !l.mesh.faces.is_empty()) {
+    for l in i
+        .progressive
+        .levels
+        .iter()
+        .filter(|l| !l.mesh.faces.is_empty())
+    {
         pics.push(shot(
             &l.mesh,
             format!(
@@ -112,11 +127,21 @@ pub fn report(i: &Inputs) -> Result<String> {
             ),
         )?);
     }
-    b.push(Block::Text("Progressive stream levels (octree particles):".into()));
+    b.push(Block::Text(
+        "Progressive stream levels (octree particles):".into(),
+    ));
     b.push(Block::Gallery(pics));
 
     // Heat map of the coarsest HQMS level.
-    if let Some((l, m)) = i.chain.lods.levels.iter().zip(&i.chain.meshes).rev().find(|(_, m)| !m.faces.is_empty()) {
+    if let Some((l, m)) = i
+        .chain
+        .lods
+        .levels
+        .iter()
+        .zip(&i.chain.meshes)
+        .rev()
+        .find(|(_, m)| !m.faces.is_empty())
+    {
         let d = i.reference.index().distances(&m.positions);
         let max = d.iter().copied().fold(0.0f32, f32::max);
         let colours = d
@@ -187,12 +212,36 @@ pub fn report(i: &Inputs) -> Result<String> {
     }];
     if i.sampling.measures() {
         series.extend([
-            Series { name: "HQMS max", points: chain_pts(|m| m.max), color: RED },
-            Series { name: "HQMS mean", points: chain_pts(|m| m.mean), color: RGBColor(240, 150, 150) },
-            Series { name: "MCO max", points: cut_pts(|m| m.max), color: BLUE },
-            Series { name: "MCO mean", points: cut_pts(|m| m.mean), color: RGBColor(150, 150, 240) },
-            Series { name: ".pop max", points: pop_pts(|m| m.max, |l| l.mesh.faces.len() as f64), color: GREEN },
-            Series { name: ".pop mean", points: pop_pts(|m| m.mean, |l| l.mesh.faces.len() as f64), color: RGBColor(140, 200, 140) },
+            Series {
+                name: "HQMS max",
+                points: chain_pts(|m| m.max),
+                color: RED,
+            },
+            Series {
+                name: "HQMS mean",
+                points: chain_pts(|m| m.mean),
+                color: RGBColor(240, 150, 150),
+            },
+            Series {
+                name: "MCO max",
+                points: cut_pts(|m| m.max),
+                color: BLUE,
+            },
+            Series {
+                name: "MCO mean",
+                points: cut_pts(|m| m.mean),
+                color: RGBColor(150, 150, 240),
+            },
+            Series {
+                name: ".pop max",
+                points: pop_pts(|m| m.max, |l| l.mesh.faces.len() as f64),
+                color: GREEN,
+            },
+            Series {
+                name: ".pop mean",
+                points: pop_pts(|m| m.mean, |l| l.mesh.faces.len() as f64),
+                color: RGBColor(140, 200, 140),
+            },
         ]);
     }
     series.retain(|s| !s.points.is_empty());
@@ -202,8 +251,16 @@ pub fn report(i: &Inputs) -> Result<String> {
     )?));
     if i.sampling.measures() {
         let s = [
-            Series { name: ".pop max", points: pop_pts(|m| m.max, |l| l.bytes_so_far as f64), color: GREEN },
-            Series { name: ".pop mean", points: pop_pts(|m| m.mean, |l| l.bytes_so_far as f64), color: BLUE },
+            Series {
+                name: ".pop max",
+                points: pop_pts(|m| m.max, |l| l.bytes_so_far as f64),
+                color: GREEN,
+            },
+            Series {
+                name: ".pop mean",
+                points: pop_pts(|m| m.mean, |l| l.bytes_so_far as f64),
+                color: BLUE,
+            },
         ];
         if s.iter().any(|s| !s.points.is_empty()) {
             b.push(Block::Svg(log_chart(
@@ -216,9 +273,18 @@ pub fn report(i: &Inputs) -> Result<String> {
 
     // Tables.
     let col = |h: &str, why: &str| (h.to_string(), why.to_string());
-    let mean_col = col("measured mean", "Mean distance over the samples of both surfaces, the larger of the two directions (Metro's mean), object units and % of the diagonal.");
-    let max_col = col("measured max", "Largest distance found over the samples of both directions: the symmetric Hausdorff distance as far as the samples resolve it.");
-    let samples_col = col("samples", "Samples of each kind (vertices, edges, faces) per direction used for this row's measurement.");
+    let mean_col = col(
+        "measured mean",
+        "Mean distance over the samples of both surfaces, the larger of the two directions (Metro's mean), object units and % of the diagonal.",
+    );
+    let max_col = col(
+        "measured max",
+        "Largest distance found over the samples of both directions: the symmetric Hausdorff distance as far as the samples resolve it.",
+    );
+    let samples_col = col(
+        "samples",
+        "Samples of each kind (vertices, edges, faces) per direction used for this row's measurement.",
+    );
     b.push(Block::Heading("Discrete LOD chain (HQMS)".into()));
     b.push(Block::Table(Table {
         columns: vec![
@@ -258,7 +324,9 @@ pub fn report(i: &Inputs) -> Result<String> {
         }))
         .collect(),
     }));
-    b.push(Block::Heading("Continuous LOD (marching cube octree)".into()));
+    b.push(Block::Heading(
+        "Continuous LOD (marching cube octree)".into(),
+    ));
     b.push(Block::Table(Table {
         columns: vec![
             col("% of full", "The cut's triangle budget as a fraction of the model's full-resolution triangle count."),
@@ -288,7 +356,9 @@ pub fn report(i: &Inputs) -> Result<String> {
             })
             .collect(),
     }));
-    b.push(Block::Heading("Progressive stream (octree particles)".into()));
+    b.push(Block::Heading(
+        "Progressive stream (octree particles)".into(),
+    ));
     b.push(Block::Text(format!(
         "{} ({} bytes): any prefix of whole chunks decodes; each row is what a reader shows after receiving the bytes so far.",
         i.progressive.file, i.progressive.bytes

@@ -87,7 +87,9 @@ fn block(h: &mut String, b: &Block) {
             h.push_str("</div>\n");
         }
         Block::Svg(svg) => {
-            let body = svg.trim_start_matches("<?xml version=\"1.0\" encoding=\"UTF-8\"?>").trim();
+            let body = svg
+                .trim_start_matches("<?xml version=\"1.0\" encoding=\"UTF-8\"?>")
+                .trim();
             let _ = writeln!(h, "<div class=\"chart\">{body}</div>");
         }
         Block::Table(t) => {
@@ -146,10 +148,7 @@ pub fn colour_bar(colour: impl Fn(f32) -> [u8; 3], low: &str, high: &str) -> Str
     for i in 0..=10 {
         let t = i as f32 / 10.0;
         let [r, g, b] = colour(t);
-        let _ = write!(
-            s,
-            "<stop offset=\"{t}\" stop-color=\"rgb({r},{g},{b})\"/>"
-        );
+        let _ = write!(s, "<stop offset=\"{t}\" stop-color=\"rgb({r},{g},{b})\"/>");
     }
     let _ = write!(
         s,

@@ -91,8 +91,12 @@ fn is_conf(path: &Path) -> bool {
 fn scan_folder(ui: &Ui, dir: &Path) -> Result<(String, Vec<Model>)> {
     let mut confs = Vec::new();
     let mut plys: Vec<PathBuf> = Vec::new();
-    for e in std::fs::read_dir(dir).with_context(|| format!("{}: cannot read folder", dir.display()))? {
-        let p = e.with_context(|| format!("{}: cannot read folder", dir.display()))?.path();
+    for e in
+        std::fs::read_dir(dir).with_context(|| format!("{}: cannot read folder", dir.display()))?
+    {
+        let p = e
+            .with_context(|| format!("{}: cannot read folder", dir.display()))?
+            .path();
         if is_conf(&p) {
             confs.push(p);
         } else if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply")) {
@@ -118,7 +122,10 @@ fn scan_folder(ui: &Ui, dir: &Path) -> Result<(String, Vec<Model>)> {
     }
     plys.sort();
     if plys.is_empty() {
-        bail!("{}: holds no range image (.ply) and no .conf", dir.display());
+        bail!(
+            "{}: holds no range image (.ply) and no .conf",
+            dir.display()
+        );
     }
     let mut models = Vec::with_capacity(plys.len());
     for p in &plys {

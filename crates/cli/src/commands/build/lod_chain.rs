@@ -74,7 +74,9 @@ pub fn write_chain(
         measured.push(m);
     }
     let glb_name = format!("{stem}_lods.glb");
-    let names: Vec<String> = (1..=meshes.len()).map(|i| format!("{stem}_lod{i}")).collect();
+    let names: Vec<String> = (1..=meshes.len())
+        .map(|i| format!("{stem}_lod{i}"))
+        .collect();
     let named: Vec<(&str, &TriMesh)> = names
         .iter()
         .zip(&meshes)

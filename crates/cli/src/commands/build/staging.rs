@@ -67,15 +67,18 @@ impl Staging {
                     .map(|n| n.to_string_lossy().replace("lodkit-tmp", "lodkit-old"))
                     .unwrap_or_default(),
             );
-            std::fs::rename(target, &old)
-                .with_context(|| format!("{}: cannot move the previous build aside", target.display()))?;
-            std::fs::rename(&self.dir, target)
-                .with_context(|| format!("{}: cannot move the new build into place", target.display()))?;
+            std::fs::rename(target, &old).with_context(|| {
+                format!("{}: cannot move the previous build aside", target.display())
+            })?;
+            std::fs::rename(&self.dir, target).with_context(|| {
+                format!("{}: cannot move the new build into place", target.display())
+            })?;
             std::fs::remove_dir_all(&old)
                 .with_context(|| format!("{}: cannot remove the previous build", old.display()))?;
         } else {
-            std::fs::rename(&self.dir, target)
-                .with_context(|| format!("{}: cannot move the new build into place", target.display()))?;
+            std::fs::rename(&self.dir, target).with_context(|| {
+                format!("{}: cannot move the new build into place", target.display())
+            })?;
         }
         self.done = true;
         Ok(())
@@ -98,7 +101,11 @@ fn check_target(target: &Path) -> Result<()> {
         return Ok(());
     };
     if !meta.is_dir() {
-        return Err(Usage(format!("--out {}: exists and is not a folder", target.display())).into());
+        return Err(Usage(format!(
+            "--out {}: exists and is not a folder",
+            target.display()
+        ))
+        .into());
     }
     if let (Ok(t), Ok(cwd)) = (target.canonicalize(), std::env::current_dir()) {
         if cwd.starts_with(&t) {
