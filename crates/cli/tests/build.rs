@@ -313,7 +313,10 @@ fn no_measure_skips_every_measurement() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
-    assert!(report.contains("not measured (`--no-measure`)"), "{report}");
+    assert!(
+        report.contains("are not measured (`--no-measure`)"),
+        "{report}"
+    );
     assert!(
         report.contains("| 1 | `lods/small_lod1.ply` | 500 |"),
         "{report}"

@@ -59,7 +59,7 @@ pub struct BuildArgs {
     /// Levels of the discrete LOD chain, each half the previous one.
     #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=MAX_LEVELS as i64))]
     pub levels: u32,
-    /// Samples per kind for every measured error (default: 10 per face
+    /// Samples per kind for every measured error (default: 4 per face
     /// of each level, 50 000 to 1 000 000).
     #[arg(long, value_name = "N", conflicts_with = "no_measure",
           value_parser = clap::value_parser!(u64).range(1..=lodkit_mesh::metrics::MAX_SAMPLES_PER_KIND as u64))]

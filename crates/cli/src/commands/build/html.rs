@@ -69,7 +69,7 @@ pub fn report(i: &Inputs) -> Result<String> {
     let mut b: Vec<Block> = i.intro.iter().cloned().map(Block::Text).collect();
     b.push(Block::Text(format!(
         "All errors are distances to the input surface in object units, with the same figure as a \
-         percentage of its bounding-box diagonal ({diagonal:.6}) beside it; they are {}.",
+         percentage of its bounding-box diagonal ({diagonal:.6}) beside it. Errors {}.",
         i.sampling.describe().replace('`', "")
     )));
 

@@ -55,16 +55,16 @@ impl Sampling {
     /// The sentence the report gives about the sample counts.
     pub fn describe(self) -> String {
         match self {
-            Sampling::Skip => "not measured (`--no-measure`)".into(),
+            Sampling::Skip => "are not measured (`--no-measure`)".into(),
             Sampling::Adaptive => format!(
-                "measured against the input with `lodkit compare`'s Metro sampling, symmetric, \
+                "are measured against the input with `lodkit compare`'s Metro sampling, symmetric, \
                  {} samples of each kind per face of the level ({}–{}; column *samples*)",
                 lodkit_mesh::metrics::reference::LEVEL_SAMPLES_PER_FACE,
                 lodkit_mesh::metrics::reference::MIN_LEVEL_SAMPLES,
                 lodkit_mesh::metrics::DEFAULT_MIN_SAMPLES
             ),
             Sampling::PerKind(n) => format!(
-                "measured against the input with `lodkit compare`'s Metro sampling, symmetric, \
+                "are measured against the input with `lodkit compare`'s Metro sampling, symmetric, \
                  {n} samples of each kind"
             ),
         }

@@ -54,7 +54,16 @@ pub fn section(
         },
         ..EncodeOptions::DEFAULT
     };
-    let enc = encode(source, &opts).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+    // Outer thinning can leave nothing of a thin, one-sided sampling (a
+    // single range image); such an input is encoded with the default
+    // thinning instead, and the report says so.
+    let (enc, outer) = match encode(source, &opts) {
+        Ok(e) => (e, true),
+        Err(_) => (
+            encode(source, &EncodeOptions::DEFAULT).map_err(|e| anyhow::anyhow!("{name}: {e}"))?,
+            false,
+        ),
+    };
     let file = format!("{name}.pop");
     write_atomic(&out.join(&file), &enc.bytes)?;
     step.finish();
@@ -67,11 +76,16 @@ pub fn section(
     };
     writeln!(
         report,
-        "## Progressive stream (octree particles)\n\n`{file}` ({} bytes, entropy-coded{from}, outer thinning{}): \
+        "## Progressive stream (octree particles)\n\n`{file}` ({} bytes, entropy-coded{from}, {}{}): \
          a reader that has the first *bytes so far* can show level *r*, triangulated directly from its \
          particles, with *N* bits per coordinate (the level chunks alone give N = R; the refinement \
          layers that follow them bring the finest level to the stream's full precision); errors {}.\n",
         enc.bytes.len(),
+        if outer {
+            "outer thinning"
+        } else {
+            "default thinning (outer thinning left no particle of this input)"
+        },
         enc.report.relax_below.map_or(String::new(), |l| format!(
             " relaxed below level {l}, the level chosen for this object"
         )),
