@@ -107,14 +107,14 @@ fn check_target(target: &Path) -> Result<()> {
         ))
         .into());
     }
-    if let (Ok(t), Ok(cwd)) = (target.canonicalize(), std::env::current_dir()) {
-        if cwd.starts_with(&t) {
-            return Err(Usage(format!(
-                "--out {}: is the current folder or one above it; give a folder of its own",
-                target.display()
-            ))
-            .into());
-        }
+    if let (Ok(t), Ok(cwd)) = (target.canonicalize(), std::env::current_dir())
+        && cwd.starts_with(&t)
+    {
+        return Err(Usage(format!(
+            "--out {}: is the current folder or one above it; give a folder of its own",
+            target.display()
+        ))
+        .into());
     }
     let empty = std::fs::read_dir(target)
         .with_context(|| format!("{}: cannot read folder", target.display()))?
