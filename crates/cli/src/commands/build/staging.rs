@@ -70,9 +70,13 @@ impl Staging {
             std::fs::rename(target, &old).with_context(|| {
                 format!("{}: cannot move the previous build aside", target.display())
             })?;
-            std::fs::rename(&self.dir, target).with_context(|| {
-                format!("{}: cannot move the new build into place", target.display())
-            })?;
+            if let Err(e) = std::fs::rename(&self.dir, target) {
+                // Put the previous build back where it was.
+                let _ = std::fs::rename(&old, target);
+                return Err(e).with_context(|| {
+                    format!("{}: cannot move the new build into place", target.display())
+                });
+            }
             std::fs::remove_dir_all(&old)
                 .with_context(|| format!("{}: cannot remove the previous build", old.display()))?;
         } else {
