@@ -79,12 +79,14 @@ enum Command {
     Convert {
         input: PathBuf,
         /// Output file; the format follows its extension (.ply, .obj, .stl, .glb, .xyz, .pts).
+        #[arg(value_parser = ui::value::output(&["ply", "obj", "stl", "glb", "xyz", "pts", "txt"], "the converted model"))]
         output: PathBuf,
         /// Write ASCII PLY/STL instead of binary.
         #[arg(long)]
         ascii: bool,
-        /// Weld vertices closer than this distance (object units) before writing.
-        #[arg(long, value_name = "DIST")]
+        /// Weld vertices closer than this distance (object units, a finite
+        /// number >= 0) before writing.
+        #[arg(long, value_name = "DIST", value_parser = ui::value::Real::NON_NEGATIVE.f32())]
         weld: Option<f32>,
     },
     /// Metro-style surface distance between two meshes (Hausdorff, mean, RMS).

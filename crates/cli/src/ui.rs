@@ -69,6 +69,23 @@ impl Ui {
     }
 }
 
+impl Ui {
+    /// A long stage of work (seconds or more): a spinner on a terminal;
+    /// off a terminal (a log, a pipe, CI) one line naming the stage as it
+    /// starts, so a long command is never silent there. `-q` hides both.
+    pub fn stage(&self, msg: &str) -> Step {
+        if !self.tty && !self.quiet {
+            eprintln!("{msg}");
+        }
+        self.spinner(msg)
+    }
+}
+
+/// A usage error (exit 2) as an `anyhow::Error`.
+pub fn usage(msg: impl Into<String>) -> anyhow::Error {
+    Usage(msg.into()).into()
+}
+
 /// One timed stage of work; prints its time with `-v` when finished.
 pub struct Step {
     bar: ProgressBar,
@@ -127,4 +144,223 @@ pub fn is_broken_pipe(e: &anyhow::Error) -> bool {
         c.downcast_ref::<std::io::Error>()
             .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
     })
+}
+
+/// Typed option values: every numeric option of every command is parsed by
+/// one of these, so a value out of range (or `nan`, `inf`) is a usage error
+/// (exit 2) whose message names the allowed range, before anything is read
+/// or written.
+pub mod value {
+    use std::fmt::Display;
+    use std::path::PathBuf;
+    use std::str::FromStr;
+
+    /// An integer in `lo..=hi`.
+    pub fn int<T>(
+        lo: T,
+        hi: T,
+    ) -> impl Fn(&str) -> Result<T, String> + Clone + Send + Sync + 'static
+    where
+        T: FromStr + PartialOrd + Display + Copy + Send + Sync + 'static,
+    {
+        move |s: &str| match s.trim().parse::<T>() {
+            Ok(v) if v >= lo && v <= hi => Ok(v),
+            _ => Err(format!("expected an integer in {lo}..={hi}")),
+        }
+    }
+
+    /// A finite real in an interval; each end closed or open, the upper
+    /// end possibly absent (`hi = inf`: any finite value above `lo`).
+    #[derive(Clone, Copy, Debug)]
+    pub struct Real {
+        lo: f64,
+        lo_open: bool,
+        hi: f64,
+        hi_open: bool,
+    }
+
+    impl Real {
+        /// `[lo, hi]`.
+        pub const fn closed(lo: f64, hi: f64) -> Real {
+            Real {
+                lo,
+                lo_open: false,
+                hi,
+                hi_open: false,
+            }
+        }
+        /// `[lo, hi)`.
+        pub const fn closed_open(lo: f64, hi: f64) -> Real {
+            Real {
+                lo,
+                lo_open: false,
+                hi,
+                hi_open: true,
+            }
+        }
+        /// `(lo, hi]`.
+        pub const fn open_closed(lo: f64, hi: f64) -> Real {
+            Real {
+                lo,
+                lo_open: true,
+                hi,
+                hi_open: false,
+            }
+        }
+        /// `(lo, hi)`.
+        pub const fn open(lo: f64, hi: f64) -> Real {
+            Real {
+                lo,
+                lo_open: true,
+                hi,
+                hi_open: true,
+            }
+        }
+        /// Any finite value `≥ 0`.
+        pub const NON_NEGATIVE: Real = Real::closed(0.0, f64::INFINITY);
+        /// Any finite value `> 0`.
+        pub const POSITIVE: Real = Real::open(0.0, f64::INFINITY);
+        /// Any finite value.
+        pub const FINITE: Real = Real::open(f64::NEG_INFINITY, f64::INFINITY);
+
+        pub fn contains(&self, v: f64) -> bool {
+            v.is_finite()
+                && if self.lo_open {
+                    v > self.lo
+                } else {
+                    v >= self.lo
+                }
+                && if self.hi_open {
+                    v < self.hi
+                } else {
+                    v <= self.hi
+                }
+        }
+
+        /// The range in words: `[0, 1]`, `(0, 180)`, `> 0`, `≥ 0`.
+        pub fn describe(&self) -> String {
+            match (self.lo.is_finite(), self.hi.is_finite()) {
+                (false, false) => "a finite number".into(),
+                (true, false) => {
+                    format!(
+                        "a finite number {} {}",
+                        if self.lo_open { ">" } else { ">=" },
+                        self.lo
+                    )
+                }
+                (false, true) => {
+                    format!(
+                        "a finite number {} {}",
+                        if self.hi_open { "<" } else { "<=" },
+                        self.hi
+                    )
+                }
+                (true, true) => format!(
+                    "a number in {}{}, {}{}",
+                    if self.lo_open { '(' } else { '[' },
+                    self.lo,
+                    self.hi,
+                    if self.hi_open { ')' } else { ']' }
+                ),
+            }
+        }
+
+        fn check(&self, s: &str) -> Result<f64, String> {
+            match s.trim().parse::<f64>() {
+                Ok(v) if self.contains(v) => Ok(v),
+                _ => Err(format!("expected {}", self.describe())),
+            }
+        }
+
+        /// The parser of an `f32` option (also refusing values that
+        /// overflow `f32`).
+        pub fn f32(self) -> impl Fn(&str) -> Result<f32, String> + Clone + Send + Sync + 'static {
+            move |s: &str| {
+                let v = self.check(s)? as f32;
+                if v.is_finite() && self.contains(v as f64) {
+                    Ok(v)
+                } else {
+                    Err(format!("expected {}", self.describe()))
+                }
+            }
+        }
+
+        /// The parser of an `f64` option.
+        pub fn f64(self) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync + 'static {
+            move |s: &str| self.check(s)
+        }
+
+        /// The parser of `X,Y,Z`: three values, each in this range.
+        pub fn vec3(
+            self,
+        ) -> impl Fn(&str) -> Result<[f32; 3], String> + Clone + Send + Sync + 'static {
+            move |s: &str| {
+                let bad = || format!("expected X,Y,Z: three numbers, each {}", self.describe());
+                let v: Vec<f32> = s
+                    .split(',')
+                    .map(|x| self.f32()(x))
+                    .collect::<Result<_, _>>()
+                    .map_err(|_| bad())?;
+                match v.as_slice() {
+                    &[x, y, z] => Ok([x, y, z]),
+                    _ => Err(bad()),
+                }
+            }
+        }
+    }
+
+    /// `WIDTHxHEIGHT`, each side in `min..=max`.
+    pub fn size(
+        min: u32,
+        max: u32,
+    ) -> impl Fn(&str) -> Result<(u32, u32), String> + Clone + Send + Sync + 'static {
+        move |s: &str| {
+            let bad =
+                || format!("expected WIDTHxHEIGHT with each side in {min}..={max}, e.g. 256x256");
+            let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+            let side = |v: &str| match v.trim().parse::<u32>() {
+                Ok(n) if (min..=max).contains(&n) => Ok(n),
+                _ => Err(bad()),
+            };
+            Ok((side(w)?, side(h)?))
+        }
+    }
+
+    /// An output file whose extension is one of `exts` (lower case, no
+    /// dot), so `-o x.ply` on a command that writes `.pop` is refused
+    /// rather than written with the wrong contents.
+    pub fn output(
+        exts: &'static [&'static str],
+        what: &'static str,
+    ) -> impl Fn(&str) -> Result<PathBuf, String> + Clone + Send + Sync + 'static {
+        move |s: &str| {
+            let p = PathBuf::from(s);
+            let ext = p
+                .extension()
+                .and_then(|e| e.to_str())
+                .map(|e| e.to_ascii_lowercase());
+            match ext {
+                Some(e) if exts.contains(&e.as_str()) => Ok(p),
+                _ => Err(format!(
+                    "{s}: {what} is written as {}",
+                    exts.iter()
+                        .map(|e| format!(".{e}"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )),
+            }
+        }
+    }
+
+    /// Most samples per kind a measurement may ask for (`--samples` of
+    /// `compare`, `lods`, `bench`): each costs about 100 bytes over the
+    /// sample kinds and both meshes, so 1 GB at the limit.
+    pub const MAX_SAMPLES: usize = 10_000_000;
+
+    /// Most levels of a halving LOD chain (`--levels`): past 32 halvings
+    /// a 4-billion-triangle mesh has no triangle left.
+    pub const MAX_LEVELS: usize = 32;
+
+    /// Output extensions that hold a triangle mesh.
+    pub const MESH_OUT: &[&str] = &["ply", "obj", "stl", "glb"];
 }

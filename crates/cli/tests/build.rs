@@ -162,8 +162,8 @@ fn bad_options_are_usage_errors_before_anything_is_written() {
     std::fs::create_dir(&out).unwrap();
     std::fs::write(out.join("report.md"), "an earlier build").unwrap();
     for (args, says) in [
-        (vec!["--levels", "0"], "1..=20"),
-        (vec!["--levels", "21"], "1..=20"),
+        (vec!["--levels", "0"], "1..=32"),
+        (vec!["--levels", "33"], "1..=32"),
         (vec!["--samples", "0"], "1.."),
         (vec!["--samples", "10", "--no-measure"], "--no-measure"),
     ] {

@@ -263,3 +263,470 @@ fn bench_simplify_runs_with_the_peers_feature_and_explains_itself_without() {
         );
     }
 }
+
+/// A small closed mesh (an octahedron, 2 units across) written as OBJ.
+fn octahedron(dir: &Path) -> String {
+    let p = dir.join("octahedron.obj");
+    std::fs::write(
+        &p,
+        "v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\n\
+         f 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n",
+    )
+    .unwrap();
+    p.display().to_string()
+}
+
+/// One test per option value that must be refused at parse time: exit 2,
+/// one message naming the option's allowed range, nothing written.
+macro_rules! refused {
+    ($name:ident, [$($arg:expr),* $(,)?], [$($word:expr),* $(,)?]) => {
+        #[test]
+        fn $name() {
+            // `@bunny`: the shipped bunny; `@out`: a folder in a scratch dir.
+            let dir = tempfile::tempdir().unwrap();
+            let out = dir.path().join("out").display().to_string();
+            let bunny = bunny();
+            let args: Vec<&str> = [$($arg),*]
+                .into_iter()
+                .map(|a| match a {
+                    "@bunny" => bunny.as_str(),
+                    "@out" => out.as_str(),
+                    a => a,
+                })
+                .collect();
+            let o = lodkit(&args);
+            let e = stderr(&o);
+            assert_eq!(o.status.code(), Some(2), "{e}");
+            $(assert!(e.contains($word), "expected {:?} in: {e}", $word);)*
+            assert!(std::fs::read_dir(dir.path()).unwrap().next().is_none(), "wrote something");
+        }
+    };
+}
+
+mod refused_at_parse_time {
+    use super::*;
+
+    // Issue 15 item 6: out of range is a usage error naming the range.
+    refused!(
+        simplify_ratio_above_one,
+        ["simplify", "@bunny", "-o", "x.ply", "--ratio", "2"],
+        ["--ratio", "[0, 1]"]
+    );
+    refused!(
+        lods_zero_levels,
+        ["lods", "@bunny", "--out", "@out", "--levels", "0"],
+        ["--levels", "1..=32"]
+    );
+    refused!(
+        mco_view_with_two_numbers,
+        ["mco", "extract", "m.mco", "-o", "x.ply", "--view", "0,0.1"],
+        ["--view", "X,Y,Z"]
+    );
+    refused!(
+        mco_look_at_without_view,
+        [
+            "mco",
+            "extract",
+            "m.mco",
+            "-o",
+            "x.ply",
+            "--lod",
+            "1",
+            "--look-at",
+            "0,0,0"
+        ],
+        ["--look-at", "--view"]
+    );
+    refused!(
+        mco_fov_out_of_range,
+        [
+            "mco", "extract", "m.mco", "-o", "x.ply", "--view", "0,0,1", "--fov", "180"
+        ],
+        ["--fov", "(0, 180)"]
+    );
+    refused!(
+        pop_precision_below_depth,
+        [
+            "pop",
+            "encode",
+            "@bunny",
+            "-o",
+            "x.pop",
+            "--depth",
+            "6",
+            "--precision",
+            "4"
+        ],
+        ["--precision 4", "6..=16"]
+    );
+    refused!(
+        pop_encode_to_ply,
+        ["pop", "encode", "@bunny", "-o", "x.ply"],
+        ["x.ply", ".pop"]
+    );
+    refused!(
+        simplify_to_points,
+        ["simplify", "@bunny", "-o", "x.xyz", "--target", "100"],
+        ["x.xyz", ".ply"]
+    );
+    refused!(
+        pop_decode_mesh_to_points,
+        ["pop", "decode", "b.pop", "-o", "x.xyz"],
+        ["x.xyz", "--points"]
+    );
+    refused!(
+        mco_build_to_ply,
+        ["mco", "build", "@bunny", "-o", "x.ply"],
+        ["x.ply", ".mco"]
+    );
+    refused!(
+        relax_below_without_outer_thinning,
+        [
+            "pop",
+            "encode",
+            "@bunny",
+            "-o",
+            "x.pop",
+            "--relax-below",
+            "5"
+        ],
+        ["--outer-thinning"]
+    );
+    refused!(
+        placement_column_in_baseline,
+        [
+            "pop",
+            "encode",
+            "@bunny",
+            "-o",
+            "x.pop",
+            "--mode",
+            "baseline",
+            "--placement",
+            "column"
+        ],
+        ["--placement", "baseline"]
+    );
+    refused!(
+        decimate_with_points,
+        [
+            "pop",
+            "decode",
+            "b.pop",
+            "-o",
+            "x.xyz",
+            "--points",
+            "--decimate",
+            "0.5"
+        ],
+        ["--decimate", "--points"]
+    );
+    refused!(
+        ascii_for_glb,
+        ["convert", "@bunny", "x.glb", "--ascii"],
+        ["--ascii", ".ply"]
+    );
+
+    // Issue 14 item 2: every option that sizes memory has an upper bound.
+    refused!(
+        huge_heap,
+        [
+            "simplify",
+            "@bunny",
+            "-o",
+            "x.ply",
+            "--target",
+            "10",
+            "--heap-size",
+            "1000000000000"
+        ],
+        ["--heap-size", "1..=16777216"]
+    );
+    refused!(
+        huge_level_count,
+        ["lods", "@bunny", "--out", "@out", "--levels", "100000000"],
+        ["--levels", "1..=32"]
+    );
+    refused!(
+        huge_pop_depth,
+        ["pop", "encode", "@bunny", "-o", "x.pop", "--depth", "16"],
+        ["--depth", "1..=12"]
+    );
+    refused!(
+        huge_render_size,
+        ["render", "@bunny", "-o", "x.png", "--size", "100000x10"],
+        ["--size", "1..=8192"]
+    );
+    refused!(
+        huge_mco_resolution,
+        [
+            "mco",
+            "build",
+            "@bunny",
+            "-o",
+            "x.mco",
+            "--resolution",
+            "2000"
+        ],
+        ["--resolution", "2..=512"]
+    );
+    refused!(
+        huge_sample_count,
+        ["compare", "@bunny", "@bunny", "--samples", "100000000000"],
+        ["--samples", "1..=10000000"]
+    );
+    refused!(
+        huge_scan,
+        [
+            "scan",
+            "@bunny",
+            "--out",
+            "@out",
+            "--views",
+            "360",
+            "--size",
+            "4096x4096"
+        ],
+        ["--views", "33554432"]
+    );
+    refused!(
+        huge_bench_blob,
+        ["bench", "simplify", "--blob", "1000000000"],
+        ["--blob", "1000..=10000000"]
+    );
+
+    // Issue 14 item 9: non-finite and out-of-domain values.
+    refused!(
+        max_error_nan,
+        ["simplify", "@bunny", "-o", "x.ply", "--max-error", "nan"],
+        ["--max-error", "finite"]
+    );
+    refused!(
+        prune_nan,
+        [
+            "simplify", "@bunny", "-o", "x.ply", "--target", "10", "--prune", "nan"
+        ],
+        ["--prune", "[0, 1)"]
+    );
+    refused!(
+        prune_two,
+        [
+            "simplify", "@bunny", "-o", "x.ply", "--target", "10", "--prune", "2"
+        ],
+        ["--prune", "[0, 1)"]
+    );
+    refused!(
+        normal_weight_nan,
+        [
+            "simplify",
+            "@bunny",
+            "-o",
+            "x.ply",
+            "--target",
+            "10",
+            "--normal-weight",
+            "nan"
+        ],
+        ["--normal-weight", "[0, 1000000]"]
+    );
+    refused!(
+        weld_nan,
+        ["convert", "@bunny", "x.obj", "--weld", "nan"],
+        ["--weld", "finite"]
+    );
+    refused!(
+        decimate_nan,
+        ["pop", "decode", "b.pop", "-o", "x.ply", "--decimate", "nan"],
+        ["--decimate", "[0, 1]"]
+    );
+    refused!(
+        scan_elevation_nan,
+        ["scan", "@bunny", "--out", "@out", "--elevation", "nan"],
+        ["--elevation", "[-90, 90]"]
+    );
+    refused!(
+        scan_noise_inf,
+        ["scan", "@bunny", "--out", "@out", "--noise", "inf"],
+        ["--noise", "finite"]
+    );
+    refused!(
+        tolerance_zero,
+        [
+            "mco",
+            "extract",
+            "m.mco",
+            "-o",
+            "x.ply",
+            "--view",
+            "0,0,1",
+            "--tolerance",
+            "0"
+        ],
+        ["--tolerance", "> 0"]
+    );
+    refused!(
+        ratio_overflowing_f32,
+        ["simplify", "@bunny", "-o", "x.ply", "--max-error", "1e39"],
+        ["--max-error", "finite"]
+    );
+}
+
+#[test]
+fn a_legal_pop_depth_too_big_for_the_mesh_is_refused_before_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = octahedron(dir.path());
+    let out = dir.path().join("o.pop");
+    let o = lodkit(&[
+        "pop",
+        "encode",
+        &mesh,
+        "-o",
+        out.to_str().unwrap(),
+        "--depth",
+        "10",
+    ]);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(
+        e.contains("--depth 10") && e.contains("octahedron.obj") && e.contains("--depth 9 or less"),
+        "{e}"
+    );
+    assert!(!out.exists());
+}
+
+#[test]
+fn a_raised_pop_precision_is_said() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = octahedron(dir.path());
+    let out = dir.path().join("o.pop");
+    let o = lodkit(&[
+        "pop",
+        "encode",
+        &mesh,
+        "-o",
+        out.to_str().unwrap(),
+        "--precision",
+        "1",
+    ]);
+    let e = stderr(&o);
+    assert!(o.status.success(), "{e}");
+    assert!(e.contains("precision raised from --precision 1"), "{e}");
+}
+
+#[test]
+fn convert_to_points_says_it_drops_the_faces() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = octahedron(dir.path());
+    let out = dir.path().join("o.xyz");
+    let o = lodkit(&["convert", &mesh, out.to_str().unwrap()]);
+    let e = stderr(&o);
+    assert!(o.status.success(), "{e}");
+    assert!(
+        e.contains("6 points") && e.contains("8 faces are dropped"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_txt_input_says_it_is_read_as_xyz() {
+    let dir = tempfile::tempdir().unwrap();
+    let txt = dir.path().join("cloud.txt");
+    std::fs::write(&txt, "0 0 0\n1 0 0\n0 1 0\n").unwrap();
+    let o = lodkit(&["info", txt.to_str().unwrap()]);
+    let e = stderr(&o);
+    assert!(o.status.success(), "{e}");
+    assert!(e.contains("cloud.txt as XYZ points"), "{e}");
+}
+
+#[test]
+fn errors_name_the_files_path() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = octahedron(dir.path());
+    let missing = dir.path().join("sub/missing.ply");
+    let o = lodkit(&["compare", &mesh, missing.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains(missing.to_str().unwrap()),
+        "{}",
+        stderr(&o)
+    );
+    let o = lodkit(&[
+        "lods",
+        missing.to_str().unwrap(),
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains(missing.to_str().unwrap()),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn dash_o_is_a_file_and_dash_dash_out_a_folder_in_every_command() {
+    // The help of each command that writes a folder shows --out DIR and
+    // no -o; those that write one file show -o.
+    for (cmd, folder) in [
+        (&["lods"][..], true),
+        (&["scan"], true),
+        (&["simplify"], false),
+        (&["pop", "encode"], false),
+        (&["pop", "decode"], false),
+        (&["mco", "build"], false),
+        (&["mco", "extract"], false),
+        (&["render"], false),
+    ] {
+        let mut args = cmd.to_vec();
+        args.push("--help");
+        let o = lodkit(&args);
+        let h = String::from_utf8_lossy(&o.stdout).into_owned();
+        if folder {
+            assert!(
+                h.contains("--out <DIR>") && !h.contains("-o,"),
+                "{cmd:?}: {h}"
+            );
+        } else {
+            assert!(h.contains("-o, --output"), "{cmd:?}: {h}");
+        }
+    }
+}
+
+#[test]
+fn off_a_terminal_long_stages_print_a_line_each_unless_quiet() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = octahedron(dir.path());
+    let out = dir.path().join("l");
+    let args = [
+        "lods",
+        &mesh,
+        "--out",
+        out.to_str().unwrap(),
+        "--levels",
+        "1",
+        "--samples",
+        "1000",
+    ];
+    let o = lodkit(&args);
+    let e = stderr(&o);
+    assert!(o.status.success(), "{e}");
+    assert!(
+        e.contains("level 1: ") && e.contains("measured mean"),
+        "{e}"
+    );
+    let mut quiet = vec!["-q"];
+    quiet.extend_from_slice(&args);
+    let o = lodkit(&quiet);
+    assert!(o.status.success());
+    assert!(stderr(&o).is_empty(), "{}", stderr(&o));
+    let o = lodkit(&["compare", &mesh, &mesh, "--samples", "1000"]);
+    assert!(o.status.success());
+    assert!(
+        stderr(&o).contains("measuring (1000 samples"),
+        "{}",
+        stderr(&o)
+    );
+    let o = lodkit(&["-q", "compare", &mesh, &mesh, "--samples", "1000"]);
+    assert!(stderr(&o).is_empty(), "{}", stderr(&o));
+}

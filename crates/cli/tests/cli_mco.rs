@@ -135,5 +135,66 @@ fn bad_models_and_options_are_one_line_errors() {
         "--out",
         s(dir.path()),
     ]);
-    assert_eq!(o.status.code(), Some(1));
+    // A malformed option value is a usage error, before the file is read.
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("2..=4096"));
+}
+
+#[test]
+fn scan_build_extract_and_bench_print_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = dir.path().join("sphere.ply");
+    lodkit_mesh::io::save_mesh(
+        &mesh,
+        &lodkit_mesh::shapes::icosphere(2),
+        lodkit_mesh::io::WriteOptions::default(),
+    )
+    .unwrap();
+    let json = |args: &[&str]| -> serde_json::Value {
+        let o = lodkit(args);
+        ok(&o);
+        serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{args:?}: {e}"))
+    };
+    let scans = dir.path().join("scans");
+    let v = json(&[
+        "scan",
+        s(&mesh),
+        "--views",
+        "2",
+        "--size",
+        "16x16",
+        "--out",
+        s(&scans),
+        "--json",
+    ]);
+    assert_eq!(v["scans"].as_array().unwrap().len(), 2, "{v}");
+    assert!(v["conf"].as_str().unwrap().ends_with("sphere.conf"));
+    let model = dir.path().join("s.mco");
+    let v = json(&[
+        "mco",
+        "build",
+        s(&mesh),
+        "-o",
+        s(&model),
+        "--resolution",
+        "12",
+        "--json",
+    ]);
+    assert_eq!(v["resolution"], 12);
+    assert!(v["full_triangles"].as_u64().unwrap() > 0, "{v}");
+    let v = json(&[
+        "mco",
+        "extract",
+        s(&model),
+        "--lod",
+        "0",
+        "-o",
+        s(&dir.path().join("root.ply")),
+        "--json",
+    ]);
+    assert_eq!(v["lod"], 0);
+    assert!(v["triangles"].as_u64().is_some(), "{v}");
+    let v = json(&["bench", "mco", s(&model), "--budget", "0.01", "--json"]);
+    assert!(!v.as_array().unwrap().is_empty(), "{v}");
+    assert!(v[0]["extract_us"].as_f64().is_some(), "{v}");
 }

@@ -45,10 +45,9 @@ fn encode_decode_and_stats_the_bunny() {
     }
 }
 
-#[test]
-fn a_cut_stream_is_a_one_line_error_naming_the_file() {
-    let dir = tempfile::tempdir().unwrap();
-    let pop = dir.path().join("bunny.pop");
+/// The bunny encoded at depth 5 into `dir/bunny.pop`; its bytes.
+fn bunny_pop(dir: &std::path::Path) -> Vec<u8> {
+    let pop = dir.join("bunny.pop");
     let o = lodkit(&[
         "-q",
         "pop",
@@ -60,7 +59,42 @@ fn a_cut_stream_is_a_one_line_error_naming_the_file() {
         "5",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let bytes = std::fs::read(&pop).unwrap();
+    std::fs::read(&pop).unwrap()
+}
+
+#[test]
+fn a_stream_cut_inside_a_chunk_decodes_its_complete_chunks_and_says_where_it_stopped() {
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = bunny_pop(dir.path());
+    let cut = dir.path().join("cut.pop");
+    std::fs::write(&cut, &bytes[..bytes.len() / 4]).unwrap();
+    let out = dir.path().join("x.ply");
+    let o = lodkit(&[
+        "pop",
+        "decode",
+        cut.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    let e = stderr(&o);
+    assert!(o.status.success(), "{e}");
+    assert!(
+        e.contains("cut.pop: stopped at byte") && e.contains("complete chunks before it"),
+        "{e}"
+    );
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    // The default level is the finest the prefix holds, below the stream's depth.
+    assert_eq!(v["level"], v["finest_level"]);
+    assert!(v["level"].as_u64().unwrap() < 5, "{v}");
+    assert!(v["cut"]["offset"].as_u64().unwrap() <= bytes.len() as u64 / 4);
+    assert!(out.exists());
+}
+
+#[test]
+fn strict_refuses_a_cut_stream_with_one_line_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = bunny_pop(dir.path());
     let cut = dir.path().join("cut.pop");
     std::fs::write(&cut, &bytes[..bytes.len() - 3]).unwrap();
     let out = dir.path().join("x.ply");
@@ -70,12 +104,103 @@ fn a_cut_stream_is_a_one_line_error_naming_the_file() {
         cut.to_str().unwrap(),
         "-o",
         out.to_str().unwrap(),
+        "--strict",
     ]);
     assert_eq!(o.status.code(), Some(1));
     let e = stderr(&o);
-    assert!(e.contains("cut.pop") && e.contains("truncated"), "{e}");
+    assert!(
+        e.contains("cut.pop") && e.contains("truncated") && e.contains("--strict"),
+        "{e}"
+    );
     assert_eq!(e.lines().count(), 1, "{e}");
     assert!(!out.exists());
+}
+
+#[test]
+fn a_level_past_what_a_prefix_holds_is_a_usage_error_naming_the_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = bunny_pop(dir.path());
+    let cut = dir.path().join("cut.pop");
+    std::fs::write(&cut, &bytes[..bytes.len() / 4]).unwrap();
+    let o = lodkit(&[
+        "pop",
+        "decode",
+        cut.to_str().unwrap(),
+        "--level",
+        "5",
+        "-o",
+        dir.path().join("x.ply").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let e = stderr(&o);
+    assert!(
+        e.contains("--level 5 is outside 0..=") && e.contains("cut.pop"),
+        "{e}"
+    );
+}
+
+#[test]
+fn the_help_examples_decode_the_bunny() {
+    let dir = tempfile::tempdir().unwrap();
+    let pop = dir.path().join("bunny.pop");
+    let o = lodkit(&["-q", "pop", "encode", &bunny(), "-o", pop.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let help = String::from_utf8_lossy(&lodkit(&["pop", "decode", "--help"]).stdout).into_owned();
+    let mut ran = 0;
+    for line in help.lines().map(str::trim) {
+        let Some(cmd) = line.strip_prefix("lodkit pop decode ") else {
+            continue;
+        };
+        let cmd = cmd.split('#').next().unwrap();
+        let args: Vec<String> = cmd
+            .split_whitespace()
+            .map(|a| match a {
+                "bunny.pop" => pop.display().to_string(),
+                a if a.ends_with(".ply") => dir.path().join(a).display().to_string(),
+                a => a.to_string(),
+            })
+            .collect();
+        let mut all = vec!["pop", "decode"];
+        all.extend(args.iter().map(String::as_str));
+        let o = lodkit(&all);
+        assert!(o.status.success(), "{line}: {}", stderr(&o));
+        ran += 1;
+    }
+    assert!(ran >= 3, "{help}");
+}
+
+#[test]
+fn encode_and_decode_print_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let pop = dir.path().join("bunny.pop");
+    let o = lodkit(&[
+        "pop",
+        "encode",
+        &bunny(),
+        "-o",
+        pop.to_str().unwrap(),
+        "--depth",
+        "5",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["depth"], 5);
+    assert!(v["particles"].as_u64().unwrap() > 0);
+    assert!(v["total_bytes"].as_u64().unwrap() > 0);
+    let o = lodkit(&[
+        "pop",
+        "decode",
+        pop.to_str().unwrap(),
+        "-o",
+        dir.path().join("p.xyz").to_str().unwrap(),
+        "--points",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["level"], 5);
+    assert!(v["cut"].is_null() && v["triangles"].is_null(), "{v}");
 }
 
 #[test]

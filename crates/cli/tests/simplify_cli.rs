@@ -82,8 +82,9 @@ fn simplify_without_a_budget_is_a_usage_error() {
         "--ratio",
         "3",
     ]);
-    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    assert!(stderr(&o).contains("--ratio"));
+    // Out of range: a usage error naming the range, before the input is read.
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--ratio") && stderr(&o).contains("[0, 1]"));
 }
 
 #[test]

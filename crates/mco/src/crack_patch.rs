@@ -11,8 +11,13 @@
 //! and the segment already share their end points; only the extra fine
 //! vertices `P3` stick out. Each is moved to its compensation point `R`,
 //! the foot of the perpendicular from `P3` to the coarse segment `P1P2`
-//! (Fig. 5.6; clamped to the segment, and onto the nearest segment when
-//! the face has two).
+//! (Fig. 5.6; clamped to the segment). When the face has two coarse
+//! segments, `P3` goes onto the one joining the ends of its own fine
+//! polyline, not the nearer one: the fine polylines across the parent's
+//! face are chained, and each polyline's ends are one coarse segment's
+//! ends (what `face_patchable` checks). On a curved surface the other
+//! segment can be nearer, and a point moved there leaves the gap between
+//! its polyline and its segment open.
 //!
 //! Every compensation point is stored once in the shared vertex buffer
 //! (keyed by the fine vertex and `q`), and node `n` gets a patch record
@@ -200,6 +205,75 @@ fn dedup_sorted<T: PartialEq + Copy>(v: &mut [T]) -> usize {
         }
     }
     w
+}
+
+/// The fine segments on face `f` of a node whose children are `kids`
+/// (indices into the level below, `below`): those of the children whose
+/// face `f` lies on the node's, as vertex pairs, smaller index first. At
+/// most 4 children, 2 segments each.
+fn fine_face_segments(below: &Level, kids: &[u32], f: Face, out: &mut [[u32; 2]; 8]) -> usize {
+    let axis = f.axis as u32;
+    let mut n = 0;
+    for &ci in kids {
+        let ci = ci as usize;
+        if below.keys[ci] >> (axis * KEY_BITS) & 1 != f.side as u64 {
+            continue;
+        }
+        for s in face_segments_fixed(below.configs[ci], f) {
+            out[n] = ordered(&below.node_edges[ci], *s);
+            n += 1;
+        }
+    }
+    n
+}
+
+/// The two ends of the fine polyline through vertex `x` among the
+/// segments `fine`, smaller first; `None` when `x` is on no segment, on a
+/// closed loop, or where the polyline branches (a vertex on more than two
+/// segments).
+fn chain_ends(fine: &[[u32; 2]], x: u32) -> Option<[u32; 2]> {
+    let mut used = [false; 8];
+    let mut ends = [x; 2];
+    let mut side = 0;
+    for start in 0..fine.len() {
+        if !fine[start].contains(&x) {
+            continue;
+        }
+        if side == 2 {
+            return None; // `x` on three segments
+        }
+        // Walk away from `x` through `start`.
+        used[start] = true;
+        let mut at = if fine[start][0] == x {
+            fine[start][1]
+        } else {
+            fine[start][0]
+        };
+        loop {
+            if at == x {
+                return None; // a closed loop
+            }
+            let mut next = None;
+            for k in 0..fine.len() {
+                if !used[k] && fine[k].contains(&at) {
+                    if next.is_some() {
+                        return None; // a branch
+                    }
+                    next = Some(k);
+                }
+            }
+            let Some(k) = next else { break };
+            used[k] = true;
+            at = if fine[k][0] == at {
+                fine[k][1]
+            } else {
+                fine[k][0]
+            };
+        }
+        ends[side] = at;
+        side += 1;
+    }
+    (side > 0).then(|| [ends[0].min(ends[1]), ends[0].max(ends[1])])
 }
 
 /// The level-`lv` node at offset `ou` along axis `u` and `ow` along axis
@@ -431,11 +505,25 @@ pub fn patch(tree: &mut Tree, model: &mut McoModel) {
                     unpatched += nf as u64;
                     continue;
                 }
+                // The fine polylines on the parent's face: each extra
+                // vertex goes onto the coarse segment joining its
+                // polyline's ends (see the module docs); the nearest
+                // segment only where the face is not patchable (its nodes
+                // expand together, so that patch is never drawn).
+                let mut on_face = [[0u32; 2]; 8];
+                let (start_of, list) = &tree.children[l + 1];
+                let p = parent[i] as usize;
+                let kids = &list[start_of[p] as usize..start_of[p + 1] as usize];
+                let n_on_face = fine_face_segments(lv, kids, f, &mut on_face);
+                let on_face = &on_face[..n_on_face];
                 let start = subs.len();
                 for &x in &fine_buf[..nf] {
                     let px = vertices.positions[x as usize];
+                    let own = chain_ends(on_face, x)
+                        .and_then(|e| segs.iter().find(|s| [s[0].min(s[1]), s[0].max(s[1])] == e));
                     let (seg, r) = segs
                         .iter()
+                        .filter(|s| own.is_none_or(|o| o == *s))
                         .map(|s| {
                             let (a, b) = (
                                 vertices.positions[s[0] as usize],

@@ -11,6 +11,10 @@ use lodkit_bench::simplify::{BenchConfig, format_table, run_case, standard_targe
 use lodkit_mesh::TriMesh;
 
 use crate::ui::Ui;
+use crate::ui::value;
+
+/// Largest synthetic blob of `bench simplify --blob`, in triangles.
+const MAX_BLOB: usize = 10_000_000;
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
@@ -24,14 +28,15 @@ pub enum BenchWhat {
     Simplify {
         /// Meshes to run (default: the bunny and a 1M-triangle blob).
         meshes: Vec<PathBuf>,
-        /// Timed runs per side (the best is kept).
-        #[arg(long, default_value_t = 3)]
+        /// Timed runs per side (the best is kept), in 1..=100.
+        #[arg(long, default_value_t = 3, value_parser = value::int(1usize, 100))]
         runs: usize,
-        /// Samples per kind for the error measurement.
-        #[arg(long, default_value_t = 1_000_000)]
+        /// Samples per kind for the error measurement, in 1..=10000000.
+        #[arg(long, default_value_t = 1_000_000, value_parser = value::int(1usize, value::MAX_SAMPLES))]
         samples: usize,
-        /// Size of the synthetic blob when no mesh is given.
-        #[arg(long, default_value_t = 1_000_000)]
+        /// Triangles of the synthetic blob when no mesh is given, in
+        /// 1000..=10000000.
+        #[arg(long, default_value_t = 1_000_000, value_parser = value::int(1000usize, MAX_BLOB), conflicts_with = "meshes")]
         blob: usize,
         /// Print the rows as JSON.
         #[arg(long)]
@@ -65,11 +70,7 @@ pub fn run(ui: &Ui, a: &BenchArgs) -> Result<()> {
         inputs.push((format!("blob {}", blob), lodkit_mesh::shapes::blob(*blob)));
     } else {
         for p in meshes {
-            let name = p
-                .file_stem()
-                .and_then(|s| s.to_str())
-                .unwrap_or("mesh")
-                .to_string();
+            let name = p.display().to_string();
             inputs.push((name, super::load_mesh(ui, p)?));
         }
     }
@@ -80,7 +81,7 @@ pub fn run(ui: &Ui, a: &BenchArgs) -> Result<()> {
     let mut rows = Vec::new();
     for (name, mesh) in &inputs {
         for (label, target) in standard_targets() {
-            let step = ui.spinner(&format!("{name} at {label}"));
+            let step = ui.stage(&format!("{name} at {label}"));
             let row = run_case(name, mesh, &label, target, &cfg)
                 .map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
             step.finish();

@@ -39,14 +39,10 @@ use lodkit_simplify::halving_targets;
 use plotters::style::{BLUE, RED, RGBColor};
 
 use crate::chart::{Series, error_chart};
-use crate::ui::Ui;
+use crate::ui::{Ui, value};
 pub use measure::Sampling;
 
 const BUILTIN_NAME: &str = "stanford_bunny";
-/// Most levels `--levels` takes: each halves the previous one, so 20
-/// levels take a million triangles down to one.
-pub const MAX_LEVELS: u32 = 20;
-
 #[derive(Args)]
 pub struct BuildArgs {
     /// Input: a mesh (any format), a point cloud (.xyz, .pts, PLY without
@@ -57,13 +53,12 @@ pub struct BuildArgs {
     #[arg(long, short, default_value = "lodkit-out")]
     pub out: PathBuf,
     /// Levels of the discrete LOD chain, each half the previous one.
-    #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(1..=MAX_LEVELS as i64))]
-    pub levels: u32,
+    #[arg(long, default_value_t = 6, value_name = "N", value_parser = value::int(1usize, value::MAX_LEVELS))]
+    pub levels: usize,
     /// Samples per kind for every measured error (default: 4 per face
     /// of each level, 50 000 to 1 000 000).
-    #[arg(long, value_name = "N", conflicts_with = "no_measure",
-          value_parser = clap::value_parser!(u64).range(1..=lodkit_mesh::metrics::MAX_SAMPLES_PER_KIND as u64))]
-    pub samples: Option<u64>,
+    #[arg(long, value_name = "N", conflicts_with = "no_measure", value_parser = value::int(1usize, value::MAX_SAMPLES))]
+    pub samples: Option<usize>,
     /// Skip every error measurement (the report shows "-").
     #[arg(long)]
     pub no_measure: bool,
@@ -87,7 +82,7 @@ impl Timings {
 pub fn run(ui: &Ui, args: &BuildArgs) -> Result<()> {
     let sampling = match (args.no_measure, args.samples) {
         (true, _) => Sampling::Skip,
-        (false, Some(n)) => Sampling::PerKind(n as usize),
+        (false, Some(n)) => Sampling::PerKind(n),
         (false, None) => Sampling::Adaptive,
     };
     let mut timings = Timings(Vec::new());
@@ -182,7 +177,7 @@ fn write_all(
             &reference,
             name,
             &dir.join("lods"),
-            &halving_targets(args.levels as usize),
+            &halving_targets(args.levels),
             sampling,
         )
     })?;

@@ -1,11 +1,12 @@
 //! `lodkit compare A B`: Metro-style distances.
 use std::path::PathBuf;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 use lodkit_mesh::metrics::{CompareOptions, compare};
 
 use crate::ui::Ui;
+use crate::ui::value;
 
 #[derive(Args)]
 pub struct CompareArgs {
@@ -14,8 +15,9 @@ pub struct CompareArgs {
     /// Second mesh (e.g. the simplified one).
     pub b: PathBuf,
     /// Samples of each kind (vertex, edge, face) per mesh, MeshLab's
-    /// `SampleNum` (default: max(10 × faces of the larger mesh, 1M)).
-    #[arg(long)]
+    /// `SampleNum`, in 1..=10000000 (default: max(10 × faces of the larger
+    /// mesh, 1M), at most 10000000).
+    #[arg(long, value_parser = value::int(1usize, value::MAX_SAMPLES))]
     pub samples: Option<usize>,
     /// Seed of the sample positions (same seed → identical numbers).
     #[arg(long, default_value_t = lodkit_mesh::metrics::DEFAULT_SEED)]
@@ -49,9 +51,32 @@ pub fn run(ui: &Ui, args: &CompareArgs) -> Result<()> {
         face_samples: !args.no_face_samples,
     };
     let n = opts.resolved_samples(a.faces.len(), b.faces.len());
-    let step = ui.spinner(&format!("measuring ({n} samples of each kind per mesh)"));
-    let report = compare(&a, &b, &opts)
-        .with_context(|| format!("comparing {} with {}", args.a.display(), args.b.display()))?;
+    if n > value::MAX_SAMPLES {
+        ui.status(format!(
+            "sampling {} per kind rather than the default {n} (10 per face): the most --samples allows",
+            value::MAX_SAMPLES
+        ));
+    }
+    // The default grows with the meshes; the memory it sizes is bounded
+    // like an explicit `--samples`.
+    let opts = CompareOptions {
+        samples: Some(n.min(value::MAX_SAMPLES)),
+        ..opts
+    };
+    let n = n.min(value::MAX_SAMPLES);
+    let step = ui.stage(&format!("measuring ({n} samples of each kind per mesh)"));
+    // The library names the meshes "A" and "B"; the user knows their paths.
+    let report = compare(&a, &b, &opts).map_err(|e| {
+        let msg = e
+            .to_string()
+            .replace("mesh A", &args.a.display().to_string())
+            .replace("mesh B", &args.b.display().to_string());
+        anyhow::anyhow!(
+            "comparing {} with {}: {msg}",
+            args.a.display(),
+            args.b.display()
+        )
+    })?;
     step.finish();
     let heat = match &args.heatmap {
         Some(out) => Some(heatmap::write(&a, &b, &args.a, out)?),

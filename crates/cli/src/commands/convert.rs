@@ -3,12 +3,19 @@ use std::path::Path;
 
 use anyhow::Result;
 use lodkit_mesh::Model;
-use lodkit_mesh::io::{WriteOptions, save};
+use lodkit_mesh::io::{Format, WriteOptions, save};
 
 use crate::ui::Ui;
 
 pub fn run(ui: &Ui, input: &Path, output: &Path, ascii: bool, weld: Option<f32>) -> Result<()> {
     let mut model = super::load(ui, input)?;
+    if weld.is_some() && !matches!(model, Model::Mesh(_)) {
+        return Err(crate::ui::usage(format!(
+            "--weld applies to meshes; {} holds a {}",
+            input.display(),
+            model.kind()
+        )));
+    }
     if let (Some(tol), Model::Mesh(m)) = (weld, &mut model) {
         let before = m.positions.len();
         let (welded, dropped) = lodkit_mesh::weld::weld(m, tol);
@@ -20,9 +27,20 @@ pub fn run(ui: &Ui, input: &Path, output: &Path, ascii: bool, weld: Option<f32>)
         ));
         *m = welded;
     }
+    let format = Format::from_path(output);
+    if ascii && !matches!(format, Some(Format::Ply | Format::Stl)) {
+        return Err(crate::ui::usage(format!(
+            "--ascii applies to .ply and .stl outputs, not to {}",
+            output.display()
+        )));
+    }
     let step = ui.spinner(&format!("writing {}", output.display()));
     save(output, &model, WriteOptions { ascii })?;
     step.finish();
-    ui.status(format!("wrote {} ({})", output.display(), model.kind()));
+    ui.status(format!(
+        "wrote {} ({})",
+        output.display(),
+        super::written_as(&model, format)
+    ));
     Ok(())
 }

@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::Args;
 use lodkit_mesh::io::{Format, WriteOptions, encode, gltf::write_glb, write_atomic};
 use lodkit_mesh::metrics::{CompareOptions, compare};
@@ -14,29 +14,31 @@ use lodkit_simplify::{Options, Simplifier, Target, halving_targets};
 
 use super::simplify::SimplifyOpts;
 use crate::ui::Ui;
+use crate::ui::value::{self, Real};
 
 #[derive(Args, Debug)]
 pub struct LodsArgs {
     /// Input mesh.
     pub input: PathBuf,
     /// Output directory (created if missing).
-    #[arg(long)]
+    #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
     /// Comma-separated fractions of the input's triangles, one level each.
     #[arg(
         long,
         value_delimiter = ',',
         value_name = "R,R,...",
-        conflicts_with = "levels"
+        conflicts_with = "levels",
+        value_parser = Real::closed(0.0, 1.0).f32()
     )]
     pub ratios: Option<Vec<f32>>,
-    /// Number of levels, each half the previous one (default 6).
-    #[arg(long, value_name = "N")]
+    /// Number of levels, each half the previous one, in 1..=32 (default 6).
+    #[arg(long, value_name = "N", value_parser = value::int(1usize, value::MAX_LEVELS))]
     pub levels: Option<usize>,
     #[command(flatten)]
     pub opts: SimplifyOpts,
-    /// Samples per kind for the measured error (`compare`).
-    #[arg(long, default_value_t = 1_000_000)]
+    /// Samples per kind for the measured error (`compare`), in 1..=10000000.
+    #[arg(long, default_value_t = 1_000_000, value_parser = value::int(1usize, value::MAX_SAMPLES))]
     pub samples: usize,
     /// Print lods.json on stdout too.
     #[arg(long)]
@@ -68,17 +70,14 @@ pub struct Lods {
 
 pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
     let targets: Vec<Target> = match (&a.ratios, a.levels) {
-        (Some(r), _) => {
-            if let Some(bad) = r.iter().find(|x| !(0.0..=1.0).contains(*x)) {
-                bail!("--ratios must be within 0..1, got {bad}");
-            }
-            r.iter().map(|&x| Target::Ratio(x)).collect()
-        }
+        (Some(r), _) => r.iter().map(|&x| Target::Ratio(x)).collect(),
         (None, Some(n)) => halving_targets(n),
         (None, None) => halving_targets(6),
     };
     if targets.is_empty() {
-        bail!("no levels asked for");
+        return Err(crate::ui::usage(
+            "--ratios: give at least one fraction in [0, 1]",
+        ));
     }
     let opts = a.opts.options(Target::Ratio(1.0))?;
     let mesh: TriMesh = super::load_mesh(ui, &a.input)?;
@@ -89,7 +88,8 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
         .unwrap_or("mesh")
         .to_string();
     let start = Instant::now();
-    let report = write_chain(
+    let json = a.json;
+    let report = write_chain_reporting(
         ui,
         &mesh,
         &a.input.display().to_string(),
@@ -98,18 +98,20 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
         &targets,
         &opts,
         a.samples,
+        &mut |l| {
+            if !json {
+                ui.status(format!(
+                    "level {}: {} triangles, {} vertices, error est. {:.3e} / measured mean {:.3e} max {:.3e}: {}",
+                    l.level, l.triangles, l.vertices, l.estimated_error, l.measured_mean_error, l.measured_max_error, l.stop
+                ));
+            }
+        },
     )?;
     let total = start.elapsed().as_secs_f64();
     let json = serde_json::to_string_pretty(&report)? + "\n";
     if a.json {
         crate::out!("{json}")?;
         return Ok(());
-    }
-    for l in &report.levels {
-        ui.status(format!(
-            "level {}: {} triangles, {} vertices, error est. {:.3e} / measured mean {:.3e} max {:.3e}: {}",
-            l.level, l.triangles, l.vertices, l.estimated_error, l.measured_mean_error, l.measured_max_error, l.stop
-        ));
     }
     ui.status(format!(
         "wrote {} levels, {} and lods.json to {} ({:.3} s)",
@@ -124,9 +126,11 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
 /// Simplifies `mesh` into one level per target (each from the previous
 /// level), measures each level against `mesh` with `compare` (`samples` per
 /// kind), and writes `<stem>_lodN.ply`, `<stem>_lods.glb` and `lods.json`
-/// into `out`. Shared by `lodkit lods` and `lodkit build`.
+/// into `out`, calling `on_level` with each level as soon as it is
+/// measured and written (so a long chain reports one line per level as it
+/// goes, on a terminal or not).
 #[allow(clippy::too_many_arguments)]
-pub fn write_chain(
+pub fn write_chain_reporting(
     ui: &Ui,
     mesh: &TriMesh,
     input_label: &str,
@@ -135,6 +139,7 @@ pub fn write_chain(
     targets: &[Target],
     opts: &Options,
     samples: usize,
+    on_level: &mut dyn FnMut(&Level),
 ) -> Result<Lods> {
     std::fs::create_dir_all(out)
         .with_context(|| format!("{}: cannot create output directory", out.display()))?;
@@ -166,7 +171,7 @@ pub fn write_chain(
             &Model::Mesh(l.mesh.clone()),
             WriteOptions::default(),
         )
-        .map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
+        .map_err(|e| anyhow::anyhow!("{}: {e}", out.join(&file).display()))?;
         write_atomic(&out.join(&file), &bytes)?;
         levels.push(Level {
             level: i + 1,
@@ -180,6 +185,7 @@ pub fn write_chain(
             seconds: l.report.seconds,
             stop: l.report.stop.to_string(),
         });
+        on_level(levels.last().expect("just pushed"));
         meshes.push((name, l.mesh));
     }
     let glb_name = format!("{stem}_lods.glb");
@@ -188,7 +194,8 @@ pub fn write_chain(
         .filter(|(_, m)| !m.faces.is_empty())
         .map(|(n, m)| (n.as_str(), m))
         .collect();
-    let glb = write_glb(&named).map_err(|e| anyhow::anyhow!("{glb_name}: {e}"))?;
+    let glb =
+        write_glb(&named).map_err(|e| anyhow::anyhow!("{}: {e}", out.join(&glb_name).display()))?;
     write_atomic(&out.join(&glb_name), &glb)?;
     let report = Lods {
         input: input_label.to_string(),

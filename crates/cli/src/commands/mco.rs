@@ -13,6 +13,7 @@ use lodkit_mesh::{Model, RangeImage};
 use serde::Serialize;
 
 use crate::ui::Ui;
+use crate::ui::value::{self, Real};
 
 #[derive(Subcommand)]
 pub enum McoCommand {
@@ -25,11 +26,15 @@ pub enum McoCommand {
         #[arg(required = true)]
         inputs: Vec<PathBuf>,
         /// Output .mco file.
-        #[arg(short, long)]
+        #[arg(short, long, value_parser = value::output(&["mco"], "a continuous-LOD model"))]
         output: PathBuf,
-        /// Leaf cubes along the longest axis (default: cube = twice the sample spacing).
-        #[arg(long)]
+        /// Leaf cubes along the longest axis, in 2..=512 (default: cube =
+        /// twice the sample spacing).
+        #[arg(long, value_parser = value::int(2u32, MAX_RESOLUTION))]
         resolution: Option<u32>,
+        /// Print what was built as JSON.
+        #[arg(long)]
+        json: bool,
     },
     /// Write the mesh of one level of detail.
     #[command(
@@ -51,7 +56,7 @@ pub struct ExtractArgs {
     /// The .mco model.
     pub model: PathBuf,
     /// Output mesh (.ply, .obj, .stl, .glb).
-    #[arg(short, long)]
+    #[arg(short, long, value_parser = value::output(value::MESH_OUT, "the extracted mesh"))]
     pub output: PathBuf,
     /// LOD number (0 = root only; `mco info` prints the highest).
     #[arg(long)]
@@ -59,27 +64,37 @@ pub struct ExtractArgs {
     /// Triangle budget (the closest LOD number is used).
     #[arg(long)]
     pub triangles: Option<usize>,
-    /// View-dependent: camera position X,Y,Z.
-    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
-    pub view: Option<String>,
+    /// View-dependent: camera position X,Y,Z (finite numbers).
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true, value_parser = Real::FINITE.vec3())]
+    pub view: Option<[f32; 3]>,
     /// Point the camera looks at (default: the model's centre).
     #[arg(
         long,
         value_name = "X,Y,Z",
         requires = "view",
-        allow_hyphen_values = true
+        allow_hyphen_values = true,
+        value_parser = Real::FINITE.vec3()
     )]
-    pub look_at: Option<String>,
-    /// Vertical field of view, degrees.
-    #[arg(long, default_value_t = 60.0, requires = "view")]
-    pub fov: f32,
-    /// Viewport height, pixels.
-    #[arg(long, default_value_t = 1080.0, requires = "view")]
-    pub viewport: f32,
-    /// Largest projected error allowed, pixels.
-    #[arg(long, default_value_t = 1.0, requires = "view")]
-    pub tolerance: f32,
+    pub look_at: Option<[f32; 3]>,
+    /// Vertical field of view, degrees in (0, 180) (default 60).
+    #[arg(long, requires = "view", value_parser = Real::open(0.0, 180.0).f32())]
+    pub fov: Option<f32>,
+    /// Viewport height, pixels in [1, 65536] (default 1080).
+    #[arg(long, requires = "view", value_parser = Real::closed(1.0, 65536.0).f32())]
+    pub viewport: Option<f32>,
+    /// Largest projected error allowed, pixels (a finite number > 0; default 1).
+    #[arg(long, requires = "view", value_parser = Real::POSITIVE.f32())]
+    pub tolerance: Option<f32>,
+    /// Print what was extracted as JSON.
+    #[arg(long)]
+    pub json: bool,
 }
+
+/// Largest `--resolution` of `mco build` (and `bench mco`): the library
+/// takes up to [`lodkit_mco::MAX_RESOLUTION`], but memory grows with its
+/// square on a surface that fills the lattice (an octahedron at 512 took
+/// 250 MB on the 2-core build machine; 2000 on a small sphere took 6.8 GB).
+pub const MAX_RESOLUTION: u32 = 512;
 
 pub fn run(ui: &Ui, cmd: &McoCommand) -> Result<()> {
     match cmd {
@@ -87,7 +102,8 @@ pub fn run(ui: &Ui, cmd: &McoCommand) -> Result<()> {
             inputs,
             output,
             resolution,
-        } => build(ui, inputs, output, *resolution),
+            json,
+        } => build(ui, inputs, output, *resolution, *json),
         McoCommand::Extract(args) => extract(ui, args),
         McoCommand::Info { model, json } => info(ui, model, *json),
     }
@@ -110,7 +126,35 @@ fn load_inputs(ui: &Ui, path: &Path) -> Result<Vec<(String, Model)>> {
     Ok(vec![(path.display().to_string(), super::load(ui, path)?)])
 }
 
-fn build(ui: &Ui, inputs: &[PathBuf], output: &Path, resolution: Option<u32>) -> Result<()> {
+#[derive(Serialize)]
+struct Added {
+    input: String,
+    samples: usize,
+    cubes_recomputed: usize,
+    surface_cubes: usize,
+}
+
+#[derive(Serialize)]
+struct Built {
+    output: String,
+    resolution: u32,
+    cube: f32,
+    depth: u32,
+    added: Vec<Added>,
+    nodes: usize,
+    lod_numbers: usize,
+    full_triangles: usize,
+    bytes: u64,
+    seconds: f64,
+}
+
+fn build(
+    ui: &Ui,
+    inputs: &[PathBuf],
+    output: &Path,
+    resolution: Option<u32>,
+    json: bool,
+) -> Result<()> {
     let t0 = std::time::Instant::now();
     let mut models = Vec::new();
     for p in inputs {
@@ -121,12 +165,18 @@ fn build(ui: &Ui, inputs: &[PathBuf], output: &Path, resolution: Option<u32>) ->
         .map(|(name, m)| samples_of(m).with_context(|| name.clone()))
         .collect::<Result<Vec<_>>>()?;
     if samples.iter().all(|s| s.is_empty()) {
-        bail!("the inputs hold no usable samples");
+        let names: Vec<String> = models.iter().map(|(n, _)| n.clone()).collect();
+        bail!("{}: no usable samples", names.join(", "));
     }
     let plain: Vec<Model> = models.iter().map(|(_, m)| m.clone()).collect();
     let grid = grid_for(&plain, &samples, &Options { resolution })?;
     let samples = densify_meshes(&plain, samples, &grid);
-    ui.status(format!(
+    let status = |line: String| {
+        if !json {
+            ui.status(line)
+        }
+    };
+    status(format!(
         "lattice: resolution {}, cube {:.6}, octree depth {}",
         grid.resolution(),
         grid.cube(),
@@ -137,18 +187,40 @@ fn build(ui: &Ui, inputs: &[PathBuf], output: &Path, resolution: Option<u32>) ->
     if plain.iter().any(|m| !matches!(m, Model::Mesh(_))) {
         builder = builder.with_tangential_rule();
     }
+    let mut added = Vec::new();
     for ((name, _), s) in models.iter().zip(&samples) {
         let r = builder.add(s);
-        ui.status(format!(
+        status(format!(
             "added {name}: {} samples, {} cubes recomputed, {} surface cubes",
             r.samples, r.cubes_recomputed, r.surface_cubes
         ));
+        added.push(Added {
+            input: name.clone(),
+            samples: r.samples,
+            cubes_recomputed: r.cubes_recomputed,
+            surface_cubes: r.surface_cubes,
+        });
     }
     let step = ui.spinner("building the octree");
     let model = builder.build()?;
     step.finish();
     let seconds = t0.elapsed().as_secs_f64();
     model.save(output)?;
+    if json {
+        let grid = &model.info().grid;
+        return super::print_json(&Built {
+            output: output.display().to_string(),
+            resolution: grid.resolution(),
+            cube: grid.cube(),
+            depth: grid.depth(),
+            added,
+            nodes: model.info().nodes,
+            lod_numbers: model.max_lod(),
+            full_triangles: model.full_triangles(),
+            bytes: std::fs::metadata(output).map_or(0, |m| m.len()),
+            seconds,
+        });
+    }
     ui.status(format!(
         "wrote {} ({} nodes, {} LOD numbers, {} triangles at full resolution)",
         output.display(),
@@ -160,57 +232,86 @@ fn build(ui: &Ui, inputs: &[PathBuf], output: &Path, resolution: Option<u32>) ->
     Ok(())
 }
 
-fn parse_vec3(s: &str, what: &str) -> Result<Vec3> {
-    let v: Vec<f32> = s
-        .split(',')
-        .map(|x| x.trim().parse::<f32>())
-        .collect::<Result<_, _>>()
-        .with_context(|| format!("{what} '{s}': expected X,Y,Z"))?;
-    match v.as_slice() {
-        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(Vec3::new(*x, *y, *z)),
-        _ => bail!("{what} '{s}': expected three finite numbers X,Y,Z"),
-    }
+#[derive(Serialize)]
+struct Extracted {
+    model: String,
+    output: String,
+    /// What was cut: `LOD k`, a budget, or a view.
+    cut: String,
+    lod: Option<usize>,
+    triangles: usize,
+    vertices: usize,
 }
 
 fn extract(ui: &Ui, a: &ExtractArgs) -> Result<()> {
+    // The camera options mean nothing without a camera: refused, not
+    // ignored (checked here too, as clap's `requires` does not fire
+    // inside a satisfied group).
+    if a.view.is_none() {
+        for (given, name) in [
+            (a.look_at.is_some(), "--look-at"),
+            (a.fov.is_some(), "--fov"),
+            (a.viewport.is_some(), "--viewport"),
+            (a.tolerance.is_some(), "--tolerance"),
+        ] {
+            if given {
+                return Err(crate::ui::usage(format!(
+                    "{name} applies to a view-dependent cut: give --view X,Y,Z too"
+                )));
+            }
+        }
+    }
+    let (fov, viewport, tolerance) = (
+        a.fov.unwrap_or(60.0),
+        a.viewport.unwrap_or(1080.0),
+        a.tolerance.unwrap_or(1.0),
+    );
     let model = McoModel::load(&a.model)?;
     let mut idx = Vec::new();
     let step = ui.spinner("extracting");
-    let what = if let Some(k) = a.lod {
+    let (what, lod) = if let Some(k) = a.lod {
         if k > model.max_lod() {
-            bail!(
-                "{}: --lod {k} is past the highest LOD number {}",
-                a.model.display(),
-                model.max_lod()
-            );
+            return Err(crate::ui::usage(format!(
+                "--lod {k} is outside 0..={} for {}",
+                model.max_lod(),
+                a.model.display()
+            )));
         }
         model.extract_lod(k, &mut idx);
-        format!("LOD {k}")
+        (format!("LOD {k}"), Some(k))
     } else if let Some(n) = a.triangles {
         let k = model.extract_triangles(n, &mut idx);
-        format!("LOD {k} for a budget of {n} triangles")
+        (format!("LOD {k} for a budget of {n} triangles"), Some(k))
     } else {
-        let view = a.view.as_deref().expect("clap requires one of the three");
-        let position = parse_vec3(view, "--view")?;
+        let position = Vec3::from(a.view.expect("clap requires one of the three"));
         let (lo, hi) = model.bounds();
-        let target = match &a.look_at {
-            Some(s) => parse_vec3(s, "--look-at")?,
-            None => (lo + hi) * 0.5,
-        };
-        if !(a.fov > 0.0 && a.fov < 180.0 && a.viewport > 0.0 && a.tolerance > 0.0) {
-            bail!("--fov must be in (0, 180), --viewport and --tolerance positive");
+        let target = a.look_at.map_or((lo + hi) * 0.5, Vec3::from);
+        if position == target {
+            return Err(crate::ui::usage(
+                "--view and --look-at are the same point: the camera has no direction",
+            ));
         }
         let cam = Camera {
-            vfov_deg: a.fov,
-            viewport_height: a.viewport,
+            vfov_deg: fov,
+            viewport_height: viewport,
             ..Camera::looking_at(position, target)
         };
-        let n = model.extract_view(&cam, a.tolerance, &mut idx);
-        format!("view-dependent cut ({n} nodes expanded)")
+        let n = model.extract_view(&cam, tolerance, &mut idx);
+        (format!("view-dependent cut ({n} nodes expanded)"), None)
     };
     step.finish();
     let mesh = model.mesh_from_indices(&idx);
     save_mesh(&a.output, &mesh, WriteOptions::default())?;
+    if a.json {
+        return super::print_json(&Extracted {
+            model: a.model.display().to_string(),
+            output: a.output.display().to_string(),
+            cut: what,
+            lod,
+            triangles: mesh.faces.len(),
+            vertices: mesh.positions.len(),
+        });
+    }
     ui.status(format!(
         "wrote {} ({what}: {} triangles, {} vertices)",
         a.output.display(),

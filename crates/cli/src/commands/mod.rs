@@ -33,8 +33,21 @@ pub fn builtin_bunny() -> Result<lodkit_mesh::TriMesh> {
     }
 }
 
-/// Loads any supported file behind a spinner.
+/// Whether a path ends in `.txt`, which the readers take as XYZ.
+fn is_txt(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("txt"))
+}
+
+/// Loads any supported file behind a spinner (a `.txt` is read as XYZ
+/// points, and says so).
 pub fn load(ui: &Ui, path: &Path) -> Result<Model> {
+    if is_txt(path) {
+        ui.status(format!(
+            "reading {} as XYZ points (x y z [nx ny nz] per line)",
+            path.display()
+        ));
+    }
     let step = ui.spinner(&format!("reading {}", path.display()));
     let model = lodkit_mesh::io::load(path)?;
     step.finish();
@@ -50,6 +63,47 @@ pub fn load_mesh(ui: &Ui, path: &Path) -> Result<lodkit_mesh::TriMesh> {
             path.display(),
             other.kind()
         ),
+    }
+}
+
+/// What writing `model` as `format` keeps, in words for the `wrote` line:
+/// a conversion that drops something (a mesh's faces into a point format)
+/// is said, never silent.
+pub fn written_as(model: &Model, format: Option<lodkit_mesh::io::Format>) -> String {
+    use lodkit_mesh::io::Format;
+    let points = matches!(format, Some(Format::Xyz | Format::Pts));
+    match model {
+        Model::Mesh(m) if points => format!(
+            "{} points: the mesh's vertices; its {} faces are dropped, {} holds points only",
+            m.positions.len(),
+            m.faces.len(),
+            format.map_or("the format", |f| f.name())
+        ),
+        Model::Range(r) if points => {
+            format!("{} points of the range image", r.to_point_cloud().len())
+        }
+        other => other.kind().to_string(),
+    }
+}
+
+/// Refuses (exit 2) to write a mesh result to a points-only format, where
+/// its faces would be dropped.
+pub fn mesh_output(path: &Path) -> Result<lodkit_mesh::io::Format> {
+    use lodkit_mesh::io::Format;
+    match Format::from_path(path) {
+        Some(Format::Xyz | Format::Pts) => Err(crate::ui::usage(format!(
+            "{}: this command writes a mesh; .xyz, .pts and .txt hold points only (use .ply, .obj, .stl or .glb)",
+            path.display()
+        ))),
+        Some(Format::Gltf) => Err(crate::ui::usage(format!(
+            "{}: meshes are written as .glb, not .gltf",
+            path.display()
+        ))),
+        Some(f) => Ok(f),
+        None => Err(crate::ui::usage(format!(
+            "{}: unknown output extension (expected .ply, .obj, .stl or .glb)",
+            path.display()
+        ))),
     }
 }
 

@@ -2,16 +2,35 @@
 //! (`.pop`, see `docs/formats/pop.md` and the `lodkit-particles` crate).
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::{Args, Subcommand, ValueEnum};
 use lodkit_mesh::Model;
 use lodkit_mesh::io::WriteOptions;
 use lodkit_particles::{
-    DecodeOptions, EncodeOptions, Mode, Placement, ThinningOptions, TriangulateOptions, decode,
-    encode, stream_stats, triangulate,
+    DecodeOptions, EncodeOptions, Frame, Mode, Placement, ThinningOptions, TriangulateOptions,
+    decode, decode_prefix, encode, stream_stats, triangulate,
 };
+use serde::Serialize;
 
 use crate::ui::Ui;
+use crate::ui::value::{self, Real};
+
+/// Largest `--depth` (octree resolution R) `pop encode` takes: each level
+/// quadruples the cells of a surface, and at 12 a closed surface that
+/// fills the cube has about 10^8 of them. The library's format allows up
+/// to 16; legal depths too big for the input are refused by
+/// [`check_cost`] before any work.
+const MAX_DEPTH: u8 = 12;
+/// Most surface samples `pop encode` takes on: measured on a 2-core
+/// machine, 8e6 samples (an octahedron at depth 9) encode in about 5 s.
+const MAX_SAMPLES: f64 = 2e7;
+/// Most leaf cubes the surface may occupy (`2 A / side²`, about three
+/// times the particles kept): 3.6e6 of them (the octahedron at depth 10)
+/// took 720 MB, so this stays near 400 MB.
+const MAX_CELLS: f64 = 2e6;
+/// Highest level and precision a stream can hold (the format's 16-bit
+/// coordinates).
+const MAX_BITS: u8 = 16;
 
 #[derive(Subcommand)]
 pub enum PopCommand {
@@ -22,7 +41,7 @@ pub enum PopCommand {
     Encode(EncodeArgs),
     /// Decode one level of a `.pop` stream to a mesh (or its particles).
     #[command(
-        after_help = "Examples:\n  lodkit pop decode bunny.pop --level 6 -o bunny6.ply\n  lodkit pop decode bunny.pop --level 8 --precision 10 --points -o p.ply"
+        after_help = "Examples:\n  lodkit pop decode bunny.pop -o bunny.ply            # the finest level it holds\n  lodkit pop decode bunny.pop --level 5 -o bunny5.ply\n  lodkit pop decode bunny.pop --level 6 --precision 10 --points -o p.ply\n  head -c 20000 bunny.pop > part.pop; lodkit pop decode part.pop -o part.ply"
     )]
     Decode(DecodeArgs),
     /// Per-level figures of a `.pop` stream (the paper's Table 1 and bits per particle).
@@ -58,25 +77,27 @@ pub struct EncodeArgs {
     /// Input mesh or point cloud.
     pub input: PathBuf,
     /// Output `.pop` file.
-    #[arg(short, long)]
+    #[arg(short, long, value_parser = value::output(&["pop"], "a progressive stream"))]
     pub output: PathBuf,
-    /// Octree resolution R (default: from the sampling density).
-    #[arg(long)]
+    /// Octree resolution R, in 1..=12 (default: from the sampling density).
+    #[arg(long, value_parser = value::int(1u8, MAX_DEPTH))]
     pub depth: Option<u8>,
-    /// Vertex precision N in bits (R..=16).
-    #[arg(long, default_value_t = lodkit_particles::DEFAULT_PRECISION)]
-    pub precision: u8,
+    /// Vertex precision N in bits, in 1..=16 and at least R (default 12,
+    /// raised to R when R is larger).
+    #[arg(long, value_parser = value::int(1u8, MAX_BITS))]
+    pub precision: Option<u8>,
     #[arg(long, value_enum, default_value_t = ModeArg::Entropy)]
     pub mode: ModeArg,
-    /// Vertex placement in entropy mode (the baseline codes means).
-    #[arg(long, value_enum, default_value_t = PlacementArg::Column)]
-    pub placement: PlacementArg,
+    /// Vertex placement in entropy mode (default: column; the baseline
+    /// codes means).
+    #[arg(long, value_enum)]
+    pub placement: Option<PlacementArg>,
     /// Also thin the outer boundary (with the hole-preventing test).
     #[arg(long)]
     pub outer_thinning: bool,
-    /// Relax outer thinning below this level (1–16), or `auto`: the level
-    /// that leaves the coarse levels fewest non-manifold triangles.
-    #[arg(long, default_value = "auto", value_parser = parse_relax)]
+    /// With --outer-thinning: relax it below this level (1–16), or `auto`:
+    /// the level that leaves the coarse levels fewest non-manifold triangles.
+    #[arg(long, default_value = "auto", value_parser = parse_relax, requires = "outer_thinning")]
     pub relax_below: u8,
     /// Also code particle normals.
     #[arg(long)]
@@ -84,28 +105,39 @@ pub struct EncodeArgs {
     /// Drop the input's colours.
     #[arg(long)]
     pub no_colours: bool,
+    /// Print the encoding's figures as JSON.
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Args)]
 pub struct DecodeArgs {
     /// Input `.pop` file.
     pub input: PathBuf,
-    /// Level r to decode (default: the finest present).
-    #[arg(long)]
+    /// Level r to decode, in 0..=16 (default: the finest the file holds,
+    /// which for a prefix is the finest of its complete chunks).
+    #[arg(long, value_parser = value::int(0u8, MAX_BITS))]
     pub level: Option<u8>,
-    /// Vertex precision to decode (default: all present).
-    #[arg(long)]
+    /// Vertex precision to decode, in 1..=16 (default: all present).
+    #[arg(long, value_parser = value::int(1u8, MAX_BITS))]
     pub precision: Option<u8>,
-    /// Output file (.ply, .obj, .stl, .glb; .xyz for points).
-    #[arg(short, long)]
+    /// Output file (.ply, .obj, .stl, .glb; with --points also .xyz, .pts).
+    #[arg(short, long, value_parser = value::output(&["ply", "obj", "stl", "glb", "xyz", "pts"], "the decoded level"))]
     pub output: PathBuf,
     /// Write the particles as a point cloud instead of triangulating.
     #[arg(long)]
     pub points: bool,
     /// Decimate during triangulation (§6.3): merge cubes joined by edges
-    /// shorter than this fraction of the cube size.
-    #[arg(long, value_name = "FRACTION")]
+    /// shorter than this fraction of the cube size, in [0, 1].
+    #[arg(long, value_name = "FRACTION", value_parser = Real::closed(0.0, 1.0).f32(), conflicts_with = "points")]
     pub decimate: Option<f32>,
+    /// Refuse a file whose last chunk is cut short (default: decode every
+    /// complete chunk before the cut and say where it stopped).
+    #[arg(long)]
+    pub strict: bool,
+    /// Print what was decoded as JSON.
+    #[arg(long)]
+    pub json: bool,
 }
 
 pub fn run(ui: &Ui, cmd: &PopCommand) -> Result<()> {
@@ -116,11 +148,76 @@ pub fn run(ui: &Ui, cmd: &PopCommand) -> Result<()> {
     }
 }
 
+/// Refuses (exit 2) an explicit `--depth` whose sampling of this mesh
+/// would exceed [`MAX_SAMPLES`] or [`MAX_CELLS`]: the encoder samples each
+/// triangle on a lattice of half the leaf size, and a surface of area `A`
+/// occupies about `2 A / side²` leaf cubes.
+fn check_cost(path: &Path, model: &Model, depth: u8) -> Result<()> {
+    let Model::Mesh(mesh) = model else {
+        // A cloud's cells are at most its points.
+        return Ok(());
+    };
+    let bbox = lodkit_mesh::metrics::sample::surface_bbox(mesh);
+    if bbox.is_empty() {
+        return Ok(());
+    }
+    let frame = Frame::around(bbox.min, bbox.max);
+    let side = f64::from(frame.size) / f64::from(1u32 << depth);
+    let spacing = side * 0.5;
+    let (mut samples, mut area) = (0.0f64, 0.0f64);
+    for f in &mesh.faces {
+        let [a, b, c] = f.map(|i| mesh.positions[i as usize].as_dvec3());
+        if !(a.is_finite() && b.is_finite() && c.is_finite()) {
+            continue;
+        }
+        let longest = (b - a).length().max((c - b).length()).max((a - c).length());
+        let k = (longest / spacing).ceil().clamp(1.0, 16384.0);
+        samples += (k + 1.0) * (k + 2.0) * 0.5;
+        area += (b - a).cross(c - a).length() * 0.5;
+    }
+    let cells = 2.0 * area / (side * side);
+    if samples > MAX_SAMPLES || cells > MAX_CELLS {
+        // The deepest depth within both limits, for the message.
+        let fits = (1..depth)
+            .rev()
+            .find(|&d| {
+                let r = f64::from(1u32 << (depth - d));
+                cells / (r * r) <= MAX_CELLS && samples / (r * r) <= MAX_SAMPLES
+            })
+            .unwrap_or(1);
+        return Err(crate::ui::usage(format!(
+            "--depth {depth} on {}: about {:.1e} surface samples and {:.1e} octree cells, past the {:.0e} samples and {:.0e} cells this command takes (well under 1 GB and a minute); use --depth {fits} or less",
+            path.display(),
+            samples,
+            cells,
+            MAX_SAMPLES,
+            MAX_CELLS
+        )));
+    }
+    Ok(())
+}
+
 fn run_encode(ui: &Ui, a: &EncodeArgs) -> Result<()> {
+    if let (Some(n), Some(r)) = (a.precision, a.depth)
+        && n < r
+    {
+        return Err(crate::ui::usage(format!(
+            "--precision {n} is below --depth {r}: the precision N must be in {r}..=16"
+        )));
+    }
+    if matches!(a.mode, ModeArg::Baseline) && matches!(a.placement, Some(PlacementArg::Column)) {
+        return Err(crate::ui::usage(
+            "--placement column applies to --mode entropy; the baseline codes means",
+        ));
+    }
     let model = super::load(ui, &a.input)?;
+    if let Some(d) = a.depth {
+        check_cost(&a.input, &model, d)?;
+    }
+    let precision = a.precision.unwrap_or(lodkit_particles::DEFAULT_PRECISION);
     let opts = EncodeOptions {
         depth: a.depth,
-        precision: a.precision,
+        precision,
         mode: match a.mode {
             ModeArg::Baseline => Mode::Baseline,
             ModeArg::Entropy => Mode::Entropy,
@@ -132,8 +229,8 @@ fn run_encode(ui: &Ui, a: &EncodeArgs) -> Result<()> {
         normals: a.normals,
         colours: !a.no_colours,
         placement: match a.placement {
-            PlacementArg::Mean => Placement::Mean,
-            PlacementArg::Column => Placement::SurfaceColumn,
+            Some(PlacementArg::Mean) => Placement::Mean,
+            Some(PlacementArg::Column) | None => Placement::SurfaceColumn,
         },
         ..EncodeOptions::DEFAULT
     };
@@ -142,6 +239,28 @@ fn run_encode(ui: &Ui, a: &EncodeArgs) -> Result<()> {
     step.finish();
     lodkit_mesh::io::write_atomic(&a.output, &e.bytes)?;
     let r = &e.report;
+    if a.json {
+        #[derive(Serialize)]
+        struct Encoded<'a> {
+            input: String,
+            output: String,
+            #[serde(flatten)]
+            report: &'a lodkit_particles::EncodeReport,
+        }
+        return super::print_json(&Encoded {
+            input: a.input.display().to_string(),
+            output: a.output.display().to_string(),
+            report: r,
+        });
+    }
+    if let Some(n) = a.precision
+        && r.precision != n
+    {
+        ui.status(format!(
+            "precision raised from --precision {n} to N = R = {}: a stream's precision is at least its octree resolution",
+            r.precision
+        ));
+    }
     ui.status(format!(
         "{}: {} particles, R = {}, N = {}, {} bytes ({} mode), structure {:.2} bits/particle (paper's estimate {:.2}), {:.2} bits/particle in all",
         a.output.display(),
@@ -177,26 +296,92 @@ fn read_pop(path: &Path) -> Result<Vec<u8>> {
     std::fs::read(path).with_context(|| format!("{}: cannot read", path.display()))
 }
 
+#[derive(Serialize)]
+struct DecodedReport {
+    input: String,
+    output: String,
+    level: u8,
+    /// The finest level the file (or its complete chunks) holds.
+    finest_level: u8,
+    /// The stream's octree resolution R (its finest level when whole).
+    depth: u8,
+    particles: usize,
+    precision: u8,
+    /// `None` with `--points`.
+    triangles: Option<usize>,
+    bytes_read: usize,
+    file_bytes: usize,
+    /// Where a cut file stopped (`None`: every chunk read was whole).
+    cut: Option<CutReport>,
+}
+
+#[derive(Serialize)]
+struct CutReport {
+    chunk: usize,
+    offset: usize,
+    message: String,
+}
+
 fn run_decode(ui: &Ui, a: &DecodeArgs) -> Result<()> {
+    if !a.points {
+        super::mesh_output(&a.output).map_err(|_| {
+            crate::ui::usage(format!(
+                "{}: a triangulated level is a mesh (.ply, .obj, .stl, .glb); give --points to write the particles as points",
+                a.output.display()
+            ))
+        })?;
+    }
+    let name = a.input.display().to_string();
     let bytes = read_pop(&a.input)?;
     let step = ui.spinner("decoding");
     let opts = DecodeOptions {
         max_level: a.level,
         max_precision: a.precision,
     };
-    let d = decode(&bytes, &opts).with_context(|| a.input.display().to_string())?;
-    step.finish();
-    let r = a.level.unwrap_or(d.header.depth);
-    if r as usize >= d.levels.len() {
-        bail!(
-            "{}: level {r} is not in the stream (it has {} levels)",
-            a.input.display(),
-            d.levels.len()
-        );
+    let d = if a.strict {
+        decode(&bytes, &opts)
+    } else {
+        decode_prefix(&bytes, &opts)
     }
-    let s = d
-        .surface(r)
-        .with_context(|| a.input.display().to_string())?;
+    .with_context(|| {
+        if a.strict {
+            format!("{name} (--strict: a cut chunk is refused)")
+        } else {
+            name.clone()
+        }
+    })?;
+    step.finish();
+    let finest = d.finest_level();
+    let r = a.level.unwrap_or(finest);
+    if r > finest {
+        let held = if d.cut.is_some() {
+            "its complete chunks hold"
+        } else {
+            "it holds"
+        };
+        return Err(crate::ui::usage(format!(
+            "--level {r} is outside 0..={finest}: the levels {held} in {name}"
+        )));
+    }
+    if let Some(n) = a.precision
+        && n != d.precision
+    {
+        ui.status(format!(
+            "{name}: decoded at {} bits, not the --precision {n} asked: this stream's positions carry {}..={} bits",
+            d.precision, d.header.depth, d.header.precision
+        ));
+    }
+    if let Some(c) = &d.cut {
+        ui.status(format!(
+            "{name}: stopped at byte {} of {}, where chunk {} is cut short ({}); decoded the {} complete chunks before it (levels 0..={finest})",
+            c.offset,
+            bytes.len(),
+            c.chunk,
+            c.message,
+            c.chunk
+        ));
+    }
+    let s = d.surface(r).with_context(|| name.clone())?;
     let model = if a.points {
         Model::Points(s.to_point_cloud())
     } else {
@@ -210,9 +395,32 @@ fn run_decode(ui: &Ui, a: &DecodeArgs) -> Result<()> {
         Model::Mesh(t.mesh)
     };
     lodkit_mesh::io::save(&a.output, &model, WriteOptions::default())?;
-    let what = match &model {
-        Model::Mesh(m) => format!("{} triangles", m.faces.len()),
-        _ => "points".into(),
+    let triangles = match &model {
+        Model::Mesh(m) => Some(m.faces.len()),
+        _ => None,
+    };
+    if a.json {
+        return super::print_json(&DecodedReport {
+            input: name,
+            output: a.output.display().to_string(),
+            level: r,
+            finest_level: finest,
+            depth: d.header.depth,
+            particles: s.cells.len(),
+            precision: d.precision,
+            triangles,
+            bytes_read: d.bytes_read,
+            file_bytes: bytes.len(),
+            cut: d.cut.as_ref().map(|c| CutReport {
+                chunk: c.chunk,
+                offset: c.offset,
+                message: c.message.clone(),
+            }),
+        });
+    }
+    let what = match triangles {
+        Some(n) => format!("{n} triangles"),
+        None => "points".into(),
     };
     ui.status(format!(
         "{}: level {r}, {} particles at {} bits, {what}, {} of {} stream bytes read",
@@ -227,7 +435,7 @@ fn run_decode(ui: &Ui, a: &DecodeArgs) -> Result<()> {
 
 fn run_stats(ui: &Ui, file: &Path, json: bool) -> Result<()> {
     let bytes = read_pop(file)?;
-    let step = ui.spinner("decoding and triangulating every level");
+    let step = ui.stage("decoding and triangulating every level");
     let s = stream_stats(&bytes, &TriangulateOptions::DEFAULT)
         .with_context(|| file.display().to_string())?;
     step.finish();

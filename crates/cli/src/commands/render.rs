@@ -14,6 +14,7 @@ use lodkit_render::{
 use serde::Serialize;
 
 use crate::ui::Ui;
+use crate::ui::value::{self, Real};
 
 /// Most views per elevation of a ring.
 const MAX_RING: u32 = 720;
@@ -34,13 +35,13 @@ pub struct RenderArgs {
     #[arg(long, value_name = "AZ,EL", default_value = "30,20", value_parser = parse_view, allow_hyphen_values = true, conflicts_with = "ring")]
     pub view: View,
     /// Image size in pixels, each side in 1..=8192.
-    #[arg(long, value_name = "WxH", default_value = "1024x1024", value_parser = parse_size)]
-    pub size: Size,
+    #[arg(long, value_name = "WxH", default_value = "1024x1024", value_parser = value::size(1, MAX_SIZE))]
+    pub size: (u32, u32),
     /// Background colour, three values in 0..=255.
     #[arg(long, value_name = "R,G,B", default_value = "255,255,255", value_parser = parse_rgb)]
     pub background: Rgb,
     /// Vertical field of view in degrees, in [1, 170].
-    #[arg(long, value_name = "DEG", default_value_t = 35.0, value_parser = parse_fov)]
+    #[arg(long, value_name = "DEG", default_value_t = 35.0, value_parser = Real::closed(1.0, 170.0).f32())]
     pub fov: f32,
     /// Smooth shading from computed vertex normals when the mesh has none
     /// (default: the mesh's normals if it has them, else flat faces).
@@ -52,9 +53,9 @@ pub struct RenderArgs {
     /// .mco only: the cut at this LOD number (0 = coarsest).
     #[arg(long, value_name = "N")]
     pub lod: Option<usize>,
-    /// .pop only: the octree level to decode and triangulate (default: the
-    /// finest the stream holds).
-    #[arg(long, value_name = "L")]
+    /// .pop only: the octree level to decode and triangulate, in 0..=16
+    /// (default: the finest the stream, or its complete chunks, holds).
+    #[arg(long, value_name = "L", value_parser = value::int(0u8, 16))]
     pub level: Option<u8>,
     /// Write a ring of N views per elevation into --out instead of one
     /// picture (N in 1..=720).
@@ -77,12 +78,6 @@ pub struct RenderArgs {
 pub struct View {
     pub azimuth: f32,
     pub elevation: f32,
-}
-
-#[derive(Clone, Copy, Debug)]
-pub struct Size {
-    pub width: u32,
-    pub height: u32,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -118,32 +113,11 @@ fn parse_view(s: &str) -> std::result::Result<View, String> {
     }
 }
 
-fn parse_size(s: &str) -> std::result::Result<Size, String> {
-    let bad = || format!("expected WxH with each side in 1..={MAX_SIZE}, e.g. 1024x768");
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
-    let w: u32 = w.trim().parse().map_err(|_| bad())?;
-    let h: u32 = h.trim().parse().map_err(|_| bad())?;
-    if !(1..=MAX_SIZE).contains(&w) || !(1..=MAX_SIZE).contains(&h) {
-        return Err(bad());
-    }
-    Ok(Size {
-        width: w,
-        height: h,
-    })
-}
-
 fn parse_rgb(s: &str) -> std::result::Result<Rgb, String> {
     let v: Option<Vec<u8>> = s.split(',').map(|v| v.trim().parse::<u8>().ok()).collect();
     match v.as_deref() {
         Some(&[r, g, b]) => Ok(Rgb([r, g, b])),
         _ => Err("expected R,G,B with each value in 0..=255, e.g. 255,255,255".into()),
-    }
-}
-
-fn parse_fov(s: &str) -> std::result::Result<f32, String> {
-    match s.trim().parse::<f32>() {
-        Ok(f) if (1.0..=170.0).contains(&f) => Ok(f),
-        _ => Err("expected a field of view in [1, 170] degrees".into()),
     }
 }
 
@@ -239,7 +213,8 @@ fn load(ui: &Ui, a: &RenderArgs, k: Kind) -> Result<(Drawable, String)> {
                 max_level: a.level,
                 max_precision: None,
             };
-            let d = lodkit_particles::decode(&bytes, &opts).with_context(|| name.clone())?;
+            // A prefix shows the finest level of its complete chunks.
+            let d = lodkit_particles::decode_prefix(&bytes, &opts).with_context(|| name.clone())?;
             if d.levels.is_empty() {
                 bail!("{name}: the stream holds no complete level");
             }
@@ -329,8 +304,8 @@ pub fn run(ui: &Ui, a: &RenderArgs) -> Result<()> {
         bail!("{}: nothing to draw (no vertices)", a.input.display());
     }
     let opts = RenderOptions {
-        width: a.size.width,
-        height: a.size.height,
+        width: a.size.0,
+        height: a.size.1,
         background: a.background.0,
         normals: if a.smooth {
             Normals::Smooth
@@ -346,7 +321,7 @@ pub fn run(ui: &Ui, a: &RenderArgs) -> Result<()> {
             std::fs::create_dir_all(dir.join(sub))
                 .with_context(|| format!("{}: cannot create", dir.join(sub).display()))?;
         }
-        let step = ui.spinner(&format!("rendering {} views", ring.views.len()));
+        let step = ui.stage(&format!("rendering {} views", ring.views.len()));
         let mut coverage = 0.0;
         for (i, v) in ring.views.iter().enumerate() {
             let img = drawable.draw(&v.camera, &opts)?;

@@ -4,17 +4,25 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Result, bail};
 use clap::Args;
-use lodkit_mesh::io::{Format, WriteOptions, encode, write_atomic};
+use lodkit_mesh::io::{WriteOptions, encode, write_atomic};
 use lodkit_mesh::{Model, TriMesh};
 use lodkit_simplify::{AttributeWeights, Options, Simplifier, Target};
 
 use crate::ui::Ui;
+use crate::ui::value::{self, Real};
+
+/// Largest `--heap-size`: 2^24 records (a few hundred MB at most).
+pub const MAX_HEAP_SIZE: usize = 1 << 24;
+
+/// Range of the attribute weights.
+const WEIGHT: Real = Real::closed(0.0, 1e6);
 
 /// Options shared by `simplify` and `lods`.
 #[derive(Args, Debug, Clone)]
 pub struct SimplifyOpts {
-    /// Stop before any collapse whose estimated object-space error (input units) would exceed E.
-    #[arg(long, value_name = "E")]
+    /// Stop before any collapse whose estimated object-space error (input
+    /// units, a finite number >= 0) would exceed E.
+    #[arg(long, value_name = "E", value_parser = Real::NON_NEGATIVE.f32())]
     pub max_error: Option<f32>,
     /// Keep border vertices (edges with one face) in place.
     #[arg(long)]
@@ -22,28 +30,28 @@ pub struct SimplifyOpts {
     /// Keep every hole and open rim (the paper's hole filling is on by default).
     #[arg(long)]
     pub no_fill_holes: bool,
-    /// Records in the replacement-selection heap.
-    #[arg(long, default_value_t = Options::DEFAULT_HEAP_SIZE, value_name = "N")]
+    /// Records in the replacement-selection heap, in 1..=16777216 (2^24:
+    /// its memory grows with it).
+    #[arg(long, default_value_t = Options::DEFAULT_HEAP_SIZE, value_name = "N",
+          value_parser = value::int(1usize, MAX_HEAP_SIZE))]
     pub heap_size: usize,
-    /// Weight of normals in the cost (relative to the bounding-box extent).
-    #[arg(long, default_value_t = AttributeWeights::DEFAULT.normal, value_name = "W")]
+    /// Weight of normals in the cost (relative to the bounding-box extent), in [0, 1000000].
+    #[arg(long, default_value_t = AttributeWeights::DEFAULT.normal, value_name = "W", value_parser = WEIGHT.f32())]
     pub normal_weight: f32,
-    /// Weight of colours in the cost.
-    #[arg(long, default_value_t = AttributeWeights::DEFAULT.color, value_name = "W")]
+    /// Weight of colours in the cost, in [0, 1000000].
+    #[arg(long, default_value_t = AttributeWeights::DEFAULT.color, value_name = "W", value_parser = WEIGHT.f32())]
     pub color_weight: f32,
-    /// Weight of UVs in the cost.
-    #[arg(long, default_value_t = AttributeWeights::DEFAULT.uv, value_name = "W")]
+    /// Weight of UVs in the cost, in [0, 1000000].
+    #[arg(long, default_value_t = AttributeWeights::DEFAULT.uv, value_name = "W", value_parser = WEIGHT.f32())]
     pub uv_weight: f32,
-    /// Remove components smaller than this fraction of the bounding-box diagonal first.
-    #[arg(long, value_name = "FRACTION")]
+    /// Remove components smaller than this fraction of the bounding-box
+    /// diagonal first, in [0, 1) (1 would remove every component).
+    #[arg(long, value_name = "FRACTION", value_parser = Real::closed_open(0.0, 1.0).f32())]
     pub prune: Option<f32>,
 }
 
 impl SimplifyOpts {
     pub fn options(&self, target: Target) -> Result<Options> {
-        if self.heap_size == 0 {
-            bail!("--heap-size must be at least 1");
-        }
         Ok(Options {
             target,
             max_error: self.max_error,
@@ -71,14 +79,14 @@ impl SimplifyOpts {
 pub struct SimplifyArgs {
     /// Input mesh (.ply, .obj, .stl, .gltf, .glb).
     pub input: PathBuf,
-    /// Output mesh; the format follows the extension.
-    #[arg(short, long)]
+    /// Output mesh; the format follows the extension (.ply, .obj, .stl, .glb).
+    #[arg(short, long, value_parser = value::output(value::MESH_OUT, "the simplified mesh"))]
     pub output: PathBuf,
-    /// Triangle budget.
-    #[arg(long, value_name = "FACES", conflicts_with = "ratio")]
+    /// Triangle budget, in 0..=4294967295.
+    #[arg(long, value_name = "FACES", conflicts_with = "ratio", value_parser = value::int(0usize, u32::MAX as usize))]
     pub target: Option<usize>,
-    /// Fraction of the input's triangles to keep (0..1).
-    #[arg(long, value_name = "R")]
+    /// Fraction of the input's triangles to keep, in [0, 1].
+    #[arg(long, value_name = "R", value_parser = Real::closed(0.0, 1.0).f32())]
     pub ratio: Option<f32>,
     #[command(flatten)]
     pub opts: SimplifyOpts,
@@ -117,8 +125,7 @@ pub fn target_of(
 }
 
 pub fn run(ui: &Ui, a: &SimplifyArgs) -> Result<()> {
-    let format = Format::from_path(&a.output)
-        .ok_or_else(|| anyhow::anyhow!("{}: unknown output extension", a.output.display()))?;
+    let format = super::mesh_output(&a.output)?;
     let target = target_of(a.target, a.ratio, a.opts.max_error)?;
     let opts = a.opts.options(target)?;
     let mesh: TriMesh = super::load_mesh(ui, &a.input)?;
