@@ -6,16 +6,22 @@
 
 use plotters::prelude::*;
 
-/// One named line of `(triangles, error)` points.
+/// One named line of `(x, error)` points (x: triangles, bytes, ...).
 pub struct Series<'a> {
     pub name: &'a str,
     pub points: Vec<(f64, f64)>,
     pub color: RGBColor,
 }
 
-/// Renders the series into an SVG document. Points with a non-positive or
-/// non-finite error are skipped (they cannot sit on a log axis).
+/// Renders the series into an SVG document, triangles on the x axis.
+/// Points with a non-positive or non-finite coordinate are skipped (they
+/// cannot sit on a log axis).
 pub fn error_chart(title: &str, series: &[Series]) -> anyhow::Result<String> {
+    log_chart(title, "triangles", series)
+}
+
+/// [`error_chart`] with `x_desc` naming the x axis (e.g. bytes received).
+pub fn log_chart(title: &str, x_desc: &str, series: &[Series]) -> anyhow::Result<String> {
     let finite = |(x, y): &(f64, f64)| *x > 0.0 && *y > 0.0 && x.is_finite() && y.is_finite();
     let all: Vec<(f64, f64)> = series
         .iter()
@@ -48,7 +54,7 @@ pub fn error_chart(title: &str, series: &[Series]) -> anyhow::Result<String> {
             .x_labels(6)
             .y_labels(6)
             .light_line_style(RGBColor(235, 235, 235))
-            .x_desc("triangles")
+            .x_desc(x_desc)
             .y_desc("error (object units)")
             .y_label_formatter(&|v| format!("{v:.1e}"))
             .x_label_formatter(&|v| format!("{v:.0}"))

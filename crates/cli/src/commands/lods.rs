@@ -126,32 +126,7 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
 /// Simplifies `mesh` into one level per target (each from the previous
 /// level), measures each level against `mesh` with `compare` (`samples` per
 /// kind), and writes `<stem>_lodN.ply`, `<stem>_lods.glb` and `lods.json`
-/// into `out`. Shared by `lodkit lods` and `lodkit build`.
-#[allow(clippy::too_many_arguments)]
-pub fn write_chain(
-    ui: &Ui,
-    mesh: &TriMesh,
-    input_label: &str,
-    stem: &str,
-    out: &Path,
-    targets: &[Target],
-    opts: &Options,
-    samples: usize,
-) -> Result<Lods> {
-    write_chain_reporting(
-        ui,
-        mesh,
-        input_label,
-        stem,
-        out,
-        targets,
-        opts,
-        samples,
-        &mut |_| {},
-    )
-}
-
-/// [`write_chain`], calling `on_level` with each level as soon as it is
+/// into `out`, calling `on_level` with each level as soon as it is
 /// measured and written (so a long chain reports one line per level as it
 /// goes, on a terminal or not).
 #[allow(clippy::too_many_arguments)]

@@ -12,7 +12,10 @@
 //! - [`SurfaceIndex`] ([`distance`]) answers closest-point queries on a mesh
 //!   through a BVH, built once per target;
 //! - [`DirectionStats`], [`SymmetricStats`] and [`CompareReport`]
-//!   ([`report`]) hold the figures and serialise with serde.
+//!   ([`report`]) hold the figures and serialise with serde;
+//! - [`Reference`] ([`reference`]) measures one input against many
+//!   meshes with the input's index built once, and [`level_samples`] sizes
+//!   each measurement by the level's faces.
 //!
 //! # Defaults (all in one place)
 //!
@@ -45,10 +48,12 @@
 //!   and in-order reductions.
 
 pub mod distance;
+pub mod reference;
 pub mod report;
 pub mod sample;
 
 pub use distance::{Closest, SurfaceIndex};
+pub use reference::{Reference, level_samples};
 pub use report::{CompareReport, DirectionStats, SymmetricStats};
 pub use sample::{SampleCounts, SamplingPlan, SurfaceSampler};
 

@@ -1,0 +1,189 @@
+//! Every input kind `build` takes, reduced to what its stages need: a
+//! surface for the HQMS chain and the measurements, and the samples the
+//! progressive stream is built from.
+//!
+//! - a **mesh** (any format) is the surface; the stream samples it;
+//! - a **point cloud** (`.xyz`, `.pts`, a PLY without faces), a **range
+//!   image** (range-grid PLY) or a **scan set** (a `.conf`, or a folder of
+//!   range images, posed by the one `.conf` in it if there is one) is
+//!   first reconstructed as a marching cube octree (`lodkit_mco`, as
+//!   `lodkit mco build` does); its full-resolution cut is the surface, and
+//!   the stream is built from the points themselves (range images as their
+//!   posed samples).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use lodkit_mco::McoModel;
+use lodkit_mesh::{Model, PointCloud, TriMesh};
+
+use crate::ui::Ui;
+
+/// How the input reached the surface the chain starts from.
+pub enum InputPath {
+    /// The input is a mesh.
+    Mesh,
+    /// The input was reconstructed: what it was (`"point cloud"`, `"range
+    /// image"`, `"scan set of 8 range images"`).
+    Reconstructed(String),
+}
+
+/// The loaded input.
+pub struct BuildInput {
+    /// Output file stem.
+    pub name: String,
+    /// The surface: the mesh itself, or the reconstruction.
+    pub surface: TriMesh,
+    /// What the progressive stream encodes: the mesh, or the input's points.
+    pub stream_source: Model,
+    /// The reconstruction, for non-mesh inputs.
+    pub reconstruction: Option<McoModel>,
+    /// Which path the input took.
+    pub path: InputPath,
+}
+
+/// Loads `path` (any kind; see the module docs) and reconstructs it when
+/// it is not a mesh. Errors name the file.
+pub fn load(ui: &Ui, path: &Path) -> Result<BuildInput> {
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .filter(|s| !s.is_empty())
+        .unwrap_or_else(|| "model".into());
+    let (what, models) = if path.is_dir() {
+        scan_folder(ui, path)?
+    } else if is_conf(path) {
+        let step = ui.spinner(&format!("reading {}", path.display()));
+        let scans = lodkit_mesh::io::conf::load_scans(path)?;
+        step.finish();
+        let n = scans.len();
+        (
+            format!("scan set of {n} range images"),
+            scans.into_iter().map(|(_, r)| Model::Range(r)).collect(),
+        )
+    } else {
+        match super::super::load(ui, path)? {
+            Model::Mesh(m) => {
+                if m.faces.is_empty() {
+                    bail!("{}: the mesh has no faces", path.display());
+                }
+                return Ok(BuildInput {
+                    name,
+                    stream_source: Model::Mesh(m.clone()),
+                    surface: m,
+                    reconstruction: None,
+                    path: InputPath::Mesh,
+                });
+            }
+            other => (other.kind().to_string(), vec![other]),
+        }
+    };
+    reconstruct(ui, path, name, what, &models)
+}
+
+fn is_conf(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("conf"))
+}
+
+/// A folder of range images: the `.conf` in it when there is exactly one,
+/// else every `.ply` in it (name order), each as its file poses it.
+fn scan_folder(ui: &Ui, dir: &Path) -> Result<(String, Vec<Model>)> {
+    let mut confs = Vec::new();
+    let mut plys: Vec<PathBuf> = Vec::new();
+    for e in
+        std::fs::read_dir(dir).with_context(|| format!("{}: cannot read folder", dir.display()))?
+    {
+        let p = e
+            .with_context(|| format!("{}: cannot read folder", dir.display()))?
+            .path();
+        if is_conf(&p) {
+            confs.push(p);
+        } else if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply")) {
+            plys.push(p);
+        }
+    }
+    match confs.len() {
+        1 => {
+            let step = ui.spinner(&format!("reading {}", confs[0].display()));
+            let scans = lodkit_mesh::io::conf::load_scans(&confs[0])?;
+            step.finish();
+            let n = scans.len();
+            return Ok((
+                format!("scan set of {n} range images ({})", confs[0].display()),
+                scans.into_iter().map(|(_, r)| Model::Range(r)).collect(),
+            ));
+        }
+        0 => {}
+        n => bail!(
+            "{}: holds {n} .conf files; give the one to build as the input",
+            dir.display()
+        ),
+    }
+    plys.sort();
+    if plys.is_empty() {
+        bail!(
+            "{}: holds no range image (.ply) and no .conf",
+            dir.display()
+        );
+    }
+    let mut models = Vec::with_capacity(plys.len());
+    for p in &plys {
+        match super::super::load(ui, p)? {
+            m @ Model::Range(_) => models.push(m),
+            other => bail!(
+                "{}: holds a {}, not a range image (a scan folder holds range-grid PLYs)",
+                p.display(),
+                other.kind()
+            ),
+        }
+    }
+    Ok((format!("scan set of {} range images", models.len()), models))
+}
+
+/// Reconstructs `models` as a marching cube octree; its full cut is the
+/// surface, and the posed samples of every model are the stream's points.
+fn reconstruct(
+    ui: &Ui,
+    path: &Path,
+    name: String,
+    what: String,
+    models: &[Model],
+) -> Result<BuildInput> {
+    let step = ui.spinner(&format!("reconstructing the {what}"));
+    let model = lodkit_mco::build_from_models(models, &lodkit_mco::Options::default())
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    let surface = model.mesh_at_lod(model.max_lod());
+    step.finish();
+    if surface.faces.is_empty() {
+        bail!("{}: the reconstruction has no triangles", path.display());
+    }
+    let stream_source = match models {
+        [Model::Points(c)] => Model::Points(c.clone()),
+        _ => {
+            let mut cloud = PointCloud::default();
+            let mut colors = Vec::new();
+            let mut all_coloured = true;
+            for m in models {
+                let s = lodkit_mco::samples_of(m)
+                    .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+                all_coloured &= s.colors.is_some();
+                if let Some(c) = &s.colors {
+                    colors.extend_from_slice(c);
+                }
+                cloud.positions.extend_from_slice(&s.positions);
+            }
+            if all_coloured && colors.len() == cloud.positions.len() {
+                cloud.colors = Some(colors);
+            }
+            Model::Points(cloud)
+        }
+    };
+    Ok(BuildInput {
+        name,
+        surface,
+        stream_source,
+        reconstruction: Some(model),
+        path: InputPath::Reconstructed(what),
+    })
+}

@@ -1,0 +1,325 @@
+//! End-to-end tests of `lodkit build`: every input kind, options checked
+//! before anything is written, the output folder replaced whole or left
+//! as it was, and the structure of `report.html`.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use common::{bunny, lodkit, stderr};
+use lodkit_mesh::io::{WriteOptions, save};
+use lodkit_mesh::{Model, PointCloud, TriMesh};
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// The bunny simplified to about 1 000 triangles: small enough that a
+/// whole build takes a moment.
+fn small_bunny() -> TriMesh {
+    let m = lodkit_mesh::io::load_mesh(Path::new(&bunny())).unwrap();
+    lodkit_simplify::simplify(&m, &lodkit_simplify::Options::faces(1_000))
+        .unwrap()
+        .mesh
+}
+
+/// Runs `build INPUT --out OUT` with cheap options; returns report.md.
+fn build_ok(input: &Path, out: &Path) -> String {
+    let o = lodkit(&[
+        "-q",
+        "build",
+        s(input),
+        "--out",
+        s(out),
+        "--levels",
+        "2",
+        "--samples",
+        "2000",
+    ]);
+    assert!(o.status.success(), "{}: {}", input.display(), stderr(&o));
+    for f in [
+        "report.md",
+        "report.html",
+        "lod_error.svg",
+        "lods/lods.json",
+    ] {
+        assert!(out.join(f).is_file(), "{}: no {f}", input.display());
+    }
+    std::fs::read_to_string(out.join("report.md")).unwrap()
+}
+
+/// Everything in `dir` (relative paths, sorted).
+fn tree(dir: &Path) -> Vec<String> {
+    fn walk(base: &Path, d: &Path, out: &mut Vec<String>) {
+        for e in std::fs::read_dir(d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                walk(base, &p, out);
+            } else {
+                out.push(p.strip_prefix(base).unwrap().display().to_string());
+            }
+        }
+    }
+    let mut v = Vec::new();
+    walk(dir, dir, &mut v);
+    v.sort();
+    v
+}
+
+/// No `.NAME.lodkit-tmp-*` or `-old-*` folder is left beside `out`.
+fn no_staging_left(out: &Path) {
+    let parent = out.parent().unwrap();
+    for e in std::fs::read_dir(parent).unwrap() {
+        let n = e.unwrap().file_name().to_string_lossy().into_owned();
+        assert!(!n.contains(".lodkit-"), "left behind: {n}");
+    }
+}
+
+#[test]
+fn meshes_of_every_format_take_the_mesh_path() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = Model::Mesh(small_bunny());
+    for ext in ["ply", "obj", "stl", "glb"] {
+        let input = dir.path().join(format!("small.{ext}"));
+        save(&input, &mesh, WriteOptions::default()).unwrap();
+        let out = dir.path().join(format!("out_{ext}"));
+        let report = build_ok(&input, &out);
+        assert!(report.contains("Path: a mesh."), "{ext}: {report}");
+        assert!(out.join("scans/small.conf").is_file(), "{ext}");
+        assert!(out.join("small.mco").is_file() && out.join("small.pop").is_file());
+        no_staging_left(&out);
+    }
+}
+
+#[test]
+fn point_clouds_are_reconstructed_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = small_bunny();
+    let cloud = Model::Points(PointCloud {
+        positions: m.positions.clone(),
+        normals: None,
+        colors: None,
+    });
+    for ext in ["xyz", "pts", "ply"] {
+        let input = dir.path().join(format!("cloud.{ext}"));
+        save(&input, &cloud, WriteOptions::default()).unwrap();
+        let out = dir.path().join(format!("out_{ext}"));
+        let report = build_ok(&input, &out);
+        assert!(
+            report.contains("Path: a point cloud, reconstructed first"),
+            "{ext}: {report}"
+        );
+        assert!(
+            report.contains("from the input's points"),
+            "{ext}: {report}"
+        );
+        // No virtual scans: the reconstruction is the model.
+        assert!(!out.join("scans").exists(), "{ext}");
+        assert!(report.contains("The input's reconstruction"), "{report}");
+    }
+}
+
+/// `lodkit scan` writes range images and a `.conf`; `build` takes one
+/// range image, the `.conf`, and the folder.
+#[test]
+fn range_images_and_scan_sets_are_reconstructed_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let scans = dir.path().join("scans");
+    let o = lodkit(&[
+        "-q",
+        "scan",
+        &bunny(),
+        "--out",
+        s(&scans),
+        "--views",
+        "4",
+        "--size",
+        "64x64",
+        "--alternate",
+        "--elevation",
+        "30",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let cases: [(PathBuf, &str); 3] = [
+        (scans.join("stanford_bunny_000.ply"), "Path: a range image,"),
+        (
+            scans.join("stanford_bunny.conf"),
+            "Path: a scan set of 4 range images,",
+        ),
+        (scans.clone(), "Path: a scan set of 4 range images ("),
+    ];
+    for (i, (input, expect)) in cases.iter().enumerate() {
+        let out = dir.path().join(format!("out_{i}"));
+        let report = build_ok(input, &out);
+        assert!(report.contains(expect), "{}: {report}", input.display());
+    }
+}
+
+#[test]
+fn bad_options_are_usage_errors_before_anything_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join("report.md"), "an earlier build").unwrap();
+    for (args, says) in [
+        (vec!["--levels", "0"], "1..=32"),
+        (vec!["--levels", "33"], "1..=32"),
+        (vec!["--samples", "0"], "1.."),
+        (vec!["--samples", "10", "--no-measure"], "--no-measure"),
+    ] {
+        let mut all = vec!["build", "--out", s(&out)];
+        all.extend(args.iter().copied());
+        let o = lodkit(&all);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(says), "{args:?}: {}", stderr(&o));
+        assert_eq!(tree(&out), vec!["report.md".to_string()], "{args:?}");
+    }
+    // A folder of other files is never replaced.
+    let other = dir.path().join("other");
+    std::fs::create_dir(&other).unwrap();
+    std::fs::write(other.join("notes.txt"), "mine").unwrap();
+    let o = lodkit(&["build", "--out", s(&other)]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("not a lodkit build"), "{}", stderr(&o));
+    assert_eq!(tree(&other), vec!["notes.txt".to_string()]);
+    no_staging_left(&out);
+}
+
+#[test]
+fn a_failed_build_leaves_the_folder_as_it_was_and_a_good_one_replaces_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join("report.md"), "an earlier build").unwrap();
+    std::fs::write(out.join("stale.ply"), "from an earlier build").unwrap();
+    let bad = dir.path().join("bad.ply");
+    std::fs::write(&bad, "ply\nformat nonsense\n").unwrap();
+    for input in [bad.clone(), dir.path().join("missing.ply")] {
+        let o = lodkit(&["build", s(&input), "--out", s(&out)]);
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+        assert!(stderr(&o).contains(s(&input)), "{}", stderr(&o));
+        assert_eq!(tree(&out), vec!["report.md", "stale.ply"]);
+        no_staging_left(&out);
+    }
+    let input = dir.path().join("small.ply");
+    save(&input, &Model::Mesh(small_bunny()), WriteOptions::default()).unwrap();
+    build_ok(&input, &out);
+    assert!(
+        !out.join("stale.ply").exists(),
+        "the folder is replaced whole"
+    );
+    no_staging_left(&out);
+}
+
+/// `report.html`: every picture an embedded PNG that shows the model,
+/// every chart and table present, and the page the same from run to run
+/// outside its timings.
+#[test]
+fn report_html_is_self_contained_and_deterministic() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("small.ply");
+    save(&input, &Model::Mesh(small_bunny()), WriteOptions::default()).unwrap();
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    build_ok(&input, &a);
+    build_ok(&input, &b);
+    let html = std::fs::read_to_string(a.join("report.html")).unwrap();
+    let strip = |h: &str| {
+        let (start, end) = (
+            h.find("<!-- varies -->").unwrap(),
+            h.find("<!-- /varies -->").unwrap(),
+        );
+        format!("{}{}", &h[..start], &h[end..])
+    };
+    let other = std::fs::read_to_string(b.join("report.html")).unwrap();
+    assert_eq!(
+        strip(&html),
+        strip(&other),
+        "report.html differs outside its timings"
+    );
+    assert!(html.starts_with("<!DOCTYPE html>"));
+    // Nothing fetched: no external reference of any kind.
+    for bad in ["http://", "https://", "<script", "<link"] {
+        let n = html.matches(bad).count();
+        // SVG's own namespace is the one URL allowed.
+        let allowed = html.matches("http://www.w3.org/2000/svg").count()
+            + html.matches("http://www.w3.org/1999/xlink").count();
+        assert!(
+            bad != "http://" && n == 0 || bad == "http://" && n == allowed,
+            "{bad}"
+        );
+    }
+    let imgs: Vec<&str> = html.split("<img ").skip(1).collect();
+    // Input, 2 HQMS levels, the MCO cuts, the stream levels, the heat map.
+    assert!(imgs.len() >= 6, "{} images", imgs.len());
+    use base64::Engine as _;
+    for img in &imgs {
+        let src = img
+            .split("src=\"data:image/png;base64,")
+            .nth(1)
+            .expect("every <img> is a data: PNG");
+        let b64 = &src[..src.find('"').unwrap()];
+        let png = base64::engine::general_purpose::STANDARD
+            .decode(b64)
+            .unwrap();
+        let mut reader = png::Decoder::new(std::io::Cursor::new(png))
+            .read_info()
+            .unwrap();
+        let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+        let info = reader.next_frame(&mut buf).unwrap();
+        assert_eq!((info.width, info.height), (256, 256));
+        let px = info.line_size * info.height as usize;
+        let step = info.color_type.samples();
+        let drawn = buf[..px]
+            .chunks_exact(step)
+            .filter(|p| p[..3] != [255, 255, 255])
+            .count();
+        assert!(
+            drawn > 500,
+            "a picture shows almost nothing ({drawn} pixels)"
+        );
+    }
+    for needle in [
+        "error against triangle count, every form",
+        ".pop error against bytes received",
+        "linearGradient",
+        "Stage timings",
+        "<dt>estimated error</dt>",
+        "% of the diagonal",
+    ] {
+        assert!(html.contains(needle), "no {needle}");
+    }
+    assert!(
+        html.matches("<svg").count() >= 3,
+        "two charts and a colour bar"
+    );
+    assert!(html.matches("<table>").count() >= 4);
+}
+
+#[test]
+fn no_measure_skips_every_measurement() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("small.ply");
+    save(&input, &Model::Mesh(small_bunny()), WriteOptions::default()).unwrap();
+    let out = dir.path().join("out");
+    let o = lodkit(&[
+        "-q",
+        "build",
+        s(&input),
+        "--out",
+        s(&out),
+        "--levels",
+        "2",
+        "--no-measure",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(
+        report.contains("are not measured (`--no-measure`)"),
+        "{report}"
+    );
+    assert!(
+        report.contains("| 1 | `lods/small_lod1.ply` | 500 |"),
+        "{report}"
+    );
+    assert!(out.join("report.html").is_file());
+}
