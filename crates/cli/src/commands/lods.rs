@@ -8,7 +8,6 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use clap::Args;
 use lodkit_mesh::io::{Format, WriteOptions, encode, gltf::write_glb, write_atomic};
-use lodkit_mesh::metrics::{CompareOptions, compare};
 use lodkit_mesh::{Model, TriMesh};
 use lodkit_simplify::{Options, Simplifier, Target, halving_targets};
 
@@ -37,9 +36,10 @@ pub struct LodsArgs {
     pub levels: Option<usize>,
     #[command(flatten)]
     pub opts: SimplifyOpts,
-    /// Samples per kind for the measured error (`compare`), in 1..=10000000.
-    #[arg(long, default_value_t = 1_000_000, value_parser = value::int(1usize, value::MAX_SAMPLES))]
-    pub samples: usize,
+    /// Samples per kind for the measured error (`compare`), in 1..=10000000;
+    /// by default each level gets 4 per face, within 50000..=1000000.
+    #[arg(long, value_parser = value::int(1usize, value::MAX_SAMPLES))]
+    pub samples: Option<usize>,
     /// Print lods.json on stdout too.
     #[arg(long)]
     pub json: bool,
@@ -124,8 +124,8 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
 }
 
 /// Simplifies `mesh` into one level per target (each from the previous
-/// level), measures each level against `mesh` with `compare` (`samples` per
-/// kind), and writes `<stem>_lodN.ply`, `<stem>_lods.glb` and `lods.json`
+/// level), measures each level against `mesh` (its distance index built
+/// once; `samples` per kind, or [`lodkit_mesh::metrics::level_samples`]), and writes `<stem>_lodN.ply`, `<stem>_lods.glb` and `lods.json`
 /// into `out`, calling `on_level` with each level as soon as it is
 /// measured and written (so a long chain reports one line per level as it
 /// goes, on a terminal or not).
@@ -138,7 +138,7 @@ pub fn write_chain_reporting(
     out: &Path,
     targets: &[Target],
     opts: &Options,
-    samples: usize,
+    samples: Option<usize>,
     on_level: &mut dyn FnMut(&Level),
 ) -> Result<Lods> {
     std::fs::create_dir_all(out)
@@ -151,10 +151,8 @@ pub fn write_chain_reporting(
         .lod_chain(mesh, opts, targets)
         .map_err(|e| anyhow::anyhow!("{input_label}: {e}"))?;
     step.finish();
-    let copts = CompareOptions {
-        samples: Some(samples),
-        ..CompareOptions::default()
-    };
+    let reference = lodkit_mesh::metrics::Reference::new(mesh)
+        .map_err(|e| anyhow::anyhow!("{input_label}: {e}"))?;
     for (i, l) in chain.into_iter().enumerate() {
         let name = format!("{stem}_lod{}", i + 1);
         let file = format!("{name}.ply");
@@ -162,7 +160,7 @@ pub fn write_chain_reporting(
         let (mean, max) = if l.mesh.faces.is_empty() {
             (f64::NAN, f64::NAN)
         } else {
-            let c = compare(mesh, &l.mesh, &copts)?;
+            let c = reference.compare_level(&l.mesh, samples)?;
             (c.symmetric.mean, c.symmetric.max)
         };
         step.finish();
