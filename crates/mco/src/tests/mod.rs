@@ -8,3 +8,4 @@ mod support;
 
 mod extraction;
 mod pipeline;
+mod view_cut;
