@@ -32,8 +32,18 @@ fn table(name: &str, m: &McoModel) {
         "| model | target | tolerance (px) | triangles min / mean / max | expanded | kept ViewCut median / worst (ms) | fresh extract_view median / worst (ms) | memcpy (ms) |"
     );
     println!("|---|---:|---:|---|---:|---|---|---:|");
-    for target in [20_000, 100_000, 300_000] {
-        let tol = tolerance_for(m, &cameras, target);
+    let fixed: Option<Vec<f32>> = std::env::var("MCO_TOLERANCES")
+        .ok()
+        .map(|s| s.split(',').filter_map(|x| x.parse().ok()).collect());
+    let targets = [20_000, 100_000, 300_000];
+    for (i, target) in targets.into_iter().enumerate() {
+        let tol = match &fixed {
+            Some(t) => match t.get(i) {
+                Some(&t) => t,
+                None => break,
+            },
+            None => tolerance_for(m, &cameras, target),
+        };
         let r = time_view_cuts(m, &cameras, tol, 5);
         println!(
             "| {name} | {target} | {:.3} | {} / {} / {} | {:.0} | {:.3} / {:.3} | {:.3} / {:.3} | {:.3} |",
