@@ -124,10 +124,17 @@ pub fn densify_mesh_samples_of(m: &TriMesh, cube: f32, s: &mut PointCloud) {
 }
 
 /// Faces of `m` (valid indices) with an edge longer than `cube`, with their
-/// corner positions and that edge length.
-fn long_edged_faces(m: &TriMesh, cube: f32) -> impl Iterator<Item = (&[u32; 3], [Vec3; 3], f32)> {
+/// corner positions and that edge length; a face on the same three
+/// vertices as an earlier one (in any order) is left out: it would add the
+/// same samples again, so a mesh of one triangle repeated a million times
+/// is densified once, not a million times.
+pub(crate) fn long_edged_faces(
+    m: &TriMesh,
+    cube: f32,
+) -> impl Iterator<Item = (&[u32; 3], [Vec3; 3], f32)> {
     let nv = m.positions.len();
     let ok = cube > 0.0 && cube.is_finite();
+    let mut seen: rustc_hash::FxHashSet<[u32; 3]> = Default::default();
     m.faces.iter().filter_map(move |f| {
         if !ok || f.iter().any(|&i| i as usize >= nv) {
             return None;
@@ -140,8 +147,36 @@ fn long_edged_faces(m: &TriMesh, cube: f32) -> impl Iterator<Item = (&[u32; 3], 
             .max(b.distance_squared(c))
             .max(c.distance_squared(a))
             .sqrt();
-        (longest > cube && longest.is_finite()).then_some((f, [a, b, c], longest))
+        if !(longest > cube && longest.is_finite()) {
+            return None;
+        }
+        let mut key = *f;
+        key.sort_unstable();
+        seen.insert(key).then_some((f, [a, b, c], longest))
     })
+}
+
+/// Subdivisions per side of a long-edged face's sample grid: half-cube
+/// spacing, at most [`MAX_SUBDIVISIONS`] (bounded work per face).
+fn subdivisions(longest: f32, cube: f32) -> usize {
+    ((2.0 * longest / cube).ceil() as usize).min(MAX_SUBDIVISIONS)
+}
+
+/// Most subdivisions per side of one face's densification grid.
+const MAX_SUBDIVISIONS: usize = 64;
+
+/// At most how many samples [`densify_mesh_samples`] adds to `m`'s for cube
+/// `cube` (exact but for the samples whose interpolated normal is zero),
+/// without making them: the figure the build's memory estimate uses.
+/// `O(faces)`.
+pub(crate) fn densify_count(m: &TriMesh, cube: f32) -> u64 {
+    long_edged_faces(m, cube)
+        .map(|(_, _, longest)| {
+            let n = subdivisions(longest, cube) as u64;
+            // The grid's points less its three corners.
+            (n + 1) * (n + 2) / 2 - 3
+        })
+        .sum()
 }
 
 /// Makes mesh samples `s` dense enough for a lattice of cube `cube`: to
@@ -155,8 +190,7 @@ pub(crate) fn densify_mesh_samples(m: &TriMesh, normals: &[Vec3], cube: f32, s: 
     let out_normals = s.normals.get_or_insert_default();
     for (f, [a, b, c], longest) in long_edged_faces(m, cube) {
         let [na, nb, nc] = f.map(|i| normals[i as usize]);
-        // Half-cube spacing, at most 64 subdivisions per side (bounded work).
-        let n = ((2.0 * longest / cube).ceil() as usize).min(64);
+        let n = subdivisions(longest, cube);
         let color = m.colors.as_ref().map(|cs| cs[f[0] as usize]);
         for i in 0..=n {
             for j in 0..=n - i {

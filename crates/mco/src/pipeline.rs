@@ -448,6 +448,95 @@ fn grid_for_inputs(inputs: &[Input], samples: &[PointCloud], opts: &Options) -> 
     Grid::new(bbox, resolution)
 }
 
+/// Bytes a build holds per input sample at its peak (the sample itself,
+/// its place in the signed-distance stamping). With the next constant, an
+/// upper figure: the estimate is 1.0–1.2 × the peak resident size measured
+/// on spheres (resolution 200–800) and blobs (`examples/build_memory.rs`).
+const BYTES_PER_SAMPLE: u64 = 64;
+/// Bytes a build holds per leaf cube of surface at its peak (band vertices,
+/// leaf configurations, octree nodes, triangles, crack patches, extraction
+/// tables), an upper figure measured likewise.
+const BYTES_PER_SURFACE_CUBE: u64 = 600;
+/// Surface cubes counted per sample of an input without faces (a sample
+/// touches the cubes around it; more samples than that per cube only add
+/// to cubes already counted).
+const CUBES_PER_POINT_SAMPLE: u64 = 8;
+
+/// Builds whose [`estimate_build_bytes`] is above this are refused before
+/// anything sized by the lattice is allocated (8 GiB: a sphere at
+/// resolution 1,400, far finer than any input's sampling warrants; the
+/// default resolution of the inputs lodkit ships needs well under 1 GiB).
+pub const MAX_BUILD_BYTES: u64 = 8 << 30;
+
+/// An upper estimate of the memory (bytes) a build of `models` with `opts`
+/// needs at its peak, from the counts that drive it, computed without
+/// making any of them: the input samples (vertices, range pixels, points),
+/// the samples densification will add on long mesh edges (counted, each
+/// repeated face once), and the leaf cubes the surface crosses (a mesh's
+/// area in cubes; 8 per sample for inputs without faces). The build
+/// refuses to start above [`MAX_BUILD_BYTES`]; a caller can compare it
+/// with its own budget first. Errors as [`grid_for`]. Cost: `O(input)`
+/// (the samples' positions and normals are computed, as the build does).
+pub fn estimate_build_bytes(models: &[Model], opts: &Options) -> Result<u64> {
+    let inputs: Vec<Input> = models.iter().map(Input::from).collect();
+    let samples: Vec<PointCloud> = inputs
+        .iter()
+        .map(|&i| input_samples(i))
+        .collect::<Result<_>>()?;
+    let grid = grid_for_inputs(&inputs, &samples, opts)?;
+    Ok(estimate_inputs_bytes(&inputs, &samples, &grid))
+}
+
+fn estimate_inputs_bytes(inputs: &[Input], samples: &[PointCloud], grid: &Grid) -> u64 {
+    let cube = grid.cube as f64;
+    let mut n_samples = 0u64;
+    let mut cubes = 0f64;
+    for (input, s) in inputs.iter().zip(samples) {
+        n_samples += s.positions.len() as u64;
+        if let Input::Mesh(m) = input {
+            n_samples += crate::normals_estimation::densify_count(m, grid.cube);
+            let mut seen: rustc_hash::FxHashSet<[u32; 3]> = Default::default();
+            let area: f64 = m
+                .faces
+                .iter()
+                .filter(|f| f.iter().all(|&i| (i as usize) < m.positions.len()))
+                .filter(|f| {
+                    let mut k = **f;
+                    k.sort_unstable();
+                    seen.insert(k)
+                })
+                .map(|f| {
+                    let [a, b, c] = f.map(|i| m.positions[i as usize].as_dvec3());
+                    0.5 * (b - a).cross(c - a).length()
+                })
+                .filter(|x| x.is_finite())
+                .sum();
+            // A surface crosses at most a few cubes per cube of its area;
+            // 2 covers the slanted and curved parts.
+            cubes += 2.0 * area / (cube * cube) + s.positions.len() as f64;
+        } else {
+            cubes += (CUBES_PER_POINT_SAMPLE * s.positions.len() as u64) as f64;
+        }
+    }
+    let cubes = cubes.min(u64::MAX as f64 / 2.0) as u64;
+    n_samples
+        .saturating_mul(BYTES_PER_SAMPLE)
+        .saturating_add(cubes.saturating_mul(BYTES_PER_SURFACE_CUBE))
+}
+
+/// The refusal of a build estimated above [`MAX_BUILD_BYTES`].
+fn check_estimate(bytes: u64, grid: &Grid) -> Result<()> {
+    if bytes > MAX_BUILD_BYTES {
+        return Err(Error::Input(format!(
+            "resolution {}: the build would need about {:.1} GB of memory, more than its {:.0} GB limit; use a lower resolution",
+            grid.resolution,
+            bytes as f64 / 1e9,
+            MAX_BUILD_BYTES as f64 / 1e9
+        )));
+    }
+    Ok(())
+}
+
 /// Mesh samples made dense enough for `grid`: a mesh's triangles with an
 /// edge longer than a cube get samples on a half-cube barycentric grid,
 /// normals interpolated (without them, long edges leave holes); other
@@ -508,6 +597,7 @@ fn build_from_inputs(inputs: &[Input], opts: &Options) -> Result<McoModel> {
         return Err(Error::Input("the input has no usable samples".into()));
     }
     let grid = grid_for_inputs(inputs, &samples, opts)?;
+    check_estimate(estimate_inputs_bytes(inputs, &samples, &grid), &grid)?;
     for ((input, s), normals) in inputs.iter().zip(&mut samples).zip(&mesh_normals) {
         if let (Input::Mesh(m), Some(normals)) = (input, normals) {
             crate::normals_estimation::densify_mesh_samples(m, normals, grid.cube, s);

@@ -198,3 +198,44 @@ fn the_extraction_stream_draws_what_following_the_nodes_draws() {
         assert_eq!(sorted(&a), sorted(&b), "lod {k}");
     }
 }
+
+#[test]
+fn a_build_estimated_above_the_memory_limit_is_refused_before_it_starts() {
+    let sphere = shapes::icosphere(3);
+    let opts = Options {
+        resolution: Some(crate::MAX_RESOLUTION),
+    };
+    let est = crate::estimate_build_bytes(&[Model::Mesh(sphere.clone())], &opts).unwrap();
+    assert!(est > crate::MAX_BUILD_BYTES, "{est}");
+    let e = build_from_mesh(&sphere, &opts).unwrap_err().to_string();
+    assert!(
+        e.contains("resolution 4096") && e.contains("GB") && !e.contains('\n'),
+        "{e}"
+    );
+    // The default resolution is far below the limit.
+    let est = crate::estimate_build_bytes(&[Model::Mesh(sphere)], &Options::default()).unwrap();
+    assert!(est < 1 << 30, "{est}");
+}
+
+#[test]
+fn a_triangle_repeated_many_times_is_densified_once() {
+    let one = TriMesh {
+        positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+        faces: vec![[0, 1, 2]],
+        ..Default::default()
+    };
+    let mut many = one.clone();
+    many.faces = (0..200_000)
+        .map(|i| if i % 2 == 0 { [0, 1, 2] } else { [2, 0, 1] })
+        .collect();
+    let cube = 0.01;
+    let count = crate::normals_estimation::densify_count(&one, cube);
+    assert!(count > 0);
+    assert_eq!(crate::normals_estimation::densify_count(&many, cube), count);
+    let opts = Options {
+        resolution: Some(64),
+    };
+    let a = crate::estimate_build_bytes(&[Model::Mesh(one)], &opts).unwrap();
+    let b = crate::estimate_build_bytes(&[Model::Mesh(many)], &opts).unwrap();
+    assert_eq!(a, b);
+}
