@@ -429,14 +429,24 @@ impl IncrementalBuilder {
 /// The lattice for several inputs: the union box of their `samples`
 /// (`samples[i]` = [`samples_of`]`(&models[i])`) and the resolution of
 /// `opts` (default: from the inputs' median sample spacing). Errors: no
-/// finite sample, a box without extent, or a resolution outside
-/// `2..=`[`crate::MAX_RESOLUTION`].
+/// finite sample, a box without extent, a resolution outside
+/// `2..=`[`crate::MAX_RESOLUTION`], or a lattice whose build would need
+/// more than [`MAX_BUILD_BYTES`] ([`estimate_build_bytes`]; checked here,
+/// before anything is sized by the lattice, so a caller that builds step
+/// by step is refused as early as the one-call builds).
 pub fn grid_for(models: &[Model], samples: &[PointCloud], opts: &Options) -> Result<Grid> {
     let inputs: Vec<Input> = models.iter().map(Input::from).collect();
     grid_for_inputs(&inputs, samples, opts)
 }
 
 fn grid_for_inputs(inputs: &[Input], samples: &[PointCloud], opts: &Options) -> Result<Grid> {
+    let grid = lattice_of(inputs, samples, opts)?;
+    check_estimate(estimate_inputs_bytes(inputs, samples, &grid), &grid)?;
+    Ok(grid)
+}
+
+/// [`grid_for_inputs`] without the memory check.
+fn lattice_of(inputs: &[Input], samples: &[PointCloud], opts: &Options) -> Result<Grid> {
     let bbox = samples.iter().fold(Aabb::EMPTY, |b, s| b.union(&s.bbox()));
     let resolution = match opts.resolution {
         Some(r) => r,
@@ -483,7 +493,7 @@ pub fn estimate_build_bytes(models: &[Model], opts: &Options) -> Result<u64> {
         .iter()
         .map(|&i| input_samples(i))
         .collect::<Result<_>>()?;
-    let grid = grid_for_inputs(&inputs, &samples, opts)?;
+    let grid = lattice_of(&inputs, &samples, opts)?;
     Ok(estimate_inputs_bytes(&inputs, &samples, &grid))
 }
 
@@ -597,7 +607,6 @@ fn build_from_inputs(inputs: &[Input], opts: &Options) -> Result<McoModel> {
         return Err(Error::Input("the input has no usable samples".into()));
     }
     let grid = grid_for_inputs(inputs, &samples, opts)?;
-    check_estimate(estimate_inputs_bytes(inputs, &samples, &grid), &grid)?;
     for ((input, s), normals) in inputs.iter().zip(&mut samples).zip(&mesh_normals) {
         if let (Input::Mesh(m), Some(normals)) = (input, normals) {
             crate::normals_estimation::densify_mesh_samples(m, normals, grid.cube, s);
