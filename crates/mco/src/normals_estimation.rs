@@ -87,7 +87,28 @@ pub fn range_image_samples(r: &RangeImage) -> PointCloud {
 /// normals. Vertices whose normal is zero (only degenerate faces) are
 /// dropped.
 pub fn mesh_samples(m: &TriMesh) -> PointCloud {
-    mesh_samples_with(m, &lodkit_mesh::normals::vertex_normals(m))
+    mesh_samples_with(m, &vertex_normals(m))
+}
+
+/// The mesh's area-weighted vertex normals, computed at any scale: a mesh
+/// whose extent is far from 1 (cross products overflow `f32` around 1e19,
+/// go subnormal around 1e-19) has them computed on a copy scaled by a
+/// power of two, which gives the same directions; other meshes as
+/// `lodkit_mesh::normals::vertex_normals` does.
+pub(crate) fn vertex_normals(m: &TriMesh) -> Vec<Vec3> {
+    let extent = m.bbox().size().max_element();
+    let s = crate::pipeline::normalising_scale(extent / 256.0);
+    if s == 1.0 {
+        return lodkit_mesh::normals::vertex_normals(m);
+    }
+    let scaled = TriMesh {
+        positions: m.positions.iter().map(|&p| p * s).collect(),
+        normals: None,
+        colors: None,
+        uvs: None,
+        faces: m.faces.clone(),
+    };
+    lodkit_mesh::normals::vertex_normals(&scaled)
 }
 
 /// [`mesh_samples`] with the mesh's vertex normals already computed.
@@ -120,7 +141,7 @@ pub fn densify_mesh_samples_of(m: &TriMesh, cube: f32, s: &mut PointCloud) {
     if long_edged_faces(m, cube).next().is_none() {
         return;
     }
-    densify_mesh_samples(m, &lodkit_mesh::normals::vertex_normals(m), cube, s);
+    densify_mesh_samples(m, &vertex_normals(m), cube, s);
 }
 
 /// Faces of `m` (valid indices) with an edge longer than `cube`, with their
@@ -142,11 +163,17 @@ pub(crate) fn long_edged_faces(
         let [a, b, c] = f.map(|i| m.positions[i as usize]);
         // One square root: it is monotone, so the longest edge is the root
         // of the largest squared length (NaNs are skipped by `max` alike).
-        let longest = a
+        let mut longest = a
             .distance_squared(b)
             .max(b.distance_squared(c))
             .max(c.distance_squared(a))
             .sqrt();
+        if longest.is_infinite() {
+            // Squared lengths past f32's range (coordinates around 1e19):
+            // the length itself may still fit.
+            let [a, b, c] = [a, b, c].map(|p| p.as_dvec3());
+            longest = (a.distance(b).max(b.distance(c)).max(c.distance(a))) as f32;
+        }
         if !(longest > cube && longest.is_finite()) {
             return None;
         }

@@ -142,17 +142,21 @@ fn spacing_of(input: Input) -> Option<f32> {
         Input::Mesh(m) => {
             // Squared lengths: the median's square root is the median
             // length, with one square root instead of one per edge.
+            // Far from unit size, the lengths are taken in a frame scaled
+            // by a power of two (exact), so that their squares neither
+            // overflow nor go subnormal.
             let nv = m.positions.len();
+            let s = normalising_scale(m.bbox().size().max_element() / 256.0);
             let mut sq = Vec::with_capacity(3 * m.faces.len());
             for f in &m.faces {
                 if f.iter().all(|&i| (i as usize) < nv) {
-                    let p = f.map(|i| m.positions[i as usize]);
+                    let p = f.map(|i| m.positions[i as usize] * s);
                     for k in 0..3 {
                         sq.push(p[k].distance_squared(p[(k + 1) % 3]));
                     }
                 }
             }
-            median(sq).map(f32::sqrt)
+            median(sq).map(|x| x.sqrt() / s)
         }
         Input::Range(r) => median(range_spacings(r)),
         Input::Points(p) => {
@@ -246,6 +250,44 @@ pub struct IncrementalBuilder {
     has_colors: Option<bool>,
     /// The band's sides when the last add computed them (a first add).
     signs: Option<BandSigns>,
+    /// The lattice as given; `field` works on it scaled by `scale`.
+    grid: Grid,
+    /// The power of two the samples are multiplied by (1 for lattices of
+    /// ordinary size; see [`normalising_scale`]).
+    scale: f32,
+}
+
+/// Leaf cubes of at least this and at most [`MAX_PLAIN_CUBE`] (object
+/// units) are built as they are; outside, the build runs in a frame
+/// scaled by a power of two (see [`normalising_scale`]).
+const MIN_PLAIN_CUBE: f32 = 1.0 / (1u32 << 24) as f32;
+/// See [`MIN_PLAIN_CUBE`].
+const MAX_PLAIN_CUBE: f32 = (1u32 << 16) as f32;
+
+/// The power of two `2^k` that brings a leaf cube of `cube` object units to
+/// about `2^-8` (a unit box at resolution 256), or 1 when `cube` lies in
+/// `MIN_PLAIN_CUBE..=MAX_PLAIN_CUBE`. The build's squared distances, areas
+/// and tolerances overflow `f32` for cubes around 1e18 and lose their
+/// meaning (subnormal) around 1e-12; scaled, every input builds in the same
+/// frame and gives the same model at any scale within float precision.
+/// Multiplying by a power of two is exact (no rounding), and the model is
+/// mapped back exactly, so lattices of ordinary size build bit for bit as
+/// they always did.
+pub(crate) fn normalising_scale(cube: f32) -> f32 {
+    if !(cube.is_finite() && cube > 0.0) || (MIN_PLAIN_CUBE..=MAX_PLAIN_CUBE).contains(&cube) {
+        return 1.0;
+    }
+    let k = -8 - cube.log2().round() as i32;
+    2f32.powi(k.clamp(-126, 126))
+}
+
+/// `grid` with its lengths multiplied by `s` (a power of two: exact).
+fn scaled_grid(grid: Grid, s: f32) -> Grid {
+    Grid {
+        origin: grid.origin * s,
+        cube: grid.cube * s,
+        ..grid
+    }
 }
 
 impl IncrementalBuilder {
@@ -263,19 +305,22 @@ impl IncrementalBuilder {
 
     /// An empty builder on `grid` (from [`grid_for`] or [`Grid::new`]).
     pub fn new(grid: Grid) -> Self {
+        let scale = normalising_scale(grid.cube);
         IncrementalBuilder {
-            field: SignedDistanceField::new(grid),
+            field: SignedDistanceField::new(scaled_grid(grid, scale)),
             configs: Vec::new(),
             surface_cubes: 0,
             samples: 0,
             has_colors: None,
             signs: None,
+            grid,
+            scale,
         }
     }
 
     /// The lattice this builder works on.
     pub fn grid(&self) -> Grid {
-        self.field.grid
+        self.grid
     }
 
     /// Leaf cubes with a surface, `(key, configuration)` in key order.
@@ -306,6 +351,19 @@ impl IncrementalBuilder {
     /// value changed are recomputed. Cost: `O(samples)` stamping (64
     /// lattice vertices each) plus the recomputed cubes.
     pub fn add(&mut self, s: &PointCloud) -> AddReport {
+        if self.scale != 1.0 {
+            let scaled = PointCloud {
+                positions: s.positions.iter().map(|&p| p * self.scale).collect(),
+                normals: s.normals.clone(),
+                colors: s.colors.clone(),
+            };
+            return self.add_scaled(&scaled);
+        }
+        self.add_scaled(s)
+    }
+
+    /// [`IncrementalBuilder::add`] of samples already in the field's frame.
+    fn add_scaled(&mut self, s: &PointCloud) -> AddReport {
         let colors = s.colors.is_some();
         self.has_colors = Some(self.has_colors.unwrap_or(colors) && colors);
         self.samples += s.len() as u64;
@@ -422,6 +480,16 @@ impl IncrementalBuilder {
         model.prepare_extraction();
         model.has_colors = self.has_colors.unwrap_or(false);
         model.stats.input_samples = self.samples;
+        if self.scale != 1.0 {
+            // Back to object units, exactly (a power of two); a metric (an
+            // area) past f32's range saturates.
+            let back = 1.0 / self.scale;
+            model.grid = self.grid;
+            model.vertices.positions.iter_mut().for_each(|p| *p *= back);
+            for x in &mut model.metric {
+                *x = (*x * back * back).min(f32::MAX);
+            }
+        }
         Ok(model)
     }
 }
@@ -595,7 +663,7 @@ fn build_from_inputs(inputs: &[Input], opts: &Options) -> Result<McoModel> {
     let mut samples: Vec<PointCloud> = Vec::with_capacity(inputs.len());
     for &input in inputs {
         if let Input::Mesh(m) = input {
-            let normals = lodkit_mesh::normals::vertex_normals(m);
+            let normals = crate::normals_estimation::vertex_normals(m);
             samples.push(crate::normals_estimation::mesh_samples_with(m, &normals));
             mesh_normals.push(Some(normals));
         } else {
