@@ -669,7 +669,7 @@ impl McoModel {
     /// to the higher one), by binary search over the running maximum of the
     /// accumulation table (which is not monotone: an expansion can lower
     /// the count). `O(log n)`. The same choice as
-    /// [`crate::priority_numbering::lod_for_triangles`]'s linear scan.
+    /// `priority_numbering::lod_for_triangles`'s linear scan.
     pub fn lod_for_triangles(&self, triangles: usize) -> usize {
         if self.acc_max.len() != self.acc.len() || self.acc.is_empty() {
             return crate::priority_numbering::lod_for_triangles(&self.acc, triangles);

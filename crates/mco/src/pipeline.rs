@@ -291,7 +291,7 @@ fn scaled_grid(grid: Grid, s: f32) -> Grid {
 }
 
 impl IncrementalBuilder {
-    /// Turns on Hoppe's tangential rule ([`crate::signed_distance::TANGENTIAL_LIMIT`]
+    /// Turns on Hoppe's tangential rule (`TANGENTIAL_LIMIT`
     /// = 1.5 cubes): a lattice vertex counts only where its closest
     /// sample's tangent plane is a fair estimate, so scans and point
     /// clouds get no spurious sheets past their edges. For scan data; closed
