@@ -40,10 +40,11 @@
 //! eight octants of its cube one level down (possible only in a
 //! hand-made model) gets an infinite bound: its subtree is always
 //! searched. The result is therefore exactly the set a scan of every node
-//! finds (tested against that scan). The expanded set, being closed under
-//! parents, is then walked breadth-first from the root to emit the drawn
-//! children, so the whole cut costs `O(expanded nodes + nodes tested +
-//! output)`.
+//! finds (tested against that scan). The expanded nodes then draw their
+//! children that are not expanded, in node order (the list sorted, or for
+//! a large set the flags read in blocks), so the whole cut costs
+//! `O(expanded nodes · log + nodes tested + output)`, and gives the scan's
+//! triangles in the scan's order.
 //!
 //! [`ViewCut`] keeps the per-node flags and work lists between cuts (the
 //! flags set by one cut are cleared through its own list of expanded
@@ -381,25 +382,40 @@ impl ViewCut {
                 self.stack.extend_from_slice(model.group(k as usize));
             }
         }
-        // The emission: the expanded set is closed under parents, so a
-        // breadth-first walk from the root reaches all of it; each expanded
-        // node draws its children that are not expanded.
+        // The emission: each expanded node, in node order, draws its
+        // children that are not expanded. Node order keeps the reads of
+        // the node, triangle and patch arrays moving forward (children
+        // are numbered after their parent, in blocks), which a walk from
+        // the root does not in a file's LOD-ordered numbering; it also
+        // makes the order of the triangles a function of the set alone.
         let flags = &self.flags;
         let is = |q: u32| flags[q as usize];
         if !flags[0] {
             model.emit(0, out, &is);
             return self.expanded.len();
         }
-        self.queue.clear();
-        self.queue.push(0);
-        let mut at = 0;
-        while at < self.queue.len() {
-            let n = self.queue[at];
-            at += 1;
+        let order = &mut self.queue;
+        order.clear();
+        if self.expanded.len() * 32 > flags.len() {
+            // A large set: reading the flags in blocks costs less than
+            // sorting the list.
+            for (b, block) in flags.chunks(64).enumerate() {
+                if block.iter().any(|&f| f) {
+                    let base = (64 * b) as u32;
+                    order.extend(
+                        (0..block.len() as u32)
+                            .filter(|&j| block[j as usize])
+                            .map(|j| base + j),
+                    );
+                }
+            }
+        } else {
+            order.extend_from_slice(&self.expanded);
+            order.sort_unstable();
+        }
+        for &n in order.iter() {
             for c in model.children(n) {
-                if flags[c as usize] {
-                    self.queue.push(c);
-                } else {
+                if !flags[c as usize] {
                     model.emit(c, out, &is);
                 }
             }
@@ -464,8 +480,8 @@ impl McoModel {
     ///   balance dependencies and groups that must expand together, so the
     ///   crack patches apply unchanged); each part of the surface is drawn
     ///   once, at one level; every index is below `positions().len()`;
-    ///   deterministic: the triangles are those of the drawn nodes in
-    ///   breadth-first order from the root. Nothing in view (a camera
+    ///   deterministic: the triangles are those of the drawn nodes, in
+    ///   node order. Nothing in view (a camera
     ///   looking away, a NaN position) leaves the model at its coarsest:
     ///   the root cube's triangles.
     /// - Cost: proportional to the cut, not the model (see [`ViewCut`]),

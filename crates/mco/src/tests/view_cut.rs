@@ -23,12 +23,6 @@ fn model(mesh: &lodkit_mesh::TriMesh, resolution: u32) -> McoModel {
     .unwrap()
 }
 
-fn sorted(v: &[u32]) -> Vec<[u32; 3]> {
-    let mut t: Vec<[u32; 3]> = v.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
-    t.sort_unstable();
-    t
-}
-
 /// A camera path around the model's root cube: an orbit that zooms from
 /// far outside to inside the cube, glances past it, looks away, and
 /// changes the tolerance and viewport on the way.
@@ -59,7 +53,7 @@ fn camera_path(m: &McoModel) -> Vec<(Camera, f32)> {
 }
 
 /// `state` (kept across the path) against a fresh cut and the scan.
-fn assert_same_cuts(name: &str, m: &McoModel, state: &mut ViewCut, exact_order: bool) {
+fn assert_same_cuts(name: &str, m: &McoModel, state: &mut ViewCut) {
     let mut fresh = Vec::new();
     let mut reference = Vec::new();
     let mut sizes = Vec::new();
@@ -76,11 +70,7 @@ fn assert_same_cuts(name: &str, m: &McoModel, state: &mut ViewCut, exact_order: 
             "{name}, step {step}: expanded nodes"
         );
         m.extract_expanded(&flags, &mut reference);
-        if exact_order {
-            assert_eq!(kept, reference, "{name}, step {step}: vs the scan");
-        } else {
-            assert_eq!(sorted(&kept), sorted(&reference), "{name}, step {step}");
-        }
+        assert_eq!(kept, reference, "{name}, step {step}: vs the scan");
         sizes.push(kept.len() / 3);
     }
     // The path is not trivial: it covers coarse and fine cuts.
@@ -92,15 +82,14 @@ fn assert_same_cuts(name: &str, m: &McoModel, state: &mut ViewCut, exact_order: 
 fn a_kept_view_cut_equals_a_fresh_cut_and_the_scan_of_every_node() {
     let mut state = ViewCut::new();
     let sphere = model(&shapes::icosphere(4), 40);
-    assert_same_cuts("sphere", &sphere, &mut state, true);
+    assert_same_cuts("sphere", &sphere, &mut state);
     let blob = model(&shapes::blob(20_000), 48);
-    assert_same_cuts("blob", &blob, &mut state, true);
+    assert_same_cuts("blob", &blob, &mut state);
     // The same state back on the first model, then on a loaded model (its
-    // nodes renumbered in LOD order, so the walk's order differs from the
-    // scan's).
-    assert_same_cuts("sphere again", &sphere, &mut state, true);
+    // nodes renumbered in LOD order).
+    assert_same_cuts("sphere again", &sphere, &mut state);
     let loaded = McoModel::from_bytes(&blob.to_bytes()).unwrap();
-    assert_same_cuts("loaded blob", &loaded, &mut state, false);
+    assert_same_cuts("loaded blob", &loaded, &mut state);
     // A partial model (a prefix of the file).
     let bytes = blob.to_bytes();
     let table = McoModel::chunk_table(&bytes).unwrap();
