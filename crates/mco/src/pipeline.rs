@@ -606,7 +606,7 @@ fn estimate_inputs_bytes(inputs: &[Input], samples: &[PointCloud], grid: &Grid) 
 fn check_estimate(bytes: u64, grid: &Grid) -> Result<()> {
     if bytes > MAX_BUILD_BYTES {
         return Err(Error::Input(format!(
-            "resolution {}: the build would need about {:.1} GB of memory, more than its {:.0} GB limit; use a lower resolution",
+            "resolution {}: the build would need about {:.1} GB of memory, more than its {:.1} GB limit; use a lower resolution",
             grid.resolution,
             bytes as f64 / 1e9,
             MAX_BUILD_BYTES as f64 / 1e9
