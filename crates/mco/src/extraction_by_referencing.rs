@@ -62,8 +62,8 @@
 //!
 //! The traversal ([`McoModel::extract_lod_traversal`]) stays: it is the
 //! thesis's algorithm, the reference the tables are tested against, and
-//! the view-dependent cut ([`McoModel::extract_expanded`]) walks nodes the
-//! same way.
+//! the view-dependent cut (`crate::view_dependent_cut`) draws nodes the
+//! same way ([`McoModel::emit`]).
 //!
 //! By triangle count, the accumulation table gives the LOD number first
 //! (a binary search over its running maximum, the choice of
@@ -485,7 +485,7 @@ impl McoModel {
     /// Appends node `n`'s triangles to `out`, crack-patched against every
     /// coarse neighbour that `expanded` says is drawn unexpanded.
     #[inline(always)]
-    fn emit<F: Fn(u32) -> bool>(&self, n: u32, out: &mut Vec<u32>, expanded: &F) {
+    pub(crate) fn emit<F: Fn(u32) -> bool>(&self, n: u32, out: &mut Vec<u32>, expanded: &F) {
         let nd = &self.nodes[n as usize];
         let start = out.len();
         out.extend_from_slice(&self.tris[nd.tri_start as usize..][..3 * nd.tri_count as usize]);
@@ -669,7 +669,7 @@ impl McoModel {
     /// to the higher one), by binary search over the running maximum of the
     /// accumulation table (which is not monotone: an expansion can lower
     /// the count). `O(log n)`. The same choice as
-    /// [`crate::priority_numbering::lod_for_triangles`]'s linear scan.
+    /// `priority_numbering::lod_for_triangles`'s linear scan.
     pub fn lod_for_triangles(&self, triangles: usize) -> usize {
         if self.acc_max.len() != self.acc.len() || self.acc.is_empty() {
             return crate::priority_numbering::lod_for_triangles(&self.acc, triangles);
@@ -717,7 +717,9 @@ impl McoModel {
 
     /// The index buffer of an arbitrary balanced cut given by per-node
     /// `expanded` flags (parents of expanded nodes expanded, balance kept;
-    /// see [`crate::view_dependent_cut`]).
+    /// see [`crate::view_dependent_cut`]), by a scan of every node: the
+    /// reference `ViewCut`'s walk from the root is tested against.
+    #[cfg(test)]
     pub(crate) fn extract_expanded(&self, expanded: &[bool], out: &mut Vec<u32>) {
         out.clear();
         if self.nodes.is_empty() {

@@ -21,7 +21,10 @@
 //! - by triangle budget: [`McoModel::extract_triangles`];
 //! - by LOD number: [`McoModel::extract_lod`] (`0` = the root cube,
 //!   [`McoModel::max_lod`] = every leaf cube);
-//! - for a camera, within a pixel error: [`McoModel::extract_view`].
+//! - for a camera, within a pixel error: [`McoModel::extract_view`], or
+//!   frame after frame through a [`ViewCut`] (the same cut, its scratch
+//!   space kept; each cut costs in proportion to its size, not the
+//!   model's).
 //!
 //! A cut is an index buffer (3 `u32` per triangle, counter-clockwise seen
 //! from outside) into the model's one vertex buffer ([`McoModel::positions`],
@@ -127,11 +130,12 @@ pub use model::{LevelInfo, McoModel, ModelInfo};
 pub use model_file::FORMAT_VERSION;
 pub use model_file_v2::{ChunkInfo, Header as McoHeader, McoStream, PartialModel};
 pub use pipeline::{
-    AddReport, IncrementalBuilder, Options, build_from_conf, build_from_mesh, build_from_models,
-    build_from_points, build_from_range_images, densify_meshes, grid_for, samples_of,
+    AddReport, IncrementalBuilder, MAX_BUILD_BYTES, Options, build_from_conf, build_from_mesh,
+    build_from_models, build_from_points, build_from_range_images, densify_meshes,
+    estimate_build_bytes, grid_for, samples_of,
 };
 pub use scanner::{ScanOptions, scan_mesh, write_scans};
-pub use view_dependent_cut::Camera;
+pub use view_dependent_cut::{Camera, ViewCut};
 
 /// Errors of the continuous-LOD crate; `Display` is one line.
 #[derive(Debug, thiserror::Error)]

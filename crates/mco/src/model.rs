@@ -96,6 +96,9 @@ pub struct McoModel {
     /// Running maximum of `acc` (derived): the triangle-count lookup is a
     /// binary search over it.
     pub(crate) acc_max: Vec<u32>,
+    /// Per node, the largest error in its subtree (derived, built on the
+    /// first view-dependent cut; see [`crate::view_dependent_cut`]).
+    pub(crate) view_bounds: crate::view_dependent_cut::LazyViewBounds,
 }
 
 /// The traversal's arrays once built. Derived from the other fields, so

@@ -6,10 +6,15 @@
 //!
 //! Reading is defensive: the file size must equal the size the header's
 //! counts imply (checked in 64-bit arithmetic before anything is
-//! allocated), the CRC-32 must match, and every index the extractor will
-//! follow is range-checked, so a loaded model can never make extraction
-//! panic or read out of bounds. Each array is one allocation — there is no
-//! per-node allocation. Any problem is one error line naming the file.
+//! allocated), the CRC-32 must match, every index the extractor will
+//! follow is range-checked, and every table is checked against the others
+//! ([`validate`], for both versions): the nodes form one octree, the LOD
+//! array, priority numbers and balance dependencies agree, and the
+//! accumulation table is the triangle count the nodes give at every LOD
+//! number. So a loaded model can never make extraction panic, read out of
+//! bounds, or size an allocation by a table that disagrees with the data.
+//! Each array is one allocation — there is no per-node allocation. Any
+//! problem is one error line naming the file.
 
 use std::path::Path;
 
@@ -335,7 +340,9 @@ pub(crate) fn decode(bytes: &[u8]) -> std::result::Result<McoModel, String> {
     Ok(m)
 }
 
-/// Every index extraction follows must be in range.
+/// Every index extraction follows must be in range, and the tables must
+/// agree with each other (the tree, the LOD tables, finite positions,
+/// normals and metrics). `O(size)`.
 pub(crate) fn validate(m: &McoModel) -> std::result::Result<(), String> {
     let (v, n) = (m.vertices.len() as u64, m.nodes.len() as u64);
     if n == 0 {
@@ -406,8 +413,127 @@ pub(crate) fn validate(m: &McoModel) -> std::result::Result<(), String> {
     {
         return Err("a priority number is out of range".into());
     }
-    if m.vertices.normals.len() != m.vertices.positions.len() {
+    if m.vertices.normals.len() != m.vertices.positions.len()
+        || m.vertices.colors.len() != m.vertices.positions.len()
+    {
         return Err("vertex arrays differ in length".into());
+    }
+    if let Some(i) = (m.vertices.positions.iter().zip(&m.vertices.normals))
+        .position(|(p, n)| !(p.is_finite() && n.is_finite()))
+    {
+        return Err(format!("vertex {i}: position or normal is not finite"));
+    }
+    if let Some(i) = m.metric.iter().position(|x| !x.is_finite()) {
+        return Err(format!("node {i}: LOD metric is not finite"));
+    }
+    validate_tree(m)?;
+    validate_lod_tables(m)
+}
+
+/// The nodes form one tree: each node's children follow it, name it as
+/// their parent, and are octants of its cube one level down; every node
+/// but the root is listed as a child exactly once. (Run after
+/// [`validate`]'s range checks.)
+fn validate_tree(m: &McoModel) -> std::result::Result<(), String> {
+    let mut listed = 0u64;
+    for (i, nd) in m.nodes.iter().enumerate() {
+        for c in m.children(i as u32) {
+            let cn = &m.nodes[c as usize];
+            if cn.parent != i as u32 {
+                return Err(format!(
+                    "node {c}: its parent is {}, but node {i} lists it as a child",
+                    cn.parent
+                ));
+            }
+            if cn.level as u32 + 1 != nd.level as u32
+                || (0..3).any(|a| cn.coord[a] >> 1 != nd.coord[a])
+            {
+                return Err(format!(
+                    "node {c}: not an octant of its parent {i}'s cube one level down"
+                ));
+            }
+        }
+        listed += nd.child_count as u64;
+    }
+    if listed != m.nodes.len() as u64 - 1 {
+        return Err(format!(
+            "the nodes are not one tree: {listed} are children, {} expected",
+            m.nodes.len() - 1
+        ));
+    }
+    Ok(())
+}
+
+/// The LOD array, priority numbers, balance dependencies and the
+/// accumulation table agree with each other and with the tree: LOD number
+/// `k` expands `lod[groups[k-1]..groups[k]]` (at least one node), those
+/// nodes and no others have priority number `k`, each has children, was
+/// drawn before (its parent expanded at an earlier LOD number) and has its
+/// balance dependencies expanded by then; and `acc[k]` is the triangle
+/// count those expansions give, recomputed from the nodes' own counts.
+/// (Run after [`validate`]'s range checks and [`validate_tree`].)
+fn validate_lod_tables(m: &McoModel) -> std::result::Result<(), String> {
+    let last = *m.groups.last().expect("non-empty") as usize;
+    if last != m.lod.len() {
+        return Err(format!(
+            "the LOD groups cover {last} of the LOD array's {} entries",
+            m.lod.len()
+        ));
+    }
+    let numbered = m.prio.iter().filter(|&&k| k != u32::MAX).count();
+    if numbered != m.lod.len() {
+        return Err(format!(
+            "{numbered} nodes have a priority number, the LOD array has {} entries",
+            m.lod.len()
+        ));
+    }
+    let mut tris = m.nodes[0].tri_count as u64;
+    if m.acc[0] as u64 != tris {
+        return Err(format!(
+            "the triangle table gives {} triangles at LOD 0, the root has {tris}",
+            m.acc[0]
+        ));
+    }
+    for k in 1..m.groups.len() {
+        if m.groups[k] == m.groups[k - 1] {
+            return Err(format!("LOD {k} expands no node"));
+        }
+        for &n in m.group(k) {
+            let nd = &m.nodes[n as usize];
+            if m.prio[n as usize] != k as u32 {
+                return Err(format!(
+                    "LOD {k}: node {n} has priority number {}",
+                    m.prio[n as usize]
+                ));
+            }
+            if nd.child_count == 0 {
+                return Err(format!("LOD {k}: node {n} has no children to expand"));
+            }
+            if nd.parent != u32::MAX && m.prio[nd.parent as usize] >= k as u32 {
+                return Err(format!(
+                    "LOD {k}: node {n} expands before its parent {}",
+                    nd.parent
+                ));
+            }
+            let deps = &m.deps[nd.deps_start as usize..][..nd.deps_count as usize];
+            if let Some(d) = deps.iter().find(|&&d| m.prio[d as usize] > k as u32) {
+                return Err(format!(
+                    "LOD {k}: node {n} expands before its balance dependency {d}"
+                ));
+            }
+            // `n` is drawn until now (parent expanded earlier, itself not).
+            tris = tris.saturating_sub(nd.tri_count as u64);
+            tris += m
+                .children(n)
+                .map(|c| m.nodes[c as usize].tri_count as u64)
+                .sum::<u64>();
+        }
+        if m.acc[k] as u64 != tris {
+            return Err(format!(
+                "the triangle table gives {} triangles at LOD {k}, its nodes draw {tris}",
+                m.acc[k]
+            ));
+        }
     }
     Ok(())
 }
@@ -428,7 +554,9 @@ impl McoModel {
     /// Reads versions 1 and 2. Errors ([`Error::Format`], one line):
     /// wrong signature or version,
     /// a size that differs from what the header's counts imply, a
-    /// checksum mismatch, or any index out of range. Every check runs
+    /// checksum mismatch, any index out of range, or tables that disagree
+    /// (the octree, the LOD array and priority numbers, the per-LOD
+    /// triangle counts against the nodes' triangles). Every check runs
     /// before the model is used, so a model that loads can never make a
     /// cut panic or read out of bounds; untrusted bytes are safe. Memory
     /// is allocated only after the size check: at most a small multiple

@@ -87,7 +87,28 @@ pub fn range_image_samples(r: &RangeImage) -> PointCloud {
 /// normals. Vertices whose normal is zero (only degenerate faces) are
 /// dropped.
 pub fn mesh_samples(m: &TriMesh) -> PointCloud {
-    mesh_samples_with(m, &lodkit_mesh::normals::vertex_normals(m))
+    mesh_samples_with(m, &vertex_normals(m))
+}
+
+/// The mesh's area-weighted vertex normals, computed at any scale: a mesh
+/// whose extent is far from 1 (cross products overflow `f32` around 1e19,
+/// go subnormal around 1e-19) has them computed on a copy scaled by a
+/// power of two, which gives the same directions; other meshes as
+/// `lodkit_mesh::normals::vertex_normals` does.
+pub(crate) fn vertex_normals(m: &TriMesh) -> Vec<Vec3> {
+    let extent = m.bbox().size().max_element();
+    let s = crate::pipeline::normalising_scale(extent / 256.0);
+    if s == 1.0 {
+        return lodkit_mesh::normals::vertex_normals(m);
+    }
+    let scaled = TriMesh {
+        positions: m.positions.iter().map(|&p| p * s).collect(),
+        normals: None,
+        colors: None,
+        uvs: None,
+        faces: m.faces.clone(),
+    };
+    lodkit_mesh::normals::vertex_normals(&scaled)
 }
 
 /// [`mesh_samples`] with the mesh's vertex normals already computed.
@@ -120,14 +141,21 @@ pub fn densify_mesh_samples_of(m: &TriMesh, cube: f32, s: &mut PointCloud) {
     if long_edged_faces(m, cube).next().is_none() {
         return;
     }
-    densify_mesh_samples(m, &lodkit_mesh::normals::vertex_normals(m), cube, s);
+    densify_mesh_samples(m, &vertex_normals(m), cube, s);
 }
 
 /// Faces of `m` (valid indices) with an edge longer than `cube`, with their
-/// corner positions and that edge length.
-fn long_edged_faces(m: &TriMesh, cube: f32) -> impl Iterator<Item = (&[u32; 3], [Vec3; 3], f32)> {
+/// corner positions and that edge length; a face on the same three
+/// vertices as an earlier one (in any order) is left out: it would add the
+/// same samples again, so a mesh of one triangle repeated a million times
+/// is densified once, not a million times.
+pub(crate) fn long_edged_faces(
+    m: &TriMesh,
+    cube: f32,
+) -> impl Iterator<Item = (&[u32; 3], [Vec3; 3], f32)> {
     let nv = m.positions.len();
     let ok = cube > 0.0 && cube.is_finite();
+    let mut seen: rustc_hash::FxHashSet<[u32; 3]> = Default::default();
     m.faces.iter().filter_map(move |f| {
         if !ok || f.iter().any(|&i| i as usize >= nv) {
             return None;
@@ -135,13 +163,47 @@ fn long_edged_faces(m: &TriMesh, cube: f32) -> impl Iterator<Item = (&[u32; 3], 
         let [a, b, c] = f.map(|i| m.positions[i as usize]);
         // One square root: it is monotone, so the longest edge is the root
         // of the largest squared length (NaNs are skipped by `max` alike).
-        let longest = a
+        let mut longest = a
             .distance_squared(b)
             .max(b.distance_squared(c))
             .max(c.distance_squared(a))
             .sqrt();
-        (longest > cube && longest.is_finite()).then_some((f, [a, b, c], longest))
+        if longest.is_infinite() {
+            // Squared lengths past f32's range (coordinates around 1e19):
+            // the length itself may still fit.
+            let [a, b, c] = [a, b, c].map(|p| p.as_dvec3());
+            longest = (a.distance(b).max(b.distance(c)).max(c.distance(a))) as f32;
+        }
+        if !(longest > cube && longest.is_finite()) {
+            return None;
+        }
+        let mut key = *f;
+        key.sort_unstable();
+        seen.insert(key).then_some((f, [a, b, c], longest))
     })
+}
+
+/// Subdivisions per side of a long-edged face's sample grid: half-cube
+/// spacing, at most [`MAX_SUBDIVISIONS`] (bounded work per face).
+fn subdivisions(longest: f32, cube: f32) -> usize {
+    ((2.0 * longest / cube).ceil() as usize).min(MAX_SUBDIVISIONS)
+}
+
+/// Most subdivisions per side of one face's densification grid.
+const MAX_SUBDIVISIONS: usize = 64;
+
+/// At most how many samples [`densify_mesh_samples`] adds to `m`'s for cube
+/// `cube` (exact but for the samples whose interpolated normal is zero),
+/// without making them: the figure the build's memory estimate uses.
+/// `O(faces)`.
+pub(crate) fn densify_count(m: &TriMesh, cube: f32) -> u64 {
+    long_edged_faces(m, cube)
+        .map(|(_, _, longest)| {
+            let n = subdivisions(longest, cube) as u64;
+            // The grid's points less its three corners.
+            (n + 1) * (n + 2) / 2 - 3
+        })
+        .sum()
 }
 
 /// Makes mesh samples `s` dense enough for a lattice of cube `cube`: to
@@ -155,8 +217,7 @@ pub(crate) fn densify_mesh_samples(m: &TriMesh, normals: &[Vec3], cube: f32, s: 
     let out_normals = s.normals.get_or_insert_default();
     for (f, [a, b, c], longest) in long_edged_faces(m, cube) {
         let [na, nb, nc] = f.map(|i| normals[i as usize]);
-        // Half-cube spacing, at most 64 subdivisions per side (bounded work).
-        let n = ((2.0 * longest / cube).ceil() as usize).min(64);
+        let n = subdivisions(longest, cube);
         let color = m.colors.as_ref().map(|cs| cs[f[0] as usize]);
         for i in 0..=n {
             for j in 0..=n - i {

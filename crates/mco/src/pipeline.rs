@@ -142,17 +142,21 @@ fn spacing_of(input: Input) -> Option<f32> {
         Input::Mesh(m) => {
             // Squared lengths: the median's square root is the median
             // length, with one square root instead of one per edge.
+            // Far from unit size, the lengths are taken in a frame scaled
+            // by a power of two (exact), so that their squares neither
+            // overflow nor go subnormal.
             let nv = m.positions.len();
+            let s = normalising_scale(m.bbox().size().max_element() / 256.0);
             let mut sq = Vec::with_capacity(3 * m.faces.len());
             for f in &m.faces {
                 if f.iter().all(|&i| (i as usize) < nv) {
-                    let p = f.map(|i| m.positions[i as usize]);
+                    let p = f.map(|i| m.positions[i as usize] * s);
                     for k in 0..3 {
                         sq.push(p[k].distance_squared(p[(k + 1) % 3]));
                     }
                 }
             }
-            median(sq).map(f32::sqrt)
+            median(sq).map(|x| x.sqrt() / s)
         }
         Input::Range(r) => median(range_spacings(r)),
         Input::Points(p) => {
@@ -246,10 +250,48 @@ pub struct IncrementalBuilder {
     has_colors: Option<bool>,
     /// The band's sides when the last add computed them (a first add).
     signs: Option<BandSigns>,
+    /// The lattice as given; `field` works on it scaled by `scale`.
+    grid: Grid,
+    /// The power of two the samples are multiplied by (1 for lattices of
+    /// ordinary size; see [`normalising_scale`]).
+    scale: f32,
+}
+
+/// Leaf cubes of at least this and at most [`MAX_PLAIN_CUBE`] (object
+/// units) are built as they are; outside, the build runs in a frame
+/// scaled by a power of two (see [`normalising_scale`]).
+const MIN_PLAIN_CUBE: f32 = 1.0 / (1u32 << 24) as f32;
+/// See [`MIN_PLAIN_CUBE`].
+const MAX_PLAIN_CUBE: f32 = (1u32 << 16) as f32;
+
+/// The power of two `2^k` that brings a leaf cube of `cube` object units to
+/// about `2^-8` (a unit box at resolution 256), or 1 when `cube` lies in
+/// `MIN_PLAIN_CUBE..=MAX_PLAIN_CUBE`. The build's squared distances, areas
+/// and tolerances overflow `f32` for cubes around 1e18 and lose their
+/// meaning (subnormal) around 1e-12; scaled, every input builds in the same
+/// frame and gives the same model at any scale within float precision.
+/// Multiplying by a power of two is exact (no rounding), and the model is
+/// mapped back exactly, so lattices of ordinary size build bit for bit as
+/// they always did.
+pub(crate) fn normalising_scale(cube: f32) -> f32 {
+    if !(cube.is_finite() && cube > 0.0) || (MIN_PLAIN_CUBE..=MAX_PLAIN_CUBE).contains(&cube) {
+        return 1.0;
+    }
+    let k = -8 - cube.log2().round() as i32;
+    2f32.powi(k.clamp(-126, 126))
+}
+
+/// `grid` with its lengths multiplied by `s` (a power of two: exact).
+fn scaled_grid(grid: Grid, s: f32) -> Grid {
+    Grid {
+        origin: grid.origin * s,
+        cube: grid.cube * s,
+        ..grid
+    }
 }
 
 impl IncrementalBuilder {
-    /// Turns on Hoppe's tangential rule ([`crate::signed_distance::TANGENTIAL_LIMIT`]
+    /// Turns on Hoppe's tangential rule (`TANGENTIAL_LIMIT`
     /// = 1.5 cubes): a lattice vertex counts only where its closest
     /// sample's tangent plane is a fair estimate, so scans and point
     /// clouds get no spurious sheets past their edges. For scan data; closed
@@ -263,19 +305,22 @@ impl IncrementalBuilder {
 
     /// An empty builder on `grid` (from [`grid_for`] or [`Grid::new`]).
     pub fn new(grid: Grid) -> Self {
+        let scale = normalising_scale(grid.cube);
         IncrementalBuilder {
-            field: SignedDistanceField::new(grid),
+            field: SignedDistanceField::new(scaled_grid(grid, scale)),
             configs: Vec::new(),
             surface_cubes: 0,
             samples: 0,
             has_colors: None,
             signs: None,
+            grid,
+            scale,
         }
     }
 
     /// The lattice this builder works on.
     pub fn grid(&self) -> Grid {
-        self.field.grid
+        self.grid
     }
 
     /// Leaf cubes with a surface, `(key, configuration)` in key order.
@@ -306,6 +351,19 @@ impl IncrementalBuilder {
     /// value changed are recomputed. Cost: `O(samples)` stamping (64
     /// lattice vertices each) plus the recomputed cubes.
     pub fn add(&mut self, s: &PointCloud) -> AddReport {
+        if self.scale != 1.0 {
+            let scaled = PointCloud {
+                positions: s.positions.iter().map(|&p| p * self.scale).collect(),
+                normals: s.normals.clone(),
+                colors: s.colors.clone(),
+            };
+            return self.add_scaled(&scaled);
+        }
+        self.add_scaled(s)
+    }
+
+    /// [`IncrementalBuilder::add`] of samples already in the field's frame.
+    fn add_scaled(&mut self, s: &PointCloud) -> AddReport {
         let colors = s.colors.is_some();
         self.has_colors = Some(self.has_colors.unwrap_or(colors) && colors);
         self.samples += s.len() as u64;
@@ -422,6 +480,16 @@ impl IncrementalBuilder {
         model.prepare_extraction();
         model.has_colors = self.has_colors.unwrap_or(false);
         model.stats.input_samples = self.samples;
+        if self.scale != 1.0 {
+            // Back to object units, exactly (a power of two); a metric (an
+            // area) past f32's range saturates.
+            let back = 1.0 / self.scale;
+            model.grid = self.grid;
+            model.vertices.positions.iter_mut().for_each(|p| *p *= back);
+            for x in &mut model.metric {
+                *x = (*x * back * back).min(f32::MAX);
+            }
+        }
         Ok(model)
     }
 }
@@ -429,14 +497,24 @@ impl IncrementalBuilder {
 /// The lattice for several inputs: the union box of their `samples`
 /// (`samples[i]` = [`samples_of`]`(&models[i])`) and the resolution of
 /// `opts` (default: from the inputs' median sample spacing). Errors: no
-/// finite sample, a box without extent, or a resolution outside
-/// `2..=`[`crate::MAX_RESOLUTION`].
+/// finite sample, a box without extent, a resolution outside
+/// `2..=`[`crate::MAX_RESOLUTION`], or a lattice whose build would need
+/// more than [`MAX_BUILD_BYTES`] ([`estimate_build_bytes`]; checked here,
+/// before anything is sized by the lattice, so a caller that builds step
+/// by step is refused as early as the one-call builds).
 pub fn grid_for(models: &[Model], samples: &[PointCloud], opts: &Options) -> Result<Grid> {
     let inputs: Vec<Input> = models.iter().map(Input::from).collect();
     grid_for_inputs(&inputs, samples, opts)
 }
 
 fn grid_for_inputs(inputs: &[Input], samples: &[PointCloud], opts: &Options) -> Result<Grid> {
+    let grid = lattice_of(inputs, samples, opts)?;
+    check_estimate(estimate_inputs_bytes(inputs, samples, &grid), &grid)?;
+    Ok(grid)
+}
+
+/// [`grid_for_inputs`] without the memory check.
+fn lattice_of(inputs: &[Input], samples: &[PointCloud], opts: &Options) -> Result<Grid> {
     let bbox = samples.iter().fold(Aabb::EMPTY, |b, s| b.union(&s.bbox()));
     let resolution = match opts.resolution {
         Some(r) => r,
@@ -446,6 +524,95 @@ fn grid_for_inputs(inputs: &[Input], samples: &[PointCloud], opts: &Options) -> 
         }
     };
     Grid::new(bbox, resolution)
+}
+
+/// Bytes a build holds per input sample at its peak (the sample itself,
+/// its place in the signed-distance stamping). With the next constant, an
+/// upper figure: the estimate is 1.0–1.2 × the peak resident size measured
+/// on spheres (resolution 200–800) and blobs (`examples/build_memory.rs`).
+const BYTES_PER_SAMPLE: u64 = 64;
+/// Bytes a build holds per leaf cube of surface at its peak (band vertices,
+/// leaf configurations, octree nodes, triangles, crack patches, extraction
+/// tables), an upper figure measured likewise.
+const BYTES_PER_SURFACE_CUBE: u64 = 600;
+/// Surface cubes counted per sample of an input without faces (a sample
+/// touches the cubes around it; more samples than that per cube only add
+/// to cubes already counted).
+const CUBES_PER_POINT_SAMPLE: u64 = 8;
+
+/// Builds whose [`estimate_build_bytes`] is above this are refused before
+/// anything sized by the lattice is allocated (8 GiB: a sphere at
+/// resolution 1,400, far finer than any input's sampling warrants; the
+/// default resolution of the inputs lodkit ships needs well under 1 GiB).
+pub const MAX_BUILD_BYTES: u64 = 8 << 30;
+
+/// An upper estimate of the memory (bytes) a build of `models` with `opts`
+/// needs at its peak, from the counts that drive it, computed without
+/// making any of them: the input samples (vertices, range pixels, points),
+/// the samples densification will add on long mesh edges (counted, each
+/// repeated face once), and the leaf cubes the surface crosses (a mesh's
+/// area in cubes; 8 per sample for inputs without faces). The build
+/// refuses to start above [`MAX_BUILD_BYTES`]; a caller can compare it
+/// with its own budget first. Errors as [`grid_for`]. Cost: `O(input)`
+/// (the samples' positions and normals are computed, as the build does).
+pub fn estimate_build_bytes(models: &[Model], opts: &Options) -> Result<u64> {
+    let inputs: Vec<Input> = models.iter().map(Input::from).collect();
+    let samples: Vec<PointCloud> = inputs
+        .iter()
+        .map(|&i| input_samples(i))
+        .collect::<Result<_>>()?;
+    let grid = lattice_of(&inputs, &samples, opts)?;
+    Ok(estimate_inputs_bytes(&inputs, &samples, &grid))
+}
+
+fn estimate_inputs_bytes(inputs: &[Input], samples: &[PointCloud], grid: &Grid) -> u64 {
+    let cube = grid.cube as f64;
+    let mut n_samples = 0u64;
+    let mut cubes = 0f64;
+    for (input, s) in inputs.iter().zip(samples) {
+        n_samples += s.positions.len() as u64;
+        if let Input::Mesh(m) = input {
+            n_samples += crate::normals_estimation::densify_count(m, grid.cube);
+            let mut seen: rustc_hash::FxHashSet<[u32; 3]> = Default::default();
+            let area: f64 = m
+                .faces
+                .iter()
+                .filter(|f| f.iter().all(|&i| (i as usize) < m.positions.len()))
+                .filter(|f| {
+                    let mut k = **f;
+                    k.sort_unstable();
+                    seen.insert(k)
+                })
+                .map(|f| {
+                    let [a, b, c] = f.map(|i| m.positions[i as usize].as_dvec3());
+                    0.5 * (b - a).cross(c - a).length()
+                })
+                .filter(|x| x.is_finite())
+                .sum();
+            // A surface crosses at most a few cubes per cube of its area;
+            // 2 covers the slanted and curved parts.
+            cubes += 2.0 * area / (cube * cube) + s.positions.len() as f64;
+        } else {
+            cubes += (CUBES_PER_POINT_SAMPLE * s.positions.len() as u64) as f64;
+        }
+    }
+    let cubes = cubes.min(u64::MAX as f64 / 2.0) as u64;
+    n_samples
+        .saturating_mul(BYTES_PER_SAMPLE)
+        .saturating_add(cubes.saturating_mul(BYTES_PER_SURFACE_CUBE))
+}
+
+/// The refusal of a build estimated above [`MAX_BUILD_BYTES`].
+fn check_estimate(bytes: u64, grid: &Grid) -> Result<()> {
+    if bytes > MAX_BUILD_BYTES {
+        return Err(Error::Input(format!(
+            "resolution {}: the build would need about {:.1} GB of memory, more than its {:.1} GB limit; use a lower resolution",
+            grid.resolution,
+            bytes as f64 / 1e9,
+            MAX_BUILD_BYTES as f64 / 1e9
+        )));
+    }
+    Ok(())
 }
 
 /// Mesh samples made dense enough for `grid`: a mesh's triangles with an
@@ -496,7 +663,7 @@ fn build_from_inputs(inputs: &[Input], opts: &Options) -> Result<McoModel> {
     let mut samples: Vec<PointCloud> = Vec::with_capacity(inputs.len());
     for &input in inputs {
         if let Input::Mesh(m) = input {
-            let normals = lodkit_mesh::normals::vertex_normals(m);
+            let normals = crate::normals_estimation::vertex_normals(m);
             samples.push(crate::normals_estimation::mesh_samples_with(m, &normals));
             mesh_normals.push(Some(normals));
         } else {

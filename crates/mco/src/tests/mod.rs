@@ -8,3 +8,5 @@ mod support;
 
 mod extraction;
 mod pipeline;
+mod validation;
+mod view_cut;

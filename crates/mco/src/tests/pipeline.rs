@@ -198,3 +198,80 @@ fn the_extraction_stream_draws_what_following_the_nodes_draws() {
         assert_eq!(sorted(&a), sorted(&b), "lod {k}");
     }
 }
+
+#[test]
+fn a_build_estimated_above_the_memory_limit_is_refused_before_it_starts() {
+    let sphere = shapes::icosphere(3);
+    let opts = Options {
+        resolution: Some(crate::MAX_RESOLUTION),
+    };
+    let est = crate::estimate_build_bytes(&[Model::Mesh(sphere.clone())], &opts).unwrap();
+    assert!(est > crate::MAX_BUILD_BYTES, "{est}");
+    let e = build_from_mesh(&sphere, &opts).unwrap_err().to_string();
+    assert!(
+        e.contains("resolution 4096") && e.contains("GB") && !e.contains('\n'),
+        "{e}"
+    );
+    // The default resolution is far below the limit.
+    let est = crate::estimate_build_bytes(&[Model::Mesh(sphere)], &Options::default()).unwrap();
+    assert!(est < 1 << 30, "{est}");
+}
+
+#[test]
+fn a_triangle_repeated_many_times_is_densified_once() {
+    let one = TriMesh {
+        positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+        faces: vec![[0, 1, 2]],
+        ..Default::default()
+    };
+    let mut many = one.clone();
+    many.faces = (0..200_000)
+        .map(|i| if i % 2 == 0 { [0, 1, 2] } else { [2, 0, 1] })
+        .collect();
+    let cube = 0.01;
+    let count = crate::normals_estimation::densify_count(&one, cube);
+    assert!(count > 0);
+    assert_eq!(crate::normals_estimation::densify_count(&many, cube), count);
+    let opts = Options {
+        resolution: Some(64),
+    };
+    let a = crate::estimate_build_bytes(&[Model::Mesh(one)], &opts).unwrap();
+    let b = crate::estimate_build_bytes(&[Model::Mesh(many)], &opts).unwrap();
+    assert_eq!(a, b);
+}
+
+/// The build runs in a normalised frame: a mesh scaled by 1e-10, 1 or
+/// 1e20 gives the same model, its positions scaled alike (within float
+/// precision), at the default and at a given resolution.
+#[test]
+fn the_same_mesh_at_any_scale_gives_the_same_model() {
+    let sphere = shapes::icosphere(3);
+    for opts in [
+        Options::default(),
+        Options {
+            resolution: Some(20),
+        },
+    ] {
+        let reference = build_from_mesh(&sphere, &opts).unwrap();
+        for scale in [1e-10f32, 1e20] {
+            let mut m = sphere.clone();
+            m.positions.iter_mut().for_each(|p| *p *= scale);
+            let scaled = build_from_mesh(&m, &opts).unwrap();
+            assert_eq!(scaled.grid.resolution, reference.grid.resolution);
+            assert_eq!(scaled.nodes.len(), reference.nodes.len(), "scale {scale}");
+            assert_eq!(scaled.full_triangles(), reference.full_triangles());
+            assert_eq!(scaled.max_lod(), reference.max_lod());
+            let tol = 1e-4 * reference.grid.cube;
+            let far = reference
+                .positions()
+                .iter()
+                .zip(scaled.positions())
+                .map(|(a, b)| (*a - *b / scale).abs().max_element())
+                .fold(0.0f32, f32::max);
+            assert!(far <= tol, "scale {scale}: positions differ by {far}");
+            // It saves and loads at that scale too.
+            let back = McoModel::from_bytes(&scaled.to_bytes()).unwrap();
+            assert_eq!(back.full_triangles(), scaled.full_triangles());
+        }
+    }
+}

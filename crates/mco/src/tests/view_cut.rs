@@ -1,0 +1,148 @@
+//! View-dependent cuts: a [`ViewCut`] kept from frame to frame gives
+//! exactly the cut made from scratch for each camera, and both give the
+//! cut the plain scan of every node defines
+//! ([`crate::view_dependent_cut::select`]), on built and on loaded models,
+//! for camera paths that zoom in and out, orbit, look away and change the
+//! tolerance; every cut of a closed shape is crack-free.
+
+use super::support;
+
+use crate::pipeline::{Options, build_from_mesh};
+use crate::view_dependent_cut::select;
+use crate::{Camera, McoModel, ViewCut};
+use lodkit_mesh::glam::Vec3;
+use lodkit_mesh::shapes;
+
+fn model(mesh: &lodkit_mesh::TriMesh, resolution: u32) -> McoModel {
+    build_from_mesh(
+        mesh,
+        &Options {
+            resolution: Some(resolution),
+        },
+    )
+    .unwrap()
+}
+
+/// A camera path around the model's root cube: an orbit that zooms from
+/// far outside to inside the cube, glances past it, looks away, and
+/// changes the tolerance and viewport on the way.
+fn camera_path(m: &McoModel) -> Vec<(Camera, f32)> {
+    let (lo, hi) = m.bounds();
+    let (c, r) = ((lo + hi) * 0.5, (hi - lo).length());
+    let mut out = Vec::new();
+    for i in 0..48 {
+        let a = i as f32 * 0.37;
+        let dist = [30.0, 6.0, 2.0, 1.0, 0.55, 0.3, 0.12, 0.02][i % 8];
+        let dir = Vec3::new(a.cos(), 0.4 * (1.3 * a).sin(), a.sin()).normalize();
+        let eye = c + dir * r * dist;
+        let target = match i % 5 {
+            0 => c + dir * r * 10.0, // looking away
+            1 => c + Vec3::new(0.3, -0.2, 0.1) * r,
+            _ => c,
+        };
+        let mut cam = Camera::looking_at(eye, target);
+        if i % 3 == 0 {
+            cam.vfov_deg = 25.0;
+            cam.aspect = 1.7;
+            cam.viewport_height = 600.0;
+        }
+        let tol = [1.0, 0.5, 4.0, 20.0][i % 4];
+        out.push((cam, tol));
+    }
+    out
+}
+
+/// `state` (kept across the path) against a fresh cut and the scan.
+fn assert_same_cuts(name: &str, m: &McoModel, state: &mut ViewCut) {
+    let mut fresh = Vec::new();
+    let mut reference = Vec::new();
+    let mut sizes = Vec::new();
+    for (step, (cam, tol)) in camera_path(m).into_iter().enumerate() {
+        let expanded = m.extract_view(&cam, tol, &mut fresh);
+        let kept = state.update(m, &cam, tol).to_vec();
+        assert_eq!(kept, fresh, "{name}, step {step}: kept state vs fresh cut");
+        assert_eq!(state.expanded_nodes(), expanded, "{name}, step {step}");
+        assert_eq!(state.triangles() * 3, kept.len());
+        let flags = select(m, &cam, tol);
+        assert_eq!(
+            flags.iter().filter(|&&f| f).count(),
+            expanded,
+            "{name}, step {step}: expanded nodes"
+        );
+        m.extract_expanded(&flags, &mut reference);
+        assert_eq!(kept, reference, "{name}, step {step}: vs the scan");
+        sizes.push(kept.len() / 3);
+    }
+    // The path is not trivial: it covers coarse and fine cuts.
+    let (lo, hi) = (sizes.iter().min().unwrap(), sizes.iter().max().unwrap());
+    assert!(hi > &(4 * lo), "{name}: cut sizes {sizes:?}");
+}
+
+#[test]
+fn a_kept_view_cut_equals_a_fresh_cut_and_the_scan_of_every_node() {
+    let mut state = ViewCut::new();
+    let sphere = model(&shapes::icosphere(4), 40);
+    assert_same_cuts("sphere", &sphere, &mut state);
+    let blob = model(&shapes::blob(20_000), 48);
+    assert_same_cuts("blob", &blob, &mut state);
+    // The same state back on the first model, then on a loaded model (its
+    // nodes renumbered in LOD order).
+    assert_same_cuts("sphere again", &sphere, &mut state);
+    let loaded = McoModel::from_bytes(&blob.to_bytes()).unwrap();
+    assert_same_cuts("loaded blob", &loaded, &mut state);
+    // A partial model (a prefix of the file).
+    let bytes = blob.to_bytes();
+    let table = McoModel::chunk_table(&bytes).unwrap();
+    let cut = table[table.len() / 2];
+    let part = McoModel::from_prefix(&bytes[..(cut.offset + cut.bytes) as usize]).unwrap();
+    let mut fresh = Vec::new();
+    for (cam, tol) in camera_path(&part.model) {
+        part.model.extract_view(&cam, tol, &mut fresh);
+        assert_eq!(state.update(&part.model, &cam, tol), &fresh[..]);
+    }
+}
+
+#[test]
+fn view_cuts_along_a_camera_path_are_crack_free() {
+    let m = model(&shapes::icosphere(4), 32);
+    let mut state = ViewCut::new();
+    let tol = 1e-5 * 2.0 * 3f32.sqrt();
+    let mut checked = 0;
+    for (cam, px) in camera_path(&m) {
+        let idx = state.update(&m, &cam, px);
+        let mesh = m.mesh_from_indices(idx);
+        let (_, gaps) = support::gap_edges(&mesh, tol);
+        assert_eq!(gaps, 0, "camera {cam:?}, tolerance {px}");
+        checked += 1;
+    }
+    assert_eq!(checked, 48);
+}
+
+#[test]
+fn a_view_cut_of_an_empty_model_is_empty() {
+    let mut state = ViewCut::new();
+    let cam = Camera::looking_at(Vec3::Z, Vec3::ZERO);
+    assert!(state.update(&McoModel::default(), &cam, 1.0).is_empty());
+    assert_eq!(state.expanded_nodes(), 0);
+}
+
+/// A camera at NaN or infinity, or a NaN, infinite or negative tolerance,
+/// gives the same cut as the scan.
+#[test]
+fn non_finite_cameras_give_the_scans_cut() {
+    let m = model(&shapes::icosphere(3), 16);
+    let mut state = ViewCut::new();
+    let mut reference = Vec::new();
+    for (pos, tol) in [
+        (Vec3::splat(f32::NAN), 1.0),
+        (Vec3::new(0.0, 0.0, f32::INFINITY), 1.0),
+        (Vec3::new(0.0, 0.0, 3.0), f32::NAN),
+        (Vec3::new(0.0, 0.0, 3.0), f32::INFINITY),
+        (Vec3::new(0.0, 0.0, 3.0), -1.0),
+    ] {
+        let cam = Camera::looking_at(pos, Vec3::ZERO);
+        let kept = state.update(&m, &cam, tol).to_vec();
+        m.extract_expanded(&select(&m, &cam, tol), &mut reference);
+        assert_eq!(kept, reference, "{pos} {tol}");
+    }
+}
