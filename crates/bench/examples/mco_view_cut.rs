@@ -63,7 +63,9 @@ fn table(name: &str, m: &McoModel) {
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let arg = std::env::args().nth(1);
-    let resolution = std::env::var("RESOLUTION").ok().and_then(|s| s.parse().ok());
+    let resolution = std::env::var("RESOLUTION")
+        .ok()
+        .and_then(|s| s.parse().ok());
     let t = Instant::now();
     let model = match &arg {
         Some(p) if p.ends_with(".mco") => McoModel::load(Path::new(p))?,

@@ -169,6 +169,18 @@ fn build(
         bail!("{}: no usable samples", names.join(", "));
     }
     let plain: Vec<Model> = models.iter().map(|(_, m)| m.clone()).collect();
+    if let Some(r) = resolution {
+        // A resolution the user chose that needs more memory than a build
+        // may take is a bad option value (exit 2), not bad input.
+        let bytes = lodkit_mco::estimate_build_bytes(&plain, &Options { resolution })?;
+        if bytes > lodkit_mco::MAX_BUILD_BYTES {
+            return Err(crate::ui::usage(format!(
+                "--resolution {r}: the build would need about {:.1} GB of memory, more than its {:.1} GB limit; use a lower resolution",
+                bytes as f64 / 1e9,
+                lodkit_mco::MAX_BUILD_BYTES as f64 / 1e9
+            )));
+        }
+    }
     let grid = grid_for(&plain, &samples, &Options { resolution })?;
     let samples = densify_meshes(&plain, samples, &grid);
     let status = |line: String| {
