@@ -181,7 +181,7 @@ pub fn one_sided(
 ) -> Result<DirectionStats> {
     distance::check_surface(sampled)?;
     let n = opts.resolved_samples(sampled.faces.len(), target.face_count());
-    if n > MAX_SAMPLES_PER_KIND {
+    if n as u64 > MAX_SAMPLES_PER_KIND as u64 {
         return Err(Error::Invalid(format!(
             "{n} samples per kind is over the limit of {MAX_SAMPLES_PER_KIND}"
         )));
