@@ -347,7 +347,9 @@ impl Octree {
                 let d = check_depth(d)?;
                 let n = mesh_sample_count(&frame, mesh, d);
                 if n > limit {
-                    let fits = (1..d).rev().find(|&r| mesh_sample_count(&frame, mesh, r) <= limit);
+                    let fits = (1..d)
+                        .rev()
+                        .find(|&r| mesh_sample_count(&frame, mesh, r) <= limit);
                     let hint = match fits {
                         Some(r) => format!("; depth {r} or less fits"),
                         None => String::new(),
@@ -814,7 +816,10 @@ mod tests {
             // The same leaves up to float rounding of the scaled
             // positions (a sample on a leaf's face may change sides).
             let (a, b) = (t.leaves.q.len() as f64, one.leaves.q.len() as f64);
-            assert!((a - b).abs() <= 0.01 * b, "scale {k}: {a} leaves against {b}");
+            assert!(
+                (a - b).abs() <= 0.01 * b,
+                "scale {k}: {a} leaves against {b}"
+            );
         }
     }
 
@@ -824,7 +829,11 @@ mod tests {
     #[test]
     fn sample_counts_are_bounded_by_the_depth_and_the_limit() {
         let tri = TriMesh::new(
-            vec![Vec3::ZERO, Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 1.0)],
+            vec![
+                Vec3::ZERO,
+                Vec3::new(1.0, 0.0, 0.0),
+                Vec3::new(0.0, 1.0, 1.0),
+            ],
             vec![[0, 1, 2]],
         );
         let frame = Frame::around(Vec3::ZERO, Vec3::ONE);
@@ -851,12 +860,19 @@ mod tests {
         m.normals = None;
         m.positions.iter_mut().for_each(|p| *p *= 1e-3);
         let n = m.positions.len() as u32;
-        m.positions.extend([Vec3::splat(-1.0), Vec3::new(1.0, -1.0, 1.0), Vec3::new(-1.0, 1.0, 1.0)]);
+        m.positions.extend([
+            Vec3::splat(-1.0),
+            Vec3::new(1.0, -1.0, 1.0),
+            Vec3::new(-1.0, 1.0, 1.0),
+        ]);
         m.faces.push([n, n + 1, n + 2]);
         let frame = Frame::around(Vec3::splat(-1.0), Vec3::ONE);
         let wanted = depth_from_mesh(&frame, &m);
         let limit = mesh_sample_limit(m.faces.len());
-        assert!(mesh_sample_count(&frame, &m, wanted) > limit, "depth {wanted}");
+        assert!(
+            mesh_sample_count(&frame, &m, wanted) > limit,
+            "depth {wanted}"
+        );
         let t = Octree::from_mesh(&m, &BuildOptions::default()).unwrap();
         assert!(t.depth < wanted);
         assert!(mesh_sample_count(&t.frame, &m, t.depth) <= limit);
