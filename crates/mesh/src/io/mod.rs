@@ -33,6 +33,7 @@
 pub mod conf;
 pub mod gltf;
 pub mod input;
+pub mod interrupt;
 pub mod obj;
 pub mod ply;
 pub mod stl;
@@ -340,6 +341,15 @@ pub fn write_atomic(path: &Path, _bytes: &[u8]) -> Result<()> {
     ))
 }
 
+/// On `wasm32` there is no file system to write to: refused with one line.
+#[cfg(target_arch = "wasm32")]
+pub fn write_atomic_with(
+    path: &Path,
+    _write: impl FnOnce(&mut std::fs::File) -> std::io::Result<()>,
+) -> Result<()> {
+    write_atomic(path, &[])
+}
+
 /// Writes `bytes` to a temp file beside `path`, syncs it and renames it
 /// over `path`: readers see either the old file or the whole new one.
 ///
@@ -350,11 +360,24 @@ pub fn write_atomic(path: &Path, _bytes: &[u8]) -> Result<()> {
 /// file it points to. An existing regular file's permissions are kept; a
 /// new file gets the usual `0666` minus the umask. On any error (and when
 /// the temp file is dropped) the temp file is removed, so a failed write
-/// leaves the old file untouched and nothing else. A process killed by a
-/// signal runs no destructor: its temp file (`.NAME.XXXXXX.tmp`) stays
-/// behind; removing it on Ctrl-C is the CLI's job.
+/// leaves the old file untouched and nothing else. A signal runs no
+/// destructor: in a process that called
+/// [`interrupt::remove_temp_files_on_signal`] (the CLI does), SIGINT,
+/// SIGTERM and SIGHUP remove the temp file before the process dies;
+/// otherwise it (`.NAME.XXXXXX.tmp`) stays behind.
 #[cfg(not(target_arch = "wasm32"))]
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    write_atomic_with(path, |f| f.write_all(bytes))
+}
+
+/// [`write_atomic`] for output produced piece by piece: `write` fills the
+/// temp file (it need not flush or sync), then it is synced and renamed
+/// over `path`, with every guarantee of [`write_atomic`].
+#[cfg(not(target_arch = "wasm32"))]
+pub fn write_atomic_with(
+    path: &Path,
+    write: impl FnOnce(&mut std::fs::File) -> std::io::Result<()>,
+) -> Result<()> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
@@ -380,7 +403,10 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     builder.permissions(default_mode);
     let result = (|| {
         let mut tmp = builder.tempfile_in(dir)?;
-        tmp.write_all(bytes)?;
+        // Listed until renamed or removed (declared after `tmp`, so it is
+        // dropped first: delisted before `tmp` removes the file).
+        let _pending = interrupt::Pending::new(tmp.path());
+        write(tmp.as_file_mut())?;
         if let Some(perms) = kept {
             tmp.as_file().set_permissions(perms)?;
         }
