@@ -49,10 +49,11 @@ for t in "${targets[@]}"; do
     log="$fuzz/fuzz-$name.log"
     cd "$fuzz"
     status=ok
-    # -O: release with debug assertions; one job, RSS and malloc capped at
+    # -O: release with debug assertions; one process (no -jobs, which would
+    # log to fuzz-N.log instead), RSS and malloc capped at
     # libFuzzer's default 2 GB so a runaway allocation is a finding.
     if ! nice -n 19 cargo +nightly fuzz run -O "$name" "$corpus" -- \
-        -max_total_time=$((minutes * 60)) -jobs=1 -workers=1 -rss_limit_mb=2048 \
+        -max_total_time=$((minutes * 60)) -rss_limit_mb=2048 \
         -malloc_limit_mb=2048 -print_final_stats=1 >"$log" 2>&1; then
         status="CRASH (see $log and artifacts/$name/)"
         failed=1
