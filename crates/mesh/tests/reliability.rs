@@ -231,6 +231,35 @@ fn every_written_file_reads_back_or_is_refused() {
             ),
         ),
         ("empty point cloud", Model::Points(PointCloud::default())),
+        (
+            "range image without a sample",
+            Model::Range(lodkit_mesh::RangeImage {
+                cols: 2,
+                rows: 1,
+                points: vec![Vec3::ZERO; 2],
+                valid: vec![false; 2],
+                colors: None,
+                pose: None,
+            }),
+        ),
+        (
+            "tiny mesh (1e-30)",
+            mesh(
+                vec![Vec3::ZERO, Vec3::X * 1e-30, Vec3::Y * 1e-30],
+                vec![[0, 1, 2]],
+            ),
+        ),
+        (
+            "mesh beyond the coordinate bound",
+            mesh(vec![Vec3::ZERO, Vec3::X * 1e19, Vec3::Y], vec![[0, 1, 2]]),
+        ),
+        (
+            "denormal coordinates",
+            mesh(
+                vec![Vec3::ZERO, Vec3::X * 1e-40, Vec3::Y * 1e-40],
+                vec![[0, 1, 2]],
+            ),
+        ),
     ];
     let formats = [
         Format::Ply,
