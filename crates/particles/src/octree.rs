@@ -20,7 +20,8 @@
 //! than `√3 · size`, so its lattice has at most
 //! `k = ⌈2√3 · 2^R⌉` steps per edge and `(k+1)(k+2)/2` samples
 //! ([`max_lattice_steps`]); the whole mesh may take at most
-//! [`mesh_sample_limit`] samples. The count is computed before sampling:
+//! [`mesh_sample_limit`] samples (`max(2^20, 256 × faces)`). The count is
+//! computed before sampling:
 //! an explicit depth that needs more is refused (naming the deepest depth
 //! that fits), the automatic depth is lowered until it fits. Edge lengths
 //! are measured in `f64`, so the lattice, and with it the particles, is
@@ -56,14 +57,18 @@ const FALLBACK_DEPTH: u8 = 6;
 /// clouds: fewer and the leaves of a uniform scan start to miss samples.
 const POINTS_PER_LEAF: usize = 3;
 
-/// Mesh samples one octree build may take, at least: 2^24 (about 17
-/// million; a few seconds of sampling, and since a leaf holds several
-/// samples, a few hundred MB of leaves at most). Meshes with many faces
-/// get [`SAMPLES_PER_FACE`] per face instead ([`mesh_sample_limit`]).
-pub const MAX_MESH_SAMPLES: u64 = 1 << 24;
-/// Samples per face a large mesh may take (the lattice of a face no larger
-/// than a leaf has 3 to 10 points).
-pub const SAMPLES_PER_FACE: u64 = 16;
+/// Mesh samples one octree build may take, at least: 2^20 (about a
+/// million). A leaf holds about 4 to 8 samples, and encoding costs about
+/// 10 µs per particle, so a file of a few triangles can never ask for more
+/// than a few seconds and a couple of hundred MB, whatever the depth.
+/// Meshes with many faces get [`SAMPLES_PER_FACE`] per face instead
+/// ([`mesh_sample_limit`]).
+pub const MAX_MESH_SAMPLES: u64 = 1 << 20;
+/// Samples per face a mesh may take: 256. The lattice of a face no larger
+/// than a leaf has 3 to 10 points; the shipped bunny takes 97 per face at
+/// R = 9 and 333 at R = 10, so R = 9 is the deepest it may be encoded at,
+/// and an 81,920-face icosphere about 66 at R = 9.
+pub const SAMPLES_PER_FACE: u64 = 256;
 
 /// The most samples [`Octree::from_mesh`] takes from a mesh of `faces`
 /// faces: `max(MAX_MESH_SAMPLES, SAMPLES_PER_FACE × faces)`, so the cost
@@ -356,7 +361,7 @@ impl Octree {
                     };
                     return Err(Error::Input(format!(
                         "sampling this mesh at depth {d} takes {n} samples, over the limit of \
-                         {limit} (max(2^24, {SAMPLES_PER_FACE} per face)){hint}"
+                         {limit} (max({MAX_MESH_SAMPLES}, {SAMPLES_PER_FACE} per face)){hint}"
                     )));
                 }
                 d
@@ -850,8 +855,8 @@ mod tests {
         .to_string();
         assert!(
             e.contains("at depth 16 takes")
-                && e.contains("over the limit of 16777216")
-                && e.contains("depth 10 or less fits"),
+                && e.contains("over the limit of 1048576")
+                && e.contains("depth 8 or less fits"),
             "{e}"
         );
         // Many small triangles and one giant one: the mean edge asks for a
