@@ -149,3 +149,40 @@ fn every_malformed_file_fails_cleanly_in_every_command() {
         failures.join("\n")
     );
 }
+
+/// Sample counts derived from geometry are bounded (issue 14, item 3): a
+/// tetrahedron at any `--depth` either encodes or is refused at once with
+/// one line naming a depth that fits, always within the time limit.
+#[test]
+fn pop_encode_depth_extremes_end_quickly() {
+    let dir = tempfile::tempdir().unwrap();
+    let tet = dir.path().join("tet.obj");
+    std::fs::write(
+        &tet,
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 1 4 3\n",
+    )
+    .unwrap();
+    let out = dir.path().join("t.pop");
+    for depth in [10, 12, 16] {
+        let args: Vec<String> = ["pop", "encode"]
+            .iter()
+            .map(|s| s.to_string())
+            .chain([
+                tet.display().to_string(),
+                "-o".into(),
+                out.display().to_string(),
+            ])
+            .chain(["--depth".to_string(), depth.to_string()])
+            .collect();
+        let (code, err, _) = run(&args).unwrap_or_else(|| panic!("--depth {depth} still running"));
+        assert_eq!(code, Some(1), "--depth {depth}: {err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(
+            err.contains("tet.obj")
+                && err.contains(&format!("at depth {depth} takes"))
+                && err.contains("or less fits"),
+            "{err}"
+        );
+        assert!(!out.exists());
+    }
+}
