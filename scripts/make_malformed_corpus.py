@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Writes lodkit's malformed-input corpus into tests/malformed/.
 
-Every file is a small, deliberately broken PLY, OBJ, STL, glTF/GLB, XYZ or
-PTS file whose name says what is wrong with it. `lodkit_mesh::io::load` must
+Every file is a small, deliberately broken PLY, OBJ, STL, glTF/GLB, XYZ,
+PTS or .conf file whose name says what is wrong with it. `lodkit_mesh::io::load` must
 return an error for each one, without panicking and without allocating from
 an unchecked count; crates/mesh/tests/malformed.rs checks exactly that.
 
@@ -236,6 +236,57 @@ add("gltf_buffer_uri_percent_parent_dir.gltf", gltf_doc(uri="%2E%2E/%2E%2E/etc/p
 add("gltf_buffer_uri_file_scheme.gltf", gltf_doc(uri="file:///etc/passwd"))
 add("gltf_buffer_uri_percent_file_scheme.gltf", gltf_doc(uri="file%3A%2F%2F%2Fetc%2Fpasswd"))
 add("gltf_buffer_uri_device.gltf", gltf_doc(uri="%2Fdev%2Fzero"))
+
+
+# Instancing is bounded: 1,026 stored vertices placed by 4,100 nodes would
+# expand to 4.2M vertices, over max(16 x stored, 4,194,304).
+def instancing_bomb(vertices=1026, nodes=4100):
+    pos = b"".join(struct.pack("<3f", i % 7, i % 11, i % 13) for i in range(vertices))
+    doc = {
+        "asset": {"version": "2.0"},
+        "buffers": [{"byteLength": len(pos)}],
+        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": len(pos)}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": vertices,
+                       "type": "VEC3", "min": [0, 0, 0], "max": [6, 10, 12]}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "nodes": [{"children": list(range(1, nodes + 1))}] + [{"mesh": 0}] * nodes,
+        "scenes": [{"nodes": [0]}],
+        "scene": 0,
+    }
+    return glb(json.dumps(doc, sort_keys=True, separators=(",", ":")), bin_bytes=pos)
+
+
+add("glb_instancing_expands_past_limit.glb", instancing_bomb())
+
+# Coordinates beyond +-1e18 (where f32 squared distances overflow) are
+# refused by every reader, however they arise.
+BIG = 1e30
+add("obj_coordinate_beyond_range.obj", f"v 0 0 0\nv {BIG} 0 0\nv 0 1 0\nf 1 2 3\n")
+add("ply_coordinate_beyond_range.ply", ply_header("ascii", 3, 1) + f"0 0 0\n1 0 0\n0 {BIG} 0\n3 0 1 2\n")
+add("ply_coordinate_beyond_range_binary.ply",
+    ply_header("binary_little_endian", 3, 1).encode()
+    + ply_bin_tri(verts=((0, 0, 0), (1, 0, 0), (0, 0, -3e38))))
+add("stl_binary_coordinate_beyond_range.stl",
+    stl_bin(1, [(0, 0, 1, 0, 0, 0, 2e18, 0, 0, 0, 1, 0)]))
+add("stl_ascii_coordinate_beyond_range.stl",
+    ASCII_TRI.replace("vertex 1 0 0", "vertex 1e20 0 0") + "endsolid t\n")
+add("xyz_coordinate_beyond_range.xyz", "0 0 0\n1e19 1 1\n")
+add("pts_coordinate_beyond_range.pts", "2\n0 0 0\n1 1 -1e25\n")
+add("gltf_coordinate_beyond_range.gltf",
+    gltf_doc(bin_bytes=struct.pack("<9f", 0, 0, 0, BIG, 0, 0, 0, 1, 0) + QUAD[36:]))
+# A node transform can carry finite positions past the bound.
+add("gltf_node_scale_beyond_range.gltf", gltf_doc(nodes=[{"mesh": 0, "scale": [1e20, 1, 1]}]))
+
+# .conf: a quaternion that cannot be normalised (its length overflows f32,
+# or it is zero or not finite) and far translations are refused by line.
+CONF_OK = "camera 0 0 0 0 0 0 1\nbmesh a.ply 0 0 0 0 0 0 1\n"
+add("conf_quaternion_overflows.conf", CONF_OK + "bmesh b.ply 0 0 0 3e19 3e19 0 1\n")
+add("conf_quaternion_huge_component.conf", CONF_OK + "bmesh b.ply 0 0 0 0 0 1e30 1\n")
+add("conf_quaternion_zero.conf", CONF_OK + "bmesh b.ply 0 0 0 0 0 0 0\n")
+add("conf_quaternion_nan.conf", CONF_OK + "bmesh b.ply 0 0 0 0 nan 0 1\n")
+add("conf_quaternion_inf.conf", CONF_OK + "bmesh b.ply 0 0 0 0 0 0 1e39\n")
+add("conf_translation_beyond_range.conf", CONF_OK + "bmesh b.ply 5e18 0 0 0 0 0 1\n")
+add("conf_missing_numbers.conf", CONF_OK + "bmesh b.ply 0 0 0 0 0 1\n")
 
 
 def main():

@@ -119,6 +119,9 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // Ctrl-C / SIGTERM during a write removes its temp file (the handler
+    // starts at the first write, so `serve` keeps its own Ctrl-C).
+    lodkit_mesh::io::interrupt::remove_temp_files_on_signal();
     let ui = Ui::new(cli.global.quiet, cli.global.verbose);
     let result = match cli.command {
         Command::Info { file, json } => commands::info::run(&ui, &file, json),

@@ -1,7 +1,7 @@
 //! Every file of the malformed-input corpus (`tests/malformed/`, made by
 //! `scripts/make_malformed_corpus.py`) must be refused by
-//! `lodkit_mesh::io::load` with a one-line error naming the file, and never
-//! make it panic.
+//! `lodkit_mesh::io::load` (a `.conf` by `io::conf::load_scans`) with a
+//! one-line error naming the file, and never make it panic.
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::PathBuf;
@@ -26,7 +26,15 @@ fn every_malformed_file_is_a_clean_one_line_error() {
     let mut failures = Vec::new();
     for path in &files {
         let name = path.file_name().unwrap().to_string_lossy().into_owned();
-        match catch_unwind(AssertUnwindSafe(|| lodkit_mesh::io::load(path))) {
+        let load = || {
+            if path.extension().is_some_and(|e| e == "conf") {
+                lodkit_mesh::io::conf::load_scans(path)
+                    .map(|_| lodkit_mesh::Model::Points(Default::default()))
+            } else {
+                lodkit_mesh::io::load(path)
+            }
+        };
+        match catch_unwind(AssertUnwindSafe(load)) {
             Err(_) => failures.push(format!("{name}: PANICKED")),
             Ok(Ok(model)) => failures.push(format!("{name}: accepted as a {}", model.kind())),
             Ok(Err(e)) => {
@@ -54,7 +62,7 @@ fn corpus_covers_every_format() {
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
-    for ext in ["ply", "obj", "stl", "gltf", "glb", "xyz", "pts"] {
+    for ext in ["ply", "obj", "stl", "gltf", "glb", "xyz", "pts", "conf"] {
         let n = names
             .iter()
             .filter(|n| n.ends_with(&format!(".{ext}")))

@@ -62,10 +62,65 @@ fn probe_corpus_files_fail_for_the_right_reason() {
             &["file:", "URI"],
         ),
         ("gltf_buffer_uri_device.gltf", &["/dev/zero", "absolute"]),
+        (
+            "glb_instancing_expands_past_limit.glb",
+            &["expand 1026 stored vertices to 4206600", "over the limit"],
+        ),
+        (
+            "obj_coordinate_beyond_range.obj",
+            &["vertex 1 (1e30", "±1e18"],
+        ),
+        ("ply_coordinate_beyond_range.ply", &["vertex 2", "±1e18"]),
+        (
+            "ply_coordinate_beyond_range_binary.ply",
+            &["vertex 2", "±1e18"],
+        ),
+        ("stl_binary_coordinate_beyond_range.stl", &["±1e18"]),
+        ("stl_ascii_coordinate_beyond_range.stl", &["(1e20", "±1e18"]),
+        (
+            "xyz_coordinate_beyond_range.xyz",
+            &["point 1 (1e19", "±1e18"],
+        ),
+        ("pts_coordinate_beyond_range.pts", &["point 1", "±1e18"]),
+        (
+            "gltf_coordinate_beyond_range.gltf",
+            &["vertex 1 (1e30", "±1e18"],
+        ),
+        (
+            "gltf_node_scale_beyond_range.gltf",
+            &["vertex 1 (1e20", "±1e18"],
+        ),
+        (
+            "conf_quaternion_overflows.conf",
+            &["line 3", "cannot be normalised"],
+        ),
+        (
+            "conf_quaternion_huge_component.conf",
+            &["line 3", "cannot be normalised"],
+        ),
+        ("conf_quaternion_zero.conf", &["line 3", "zero length"]),
+        (
+            "conf_quaternion_nan.conf",
+            &["line 3", "'nan' is not a finite number"],
+        ),
+        (
+            "conf_quaternion_inf.conf",
+            &["line 3", "'1e39' is not a finite number"],
+        ),
+        (
+            "conf_translation_beyond_range.conf",
+            &["line 3", "translation"],
+        ),
     ];
     let mut failures = Vec::new();
     for (name, needles) in expected {
-        let msg = match io::load(&corpus(name)) {
+        let path = corpus(name);
+        let loaded = if name.ends_with(".conf") {
+            io::conf::load_scans(&path).map(|_| Model::Points(PointCloud::default()))
+        } else {
+            io::load(&path)
+        };
+        let msg = match loaded {
             Ok(m) => {
                 failures.push(format!("{name}: accepted as a {}", m.kind()));
                 continue;
@@ -176,6 +231,35 @@ fn every_written_file_reads_back_or_is_refused() {
             ),
         ),
         ("empty point cloud", Model::Points(PointCloud::default())),
+        (
+            "range image without a sample",
+            Model::Range(lodkit_mesh::RangeImage {
+                cols: 2,
+                rows: 1,
+                points: vec![Vec3::ZERO; 2],
+                valid: vec![false; 2],
+                colors: None,
+                pose: None,
+            }),
+        ),
+        (
+            "tiny mesh (1e-30)",
+            mesh(
+                vec![Vec3::ZERO, Vec3::X * 1e-30, Vec3::Y * 1e-30],
+                vec![[0, 1, 2]],
+            ),
+        ),
+        (
+            "mesh beyond the coordinate bound",
+            mesh(vec![Vec3::ZERO, Vec3::X * 1e19, Vec3::Y], vec![[0, 1, 2]]),
+        ),
+        (
+            "denormal coordinates",
+            mesh(
+                vec![Vec3::ZERO, Vec3::X * 1e-40, Vec3::Y * 1e-40],
+                vec![[0, 1, 2]],
+            ),
+        ),
     ];
     let formats = [
         Format::Ply,

@@ -16,6 +16,18 @@
 //! samples in every leaf cube a triangle crosses (the paper oversampled its
 //! meshes in the same spirit).
 //!
+//! **Bounded sampling.** A triangle inside the root cube has no edge longer
+//! than `√3 · size`, so its lattice has at most
+//! `k = ⌈2√3 · 2^R⌉` steps per edge and `(k+1)(k+2)/2` samples
+//! ([`max_lattice_steps`]); the whole mesh may take at most
+//! [`mesh_sample_limit`] samples (`max(2^20, 256 × faces)`). The count is
+//! computed before sampling:
+//! an explicit depth that needs more is refused (naming the deepest depth
+//! that fits), the automatic depth is lowered until it fits. Edge lengths
+//! are measured in `f64`, so the lattice, and with it the particles, is
+//! the same at any scale `f32` can hold (a mesh at 1e-10 and one at 1e15
+//! give the same octree).
+//!
 //! **Labels (§4.1, §8.1.2).** The paper assumes IN/OUT next to the surface
 //! is known. Closed inputs get it from a flood fill of the outside at each
 //! level; rather than a dense `8^r` grid we label only the *band* (the empty
@@ -44,6 +56,33 @@ const FALLBACK_DEPTH: u8 = 6;
 /// Mean samples per occupied leaf the automatic depth aims at for point
 /// clouds: fewer and the leaves of a uniform scan start to miss samples.
 const POINTS_PER_LEAF: usize = 3;
+
+/// Mesh samples one octree build may take, at least: 2^20 (about a
+/// million). A leaf holds about 4 to 8 samples, and encoding costs about
+/// 10 µs per particle, so a file of a few triangles can never ask for more
+/// than a few seconds and a couple of hundred MB, whatever the depth.
+/// Meshes with many faces get [`SAMPLES_PER_FACE`] per face instead
+/// ([`mesh_sample_limit`]).
+pub const MAX_MESH_SAMPLES: u64 = 1 << 20;
+/// Samples per face a mesh may take: 256. The lattice of a face no larger
+/// than a leaf has 3 to 10 points; the shipped bunny takes 97 per face at
+/// R = 9 and 333 at R = 10, so R = 9 is the deepest it may be encoded at,
+/// and an 81,920-face icosphere about 66 at R = 9.
+pub const SAMPLES_PER_FACE: u64 = 256;
+
+/// The most samples [`Octree::from_mesh`] takes from a mesh of `faces`
+/// faces: `max(MAX_MESH_SAMPLES, SAMPLES_PER_FACE × faces)`, so the cost
+/// of sampling stays proportional to the input (or a fixed few seconds).
+pub fn mesh_sample_limit(faces: usize) -> u64 {
+    MAX_MESH_SAMPLES.max(SAMPLES_PER_FACE.saturating_mul(faces as u64))
+}
+
+/// The most lattice steps per edge a triangle inside the root cube can
+/// need at depth `r`: `⌈2√3 · 2^r⌉` (longest edge `√3 · size`, spacing
+/// half a leaf, `size / 2^(r+1)`).
+pub fn max_lattice_steps(r: u8) -> u32 {
+    (2.0 * 3f64.sqrt() * (1u64 << r) as f64).ceil() as u32
+}
 
 /// A hash map keyed by Morton code (Fx hashing: the keys are not
 /// adversarial, and SipHash costs more than the work the maps serve; no
@@ -116,7 +155,11 @@ impl Frame {
     /// The cube around `bbox` with a small margin (so no sample sits on the
     /// far faces), in f64 to stay deterministic across inputs.
     pub fn around(min: Vec3, max: Vec3) -> Frame {
-        let ext = (max - min).max_element().max(1e-6);
+        // Any positive extent is kept, so a model at 1e-10 fills the cube
+        // as it does at 1; only a single point (extent 0) gets a nominal
+        // cube, tiny enough not to matter and large enough that its cells
+        // are normal floats.
+        let ext = (max - min).max_element().max(1e-30);
         let size = ext * (1.0 + 1.0 / 1024.0);
         let centre = (min + max) * 0.5;
         Frame {
@@ -303,24 +346,51 @@ impl Octree {
             return Err(Error::Input("the mesh has no finite vertex".into()));
         }
         let frame = Frame::around(bbox.min, bbox.max);
+        let limit = mesh_sample_limit(mesh.faces.len());
         let depth = match opts.depth {
-            Some(d) => check_depth(d)?,
-            None => depth_from_mesh(&frame, mesh),
+            Some(d) => {
+                let d = check_depth(d)?;
+                let n = mesh_sample_count(&frame, mesh, d);
+                if n > limit {
+                    let fits = (1..d)
+                        .rev()
+                        .find(|&r| mesh_sample_count(&frame, mesh, r) <= limit);
+                    let hint = match fits {
+                        Some(r) => format!("; depth {r} or less fits"),
+                        None => String::new(),
+                    };
+                    return Err(Error::Input(format!(
+                        "sampling this mesh at depth {d} takes {n} samples, over the limit of \
+                         {limit} (max({MAX_MESH_SAMPLES}, {SAMPLES_PER_FACE} per face)){hint}"
+                    )));
+                }
+                d
+            }
+            None => {
+                let mut d = depth_from_mesh(&frame, mesh);
+                while d > 1 && mesh_sample_count(&frame, mesh, d) > limit {
+                    d -= 1;
+                }
+                d
+            }
         };
         let spacing = f64::from(frame.cube(depth)) * 0.5;
+        let max_k = max_lattice_steps(depth);
         let mut acc: MortonMap<Acc> = MortonMap::default();
         for f in &mesh.faces {
             let [a, b, c] = f.map(|i| mesh.positions[i as usize]);
             if !(a.is_finite() && b.is_finite() && c.is_finite()) {
                 continue;
             }
-            let normal = (b - a).cross(c - a).normalize_or_zero();
+            let mut normal = (b - a).cross(c - a).normalize_or_zero();
+            if normal == Vec3::ZERO {
+                // The f32 cross product underflows (or overflows) at
+                // extreme scales; f64 holds it.
+                let [a, b, c] = [a, b, c].map(Vec3::as_dvec3);
+                normal = (b - a).cross(c - a).normalize_or_zero().as_vec3();
+            }
             let cols = mesh.colors.as_ref().map(|cs| f.map(|i| cs[i as usize]));
-            let longest = f64::from((b - a).length().max((c - b).length()).max((a - c).length()));
-            // Lattice resolution: enough steps that neighbouring lattice
-            // points are at most `spacing` apart; bounded so a degenerate
-            // giant triangle cannot run away.
-            let k = ((longest / spacing).ceil() as u64).clamp(1, 1 << 14) as u32;
+            let k = lattice_steps([a, b, c], spacing, max_k);
             for i in 0..=k {
                 for j in 0..=(k - i) {
                     let u = i as f32 / k as f32;
@@ -564,6 +634,46 @@ impl Octree {
     }
 }
 
+/// Lattice steps per edge of triangle `t`: enough that neighbouring
+/// lattice points are at most `spacing` apart, at most `max_k`
+/// ([`max_lattice_steps`]; only reached by rounding at the cube's diagonal).
+fn lattice_steps(t: [Vec3; 3], spacing: f64, max_k: u32) -> u32 {
+    let [a, b, c] = t;
+    let longest = edge_length(a, b)
+        .max(edge_length(b, c))
+        .max(edge_length(c, a));
+    ((longest / spacing).ceil() as u64).clamp(1, u64::from(max_k)) as u32
+}
+
+/// `|a − b|`: the `f32` length where it is exact enough (so results on
+/// ordinary data stay bit-for-bit what they were), the `f64` one where the
+/// squared `f32` length would underflow or overflow.
+fn edge_length(a: Vec3, b: Vec3) -> f64 {
+    let l = (a - b).length();
+    if l.is_finite() && (l >= 1e-15 || l == 0.0 && a == b) && l <= 1e15 {
+        f64::from(l)
+    } else {
+        a.as_dvec3().distance(b.as_dvec3())
+    }
+}
+
+/// Samples [`Octree::from_mesh`] takes at depth `r`, saturating; a pass
+/// over the faces without sampling.
+fn mesh_sample_count(frame: &Frame, mesh: &TriMesh, r: u8) -> u64 {
+    let spacing = f64::from(frame.cube(r)) * 0.5;
+    let max_k = max_lattice_steps(r);
+    let mut total = 0u64;
+    for f in &mesh.faces {
+        let t = f.map(|i| mesh.positions[i as usize]);
+        if !t.iter().all(|p| p.is_finite()) {
+            continue;
+        }
+        let k = u64::from(lattice_steps(t, spacing, max_k));
+        total = total.saturating_add((k + 1) * (k + 2) / 2);
+    }
+    total
+}
+
 fn add_sample(
     acc: &mut MortonMap<Acc>,
     frame: &Frame,
@@ -634,9 +744,9 @@ fn depth_from_mesh(frame: &Frame, mesh: &TriMesh) -> u8 {
         for k in 0..3 {
             let a = mesh.positions[f[k] as usize];
             let b = mesh.positions[f[(k + 1) % 3] as usize];
-            let l = (a - b).length();
+            let l = edge_length(a, b);
             if l.is_finite() && l > 0.0 {
-                total += f64::from(l);
+                total += l;
                 n += 1;
             }
         }
@@ -689,5 +799,87 @@ mod tests {
         let t = Octree::from_mesh(&m, &opts).unwrap();
         assert_eq!(t.label(5, [16, 16, 16]), Label::In);
         assert_eq!(t.label(5, [0, 0, 0]), Label::Out);
+    }
+
+    fn scaled(m: &TriMesh, k: f32) -> TriMesh {
+        let mut m = m.clone();
+        m.positions.iter_mut().for_each(|p| *p *= k);
+        m
+    }
+
+    /// The octree of a mesh does not depend on its scale: a sphere at 1e-10,
+    /// 1 and 1e15 gives the same depth and the same leaves.
+    #[test]
+    fn the_octree_is_the_same_at_any_scale() {
+        let m = lodkit_mesh::shapes::icosphere(3);
+        let auto = BuildOptions::default();
+        let one = Octree::from_mesh(&m, &auto).unwrap();
+        assert!(one.leaves.q.len() > 100, "{}", one.leaves.q.len());
+        for k in [1e-10, 1e-20, 1e15] {
+            let t = Octree::from_mesh(&scaled(&m, k), &auto).unwrap();
+            assert_eq!(t.depth, one.depth, "scale {k}");
+            // The same leaves up to float rounding of the scaled
+            // positions (a sample on a leaf's face may change sides).
+            let (a, b) = (t.leaves.q.len() as f64, one.leaves.q.len() as f64);
+            assert!(
+                (a - b).abs() <= 0.01 * b,
+                "scale {k}: {a} leaves against {b}"
+            );
+        }
+    }
+
+    /// Sampling is bounded before it starts: an explicit depth that needs
+    /// more than the limit is refused (naming one that fits), the automatic
+    /// depth is lowered, and one giant triangle never takes 1e8 samples.
+    #[test]
+    fn sample_counts_are_bounded_by_the_depth_and_the_limit() {
+        let tri = TriMesh::new(
+            vec![
+                Vec3::ZERO,
+                Vec3::new(1.0, 0.0, 0.0),
+                Vec3::new(0.0, 1.0, 1.0),
+            ],
+            vec![[0, 1, 2]],
+        );
+        let frame = Frame::around(Vec3::ZERO, Vec3::ONE);
+        let k = u64::from(max_lattice_steps(16));
+        assert!(mesh_sample_count(&frame, &tri, 16) <= (k + 1) * (k + 2) / 2);
+        let e = Octree::from_mesh(
+            &tri,
+            &BuildOptions {
+                depth: Some(16),
+                sidedness: None,
+            },
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("at depth 16 takes")
+                && e.contains("over the limit of 1048576")
+                && e.contains("depth 8 or less fits"),
+            "{e}"
+        );
+        // Many small triangles and one giant one: the mean edge asks for a
+        // deep tree, the giant triangle would need too many samples there.
+        let mut m = lodkit_mesh::shapes::icosphere(5);
+        m.normals = None;
+        m.positions.iter_mut().for_each(|p| *p *= 1e-3);
+        let n = m.positions.len() as u32;
+        m.positions.extend([
+            Vec3::splat(-1.0),
+            Vec3::new(1.0, -1.0, 1.0),
+            Vec3::new(-1.0, 1.0, 1.0),
+        ]);
+        m.faces.push([n, n + 1, n + 2]);
+        let frame = Frame::around(Vec3::splat(-1.0), Vec3::ONE);
+        let wanted = depth_from_mesh(&frame, &m);
+        let limit = mesh_sample_limit(m.faces.len());
+        assert!(
+            mesh_sample_count(&frame, &m, wanted) > limit,
+            "depth {wanted}"
+        );
+        let t = Octree::from_mesh(&m, &BuildOptions::default()).unwrap();
+        assert!(t.depth < wanted);
+        assert!(mesh_sample_count(&t.frame, &m, t.depth) <= limit);
     }
 }

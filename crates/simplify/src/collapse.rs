@@ -215,7 +215,8 @@ pub fn collapse(
         return Err(Reject::Flip);
     };
     let new_err = m.err[s as usize].max(m.err[t as usize]) + d;
-    if opts.max_error.is_some_and(|e| new_err > e) {
+    // `err` is in the working frame (`WorkMesh::scale_exp`).
+    if opts.max_error.is_some_and(|e| new_err > e * m.unit()) {
         return Err(Reject::MaxError);
     }
     // Staying at v_t keeps its stored position bit for bit.

@@ -116,6 +116,7 @@ pub fn compact(m: &mut WorkMesh, index: &mut Vec<u32>) {
 pub fn export(m: &WorkMesh) -> TriMesh {
     if !m.has_wedges() {
         let mut out = TriMesh::new(m.pos.clone(), m.faces.clone());
+        to_object_space(m, &mut out.positions);
         write_attrs(m, m.pos.len(), &mut out);
         return out;
     }
@@ -126,9 +127,18 @@ pub fn export(m: &WorkMesh) -> TriMesh {
             positions[wf[c] as usize] = m.pos[f[c] as usize];
         }
     }
+    to_object_space(m, &mut positions);
     let mut out = TriMesh::new(positions, m.wedges.clone());
     write_attrs(m, nw, &mut out);
     out
+}
+
+/// Working-frame positions back to object space (exact: a power of two).
+fn to_object_space(m: &WorkMesh, positions: &mut [Vec3]) {
+    let unit = m.unit();
+    if unit != 1.0 {
+        positions.iter_mut().for_each(|p| *p /= unit);
+    }
 }
 
 /// Moves the compacted working mesh out as a `TriMesh` without copying the
@@ -143,6 +153,7 @@ pub fn take(m: &mut WorkMesh) -> TriMesh {
     pos.shrink_to_fit();
     faces.shrink_to_fit();
     let n = pos.len();
+    to_object_space(m, &mut pos);
     let mut out = TriMesh::new(pos, faces);
     write_attrs(m, n, &mut out);
     m.live_faces = 0;

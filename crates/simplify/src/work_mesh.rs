@@ -58,6 +58,14 @@ pub struct WorkMesh {
     pub wedges: Vec<[u32; 3]>,
     /// Weight of border planes (see `quadric::BORDER_WEIGHT`).
     pub border_weight: f64,
+    /// The working frame: `pos` and `err` are the input's object-space
+    /// values times `2^scale_exp` ([`WorkMesh::unit`]), chosen at load so
+    /// the bounding box's largest side lies in `[1, 2)`. A power of two
+    /// scales every float exactly, so the collapses made are the same at
+    /// any scale (the input's own rounding aside) and no cross product,
+    /// area or squared distance underflows or overflows `f32` for tiny or
+    /// huge models; values are scaled back on the way out.
+    pub scale_exp: i32,
 }
 
 impl WorkMesh {
@@ -112,8 +120,15 @@ impl WorkMesh {
             return Err(Error::AttributeLength);
         }
 
-        // Attribute layout and cost scales.
-        let extent = mesh.bbox().size().max_element().max(f32::MIN_POSITIVE);
+        // The working frame (see `scale_exp`), then attribute layout and
+        // cost scales in it.
+        let bbox = mesh.bbox();
+        self.scale_exp = frame_exponent(
+            bbox.size().max_element(),
+            bbox.min.abs().max(bbox.max.abs()).max_element(),
+        );
+        let unit = self.unit();
+        let extent = (bbox.size().max_element() * unit).max(f32::MIN_POSITIVE);
         let mut layout = AttrLayout::default();
         let mut scale = [0.0f32; MAX_ATTR];
         let mut add = |len: usize, w: f32, slot: &mut Option<usize>| {
@@ -208,6 +223,9 @@ impl WorkMesh {
                 }
             }
         }
+        if unit != 1.0 {
+            self.pos.iter_mut().for_each(|p| *p *= unit);
+        }
         let nv = self.pos.len();
         self.live_faces = self.faces.len();
         self.flags.clear();
@@ -234,8 +252,18 @@ impl WorkMesh {
             + self.wedges.capacity() * 12
     }
 
-    /// Largest accumulated error over live vertices.
+    /// `2^scale_exp`: one object-space unit in the working frame.
+    pub fn unit(&self) -> f32 {
+        pow2(self.scale_exp)
+    }
+
+    /// Largest accumulated error over live vertices, in object space.
     pub fn max_error(&self) -> f32 {
+        self.max_working_error() / self.unit()
+    }
+
+    /// Largest accumulated error over live vertices, in the working frame.
+    fn max_working_error(&self) -> f32 {
         let mut e = 0.0f32;
         for f in &self.faces {
             if f[0] == DEAD {
@@ -247,6 +275,34 @@ impl WorkMesh {
         }
         e
     }
+}
+
+/// `2^e` exactly, for `e` in `-126..=127`.
+fn pow2(e: i32) -> f32 {
+    f32::from_bits(((127 + e.clamp(-126, 127)) as u32) << 23)
+}
+
+/// The exponent `e` that brings `extent` (the largest bounding-box side)
+/// into `[1, 2)` once scaled by `2^e`; 0 for an empty or single-point box.
+/// Bounded so the largest coordinate magnitude `reach` stays below `2^64`
+/// (a far, tiny model keeps the frame where its squares still fit).
+fn frame_exponent(extent: f32, reach: f32) -> i32 {
+    if !(extent > 0.0 && extent.is_finite()) {
+        return 0;
+    }
+    let e = -(extent.log2().floor() as i32);
+    // `log2` may round at exact powers of two; settle on [1, 2) exactly.
+    let mut e = e.clamp(-120, 120);
+    while e > -120 && extent * pow2(e) >= 2.0 {
+        e -= 1;
+    }
+    while e < 120 && extent * pow2(e) < 1.0 {
+        e += 1;
+    }
+    while e > -120 && reach.is_finite() && f64::from(reach) * f64::from(pow2(e)) >= 2f64.powi(64) {
+        e -= 1;
+    }
+    e
 }
 
 fn push_attrs(mesh: &TriMesh, v: usize, out: &mut Vec<f32>) {

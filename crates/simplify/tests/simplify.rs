@@ -433,3 +433,64 @@ fn replacement_selection_heap_keeps_the_topology_and_the_target() {
         assert_eq!(simplify(&m, &o).unwrap().mesh, out.mesh, "heap {heap_size}");
     }
 }
+
+fn scaled(m: &TriMesh, k: f32) -> TriMesh {
+    let mut m = m.clone();
+    m.positions.iter_mut().for_each(|p| *p *= k);
+    m
+}
+
+/// Simplification works in a frame normalised to the model's extent: the
+/// same mesh at 1e-10, 1 and 1e15 gives the same faces, `max_error`
+/// binds the same way and the estimated error scales with the model (it
+/// used to be ignored at 1e-15 and read 0 past 1e20). A power-of-two scale
+/// gives bit-for-bit the same result, scaled.
+#[test]
+fn the_result_does_not_depend_on_the_scale() {
+    let m = blob(3);
+    let opts = Options {
+        target: Target::Ratio(0.1),
+        ..Options::DEFAULT
+    };
+    let one = simplify(&m, &opts).unwrap();
+    let bound = one.report.estimated_error * 0.25;
+    let bounded_one = simplify(
+        &m,
+        &Options {
+            max_error: Some(bound),
+            ..opts.clone()
+        },
+    )
+    .unwrap();
+    assert!(bounded_one.mesh.faces.len() > one.mesh.faces.len());
+    for k in [1e-10f32, 1e15, 2f32.powi(-60), 2f32.powi(50)] {
+        let s = simplify(&scaled(&m, k), &opts).unwrap();
+        let rel = s.report.estimated_error / k / one.report.estimated_error;
+        assert!((rel - 1.0).abs() < 1e-3, "scale {k}: error ratio {rel}");
+        let b = simplify(
+            &scaled(&m, k),
+            &Options {
+                max_error: Some(bound * k),
+                ..opts.clone()
+            },
+        )
+        .unwrap();
+        assert!(b.report.estimated_error <= bound * k * 1.0001, "scale {k}");
+        let (f, g) = (
+            b.mesh.faces.len() as f64,
+            bounded_one.mesh.faces.len() as f64,
+        );
+        assert!(
+            (f - g).abs() <= 0.02 * g,
+            "scale {k}: {f} faces against {g}"
+        );
+        if k.log2().fract() == 0.0 {
+            assert_eq!(s.mesh.faces, one.mesh.faces, "scale {k}");
+            assert_eq!(
+                s.mesh.positions,
+                scaled(&one.mesh, k).positions,
+                "scale {k}"
+            );
+        }
+    }
+}

@@ -30,7 +30,8 @@ pub struct ConfEntry {
 ///
 /// Fails with the line number on a malformed `bmesh`/`mesh` line (not
 /// exactly 8 fields after the keyword, a value that is not a finite
-/// number, a zero quaternion) or an unknown keyword. The quaternion is
+/// number, a zero quaternion or one whose length overflows `f32`, a
+/// translation beyond [`super::MAX_COORDINATE`]) or an unknown keyword. The quaternion is
 /// normalised before its conjugate becomes `pose.rotation`.
 pub fn read(text: &str) -> Result<Vec<ConfEntry>, ParseError> {
     let text = text.strip_prefix('\u{FEFF}').unwrap_or(text);
@@ -76,17 +77,35 @@ pub fn read(text: &str) -> Result<Vec<ConfEntry>, ParseError> {
         let [tx, ty, tz, qx, qy, qz, qw] = v;
         let q = Quat::from_xyzw(qx, qy, qz, qw);
         let len = q.length();
-        // Every component is finite, so `len` is too.
+        // Finite components can still overflow the squared length (any
+        // component beyond ~1.8e19 makes `len` infinite and `q / len` zero,
+        // a rotation that collapses the scan to a point): the normalised
+        // quaternion must be a unit quaternion, or the line is refused.
+        let unit = q / len;
         if len <= 1e-6 {
             return Err(parse_err!(
                 "line {line_no}: rotation quaternion ({qx} {qy} {qz} {qw}) has zero length"
             ));
         }
+        if !len.is_finite() || !unit.is_finite() || (unit.length() - 1.0).abs() > 1e-3 {
+            return Err(parse_err!(
+                "line {line_no}: rotation quaternion ({qx} {qy} {qz} {qw}) cannot be normalised \
+                 (its length overflows 32-bit floats)"
+            ));
+        }
+        let translation = Vec3::new(tx, ty, tz);
+        if translation.abs().max_element() > super::MAX_COORDINATE {
+            return Err(parse_err!(
+                "line {line_no}: translation ({tx:e} {ty:e} {tz:e}) is beyond the supported \
+                 coordinate range of ±{:e}",
+                super::MAX_COORDINATE
+            ));
+        }
         entries.push(ConfEntry {
             file: (*file).to_string(),
             pose: Pose {
-                rotation: (q / len).conjugate(),
-                translation: Vec3::new(tx, ty, tz),
+                rotation: unit.conjugate(),
+                translation,
             },
         });
     }
@@ -189,6 +208,26 @@ mod tests {
             (
                 "bmesh a.ply 0 0 0 0 0 0 0\n",
                 "line 1: rotation quaternion (0 0 0 0) has zero length",
+            ),
+            (
+                "bmesh a.ply 0 0 0 0 0 0 1\nbmesh b.ply 0 0 0 1e30 0 0 1\n",
+                "line 2: rotation quaternion (1000000000000000000000000000000 0 0 1) cannot be normalised",
+            ),
+            (
+                "bmesh a.ply 0 0 0 3e19 3e19 3e19 3e19\n",
+                "line 1: rotation quaternion",
+            ),
+            (
+                "bmesh a.ply 0 0 0 1e-30 0 0 0\n",
+                "line 1: rotation quaternion (0.000000000000000000000000000001 0 0 0) has zero length",
+            ),
+            (
+                "bmesh a.ply 0 0 2e18 0 0 0 1\n",
+                "line 1: translation (0e0 0e0 2e18) is beyond the supported coordinate range",
+            ),
+            (
+                "bmesh a.ply 0 0 0 0 0 0 inf\n",
+                "line 1: 'inf' is not a finite number",
             ),
             (
                 "camera 1 2 3\nscan a.ply\n",

@@ -33,6 +33,7 @@
 pub mod conf;
 pub mod gltf;
 pub mod input;
+pub mod interrupt;
 pub mod obj;
 pub mod ply;
 pub mod stl;
@@ -134,7 +135,66 @@ pub fn decode(format: Format, bytes: &[u8], base_dir: Option<&Path>) -> Result<M
         Model::Points(p) => p.validate()?,
         Model::Range(r) => r.validate()?,
     }
+    check_coordinates(&model)?;
     Ok(model)
+}
+
+/// The largest coordinate magnitude lodkit reads or writes: `1e18`.
+///
+/// Why this bound: every stage measures squared distances in `f32`. With
+/// all coordinates within ±`MAX_COORDINATE`, a squared distance between
+/// two points is at most `3 · (2e18)² = 1.2e37`, well inside `f32`'s
+/// `3.4e38`, so no distance, bounding-box diagonal or error overflows to
+/// infinity or reads back as zero. Beyond it (about `1.8e19` a single
+/// squared coordinate overflows) results would be silently wrong, so
+/// every reader refuses such a file with one line ([`decode`]), every
+/// writer refuses to write one ([`check_readable`]), and a `.conf` pose
+/// may not translate past it. Small magnitudes are not bounded: the
+/// stages that depend on scale (particle sampling, simplification error)
+/// work in a frame normalised to the model's extent.
+pub const MAX_COORDINATE: f32 = 1e18;
+
+/// Refuses a model with a coordinate beyond ±[`MAX_COORDINATE`] (the
+/// first one found, by index). Non-finite values are `validate()`'s job
+/// and are refused there first. Cost: one pass over the positions.
+pub fn check_coordinates(model: &Model) -> Result<(), ParseError> {
+    let (what, first) = match model {
+        Model::Mesh(m) => ("vertex", first_out_of_range(&m.positions)),
+        Model::Points(p) => ("point", first_out_of_range(&p.positions)),
+        Model::Range(r) => (
+            "range point",
+            r.points
+                .iter()
+                .zip(&r.valid)
+                .position(|(p, &ok)| ok && !within_range(*p)),
+        ),
+    };
+    let positions = match model {
+        Model::Mesh(m) => &m.positions,
+        Model::Points(p) => &p.positions,
+        Model::Range(r) => &r.points,
+    };
+    match first {
+        None => Ok(()),
+        Some(i) => {
+            let p = positions[i];
+            Err(crate::parse_err!(
+                "{what} {i} ({:e} {:e} {:e}) is beyond the supported coordinate range of \
+                 ±{MAX_COORDINATE:e} (squared distances would overflow 32-bit floats)",
+                p.x,
+                p.y,
+                p.z
+            ))
+        }
+    }
+}
+
+fn within_range(p: glam::Vec3) -> bool {
+    p.abs().max_element() <= MAX_COORDINATE
+}
+
+fn first_out_of_range(points: &[glam::Vec3]) -> Option<usize> {
+    points.iter().position(|p| !within_range(*p))
 }
 
 /// Reads a file that must hold a triangle mesh.
@@ -189,7 +249,8 @@ pub fn encode(format: Format, model: &Model, opts: WriteOptions) -> Result<Vec<u
 
 /// Refuses to write what the reader of `format` would refuse to read back:
 /// a model that fails its `validate()` (non-finite values, a face index out
-/// of range or repeated); no faces in a mesh-only format (OBJ, STL, GLB
+/// of range or repeated) or has a coordinate beyond [`MAX_COORDINATE`]
+/// ([`check_coordinates`]); no faces in a mesh-only format (OBJ, STL, GLB
 /// readers refuse a file without triangles); in STL, no triangle with three
 /// distinct corners (STL stores corners, not indices, and its reader drops
 /// triangles whose corners coincide); no points in XYZ/PTS (an empty file is
@@ -207,6 +268,7 @@ pub fn check_readable(format: Format, model: &Model) -> Result<(), ParseError> {
         Model::Points(p) => p.validate()?,
         Model::Range(r) => r.validate()?,
     }
+    check_coordinates(model)?;
     match (format, model) {
         (Format::Obj | Format::Stl | Format::Glb, Model::Mesh(m)) if m.faces.is_empty() => {
             refuse("it has no faces".into())
@@ -279,6 +341,15 @@ pub fn write_atomic(path: &Path, _bytes: &[u8]) -> Result<()> {
     ))
 }
 
+/// On `wasm32` there is no file system to write to: refused with one line.
+#[cfg(target_arch = "wasm32")]
+pub fn write_atomic_with(
+    path: &Path,
+    _write: impl FnOnce(&mut std::fs::File) -> std::io::Result<()>,
+) -> Result<()> {
+    write_atomic(path, &[])
+}
+
 /// Writes `bytes` to a temp file beside `path`, syncs it and renames it
 /// over `path`: readers see either the old file or the whole new one.
 ///
@@ -289,11 +360,24 @@ pub fn write_atomic(path: &Path, _bytes: &[u8]) -> Result<()> {
 /// file it points to. An existing regular file's permissions are kept; a
 /// new file gets the usual `0666` minus the umask. On any error (and when
 /// the temp file is dropped) the temp file is removed, so a failed write
-/// leaves the old file untouched and nothing else. A process killed by a
-/// signal runs no destructor: its temp file (`.NAME.XXXXXX.tmp`) stays
-/// behind; removing it on Ctrl-C is the CLI's job.
+/// leaves the old file untouched and nothing else. A signal runs no
+/// destructor: in a process that called
+/// [`interrupt::remove_temp_files_on_signal`] (the CLI does), SIGINT,
+/// SIGTERM and SIGHUP remove the temp file before the process dies;
+/// otherwise it (`.NAME.XXXXXX.tmp`) stays behind.
 #[cfg(not(target_arch = "wasm32"))]
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    write_atomic_with(path, |f| f.write_all(bytes))
+}
+
+/// [`write_atomic`] for output produced piece by piece: `write` fills the
+/// temp file (it need not flush or sync), then it is synced and renamed
+/// over `path`, with every guarantee of [`write_atomic`].
+#[cfg(not(target_arch = "wasm32"))]
+pub fn write_atomic_with(
+    path: &Path,
+    write: impl FnOnce(&mut std::fs::File) -> std::io::Result<()>,
+) -> Result<()> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
@@ -319,7 +403,10 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     builder.permissions(default_mode);
     let result = (|| {
         let mut tmp = builder.tempfile_in(dir)?;
-        tmp.write_all(bytes)?;
+        // Listed until renamed or removed (declared after `tmp`, so it is
+        // dropped first: delisted before `tmp` removes the file).
+        let _pending = interrupt::Pending::new(tmp.path());
+        write(tmp.as_file_mut())?;
         if let Some(perms) = kept {
             tmp.as_file().set_permissions(perms)?;
         }
@@ -377,6 +464,46 @@ mod tests {
         let missing = dir.path().join("no/such/dir/m.ply");
         let err = save_mesh(&missing, &shapes::icosphere(0), WriteOptions::default()).unwrap_err();
         assert!(err.to_string().contains("no/such/dir/m.ply"), "{err}");
+    }
+
+    /// Coordinates beyond ±MAX_COORDINATE are refused on read and on write,
+    /// in every format; within it (1e-10 to 1e15 scales) they read back.
+    #[test]
+    fn coordinates_beyond_the_stated_range_are_refused_both_ways() {
+        let scaled = |k: f32| {
+            let mut m = shapes::icosphere(1);
+            m.positions.iter_mut().for_each(|p| *p *= k);
+            Model::Mesh(m)
+        };
+        for f in [
+            Format::Ply,
+            Format::Obj,
+            Format::Stl,
+            Format::Glb,
+            Format::Xyz,
+        ] {
+            for k in [1e-10, 1.0, 1e15] {
+                let bytes = encode(f, &scaled(k), WriteOptions::default()).unwrap();
+                assert!(decode(f, &bytes, None).is_ok(), "{f:?} at {k}");
+            }
+            let e = encode(f, &scaled(1e19), WriteOptions::default())
+                .unwrap_err()
+                .0;
+            assert!(
+                e.contains("beyond the supported coordinate range of ±1e18"),
+                "{e}"
+            );
+        }
+        let text = b"v 0 0 0\nv 1 0 0\nv 0 2e18 0\nf 1 2 3\n";
+        let e = decode(Format::Obj, text, None).unwrap_err().0;
+        assert!(
+            e.contains("vertex 2 (0e0 2e18 0e0) is beyond the supported coordinate range"),
+            "{e}"
+        );
+        let e = decode(Format::Xyz, b"0 0 0\n1e30 0 0\n", None)
+            .unwrap_err()
+            .0;
+        assert!(e.contains("point 1 (1e30 0e0 0e0)"), "{e}");
     }
 
     #[test]

@@ -15,7 +15,8 @@
 //!
 //! An attribute is kept only when *every* corner of every face has it;
 //! otherwise it is dropped for the whole mesh (a half-textured mesh comes out
-//! untextured rather than misaligned).
+//! untextured rather than misaligned), and dropped before vertices are split
+//! by it, so no seam remains where the dropped attribute alone differed.
 //!
 //! **Guarantees on bad input**: before `tobj` sees the text, `prescan`
 //! checks every line `tobj` would act on: UTF-8, numbers on `v`/`vt`/`vn`
@@ -53,6 +54,22 @@ struct Scan {
     /// The file has `l` lines, which must be hidden from `tobj` (it turns an
     /// `l` with 3 or more points into a face).
     has_polylines: bool,
+    /// Face corners in the file, and how many of them name a texture
+    /// coordinate / a normal.
+    corners: usize,
+    with_uv: usize,
+    with_normal: usize,
+}
+
+impl Scan {
+    /// Texture coordinates are dropped: some corners lack one.
+    fn drops_uvs(&self) -> bool {
+        self.with_uv > 0 && self.with_uv < self.corners
+    }
+    /// Normals are dropped: some corners lack one.
+    fn drops_normals(&self) -> bool {
+        self.with_normal > 0 && self.with_normal < self.corners
+    }
 }
 
 fn check_floats<'a>(
@@ -173,9 +190,11 @@ fn prescan(text: &str) -> Result<Scan, ParseError> {
                     resolve(v, nv, "vertex", line)?;
                     if let Some(t) = parts.next().filter(|t| !t.is_empty()) {
                         resolve(t, nvt, "texture coordinate", line)?;
+                        scan.with_uv += 1;
                     }
                     if let Some(n) = parts.next().filter(|n| !n.is_empty()) {
                         resolve(n, nvn, "normal", line)?;
+                        scan.with_normal += 1;
                     }
                     if parts.next().is_some() {
                         return Err(parse_err!(
@@ -184,6 +203,7 @@ fn prescan(text: &str) -> Result<Scan, ParseError> {
                         ));
                     }
                 }
+                scan.corners += corners;
                 if corners < 3 {
                     return Err(parse_err!(
                         "line {line}: face with {corners} corner{} (a face needs at least 3)",
@@ -201,18 +221,57 @@ fn prescan(text: &str) -> Result<Scan, ParseError> {
     Ok(scan)
 }
 
-/// `text` with its `l` lines blanked (kept as empty lines).
-fn without_polylines(text: &str) -> String {
+/// `text` as `tobj` may see it: `l` lines blanked, and the texture
+/// coordinate or normal index taken out of every face corner when that
+/// attribute is dropped (some corners lack it). `tobj` splits a vertex for
+/// every distinct `v/vt/vn` triple; an index it never sees cannot split
+/// one, so a quad textured on one half stays one connected quad once its
+/// UVs are dropped. Line count and numbering are kept.
+fn rewritten<'a>(text: &'a str, scan: &Scan) -> Cow<'a, str> {
+    let (drop_uv, drop_n) = (scan.drops_uvs(), scan.drops_normals());
+    if !scan.has_polylines && !drop_uv && !drop_n {
+        return Cow::Borrowed(text);
+    }
     let mut out = String::with_capacity(text.len());
     for (i, line) in text.split('\n').enumerate() {
         if i > 0 {
             out.push('\n');
         }
-        if line.split_whitespace().next() != Some("l") {
-            out.push_str(line);
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("l") => {}
+            Some("f") if drop_uv || drop_n => {
+                out.push('f');
+                for w in words {
+                    let mut parts = w.split('/');
+                    let v = parts.next().unwrap_or("");
+                    let t = parts.next().filter(|t| !t.is_empty() && !drop_uv);
+                    let n = parts.next().filter(|n| !n.is_empty() && !drop_n);
+                    out.push(' ');
+                    out.push_str(v);
+                    match (t, n) {
+                        (Some(t), Some(n)) => {
+                            out.push('/');
+                            out.push_str(t);
+                            out.push('/');
+                            out.push_str(n);
+                        }
+                        (Some(t), None) => {
+                            out.push('/');
+                            out.push_str(t);
+                        }
+                        (None, Some(n)) => {
+                            out.push_str("//");
+                            out.push_str(n);
+                        }
+                        (None, None) => {}
+                    }
+                }
+            }
+            _ => out.push_str(line),
         }
     }
-    out
+    Cow::Owned(out)
 }
 
 /// Reads an OBJ file into one triangle mesh (see the module docs).
@@ -224,11 +283,7 @@ pub fn read(bytes: &[u8]) -> Result<TriMesh, ParseError> {
     let text = std::str::from_utf8(bytes)
         .map_err(|e| parse_err!("not a text file: invalid UTF-8 at byte {}", e.valid_up_to()))?;
     let scan = prescan(text)?;
-    let text: Cow<str> = if scan.has_polylines {
-        Cow::Owned(without_polylines(text))
-    } else {
-        Cow::Borrowed(text)
-    };
+    let text = rewritten(text, &scan);
     let opts = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
@@ -474,6 +529,28 @@ mod tests {
         let m = read(text.as_bytes()).unwrap();
         assert_eq!(m.faces.len(), 2);
         assert!(m.uvs.is_none() && m.normals.is_none());
+        // The dropped attributes split no vertex: 4 positions, 4 vertices.
+        assert_eq!(m.positions.len(), 4);
+    }
+
+    /// A quad with UVs on one of its two triangles: the UVs are dropped,
+    /// and the vertex split they made is not kept, so the quad stays one
+    /// connected component (two triangles sharing an edge).
+    #[test]
+    fn a_quad_textured_on_one_half_stays_one_component() {
+        let text = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\n\
+                    vn 0 0 1\nf 1/1/1 2/2/1 3/3/1\nf 1//1 3//1 4//1\n";
+        let m = read(text.as_bytes()).unwrap();
+        assert!(m.uvs.is_none());
+        assert!(m.normals.is_some(), "normals are on every corner and stay");
+        assert_eq!(m.positions.len(), 4);
+        assert_eq!(m.faces, vec![[0, 1, 2], [0, 2, 3]]);
+        let stats = crate::topology::topology_stats(&m);
+        assert_eq!(
+            (stats.components, stats.boundary_edges),
+            (1, 4),
+            "{stats:?}"
+        );
     }
 
     #[test]

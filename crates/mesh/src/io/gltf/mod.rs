@@ -41,8 +41,12 @@
 //! checked arithmetic) are verified, since the reader would otherwise panic
 //! (stride smaller than an element, count 0) or silently read short.
 //! Sparse accessors are refused. Indices out of range, cycles in the node
-//! graph and nodes with two parents are errors. All of these are one-line
-//! [`ParseError`]s.
+//! graph and nodes with two parents are errors. Instances are expanded
+//! (each node's copy becomes vertices of its own), within a stated limit
+//! checked before allocating: the expanded vertices and indices are at most
+//! [`MAX_INSTANCING_GROWTH`] times what the file stores, or
+//! [`INSTANCING_FLOOR`] each, whichever is larger. All of these are
+//! one-line [`ParseError`]s.
 //!
 //! **Writing** ([`write_glb`]): one mesh + one node per level, all nodes
 //! siblings in the default scene. The node and mesh are named
@@ -72,7 +76,7 @@ mod write;
 #[cfg(test)]
 mod tests;
 
-pub use read::read;
+pub use read::{INSTANCING_FLOOR, MAX_INSTANCING_GROWTH, read};
 pub use write::write_glb;
 
 #[cfg(doc)]

@@ -198,6 +198,49 @@ fn check_accessor(
     Ok(count)
 }
 
+/// Instancing may multiply what the file stores by at most this factor
+/// (vertices and indices counted separately, each accessor once however
+/// many nodes use it)…
+pub const MAX_INSTANCING_GROWTH: u64 = 16;
+/// …or reach this many vertices (and indices), whichever is larger. So a
+/// scene may place a small mesh many times (a million-vertex forest from
+/// one tree) while the memory of the expanded mesh stays proportional to
+/// the file: a 4 MB file can never ask for gigabytes. Beyond the limit the
+/// file is refused before anything is allocated.
+pub const INSTANCING_FLOOR: u64 = 1 << 22;
+
+/// Refuses a scene whose instancing expands the stored vertices or indices
+/// past `max(MAX_INSTANCING_GROWTH × stored, INSTANCING_FLOOR)`, or past
+/// what 32-bit indices address.
+fn check_instancing(
+    parts: &[Part<'_>],
+    vertices: u64,
+    stored_vertices: u64,
+    indices: u64,
+    stored_indices: u64,
+) -> Result<(), ParseError> {
+    if vertices > u32::MAX as u64 {
+        return Err(parse_err!(
+            "{vertices} vertices once instanced: more than 32-bit indices can address"
+        ));
+    }
+    let cap = |stored: u64| (stored.saturating_mul(MAX_INSTANCING_GROWTH)).max(INSTANCING_FLOOR);
+    for (what, expanded, stored) in [
+        ("vertices", vertices, stored_vertices),
+        ("indices", indices, stored_indices),
+    ] {
+        if expanded > cap(stored) {
+            return Err(parse_err!(
+                "{} primitive instances expand {stored} stored {what} to {expanded}, over the limit of \
+                 {} ({MAX_INSTANCING_GROWTH}x what the file stores, at least {INSTANCING_FLOOR})",
+                parts.len(),
+                cap(stored)
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// A primitive to read, from an [`Instance`].
 struct Part<'a> {
     prim: gltf::Primitive<'a>,
@@ -263,6 +306,11 @@ pub fn read(bytes: &[u8], base_dir: Option<&Path>) -> Result<TriMesh, ParseError
     use Dimensions::{Scalar, Vec2 as D2, Vec3 as D3, Vec4 as D4};
     // Check every accessor and count the output before allocating it.
     let mut total = 0u64;
+    let mut total_indices = 0u64;
+    // Each accessor counted once, however many nodes use it.
+    let mut seen_pos = vec![false; doc.accessors().len()];
+    let mut seen_ix = vec![false; doc.accessors().len()];
+    let (mut stored_vertices, mut stored_indices) = (0u64, 0u64);
     for (k, p) in parts.iter().enumerate() {
         let ctx = |w: &str| format!("mesh {} primitive {k}: {w}", p.mesh);
         let pos = p
@@ -300,28 +348,48 @@ pub fn read(bytes: &[u8], base_dir: Option<&Path>) -> Result<TriMesh, ParseError
             let t = [(U8, D2), (U16, D2), (F32, D2)];
             same(p.prim.get(&Semantic::TexCoords(0)), "TEXCOORD_0", &t)?;
         }
-        if let Some(ix) = p.prim.indices() {
-            check_accessor(
-                &ix,
-                &ctx("indices"),
-                &[(U8, Scalar), (U16, Scalar), (U32, Scalar)],
-                &buffers,
-            )?;
+        let indices = match p.prim.indices() {
+            Some(ix) => {
+                let c = check_accessor(
+                    &ix,
+                    &ctx("indices"),
+                    &[(U8, Scalar), (U16, Scalar), (U32, Scalar)],
+                    &buffers,
+                )?;
+                if !std::mem::replace(&mut seen_ix[ix.index()], true) {
+                    stored_indices += c as u64;
+                }
+                c
+            }
+            None => {
+                if !std::mem::replace(&mut seen_ix[pos.index()], true) {
+                    stored_indices += n as u64;
+                }
+                n
+            }
+        };
+        if !std::mem::replace(&mut seen_pos[pos.index()], true) {
+            stored_vertices += n as u64;
         }
         total += n as u64;
+        total_indices += indices as u64;
     }
-    if total > u32::MAX as u64 {
-        return Err(parse_err!(
-            "{total} vertices once instanced: more than 32-bit indices can address"
-        ));
-    }
+    check_instancing(
+        &parts,
+        total,
+        stored_vertices,
+        total_indices,
+        stored_indices,
+    )?;
 
     let mut out = TriMesh {
         positions: Vec::with_capacity(total as usize),
         normals: has_n.then(|| Vec::with_capacity(total as usize)),
         colors: has_c.then(|| Vec::with_capacity(total as usize)),
         uvs: has_uv.then(|| Vec::with_capacity(total as usize)),
-        faces: Vec::new(),
+        // A triangle takes at least one index (strips and fans) and at
+        // most three; checked against the cap above.
+        faces: Vec::with_capacity((total_indices / 3) as usize),
     };
     for (k, p) in parts.iter().enumerate() {
         let reader = p

@@ -326,3 +326,38 @@ fn base64_decoder() {
     assert!(decode_base64("AB=C").is_err());
     assert!(decode_base64("A=").is_err());
 }
+
+/// A scene placing one mesh with `nodes` nodes (the quad of [`BODY`]).
+fn instanced(nodes: usize) -> String {
+    let body = BODY.replace(
+        r#""nodes":[{"mesh":0,"translation":[10,0,0],"scale":[-1,1,1]}],
+"scenes":[{"nodes":[0]}],"scene":0"#,
+        &format!(
+            r#""nodes":[{}],"scenes":[{{"nodes":[{}]}}],"scene":0"#,
+            vec![r#"{"mesh":0}"#; nodes].join(","),
+            (0..nodes)
+                .map(|i| i.to_string())
+                .collect::<Vec<_>>()
+                .join(",")
+        ),
+    );
+    assert_ne!(body, BODY);
+    doc(&body)
+}
+
+/// Instancing is expanded within its stated limit: many copies of a small
+/// mesh are read, and a file whose instances would expand past the limit
+/// is refused before anything is allocated (one 4-vertex quad placed by
+/// 1.1M nodes would need 4.4M vertices, over the 4M floor).
+#[test]
+fn instancing_expansion_is_bounded_before_allocating() {
+    let m = read(instanced(1000).as_bytes(), None).unwrap();
+    assert_eq!((m.positions.len(), m.faces.len()), (4000, 2000));
+    let n = (super::INSTANCING_FLOOR / 4 + 1) as usize;
+    let e = read(instanced(n).as_bytes(), None).unwrap_err().0;
+    assert!(
+        e.contains("primitive instances expand 4 stored vertices to")
+            && e.contains("over the limit of 4194304"),
+        "{e}"
+    );
+}

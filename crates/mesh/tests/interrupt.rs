@@ -1,0 +1,86 @@
+//! Ctrl-C in the middle of a write removes the temporary file (issue 14,
+//! item 13): this test runs itself again as a child that opts in, starts a
+//! write that stalls half-way, and is sent SIGINT / SIGTERM while the temp
+//! file exists.
+
+#![cfg(unix)]
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+const CHILD: &str = "LODKIT_INTERRUPT_TEST_TARGET";
+
+/// The child: writes to `$CHILD` and never finishes on its own.
+#[test]
+fn child_writer() {
+    let Some(target) = std::env::var_os(CHILD) else {
+        return; // only meaningful as the child of the test below
+    };
+    lodkit_mesh::io::interrupt::remove_temp_files_on_signal();
+    let _ = lodkit_mesh::io::write_atomic_with(Path::new(&target), |f| {
+        f.write_all(b"half of the output")?;
+        f.sync_all()?;
+        std::thread::sleep(Duration::from_secs(60));
+        Ok(())
+    });
+    panic!("the write was not interrupted");
+}
+
+fn temp_files(dir: &Path) -> Vec<PathBuf> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "tmp"))
+        .collect()
+}
+
+fn interrupt_a_write(signal: &str, code: i32) {
+    let dir = tempfile::tempdir().unwrap();
+    let target = dir.path().join("out.ply");
+    std::fs::write(&target, b"old").unwrap();
+    let mut child = Command::new(std::env::current_exe().unwrap())
+        .args(["--exact", "child_writer", "--nocapture", "--test-threads=1"])
+        .env(CHILD, &target)
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while temp_files(dir.path()).is_empty() {
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "no temp file appeared"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    // The handler thread starts before the temp file is listed, so it is
+    // ready once the file exists.
+    let sent = Command::new("kill")
+        .args([signal, &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(sent.success());
+    let status = child.wait().unwrap();
+    use std::os::unix::process::ExitStatusExt as _;
+    assert_eq!(
+        status.signal().or(status.code().map(|c| c - 128)),
+        Some(code),
+        "{status:?}"
+    );
+    assert_eq!(temp_files(dir.path()), Vec::<PathBuf>::new());
+    assert_eq!(std::fs::read(&target).unwrap(), b"old");
+}
+
+#[test]
+fn sigint_removes_the_temp_file() {
+    if std::env::var_os(CHILD).is_none() {
+        interrupt_a_write("-INT", 2);
+    }
+}
+
+#[test]
+fn sigterm_removes_the_temp_file() {
+    if std::env::var_os(CHILD).is_none() {
+        interrupt_a_write("-TERM", 15);
+    }
+}
