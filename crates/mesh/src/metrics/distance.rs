@@ -42,8 +42,17 @@ pub struct Closest {
 /// and a hierarchy over many identical boxes cannot prune any of them, so
 /// every query would visit all copies (a linear scan per query on a file of
 /// one triangle repeated a million times).
+///
+/// The hierarchy holds the positions scaled by a power of two that brings
+/// the surface's largest extent into `[0.5, 1)`: parry3d's projections use
+/// fixed tolerances, which at extents far from 1 (below about 1e-7 or above
+/// about 1e9) give distances off by an order of magnitude. Scaling by a
+/// power of two is exact, so a query's answer is the same at every scale
+/// (bit for bit under power-of-two scales).
 pub struct SurfaceIndex {
     shape: parry3d::shape::TriMesh,
+    /// The power of two the hierarchy's positions were multiplied by.
+    scale: f32,
     /// For each indexed triangle, its first face in the source mesh.
     source_face: Vec<u32>,
     face_count: usize,
@@ -68,13 +77,17 @@ impl SurfaceIndex {
     pub fn new(mesh: &TriMesh) -> Result<Self> {
         check_surface(mesh)?;
         let (faces, source_face) = distinct_triangles(mesh);
-        let shape = parry3d::shape::TriMesh::new(mesh.positions.clone(), faces)
+        let bbox = super::sample::surface_bbox(mesh);
+        let scale = unit_scale(&bbox);
+        let positions = mesh.positions.iter().map(|&p| p * scale).collect();
+        let shape = parry3d::shape::TriMesh::new(positions, faces)
             .map_err(|e| Error::Invalid(format!("cannot index the mesh: {e}")))?;
         Ok(SurfaceIndex {
             shape,
+            scale,
             source_face,
             face_count: mesh.faces.len(),
-            bbox: super::sample::surface_bbox(mesh),
+            bbox,
         })
     }
 
@@ -98,13 +111,14 @@ impl SurfaceIndex {
     /// non-finite `p` the answer is `p` itself at distance 0 on face 0
     /// (there is no meaningful nearest point).
     pub fn closest(&self, p: Vec3) -> Closest {
-        match CompositeShapeRef(&self.shape).project_local_point(p, f32::MAX, false) {
-            Some((face, proj)) => Closest {
-                point: proj.point,
-                distance: proj.point.distance(p),
+        let q = p * self.scale;
+        match CompositeShapeRef(&self.shape).project_local_point(q, f32::MAX, false) {
+            Some((face, proj)) if q.is_finite() => Closest {
+                point: proj.point / self.scale,
+                distance: proj.point.distance(q) / self.scale,
                 face: self.source_face[face as usize],
             },
-            None => Closest {
+            _ => Closest {
                 point: p,
                 distance: 0.0,
                 face: 0,
@@ -122,6 +136,23 @@ impl SurfaceIndex {
         use rayon::prelude::*;
         points.par_iter().map(|&p| self.distance(p)).collect()
     }
+}
+
+/// The power of two that brings `bbox`'s largest side into `[0.5, 1)`,
+/// lowered where needed so the largest scaled coordinate stays below 2^60
+/// (queries a little outside the box must not overflow); 1 for an empty or
+/// flat-to-a-point box.
+fn unit_scale(bbox: &Aabb) -> f32 {
+    let side = (bbox.max - bbox.min).max_element();
+    let reach = bbox.min.abs().max(bbox.max.abs()).max_element();
+    if !(side.is_normal() && reach.is_finite()) {
+        return 1.0;
+    }
+    let mut e = -(side.log2().floor() as i32) - 1;
+    if reach > 0.0 {
+        e = e.min(60 - reach.log2().ceil() as i32);
+    }
+    2f32.powi(e.clamp(-120, 120))
 }
 
 /// The faces of `mesh` with duplicate triangles removed (the first of each
@@ -184,6 +215,41 @@ pub(crate) fn check_surface(mesh: &TriMesh) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The same surface and queries at any scale give the same distances
+    /// relative to that scale (parry3d's fixed tolerances would otherwise
+    /// answer an order of magnitude off far from unit extents).
+    #[test]
+    fn distances_scale_with_the_surface() {
+        let base = crate::shapes::icosphere(3);
+        let queries: Vec<Vec3> = (0..64)
+            .map(|i| {
+                let t = i as f32 * 0.37;
+                Vec3::new(t.cos(), (t * 1.3).sin(), (t * 0.7).cos()).normalize()
+                    * (0.9 + 0.003 * i as f32)
+            })
+            .collect();
+        let at = |s: f32| {
+            let mut m = base.clone();
+            for p in &mut m.positions {
+                *p *= s;
+            }
+            let index = SurfaceIndex::new(&m).unwrap();
+            queries
+                .iter()
+                .map(|&q| index.distance(q * s) / s)
+                .collect::<Vec<f32>>()
+        };
+        let unit = at(1.0);
+        for s in [1e-12f32, 1e-10, 1e-3, 1e6, 1e12, 1e15] {
+            for (a, b) in at(s).iter().zip(&unit) {
+                assert!(
+                    (a - b).abs() <= 1e-4 * b.max(1e-3),
+                    "scale {s}: {a} against {b}"
+                );
+            }
+        }
+    }
 
     fn triangle() -> TriMesh {
         TriMesh::new(
