@@ -163,7 +163,7 @@ fn pop_encode_depth_extremes_end_quickly() {
     )
     .unwrap();
     let out = dir.path().join("t.pop");
-    for depth in [10, 12, 16] {
+    for depth in [10, 11, 12] {
         let args: Vec<String> = ["pop", "encode"]
             .iter()
             .map(|s| s.to_string())

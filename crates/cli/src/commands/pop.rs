@@ -7,8 +7,8 @@ use clap::{Args, Subcommand, ValueEnum};
 use lodkit_mesh::Model;
 use lodkit_mesh::io::WriteOptions;
 use lodkit_particles::{
-    DecodeOptions, EncodeOptions, Frame, Mode, Placement, ThinningOptions, TriangulateOptions,
-    decode, decode_prefix, encode, stream_stats, triangulate,
+    DecodeOptions, EncodeOptions, Mode, Placement, ThinningOptions, TriangulateOptions, decode,
+    decode_prefix, encode, stream_stats, triangulate,
 };
 use serde::Serialize;
 
@@ -18,16 +18,9 @@ use crate::ui::value::{self, Real};
 /// Largest `--depth` (octree resolution R) `pop encode` takes: each level
 /// quadruples the cells of a surface, and at 12 a closed surface that
 /// fills the cube has about 10^8 of them. The library's format allows up
-/// to 16; legal depths too big for the input are refused by
-/// [`check_cost`] before any work.
+/// to 16; legal depths too big for the input are refused by the encoder
+/// before it samples (`lodkit_particles`' sampling budget).
 const MAX_DEPTH: u8 = 12;
-/// Most surface samples `pop encode` takes on: measured on a 2-core
-/// machine, 8e6 samples (an octahedron at depth 9) encode in about 5 s.
-const MAX_SAMPLES: f64 = 2e7;
-/// Most leaf cubes the surface may occupy (`2 A / side²`, about three
-/// times the particles kept): 3.6e6 of them (the octahedron at depth 10)
-/// took 720 MB, so this stays near 400 MB.
-const MAX_CELLS: f64 = 2e6;
 /// Highest level and precision a stream can hold (the format's 16-bit
 /// coordinates).
 const MAX_BITS: u8 = 16;
@@ -148,55 +141,6 @@ pub fn run(ui: &Ui, cmd: &PopCommand) -> Result<()> {
     }
 }
 
-/// Refuses (exit 2) an explicit `--depth` whose sampling of this mesh
-/// would exceed [`MAX_SAMPLES`] or [`MAX_CELLS`]: the encoder samples each
-/// triangle on a lattice of half the leaf size, and a surface of area `A`
-/// occupies about `2 A / side²` leaf cubes.
-fn check_cost(path: &Path, model: &Model, depth: u8) -> Result<()> {
-    let Model::Mesh(mesh) = model else {
-        // A cloud's cells are at most its points.
-        return Ok(());
-    };
-    let bbox = lodkit_mesh::metrics::sample::surface_bbox(mesh);
-    if bbox.is_empty() {
-        return Ok(());
-    }
-    let frame = Frame::around(bbox.min, bbox.max);
-    let side = f64::from(frame.size) / f64::from(1u32 << depth);
-    let spacing = side * 0.5;
-    let (mut samples, mut area) = (0.0f64, 0.0f64);
-    for f in &mesh.faces {
-        let [a, b, c] = f.map(|i| mesh.positions[i as usize].as_dvec3());
-        if !(a.is_finite() && b.is_finite() && c.is_finite()) {
-            continue;
-        }
-        let longest = (b - a).length().max((c - b).length()).max((a - c).length());
-        let k = (longest / spacing).ceil().clamp(1.0, 16384.0);
-        samples += (k + 1.0) * (k + 2.0) * 0.5;
-        area += (b - a).cross(c - a).length() * 0.5;
-    }
-    let cells = 2.0 * area / (side * side);
-    if samples > MAX_SAMPLES || cells > MAX_CELLS {
-        // The deepest depth within both limits, for the message.
-        let fits = (1..depth)
-            .rev()
-            .find(|&d| {
-                let r = f64::from(1u32 << (depth - d));
-                cells / (r * r) <= MAX_CELLS && samples / (r * r) <= MAX_SAMPLES
-            })
-            .unwrap_or(1);
-        return Err(crate::ui::usage(format!(
-            "--depth {depth} on {}: about {:.1e} surface samples and {:.1e} octree cells, past the {:.0e} samples and {:.0e} cells this command takes (well under 1 GB and a minute); use --depth {fits} or less",
-            path.display(),
-            samples,
-            cells,
-            MAX_SAMPLES,
-            MAX_CELLS
-        )));
-    }
-    Ok(())
-}
-
 fn run_encode(ui: &Ui, a: &EncodeArgs) -> Result<()> {
     if let (Some(n), Some(r)) = (a.precision, a.depth)
         && n < r
@@ -211,9 +155,6 @@ fn run_encode(ui: &Ui, a: &EncodeArgs) -> Result<()> {
         ));
     }
     let model = super::load(ui, &a.input)?;
-    if let Some(d) = a.depth {
-        check_cost(&a.input, &model, d)?;
-    }
     let precision = a.precision.unwrap_or(lodkit_particles::DEFAULT_PRECISION);
     let opts = EncodeOptions {
         depth: a.depth,
