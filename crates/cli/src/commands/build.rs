@@ -20,7 +20,7 @@ mod continuous;
 mod html;
 mod html_page;
 mod input;
-mod lod_chain;
+pub(crate) mod lod_chain;
 mod measure;
 mod progressive;
 mod staging;
@@ -176,9 +176,15 @@ fn write_all(
             ui,
             &reference,
             name,
+            name,
             &dir.join("lods"),
             &halving_targets(args.levels),
+            &lodkit_simplify::Options {
+                target: lodkit_simplify::Target::Ratio(1.0),
+                ..lodkit_simplify::Options::DEFAULT
+            },
             sampling,
+            &mut |_| {},
         )
     })?;
     writeln!(

@@ -2,15 +2,16 @@
 //! from the previous one — written as one PLY per level, one GLB with a
 //! node per level, and `lods.json` (per level: triangles, vertices,
 //! estimated and measured error, time).
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
-use lodkit_mesh::io::{Format, WriteOptions, encode, gltf::write_glb, write_atomic};
-use lodkit_mesh::{Model, TriMesh};
-use lodkit_simplify::{Options, Simplifier, Target, halving_targets};
+use lodkit_mesh::TriMesh;
+use lodkit_simplify::{Target, halving_targets};
 
+use super::build::Sampling;
+use super::build::lod_chain::write_chain;
 use super::simplify::SimplifyOpts;
 use crate::ui::Ui;
 use crate::ui::value::{self, Real};
@@ -89,15 +90,18 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
         .to_string();
     let start = Instant::now();
     let json = a.json;
-    let report = write_chain_reporting(
+    let reference = lodkit_mesh::metrics::Reference::new(&mesh)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", a.input.display()))?;
+    let sampling = a.samples.map_or(Sampling::Adaptive, Sampling::PerKind);
+    let chain = write_chain(
         ui,
-        &mesh,
+        &reference,
         &a.input.display().to_string(),
         &stem,
         &a.out,
         &targets,
         &opts,
-        a.samples,
+        sampling,
         &mut |l| {
             if !json {
                 ui.status(format!(
@@ -107,6 +111,7 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
             }
         },
     )?;
+    let report = chain.lods;
     let total = start.elapsed().as_secs_f64();
     let json = serde_json::to_string_pretty(&report)? + "\n";
     if a.json {
@@ -121,88 +126,4 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
         total
     ));
     Ok(())
-}
-
-/// Simplifies `mesh` into one level per target (each from the previous
-/// level), measures each level against `mesh` (its distance index built
-/// once; `samples` per kind, or [`lodkit_mesh::metrics::level_samples`]), and writes `<stem>_lodN.ply`, `<stem>_lods.glb` and `lods.json`
-/// into `out`, calling `on_level` with each level as soon as it is
-/// measured and written (so a long chain reports one line per level as it
-/// goes, on a terminal or not).
-#[allow(clippy::too_many_arguments)]
-pub fn write_chain_reporting(
-    ui: &Ui,
-    mesh: &TriMesh,
-    input_label: &str,
-    stem: &str,
-    out: &Path,
-    targets: &[Target],
-    opts: &Options,
-    samples: Option<usize>,
-    on_level: &mut dyn FnMut(&Level),
-) -> Result<Lods> {
-    std::fs::create_dir_all(out)
-        .with_context(|| format!("{}: cannot create output directory", out.display()))?;
-    let mut ws = Simplifier::new();
-    let mut levels = Vec::new();
-    let mut meshes: Vec<(String, TriMesh)> = Vec::new();
-    let step = ui.spinner("simplifying");
-    let chain = ws
-        .lod_chain(mesh, opts, targets)
-        .map_err(|e| anyhow::anyhow!("{input_label}: {e}"))?;
-    step.finish();
-    let reference = lodkit_mesh::metrics::Reference::new(mesh)
-        .map_err(|e| anyhow::anyhow!("{input_label}: {e}"))?;
-    for (i, l) in chain.into_iter().enumerate() {
-        let name = format!("{stem}_lod{}", i + 1);
-        let file = format!("{name}.ply");
-        let step = ui.spinner(&format!("measuring level {}", i + 1));
-        let (mean, max) = if l.mesh.faces.is_empty() {
-            (f64::NAN, f64::NAN)
-        } else {
-            let c = reference.compare_level(&l.mesh, samples)?;
-            (c.symmetric.mean, c.symmetric.max)
-        };
-        step.finish();
-        let bytes = encode(
-            Format::Ply,
-            &Model::Mesh(l.mesh.clone()),
-            WriteOptions::default(),
-        )
-        .map_err(|e| anyhow::anyhow!("{}: {e}", out.join(&file).display()))?;
-        write_atomic(&out.join(&file), &bytes)?;
-        levels.push(Level {
-            level: i + 1,
-            file,
-            target_triangles: l.report.target_faces,
-            triangles: l.report.triangles,
-            vertices: l.report.vertices,
-            estimated_error: l.report.estimated_error,
-            measured_mean_error: mean,
-            measured_max_error: max,
-            seconds: l.report.seconds,
-            stop: l.report.stop.to_string(),
-        });
-        on_level(levels.last().expect("just pushed"));
-        meshes.push((name, l.mesh));
-    }
-    let glb_name = format!("{stem}_lods.glb");
-    let named: Vec<(&str, &TriMesh)> = meshes
-        .iter()
-        .filter(|(_, m)| !m.faces.is_empty())
-        .map(|(n, m)| (n.as_str(), m))
-        .collect();
-    let glb =
-        write_glb(&named).map_err(|e| anyhow::anyhow!("{}: {e}", out.join(&glb_name).display()))?;
-    write_atomic(&out.join(&glb_name), &glb)?;
-    let report = Lods {
-        input: input_label.to_string(),
-        input_triangles: mesh.faces.len(),
-        input_vertices: mesh.positions.len(),
-        glb: glb_name,
-        levels,
-    };
-    let json = serde_json::to_string_pretty(&report)? + "\n";
-    write_atomic(&out.join("lods.json"), json.as_bytes())?;
-    Ok(report)
 }

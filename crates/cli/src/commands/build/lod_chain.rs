@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use lodkit_mesh::io::{Format, WriteOptions, encode, gltf::write_glb, write_atomic};
 use lodkit_mesh::metrics::Reference;
 use lodkit_mesh::{Model, TriMesh};
@@ -22,26 +22,32 @@ pub struct Chain {
     pub measured: Vec<Option<Measured>>,
 }
 
-/// Simplifies the reference's mesh into one level per target, measures
-/// each with `sampling`, and writes the files into `out`.
+/// Simplifies the reference's mesh into one level per target (each from
+/// the previous level, with `opts`), measures each with `sampling`, and
+/// writes `<stem>_lodN.ply`, `<stem>_lods.glb` and `lods.json` into `out`
+/// (`input` is what `lods.json` names as the input, and what errors
+/// name). `on_level` sees each level as soon as it is measured and
+/// written, so a long chain can report one line per level as it goes.
+/// `build` and `lodkit lods` both write their chains here.
+#[allow(clippy::too_many_arguments)]
 pub fn write_chain(
     ui: &Ui,
     reference: &Reference,
+    input: &str,
     stem: &str,
     out: &Path,
     targets: &[Target],
+    opts: &Options,
     sampling: Sampling,
+    on_level: &mut dyn FnMut(&Level),
 ) -> Result<Chain> {
     let mesh = reference.mesh();
-    std::fs::create_dir_all(out)?;
+    std::fs::create_dir_all(out)
+        .with_context(|| format!("{}: cannot create output directory", out.display()))?;
     let step = ui.spinner("simplifying");
-    let opts = Options {
-        target: Target::Ratio(1.0),
-        ..Options::DEFAULT
-    };
     let chain = Simplifier::new()
-        .lod_chain(mesh, &opts, targets)
-        .map_err(|e| anyhow::anyhow!("{stem}: {e}"))?;
+        .lod_chain(mesh, opts, targets)
+        .map_err(|e| anyhow::anyhow!("{input}: {e}"))?;
     step.finish();
     let mut levels = Vec::with_capacity(chain.len());
     let mut meshes = Vec::with_capacity(chain.len());
@@ -56,7 +62,7 @@ pub fn write_chain(
             &Model::Mesh(l.mesh.clone()),
             WriteOptions::default(),
         )
-        .map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
+        .map_err(|e| anyhow::anyhow!("{}: {e}", out.join(&file).display()))?;
         write_atomic(&out.join(&file), &bytes)?;
         levels.push(Level {
             level: i + 1,
@@ -70,6 +76,7 @@ pub fn write_chain(
             seconds: l.report.seconds,
             stop: l.report.stop.to_string(),
         });
+        on_level(levels.last().expect("just pushed"));
         meshes.push(l.mesh);
         measured.push(m);
     }
@@ -83,10 +90,11 @@ pub fn write_chain(
         .filter(|(_, m)| !m.faces.is_empty())
         .map(|(n, m)| (n.as_str(), m))
         .collect();
-    let glb = write_glb(&named).map_err(|e| anyhow::anyhow!("{glb_name}: {e}"))?;
+    let glb =
+        write_glb(&named).map_err(|e| anyhow::anyhow!("{}: {e}", out.join(&glb_name).display()))?;
     write_atomic(&out.join(&glb_name), &glb)?;
     let lods = Lods {
-        input: stem.to_string(),
+        input: input.to_string(),
         input_triangles: mesh.faces.len(),
         input_vertices: mesh.positions.len(),
         glb: glb_name,
