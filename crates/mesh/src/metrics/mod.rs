@@ -147,24 +147,7 @@ impl CompareOptions {
 /// over rayon's threads; memory `O(V + F)` plus one chunk of points per
 /// thread (samples are generated chunk by chunk, never all at once).
 pub fn compare(a: &TriMesh, b: &TriMesh, opts: &CompareOptions) -> Result<CompareReport> {
-    let ia = SurfaceIndex::new(a).map_err(|e| name_err("A", e))?;
-    let ib = SurfaceIndex::new(b).map_err(|e| name_err("B", e))?;
-    let n = opts.resolved_samples(a.faces.len(), b.faces.len());
-    let fixed = CompareOptions {
-        samples: Some(n),
-        ..*opts
-    };
-    let a_to_b = one_sided(a, &ib, &fixed).map_err(|e| name_err("A", e))?;
-    let b_to_a = one_sided(b, &ia, &fixed).map_err(|e| name_err("B", e))?;
-    let union = ia.bbox().union(&ib.bbox()).diagonal() as f64;
-    let symmetric = SymmetricStats::combine(&a_to_b, &b_to_a, union);
-    Ok(CompareReport {
-        a_to_b,
-        b_to_a,
-        symmetric,
-        samples_per_kind: n as u64,
-        seed: opts.seed,
-    })
+    Reference::new(a)?.compare(b, opts)
 }
 
 /// Samples `sampled` and measures each sample's distance to `target` (one

@@ -72,9 +72,9 @@ impl<'m> Reference<'m> {
         &self.index
     }
 
-    /// Exactly [`compare`](super::compare)`(input, other, opts)` (A is the
-    /// input, B is `other`; same figures, bit for bit), without rebuilding
-    /// the input's index. Errors as `compare` does.
+    /// [`compare`](super::compare)`(input, other, opts)` (A is the input,
+    /// B is `other`), without rebuilding the input's index: `compare` is
+    /// this call on a fresh `Reference`. Errors as `compare` does.
     pub fn compare(&self, other: &TriMesh, opts: &CompareOptions) -> Result<CompareReport> {
         let ib = SurfaceIndex::new(other).map_err(|e| name_err("B", e))?;
         let n = opts.resolved_samples(self.mesh.faces.len(), other.faces.len());
