@@ -135,6 +135,20 @@ fn fail(msg: impl Into<String>) {
     with_state(|s| s.error = msg.into());
 }
 
+/// An export's return value from a slot call: the count on success, -1
+/// with the error message recorded on failure, -1 for a closed handle
+/// (whose message `with_slot` recorded).
+fn status(r: Option<Result<i32, String>>) -> i32 {
+    match r {
+        Some(Ok(n)) => n,
+        Some(Err(e)) => {
+            fail(e);
+            -1
+        }
+        None => -1,
+    }
+}
+
 /// Runs `f` on handle `h`'s slot; `None` (and an error message) when the
 /// handle is not open.
 fn with_slot<T>(h: u32, f: impl FnOnce(&mut Slot) -> T) -> Option<T> {
@@ -267,14 +281,7 @@ pub extern "C" fn lk_pop_decode(h: u32) -> i32 {
         }
         Slot::Mco { .. } => Err("not a .pop handle".to_string()),
     });
-    match r {
-        Some(Ok(n)) => n,
-        Some(Err(e)) => {
-            fail(e);
-            -1
-        }
-        None => -1,
-    }
+    status(r)
 }
 
 fn pop_query(h: u32, f: impl FnOnce(&PopPrefix) -> usize) -> i32 {
@@ -297,14 +304,7 @@ pub extern "C" fn lk_pop_usable(h: u32) -> i32 {
         Slot::Pop { stream, .. } => engine::pop_stream_read(stream),
         Slot::Mco { .. } => Err("not a .pop handle".to_string()),
     });
-    match r {
-        Some(Ok(n)) => n as i32,
-        Some(Err(e)) => {
-            fail(e);
-            -1
-        }
-        None => -1,
-    }
+    status(r.map(|r| r.map(|n| n as i32)))
 }
 
 /// Octree depth `R` (the finest level's number), -1 before the first level.
@@ -348,14 +348,7 @@ pub extern "C" fn lk_pop_mesh(h: u32, level: u32) -> i32 {
         Slot::Pop { .. } => Err("no level decoded yet".to_string()),
         Slot::Mco { .. } => Err("not a .pop handle".to_string()),
     });
-    match r {
-        Some(Ok(n)) => n,
-        Some(Err(e)) => {
-            fail(e);
-            -1
-        }
-        None => -1,
-    }
+    status(r)
 }
 
 // ---- .mco -----------------------------------------------------------------
@@ -435,14 +428,7 @@ pub unsafe extern "C" fn lk_mco_stream_push(h: u32, ptr: *const u8, len: usize) 
         }
         _ => Err("not a streamed .mco handle".to_string()),
     });
-    match r {
-        Some(Ok(n)) => n,
-        Some(Err(e)) => {
-            fail(e);
-            -1
-        }
-        None => -1,
-    }
+    status(r)
 }
 
 /// 1 when every chunk of stream `h` has been read (or `h` was opened
