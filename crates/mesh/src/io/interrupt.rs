@@ -15,16 +15,20 @@
 //! `KeyboardInterrupt`) keeps its own handling. The handler is installed
 //! lazily, at the first write after opting in, so a process that never
 //! writes (a server with its own graceful Ctrl-C) is untouched. On
-//! non-Unix targets the registry is kept but no handler is installed.
+//! non-Unix targets the registry is kept but no handler is installed; on
+//! wasm32, where nothing writes files, there is no registry.
 //!
 //! Left open: a signal in the instant between the temp file's creation
 //! and its registration (a few instructions) leaves it behind; SIGKILL
 //! cannot be caught.
 
+#[cfg(not(target_arch = "wasm32"))]
 use std::path::{Path, PathBuf};
+#[cfg(not(target_arch = "wasm32"))]
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, Ordering};
 
+#[cfg(not(target_arch = "wasm32"))]
 /// Temp files that exist now, in creation order (a write may be running in
 /// several threads at once).
 static PENDING: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
@@ -40,11 +44,13 @@ pub fn remove_temp_files_on_signal() {
     ENABLED.store(true, Ordering::SeqCst);
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 /// A temp file listed in the registry while this lives.
 pub(crate) struct Pending {
     path: PathBuf,
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 impl Pending {
     /// Lists `path` (installing the handler first if the process opted in).
     pub(crate) fn new(path: &Path) -> Pending {
@@ -59,6 +65,7 @@ impl Pending {
     }
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 impl Drop for Pending {
     fn drop(&mut self) {
         let mut list = lock();
@@ -68,6 +75,7 @@ impl Drop for Pending {
     }
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 /// The registry, even if a thread panicked while holding it (the list
 /// itself is always valid).
 fn lock() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
