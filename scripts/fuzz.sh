@@ -52,7 +52,11 @@ for t in "${targets[@]}"; do
     # -O: release with debug assertions; one process (no -jobs, which would
     # log to fuzz-N.log instead), RSS and malloc capped at
     # libFuzzer's default 2 GB so a runaway allocation is a finding.
-    if ! nice -n 19 cargo +nightly fuzz run -O "$name" "$corpus" -- \
+    # fuzz/seeds/<target>/ (valid files the crate's tests load) is read as
+    # a second corpus and never written to or minimised.
+    seeds=()
+    [ -d "$fuzz/seeds/$name" ] && seeds=("$fuzz/seeds/$name")
+    if ! nice -n 19 cargo +nightly fuzz run -O "$name" "$corpus" "${seeds[@]}" -- \
         -max_total_time=$((minutes * 60)) -rss_limit_mb=2048 \
         -malloc_limit_mb=2048 -print_final_stats=1 >"$log" 2>&1; then
         status="CRASH (see $log and artifacts/$name/)"
