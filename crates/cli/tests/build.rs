@@ -323,3 +323,51 @@ fn no_measure_skips_every_measurement() {
     );
     assert!(out.join("report.html").is_file());
 }
+
+/// A build ended by SIGTERM removes its staging folder and leaves `--out`
+/// as it was (absent here); a staging folder left by a build killed
+/// outright (its process gone) is removed by the next build of that `--out`.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_killed_build_leaves_no_folder_behind() {
+    use std::time::{Duration, Instant};
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_lodkit"))
+        .args(["-q", "build", &bunny(), "--out", s(&out)])
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let staged = dir.path().join(format!(".out.lodkit-tmp-{}", child.id()));
+    let start = Instant::now();
+    // Past the input check: the staging folder has files in it.
+    while !std::fs::read_dir(&staged).is_ok_and(|mut d| d.next().is_some()) {
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "no staging folder"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let sent = std::process::Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(sent.success());
+    assert!(!child.wait().unwrap().success());
+    assert!(!out.exists());
+    no_staging_left(&out);
+
+    // A dead process's folder (pids above the kernel's pid_max never run).
+    let stale = dir.path().join(".out.lodkit-tmp-4294967294");
+    std::fs::create_dir_all(stale.join("lods")).unwrap();
+    std::fs::write(stale.join("lods/x.ply"), b"half").unwrap();
+    build_ok(&small_input(dir.path()), &out);
+    no_staging_left(&out);
+}
+
+/// The small bunny saved as a PLY in `dir`.
+fn small_input(dir: &Path) -> PathBuf {
+    let p = dir.join("small_in.ply");
+    save(&p, &Model::Mesh(small_bunny()), WriteOptions::default()).unwrap();
+    p
+}

@@ -1,7 +1,7 @@
 //! Ctrl-C in the middle of a write removes the temporary file (issue 14,
 //! item 13): this test runs itself again as a child that opts in, starts a
 //! write that stalls half-way, and is sent SIGINT / SIGTERM while the temp
-//! file exists.
+//! file exists. A folder listed with `TempGuard` goes the same way.
 
 #![cfg(unix)]
 
@@ -11,6 +11,54 @@ use std::process::Command;
 use std::time::{Duration, Instant};
 
 const CHILD: &str = "LODKIT_INTERRUPT_TEST_TARGET";
+const CHILD_DIR: &str = "LODKIT_INTERRUPT_TEST_DIR";
+
+/// The child: stages a folder with a file in it and never finishes.
+#[test]
+fn child_stager() {
+    let Some(dir) = std::env::var_os(CHILD_DIR) else {
+        return; // only meaningful as the child of the test below
+    };
+    lodkit_mesh::io::interrupt::remove_temp_files_on_signal();
+    let dir = PathBuf::from(dir);
+    let _guard = lodkit_mesh::io::interrupt::TempGuard::new(&dir);
+    std::fs::create_dir(&dir).unwrap();
+    std::fs::create_dir(dir.join("lods")).unwrap();
+    std::fs::write(dir.join("lods/a.ply"), b"half").unwrap();
+    std::fs::write(dir.join("ready"), b"").unwrap();
+    std::thread::sleep(Duration::from_secs(60));
+    panic!("the staging was not interrupted");
+}
+
+#[test]
+fn sigterm_removes_a_guarded_folder() {
+    if std::env::var_os(CHILD_DIR).is_some() {
+        return;
+    }
+    let parent = tempfile::tempdir().unwrap();
+    let dir = parent.path().join(".out.staging");
+    let mut child = Command::new(std::env::current_exe().unwrap())
+        .args(["--exact", "child_stager", "--nocapture", "--test-threads=1"])
+        .env(CHILD_DIR, &dir)
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while !dir.join("ready").exists() {
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "no folder appeared"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let sent = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(sent.success());
+    let status = child.wait().unwrap();
+    assert!(!status.success());
+    assert!(!dir.exists(), "the staged folder was left behind");
+}
 
 /// The child: writes to `$CHILD` and never finishes on its own.
 #[test]

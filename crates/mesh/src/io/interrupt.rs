@@ -18,6 +18,10 @@
 //! non-Unix targets the registry is kept but no handler is installed; on
 //! wasm32, where nothing writes files, there is no registry.
 //!
+//! A caller that stages a whole folder (the CLI's `build`) lists it with
+//! [`TempGuard::new`]; the handler removes a listed folder with everything
+//! in it.
+//!
 //! Left open: a signal in the instant between the temp file's creation
 //! and its registration (a few instructions) leaves it behind; SIGKILL
 //! cannot be caught.
@@ -76,6 +80,26 @@ impl Drop for Pending {
 }
 
 #[cfg(not(target_arch = "wasm32"))]
+/// A temporary file or folder of the caller's, removed (a folder with
+/// everything in it) if the process dies of SIGINT, SIGTERM or SIGHUP
+/// while this guard lives and the process opted in with
+/// [`remove_temp_files_on_signal`]. Dropping the guard only unlists the
+/// path: removing or renaming it on the normal path is the caller's job.
+pub struct TempGuard {
+    _pending: Pending,
+}
+
+#[cfg(not(target_arch = "wasm32"))]
+impl TempGuard {
+    /// Lists `path` until the guard is dropped. Cost: one lock and a push.
+    pub fn new(path: &Path) -> TempGuard {
+        TempGuard {
+            _pending: Pending::new(path),
+        }
+    }
+}
+
+#[cfg(not(target_arch = "wasm32"))]
 /// The registry, even if a thread panicked while holding it (the list
 /// itself is always valid).
 fn lock() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
@@ -98,7 +122,12 @@ fn install() {
                 // renames a file past this point.
                 let list = lock();
                 for p in list.iter() {
-                    let _ = std::fs::remove_file(p);
+                    // A listed folder is a staged output (`TempGuard`).
+                    if std::fs::symlink_metadata(p).is_ok_and(|m| m.is_dir()) {
+                        let _ = std::fs::remove_dir_all(p);
+                    } else {
+                        let _ = std::fs::remove_file(p);
+                    }
                 }
                 let _ = signal_hook::low_level::emulate_default_handler(sig);
                 std::process::exit(128 + sig);

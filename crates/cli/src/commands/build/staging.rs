@@ -1,12 +1,17 @@
 //! The output folder written as a whole or not at all: every file goes
 //! into a temporary sibling folder, which replaces `--out` only when the
-//! build has finished. A failed build removes its temporary folder; a
-//! killed one leaves it beside `--out` (named `.NAME.lodkit-tmp-PID`),
-//! and `--out` as it was in both cases.
+//! build has finished. A failed build removes its temporary folder, and
+//! so does one ended by Ctrl-C, SIGTERM or SIGHUP (the folder is listed
+//! with `lodkit_mesh::io::interrupt::TempGuard`); `--out` stays as it was.
+//! A build killed outright (SIGKILL, power loss) leaves the hidden
+//! `.NAME.lodkit-tmp-PID` beside `--out`, never a folder at `--out`; the
+//! next build of the same `--out` removes such folders whose process is
+//! gone (on Linux, where `/proc` tells).
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
+use lodkit_mesh::io::interrupt::TempGuard;
 
 use crate::ui::Usage;
 
@@ -17,6 +22,8 @@ pub struct Staging {
     /// Where it is written meanwhile (a sibling of `target`).
     dir: PathBuf,
     done: bool,
+    /// Keeps `dir` listed for removal on a signal until the build ends.
+    _guard: TempGuard,
 }
 
 impl Staging {
@@ -37,17 +44,20 @@ impl Staging {
         };
         std::fs::create_dir_all(&parent)
             .with_context(|| format!("{}: cannot create folder", parent.display()))?;
+        remove_stale(&parent, &name);
         let dir = parent.join(format!(".{name}.lodkit-tmp-{}", std::process::id()));
         if dir.exists() {
             std::fs::remove_dir_all(&dir)
                 .with_context(|| format!("{}: cannot remove stale folder", dir.display()))?;
         }
+        let guard = TempGuard::new(&dir);
         std::fs::create_dir(&dir)
             .with_context(|| format!("{}: cannot create output folder", dir.display()))?;
         Ok(Staging {
             target: target.to_path_buf(),
             dir,
             done: false,
+            _guard: guard,
         })
     }
 
@@ -93,6 +103,39 @@ impl Drop for Staging {
     fn drop(&mut self) {
         if !self.done {
             let _ = std::fs::remove_dir_all(&self.dir);
+        }
+    }
+}
+
+/// Removes `.NAME.lodkit-tmp-PID` and `.NAME.lodkit-old-PID` folders in
+/// `parent` whose process no longer runs: what a build killed outright
+/// left. Only where `/proc/self` exists (Linux): elsewhere a live build's
+/// folder cannot be told from a dead one's, so nothing is removed. Errors
+/// are ignored (the folder is only litter; the build does not need it gone).
+fn remove_stale(parent: &Path, name: &str) {
+    if !Path::new("/proc/self").exists() {
+        return;
+    }
+    let Ok(entries) = std::fs::read_dir(parent) else {
+        return;
+    };
+    let me = std::process::id();
+    for e in entries.flatten() {
+        let file = e.file_name();
+        let Some(file) = file.to_str() else { continue };
+        let Some(rest) = file.strip_prefix('.').and_then(|f| f.strip_prefix(name)) else {
+            continue;
+        };
+        let pid = rest
+            .strip_prefix(".lodkit-tmp-")
+            .or_else(|| rest.strip_prefix(".lodkit-old-"))
+            .and_then(|p| p.parse::<u32>().ok());
+        let Some(pid) = pid else { continue };
+        if pid != me
+            && !Path::new(&format!("/proc/{pid}")).exists()
+            && e.file_type().is_ok_and(|t| t.is_dir())
+        {
+            let _ = std::fs::remove_dir_all(e.path());
         }
     }
 }
