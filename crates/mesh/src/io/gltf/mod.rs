@@ -70,13 +70,16 @@
 mod buffers;
 mod color;
 mod glb;
+mod materials_read;
+mod materials_write;
 mod read;
 mod write;
 
 #[cfg(test)]
 mod tests;
 
-pub use read::{INSTANCING_FLOOR, MAX_INSTANCING_GROWTH, read};
+pub use materials_write::write_scene_glb;
+pub use read::{INSTANCING_FLOOR, MAX_INSTANCING_GROWTH, read, read_scene};
 pub use write::write_glb;
 
 #[cfg(doc)]
