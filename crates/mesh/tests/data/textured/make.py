@@ -62,11 +62,11 @@ def scan(src):
                 idx[(r, c)] = len(P)
                 P.append((float(verts[v]["x"]), float(verts[v]["y"]), float(verts[v]["z"])))
                 UV.append(((c + 0.5) / C, 1.0 - (r + 0.5) / R))
-    # Texture: the crop's colours at 2 texels per cell (nearest sample).
-    tex = np.zeros((R * 2, C * 2, 3), np.uint8)
-    for y in range(R * 2):
-        for x in range(C * 2):
-            v = grid[r0 + y * step // 2, c0 + x * step // 2]
+    # Texture: the crop's colours, 64 x 64 texels (a power of two, nearest sample).
+    tex = np.zeros((64, 64, 3), np.uint8)
+    for y in range(64):
+        for x in range(64):
+            v = grid[r0 + int((y + 0.5) / 64 * R * step), c0 + int((x + 0.5) / 64 * C * step)]
             if v >= 0:
                 tex[y, x] = (verts[v]["r"], verts[v]["g"], verts[v]["b"])
     Image.fromarray(tex).save(out("mug_scan.png"), optimize=True)
