@@ -28,8 +28,7 @@ pub fn split_by_material(sm: &SceneMesh) -> (TriMesh, Vec<u32>) {
     let mut first = vec![UNSET; n];
     let mut extra: rustc_hash::FxHashMap<(u32, u32), u32> = Default::default();
     let mut out = m.clone();
-    let mut groups: Vec<u32> = Vec::with_capacity(n);
-    groups.resize(n, 0);
+    let mut groups: Vec<u32> = vec![0; n];
     for (fi, &mat) in sm.face_materials.iter().enumerate() {
         for c in 0..3 {
             let v = m.faces[fi][c];

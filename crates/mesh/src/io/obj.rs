@@ -5,7 +5,8 @@
 //! own vertex. Polygons are fanned from their first corner. All objects and
 //! groups are merged into one [`TriMesh`]; vertices come out in order of
 //! first use by a face, and `v` lines no face uses are dropped. Materials are
-//! ignored (a missing or broken `.mtl` is not an error); `l` (polyline) and
+//! ignored here (a missing or broken `.mtl` is not an error; `io::mtl`
+//! reads them into a scene); `l` (polyline) and
 //! `p` (point) elements are skipped. Attributes:
 //! - UVs (`vt`) are kept as stored: OBJ's origin is bottom-left, like lodkit's;
 //! - normals (`vn`) are kept as stored (not renormalised);

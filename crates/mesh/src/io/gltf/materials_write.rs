@@ -196,7 +196,7 @@ fn material_json(
     // UVs to sample it by (lodkit keeps TEXCOORD_0 alone).
     let slot = |r: Option<TextureRef>| {
         r.filter(|_| uv)
-            .and_then(|r| tex[r.texture].map(|t| json::Index::new(t)))
+            .and_then(|r| tex[r.texture].map(json::Index::new))
     };
     let info = |r: Option<TextureRef>| {
         slot(r).map(|index| json::texture::Info {
@@ -360,10 +360,7 @@ pub fn write_scene_glb(scene: &Scene) -> Result<Vec<u8>, ParseError> {
         if tex_used[i] {
             b.root.textures.push(json::Texture {
                 name: t.name.clone(),
-                sampler: t
-                    .sampler
-                    .and_then(|s| smp_new[s])
-                    .map(|s| json::Index::new(s)),
+                sampler: t.sampler.and_then(|s| smp_new[s]).map(json::Index::new),
                 source: json::Index::new(img_new[t.image].unwrap_or(0)),
                 extensions: None,
                 extras: None,
