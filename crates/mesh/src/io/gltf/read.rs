@@ -554,7 +554,7 @@ fn read_parts(
 /// primitive's material), the nodes reachable from the default scene keep
 /// their names, local transforms and hierarchy (renumbered depth first),
 /// and the material, texture, sampler and image tables are read
-/// ([`super::materials_read`]). Same checks and errors as [`read`];
+/// (`materials_read`). Same checks and errors as [`read`];
 /// instances are not expanded (a node refers to its mesh).
 pub fn read_scene(bytes: &[u8], base_dir: Option<&Path>) -> Result<Scene, ParseError> {
     let (doc, bin) = parse_document(bytes)?;
