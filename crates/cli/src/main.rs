@@ -88,6 +88,10 @@ enum Command {
         /// number >= 0) before writing.
         #[arg(long, value_name = "DIST", value_parser = ui::value::Real::NON_NEGATIVE.f32())]
         weld: Option<f32>,
+        /// Merge every mesh, primitive and instance into one mesh, dropping
+        /// materials (by default .glb and .obj outputs keep them).
+        #[arg(long)]
+        merge: bool,
     },
     /// Metro-style surface distance between two meshes (Hausdorff, mean, RMS).
     #[command(
@@ -130,7 +134,8 @@ fn main() -> ExitCode {
             output,
             ascii,
             weld,
-        } => commands::convert::run(&ui, &input, &output, ascii, weld),
+            merge,
+        } => commands::convert::run(&ui, &input, &output, ascii, weld, merge),
         Command::Compare(args) => commands::compare::run(&ui, &args),
         Command::Simplify(args) => commands::simplify::run(&ui, &args),
         Command::Lods(args) => commands::lods::run(&ui, &args),

@@ -17,6 +17,7 @@
 //! | [`io::load`], [`io::load_mesh`], [`io::decode`] | file or bytes → model; one-line errors naming the file, never a panic |
 //! | [`io::save`], [`io::save_mesh`], [`io::encode`], [`io::write_atomic`] | model → bytes → file, atomic and deterministic |
 //! | [`TriMesh`], [`PointCloud`], [`RangeImage`], [`Model`], [`Aabb`], [`Pose`] | the types and their invariants (`validate`) |
+//! | [`Scene`], [`io::load_scene`], [`io::save_scene`] | meshes with per-face materials, nodes, textures and images (kept as bytes) beside `TriMesh` ([`scene`]) |
 //! | [`metrics::compare`], [`metrics::one_sided`] | symmetric / one-sided Metro distance, deterministic for a seed |
 //! | [`info::model_info`] | counts, topology defects, genus |
 //! | [`topology::UnionFind`], [`topology::edge_multiplicities`], [`topology::non_manifold_faces`], [`topology::topology_stats`] | shared connectivity primitives |
@@ -49,6 +50,7 @@ pub mod io;
 pub mod mesh;
 pub mod metrics;
 pub mod normals;
+pub mod scene;
 pub mod shapes;
 pub mod topology;
 pub mod weld;
@@ -56,3 +58,4 @@ pub mod weld;
 pub use error::{Error, ParseError, Result};
 pub use glam;
 pub use mesh::{Aabb, Model, PointCloud, Pose, RangeImage, TriMesh};
+pub use scene::{Scene, SceneMesh};

@@ -29,8 +29,35 @@ impl Simplifier {
         opts: &Options,
         targets: &[Target],
     ) -> Result<Vec<Simplified>, Error> {
+        Ok(self
+            .chain_with(mesh, None, opts, targets)?
+            .into_iter()
+            .map(|(s, _)| s)
+            .collect())
+    }
+
+    /// [`Simplifier::lod_chain`] with one group id per vertex, as
+    /// [`Simplifier::simplify_grouped`]: each level comes with the group of
+    /// each of its vertices.
+    pub fn lod_chain_grouped(
+        &mut self,
+        mesh: &TriMesh,
+        groups: &[u32],
+        opts: &Options,
+        targets: &[Target],
+    ) -> Result<Vec<(Simplified, Vec<u32>)>, Error> {
+        self.chain_with(mesh, Some(groups), opts, targets)
+    }
+
+    fn chain_with(
+        &mut self,
+        mesh: &TriMesh,
+        groups: Option<&[u32]>,
+        opts: &Options,
+        targets: &[Target],
+    ) -> Result<Vec<(Simplified, Vec<u32>)>, Error> {
         let mut t0 = std::time::Instant::now();
-        self.start(mesh, opts)?;
+        self.start(mesh, opts, groups)?;
         let mut out = Vec::with_capacity(targets.len());
         for &t in targets {
             let goal = t.faces(self.input_faces);
@@ -38,16 +65,24 @@ impl Simplifier {
             let level = export(&self.m);
             let estimated_error = self.m.max_error();
             let level_done = std::time::Instant::now();
-            out.push(Simplified {
-                report: self.report(
-                    goal,
-                    &level,
-                    estimated_error,
-                    stop,
-                    t0.elapsed().as_secs_f64(),
-                ),
-                mesh: level,
-            });
+            let level_groups = if groups.is_some() {
+                self.m.group.clone()
+            } else {
+                Vec::new()
+            };
+            out.push((
+                Simplified {
+                    report: self.report(
+                        goal,
+                        &level,
+                        estimated_error,
+                        stop,
+                        t0.elapsed().as_secs_f64(),
+                    ),
+                    mesh: level,
+                },
+                level_groups,
+            ));
             t0 = level_done;
         }
         Ok(out)

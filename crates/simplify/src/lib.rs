@@ -16,7 +16,8 @@
 //! | [`simplify`] | one mesh to one budget (`Options::target`) |
 //! | [`lod_chain`] | one mesh to several budgets, each level from the previous |
 //! | [`halving_targets`] | the targets 1/2, 1/4, … for [`lod_chain`] |
-//! | [`Simplifier`] | the same two calls on a reusable workspace (no allocation once warm) |
+//! | [`Simplifier`] | the same two calls on a reusable workspace (no allocation once warm); `simplify_grouped` / `lod_chain_grouped` keep vertex groups (materials) apart like seams |
+//! | [`scene::simplify_scene`], [`scene::scene_lod_chain`] | every mesh of a [`lodkit_mesh::Scene`], materials kept, no crack at material borders |
 //! | [`Options`], [`Target`], [`AttributeWeights`] | every knob, with named defaults |
 //! | [`Simplified`], [`LevelReport`], [`StopReason`] | the output mesh and why it stopped where it did |
 //! | [`Error`] | why simplification could not start |
@@ -96,6 +97,7 @@ mod prune;
 mod quadric;
 mod ring_table;
 mod rs_heap;
+pub mod scene;
 mod simplifier;
 mod work_mesh;
 

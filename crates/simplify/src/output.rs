@@ -72,6 +72,15 @@ pub fn compact(m: &mut WorkMesh, index: &mut Vec<u32>) {
         }
         m.attr.truncate(next as usize * k);
     }
+    if !m.group.is_empty() && !has_wedges {
+        for v in 0..n {
+            let i = index[v];
+            if i != NONE {
+                m.group[i as usize] = m.group[v];
+            }
+        }
+        m.group.truncate(next as usize);
+    }
     let idx = &index[..];
     for f in &mut m.faces {
         for v in f.iter_mut() {
@@ -99,11 +108,17 @@ pub fn compact(m: &mut WorkMesh, index: &mut Vec<u32>) {
                 index[x] = next;
                 if next as usize != x {
                     m.attr.copy_within(x * k..x * k + k, next as usize * k);
+                    if !m.group.is_empty() {
+                        m.group[next as usize] = m.group[x];
+                    }
                 }
                 next += 1;
             }
         }
         m.attr.truncate(next as usize * k);
+        if !m.group.is_empty() {
+            m.group.truncate(next as usize);
+        }
         for f in &mut m.wedges {
             for x in f.iter_mut() {
                 *x = index[*x as usize];

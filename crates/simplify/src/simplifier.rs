@@ -70,8 +70,37 @@ impl Simplifier {
     /// vertex and face arrays instead of copying them (that copy would be
     /// the peak), so the next call allocates those two again.
     pub fn simplify(&mut self, mesh: &TriMesh, opts: &Options) -> Result<Simplified, Error> {
+        self.simplify_with(mesh, None, opts)
+    }
+
+    /// [`Simplifier::simplify`] with one group id per vertex (a material,
+    /// a part): a border between groups is treated as an attribute seam,
+    /// so both sides move together (no crack opens between groups) and
+    /// every output vertex belongs to exactly one group. Returns the output
+    /// and the group of each output vertex. For a face to keep its group,
+    /// its three corners should be in it (split shared vertices per
+    /// group first); a face's group is then that of any corner. Errors: as
+    /// [`Simplifier::simplify`], and [`Error::AttributeLength`] when
+    /// `groups` is not one per vertex. Cost: as `simplify`, plus the
+    /// wedge table every grouped mesh needs.
+    pub fn simplify_grouped(
+        &mut self,
+        mesh: &TriMesh,
+        groups: &[u32],
+        opts: &Options,
+    ) -> Result<(Simplified, Vec<u32>), Error> {
+        let out = self.simplify_with(mesh, Some(groups), opts)?;
+        Ok((out, std::mem::take(&mut self.m.group)))
+    }
+
+    fn simplify_with(
+        &mut self,
+        mesh: &TriMesh,
+        groups: Option<&[u32]>,
+        opts: &Options,
+    ) -> Result<Simplified, Error> {
         let t0 = std::time::Instant::now();
-        self.start(mesh, opts)?;
+        self.start(mesh, opts, groups)?;
         let goal = opts.target.faces(self.input_faces);
         let stop = self.run_to(goal, opts);
         let estimated_error = self.m.max_error();
@@ -94,7 +123,12 @@ impl Simplifier {
         self.peak_bytes
     }
 
-    pub(crate) fn start(&mut self, mesh: &TriMesh, opts: &Options) -> Result<(), Error> {
+    pub(crate) fn start(
+        &mut self,
+        mesh: &TriMesh,
+        opts: &Options,
+        groups: Option<&[u32]>,
+    ) -> Result<(), Error> {
         self.peak_bytes = 0;
         self.passes = 0;
         self.collapses = 0;
@@ -103,7 +137,8 @@ impl Simplifier {
         // The ring table's offset array is free until the first pass: it
         // serves as the weld map here and as the vertex index table of
         // every compaction (it is rebuilt at the start of each pass).
-        self.m.load(mesh, &opts.weights, &mut self.rings.off)?;
+        self.m
+            .load(mesh, &opts.weights, groups, &mut self.rings.off)?;
         self.m.border_weight = crate::quadric::BORDER_WEIGHT;
         self.note_memory();
         if let Some(p) = opts.prune {

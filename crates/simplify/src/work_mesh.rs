@@ -13,7 +13,13 @@
 //!   1999's wedges) — so both sides of a seam move together and keep their
 //!   own normals / UVs (see `collapse.rs` for the seam rules);
 //! - without seams, wedges and vertices coincide and no corner table exists;
-//! - without attributes, duplicates are simply merged.
+//! - without attributes, duplicates are simply merged;
+//! - with *groups* (one id per input vertex, e.g. a material: see
+//!   [`Simplifier::simplify_grouped`](crate::Simplifier::simplify_grouped)),
+//!   the group is part of the wedge key like an attribute value, so a
+//!   border between groups is a seam: both sides move together and no
+//!   wedge ever takes another group's id. Each wedge keeps its group
+//!   (`group`), which is never interpolated.
 //!
 //! Memory: positions 12 B, flags 1 B and accumulated error 4 B per vertex,
 //! faces 12 B each, plus 12 B per face of corner wedges only for meshes
@@ -56,6 +62,9 @@ pub struct WorkMesh {
     /// Corner wedges, parallel to `faces`; empty when every vertex is its
     /// own only wedge.
     pub wedges: Vec<[u32; 3]>,
+    /// Group id per wedge (per vertex when there are no wedges); empty
+    /// when the input has no groups.
+    pub group: Vec<u32>,
     /// Weight of border planes (see `quadric::BORDER_WEIGHT`).
     pub border_weight: f64,
     /// The working frame: `pos` and `err` are the input's object-space
@@ -91,9 +100,13 @@ impl WorkMesh {
         &mut self,
         mesh: &TriMesh,
         weights: &AttributeWeights,
+        groups: Option<&[u32]>,
         scratch: &mut Vec<u32>,
     ) -> Result<(), Error> {
         let n = mesh.positions.len();
+        if groups.is_some_and(|g| g.len() != n) {
+            return Err(Error::AttributeLength);
+        }
         if n >= u32::MAX as usize - 1 {
             return Err(Error::TooLarge(n));
         }
@@ -163,6 +176,10 @@ impl WorkMesh {
         self.wedges.clear();
         self.attr.clear();
         self.pos.clear();
+        self.group.clear();
+        // Wedges are needed where attributes or groups may differ at a
+        // shared position.
+        let keyed = layout.k > 0 || groups.is_some();
         // Exact capacities: the working arrays are most of the peak memory.
         self.faces.reserve_exact(mesh.faces.len());
         if !has_dups {
@@ -179,6 +196,9 @@ impl WorkMesh {
                     push_attrs(mesh, v, &mut self.attr);
                 }
             }
+            if let Some(g) = groups {
+                self.group.extend_from_slice(g);
+            }
         } else {
             self.pos.reserve_exact(welded);
             self.pos.resize(welded, Vec3::ZERO);
@@ -188,7 +208,7 @@ impl WorkMesh {
             // Wedges: duplicates that also agree on every attribute are
             // one wedge (an unwelded but smooth mesh has no seams).
             let mut wedge_of: Vec<u32> = Vec::new();
-            if layout.k > 0 {
+            if keyed {
                 let mut seen: FxHashMap<Vec<u32>, u32> = FxHashMap::default();
                 let mut key = Vec::with_capacity(1 + layout.k);
                 let mut a = Vec::with_capacity(layout.k);
@@ -198,10 +218,20 @@ impl WorkMesh {
                     push_attrs(mesh, v, &mut a);
                     key.clear();
                     key.push(rv);
+                    if let Some(g) = groups {
+                        key.push(g[v]);
+                    }
                     key.extend(a.iter().map(|x| if *x == 0.0 { 0 } else { x.to_bits() }));
                     let id = *seen.entry(key.clone()).or_insert(v as u32);
                     if id == v as u32 {
-                        wedge_of.push((self.attr.len() / layout.k) as u32);
+                        let w = match groups {
+                            Some(g) => {
+                                self.group.push(g[v]);
+                                self.group.len() - 1
+                            }
+                            None => self.attr.len() / layout.k,
+                        };
+                        wedge_of.push(w as u32);
                         self.attr.extend_from_slice(&a);
                     } else {
                         wedge_of.push(wedge_of[id as usize]);
@@ -218,7 +248,7 @@ impl WorkMesh {
                     continue;
                 }
                 self.faces.push(g);
-                if layout.k > 0 {
+                if keyed {
                     self.wedges.push(f.map(|v| wedge_of[v as usize]));
                 }
             }
@@ -239,6 +269,9 @@ impl WorkMesh {
 
     /// Number of wedges (attribute vertices).
     pub fn wedge_count(&self) -> usize {
+        if self.has_wedges() && !self.group.is_empty() {
+            return self.group.len();
+        }
         self.attr.len().checked_div(self.layout.k).unwrap_or(0)
     }
 
@@ -250,6 +283,7 @@ impl WorkMesh {
             + self.err.capacity() * 4
             + self.attr.capacity() * 4
             + self.wedges.capacity() * 12
+            + self.group.capacity() * 4
     }
 
     /// `2^scale_exp`: one object-space unit in the working frame.

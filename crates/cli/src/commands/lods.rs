@@ -81,7 +81,16 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
         ));
     }
     let opts = a.opts.options(Target::Ratio(1.0))?;
-    let mesh: TriMesh = super::load_mesh(ui, &a.input)?;
+    // A scene (materials, parts) keeps them unless --merge: its own path.
+    let mesh: TriMesh = match super::scene::load_input(ui, &a.input, !a.opts.merge)? {
+        super::scene::Input::Scene(s) => return super::scene::run_lods(ui, a, &s, &targets, &opts),
+        super::scene::Input::Model(lodkit_mesh::Model::Mesh(m)) => m,
+        super::scene::Input::Model(other) => anyhow::bail!(
+            "{}: holds a {} with no faces, a mesh is needed",
+            a.input.display(),
+            other.kind()
+        ),
+    };
     let stem = a
         .input
         .file_stem()

@@ -10,6 +10,7 @@ pub mod mco;
 pub mod pop;
 pub mod render;
 pub mod scan;
+pub mod scene;
 pub mod serve;
 pub mod simplify;
 

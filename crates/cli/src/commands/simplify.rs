@@ -48,6 +48,11 @@ pub struct SimplifyOpts {
     /// diagonal first, in [0, 1) (1 would remove every component).
     #[arg(long, value_name = "FRACTION", value_parser = Real::closed_open(0.0, 1.0).f32())]
     pub prune: Option<f32>,
+    /// Merge every mesh, primitive and instance into one mesh, dropping
+    /// materials (by default .glb and .obj outputs keep them, one
+    /// primitive per material, borders kept closed).
+    #[arg(long)]
+    pub merge: bool,
 }
 
 impl SimplifyOpts {
@@ -128,7 +133,19 @@ pub fn run(ui: &Ui, a: &SimplifyArgs) -> Result<()> {
     let format = super::mesh_output(&a.output)?;
     let target = target_of(a.target, a.ratio, a.opts.max_error)?;
     let opts = a.opts.options(target)?;
-    let mesh: TriMesh = super::load_mesh(ui, &a.input)?;
+    let mesh: TriMesh = match super::scene::load_input(
+        ui,
+        &a.input,
+        !a.opts.merge && super::scene::holds_scenes(&a.output),
+    )? {
+        super::scene::Input::Scene(scene) => return run_scene(ui, a, &scene, &opts),
+        super::scene::Input::Model(Model::Mesh(m)) => m,
+        super::scene::Input::Model(other) => bail!(
+            "{}: holds a {} with no faces, a mesh is needed",
+            a.input.display(),
+            other.kind()
+        ),
+    };
     let step = ui.spinner("simplifying");
     let out = Simplifier::new()
         .simplify(&mesh, &opts)
@@ -161,6 +178,44 @@ pub fn run(ui: &Ui, a: &SimplifyArgs) -> Result<()> {
         r.estimated_error,
         r.passes,
         t.as_secs_f64(),
+        r.stop
+    ));
+    Ok(())
+}
+
+/// `simplify` on a scene: every mesh simplified, materials kept
+/// (`lodkit_simplify::scene`), written as .glb or .obj.
+fn run_scene(ui: &Ui, a: &SimplifyArgs, scene: &lodkit_mesh::Scene, opts: &Options) -> Result<()> {
+    let step = ui.spinner("simplifying");
+    let (out, reports) = lodkit_simplify::scene::simplify_scene(scene, opts)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", a.input.display()))?;
+    let t = step.finish();
+    let r = lodkit_simplify::scene::combined_report(&reports)
+        .ok_or_else(|| anyhow::anyhow!("{}: the scene has no meshes", a.input.display()))?;
+    lodkit_mesh::io::save_scene(&a.output, &out, WriteOptions::default())?;
+    if a.json {
+        return super::print_json(&Report {
+            input: &a.input,
+            output: &a.output,
+            input_triangles: scene.face_count(),
+            target_triangles: r.target_faces,
+            triangles: r.triangles,
+            vertices: r.vertices,
+            estimated_error: r.estimated_error,
+            passes: r.passes,
+            stop: r.stop.to_string(),
+            seconds: t.as_secs_f64(),
+        });
+    }
+    ui.status(format!(
+        "wrote {} ({} → {} triangles, {} vertices, estimated error {:.3e}, {:.3} s; {}): {}",
+        a.output.display(),
+        scene.face_count(),
+        r.triangles,
+        r.vertices,
+        r.estimated_error,
+        t.as_secs_f64(),
+        super::scene::describe(&out),
         r.stop
     ));
     Ok(())

@@ -34,10 +34,14 @@ pub mod conf;
 pub mod gltf;
 pub mod input;
 pub mod interrupt;
+pub mod mtl;
 pub mod obj;
 pub mod ply;
+pub mod scene_io;
 pub mod stl;
 pub mod xyz;
+
+pub use scene_io::{load_scene, save_scene};
 
 #[cfg(not(target_arch = "wasm32"))]
 use std::io::Write;

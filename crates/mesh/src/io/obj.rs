@@ -5,7 +5,8 @@
 //! own vertex. Polygons are fanned from their first corner. All objects and
 //! groups are merged into one [`TriMesh`]; vertices come out in order of
 //! first use by a face, and `v` lines no face uses are dropped. Materials are
-//! ignored (a missing or broken `.mtl` is not an error); `l` (polyline) and
+//! ignored here (a missing or broken `.mtl` is not an error; `io::mtl`
+//! reads them into a scene); `l` (polyline) and
 //! `p` (point) elements are skipped. Attributes:
 //! - UVs (`vt`) are kept as stored: OBJ's origin is bottom-left, like lodkit's;
 //! - normals (`vn`) are kept as stored (not renormalised);
@@ -50,7 +51,7 @@ use crate::parse_err;
 
 /// What the prescan learned about the file.
 #[derive(Debug, Default)]
-struct Scan {
+pub(super) struct Scan {
     /// The file has `l` lines, which must be hidden from `tobj` (it turns an
     /// `l` with 3 or more points into a face).
     has_polylines: bool,
@@ -123,7 +124,7 @@ fn resolve(tok: &str, count: usize, what: &str, line: usize) -> Result<usize, Pa
 
 /// Checks every line `tobj` acts on (see the module docs); line numbers are
 /// 1-based.
-fn prescan(text: &str) -> Result<Scan, ParseError> {
+pub(super) fn prescan(text: &str) -> Result<Scan, ParseError> {
     let mut scan = Scan::default();
     let (mut nv, mut nvt, mut nvn) = (0usize, 0usize, 0usize);
     // First line of a `v` with colours, and of one without.
@@ -227,7 +228,7 @@ fn prescan(text: &str) -> Result<Scan, ParseError> {
 /// every distinct `v/vt/vn` triple; an index it never sees cannot split
 /// one, so a quad textured on one half stays one connected quad once its
 /// UVs are dropped. Line count and numbering are kept.
-fn rewritten<'a>(text: &'a str, scan: &Scan) -> Cow<'a, str> {
+pub(super) fn rewritten<'a>(text: &'a str, scan: &Scan) -> Cow<'a, str> {
     let (drop_uv, drop_n) = (scan.drops_uvs(), scan.drops_normals());
     if !scan.has_polylines && !drop_uv && !drop_n {
         return Cow::Borrowed(text);
@@ -299,7 +300,7 @@ pub fn read(bytes: &[u8]) -> Result<TriMesh, ParseError> {
 
 /// Merges `tobj` models into one mesh, keeping an attribute only when every
 /// model with vertices has it for all of its vertices.
-fn merge(models: &[tobj::Model]) -> Result<TriMesh, ParseError> {
+pub(super) fn merge(models: &[tobj::Model]) -> Result<TriMesh, ParseError> {
     let used: Vec<&tobj::Mesh> = models
         .iter()
         .map(|m| &m.mesh)

@@ -21,7 +21,7 @@ pub(super) fn decode_base64(s: &str) -> Result<Vec<u8>, String> {
 }
 
 /// Decodes `%XX` escapes in a relative URI.
-fn percent_decode(s: &str) -> Result<String, ParseError> {
+pub(super) fn percent_decode(s: &str) -> Result<String, ParseError> {
     let b = s.as_bytes();
     let mut out = Vec::with_capacity(b.len());
     let mut i = 0;

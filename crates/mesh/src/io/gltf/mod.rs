@@ -20,7 +20,11 @@
 //! - an attribute is kept only if *every* primitive read has it (dropped
 //!   otherwise, never filled with made-up defaults);
 //! - materials, textures, skins, morph targets, cameras, animations and
-//!   other texture coordinate / colour sets are ignored.
+//!   other texture coordinate / colour sets are ignored by [`read`];
+//!   [`read_scene`] keeps meshes apart, one material per primitive, the
+//!   nodes and the material, texture, sampler and image tables (see
+//!   `crate::scene` and `materials_read`), and [`write_scene_glb`] writes
+//!   such a scene (see `materials_write`).
 //!
 //! Buffers come from the GLB `BIN` chunk, `data:` URIs (base64 only), or
 //! files relative to `base_dir` (`None` refuses them). A file URI is
@@ -70,13 +74,16 @@
 mod buffers;
 mod color;
 mod glb;
+mod materials_read;
+mod materials_write;
 mod read;
 mod write;
 
 #[cfg(test)]
 mod tests;
 
-pub use read::{INSTANCING_FLOOR, MAX_INSTANCING_GROWTH, read};
+pub use materials_write::write_scene_glb;
+pub use read::{INSTANCING_FLOOR, MAX_INSTANCING_GROWTH, read, read_scene};
 pub use write::write_glb;
 
 #[cfg(doc)]

@@ -17,6 +17,7 @@ use super::glb::{GLB_MAGIC, split_glb};
 use crate::error::ParseError;
 use crate::mesh::TriMesh;
 use crate::parse_err;
+use crate::scene::{NO_MATERIAL, Node, Scene, SceneMesh, Transform};
 
 /// Checks what gltf-json's validation indexes without checking.
 fn precheck(root: &json::Root) -> Result<(), ParseError> {
@@ -93,18 +94,7 @@ fn instances(doc: &gltf::Document) -> Result<Vec<Instance<'_>>, ParseError> {
             })
             .collect());
     }
-    let roots: Vec<gltf::Node> = match doc.default_scene() {
-        Some(s) => s.nodes().collect(),
-        None => {
-            let mut is_child = vec![false; doc.nodes().len()];
-            for n in doc.nodes() {
-                for c in n.children() {
-                    is_child[c.index()] = true;
-                }
-            }
-            doc.nodes().filter(|n| !is_child[n.index()]).collect()
-        }
-    };
+    let roots = root_nodes(doc);
     let mut seen = vec![false; doc.nodes().len()];
     let mut stack: Vec<(gltf::Node, Mat4)> = roots
         .into_iter()
@@ -127,6 +117,23 @@ fn instances(doc: &gltf::Document) -> Result<Vec<Instance<'_>>, ParseError> {
         stack.extend(children.into_iter().rev().map(|c| (c, world)));
     }
     Ok(out)
+}
+
+/// The default scene's nodes; when the file names none, every node that
+/// is no other node's child.
+fn root_nodes(doc: &gltf::Document) -> Vec<gltf::Node<'_>> {
+    match doc.default_scene() {
+        Some(s) => s.nodes().collect(),
+        None => {
+            let mut is_child = vec![false; doc.nodes().len()];
+            for n in doc.nodes() {
+                for c in n.children() {
+                    is_child[c.index()] = true;
+                }
+            }
+            doc.nodes().filter(|n| !is_child[n.index()]).collect()
+        }
+    }
 }
 
 /// Verifies an accessor so that `gltf`'s reader can read all `count`
@@ -271,14 +278,34 @@ pub fn read(bytes: &[u8], base_dir: Option<&Path>) -> Result<TriMesh, ParseError
             "no triangles: the scene has no triangle primitives",
         ));
     }
+    read_parts(
+        &parts,
+        bin,
+        base_dir,
+        doc.buffers().len(),
+        doc.accessors().len(),
+    )
+    .map(|(mesh, _)| mesh)
+}
+
+/// Reads `parts` (each with its world transform) into one mesh; also
+/// returns each part's face count, in order. `n_buffers` and
+/// `n_accessors` are the document's counts.
+fn read_parts(
+    parts: &[Part<'_>],
+    bin: Option<&[u8]>,
+    base_dir: Option<&Path>,
+    n_buffers: usize,
+    n_accessors: usize,
+) -> Result<(TriMesh, Vec<usize>), ParseError> {
     let all = |s: &Semantic| parts.iter().all(|p| p.prim.get(s).is_some());
     let has_n = all(&Semantic::Normals);
     let has_c = all(&Semantic::Colors(0));
     let has_uv = all(&Semantic::TexCoords(0));
 
     // Resolve exactly the buffers the accessors to read live in.
-    let mut buffers: Vec<Option<Cow<[u8]>>> = vec![None; doc.buffers().len()];
-    for p in &parts {
+    let mut buffers: Vec<Option<Cow<[u8]>>> = vec![None; n_buffers];
+    for p in parts {
         let mut accs: Vec<Accessor> = vec![];
         accs.extend(p.prim.get(&Semantic::Positions));
         accs.extend(p.prim.indices());
@@ -308,8 +335,8 @@ pub fn read(bytes: &[u8], base_dir: Option<&Path>) -> Result<TriMesh, ParseError
     let mut total = 0u64;
     let mut total_indices = 0u64;
     // Each accessor counted once, however many nodes use it.
-    let mut seen_pos = vec![false; doc.accessors().len()];
-    let mut seen_ix = vec![false; doc.accessors().len()];
+    let mut seen_pos = vec![false; n_accessors];
+    let mut seen_ix = vec![false; n_accessors];
     let (mut stored_vertices, mut stored_indices) = (0u64, 0u64);
     for (k, p) in parts.iter().enumerate() {
         let ctx = |w: &str| format!("mesh {} primitive {k}: {w}", p.mesh);
@@ -374,13 +401,7 @@ pub fn read(bytes: &[u8], base_dir: Option<&Path>) -> Result<TriMesh, ParseError
         total += n as u64;
         total_indices += indices as u64;
     }
-    check_instancing(
-        &parts,
-        total,
-        stored_vertices,
-        total_indices,
-        stored_indices,
-    )?;
+    check_instancing(parts, total, stored_vertices, total_indices, stored_indices)?;
 
     let mut out = TriMesh {
         positions: Vec::with_capacity(total as usize),
@@ -391,7 +412,9 @@ pub fn read(bytes: &[u8], base_dir: Option<&Path>) -> Result<TriMesh, ParseError
         // most three; checked against the cap above.
         faces: Vec::with_capacity((total_indices / 3) as usize),
     };
+    let mut part_faces = Vec::with_capacity(parts.len());
     for (k, p) in parts.iter().enumerate() {
+        let faces_before = out.faces.len();
         let reader = p
             .prim
             .reader(|b| buffers.get(b.index()).and_then(|d| d.as_deref()));
@@ -517,9 +540,113 @@ pub fn read(bytes: &[u8], base_dir: Option<&Path>) -> Result<TriMesh, ParseError
             }
             _ => {}
         }
+        part_faces.push(out.faces.len() - faces_before);
     }
     if out.faces.is_empty() {
         return Err(ParseError::new("no triangles"));
     }
-    Ok(out)
+    Ok((out, part_faces))
+}
+
+/// Reads a glTF or GLB file as a [`Scene`] (see the module docs): each
+/// mesh with triangle primitives becomes one [`SceneMesh`] in its own
+/// frame (its primitives' faces in order, each face tagged with its
+/// primitive's material), the nodes reachable from the default scene keep
+/// their names, local transforms and hierarchy (renumbered depth first),
+/// and the material, texture, sampler and image tables are read
+/// (`materials_read`). Same checks and errors as [`read`];
+/// instances are not expanded (a node refers to its mesh).
+pub fn read_scene(bytes: &[u8], base_dir: Option<&Path>) -> Result<Scene, ParseError> {
+    let (doc, bin) = parse_document(bytes)?;
+    // Checks the node graph (no cycle, one parent per node).
+    instances(&doc)?;
+    let mut scene = Scene::default();
+    let mut mesh_map = vec![None; doc.meshes().len()];
+    for mesh in doc.meshes() {
+        let parts: Vec<Part> = mesh
+            .primitives()
+            .filter(|p| {
+                matches!(
+                    p.mode(),
+                    Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+                )
+            })
+            .map(|prim| Part {
+                prim,
+                world: Mat4::IDENTITY,
+                mesh: mesh.index(),
+            })
+            .collect();
+        if parts.is_empty() {
+            continue;
+        }
+        let (tm, counts) = read_parts(
+            &parts,
+            bin,
+            base_dir,
+            doc.buffers().len(),
+            doc.accessors().len(),
+        )?;
+        let mut face_materials = Vec::with_capacity(tm.faces.len());
+        for (p, c) in parts.iter().zip(counts) {
+            let id = p.prim.material().index().map_or(NO_MATERIAL, |i| i as u32);
+            face_materials.extend(std::iter::repeat_n(id, c));
+        }
+        mesh_map[mesh.index()] = Some(scene.meshes.len());
+        scene.meshes.push(SceneMesh {
+            name: mesh.name().map(str::to_owned),
+            mesh: tm,
+            face_materials,
+        });
+    }
+    if scene.meshes.is_empty() {
+        return Err(ParseError::new(
+            "no triangles: the scene has no triangle primitives",
+        ));
+    }
+    if doc.nodes().len() == 0 {
+        for m in 0..scene.meshes.len() {
+            scene.nodes.push(Node {
+                mesh: Some(m),
+                ..Default::default()
+            });
+            scene.roots.push(m);
+        }
+    } else {
+        let roots = root_nodes(&doc);
+        let mut new_id = vec![usize::MAX; doc.nodes().len()];
+        let mut order = Vec::new();
+        let mut stack: Vec<gltf::Node> = roots.iter().rev().cloned().collect();
+        while let Some(n) = stack.pop() {
+            new_id[n.index()] = order.len();
+            let children: Vec<gltf::Node> = n.children().collect();
+            stack.extend(children.into_iter().rev());
+            order.push(n);
+        }
+        for n in &order {
+            scene.nodes.push(Node {
+                name: n.name().map(str::to_owned),
+                transform: match n.transform() {
+                    gltf::scene::Transform::Matrix { matrix } => {
+                        Transform::Matrix(Mat4::from_cols_array_2d(&matrix).to_cols_array())
+                    }
+                    gltf::scene::Transform::Decomposed {
+                        translation,
+                        rotation,
+                        scale,
+                    } => Transform::Trs {
+                        translation,
+                        rotation,
+                        scale,
+                    },
+                },
+                mesh: n.mesh().and_then(|m| mesh_map[m.index()]),
+                children: n.children().map(|c| new_id[c.index()]).collect(),
+            });
+        }
+        scene.roots = roots.iter().map(|r| new_id[r.index()]).collect();
+    }
+    super::materials_read::read_tables(&doc, bin, base_dir, &mut scene)?;
+    scene.validate()?;
+    Ok(scene)
 }

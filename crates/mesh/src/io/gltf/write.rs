@@ -13,16 +13,16 @@ use crate::mesh::TriMesh;
 use crate::parse_err;
 
 /// Builds the BIN chunk and the JSON objects that point into it.
-struct Builder {
-    bin: Vec<u8>,
-    root: json::Root,
+pub(super) struct Builder {
+    pub(super) bin: Vec<u8>,
+    pub(super) root: json::Root,
 }
 
 impl Builder {
     /// Appends `bytes` as a new 4-byte-aligned buffer view and an accessor
     /// over it; returns the accessor's index.
     #[allow(clippy::too_many_arguments)]
-    fn accessor(
+    pub(super) fn accessor(
         &mut self,
         bytes: &[u8],
         count: usize,
@@ -71,7 +71,7 @@ impl Builder {
     }
 }
 
-fn le_bytes<const N: usize, T: Copy>(items: &[T], f: impl Fn(T) -> [u8; N]) -> Vec<u8> {
+pub(super) fn le_bytes<const N: usize, T: Copy>(items: &[T], f: impl Fn(T) -> [u8; N]) -> Vec<u8> {
     let mut v = Vec::with_capacity(items.len() * N);
     for &x in items {
         v.extend_from_slice(&f(x));

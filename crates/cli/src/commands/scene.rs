@@ -1,0 +1,220 @@
+//! Inputs that may be scenes (meshes with materials, parts and nodes), for
+//! `convert`, `simplify`, `lods` and `build`.
+use std::path::Path;
+
+use anyhow::Result;
+use lodkit_mesh::io::Format;
+use lodkit_mesh::{Model, Scene};
+use lodkit_simplify::{Options, Target};
+
+use crate::ui::Ui;
+
+/// What an input became: a scene to keep (materials, several meshes,
+/// nodes), or a plain model for the one-mesh path.
+pub enum Input {
+    /// Materials, several parts or named / transformed nodes to keep.
+    Scene(Scene),
+    /// Everything else: the model exactly as `lodkit_mesh::io::load` reads it.
+    Model(Model),
+}
+
+/// Whether `output`'s format holds scenes (.glb, .obj).
+pub fn holds_scenes(output: &Path) -> bool {
+    matches!(Format::from_path(output), Some(Format::Glb | Format::Obj))
+}
+
+/// Loads `input`: as a [`Scene`] when `keeps` (the output can hold one and
+/// `--merge` is off) and the input has something a single mesh would
+/// lose (materials, textures, several meshes, node names or transforms);
+/// otherwise as a model, exactly as before. The scene's warnings (a
+/// missing texture) are printed.
+pub fn load_input(ui: &Ui, input: &Path, keeps: bool) -> Result<Input> {
+    let fmt = Format::from_path(input);
+    if !keeps
+        || !matches!(
+            fmt,
+            Some(Format::Obj | Format::Gltf | Format::Glb | Format::Ply)
+        )
+    {
+        return Ok(Input::Model(super::load(ui, input)?));
+    }
+    let scene = if fmt == Some(Format::Ply) {
+        match super::load(ui, input)? {
+            Model::Mesh(m) => lodkit_mesh::io::scene_io::ply_scene(input, m),
+            other => return Ok(Input::Model(other)),
+        }
+    } else {
+        let step = ui.spinner(&format!("reading {}", input.display()));
+        let s = lodkit_mesh::io::load_scene(input)?;
+        step.finish();
+        s
+    };
+    for w in &scene.warnings {
+        ui.status(format!("warning: {}: {w}", input.display()));
+    }
+    if scene.is_plain_mesh() {
+        let mut scene = scene;
+        return Ok(Input::Model(Model::Mesh(scene.meshes.swap_remove(0).mesh)));
+    }
+    Ok(Input::Scene(scene))
+}
+
+/// A one-line summary of a scene for the `wrote` line.
+pub fn describe(scene: &Scene) -> String {
+    let prims: usize = scene
+        .meshes
+        .iter()
+        .map(|m| {
+            let mut ids = m.face_materials.clone();
+            ids.sort_unstable();
+            ids.dedup();
+            ids.len()
+        })
+        .sum();
+    let plural = |n: usize, w: &str| {
+        let s = if n == 1 {
+            ""
+        } else if w.ends_with('h') {
+            "es"
+        } else {
+            "s"
+        };
+        format!("{n} {w}{s}")
+    };
+    format!(
+        "scene: {}, {}, {}, {}, {}",
+        plural(scene.meshes.len(), "mesh"),
+        plural(prims, "primitive"),
+        plural(scene.face_count(), "triangle"),
+        plural(scene.materials.len(), "material"),
+        plural(scene.images.len(), "image")
+    )
+}
+
+/// One scene holding every level: a root node per level, named by
+/// `names`, over a copy of the level's node tree; the material, texture,
+/// image and sampler tables are shared (every level has the input's).
+pub fn chain_scene(levels: &[Scene], names: &[String]) -> Scene {
+    let mut out = match levels.first() {
+        Some(l) => l.clone_tables(),
+        None => return Scene::default(),
+    };
+    out.nodes.clear();
+    out.roots.clear();
+    for (l, name) in levels.iter().zip(names) {
+        let (mesh_base, node_base) = (out.meshes.len(), out.nodes.len() + 1);
+        out.roots.push(out.nodes.len());
+        out.nodes.push(lodkit_mesh::scene::Node {
+            name: Some(name.clone()),
+            children: l.roots.iter().map(|r| r + node_base).collect(),
+            ..Default::default()
+        });
+        out.nodes
+            .extend(l.nodes.iter().map(|n| lodkit_mesh::scene::Node {
+                name: n.name.clone(),
+                transform: n.transform,
+                mesh: n.mesh.map(|m| m + mesh_base),
+                children: n.children.iter().map(|c| c + node_base).collect(),
+            }));
+        out.meshes.extend(l.meshes.iter().cloned());
+    }
+    out
+}
+
+/// `lodkit lods` on a scene: each level made by
+/// `lodkit_simplify::scene::scene_lod_chain`, written as `STEM_lodN.glb`
+/// (materials and images embedded), all levels in `STEM_lods.glb` (a root
+/// node per level, materials shared), measured against the merged input,
+/// and `lods.json`.
+pub fn run_lods(
+    ui: &Ui,
+    a: &super::lods::LodsArgs,
+    scene: &Scene,
+    targets: &[Target],
+    opts: &Options,
+) -> Result<()> {
+    use anyhow::Context as _;
+    use lodkit_mesh::io::write_atomic;
+    let stem = a
+        .input
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("mesh")
+        .to_string();
+    std::fs::create_dir_all(&a.out)
+        .with_context(|| format!("{}: cannot create output directory", a.out.display()))?;
+    let merged = scene.merged().mesh;
+    let reference = lodkit_mesh::metrics::Reference::new(&merged)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", a.input.display()))?;
+    let sampling = a.samples.map_or(
+        super::build::Sampling::Adaptive,
+        super::build::Sampling::PerKind,
+    );
+    let step = ui.spinner("simplifying");
+    let chain = lodkit_simplify::scene::scene_lod_chain(scene, opts, targets)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", a.input.display()))?;
+    step.finish();
+    let mut levels = Vec::new();
+    let mut kept = Vec::new();
+    let mut names = Vec::new();
+    for (i, (level, reports)) in chain.into_iter().enumerate() {
+        let r = lodkit_simplify::scene::combined_report(&reports)
+            .ok_or_else(|| anyhow::anyhow!("{}: the scene has no meshes", a.input.display()))?;
+        let file = format!("{stem}_lod{}.glb", i + 1);
+        let m = sampling.measure(&reference, &level.merged().mesh)?;
+        if level.meshes.iter().all(|m| !m.mesh.faces.is_empty()) {
+            let path = a.out.join(&file);
+            let bytes = lodkit_mesh::io::gltf::write_scene_glb(&level)
+                .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+            write_atomic(&path, &bytes)?;
+            names.push(format!("{stem}_lod{}", i + 1));
+            kept.push(level);
+        }
+        let l = super::lods::Level {
+            level: i + 1,
+            file,
+            target_triangles: r.target_faces,
+            triangles: r.triangles,
+            vertices: r.vertices,
+            estimated_error: r.estimated_error,
+            measured_mean_error: m.map_or(f64::NAN, |m| m.mean),
+            measured_max_error: m.map_or(f64::NAN, |m| m.max),
+            seconds: r.seconds,
+            stop: r.stop.to_string(),
+        };
+        if !a.json {
+            ui.status(format!(
+                "level {}: {} triangles, {} vertices, error est. {:.3e} / measured mean {:.3e} max {:.3e}: {}",
+                l.level, l.triangles, l.vertices, l.estimated_error, l.measured_mean_error, l.measured_max_error, l.stop
+            ));
+        }
+        levels.push(l);
+    }
+    let glb_name = format!("{stem}_lods.glb");
+    let all = chain_scene(&kept, &names);
+    let path = a.out.join(&glb_name);
+    let bytes = lodkit_mesh::io::gltf::write_scene_glb(&all)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    write_atomic(&path, &bytes)?;
+    let report = super::lods::Lods {
+        input: a.input.display().to_string(),
+        input_triangles: merged.faces.len(),
+        input_vertices: merged.positions.len(),
+        glb: glb_name,
+        levels,
+    };
+    let json = serde_json::to_string_pretty(&report)? + "\n";
+    write_atomic(&a.out.join("lods.json"), json.as_bytes())?;
+    if a.json {
+        crate::out!("{json}")?;
+        return Ok(());
+    }
+    ui.status(format!(
+        "wrote {} levels, {} and lods.json to {} ({})",
+        report.levels.len(),
+        report.glb,
+        a.out.display(),
+        describe(scene)
+    ));
+    Ok(())
+}
