@@ -175,7 +175,7 @@ def blob(triangles: int, seed: int = 1) -> Mesh:
     Example::
 
         >>> lk.blob(1_000_000).n_faces
-        1000188
+        1002252
     """
     _check.integer("triangles", triangles, 1, 1 << 30)
     _check.integer("seed", seed, 0, 2**32 - 1)
@@ -293,7 +293,7 @@ def lod_chain(
 
         >>> chain = lk.lod_chain(lk.bunny(), levels=3)
         >>> [r["triangles"] for _, r in chain]
-        [34725, 17362, 8681]
+        [34725, 17361, 8680]
     """
     if levels is not None and ratios is not None:
         raise OptionError("levels and ratios conflict: give one of them")

@@ -32,9 +32,9 @@ class Model:
 
         >>> model = lk.mco.build(lk.bunny())
         >>> model.max_lod, model.full_triangles
-        (..., ...)
+        (3129, 20362)
         >>> model.extract(lod=model.max_lod // 2)
-        Mesh(...)
+        Mesh(6118 vertices, 11518 faces, normals)
     """
 
     def __init__(self, native: Any) -> None:

@@ -134,7 +134,7 @@ def decode(data: bytes, level: Optional[int] = None, **options: Any) -> Union[Me
     Example::
 
         >>> lk.pop.decode(lk.pop.encode(lk.bunny()), level=6)
-        Mesh(...)
+        Mesh(8591 vertices, 17131 faces)
     """
     return decode_with_info(data, level, **options)[0]
 

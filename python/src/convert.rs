@@ -10,9 +10,11 @@
 //! made while the GIL is held so no Python thread can write to the array
 //! while it is read.
 //!
-//! Out: the crates' vectors are handed to numpy as they are (`Vec<Vec3>`
-//! reinterpreted as `Vec<f32>`, no copy): vertices float32 (n, 3), faces
-//! uint32 (m, 3), colors uint8 (n, 4), normals float32, uvs float32.
+//! Out: faces uint32 (m, 3) and colors uint8 (n, 4) are the crates' own
+//! vectors handed to numpy (`Vec::into_flattened`, no copy); vertices, normals (float32 (n, 3)) and uvs (float32 (n, 2)) are
+//! copied once out of glam's vectors, a pass of a few microseconds per
+//! thousand vertices (a cast would need glam's `bytemuck` feature, which
+//! would change the build of every crate that shares glam with this one).
 
 use glam::{Vec2, Vec3};
 use lodkit_mesh::{Model, PointCloud, TriMesh};
@@ -297,49 +299,41 @@ fn array2<'py, T: Element>(py: Python<'py>, flat: Vec<T>, cols: usize) -> Bound<
     PyArray2::from_owned_array(py, a)
 }
 
-/// A `Vec` of `[T; C]`-shaped values as a numpy (n, C) array, without
-/// copying where the allocation can be reinterpreted (it always can for
-/// these element types; the copy is a fallback).
-fn pod_rows<'py, A: bytemuck::Pod, T: bytemuck::Pod + Element>(
+/// glam vectors as a numpy (n, C) float32 array (one copy, see the module docs).
+fn vec_rows<'py, const C: usize>(
     py: Python<'py>,
-    v: Vec<A>,
-    cols: usize,
-) -> Bound<'py, PyArray2<T>> {
-    match bytemuck::allocation::try_cast_vec::<A, T>(v) {
-        Ok(flat) => array2(py, flat, cols),
-        Err((_, v)) => array2(py, bytemuck::cast_slice::<A, T>(&v).to_vec(), cols),
+    v: &[impl Copy + Into<[f32; C]>],
+) -> Bound<'py, PyArray2<f32>> {
+    let mut flat = Vec::with_capacity(v.len() * C);
+    for &p in v {
+        flat.extend_from_slice(&p.into());
     }
+    array2(py, flat, C)
 }
 
 /// The mesh as a dict of numpy arrays (`vertices`, `faces`, `normals`,
 /// `colors`, `uvs`; absent attributes are `None`).
 pub fn mesh_to_py<'py>(py: Python<'py>, m: TriMesh) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
-    d.set_item("vertices", pod_rows::<Vec3, f32>(py, m.positions, 3))?;
-    d.set_item("faces", pod_rows::<[u32; 3], u32>(py, m.faces, 3))?;
-    d.set_item(
-        "normals",
-        m.normals.map(|n| pod_rows::<Vec3, f32>(py, n, 3)),
-    )?;
+    d.set_item("vertices", vec_rows::<3>(py, &m.positions))?;
+    d.set_item("faces", array2(py, m.faces.into_flattened(), 3))?;
+    d.set_item("normals", m.normals.map(|n| vec_rows::<3>(py, &n)))?;
     d.set_item(
         "colors",
-        m.colors.map(|c| pod_rows::<[u8; 4], u8>(py, c, 4)),
+        m.colors.map(|c| array2(py, c.into_flattened(), 4)),
     )?;
-    d.set_item("uvs", m.uvs.map(|t| pod_rows::<Vec2, f32>(py, t, 2)))?;
+    d.set_item("uvs", m.uvs.map(|t| vec_rows::<2>(py, &t)))?;
     Ok(d)
 }
 
 /// The point cloud as a dict (`points`, `normals`, `colors`).
 pub fn points_to_py<'py>(py: Python<'py>, p: PointCloud) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
-    d.set_item("points", pod_rows::<Vec3, f32>(py, p.positions, 3))?;
-    d.set_item(
-        "normals",
-        p.normals.map(|n| pod_rows::<Vec3, f32>(py, n, 3)),
-    )?;
+    d.set_item("points", vec_rows::<3>(py, &p.positions))?;
+    d.set_item("normals", p.normals.map(|n| vec_rows::<3>(py, &n)))?;
     d.set_item(
         "colors",
-        p.colors.map(|c| pod_rows::<[u8; 4], u8>(py, c, 4)),
+        p.colors.map(|c| array2(py, c.into_flattened(), 4)),
     )?;
     Ok(d)
 }
