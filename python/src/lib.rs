@@ -284,6 +284,8 @@ fn lod_chain<'py>(
 #[pyfunction]
 #[pyo3(signature = (a, b, samples = None, seed = lodkit_mesh::metrics::DEFAULT_SEED,
     vertex_samples = true, edge_samples = true, face_samples = true))]
+// Python keyword options, one parameter each (as the CLI's flags).
+#[allow(clippy::too_many_arguments)]
 fn compare<'py>(
     py: Python<'py>,
     a: &Bound<'py, PyAny>,
