@@ -339,7 +339,7 @@ def compare(
         >>> lod, _ = lk.simplify(lk.bunny(), ratio=0.1)
         >>> r = lk.compare(lk.bunny(), lod)
         >>> round(r["symmetric"]["mean_pct"], 4)
-        0.0184
+        0.0185
     """
     n = _check.integer("samples", samples, 1, MAX_SAMPLES)
     _check.integer("seed", seed, 0, 2**64 - 1)
