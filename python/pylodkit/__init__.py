@@ -1,0 +1,63 @@
+"""pylodkit: lodkit's mesh engines on numpy arrays.
+
+The distribution and the import name are ``pylodkit`` (``lodkit`` on PyPI is
+an unrelated project). Install from a checkout with ``pip install ./python``.
+
+- :func:`load` / :func:`save`: .ply .obj .stl .gltf .glb .xyz .pts files.
+- :class:`Mesh` (``vertices`` (n, 3), ``faces`` (m, 3), optional
+  ``normals``, ``colors``, ``uvs``) and :class:`PointCloud`.
+- :func:`simplify`, :func:`lod_chain`: HQMS simplification and LOD chains.
+- :func:`compare`: Metro distances, as ``lodkit compare --json``.
+- :mod:`pylodkit.mco`: continuous LOD (marching cube octree).
+- :mod:`pylodkit.pop`: progressive particle streams.
+- :mod:`pylodkit.batch`: LODs for a folder of assets on Ray.
+- :func:`from_trimesh` / :func:`to_trimesh`, :func:`from_open3d` / :func:`to_open3d`.
+
+Every call releases the GIL while it computes; errors are
+:class:`LodkitError` subclasses carrying the CLI's one-line message.
+
+Example::
+
+    >>> import pylodkit as lk
+    >>> bunny = lk.bunny()
+    >>> lod, report = lk.simplify(bunny, ratio=0.1)
+    >>> lk.compare(bunny, lod)["symmetric"]["mean_pct"] < 0.05
+    True
+"""
+from __future__ import annotations
+
+from importlib.metadata import PackageNotFoundError, version as _version
+
+from . import errors, mco, pop
+from ._core import (
+    MAX_HEAP_SIZE,
+    MAX_LEVELS,
+    MAX_SAMPLES,
+    Mesh,
+    PointCloud,
+    blob,
+    bunny,
+    compare,
+    from_open3d,
+    from_trimesh,
+    icosphere,
+    load,
+    lod_chain,
+    save,
+    simplify,
+    to_open3d,
+    to_trimesh,
+)
+from .errors import FileError, InputError, LodkitError, OptionError
+
+try:
+    __version__ = _version("pylodkit")
+except PackageNotFoundError:  # imported from a source tree
+    __version__ = "0.0.0"
+
+__all__ = [
+    "Mesh", "PointCloud", "load", "save", "bunny", "blob", "icosphere", "simplify",
+    "lod_chain", "compare", "from_trimesh", "to_trimesh", "from_open3d", "to_open3d",
+    "mco", "pop", "errors", "LodkitError", "InputError", "FileError", "OptionError",
+    "MAX_SAMPLES", "MAX_HEAP_SIZE", "MAX_LEVELS", "__version__",
+]

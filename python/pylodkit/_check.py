@@ -1,0 +1,46 @@
+"""Option ranges, worded as the CLI's range parsers word them."""
+from __future__ import annotations
+
+import math
+from typing import Optional
+
+from .errors import OptionError
+
+
+def _fmt(x: float) -> str:
+    return str(int(x)) if float(x).is_integer() else repr(float(x))
+
+
+def real(name: str, value, lo: float = -math.inf, hi: float = math.inf,
+         lo_open: bool = False, hi_open: bool = False) -> Optional[float]:
+    """``value`` as a float within the range, or ``OptionError``."""
+    if value is None:
+        return None
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        v = math.nan
+    ok = math.isfinite(v) and (v > lo if lo_open else v >= lo) and (v < hi if hi_open else v <= hi)
+    if not ok:
+        if math.isfinite(lo) and math.isfinite(hi):
+            what = "a number in %s%s, %s%s" % ("(" if lo_open else "[", _fmt(lo), _fmt(hi), ")" if hi_open else "]")
+        elif math.isfinite(lo):
+            what = "a finite number %s %s" % (">" if lo_open else ">=", _fmt(lo))
+        elif math.isfinite(hi):
+            what = "a finite number %s %s" % ("<" if hi_open else "<=", _fmt(hi))
+        else:
+            what = "a finite number"
+        raise OptionError("%s=%r: expected %s" % (name, value, what))
+    return v
+
+
+def integer(name: str, value, lo: int, hi: int) -> Optional[int]:
+    """``value`` as an int in ``lo..=hi``, or ``OptionError``."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not hasattr(value, "__index__"):
+        raise OptionError("%s=%r: expected an integer in %d..=%d" % (name, value, lo, hi))
+    v = value.__index__()
+    if not lo <= v <= hi:
+        raise OptionError("%s=%r: expected an integer in %d..=%d" % (name, value, lo, hi))
+    return v

@@ -1,0 +1,478 @@
+"""Meshes, point clouds, files, simplification and distances."""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+
+import numpy as np
+
+from . import _check
+from . import _lodkit as _native
+from .errors import OptionError
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+#: Most samples per kind a measurement may take (the CLI's ``--samples`` bound).
+MAX_SAMPLES: int = _native.MAX_SAMPLES
+#: Largest ``heap_size`` (2**24 records).
+MAX_HEAP_SIZE: int = _native.MAX_HEAP_SIZE
+#: Most levels of a halving chain.
+MAX_LEVELS: int = 32
+
+
+def _opt_array(a):
+    return None if a is None else np.asarray(a)
+
+
+@dataclass(eq=False)
+class Mesh:
+    """An indexed triangle mesh of numpy arrays.
+
+    - ``vertices``: (n, 3) float32 or float64, object units.
+    - ``faces``: (m, 3) integer indices into ``vertices``, counter-clockwise
+      seen from outside (any of int32, int64, uint32, uint64).
+    - ``normals``: optional (n, 3) float per-vertex normals.
+    - ``colors``: optional (n, 4) or (n, 3) per-vertex colours, uint8
+      (0..255) or float (0..1); lodkit returns uint8 RGBA.
+    - ``uvs``: optional (n, 2) float texture coordinates, origin bottom-left.
+
+    Arrays are kept as given (``np.asarray``: no copy for an ndarray) and
+    read in place by every call. Meshes lodkit returns have float32
+    vertices and uint32 faces that numpy owns (no copy was made).
+
+    Example::
+
+        >>> import numpy as np, pylodkit as lk
+        >>> tetra = lk.Mesh(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], np.float32),
+        ...                 np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]))
+        >>> tetra
+        Mesh(4 vertices, 4 faces)
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    normals: Optional[np.ndarray] = None
+    colors: Optional[np.ndarray] = None
+    uvs: Optional[np.ndarray] = None
+
+    def __post_init__(self) -> None:
+        self.vertices = np.asarray(self.vertices)
+        self.faces = np.asarray(self.faces)
+        self.normals = _opt_array(self.normals)
+        self.colors = _opt_array(self.colors)
+        self.uvs = _opt_array(self.uvs)
+
+    @property
+    def n_vertices(self) -> int:
+        """Number of vertices."""
+        return int(self.vertices.shape[0])
+
+    @property
+    def n_faces(self) -> int:
+        """Number of triangles."""
+        return int(self.faces.shape[0])
+
+    def attributes(self) -> List[str]:
+        """Names of the attributes present, e.g. ``["normals", "colors"]``."""
+        return [k for k in ("normals", "colors", "uvs") if getattr(self, k) is not None]
+
+    def __repr__(self) -> str:
+        extra = "".join(", " + a for a in self.attributes())
+        return "Mesh(%d vertices, %d faces%s)" % (self.n_vertices, self.n_faces, extra)
+
+
+@dataclass(eq=False)
+class PointCloud:
+    """Points with optional per-point normals and colours.
+
+    - ``points``: (n, 3) float32 or float64.
+    - ``normals``: optional (n, 3) float.
+    - ``colors``: optional (n, 4) or (n, 3) uint8 or float in [0, 1].
+
+    Example::
+
+        >>> import numpy as np, pylodkit as lk
+        >>> lk.PointCloud(np.random.default_rng(0).normal(size=(1000, 3)))
+        PointCloud(1000 points)
+    """
+
+    points: np.ndarray
+    normals: Optional[np.ndarray] = None
+    colors: Optional[np.ndarray] = None
+
+    def __post_init__(self) -> None:
+        self.points = np.asarray(self.points)
+        self.normals = _opt_array(self.normals)
+        self.colors = _opt_array(self.colors)
+
+    def __len__(self) -> int:
+        return int(self.points.shape[0])
+
+    def __repr__(self) -> str:
+        extra = "".join(", " + a for a in ("normals", "colors") if getattr(self, a) is not None)
+        return "PointCloud(%d points%s)" % (len(self), extra)
+
+
+Geometry = Union[Mesh, PointCloud]
+
+
+def _wrap(kind: str, d: Dict[str, Any]) -> Geometry:
+    return Mesh(**d) if kind == "mesh" else PointCloud(**d)
+
+
+def load(path: PathLike) -> Geometry:
+    """Reads a mesh or point-cloud file (.ply, .obj, .stl, .gltf, .glb, .xyz, .pts).
+
+    The format follows the extension (``.txt`` reads as XYZ); a PLY range
+    grid becomes its valid samples as a :class:`PointCloud`. Errors:
+    :class:`~pylodkit.FileError` when the file cannot be read,
+    :class:`~pylodkit.InputError` when it is malformed — with the CLI's
+    message, naming the file. The GIL is released while reading.
+
+    Example::
+
+        >>> mesh = lk.load("bunny.ply")
+        >>> mesh.n_faces
+        69451
+    """
+    kind, d = _native.load(os.fspath(path))
+    return _wrap(kind, d)
+
+
+def save(obj: Union[Geometry, Any], path: PathLike, *, ascii: bool = False) -> None:
+    """Writes a mesh or point cloud; the format follows the extension.
+
+    Meshes: .ply, .obj, .stl, .glb (and .xyz/.pts for their vertices);
+    point clouds: .ply, .xyz, .pts. PLY and STL are binary unless
+    ``ascii``. The write is atomic (temporary file, fsync, rename) and
+    deterministic, as every lodkit writer. Anything with ``vertices`` and
+    ``faces`` arrays is a mesh (a ``trimesh.Trimesh`` too).
+
+    Example::
+
+        >>> lk.save(lk.bunny(), "bunny.glb")
+    """
+    _native.save(obj, os.fspath(path), ascii)
+
+
+def bunny() -> Mesh:
+    """The Stanford bunny (35,947 vertices, 69,451 faces), built in as in ``lodkit build``.
+
+    Example::
+
+        >>> lk.bunny()
+        Mesh(35947 vertices, 69451 faces)
+    """
+    return Mesh(**_native.bunny())
+
+
+def blob(triangles: int, seed: int = 1) -> Mesh:
+    """A noise-displaced sphere of about ``triangles`` faces (closed, genus 0).
+
+    The benchmarks' stand-in for a dense scan; deterministic for a seed.
+
+    Example::
+
+        >>> lk.blob(1_000_000).n_faces
+        1002252
+    """
+    _check.integer("triangles", triangles, 1, 1 << 30)
+    _check.integer("seed", seed, 0, 2**32 - 1)
+    return Mesh(**_native.blob(triangles, seed))
+
+
+def icosphere(level: int) -> Mesh:
+    """The unit icosphere with 20 × 4**level faces (``level`` in 0..=8).
+
+    Example::
+
+        >>> lk.icosphere(3).n_faces
+        1280
+    """
+    _check.integer("level", level, 0, 8)
+    return Mesh(**_native.icosphere(level))
+
+
+def _simplify_options(max_error, lock_border, fill_holes, heap_size, normal_weight,
+                      color_weight, uv_weight, prune) -> Dict[str, Any]:
+    w = dict(lo=0.0, hi=1e6)
+    return dict(
+        max_error=_check.real("max_error", max_error, 0.0),
+        lock_border=bool(lock_border),
+        fill_holes=bool(fill_holes),
+        heap_size=_check.integer("heap_size", heap_size, 1, MAX_HEAP_SIZE),
+        normal_weight=_check.real("normal_weight", normal_weight, **w),
+        color_weight=_check.real("color_weight", color_weight, **w),
+        uv_weight=_check.real("uv_weight", uv_weight, **w),
+        prune=_check.real("prune", prune, 0.0, 1.0, hi_open=True),
+    )
+
+
+def simplify(
+    mesh: Any,
+    target: Optional[int] = None,
+    *,
+    ratio: Optional[float] = None,
+    max_error: Optional[float] = None,
+    lock_border: bool = False,
+    fill_holes: bool = True,
+    heap_size: int = 1,
+    normal_weight: float = 0.05,
+    color_weight: float = 0.05,
+    uv_weight: float = 0.1,
+    prune: Optional[float] = None,
+) -> Tuple[Mesh, Dict[str, Any]]:
+    """Simplifies a mesh to a budget with lodkit's HQMS simplifier (``lodkit simplify``).
+
+    Give ``target`` (triangles), ``ratio`` (fraction of the input's
+    triangles, in [0, 1]) or ``max_error`` (stop before a collapse whose
+    estimated error, in input units, would exceed it), or an error with a
+    budget. The other options and their defaults are the CLI's:
+    ``lock_border`` keeps border vertices in place, ``fill_holes=False``
+    keeps every hole, ``heap_size`` (1..=2**24) is the replacement-selection
+    heap, the weights (0..=1e6) price normals, colours and UVs in the cost,
+    ``prune`` (in [0, 1)) removes components smaller than that fraction of
+    the diagonal first. Attributes are interpolated; seams are kept.
+
+    Returns ``(mesh, report)``; the report has ``lodkit simplify --json``'s
+    figures: ``input_triangles``, ``target_triangles``, ``triangles``,
+    ``vertices``, ``estimated_error``, ``passes``, ``collapses``, ``stop``
+    (why it stopped, in words) and ``seconds`` (the simplifier's own time).
+    Deterministic; the GIL is released while it runs.
+
+    Example::
+
+        >>> lod, report = lk.simplify(lk.bunny(), ratio=0.1)
+        >>> report["triangles"] <= 6945, report["stop"]
+        (True, 'reached the target')
+    """
+    if target is not None and ratio is not None:
+        raise OptionError("target and ratio conflict: give one of them")
+    if target is None and ratio is None and max_error is None:
+        raise OptionError("give target=FACES, ratio=R or max_error=E")
+    t = _check.integer("target", target, 0, 2**32 - 1)
+    r = _check.real("ratio", ratio, 0.0, 1.0)
+    opts = _simplify_options(max_error, lock_border, fill_holes, heap_size, normal_weight,
+                             color_weight, uv_weight, prune)
+    d, report = _native.simplify(mesh, t, r, **opts)
+    return Mesh(**d), report
+
+
+def lod_chain(
+    mesh: Any,
+    levels: Optional[int] = None,
+    *,
+    ratios: Optional[Sequence[float]] = None,
+    measure: bool = True,
+    samples: Optional[int] = None,
+    max_error: Optional[float] = None,
+    lock_border: bool = False,
+    fill_holes: bool = True,
+    heap_size: int = 1,
+    normal_weight: float = 0.05,
+    color_weight: float = 0.05,
+    uv_weight: float = 0.1,
+    prune: Optional[float] = None,
+) -> List[Tuple[Mesh, Dict[str, Any]]]:
+    """A discrete LOD chain, each level simplified from the previous one (``lodkit lods``).
+
+    ``levels`` (1..=32, default 6) halves the triangles per level (1/2,
+    1/4, ...); ``ratios`` gives each level's fraction of the input instead.
+    With ``measure`` (the default, as ``lods.json``), each level's
+    symmetric Metro distance to the input is measured: ``samples`` per
+    kind, by default 4 per face of the level within 50,000..=1,000,000.
+    The simplifier options are :func:`simplify`'s.
+
+    Returns one ``(mesh, report)`` per level; each report has
+    :func:`simplify`'s keys plus ``level``, ``measured_mean_error``,
+    ``measured_max_error`` (object units; ``None`` when not measured) and
+    ``samples``. The GIL is released while it runs.
+
+    Example::
+
+        >>> chain = lk.lod_chain(lk.bunny(), levels=3)
+        >>> [r["triangles"] for _, r in chain]
+        [34725, 17361, 8680]
+    """
+    if levels is not None and ratios is not None:
+        raise OptionError("levels and ratios conflict: give one of them")
+    if ratios is None:
+        n = _check.integer("levels", 6 if levels is None else levels, 1, MAX_LEVELS)
+        rs = [0.5 ** (i + 1) for i in range(n)]
+    else:
+        rs = [_check.real("ratios", r, 0.0, 1.0) for r in ratios]
+        if not rs:
+            raise OptionError("ratios: give at least one fraction in [0, 1]")
+    s = _check.integer("samples", samples, 1, MAX_SAMPLES)
+    opts = _simplify_options(max_error, lock_border, fill_holes, heap_size, normal_weight,
+                             color_weight, uv_weight, prune)
+    out = _native.lod_chain(mesh, rs, measure=bool(measure), samples=s, **opts)
+    return [(Mesh(**d), r) for d, r in out]
+
+
+def compare(
+    a: Any,
+    b: Any,
+    *,
+    samples: Optional[int] = None,
+    seed: int = 1998,
+    vertex_samples: bool = True,
+    edge_samples: bool = True,
+    face_samples: bool = True,
+) -> Dict[str, Any]:
+    """Metro-style distances between two meshes (``lodkit compare --json``).
+
+    Samples each surface on its vertices, edges and faces (``samples`` of
+    each kind per mesh, 1..=10,000,000; default max(10 × faces of the
+    larger mesh, 1M), at most 10M) and measures them against the other.
+    Deterministic for a ``seed``.
+
+    Returns the CLI's JSON as a dict: ``a_to_b`` and ``b_to_a`` (samples,
+    min, max, mean, rms, max_at, diagonal, max_pct, mean_pct, rms_pct),
+    ``symmetric`` (samples, max, mean, rms, diagonal, *_pct: each the larger
+    of the two directions, percentages of the union's diagonal),
+    ``samples_per_kind`` and ``seed``. The GIL is released while it runs.
+
+    Example::
+
+        >>> lod, _ = lk.simplify(lk.bunny(), ratio=0.1)
+        >>> r = lk.compare(lk.bunny(), lod)
+        >>> round(r["symmetric"]["mean_pct"], 4)
+        0.0185
+    """
+    n = _check.integer("samples", samples, 1, MAX_SAMPLES)
+    _check.integer("seed", seed, 0, 2**64 - 1)
+    return _native.compare(a, b, n, seed, bool(vertex_samples), bool(edge_samples),
+                           bool(face_samples))
+
+
+# -- trimesh and open3d -------------------------------------------------------
+
+def from_trimesh(tm: Any, *, normals: bool = False) -> Mesh:
+    """A :class:`Mesh` from a ``trimesh.Trimesh`` (its arrays, not copied).
+
+    Vertex colours come along when ``tm.visual`` holds them, UVs when it is
+    a texture visual with UVs; vertex normals only with ``normals=True``
+    (trimesh computes them on demand).
+
+    Example::
+
+        >>> import trimesh
+        >>> m = lk.from_trimesh(trimesh.creation.icosphere(3))
+        >>> lod, _ = lk.simplify(m, ratio=0.5)
+    """
+    colors = uvs = None
+    visual = getattr(tm, "visual", None)
+    kind = getattr(visual, "kind", None)
+    if kind == "vertex":
+        colors = np.asarray(visual.vertex_colors)
+    elif kind == "texture" and getattr(visual, "uv", None) is not None:
+        uvs = np.asarray(visual.uv)
+    return Mesh(
+        np.asarray(tm.vertices),
+        np.asarray(tm.faces),
+        normals=np.asarray(tm.vertex_normals) if normals else None,
+        colors=colors,
+        uvs=uvs,
+    )
+
+
+def to_trimesh(mesh: Mesh, **kwargs: Any) -> Any:
+    """A ``trimesh.Trimesh`` of a :class:`Mesh` (``process=False``: vertices kept as they are).
+
+    Normals become ``vertex_normals``, colours ``vertex_colors``, UVs a
+    ``TextureVisuals``. Extra keywords go to ``trimesh.Trimesh``.
+
+    Example::
+
+        >>> tm = lk.to_trimesh(lk.bunny())
+        >>> tm.is_watertight
+        False
+    """
+    import trimesh
+
+    kwargs.setdefault("process", False)
+    visual = None
+    if mesh.uvs is not None:
+        visual = trimesh.visual.TextureVisuals(uv=mesh.uvs)
+    elif mesh.colors is not None:
+        visual = trimesh.visual.ColorVisuals(vertex_colors=mesh.colors)
+    return trimesh.Trimesh(
+        vertices=mesh.vertices,
+        faces=mesh.faces.astype(np.int64, copy=False),
+        vertex_normals=mesh.normals,
+        visual=visual,
+        **kwargs,
+    )
+
+
+def from_open3d(geometry: Any) -> Geometry:
+    """A :class:`Mesh` from an ``open3d.geometry.TriangleMesh``, or a
+    :class:`PointCloud` from an ``open3d.geometry.PointCloud``.
+
+    Vertex normals and colours (open3d's float RGB in [0, 1]) come along
+    when present.
+
+    Example::
+
+        >>> import open3d as o3d
+        >>> m = lk.from_open3d(o3d.geometry.TriangleMesh.create_sphere())
+    """
+    if hasattr(geometry, "triangles"):
+        return Mesh(
+            np.asarray(geometry.vertices),
+            np.asarray(geometry.triangles),
+            normals=np.asarray(geometry.vertex_normals) if geometry.has_vertex_normals() else None,
+            colors=np.asarray(geometry.vertex_colors) if geometry.has_vertex_colors() else None,
+        )
+    return PointCloud(
+        np.asarray(geometry.points),
+        normals=np.asarray(geometry.normals) if geometry.has_normals() else None,
+        colors=np.asarray(geometry.colors) if geometry.has_colors() else None,
+    )
+
+
+def to_open3d(obj: Geometry) -> Any:
+    """An ``open3d.geometry.TriangleMesh`` (or ``PointCloud``) of a lodkit geometry.
+
+    Colours become open3d's float RGB in [0, 1] (alpha is dropped).
+
+    Example::
+
+        >>> o3d_mesh = lk.to_open3d(lk.bunny())
+        >>> len(o3d_mesh.triangles)
+        69451
+    """
+    import open3d as o3d
+
+    def rgb(c):
+        c = np.asarray(c)
+        c = c[:, :3]
+        return c.astype(np.float64) / 255.0 if c.dtype == np.uint8 else c.astype(np.float64)
+
+    v3 = o3d.utility.Vector3dVector
+    if isinstance(obj, PointCloud):
+        pc = o3d.geometry.PointCloud(v3(np.asarray(obj.points, np.float64)))
+        if obj.normals is not None:
+            pc.normals = v3(np.asarray(obj.normals, np.float64))
+        if obj.colors is not None:
+            pc.colors = v3(rgb(obj.colors))
+        return pc
+    m = o3d.geometry.TriangleMesh(
+        v3(np.asarray(obj.vertices, np.float64)),
+        o3d.utility.Vector3iVector(np.asarray(obj.faces, np.int32)),
+    )
+    if obj.normals is not None:
+        m.vertex_normals = v3(np.asarray(obj.normals, np.float64))
+    if obj.colors is not None:
+        m.vertex_colors = v3(rgb(obj.colors))
+    return m
+
+
+__all__ = [
+    "Mesh", "PointCloud", "load", "save", "bunny", "blob", "icosphere", "simplify",
+    "lod_chain", "compare", "from_trimesh", "to_trimesh", "from_open3d", "to_open3d",
+    "MAX_SAMPLES", "MAX_HEAP_SIZE", "MAX_LEVELS",
+]
+

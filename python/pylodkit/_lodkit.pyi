@@ -1,0 +1,151 @@
+"""Type stubs of the native module ``pylodkit._lodkit`` (Rust, PyO3).
+
+These are the raw calls behind the public API; use :mod:`pylodkit`, which
+checks option ranges and wraps results in ``Mesh`` / ``PointCloud``.
+Mesh dicts have ``vertices`` float32 (n, 3), ``faces`` uint32 (m, 3),
+``normals`` float32 (n, 3) | None, ``colors`` uint8 (n, 4) | None,
+``uvs`` float32 (n, 2) | None; point dicts have ``points``, ``normals``,
+``colors``. Every call releases the GIL while it computes.
+
+Example::
+
+    >>> from pylodkit import _lodkit
+    >>> d, report = _lodkit.simplify(_lodkit.bunny(), None, 0.1)
+"""
+from typing import Any, Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+MeshDict = Dict[str, Optional[np.ndarray]]
+MAX_SAMPLES: int
+MAX_HEAP_SIZE: int
+MCO_MAX_RESOLUTION: int
+
+def load(path: str) -> Tuple[str, Dict[str, Optional[np.ndarray]]]:
+    """``(kind, dict)`` of a file; kind is ``"mesh"`` or ``"points"``.
+
+    Example: ``kind, d = load("bunny.ply")``
+    """
+
+def save(obj: Any, path: str, ascii: bool = False) -> None:
+    """Writes a mesh-like or points-like object, atomically.
+
+    Example: ``save(bunny(), "bunny.glb")``
+    """
+
+def bunny() -> MeshDict:
+    """The built-in Stanford bunny. Example: ``bunny()["faces"].shape``"""
+
+def blob(triangles: int, seed: int = 1) -> MeshDict:
+    """A noise-displaced sphere of about ``triangles`` faces. Example: ``blob(10_000)``"""
+
+def icosphere(level: int) -> MeshDict:
+    """The unit icosphere, 20 × 4**level faces. Example: ``icosphere(3)``"""
+
+def write_atomic(path: str, data: bytes) -> None:
+    """lodkit's atomic write (temporary file, fsync, rename). Example: ``write_atomic("a.pop", data)``"""
+
+def simplify(
+    mesh: Any,
+    target: Optional[int] = None,
+    ratio: Optional[float] = None,
+    max_error: Optional[float] = None,
+    lock_border: bool = False,
+    fill_holes: bool = True,
+    heap_size: int = 1,
+    normal_weight: float = 0.05,
+    color_weight: float = 0.05,
+    uv_weight: float = 0.1,
+    prune: Optional[float] = None,
+) -> Tuple[MeshDict, Dict[str, Any]]:
+    """One mesh to one budget: ``(mesh dict, report)``. Example: ``simplify(bunny(), None, 0.1)``"""
+
+def lod_chain(
+    mesh: Any,
+    ratios: Sequence[float],
+    max_error: Optional[float] = None,
+    lock_border: bool = False,
+    fill_holes: bool = True,
+    heap_size: int = 1,
+    normal_weight: float = 0.05,
+    color_weight: float = 0.05,
+    uv_weight: float = 0.1,
+    prune: Optional[float] = None,
+    measure: bool = True,
+    samples: Optional[int] = None,
+) -> List[Tuple[MeshDict, Dict[str, Any]]]:
+    """Each level from the previous. Example: ``lod_chain(bunny(), [0.5, 0.25])``"""
+
+def compare(
+    a: Any,
+    b: Any,
+    samples: Optional[int] = None,
+    seed: int = 1998,
+    vertex_samples: bool = True,
+    edge_samples: bool = True,
+    face_samples: bool = True,
+) -> Dict[str, Any]:
+    """``lodkit compare --json``'s report. Example: ``compare(bunny(), bunny())["symmetric"]["max"]``"""
+
+class McoModel:
+    """A built marching cube octree (immutable). Example: ``m = mco_build([bunny()])``"""
+
+    @property
+    def max_lod(self) -> int: ...
+    @property
+    def full_triangles(self) -> int: ...
+    def triangles_at_lod(self, k: int) -> int:
+        """Example: ``m.triangles_at_lod(m.max_lod)``"""
+    def bounds(self) -> Tuple[Tuple[float, float, float], Tuple[float, float, float]]:
+        """Example: ``lo, hi = m.bounds()``"""
+    def extract_triangles(self, triangles: int) -> Tuple[MeshDict, int]:
+        """``(mesh dict, lod)``. Example: ``m.extract_triangles(10_000)``"""
+    def extract_lod(self, lod: int) -> MeshDict:
+        """Example: ``m.extract_lod(0)``"""
+    def extract_view(
+        self,
+        position: Tuple[float, float, float],
+        look_at: Optional[Tuple[float, float, float]] = None,
+        fov: float = 60.0,
+        viewport: float = 1080.0,
+        tolerance: float = 1.0,
+    ) -> Tuple[MeshDict, int]:
+        """``(mesh dict, expanded nodes)``. Example: ``m.extract_view((0, 0.1, 0.4))``"""
+    def save(self, path: str) -> None:
+        """Example: ``m.save("bunny.mco")``"""
+    def to_bytes(self) -> bytes:
+        """Example: ``m.to_bytes()[:4]``"""
+    def info(self) -> Dict[str, Any]:
+        """Example: ``m.info()["nodes"]``"""
+
+def mco_build(inputs: Sequence[Any], resolution: Optional[int] = None) -> McoModel:
+    """Example: ``mco_build([bunny()], 128)``"""
+
+def mco_load(path: str) -> McoModel:
+    """Example: ``mco_load("bunny.mco")``"""
+
+def mco_from_bytes(data: bytes) -> McoModel:
+    """Example: ``mco_from_bytes(m.to_bytes())``"""
+
+def pop_encode(
+    obj: Any,
+    depth: Optional[int] = None,
+    precision: Optional[int] = None,
+    mode: str = "entropy",
+    placement: Optional[str] = None,
+    outer_thinning: bool = False,
+    relax_below: Optional[int] = None,
+    normals: bool = False,
+    colours: bool = True,
+) -> Tuple[bytes, Dict[str, Any]]:
+    """``(stream, report)``. Example: ``data, report = pop_encode(bunny())``"""
+
+def pop_decode(
+    data: bytes,
+    level: Optional[int] = None,
+    precision: Optional[int] = None,
+    points: bool = False,
+    decimate: Optional[float] = None,
+    strict: bool = False,
+) -> Tuple[str, Dict[str, Optional[np.ndarray]], Dict[str, Any]]:
+    """``(kind, dict, info)``. Example: ``kind, d, info = pop_decode(data, 5)``"""

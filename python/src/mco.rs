@@ -1,0 +1,281 @@
+//! `McoModel`: the continuous-LOD model of `lodkit-mco`, built, saved,
+//! loaded and cut from Python (`lodkit mco build|extract|info`).
+
+use std::path::PathBuf;
+
+use glam::Vec3;
+use lodkit_mco::{
+    Camera, IncrementalBuilder, McoModel, Options, densify_meshes, grid_for, samples_of,
+};
+use lodkit_mesh::Model;
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict};
+
+use crate::convert::{json_to_py, mesh_to_py, model_from_py};
+use crate::errors::{self, Kind, input, raise};
+
+/// Largest `resolution` of a build: the CLI's `--resolution` bound (memory
+/// grows with its square on a surface that fills the lattice).
+pub const MAX_RESOLUTION: u32 = 512;
+
+/// A built marching cube octree: one vertex buffer, cut at any triangle
+/// budget, LOD number or camera. Immutable, so cuts from several Python
+/// threads run at once (each releases the GIL).
+#[pyclass(name = "McoModel", module = "pylodkit._lodkit", frozen)]
+pub struct PyMco {
+    inner: McoModel,
+}
+
+/// Builds from meshes, point clouds and files, as `lodkit mco build`
+/// does: every input on one lattice, meshes densified, Hoppe's tangential
+/// rule when any input is not a mesh (a `.conf` path adds its posed scans).
+fn build_models(models: &[Model], resolution: Option<u32>) -> Result<McoModel, lodkit_mco::Error> {
+    let opts = Options { resolution };
+    if resolution.is_some() {
+        let bytes = lodkit_mco::estimate_build_bytes(models, &opts)?;
+        if bytes > lodkit_mco::MAX_BUILD_BYTES {
+            return Err(lodkit_mco::Error::Input(format!(
+                "resolution {}: the build would need about {:.1} GB of memory, more than its {:.1} GB limit; use a lower resolution",
+                resolution.unwrap_or(0),
+                bytes as f64 / 1e9,
+                lodkit_mco::MAX_BUILD_BYTES as f64 / 1e9
+            )));
+        }
+    }
+    let samples = models
+        .iter()
+        .map(samples_of)
+        .collect::<Result<Vec<_>, _>>()?;
+    if samples.iter().all(|s| s.is_empty()) {
+        return Err(lodkit_mco::Error::Input(
+            "the input has no usable samples".into(),
+        ));
+    }
+    let grid = grid_for(models, &samples, &opts)?;
+    let samples = densify_meshes(models, samples, &grid);
+    let mut builder = IncrementalBuilder::new(grid);
+    if models.iter().any(|m| !matches!(m, Model::Mesh(_))) {
+        builder = builder.with_tangential_rule();
+    }
+    for s in &samples {
+        let _ = builder.add(s);
+    }
+    builder.build()
+}
+
+/// `mco_build(inputs, resolution) -> McoModel`.
+#[pyfunction]
+#[pyo3(signature = (inputs, resolution = None))]
+fn mco_build(
+    py: Python<'_>,
+    inputs: Vec<Bound<'_, PyAny>>,
+    resolution: Option<u32>,
+) -> PyResult<PyMco> {
+    let mut models = Vec::with_capacity(inputs.len());
+    for obj in &inputs {
+        let conf = obj.extract::<PathBuf>().ok().filter(|p| {
+            p.extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("conf"))
+        });
+        match conf {
+            Some(path) => {
+                let scans = py
+                    .detach(|| lodkit_mesh::io::conf::load_scans(&path))
+                    .map_err(errors::mesh)?;
+                models.extend(scans.into_iter().map(|(_, r)| Model::Range(r)));
+            }
+            None => models.push(model_from_py(obj)?),
+        }
+    }
+    let inner = py
+        .detach(|| build_models(&models, resolution))
+        .map_err(errors::mco)?;
+    Ok(PyMco { inner })
+}
+
+/// `mco_load(path) -> McoModel`.
+#[pyfunction]
+fn mco_load(py: Python<'_>, path: PathBuf) -> PyResult<PyMco> {
+    let r = py.detach(|| McoModel::load(&path));
+    match r {
+        Ok(inner) => Ok(PyMco { inner }),
+        // Tell "cannot open" (an OSError) from "malformed" (bad data).
+        Err(e) if std::fs::File::open(&path).is_err() => Err(raise(Kind::File, e.to_string())),
+        Err(e) => Err(errors::mco(e)),
+    }
+}
+
+/// `mco_from_bytes(data) -> McoModel`.
+#[pyfunction]
+fn mco_from_bytes(py: Python<'_>, data: &[u8]) -> PyResult<PyMco> {
+    let inner = py
+        .detach(|| McoModel::from_bytes(data))
+        .map_err(errors::mco)?;
+    Ok(PyMco { inner })
+}
+
+#[derive(serde::Serialize)]
+struct LevelRow {
+    level: usize,
+    nodes: usize,
+    triangles: usize,
+}
+
+/// `lodkit mco info --json`'s model fields (no file fields).
+#[derive(serde::Serialize)]
+struct Info {
+    resolution: u32,
+    cube: f32,
+    depth: u32,
+    vertices: usize,
+    nodes: usize,
+    lod_array: usize,
+    lod_numbers: usize,
+    full_triangles: usize,
+    crack_patches: usize,
+    input_samples: u64,
+    has_colors: bool,
+    levels: Vec<LevelRow>,
+}
+
+#[pymethods]
+impl PyMco {
+    /// The highest LOD number (every leaf cube).
+    #[getter]
+    fn max_lod(&self) -> usize {
+        self.inner.max_lod()
+    }
+
+    /// Triangles at full resolution.
+    #[getter]
+    fn full_triangles(&self) -> usize {
+        self.inner.full_triangles()
+    }
+
+    /// Triangles of the cut at LOD number `k`.
+    fn triangles_at_lod(&self, k: usize) -> usize {
+        self.inner.triangles_at_lod(k)
+    }
+
+    /// The bounding box `((x, y, z), (x, y, z))`.
+    fn bounds(&self) -> ([f32; 3], [f32; 3]) {
+        let (lo, hi) = self.inner.bounds();
+        (lo.to_array(), hi.to_array())
+    }
+
+    /// The cut nearest a triangle budget: `(mesh dict, lod)`.
+    fn extract_triangles<'py>(
+        &self,
+        py: Python<'py>,
+        triangles: usize,
+    ) -> PyResult<(Bound<'py, PyDict>, usize)> {
+        let model = &self.inner;
+        let (mesh, k) = py.detach(|| {
+            let mut idx = Vec::new();
+            let k = model.extract_triangles(triangles, &mut idx);
+            (model.mesh_from_indices(&idx), k)
+        });
+        Ok((mesh_to_py(py, mesh)?, k))
+    }
+
+    /// The cut at LOD number `lod` (`0..=max_lod`).
+    fn extract_lod<'py>(&self, py: Python<'py>, lod: usize) -> PyResult<Bound<'py, PyDict>> {
+        let model = &self.inner;
+        if lod > model.max_lod() {
+            return Err(input(format!(
+                "lod {lod} is outside 0..={} for this model",
+                model.max_lod()
+            )));
+        }
+        let mesh = py.detach(|| {
+            let mut idx = Vec::new();
+            model.extract_lod(lod, &mut idx);
+            model.mesh_from_indices(&idx)
+        });
+        mesh_to_py(py, mesh)
+    }
+
+    /// The view-dependent cut for a camera at `position` looking at
+    /// `look_at` (default: the model's centre): `(mesh dict, expanded nodes)`.
+    #[pyo3(signature = (position, look_at = None, fov = 60.0, viewport = 1080.0, tolerance = 1.0))]
+    fn extract_view<'py>(
+        &self,
+        py: Python<'py>,
+        position: [f32; 3],
+        look_at: Option<[f32; 3]>,
+        fov: f32,
+        viewport: f32,
+        tolerance: f32,
+    ) -> PyResult<(Bound<'py, PyDict>, usize)> {
+        let model = &self.inner;
+        let position = Vec3::from(position);
+        let (lo, hi) = model.bounds();
+        let target = look_at.map_or((lo + hi) * 0.5, Vec3::from);
+        if position == target {
+            return Err(input(
+                "view and look_at are the same point: the camera has no direction",
+            ));
+        }
+        let cam = Camera {
+            vfov_deg: fov,
+            viewport_height: viewport,
+            ..Camera::looking_at(position, target)
+        };
+        let (mesh, n) = py.detach(|| {
+            let mut idx = Vec::new();
+            let n = model.extract_view(&cam, tolerance, &mut idx);
+            (model.mesh_from_indices(&idx), n)
+        });
+        Ok((mesh_to_py(py, mesh)?, n))
+    }
+
+    /// Writes the model as a `.mco` file, atomically.
+    fn save(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        let model = &self.inner;
+        py.detach(|| model.save(&path)).map_err(errors::mco)
+    }
+
+    /// The `.mco` bytes (what `save` writes).
+    fn to_bytes<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
+        let model = &self.inner;
+        let bytes = py.detach(|| model.to_bytes());
+        PyBytes::new(py, &bytes)
+    }
+
+    /// `lodkit mco info --json`'s model figures, as a dict.
+    fn info<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let m = self.inner.info();
+        let info = Info {
+            resolution: m.grid.resolution(),
+            cube: m.grid.cube(),
+            depth: m.grid.depth(),
+            vertices: m.vertices,
+            nodes: m.nodes,
+            lod_array: m.lod_array,
+            lod_numbers: m.lod_numbers,
+            full_triangles: m.full_triangles,
+            crack_patches: m.crack_patches,
+            input_samples: m.input_samples,
+            has_colors: m.has_colors,
+            levels: m
+                .levels
+                .iter()
+                .enumerate()
+                .map(|(level, l)| LevelRow {
+                    level,
+                    nodes: l.nodes,
+                    triangles: l.triangles,
+                })
+                .collect(),
+        };
+        json_to_py(py, &info)
+    }
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyMco>()?;
+    m.add_function(wrap_pyfunction!(mco_build, m)?)?;
+    m.add_function(wrap_pyfunction!(mco_load, m)?)?;
+    m.add_function(wrap_pyfunction!(mco_from_bytes, m)?)?;
+    Ok(())
+}
