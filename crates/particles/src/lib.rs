@@ -73,6 +73,8 @@ pub(crate) mod encode;
 pub(crate) mod error;
 pub(crate) mod octree;
 pub(crate) mod ordering;
+#[cfg(feature = "silhouettes")]
+pub mod silhouette;
 pub(crate) mod orientation;
 #[cfg(test)]
 mod progressive_tests;
