@@ -41,9 +41,19 @@ fn every_malformed_image_set_fails_with_one_line_naming_the_file_and_the_camera(
                 "--depth".into(),
                 "4".into(),
             ],
-            vec!["build".into(), f.clone(), "--out".into(), format!("{o}/b"), "--no-measure".into()],
+            vec![
+                "build".into(),
+                f.clone(),
+                "--out".into(),
+                format!("{o}/b"),
+                "--no-measure".into(),
+            ],
         ] {
-            let shown = format!("{} lodkit {}", case.file_name().unwrap().to_string_lossy(), args[0]);
+            let shown = format!(
+                "{} lodkit {}",
+                case.file_name().unwrap().to_string_lossy(),
+                args[0]
+            );
             let r = Command::new(env!("CARGO_BIN_EXE_lodkit"))
                 .args(&args)
                 .env("LODKIT_VIEWER", "skip")
@@ -56,7 +66,9 @@ fn every_malformed_image_set_fails_with_one_line_naming_the_file_and_the_camera(
             } else if lines.len() != 1 {
                 failures.push(format!("{shown}: {} lines: {err}", lines.len()));
             } else if !lines[0].contains(&file_name) || !lines[0].contains(&camera) {
-                failures.push(format!("{shown}: does not name {file_name} and '{camera}': {err}"));
+                failures.push(format!(
+                    "{shown}: does not name {file_name} and '{camera}': {err}"
+                ));
             }
             let written: Vec<_> = std::fs::read_dir(out.path()).unwrap().collect();
             if !written.is_empty() {

@@ -73,11 +73,11 @@ pub(crate) mod encode;
 pub(crate) mod error;
 pub(crate) mod octree;
 pub(crate) mod ordering;
-#[cfg(feature = "silhouettes")]
-pub mod silhouette;
 pub(crate) mod orientation;
 #[cfg(test)]
 mod progressive_tests;
+#[cfg(feature = "silhouettes")]
+pub mod silhouette;
 pub(crate) mod stats;
 pub(crate) mod thinning;
 pub(crate) mod triangulate;

@@ -8,8 +8,7 @@ use std::path::{Path, PathBuf};
 use glam::{DVec3, Vec3};
 use lodkit_mesh::TriMesh;
 use lodkit_particles::silhouette::{
-    ImageSet, SilhouetteOptions, SilhouetteSource, carve_octree, encode_carved,
-    encode_silhouettes,
+    ImageSet, SilhouetteOptions, SilhouetteSource, carve_octree, encode_carved, encode_silhouettes,
 };
 use lodkit_particles::{DecodeOptions, EncodeOptions, decode};
 use lodkit_render::{CameraRing, RenderOptions, render, ring};
@@ -28,8 +27,16 @@ fn write_ring(mesh: &TriMesh, dir: &Path, per_ring: u32, elevations: &[f32], siz
     for (i, v) in r.views.iter().enumerate() {
         let img = render(mesh, &v.camera, &opts).unwrap();
         let name = r.file_name(i);
-        std::fs::write(dir.join(ring::IMAGES_DIR).join(&name), img.to_png().unwrap()).unwrap();
-        std::fs::write(dir.join(ring::MASKS_DIR).join(&name), img.mask().to_png().unwrap()).unwrap();
+        std::fs::write(
+            dir.join(ring::IMAGES_DIR).join(&name),
+            img.to_png().unwrap(),
+        )
+        .unwrap();
+        std::fs::write(
+            dir.join(ring::MASKS_DIR).join(&name),
+            img.mask().to_png().unwrap(),
+        )
+        .unwrap();
     }
     for (p, text) in r.calibration_files() {
         std::fs::write(dir.join(p), text).unwrap();
@@ -88,7 +95,11 @@ fn sphere() -> TriMesh {
 
 /// Sphere colours: a smooth field of the position.
 fn colour_at(p: Vec3) -> [f32; 3] {
-    [128.0 + 100.0 * p.x, 128.0 + 100.0 * p.y, 128.0 + 100.0 * p.z]
+    [
+        128.0 + 100.0 * p.x,
+        128.0 + 100.0 * p.y,
+        128.0 + 100.0 * p.z,
+    ]
 }
 
 fn coloured_sphere() -> TriMesh {
@@ -148,8 +159,14 @@ fn a_carved_sphere_lies_within_the_cube_diagonal_plus_the_hull_error() {
         sum / pts.len() as f64
     );
     // The icosphere's faces sit inside the unit sphere by up to 0.0005.
-    assert!(lo >= -eps - 1e-3, "a particle {lo} inside the sphere (ε_R {eps})");
-    assert!(hi <= eps + hull, "a particle {hi} outside (ε_R {eps} + hull {hull})");
+    assert!(
+        lo >= -eps - 1e-3,
+        "a particle {lo} inside the sphere (ε_R {eps})"
+    );
+    assert!(
+        hi <= eps + hull,
+        "a particle {hi} outside (ε_R {eps} + hull {hull})"
+    );
 }
 
 #[test]
@@ -168,11 +185,17 @@ fn particle_colours_match_the_mesh_colour_at_the_nearest_surface_point() {
     for (p, got) in pc.positions.iter().zip(cols) {
         // The nearest point of the sphere is along the radius.
         let want = colour_at(p.normalize());
-        let e: f32 = (0..3).map(|k| (f32::from(got[k]) - want[k].clamp(0.0, 255.0)).abs()).sum::<f32>() / 3.0;
+        let e: f32 = (0..3)
+            .map(|k| (f32::from(got[k]) - want[k].clamp(0.0, 255.0)).abs())
+            .sum::<f32>()
+            / 3.0;
         err += f64::from(e);
     }
     let mean = err / pc.positions.len() as f64;
-    eprintln!("mean per-particle colour error: {mean:.2} of 255 per channel over {} particles", pc.positions.len());
+    eprintln!(
+        "mean per-particle colour error: {mean:.2} of 255 per channel over {} particles",
+        pc.positions.len()
+    );
     // The renderer shades with a headlight (ambient 0.22 + 0.78 cos): the
     // best-aligned views of 24 see a point within about 25° (cos ≥ 0.9,
     // ≤ 8 % darker, about 10 units on these colours), plus pixel blur.
@@ -184,14 +207,27 @@ fn colmap_and_nerf_layouts_of_a_ring_read_the_same_cameras() {
     let dir = tempfile::tempdir().unwrap();
     write_ring(&sphere(), dir.path(), 6, &[20.0], 64);
     let a = ImageSet::load(&dir.path().join("transforms.json"), SilhouetteSource::Auto).unwrap();
-    let b = ImageSet::load(&dir.path().join("sparse/0/cameras.txt"), SilhouetteSource::Auto).unwrap();
+    let b = ImageSet::load(
+        &dir.path().join("sparse/0/cameras.txt"),
+        SilhouetteSource::Auto,
+    )
+    .unwrap();
     assert_eq!(a.calibration.views.len(), b.calibration.views.len());
     for (u, v) in a.calibration.views.iter().zip(&b.calibration.views) {
-        assert!(v.mask.is_some(), "{}: the COLMAP layout's masks/ folder", v.label);
+        assert!(
+            v.mask.is_some(),
+            "{}: the COLMAP layout's masks/ folder",
+            v.label
+        );
         for p in [DVec3::ZERO, DVec3::new(0.5, -0.3, 0.2)] {
             let (x, y) = u.project(p).unwrap();
             let (s, t) = v.project(p).unwrap();
-            assert!((x - s).abs() < 1e-3 && (y - t).abs() < 1e-3, "{} vs {}", u.label, v.label);
+            assert!(
+                (x - s).abs() < 1e-3 && (y - t).abs() < 1e-3,
+                "{} vs {}",
+                u.label,
+                v.label
+            );
         }
     }
     // Alpha and mask silhouettes of a render agree.
@@ -236,8 +272,14 @@ fn a_colour_key_gives_the_masks_silhouette_on_an_opaque_render() {
         assert!(img.silhouette.iter().any(|&s| s));
     }
     // Without a key the opaque images have no silhouette source.
-    let e = ImageSet::load(&json, SilhouetteSource::Auto).err().unwrap().to_string();
-    assert!(e.contains("transforms.json") && e.contains("frame 0") && e.contains("--key-colour"), "{e}");
+    let e = ImageSet::load(&json, SilhouetteSource::Auto)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.contains("transforms.json") && e.contains("frame 0") && e.contains("--key-colour"),
+        "{e}"
+    );
 }
 
 fn decode_png_rgba(p: &Path) -> lodkit_render::Image {
@@ -257,7 +299,8 @@ fn decode_png_rgba(p: &Path) -> lodkit_render::Image {
 fn edited_ring(dir: &Path, edit: impl Fn(&mut serde_json::Value)) -> PathBuf {
     write_ring(&sphere(), dir, 4, &[20.0], 32);
     let json = dir.join("transforms.json");
-    let mut v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     edit(&mut v);
     std::fs::write(&json, serde_json::to_string(&v).unwrap()).unwrap();
     json
@@ -268,7 +311,14 @@ fn carve_error(json: &Path) -> String {
         Ok(s) => s,
         Err(e) => return e.to_string(),
     };
-    match carve_octree(&set, &SilhouetteOptions::DEFAULT, &EncodeOptions { depth: Some(4), ..EncodeOptions::DEFAULT }) {
+    match carve_octree(
+        &set,
+        &SilhouetteOptions::DEFAULT,
+        &EncodeOptions {
+            depth: Some(4),
+            ..EncodeOptions::DEFAULT
+        },
+    ) {
         Ok(_) => panic!("{} carved", json.display()),
         Err(e) => e.to_string(),
     }
@@ -290,20 +340,33 @@ fn bad_calibrations_are_one_line_errors_naming_the_file_and_the_camera() {
         }
     });
     let e = carve_error(&json);
-    assert!(e.contains("transforms.json") && e.contains("frame 0") && e.contains("behind"), "{e}");
+    assert!(
+        e.contains("transforms.json") && e.contains("frame 0") && e.contains("behind"),
+        "{e}"
+    );
     // An image missing.
     let d = tempfile::tempdir().unwrap();
-    let json = edited_ring(d.path(), |v| v["frames"][2]["file_path"] = "images/nothere.png".into());
+    let json = edited_ring(d.path(), |v| {
+        v["frames"][2]["file_path"] = "images/nothere.png".into()
+    });
     let e = carve_error(&json);
-    assert!(e.contains("frame 2 (images/nothere.png)") && e.contains("missing"), "{e}");
+    assert!(
+        e.contains("frame 2 (images/nothere.png)") && e.contains("missing"),
+        "{e}"
+    );
     // Image sizes disagreeing with the intrinsics.
     let d = tempfile::tempdir().unwrap();
     let json = edited_ring(d.path(), |v| v["w"] = 40.into());
     let e = carve_error(&json);
-    assert!(e.contains("frame 0") && e.contains("32x32") && e.contains("40x32"), "{e}");
+    assert!(
+        e.contains("frame 0") && e.contains("32x32") && e.contains("40x32"),
+        "{e}"
+    );
     // A path leaving the folder, percent-encoded.
     let d = tempfile::tempdir().unwrap();
-    let json = edited_ring(d.path(), |v| v["frames"][1]["file_path"] = "%2e%2e/x.png".into());
+    let json = edited_ring(d.path(), |v| {
+        v["frames"][1]["file_path"] = "%2e%2e/x.png".into()
+    });
     let e = carve_error(&json);
     assert!(e.contains("frame 1") && e.contains("'..'"), "{e}");
     for e in [&e] {

@@ -75,7 +75,10 @@ fn image_set(ui: &Ui, file: &Path, json: bool) -> Result<()> {
             coverage: set.coverage(i),
         })
         .collect();
-    let mut sizes: Vec<String> = cameras.iter().map(|c| format!("{}x{}", c.width, c.height)).collect();
+    let mut sizes: Vec<String> = cameras
+        .iter()
+        .map(|c| format!("{}x{}", c.width, c.height))
+        .collect();
     sizes.sort();
     sizes.dedup();
     let info = SetInfo {
@@ -83,7 +86,8 @@ fn image_set(ui: &Ui, file: &Path, json: bool) -> Result<()> {
         views: views.len(),
         sizes,
         masks: views.iter().filter(|v| v.mask.is_some()).count(),
-        mean_coverage: cameras.iter().map(|c| c.coverage).sum::<f64>() / cameras.len().max(1) as f64,
+        mean_coverage: cameras.iter().map(|c| c.coverage).sum::<f64>()
+            / cameras.len().max(1) as f64,
         cameras,
     };
     if json {

@@ -175,7 +175,9 @@ fn parse_bbox(s: &str) -> std::result::Result<[f32; 6], String> {
     let v: Option<Vec<f32>> = s.split(',').map(|v| v.trim().parse::<f32>().ok()).collect();
     match v.as_deref() {
         Some(&[a, b, c, d, e, f])
-            if [a, b, c, d, e, f].iter().all(|x| x.is_finite() && x.abs() <= 1e15)
+            if [a, b, c, d, e, f]
+                .iter()
+                .all(|x| x.is_finite() && x.abs() <= 1e15)
                 && a < d
                 && b < e
                 && c < f =>
@@ -309,7 +311,8 @@ fn run_encode(ui: &Ui, a: &EncodeArgs) -> Result<()> {
         (None, Some(input)) => {
             let model = super::load(ui, input)?;
             let step = ui.spinner("encoding octree particles");
-            let e = encode(&model, &opts).with_context(|| format!("encoding {}", input.display()))?;
+            let e =
+                encode(&model, &opts).with_context(|| format!("encoding {}", input.display()))?;
             step.finish();
             (e, input.clone())
         }

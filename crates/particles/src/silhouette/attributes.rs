@@ -34,9 +34,15 @@ pub const RAY_START: f64 = 2.5;
 /// Deepest level of the visibility grid (256³ bytes = 16 MiB).
 const GRID_LEVEL: u8 = 8;
 
-/// Vertices (16-bit grid) and outward normals of every ON leaf, in the
-/// order of `carved.leaves` (= the tree's level `R`).
-pub fn vertices_and_normals(tree: &Octree, carved: &Carved) -> (Vec<[u32; 3]>, Vec<Vec3>) {
+/// Vertices (16-bit grid) and outward normals of the ON leaves, in the
+/// order of `carved.leaves` (= the tree's level `R`); a leaf with
+/// `kept[i]` false (eliminated by thinning, never coded) gets its centre
+/// and a zero normal.
+pub fn vertices_and_normals(
+    tree: &Octree,
+    carved: &Carved,
+    kept: &[bool],
+) -> (Vec<[u32; 3]>, Vec<Vec3>) {
     let r = tree.depth;
     let s = QBITS - u32::from(r);
     let fraction: crate::octree::MortonMap<f64> = carved
@@ -49,8 +55,16 @@ pub fn vertices_and_normals(tree: &Octree, carved: &Carved) -> (Vec<[u32; 3]>, V
         .leaves
         .par_iter()
         .zip(&carved.inside)
-        .map(|(&m, &bits)| {
+        .zip(kept)
+        .map(|((&m, &bits), &keep)| {
             let c = unmorton(m);
+            if !keep {
+                let half = 1u32 << (s - 1).min(15);
+                return (
+                    c.map(|v| (v << s) + if s == 0 { 0 } else { half }),
+                    Vec3::ZERO,
+                );
+            }
             // Vertex.
             let at = |i: usize, j: usize, k: usize| bits >> (i + SUB * j + SUB * SUB * k) & 1 == 1;
             let mut sum = DVec3::ZERO;
@@ -60,10 +74,14 @@ pub fn vertices_and_normals(tree: &Octree, carved: &Carved) -> (Vec<[u32; 3]>, V
                     for i in 0..SUB {
                         let here = at(i, j, k);
                         let p = DVec3::new(i as f64, j as f64, k as f64) + 0.5;
-                        for (a, nb) in [(i + 1, (i + 1, j, k)), (j + 1, (i, j + 1, k)), (k + 1, (i, j, k + 1))]
-                            .iter()
-                            .enumerate()
-                            .map(|(axis, (lim, nb))| ((axis, *lim), *nb))
+                        for (a, nb) in [
+                            (i + 1, (i + 1, j, k)),
+                            (j + 1, (i, j + 1, k)),
+                            (k + 1, (i, j, k + 1)),
+                        ]
+                        .iter()
+                        .enumerate()
+                        .map(|(axis, (lim, nb))| ((axis, *lim), *nb))
                         {
                             if a.1 < SUB && at(nb.0, nb.1, nb.2) != here {
                                 let mut q = p;
@@ -103,10 +121,12 @@ pub fn vertices_and_normals(tree: &Octree, carved: &Carved) -> (Vec<[u32; 3]>, V
                             let pm = morton([p[0] as u32, p[1] as u32, p[2] as u32]);
                             match fraction.get(&pm) {
                                 Some(&f) => f,
-                                None => match tree.label(r, [p[0] as u32, p[1] as u32, p[2] as u32]) {
-                                    Label::In => 1.0,
-                                    _ => 0.0,
-                                },
+                                None => {
+                                    match tree.label(r, [p[0] as u32, p[1] as u32, p[2] as u32]) {
+                                        Label::In => 1.0,
+                                        _ => 0.0,
+                                    }
+                                }
                             }
                         };
                         let d = DVec3::new(dx as f64, dy as f64, dz as f64);
@@ -149,7 +169,8 @@ impl Grid {
                 for z in 0..n {
                     for y in 0..n {
                         for x in 0..n {
-                            occupied[idx([(c[0] << sh) + x, (c[1] << sh) + y, (c[2] << sh) + z])] = true;
+                            occupied[idx([(c[0] << sh) + x, (c[1] << sh) + y, (c[2] << sh) + z])] =
+                                true;
                         }
                     }
                 }
@@ -208,7 +229,8 @@ impl Grid {
         }
         let n = self.side as i64;
         for _ in 0..4 * self.side {
-            let i = (cell[2] as usize * self.side + cell[1] as usize) * self.side + cell[0] as usize;
+            let i =
+                (cell[2] as usize * self.side + cell[1] as usize) * self.side + cell[0] as usize;
             if self.occupied[i] {
                 return true;
             }
@@ -235,7 +257,12 @@ impl Grid {
 fn bilinear(img: &ViewImage, u: f64, v: f64) -> Option<DVec3> {
     let (w, h) = (img.width as i64, img.height as i64);
     let (x, y) = (u - 0.5, v - 0.5);
-    if !(x.is_finite() && y.is_finite()) || x < -0.5 || y < -0.5 || x > w as f64 - 0.5 || y > h as f64 - 0.5 {
+    if !(x.is_finite() && y.is_finite())
+        || x < -0.5
+        || y < -0.5
+        || x > w as f64 - 0.5
+        || y > h as f64 - 0.5
+    {
         return None;
     }
     let (x0, y0) = (x.floor() as i64, y.floor() as i64);
@@ -243,7 +270,11 @@ fn bilinear(img: &ViewImage, u: f64, v: f64) -> Option<DVec3> {
     let px = |i: i64, j: i64| {
         let (i, j) = (i.clamp(0, w - 1) as usize, j.clamp(0, h - 1) as usize);
         let k = (j * img.width as usize + i) * 3;
-        DVec3::new(f64::from(img.rgb[k]), f64::from(img.rgb[k + 1]), f64::from(img.rgb[k + 2]))
+        DVec3::new(
+            f64::from(img.rgb[k]),
+            f64::from(img.rgb[k + 1]),
+            f64::from(img.rgb[k + 2]),
+        )
     };
     Some(
         px(x0, y0) * (1.0 - fx) * (1.0 - fy)

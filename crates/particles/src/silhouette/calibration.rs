@@ -118,7 +118,10 @@ impl View {
             return None;
         }
         let (x, y) = self.lens.distort(c.x / c.z, c.y / c.z);
-        Some((self.lens.fx * x + self.lens.cx, self.lens.fy * y + self.lens.cy))
+        Some((
+            self.lens.fx * x + self.lens.cx,
+            self.lens.fy * y + self.lens.cy,
+        ))
     }
 }
 
@@ -146,10 +149,15 @@ fn err<T>(file: &Path, msg: impl std::fmt::Display) -> Result<T> {
 /// image size. Errors: one line naming the file and the camera.
 pub fn read(path: &Path) -> Result<Calibration> {
     let path = if path.is_dir() {
-        let found = ["transforms.json", "sparse/0/cameras.txt", "sparse/cameras.txt", "cameras.txt"]
-            .iter()
-            .map(|n| path.join(n))
-            .find(|p| p.is_file());
+        let found = [
+            "transforms.json",
+            "sparse/0/cameras.txt",
+            "sparse/cameras.txt",
+            "cameras.txt",
+        ]
+        .iter()
+        .map(|n| path.join(n))
+        .find(|p| p.is_file());
         match found {
             Some(p) => p,
             None => {
@@ -162,7 +170,9 @@ pub fn read(path: &Path) -> Result<Calibration> {
     } else {
         path.to_path_buf()
     };
-    let name = path.file_name().map(|n| n.to_string_lossy().to_ascii_lowercase());
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase());
     match name.as_deref() {
         Some(n) if n.ends_with(".json") => read_transforms(&path),
         Some("cameras.txt") => read_colmap(&path, &path.with_file_name("images.txt")),
@@ -176,15 +186,23 @@ pub fn read(path: &Path) -> Result<Calibration> {
 
 /// Whether `path` names a calibration [`read`] takes (by its name only).
 pub fn is_calibration(path: &Path) -> bool {
-    let name = path.file_name().map(|n| n.to_string_lossy().to_ascii_lowercase());
-    matches!(name.as_deref(), Some("transforms.json" | "cameras.txt" | "images.txt"))
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase());
+    matches!(
+        name.as_deref(),
+        Some("transforms.json" | "cameras.txt" | "images.txt")
+    )
 }
 
 fn read_text(path: &Path) -> Result<String> {
     let bytes = read_file(path).map_err(|e| Error::Input(e.to_string()))?;
     match std::str::from_utf8(strip_bom(&bytes)) {
         Ok(s) => Ok(s.to_string()),
-        Err(e) => err(path, format!("is not UTF-8 text (byte {})", e.valid_up_to())),
+        Err(e) => err(
+            path,
+            format!("is not UTF-8 text (byte {})", e.valid_up_to()),
+        ),
     }
 }
 
@@ -192,7 +210,10 @@ fn finite(file: &Path, what: &str, v: f64) -> Result<f64> {
     if v.is_finite() && v.abs() <= 1e12 {
         Ok(v)
     } else {
-        err(file, format!("{what} is {v}, not a finite number of at most 1e12"))
+        err(
+            file,
+            format!("{what} is {v}, not a finite number of at most 1e12"),
+        )
     }
 }
 
@@ -200,17 +221,33 @@ fn check_lens(file: &Path, who: &str, l: &Lens) -> Result<()> {
     if l.width == 0 || l.height == 0 || l.width > MAX_SIDE || l.height > MAX_SIDE {
         return err(
             file,
-            format!("{who}: image size {}x{} is outside 1..={MAX_SIDE} a side", l.width, l.height),
+            format!(
+                "{who}: image size {}x{} is outside 1..={MAX_SIDE} a side",
+                l.width, l.height
+            ),
         );
     }
     for (n, v) in [("fx", l.fx), ("fy", l.fy)] {
         if !(v.is_finite() && v > 0.0 && v <= 1e9) {
-            return err(file, format!("{who}: focal length {n} = {v} is not in (0, 1e9] pixels"));
+            return err(
+                file,
+                format!("{who}: focal length {n} = {v} is not in (0, 1e9] pixels"),
+            );
         }
     }
-    for (n, v) in [("cx", l.cx), ("cy", l.cy), ("k1", l.k1), ("k2", l.k2), ("p1", l.p1), ("p2", l.p2)] {
+    for (n, v) in [
+        ("cx", l.cx),
+        ("cy", l.cy),
+        ("k1", l.k1),
+        ("k2", l.k2),
+        ("p1", l.p1),
+        ("p2", l.p2),
+    ] {
         if !(v.is_finite() && v.abs() <= 1e9) {
-            return err(file, format!("{who}: {n} = {v} is not a finite number of at most 1e9"));
+            return err(
+                file,
+                format!("{who}: {n} = {v} is not a finite number of at most 1e9"),
+            );
         }
     }
     Ok(())
@@ -235,7 +272,11 @@ fn colmap_image_dir(model_dir: &Path) -> PathBuf {
         }
     }
     let own = model_dir.join("images");
-    if own.is_dir() { own } else { model_dir.to_path_buf() }
+    if own.is_dir() {
+        own
+    } else {
+        model_dir.to_path_buf()
+    }
 }
 
 fn read_colmap(cameras: &Path, images: &Path) -> Result<Calibration> {
@@ -254,22 +295,35 @@ fn parse_colmap(cameras: &Path, ctext: &str, images: &Path, itext: &str) -> Resu
         let at = format!("line {}", no + 1);
         let t: Vec<&str> = line.split_whitespace().collect();
         if t.len() < 4 {
-            return err(cameras, format!("{at}: expected CAMERA_ID MODEL WIDTH HEIGHT PARAMS…"));
+            return err(
+                cameras,
+                format!("{at}: expected CAMERA_ID MODEL WIDTH HEIGHT PARAMS…"),
+            );
         }
-        let id: u64 = t[0]
-            .parse()
-            .or_else(|_| err(cameras, format!("{at}: camera id '{}' is not a whole number", clip(t[0]))))?;
+        let id: u64 = t[0].parse().or_else(|_| {
+            err(
+                cameras,
+                format!("{at}: camera id '{}' is not a whole number", clip(t[0])),
+            )
+        })?;
         let who = format!("{at}, camera {id}");
         let dim = |s: &str| -> Result<u32> {
-            s.parse::<u32>()
-                .or_else(|_| err(cameras, format!("{who}: image size '{}' is not a whole number", clip(s))))
+            s.parse::<u32>().or_else(|_| {
+                err(
+                    cameras,
+                    format!("{who}: image size '{}' is not a whole number", clip(s)),
+                )
+            })
         };
         let (w, h) = (dim(t[2])?, dim(t[3])?);
         let mut ps = Vec::new();
         for s in &t[4..] {
-            let v: f64 = s
-                .parse()
-                .or_else(|_| err(cameras, format!("{who}: parameter '{}' is not a number", clip(s))))?;
+            let v: f64 = s.parse().or_else(|_| {
+                err(
+                    cameras,
+                    format!("{who}: parameter '{}' is not a number", clip(s)),
+                )
+            })?;
             ps.push(finite(cameras, &format!("{who}: a parameter"), v)?);
         }
         let want = match t[1] {
@@ -291,7 +345,11 @@ fn parse_colmap(cameras: &Path, ctext: &str, images: &Path, itext: &str) -> Resu
         if ps.len() != want {
             return err(
                 cameras,
-                format!("{who}: {} takes {want} parameters, the line has {}", t[1], ps.len()),
+                format!(
+                    "{who}: {} takes {want} parameters, the line has {}",
+                    t[1],
+                    ps.len()
+                ),
             );
         }
         let mut l = Lens {
@@ -354,7 +412,10 @@ fn parse_colmap(cameras: &Path, ctext: &str, images: &Path, itext: &str) -> Resu
         let at = format!("line {}", no + 1);
         let t: Vec<&str> = trimmed.split_whitespace().collect();
         if t.len() < 10 {
-            return err(images, format!("{at}: expected IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME"));
+            return err(
+                images,
+                format!("{at}: expected IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME"),
+            );
         }
         let id = t[0];
         let name = t[9..].join(" ");
@@ -369,11 +430,17 @@ fn parse_colmap(cameras: &Path, ctext: &str, images: &Path, itext: &str) -> Resu
         let q = DQuat::from_xyzw(n[1], n[2], n[3], n[0]);
         let len = q.length();
         if !(len > 1e-6 && len.is_finite()) {
-            return err(images, format!("{who}: the rotation quaternion has length {len}"));
+            return err(
+                images,
+                format!("{who}: the rotation quaternion has length {len}"),
+            );
         }
-        let cam: u64 = t[8]
-            .parse()
-            .or_else(|_| err(images, format!("{who}: camera id '{}' is not a whole number", clip(t[8]))))?;
+        let cam: u64 = t[8].parse().or_else(|_| {
+            err(
+                images,
+                format!("{who}: camera id '{}' is not a whole number", clip(t[8])),
+            )
+        })?;
         let Some(&(_, lens)) = lenses.iter().find(|(i, _)| *i == cam) else {
             return err(
                 images,
@@ -412,7 +479,10 @@ fn clip(s: &str) -> String {
     while !s.is_char_boundary(end) {
         end -= 1;
     }
-    let mut out: String = s[..end].chars().map(|c| if c.is_control() { '?' } else { c }).collect();
+    let mut out: String = s[..end]
+        .chars()
+        .map(|c| if c.is_control() { '?' } else { c })
+        .collect();
     if end < s.len() {
         out.push('…');
     }
@@ -475,7 +545,10 @@ fn parse_transforms(path: &Path, text: &str) -> Result<Calibration> {
         return err(path, "`frames` is empty");
     }
     if frames.len() > MAX_VIEWS {
-        return err(path, format!("lists {} frames, over {MAX_VIEWS}", frames.len()));
+        return err(
+            path,
+            format!("lists {} frames, over {MAX_VIEWS}", frames.len()),
+        );
     }
     let bbox = match root.get("object_bbox") {
         Some(b) => {
@@ -537,7 +610,10 @@ fn parse_transforms(path: &Path, text: &str) -> Result<Calibration> {
             if v.fract() == 0.0 && v >= 1.0 && v <= f64::from(MAX_SIDE) {
                 Ok(v as u32)
             } else {
-                err(path, format!("{who}: image size {w}x{h} is outside 1..={MAX_SIDE} a side"))
+                err(
+                    path,
+                    format!("{who}: image size {w}x{h} is outside 1..={MAX_SIDE} a side"),
+                )
             }
         };
         let (width, height) = (side(w)?, side(h)?);
@@ -549,7 +625,9 @@ fn parse_transforms(path: &Path, text: &str) -> Result<Calibration> {
                 }
                 0.5 * w / (0.5 * a).tan()
             }
-            (None, None) => return err(path, format!("{who}: has neither fl_x nor camera_angle_x")),
+            (None, None) => {
+                return err(path, format!("{who}: has neither fl_x nor camera_angle_x"));
+            }
         };
         let fy = match (key("fl_y")?, key("camera_angle_y")?) {
             (Some(f), _) => f,
@@ -569,9 +647,12 @@ fn parse_transforms(path: &Path, text: &str) -> Result<Calibration> {
             p2: key("p2")?.unwrap_or(0.0),
         };
         check_lens(path, &who, &lens)?;
-        let m = matrix(f.get("transform_matrix"))
-            .ok_or(())
-            .or_else(|_| err(path, format!("{who}: transform_matrix is not a 4×4 array of finite numbers")))?;
+        let m = matrix(f.get("transform_matrix")).ok_or(()).or_else(|_| {
+            err(
+                path,
+                format!("{who}: transform_matrix is not a 4×4 array of finite numbers"),
+            )
+        })?;
         // Camera-to-world, OpenGL axes: columns right, up, back; the
         // OpenCV frame flips up and back.
         let right = DVec3::new(m[0][0], m[1][0], m[2][0]);
@@ -586,7 +667,9 @@ fn parse_transforms(path: &Path, text: &str) -> Result<Calibration> {
         if ortho > 1e-3 || c2w.determinant() < 0.0 {
             return err(
                 path,
-                format!("{who}: transform_matrix's 3×3 part is not a rotation (scaled, sheared or mirrored)"),
+                format!(
+                    "{who}: transform_matrix's 3×3 part is not a rotation (scaled, sheared or mirrored)"
+                ),
             );
         }
         let rotation = c2w.transpose();
@@ -611,7 +694,12 @@ fn matrix(v: Option<&Json>) -> Option<[[f64; 4]; 4]> {
     if rows.len() < 3 || rows.len() > 4 {
         return None;
     }
-    let mut m = [[0.0, 0.0, 0.0, 0.0], [0.0; 4], [0.0; 4], [0.0, 0.0, 0.0, 1.0]];
+    let mut m = [
+        [0.0, 0.0, 0.0, 0.0],
+        [0.0; 4],
+        [0.0; 4],
+        [0.0, 0.0, 0.0, 1.0],
+    ];
     for (r, row) in rows.iter().enumerate() {
         let row = row.as_array()?;
         if row.len() != 4 {
@@ -635,7 +723,11 @@ fn matrix(v: Option<&Json>) -> Option<[[f64; 4]; 4]> {
 #[doc(hidden)]
 pub fn parse_for_fuzzing(json: bool, bytes: &[u8]) -> Result<usize> {
     let dir = Path::new("lodkit-fuzz-no-such-folder");
-    let text = |b: &[u8]| std::str::from_utf8(b).map(str::to_owned).map_err(|e| Error::Input(e.to_string()));
+    let text = |b: &[u8]| {
+        std::str::from_utf8(b)
+            .map(str::to_owned)
+            .map_err(|e| Error::Input(e.to_string()))
+    };
     let r = if json {
         parse_transforms(&dir.join("transforms.json"), &text(bytes)?)
     } else {
@@ -643,7 +735,12 @@ pub fn parse_for_fuzzing(json: bool, bytes: &[u8]) -> Result<usize> {
             Some(i) => (&bytes[..i], &bytes[i + 1..]),
             None => (bytes, &[][..]),
         };
-        parse_colmap(&dir.join("cameras.txt"), &text(a)?, &dir.join("images.txt"), &text(b)?)
+        parse_colmap(
+            &dir.join("cameras.txt"),
+            &text(a)?,
+            &dir.join("images.txt"),
+            &text(b)?,
+        )
     };
     r.map(|c| c.views.len())
 }

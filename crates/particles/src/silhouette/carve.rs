@@ -80,10 +80,14 @@ impl Carver<'_> {
                 Class::In => {}
             }
         }
-        if inside_all { Class::In } else { Class::Partial }
+        if inside_all {
+            Class::In
+        } else {
+            Class::Partial
+        }
     }
 
-    fn classify_in(&self, v: &View, sat: &Sat, lo: DVec3, hi: DVec3) -> Class {
+    pub(crate) fn classify_in(&self, v: &View, sat: &Sat, lo: DVec3, hi: DVec3) -> Class {
         let mut behind = 0;
         let mut near = false;
         let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
@@ -140,22 +144,17 @@ impl Carver<'_> {
         if n == area { Class::In } else { Class::Partial }
     }
 
-    /// Whether a point lies in every silhouette (dilated by the margin).
-    pub fn contains(&self, p: DVec3) -> bool {
+    /// Whether a point lies in view `k`'s silhouette (dilated by the margin).
+    pub fn contains_in(&self, k: usize, p: DVec3) -> bool {
         let m = self.margin.ceil() as i64;
-        for (v, sat) in self.views.iter().zip(self.sats) {
-            let Some((u, w)) = v.project(p) else {
-                return false;
-            };
-            if !(u.is_finite() && w.is_finite()) {
-                return false;
-            }
-            let (i, j) = (u.floor() as i64, w.floor() as i64);
-            if sat.count(i - m, j - m, i + m, j + m) == 0 {
-                return false;
-            }
+        let Some((u, w)) = self.views[k].project(p) else {
+            return false;
+        };
+        if !(u.is_finite() && w.is_finite()) {
+            return false;
         }
-        true
+        let (i, j) = (u.floor() as i64, w.floor() as i64);
+        self.sats[k].count(i - m, j - m, i + m, j + m) > 0
     }
 }
 
@@ -232,21 +231,34 @@ pub fn carve(c: &Carver<'_>, frame: &Frame, depth: u8) -> Carved {
             }
         }
         if r < depth {
-            frontier = partial.iter().flat_map(|&p| (0..8).map(move |k| (p << 3) | k)).collect();
+            frontier = partial
+                .iter()
+                .flat_map(|&p| (0..8).map(move |k| (p << 3) | k))
+                .collect();
         }
     }
-    // Leaf refinement (see the module docs).
+    // Leaf refinement (see the module docs). Only the views whose own
+    // footprint test left the leaf unresolved are asked about its points:
+    // a view that holds the whole rectangle holds every point's window.
     let inside: Vec<u64> = partial
         .par_iter()
         .map(|&m| {
             let (lo, hi) = cell_box(frame, depth, m);
+            let mut open = Vec::new();
+            for (k, (v, sat)) in c.views.iter().zip(c.sats).enumerate() {
+                match c.classify_in(v, sat, lo, hi) {
+                    Class::Out => return 0,
+                    Class::Partial => open.push(k),
+                    Class::In => {}
+                }
+            }
             let mut bits = 0u64;
             for k in 0..SUB {
                 for j in 0..SUB {
                     for i in 0..SUB {
                         let t = DVec3::new(i as f64, j as f64, k as f64) + 0.5;
                         let p = lo + (hi - lo) * t / SUB as f64;
-                        if c.contains(p) {
+                        if open.iter().all(|&v| c.contains_in(v, p)) {
                             bits |= 1 << (i + SUB * j + SUB * SUB * k);
                         }
                     }
@@ -296,7 +308,9 @@ pub fn hull_box(c: &Carver<'_>, frame: &Frame, level: u8) -> Option<((Vec3, Vec3
     let touches = (0..3).any(|a| lo[a] == 0 || hi[a] == side - 1);
     let s = frame.size / side as f32;
     let min = frame.origin + Vec3::new(lo[0] as f32, lo[1] as f32, lo[2] as f32) * s - s;
-    let max = frame.origin + Vec3::new(hi[0] as f32 + 1.0, hi[1] as f32 + 1.0, hi[2] as f32 + 1.0) * s + s;
+    let max = frame.origin
+        + Vec3::new(hi[0] as f32 + 1.0, hi[1] as f32 + 1.0, hi[2] as f32 + 1.0) * s
+        + s;
     Some(((min, max), touches))
 }
 

@@ -68,12 +68,15 @@ pub fn header_size(path: &Path) -> std::result::Result<(u32, u32), String> {
 fn size_of(bytes: &[u8]) -> std::result::Result<(u32, u32), String> {
     if is_jpeg(bytes) {
         let mut d = zune_jpeg::JpegDecoder::new(bytes);
-        d.decode_headers().map_err(|e| format!("not a readable JPEG ({e:?})"))?;
+        d.decode_headers()
+            .map_err(|e| format!("not a readable JPEG ({e:?})"))?;
         let i = d.info().ok_or("not a readable JPEG")?;
         Ok((u32::from(i.width), u32::from(i.height)))
     } else {
         let d = png::Decoder::new(std::io::Cursor::new(bytes));
-        let r = d.read_info().map_err(|e| format!("not a readable PNG or JPEG ({e})"))?;
+        let r = d
+            .read_info()
+            .map_err(|e| format!("not a readable PNG or JPEG ({e})"))?;
         let (w, h) = r.info().size();
         Ok((w, h))
     }
@@ -82,7 +85,9 @@ fn size_of(bytes: &[u8]) -> std::result::Result<(u32, u32), String> {
 fn decode(bytes: &[u8]) -> std::result::Result<Decoded, String> {
     let (w, h) = size_of(bytes)?;
     if w == 0 || h == 0 || w > MAX_SIDE || h > MAX_SIDE {
-        return Err(format!("image size {w}x{h} is outside 1..={MAX_SIDE} a side"));
+        return Err(format!(
+            "image size {w}x{h} is outside 1..={MAX_SIDE} a side"
+        ));
     }
     let px = w as usize * h as usize;
     if is_jpeg(bytes) {
@@ -91,7 +96,9 @@ fn decode(bytes: &[u8]) -> std::result::Result<Decoded, String> {
             .set_max_height(MAX_SIDE as usize)
             .jpeg_set_out_colorspace(zune_jpeg::zune_core::colorspace::ColorSpace::RGB);
         let mut d = zune_jpeg::JpegDecoder::new_with_options(bytes, opts);
-        let rgb = d.decode().map_err(|e| format!("not a readable JPEG ({e:?})"))?;
+        let rgb = d
+            .decode()
+            .map_err(|e| format!("not a readable JPEG ({e:?})"))?;
         if rgb.len() != px * 3 {
             return Err("JPEG decoded to an unexpected size".into());
         }
@@ -113,13 +120,17 @@ fn decode(bytes: &[u8]) -> std::result::Result<Decoded, String> {
         },
     );
     d.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
-    let mut r = d.read_info().map_err(|e| format!("not a readable PNG ({e})"))?;
+    let mut r = d
+        .read_info()
+        .map_err(|e| format!("not a readable PNG ({e})"))?;
     let size = r.output_buffer_size().ok_or("PNG too large")?;
     if size > px * 8 {
         return Err("PNG frame larger than its size says".into());
     }
     let mut buf = vec![0u8; size];
-    let info = r.next_frame(&mut buf).map_err(|e| format!("not a readable PNG ({e})"))?;
+    let info = r
+        .next_frame(&mut buf)
+        .map_err(|e| format!("not a readable PNG ({e})"))?;
     let (ct, _) = r.output_color_type();
     let ch = match ct {
         png::ColorType::Grayscale => 1,
@@ -164,7 +175,8 @@ fn read_image(file: &Path, who: &str, path: &Path, what: &str) -> Result<Decoded
             path.display()
         )));
     }
-    let bytes = read_file(path).map_err(|e| Error::Input(format!("{}: {who}: {e}", file.display())))?;
+    let bytes =
+        read_file(path).map_err(|e| Error::Input(format!("{}: {who}: {e}", file.display())))?;
     decode(&bytes).map_err(|e| {
         Error::Input(format!(
             "{}: {who}: {what} {}: {e}",

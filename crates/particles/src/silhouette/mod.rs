@@ -178,7 +178,8 @@ impl CarvedOctree {
             if *l != crate::octree::Label::On {
                 continue;
             }
-            pc.positions.push(t.frame.cell_centre(t.leaves.q[i], crate::octree::QBITS));
+            pc.positions
+                .push(t.frame.cell_centre(t.leaves.q[i], crate::octree::QBITS));
             if let Some(n) = &t.leaves.normal {
                 normals.push(n[i]);
             }
@@ -320,7 +321,9 @@ pub fn carve_octree(
     let depth = match opts.depth {
         Some(d) if (1..=MAX_DEPTH).contains(&d) => d,
         Some(d) => {
-            return Err(Error::Input(format!("depth {d} is outside 1..={MAX_DEPTH}")));
+            return Err(Error::Input(format!(
+                "depth {d} is outside 1..={MAX_DEPTH}"
+            )));
         }
         None => auto_depth(set, &frame),
     };
@@ -328,7 +331,8 @@ pub fn carve_octree(
     let c = set.carver(f64::from(sil.margin), near);
     let carved = carve::carve(&c, &frame, depth);
     if carved.leaves.is_empty() {
-        return set.err("carving left no surface: the silhouettes have no common view inside the box");
+        return set
+            .err("carving left no surface: the silhouettes have no common view inside the box");
     }
     // The octree: ON cells are the surface leaves and their ancestors;
     // the empty children of ON cells take the carving's label.
@@ -360,12 +364,11 @@ pub fn carve_octree(
         leaves: LeafAttributes::default(),
         sidedness: Sidedness::FloodFill,
     };
-    let (q, normals) = attributes::vertices_and_normals(&tree, &carved);
-    tree.leaves = LeafAttributes {
-        q,
-        normal: Some(normals),
-        colour: None,
-    };
+    // Thinning reads the labels (and, choosing where outer thinning is
+    // relaxed, positions: the leaf centres stand in); the attributes are
+    // then computed for the leaves it keeps.
+    let all = vec![false; carved.leaves.len()];
+    tree.leaves.q = attributes::vertices_and_normals(&tree, &carved, &all).0;
     let (eliminated, relax_below) = thin_choosing(&mut tree, &opts.thinning);
     let d = depth as usize;
     let kept: Vec<bool> = tree.levels[d]
@@ -373,6 +376,12 @@ pub fn carve_octree(
         .iter()
         .map(|l| *l == crate::octree::Label::On)
         .collect();
+    let (q, normals) = attributes::vertices_and_normals(&tree, &carved, &kept);
+    tree.leaves = LeafAttributes {
+        q,
+        normal: Some(normals),
+        colour: None,
+    };
     let points: Vec<DVec3> = tree
         .leaves
         .q

@@ -73,7 +73,13 @@ mod tests {
         let (w, h) = (7u32, 5u32);
         let s: Vec<bool> = (0..w * h).map(|i| (i * 7 + i / 3) % 3 == 0).collect();
         let sat = Sat::new(w, h, &s);
-        for (x0, y0, x1, y1) in [(0, 0, 6, 4), (2, 1, 4, 3), (3, 3, 3, 3), (-5, -5, 20, 20), (5, 0, 2, 4)] {
+        for (x0, y0, x1, y1) in [
+            (0, 0, 6, 4),
+            (2, 1, 4, 3),
+            (3, 3, 3, 3),
+            (-5, -5, 20, 20),
+            (5, 0, 2, 4),
+        ] {
             let mut n = 0;
             for y in y0.max(0)..=y1.min(4) {
                 for x in x0.max(0)..=x1.min(6) {

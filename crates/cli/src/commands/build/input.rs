@@ -222,7 +222,10 @@ fn carve(ui: &Ui, path: &Path, name: String) -> Result<BuildInput> {
     let d = lodkit_particles::decode(&e.bytes, &lodkit_particles::DecodeOptions::default())
         .with_context(|| path.display().to_string())?;
     let surface = d
-        .triangulate(d.finest_level(), &lodkit_particles::TriangulateOptions::DEFAULT)
+        .triangulate(
+            d.finest_level(),
+            &lodkit_particles::TriangulateOptions::DEFAULT,
+        )
         .with_context(|| path.display().to_string())?
         .mesh;
     if surface.faces.is_empty() {
