@@ -5,7 +5,9 @@ Each case is a folder holding a calibration (NeRF `transforms.json`, or a
 COLMAP `sparse/0/cameras.txt` + `images.txt` with `images/`), tiny 8x8 RGBA
 PNGs, and `expect.txt`: the calibration file to give lodkit (first line)
 and the text naming the camera the one-line error must contain (second
-line; empty when the file as a whole is bad). `crates/cli/tests/
+line; empty when the file as a whole is bad); a third line `carving` when
+the set reads and only carving finds the fault (`lodkit info` then
+succeeds). `crates/cli/tests/
 malformed_calibrations.rs` runs `lodkit info`, `lodkit pop encode
 --silhouettes` and `lodkit build` on each: exit 1, one line naming the
 file and the camera.
@@ -63,7 +65,7 @@ def look_at_gl(eye, target=(0.0, 0.0, 0.0)):
 EYES = [(0.0, 0.0, 4.0), (4.0, 0.0, 0.0), (0.0, 0.0, -4.0), (-4.0, 0.0, 0.0)]
 
 
-def nerf(name, edit=None, raw=None, images=4, alpha=True, expect_camera=""):
+def nerf(name, edit=None, raw=None, images=4, alpha=True, expect_camera="", carving=False):
     d = os.path.join(ROOT, name)
     os.makedirs(os.path.join(d, "images"))
     for i in range(images):
@@ -83,10 +85,10 @@ def nerf(name, edit=None, raw=None, images=4, alpha=True, expect_camera=""):
     with open(os.path.join(d, "transforms.json"), "w") as f:
         f.write(text)
     with open(os.path.join(d, "expect.txt"), "w") as f:
-        f.write(f"transforms.json\n{expect_camera}\n")
+        f.write(f"transforms.json\n{expect_camera}\n" + ("carving\n" if carving else ""))
 
 
-def colmap(name, cameras=None, images=None, files=4, expect_camera=""):
+def colmap(name, cameras=None, images=None, files=4, expect_camera="", carving=False):
     d = os.path.join(ROOT, name)
     os.makedirs(os.path.join(d, "images"))
     os.makedirs(os.path.join(d, "sparse", "0"))
@@ -102,7 +104,7 @@ def colmap(name, cameras=None, images=None, files=4, expect_camera=""):
     with open(os.path.join(d, "sparse", "0", "images.txt"), "w") as f:
         f.write(images)
     with open(os.path.join(d, "expect.txt"), "w") as f:
-        f.write(f"sparse/0/cameras.txt\n{expect_camera}\n")
+        f.write(f"sparse/0/cameras.txt\n{expect_camera}\n" + ("carving\n" if carving else ""))
 
 
 # World-to-camera poses (OpenCV axes) of four cameras 4 units from the
@@ -126,7 +128,7 @@ def main():
     if os.path.isdir(ROOT):
         shutil.rmtree(ROOT)
     os.makedirs(ROOT)
-    nerf("nerf_camera_behind_every_view", turned_round, expect_camera="frame 0")
+    nerf("nerf_camera_behind_every_view", turned_round, expect_camera="frame 0", carving=True)
     nerf("nerf_image_missing", lambda t: t["frames"][1].update(file_path="images/missing.png"), expect_camera="frame 1")
     nerf("nerf_size_disagrees_with_intrinsics", lambda t: t.update(w=10), expect_camera="frame 0")
     nerf("nerf_json_truncated", raw='{"camera_angle_x": 0.6, "frames": [{"file_path": "images/000.png", ')
@@ -157,6 +159,7 @@ def main():
         "colmap_camera_behind_every_view",
         images=RING.replace(" 0 0 4 1 ", " 0 0 -4 1 "),
         expect_camera="image 1",
+        carving=True,
     )
     colmap("colmap_no_cameras", cameras="# nothing\n")
 

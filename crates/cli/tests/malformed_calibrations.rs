@@ -25,7 +25,13 @@ fn every_malformed_image_set_fails_with_one_line_naming_the_file_and_the_camera(
         let mut lines = expect.lines();
         let file = case.join(lines.next().unwrap());
         let camera = lines.next().unwrap_or("").trim().to_string();
+        // `carving`: the set reads, only carving finds the fault.
+        let carving_only = lines.next().is_some_and(|l| l.trim() == "carving");
         let file_name = file.file_name().unwrap().to_string_lossy().into_owned();
+        // A COLMAP model's errors name the file of the faulty line.
+        let names_file = |l: &str| {
+            l.contains(&file_name) || (file_name == "cameras.txt" && l.contains("images.txt"))
+        };
         let out = tempfile::tempdir().unwrap();
         let f = file.display().to_string();
         let o = out.path().display().to_string();
@@ -49,6 +55,9 @@ fn every_malformed_image_set_fails_with_one_line_naming_the_file_and_the_camera(
                 "--no-measure".into(),
             ],
         ] {
+            if carving_only && args[0] == "info" {
+                continue;
+            }
             let shown = format!(
                 "{} lodkit {}",
                 case.file_name().unwrap().to_string_lossy(),
@@ -65,7 +74,7 @@ fn every_malformed_image_set_fails_with_one_line_naming_the_file_and_the_camera(
                 failures.push(format!("{shown}: exit {:?}: {err}", r.status.code()));
             } else if lines.len() != 1 {
                 failures.push(format!("{shown}: {} lines: {err}", lines.len()));
-            } else if !lines[0].contains(&file_name) || !lines[0].contains(&camera) {
+            } else if !names_file(lines[0]) || !lines[0].contains(&camera) {
                 failures.push(format!(
                     "{shown}: does not name {file_name} and '{camera}': {err}"
                 ));

@@ -202,7 +202,7 @@ pub fn carve_image_set(
     let step = ui.spinner(&format!("reading the images of {}", path.display()));
     let set = ImageSet::load(path, carve.source())?;
     step.finish();
-    let step = ui.stage(&format!(
+    let step = ui.spinner(&format!(
         "carving {} views from their silhouettes",
         set.calibration.views.len()
     ));

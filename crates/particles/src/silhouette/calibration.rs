@@ -261,10 +261,10 @@ fn check_lens(file: &Path, who: &str, l: &Lens) -> Result<()> {
 fn colmap_image_dir(model_dir: &Path) -> PathBuf {
     let mut p = model_dir.to_path_buf();
     for _ in 0..2 {
-        if p.file_name().is_some_and(|n| n == "sparse") {
-            if let Some(project) = p.parent() {
-                return project.join("images");
-            }
+        if p.file_name().is_some_and(|n| n == "sparse")
+            && let Some(project) = p.parent()
+        {
+            return project.join("images");
         }
         match p.parent() {
             Some(q) => p = q.to_path_buf(),

@@ -65,11 +65,14 @@ impl ImageSet {
     pub fn load(path: &Path, source: SilhouetteSource) -> Result<ImageSet> {
         let calibration = calibration::read(path)?;
         let file = calibration.file.clone();
-        let images: Vec<ViewImage> = calibration
+        // Decoded in parallel; the first failing view in file order is
+        // reported, whatever the thread count.
+        let loaded: Vec<Result<ViewImage>> = calibration
             .views
             .par_iter()
             .map(|v| images::load(&file, v, source))
-            .collect::<Result<_>>()?;
+            .collect();
+        let images: Vec<ViewImage> = loaded.into_iter().collect::<Result<_>>()?;
         let mut sats = Vec::with_capacity(images.len());
         for (v, img) in calibration.views.iter().zip(&images) {
             let s = Sat::new(img.width, img.height, &img.silhouette);
