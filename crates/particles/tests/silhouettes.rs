@@ -369,7 +369,5 @@ fn bad_calibrations_are_one_line_errors_naming_the_file_and_the_camera() {
     });
     let e = carve_error(&json);
     assert!(e.contains("frame 1") && e.contains("'..'"), "{e}");
-    for e in [&e] {
-        assert_eq!(e.lines().count(), 1, "{e}");
-    }
+    assert_eq!(e.lines().count(), 1, "{e}");
 }
