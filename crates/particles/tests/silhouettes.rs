@@ -371,3 +371,38 @@ fn bad_calibrations_are_one_line_errors_naming_the_file_and_the_camera() {
     assert!(e.contains("frame 1") && e.contains("'..'"), "{e}");
     assert_eq!(e.lines().count(), 1, "{e}");
 }
+
+/// The fuzz target's entries (`crates/particles/fuzz`, `calibration`) on
+/// every prefix of the malformed corpus's calibrations and a PNG: an error
+/// or a count, never a panic.
+#[test]
+fn the_readers_survive_every_prefix_of_the_malformed_corpus() {
+    use lodkit_particles::silhouette::{calibration, images};
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/malformed/calibrations");
+    let mut cases: Vec<PathBuf> = std::fs::read_dir(&root)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    cases.sort();
+    for case in cases {
+        let json = case.join("transforms.json");
+        if json.is_file() {
+            let b = std::fs::read(&json).unwrap();
+            for n in 0..=b.len() {
+                let _ = calibration::parse_for_fuzzing(true, &b[..n]);
+            }
+        } else {
+            let mut b = std::fs::read(case.join("sparse/0/cameras.txt")).unwrap();
+            b.push(0);
+            b.extend(std::fs::read(case.join("sparse/0/images.txt")).unwrap());
+            for n in 0..=b.len() {
+                let _ = calibration::parse_for_fuzzing(false, &b[..n]);
+            }
+        }
+        let png = std::fs::read(case.join("images/000.png")).unwrap();
+        for n in 0..=png.len() {
+            let _ = images::decode_for_fuzzing(&png[..n]);
+        }
+        assert_eq!(images::decode_for_fuzzing(&png).unwrap(), (8, 8));
+    }
+}
