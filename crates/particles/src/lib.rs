@@ -76,6 +76,8 @@ pub(crate) mod ordering;
 pub(crate) mod orientation;
 #[cfg(test)]
 mod progressive_tests;
+#[cfg(feature = "silhouettes")]
+pub mod silhouette;
 pub(crate) mod stats;
 pub(crate) mod thinning;
 pub(crate) mod triangulate;

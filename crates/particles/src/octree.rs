@@ -221,7 +221,7 @@ pub struct Level {
 }
 
 impl Level {
-    fn new(cells: Vec<u64>) -> Level {
+    pub(crate) fn new(cells: Vec<u64>) -> Level {
         let mut index = MortonMap::default();
         index.reserve(cells.len());
         for (i, &c) in cells.iter().enumerate() {

@@ -6,6 +6,9 @@ use anyhow::{Context, Result};
 use clap::{Args, Subcommand, ValueEnum};
 use lodkit_mesh::Model;
 use lodkit_mesh::io::WriteOptions;
+use lodkit_particles::silhouette::{
+    CarvedOctree, ImageSet, SilhouetteOptions, SilhouetteSource, carve_octree, encode_carved,
+};
 use lodkit_particles::{
     DecodeOptions, EncodeOptions, Mode, Placement, ThinningOptions, TriangulateOptions, decode,
     decode_prefix, encode, stream_stats, triangulate,
@@ -68,7 +71,15 @@ pub enum PlacementArg {
 #[derive(Args)]
 pub struct EncodeArgs {
     /// Input mesh or point cloud.
-    pub input: PathBuf,
+    #[arg(required_unless_present = "silhouettes")]
+    pub input: Option<PathBuf>,
+    /// Carve the octree from calibrated photographs instead: a NeRF
+    /// transforms.json or a COLMAP cameras.txt / images.txt (or a folder
+    /// holding one); silhouettes from mask images, alpha or --key-colour.
+    #[arg(long, value_name = "CAMERAS_FILE", conflicts_with = "input")]
+    pub silhouettes: Option<PathBuf>,
+    #[command(flatten)]
+    pub carve: CarveArgs,
     /// Output `.pop` file.
     #[arg(short, long, value_parser = value::output(&["pop"], "a progressive stream"))]
     pub output: PathBuf,
@@ -101,6 +112,103 @@ pub struct EncodeArgs {
     /// Print the encoding's figures as JSON.
     #[arg(long)]
     pub json: bool,
+}
+
+/// Options of `--silhouettes` (shared with `lodkit build`).
+#[derive(Args, Clone, Default)]
+pub struct CarveArgs {
+    /// Silhouettes by background colour: pixels within --key-tolerance of
+    /// this colour (hex RRGGBB) are background.
+    #[arg(long, value_name = "RRGGBB", value_parser = parse_hex_colour)]
+    pub key_colour: Option<[u8; 3]>,
+    /// Largest per-channel difference from --key-colour still background,
+    /// in 0..=255.
+    #[arg(long, value_name = "N", default_value_t = 24, value_parser = value::int(0u8, 255), requires = "key_colour")]
+    pub key_tolerance: u8,
+    /// Silhouettes from the images' alpha channel even where masks exist.
+    #[arg(long, conflicts_with = "key_colour")]
+    pub alpha: bool,
+    /// The box to carve, world units (default: the cameras' common view).
+    #[arg(long, value_name = "X0,Y0,Z0,X1,Y1,Z1", value_parser = parse_bbox, allow_hyphen_values = true)]
+    pub bbox: Option<[f32; 6]>,
+    /// Footprint margin in pixels, in [0, 16]: how far a silhouette edge
+    /// may pass the object.
+    #[arg(long, value_name = "PIXELS", default_value_t = 1.0, value_parser = Real::closed(0.0, 16.0).f32())]
+    pub margin: f32,
+}
+
+impl CarveArgs {
+    pub fn source(&self) -> SilhouetteSource {
+        match (self.key_colour, self.alpha) {
+            (Some(colour), _) => SilhouetteSource::Key {
+                colour,
+                tolerance: self.key_tolerance,
+            },
+            (None, true) => SilhouetteSource::Alpha,
+            (None, false) => SilhouetteSource::Auto,
+        }
+    }
+
+    pub fn options(&self) -> SilhouetteOptions {
+        SilhouetteOptions {
+            bbox: self.bbox.map(|b| {
+                (
+                    lodkit_mesh::glam::Vec3::new(b[0], b[1], b[2]),
+                    lodkit_mesh::glam::Vec3::new(b[3], b[4], b[5]),
+                )
+            }),
+            margin: self.margin,
+        }
+    }
+}
+
+fn parse_hex_colour(s: &str) -> std::result::Result<[u8; 3], String> {
+    let h = s.trim().trim_start_matches('#');
+    if h.len() != 6 || !h.bytes().all(|c| c.is_ascii_hexdigit()) {
+        return Err("expected a colour as six hex digits RRGGBB, e.g. 00ff00".into());
+    }
+    let byte = |i: usize| u8::from_str_radix(&h[i..i + 2], 16).map_err(|e| e.to_string());
+    Ok([byte(0)?, byte(2)?, byte(4)?])
+}
+
+fn parse_bbox(s: &str) -> std::result::Result<[f32; 6], String> {
+    let v: Option<Vec<f32>> = s.split(',').map(|v| v.trim().parse::<f32>().ok()).collect();
+    match v.as_deref() {
+        Some(&[a, b, c, d, e, f])
+            if [a, b, c, d, e, f]
+                .iter()
+                .all(|x| x.is_finite() && x.abs() <= 1e15)
+                && a < d
+                && b < e
+                && c < f =>
+        {
+            Ok([a, b, c, d, e, f])
+        }
+        _ => Err(
+            "expected X0,Y0,Z0,X1,Y1,Z1: six finite numbers with each minimum below its maximum"
+                .into(),
+        ),
+    }
+}
+
+/// Reads an image set and carves it (`lodkit pop encode --silhouettes`,
+/// `lodkit build`): the thinned octree with its attributes.
+pub fn carve_image_set(
+    ui: &Ui,
+    path: &Path,
+    carve: &CarveArgs,
+    opts: &EncodeOptions,
+) -> Result<CarvedOctree> {
+    let step = ui.spinner(&format!("reading the images of {}", path.display()));
+    let set = ImageSet::load(path, carve.source())?;
+    step.finish();
+    let step = ui.spinner(&format!(
+        "carving {} views from their silhouettes",
+        set.calibration.views.len()
+    ));
+    let c = carve_octree(&set, &carve.options(), opts)?;
+    step.finish();
+    Ok(c)
 }
 
 #[derive(Args)]
@@ -154,7 +262,16 @@ fn run_encode(ui: &Ui, a: &EncodeArgs) -> Result<()> {
             "--placement column applies to --mode entropy; the baseline codes means",
         ));
     }
-    let model = super::load(ui, &a.input)?;
+    if a.silhouettes.is_none()
+        && (a.carve.key_colour.is_some()
+            || a.carve.alpha
+            || a.carve.bbox.is_some()
+            || a.carve.margin != 1.0)
+    {
+        return Err(crate::ui::usage(
+            "--key-colour, --key-tolerance, --alpha, --bbox and --margin apply to --silhouettes",
+        ));
+    }
     let precision = a.precision.unwrap_or(lodkit_particles::DEFAULT_PRECISION);
     let opts = EncodeOptions {
         depth: a.depth,
@@ -175,9 +292,32 @@ fn run_encode(ui: &Ui, a: &EncodeArgs) -> Result<()> {
         },
         ..EncodeOptions::DEFAULT
     };
-    let step = ui.spinner("encoding octree particles");
-    let e = encode(&model, &opts).with_context(|| format!("encoding {}", a.input.display()))?;
-    step.finish();
+    let (e, input) = match (&a.silhouettes, &a.input) {
+        (Some(cams), _) => {
+            let c = carve_image_set(ui, cams, &a.carve, &opts)?;
+            let step = ui.spinner("encoding octree particles");
+            let e = encode_carved(&c, &opts)?;
+            step.finish();
+            ui.status(format!(
+                "{}: {} views carved to R = {}, {} surface leaves, {} particles after thinning",
+                cams.display(),
+                c.report.views,
+                c.report.depth,
+                c.report.surface_leaves,
+                c.report.particles
+            ));
+            (e, cams.clone())
+        }
+        (None, Some(input)) => {
+            let model = super::load(ui, input)?;
+            let step = ui.spinner("encoding octree particles");
+            let e =
+                encode(&model, &opts).with_context(|| format!("encoding {}", input.display()))?;
+            step.finish();
+            (e, input.clone())
+        }
+        (None, None) => return Err(crate::ui::usage("give an input file or --silhouettes")),
+    };
     lodkit_mesh::io::write_atomic(&a.output, &e.bytes)?;
     let r = &e.report;
     if a.json {
@@ -189,7 +329,7 @@ fn run_encode(ui: &Ui, a: &EncodeArgs) -> Result<()> {
             report: &'a lodkit_particles::EncodeReport,
         }
         return super::print_json(&Encoded {
-            input: a.input.display().to_string(),
+            input: input.display().to_string(),
             output: a.output.display().to_string(),
             report: r,
         });

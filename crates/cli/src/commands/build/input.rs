@@ -9,7 +9,12 @@
 //!   first reconstructed as a marching cube octree (`lodkit_mco`, as
 //!   `lodkit mco build` does); its full-resolution cut is the surface, and
 //!   the stream is built from the points themselves (range images as their
-//!   posed samples).
+//!   posed samples);
+//! - a **calibrated image set** (a NeRF `transforms.json`, a COLMAP
+//!   `cameras.txt` / `images.txt`) is carved from its silhouettes into
+//!   octree particles (`lodkit pop encode --silhouettes`); the finest
+//!   level's triangulation is the surface, the coloured particles are the
+//!   stream's points.
 
 use std::path::{Path, PathBuf};
 
@@ -50,6 +55,9 @@ pub fn load(ui: &Ui, path: &Path) -> Result<BuildInput> {
         .map(|s| s.to_string_lossy().into_owned())
         .filter(|s| !s.is_empty())
         .unwrap_or_else(|| "model".into());
+    if lodkit_particles::silhouette::calibration::is_calibration(path) {
+        return carve(ui, path, name);
+    }
     let (what, models) = if path.is_dir() {
         scan_folder(ui, path)?
     } else if is_conf(path) {
@@ -185,5 +193,52 @@ fn reconstruct(
         stream_source,
         reconstruction: Some(model),
         path: InputPath::Reconstructed(what),
+    })
+}
+
+/// A calibrated image set: carved (default depth and silhouette source),
+/// its finest level triangulated.
+fn carve(ui: &Ui, path: &Path, name: String) -> Result<BuildInput> {
+    // `ring/transforms.json`, `ring/sparse/0/cameras.txt`: named `ring`.
+    let name = path
+        .ancestors()
+        .skip(1)
+        .filter_map(|p| p.file_name())
+        .map(|n| n.to_string_lossy().into_owned())
+        .find(|n| n != "sparse" && n.parse::<u32>().is_err())
+        .unwrap_or(name);
+    let opts = lodkit_particles::EncodeOptions::DEFAULT;
+    let c = super::super::pop::carve_image_set(
+        ui,
+        path,
+        &super::super::pop::CarveArgs {
+            margin: 1.0,
+            key_tolerance: 24,
+            ..Default::default()
+        },
+        &opts,
+    )?;
+    let e = lodkit_particles::silhouette::encode_carved(&c, &opts)?;
+    let d = lodkit_particles::decode(&e.bytes, &lodkit_particles::DecodeOptions::default())
+        .with_context(|| path.display().to_string())?;
+    let surface = d
+        .triangulate(
+            d.finest_level(),
+            &lodkit_particles::TriangulateOptions::DEFAULT,
+        )
+        .with_context(|| path.display().to_string())?
+        .mesh;
+    if surface.faces.is_empty() {
+        bail!("{}: the carved hull has no triangles", path.display());
+    }
+    Ok(BuildInput {
+        name,
+        surface,
+        stream_source: Model::Points(c.particles()),
+        reconstruction: None,
+        path: InputPath::Reconstructed(format!(
+            "calibrated image set of {} views, carved from its silhouettes at R = {}",
+            c.report.views, c.report.depth
+        )),
     })
 }
