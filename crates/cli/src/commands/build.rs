@@ -348,5 +348,11 @@ fn path_sentence(path: &input::InputPath, name: &str) -> String {
              its full-resolution surface (`{name}.ply`) feeds the HQMS chain and is the reference \
              every error is measured against; the progressive stream encodes the input's points."
         ),
+        input::InputPath::Carved(what) => format!(
+            "Path: a {what} (`lodkit pop encode --silhouettes`); the finest level of its particles, \
+             triangulated (`{name}.ply`), feeds the HQMS chain and the marching cube octree (rebuilt from virtual scans of it) and is \
+             the reference every error is measured against; the progressive stream encodes the \
+             carved particles as points."
+        ),
     }
 }

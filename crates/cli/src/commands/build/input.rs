@@ -31,6 +31,9 @@ pub enum InputPath {
     /// The input was reconstructed: what it was (`"point cloud"`, `"range
     /// image"`, `"scan set of 8 range images"`).
     Reconstructed(String),
+    /// A calibrated image set carved into octree particles: what it was
+    /// (`"calibrated image set of 36 views, carved … at R = 8"`).
+    Carved(String),
 }
 
 /// The loaded input.
@@ -236,7 +239,7 @@ fn carve(ui: &Ui, path: &Path, name: String) -> Result<BuildInput> {
         surface,
         stream_source: Model::Points(c.particles()),
         reconstruction: None,
-        path: InputPath::Reconstructed(format!(
+        path: InputPath::Carved(format!(
             "calibrated image set of {} views, carved from its silhouettes at R = {}",
             c.report.views, c.report.depth
         )),
