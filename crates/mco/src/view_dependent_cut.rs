@@ -152,13 +152,11 @@ impl Frustum {
         let closest = Vec3::ZERO.max(lo).min(hi);
         let d = closest.length().max(self.min_d);
         let px = e * self.height / (2.0 * d * self.tan_v);
-        if !(px > self.tol) {
-            return false;
-        }
-        self.planes.iter().all(|p| {
-            let v = Vec3::select(p.cmpge(Vec3::ZERO), hi, lo);
-            p.dot(v) >= 0.0
-        })
+        px > self.tol
+            && self.planes.iter().all(|p| {
+                let v = Vec3::select(p.cmpge(Vec3::ZERO), hi, lo);
+                p.dot(v) >= 0.0
+            })
     }
 }
 
