@@ -188,6 +188,11 @@ pub struct ViewTiming {
     /// Per cut by [`McoModel::extract_view`] (fresh scratch space every
     /// call), seconds: median and worst camera.
     pub fresh_s: [f64; 2],
+    /// Per cut through a kept [`ViewCut`] by the search on the node
+    /// arrays (`ViewCut::update_by_nodes`, what every cut did before the
+    /// compact layout), timed interleaved with the others so that the
+    /// machine's load weighs on both alike; seconds, median and worst.
+    pub nodes_s: [f64; 2],
     /// A `memcpy` of the mean cut's index buffer, seconds.
     pub memcpy_s: f64,
 }
@@ -209,6 +214,10 @@ pub fn time_view_cuts(
     let n = cameras.len();
     let mut kept = vec![f64::INFINITY; n];
     let mut fresh = vec![f64::INFINITY; n];
+    let mut nodes = vec![f64::INFINITY; n];
+    let bounds = lodkit_mco::view_subtree_bounds(model);
+    let mut by_nodes = ViewCut::new();
+    let mut out_nodes = Vec::new();
     let mut tris = vec![0usize; n];
     let mut expanded = 0usize;
     let mut cut = ViewCut::new();
@@ -222,6 +231,16 @@ pub fn time_view_cuts(
             let t = Instant::now();
             black_box(model.extract_view(black_box(cam), tolerance_px, &mut out));
             fresh[i] = fresh[i].min(t.elapsed().as_secs_f64());
+            let t = Instant::now();
+            black_box(by_nodes.update_by_nodes(
+                model,
+                &bounds,
+                black_box(cam),
+                tolerance_px,
+                &mut out_nodes,
+            ));
+            nodes[i] = nodes[i].min(t.elapsed().as_secs_f64());
+            assert_eq!(out_nodes, out, "the two searches differ");
             if round == 0 {
                 tris[i] = out.len() / 3;
                 expanded += cut.expanded_nodes();
@@ -250,6 +269,7 @@ pub fn time_view_cuts(
         expanded: expanded as f64 / n.max(1) as f64,
         kept_s: median_and_max(kept),
         fresh_s: median_and_max(fresh),
+        nodes_s: median_and_max(nodes),
         memcpy_s,
     }
 }

@@ -135,6 +135,8 @@ pub use pipeline::{
     estimate_build_bytes, grid_for, samples_of,
 };
 pub use scanner::{ScanOptions, scan_mesh, write_scans};
+#[doc(hidden)]
+pub use view_dependent_cut::view_subtree_bounds;
 pub use view_dependent_cut::{Camera, ViewCut};
 
 /// Errors of the continuous-LOD crate; `Display` is one line.

@@ -138,21 +138,25 @@ impl Frustum {
     /// Whether the box `lo..hi` (absolute) is not entirely outside the
     /// frustum, and the pixels the length `e` covers at its nearest point
     /// exceed the tolerance.
+    ///
+    /// The two tests are pure, so their order does not change the answer:
+    /// the projected error goes first, as it is the cheaper one and the one
+    /// that rejects most of the nodes a search tests (a camera that sees
+    /// the whole model has every node in its frustum).
     #[inline]
     fn shows(&self, lo: Vec3, hi: Vec3, e: f32) -> bool {
         let lo = lo - self.eye;
         let hi = hi - self.eye;
-        let visible = self.planes.iter().all(|p| {
-            let v = Vec3::select(p.cmpge(Vec3::ZERO), hi, lo);
-            p.dot(v) >= 0.0
-        });
-        if !visible {
-            return false;
-        }
-        let closest = Vec3::ZERO.clamp(lo, hi);
+        // `clamp` without its debug check: a NaN camera gives NaN corners
+        // here (and no node shows).
+        let closest = Vec3::ZERO.max(lo).min(hi);
         let d = closest.length().max(self.min_d);
         let px = e * self.height / (2.0 * d * self.tan_v);
         px > self.tol
+            && self.planes.iter().all(|p| {
+                let v = Vec3::select(p.cmpge(Vec3::ZERO), hi, lo);
+                p.dot(v) >= 0.0
+            })
     }
 }
 
@@ -182,10 +186,11 @@ const SCAN_SHARE: usize = 40;
 /// separate a child's corners from its parent's.
 const BOUND_GROWTH: f32 = 1.0 / (1 << 18) as f32;
 
-/// The subtree bounds of a model once built. Derived from the other
-/// fields, so it never makes two models differ: every value compares equal.
+/// The derived arrays of a model's view-dependent cuts once built (see
+/// [`ViewData`]). Derived from the other fields, so it never makes two
+/// models differ: every value compares equal.
 #[derive(Debug, Clone, Default)]
-pub(crate) struct LazyViewBounds(OnceLock<Vec<f32>>);
+pub(crate) struct LazyViewBounds(OnceLock<ViewData>);
 
 impl PartialEq for LazyViewBounds {
     fn eq(&self, _: &Self) -> bool {
@@ -193,12 +198,25 @@ impl PartialEq for LazyViewBounds {
     }
 }
 
+/// What a model's view-dependent cuts read beyond the model: the compact
+/// layout of a regular model ([`ViewLayout`], every model a loader or the
+/// pipeline makes), or only the subtree bounds of any other (a hand-made
+/// model; its cuts read the node arrays directly, with the same result).
+#[derive(Debug, Clone)]
+enum ViewData {
+    Layout(ViewLayout),
+    Bounds(Vec<f32>),
+}
+
 /// Per node, the largest error of an inner node in its subtree (its own
 /// included; 0 for a leaf), or infinity where the subtree must always be
 /// searched (children not inside the node's cube, or a cube that is not
 /// finite). Children follow their parent in node order (the loaders check
 /// it), so one reverse pass suffices.
-fn subtree_bounds(model: &McoModel) -> Vec<f32> {
+/// The subtree bounds [`ViewCut::update_by_nodes`] reads (`O(nodes)`;
+/// not a stable API).
+#[doc(hidden)]
+pub fn view_subtree_bounds(model: &McoModel) -> Vec<f32> {
     let n = model.nodes.len();
     let mut b = vec![0.0f32; n];
     for i in (0..n).rev() {
@@ -231,10 +249,253 @@ fn subtree_bounds(model: &McoModel) -> Vec<f32> {
 }
 
 impl McoModel {
-    /// The subtree bounds, built on the first call (thread-safe).
-    fn view_bounds(&self) -> &[f32] {
-        self.view_bounds.0.get_or_init(|| subtree_bounds(self))
+    /// The view arrays, built on the first call (thread-safe).
+    fn view_data(&self) -> &ViewData {
+        self.view_bounds.0.get_or_init(|| {
+            let bounds = view_subtree_bounds(self);
+            match ViewLayout::build(self, &bounds) {
+                Some(l) => ViewData::Layout(l),
+                None => ViewData::Bounds(bounds),
+            }
+        })
     }
+}
+
+/// One inner node's fields the search reads, in one 32-byte record (two
+/// per cache line), so that testing a node touches one record, not the
+/// node, its metric, its bound and its children's records.
+#[derive(Debug, Clone, Copy, Default)]
+#[repr(C, align(32))]
+struct Hot {
+    /// The cube's min corner, as [`McoModel::node_box`] computes it.
+    lo: [f32; 3],
+    /// [`node_error`].
+    err: f32,
+    /// The subtree bound ([`view_subtree_bounds`]).
+    bound: f32,
+    /// Rank of the first inner child (the inner children's ranks are
+    /// consecutive: ranks follow node order and the children are one
+    /// node range).
+    first_inner: u32,
+    first_child: u32,
+    level: u8,
+    child_count: u8,
+    /// Bit `j`: child `first_child + j` is an inner node.
+    inner_mask: u8,
+    _pad: u8,
+}
+
+/// One inner node's fields the closure reads, by rank.
+#[derive(Debug, Clone, Copy, Default)]
+struct Close {
+    /// Rank of the parent (`u32::MAX` for the root).
+    parent: u32,
+    deps_start: u32,
+    deps_count: u32,
+    /// LOD number that expands the node (`u32::MAX`: none).
+    prio: u32,
+}
+
+/// The compact, read-only layout view-dependent cuts of a regular model
+/// work on, built once per model from its arrays (`O(nodes + triangles)`;
+/// about 50 bytes per inner node and 8 per node, plus a copy of the
+/// triangles when the model's are not stored in node order).
+///
+/// Only inner nodes can be expanded, so the search, the closure and the
+/// per-cut flags work on *ranks*: inner nodes numbered in node order (about
+/// an eighth of the nodes: the flags are a bitset that fits a core's
+/// cache). The triangles are stored in node order, so the children of a
+/// node — one node range — have one triangle range, and a run of drawn
+/// children without an active crack patch is emitted as one copy.
+///
+/// A model is regular when every node has at most 8 children after it,
+/// node 0 is the root, and every node the closure can reach (parents of
+/// inner nodes, balance dependencies, LOD groups) is an inner node; every
+/// model the loaders accept and the pipeline builds is. Any other gets no
+/// layout, and its cuts read the node arrays (same result, slower).
+#[derive(Debug, Clone)]
+pub(crate) struct ViewLayout {
+    hot: Vec<Hot>,
+    close: Vec<Close>,
+    /// Cube edge length per level (as [`McoModel::node_size`]).
+    sizes: Vec<f32>,
+    /// Balance dependencies as ranks, at `Close::deps_start`.
+    deps: Vec<u32>,
+    /// The LOD array as ranks (same shape as [`McoModel::lod`]).
+    lod: Vec<u32>,
+    /// Per node and one past: start of its triangles in `tris` (indices).
+    toff: Vec<u32>,
+    /// The triangles in node order, or `None` when [`McoModel::tris`]
+    /// already is (then `toff[i]` is node `i`'s `tri_start`).
+    tris: Option<Vec<u32>>,
+    /// Per node and one past: start of its crack patches in `patches`.
+    poff: Vec<u32>,
+    /// `[coarse neighbour's rank (u32::MAX: never expanded), subs start,
+    /// subs count]` per patch, in node order.
+    patches: Vec<[u32; 3]>,
+}
+
+impl ViewLayout {
+    /// The layout of `m`, or `None` when `m` is not regular (see the type
+    /// docs) or its arrays do not fit `u32` offsets.
+    fn build(m: &McoModel, bounds: &[f32]) -> Option<ViewLayout> {
+        let n = m.nodes.len();
+        if n == 0 || n >= u32::MAX as usize || m.nodes[0].parent != u32::MAX {
+            return None;
+        }
+        let mut rank = vec![u32::MAX; n];
+        let mut inner = 0u32;
+        for (i, nd) in m.nodes.iter().enumerate() {
+            if nd.child_count > 0 {
+                if nd.child_count > 8
+                    || (nd.first_child as usize) <= i
+                    || nd.first_child as usize + nd.child_count as usize > n
+                {
+                    return None;
+                }
+                rank[i] = inner;
+                inner += 1;
+            }
+        }
+        if inner > 0 && rank[0] != 0 {
+            return None;
+        }
+        let ranked = |x: u32| rank.get(x as usize).copied().filter(|&r| r != u32::MAX);
+        let mut hot = Vec::with_capacity(inner as usize);
+        let mut close = Vec::with_capacity(inner as usize);
+        let mut deps = Vec::new();
+        for (i, nd) in m.nodes.iter().enumerate() {
+            if nd.child_count == 0 {
+                continue;
+            }
+            let (lo, _) = m.node_box(i as u32);
+            let mut inner_mask = 0u8;
+            let mut first_inner = u32::MAX;
+            for (j, c) in m.children(i as u32).enumerate() {
+                if let Some(r) = ranked(c) {
+                    inner_mask |= 1 << j;
+                    first_inner = first_inner.min(r);
+                }
+            }
+            hot.push(Hot {
+                lo: lo.to_array(),
+                err: node_error(m, i as u32),
+                bound: bounds[i],
+                first_inner,
+                first_child: nd.first_child,
+                level: nd.level,
+                child_count: nd.child_count,
+                inner_mask,
+                _pad: 0,
+            });
+            let parent = match nd.parent {
+                u32::MAX => u32::MAX,
+                p => ranked(p)?,
+            };
+            let d = m
+                .deps
+                .get(nd.deps_start as usize..nd.deps_start as usize + nd.deps_count as usize)?;
+            let deps_start = u32::try_from(deps.len()).ok()?;
+            for &x in d {
+                deps.push(ranked(x)?);
+            }
+            let prio = m.prio.get(i).copied().unwrap_or(u32::MAX);
+            if prio != u32::MAX && (prio == 0 || prio as usize >= m.groups.len()) {
+                return None;
+            }
+            close.push(Close {
+                parent,
+                deps_start,
+                deps_count: d.len() as u32,
+                prio,
+            });
+        }
+        if m.groups.first().is_some_and(|&g| g != 0)
+            || m.groups.windows(2).any(|w| w[0] > w[1])
+            || m.groups.last().is_some_and(|&g| g as usize > m.lod.len())
+        {
+            return None;
+        }
+        let lod = m
+            .lod
+            .iter()
+            .map(|&x| ranked(x))
+            .collect::<Option<Vec<u32>>>()?;
+        // Triangles and patches in node order.
+        let mut toff = Vec::with_capacity(n + 1);
+        let mut poff = Vec::with_capacity(n + 1);
+        let mut patches = Vec::new();
+        let mut in_order = true;
+        let mut t = 0usize;
+        for nd in &m.nodes {
+            let len = 3 * nd.tri_count as usize;
+            if nd.tri_start as usize + len > m.tris.len() {
+                return None;
+            }
+            in_order &= nd.tri_start as usize == t;
+            toff.push(u32::try_from(t).ok()?);
+            t += len;
+            poff.push(u32::try_from(patches.len()).ok()?);
+            let ps = m
+                .patches
+                .get(nd.patch_start as usize..nd.patch_start as usize + nd.patch_count as usize)?;
+            for p in ps {
+                m.subs
+                    .get(p.subs_start as usize..p.subs_start as usize + p.subs_count as usize)?;
+                let coarse = ranked(p.coarse).unwrap_or(u32::MAX);
+                patches.push([coarse, p.subs_start, p.subs_count]);
+            }
+        }
+        toff.push(u32::try_from(t).ok()?);
+        poff.push(u32::try_from(patches.len()).ok()?);
+        let tris = (!in_order).then(|| {
+            let mut v = Vec::with_capacity(t);
+            for i in 0..n as u32 {
+                v.extend_from_slice(m.node_tris(i));
+            }
+            v
+        });
+        let top = m.nodes.iter().map(|nd| nd.level).max().unwrap_or(0);
+        if top > 31 {
+            return None;
+        }
+        let sizes = (0..=top as u32)
+            .map(|l| m.grid.cube * (1u32 << l) as f32)
+            .collect();
+        Some(ViewLayout {
+            hot,
+            close,
+            sizes,
+            deps,
+            lod,
+            toff,
+            tris,
+            poff,
+            patches,
+        })
+    }
+
+    /// Inner nodes (ranks).
+    fn ranks(&self) -> usize {
+        self.hot.len()
+    }
+
+    /// A ranked node's cube, bit for bit [`McoModel::node_box`].
+    #[inline(always)]
+    fn cube(&self, h: &Hot) -> (Vec3, Vec3) {
+        let lo = Vec3::from_array(h.lo);
+        (lo, lo + Vec3::splat(self.sizes[h.level as usize]))
+    }
+
+    #[inline(always)]
+    fn tris<'a>(&'a self, m: &'a McoModel) -> &'a [u32] {
+        self.tris.as_deref().unwrap_or(&m.tris)
+    }
+}
+
+#[inline(always)]
+fn bit(bits: &[u64], r: u32) -> bool {
+    bits[(r >> 6) as usize] >> (r & 63) & 1 != 0
 }
 
 /// Reusable state for view-dependent cuts of a model: keep one per model
@@ -270,6 +531,10 @@ pub struct ViewCut {
     /// Wanted nodes of the last cut (0 before the first): picks the search
     /// or the scan for the next (see [`SCAN_SHARE`]).
     last_wanted: usize,
+    /// Per rank of a [`ViewLayout`]: expanded in the current cut.
+    bits: Vec<u64>,
+    /// Nodes the current cut expands.
+    count: usize,
     indices: Vec<u32>,
 }
 
@@ -291,6 +556,42 @@ impl ViewCut {
         &self.indices
     }
 
+    /// [`ViewCut::update`] into the caller's buffer: the cut's index
+    /// buffer goes into `out` (cleared; its allocation reused), and the
+    /// expanded node count is returned. [`ViewCut::indices`] is left as
+    /// it was. Same guarantees and cost as [`ViewCut::update`].
+    pub fn update_into(
+        &mut self,
+        model: &McoModel,
+        camera: &Camera,
+        tolerance_px: f32,
+        out: &mut Vec<u32>,
+    ) -> usize {
+        self.cut_into(model, camera, tolerance_px, out)
+    }
+
+    /// The same cut as [`ViewCut::update_into`] by the search on the node
+    /// arrays that every model without a compact layout gets, given
+    /// [`view_subtree_bounds`]`(model)`: for the bench's paired
+    /// comparison of the two on one model (not a stable API).
+    #[doc(hidden)]
+    pub fn update_by_nodes(
+        &mut self,
+        model: &McoModel,
+        bounds: &[f32],
+        camera: &Camera,
+        tolerance_px: f32,
+        out: &mut Vec<u32>,
+    ) -> usize {
+        out.clear();
+        if model.nodes.is_empty() {
+            self.count = 0;
+            return 0;
+        }
+        self.count = self.cut_nodes(model, bounds, camera, tolerance_px, out);
+        self.count
+    }
+
     /// The index buffer of the last [`ViewCut::update`] (empty before).
     pub fn indices(&self) -> &[u32] {
         &self.indices
@@ -303,7 +604,7 @@ impl ViewCut {
 
     /// Nodes the last cut expanded (0: the root alone is drawn).
     pub fn expanded_nodes(&self) -> usize {
-        self.expanded.len()
+        self.count
     }
 
     /// Clears the previous cut's flags (through its list) and sizes the
@@ -339,13 +640,29 @@ impl ViewCut {
         tolerance_px: f32,
         out: &mut Vec<u32>,
     ) -> usize {
-        self.reset(model);
         out.clear();
         if model.nodes.is_empty() {
+            self.count = 0;
             return 0;
         }
+        self.count = match model.view_data() {
+            ViewData::Layout(l) => self.cut_layout(model, l, camera, tolerance_px, out),
+            ViewData::Bounds(b) => self.cut_nodes(model, b, camera, tolerance_px, out),
+        };
+        self.count
+    }
+
+    /// [`ViewCut::cut_into`] on the node arrays (any model).
+    fn cut_nodes(
+        &mut self,
+        model: &McoModel,
+        bounds: &[f32],
+        camera: &Camera,
+        tolerance_px: f32,
+        out: &mut Vec<u32>,
+    ) -> usize {
+        self.reset(model);
         let fr = Frustum::new(model, camera, tolerance_px);
-        let bounds = model.view_bounds();
         // The search: every wanted node onto `wanted`, through the subtrees
         // whose bound may show.
         let mut wanted: Vec<u32> = std::mem::take(&mut self.queue);
@@ -447,6 +764,173 @@ impl ViewCut {
         }
         self.expanded.len()
     }
+}
+
+impl ViewCut {
+    /// [`ViewCut::cut_into`] on a model's [`ViewLayout`]: the same search,
+    /// closure and emission as [`ViewCut::cut_nodes`], on ranks, so the
+    /// same expanded set and the same triangles in the same order.
+    fn cut_layout(
+        &mut self,
+        model: &McoModel,
+        lay: &ViewLayout,
+        camera: &Camera,
+        tolerance_px: f32,
+        out: &mut Vec<u32>,
+    ) -> usize {
+        let ranks = lay.ranks();
+        self.bits.clear();
+        self.bits.resize(ranks.div_ceil(64), 0);
+        if self.group_seen.len() == model.groups.len() {
+            for &k in &self.groups {
+                self.group_seen[k as usize] = false;
+            }
+        } else {
+            self.group_seen.clear();
+            self.group_seen.resize(model.groups.len(), false);
+        }
+        self.groups.clear();
+        self.stack.clear();
+        let fr = Frustum::new(model, camera, tolerance_px);
+        let mut wanted: Vec<u32> = std::mem::take(&mut self.queue);
+        wanted.clear();
+        if self.last_wanted.saturating_mul(SCAN_SHARE) > model.nodes.len() {
+            for (r, h) in lay.hot.iter().enumerate() {
+                let (lo, hi) = lay.cube(h);
+                if fr.shows(lo, hi, h.err) {
+                    wanted.push(r as u32);
+                }
+            }
+        } else if ranks > 0 {
+            self.stack.push(0);
+        }
+        while let Some(r) = self.stack.pop() {
+            let h = &lay.hot[r as usize];
+            let (lo, hi) = lay.cube(h);
+            let descend = if fr.shows(lo, hi, h.err) {
+                wanted.push(r);
+                true
+            } else {
+                h.bound == f32::INFINITY || {
+                    let m = lo.abs().max(hi.abs()).max_element() * BOUND_GROWTH;
+                    let g = Vec3::splat(m + f32::MIN_POSITIVE);
+                    fr.shows(lo - g, hi + g, h.bound)
+                }
+            };
+            if descend {
+                let k = h.inner_mask.count_ones();
+                self.stack.extend(h.first_inner..h.first_inner + k);
+            }
+        }
+        self.last_wanted = wanted.len();
+        // The closure, on ranks.
+        self.stack.append(&mut wanted);
+        self.queue = wanted;
+        let bits = &mut self.bits;
+        let mut count = 0usize;
+        while let Some(r) = self.stack.pop() {
+            let (w, b) = ((r >> 6) as usize, 1u64 << (r & 63));
+            if bits[w] & b != 0 {
+                continue;
+            }
+            bits[w] |= b;
+            count += 1;
+            let c = lay.close[r as usize];
+            if c.parent != u32::MAX {
+                self.stack.push(c.parent);
+            }
+            self.stack
+                .extend_from_slice(&lay.deps[c.deps_start as usize..][..c.deps_count as usize]);
+            let k = c.prio;
+            if k != u32::MAX && !std::mem::replace(&mut self.group_seen[k as usize], true) {
+                self.groups.push(k);
+                let g = &model.groups;
+                self.stack.extend_from_slice(
+                    &lay.lod[g[k as usize - 1] as usize..g[k as usize] as usize],
+                );
+            }
+        }
+        // The emission, in rank order (= node order): each expanded node's
+        // children that are not expanded, runs without an active crack
+        // patch copied as one triangle range.
+        let bits = &self.bits;
+        let tris = lay.tris(model);
+        let toff = &lay.toff;
+        if ranks == 0 || !bit(bits, 0) {
+            emit_patched(model, lay, bits, 0, out);
+            return count;
+        }
+        for (w, &word) in bits.iter().enumerate() {
+            let mut x = word;
+            while x != 0 {
+                let r = (w as u32) << 6 | x.trailing_zeros();
+                x &= x - 1;
+                let h = &lay.hot[r as usize];
+                let fc = h.first_child;
+                let mut run = toff[fc as usize];
+                let mut next_inner = h.first_inner;
+                for j in 0..h.child_count as u32 {
+                    let c = fc + j;
+                    let plain = if h.inner_mask >> j & 1 != 0 {
+                        next_inner += 1;
+                        !bit(bits, next_inner - 1)
+                    } else {
+                        true
+                    };
+                    if plain && !patch_active(lay, bits, c) {
+                        continue;
+                    }
+                    out.extend_from_slice(&tris[run as usize..toff[c as usize] as usize]);
+                    if plain {
+                        emit_patched(model, lay, bits, c, out);
+                    }
+                    run = toff[c as usize + 1];
+                }
+                out.extend_from_slice(
+                    &tris[run as usize..toff[(fc + h.child_count as u32) as usize] as usize],
+                );
+            }
+        }
+        count
+    }
+}
+
+/// Whether drawing node `c` now applies one of its crack patches (a coarse
+/// neighbour is not expanded).
+#[inline(always)]
+fn patch_active(lay: &ViewLayout, bits: &[u64], c: u32) -> bool {
+    let (a, b) = (lay.poff[c as usize], lay.poff[c as usize + 1]);
+    lay.patches[a as usize..b as usize]
+        .iter()
+        .any(|p| p[0] == u32::MAX || !bit(bits, p[0]))
+}
+
+/// Appends node `c`'s triangles, crack-patched against every coarse
+/// neighbour not expanded: [`McoModel::emit`] on the layout.
+fn emit_patched(model: &McoModel, lay: &ViewLayout, bits: &[u64], c: u32, out: &mut Vec<u32>) {
+    let tris = lay.tris(model);
+    let start = out.len();
+    out.extend_from_slice(&tris[lay.toff[c as usize] as usize..lay.toff[c as usize + 1] as usize]);
+    let (a, b) = (lay.poff[c as usize], lay.poff[c as usize + 1]);
+    for p in &lay.patches[a as usize..b as usize] {
+        if p[0] != u32::MAX && bit(bits, p[0]) {
+            continue;
+        }
+        let subs = &model.subs[p[1] as usize..][..p[2] as usize];
+        for idx in &mut out[start..] {
+            for s in subs {
+                if *idx == s[0] {
+                    *idx = s[1];
+                }
+            }
+        }
+    }
+}
+
+/// Whether `model`'s cuts use the compact [`ViewLayout`].
+#[cfg(test)]
+pub(crate) fn has_layout(model: &McoModel) -> bool {
+    matches!(model.view_data(), ViewData::Layout(_))
 }
 
 /// Per-node expanded flags for `camera` and a tolerance in pixels, by a

@@ -13,7 +13,7 @@
 //! usable once its colours and normals are there too.
 
 use glam::Vec3;
-use lodkit_mco::{Camera, McoModel, McoStream};
+use lodkit_mco::{Camera, McoModel, McoStream, ViewCut};
 use lodkit_particles::{DecodeOptions, Decoded, PrefixDecoder, TriangulateOptions};
 
 /// A mesh ready to be copied into GPU buffers: positions (and normals,
@@ -197,9 +197,17 @@ pub struct View {
     pub aspect: f32,
 }
 
-/// View-dependent index buffer at `tolerance_px` pixels of projected error;
-/// returns the number of expanded nodes.
-pub fn mco_extract_view(m: &McoModel, v: &View, tolerance_px: f32, out: &mut Vec<u32>) -> usize {
+/// View-dependent index buffer at `tolerance_px` pixels of projected error
+/// into `out` (cleared), through `cut`, the handle's kept state (so a cut
+/// per frame allocates nothing once warm; the same cut as
+/// `McoModel::extract_view`); returns the number of expanded nodes.
+pub fn mco_extract_view(
+    m: &McoModel,
+    cut: &mut ViewCut,
+    v: &View,
+    tolerance_px: f32,
+    out: &mut Vec<u32>,
+) -> usize {
     let cam = Camera {
         position: v.position,
         direction: v.direction,
@@ -208,7 +216,7 @@ pub fn mco_extract_view(m: &McoModel, v: &View, tolerance_px: f32, out: &mut Vec
         viewport_height: v.viewport_height,
         aspect: v.aspect,
     };
-    m.extract_view(&cam, tolerance_px, out)
+    cut.update_into(m, &cam, tolerance_px, out)
 }
 
 #[cfg(test)]

@@ -54,7 +54,7 @@ use std::cell::RefCell;
 
 use engine::{MeshOut, PopPrefix, PopStream, View};
 use glam::Vec3;
-use lodkit_mco::{McoModel, McoStream};
+use lodkit_mco::{McoModel, McoStream, ViewCut};
 
 /// FNV-1a (64 bit) over a mesh's index buffer then its positions' bit
 /// patterns, little-endian: equal digests mean identical buffers. The native
@@ -93,6 +93,8 @@ enum Slot {
         stream: Option<Box<McoStream>>,
         mesh: MeshOut,
         bounds: [f32; 6],
+        /// The view-dependent cut's scratch state, kept between frames.
+        cut: Box<ViewCut>,
     },
 }
 
@@ -372,6 +374,7 @@ pub unsafe extern "C" fn lk_mco_open(ptr: *const u8, len: usize) -> u32 {
             model: Some(Box::new(model)),
             stream: None,
             mesh: MeshOut::default(),
+            cut: Box::default(),
         }),
         Err(e) => {
             fail(e);
@@ -394,6 +397,7 @@ pub extern "C" fn lk_mco_stream_new() -> u32 {
         stream: Some(Box::new(engine::mco_stream_new())),
         mesh: MeshOut::default(),
         bounds: [0.0; 6],
+        cut: Box::default(),
     })
 }
 
@@ -559,9 +563,16 @@ pub extern "C" fn lk_mco_extract_view(
     } else {
         1.0
     };
-    mco_do(h, |m, mesh| {
-        engine::mco_extract_view(m, &v, tol, &mut mesh.indices)
+    with_slot(h, |slot| match slot {
+        Slot::Mco {
+            model: Some(model),
+            mesh,
+            cut,
+            ..
+        } => engine::mco_extract_view(model, cut, &v, tol, &mut mesh.indices) as i32,
+        _ => -1,
     })
+    .unwrap_or(-1)
 }
 
 // ---- meshes ---------------------------------------------------------------

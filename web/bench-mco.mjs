@@ -1,0 +1,87 @@
+// The `.mco` view-dependent cut in WebAssembly under Node (V8, as in
+// Chromium), on the camera path of the native bench
+// (crates/bench/examples/mco_view_cut.rs): 64 cameras orbiting the root
+// cube's centre at 1.2 x its diagonal, 60 degree field of view, a
+// 1080-pixel square viewport; the cameras in path order within a round
+// (as frames, through the handle's kept cut state), each camera's best of
+// ROUNDS rounds, then the median and worst camera.
+// Usage:
+//   node web/bench-mco.mjs MODEL.mco TOLERANCE_PX [ROUNDS]
+// with the wasm of scripts/build-web.sh (target/web-wasm/...), or another
+// one in LODKIT_WASM. Use the tolerance the native bench printed for the
+// same file and budget (its "tolerance (px)" column), so both time the
+// same cuts; the triangle counts are printed to compare.
+import fs from 'node:fs';
+import path from 'node:path';
+import { fileURLToPath } from 'node:url';
+
+const root = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..');
+const [file, tolArg, roundsArg] = process.argv.slice(2);
+if (!file || !tolArg) {
+  console.error('usage: node web/bench-mco.mjs MODEL.mco TOLERANCE_PX [ROUNDS]');
+  process.exit(2);
+}
+const tol = Number(tolArg);
+const rounds = Number(roundsArg || 5);
+if (!(tol > 0) || !(rounds >= 1)) {
+  console.error('bench-mco: TOLERANCE_PX must be > 0 and ROUNDS >= 1');
+  process.exit(2);
+}
+const wasmPath = process.env.LODKIT_WASM || path.join(root, 'target/web-wasm/wasm32-unknown-unknown/release/lodkit_wasm.wasm');
+const w = new WebAssembly.Instance(new WebAssembly.Module(fs.readFileSync(wasmPath)), {}).exports;
+const bytes = fs.readFileSync(file);
+const p = w.lk_alloc(bytes.length);
+new Uint8Array(w.memory.buffer, p, bytes.length).set(bytes);
+let t0 = performance.now();
+const h = w.lk_mco_open(p, bytes.length);
+const loadMs = performance.now() - t0;
+w.lk_free(p, bytes.length);
+if (h === 0) {
+  const msg = new TextDecoder().decode(new Uint8Array(w.memory.buffer, w.lk_error_ptr(), w.lk_error_len()));
+  console.error(`bench-mco: ${file}: ${msg}`);
+  process.exit(1);
+}
+const b = new Float32Array(w.memory.buffer, w.lk_mco_bounds(h), 6).slice();
+const c = [0, 1, 2].map((i) => Math.fround((b[i] + b[i + 3]) * 0.5));
+const r = Math.hypot(b[3] - b[0], b[4] - b[1], b[5] - b[2]);
+const cameras = [];
+for (let i = 0; i < 64; i++) {
+  const a = (i / 64) * 2 * Math.PI;
+  const d = [Math.cos(a), 0.35, Math.sin(a)];
+  const l = Math.hypot(...d);
+  const pos = d.map((x, k) => c[k] + (x / l) * r * 1.2);
+  cameras.push({ pos, dir: [0, 1, 2].map((k) => c[k] - pos[k]) });
+}
+const cut = (cam) => {
+  const { pos, dir } = cam;
+  const e = w.lk_mco_extract_view(h, pos[0], pos[1], pos[2], dir[0], dir[1], dir[2], 0, 1, 0, 60, 1080, 1, tol);
+  return [w.lk_mesh_index_count(h) / 3, e];
+};
+cameras.forEach(cut); // the first cut builds the model's view layout
+const best = cameras.map(() => Infinity);
+const tris = cameras.map(() => 0);
+let expanded = 0;
+for (let round = 0; round < rounds; round++) {
+  cameras.forEach((cam, i) => {
+    const t = performance.now();
+    const [n, e] = cut(cam);
+    best[i] = Math.min(best[i], performance.now() - t);
+    if (round === 0) {
+      tris[i] = n;
+      expanded += e;
+    }
+  });
+}
+const sorted = [...best].sort((x, y) => x - y);
+const mean = Math.round(tris.reduce((s, x) => s + x, 0) / tris.length);
+console.log(JSON.stringify({
+  file: path.basename(file),
+  full_triangles: w.lk_mco_full_triangles(h),
+  load_ms: +loadMs.toFixed(1),
+  tolerance_px: tol,
+  triangles_min_mean_max: [Math.min(...tris), mean, Math.max(...tris)],
+  expanded_mean: Math.round(expanded / cameras.length),
+  wasm_ms_median: +sorted[sorted.length >> 1].toFixed(3),
+  wasm_ms_worst: +sorted[sorted.length - 1].toFixed(3),
+  node: process.version,
+}));
