@@ -88,6 +88,8 @@ enum Command {
         /// number >= 0) before writing.
         #[arg(long, value_name = "DIST", value_parser = ui::value::Real::NON_NEGATIVE.f32())]
         weld: Option<f32>,
+        #[command(flatten)]
+        out: ui::OutputArgs,
     },
     /// Metro-style surface distance between two meshes (Hausdorff, mean, RMS).
     #[command(
@@ -130,7 +132,8 @@ fn main() -> ExitCode {
             output,
             ascii,
             weld,
-        } => commands::convert::run(&ui, &input, &output, ascii, weld),
+            out,
+        } => commands::convert::run(&ui, &input, &output, ascii, weld, &out),
         Command::Compare(args) => commands::compare::run(&ui, &args),
         Command::Simplify(args) => commands::simplify::run(&ui, &args),
         Command::Lods(args) => commands::lods::run(&ui, &args),

@@ -3,11 +3,18 @@ use std::path::Path;
 
 use anyhow::Result;
 use lodkit_mesh::Model;
-use lodkit_mesh::io::{Format, WriteOptions, save};
+use lodkit_mesh::io::{Format, WriteOptions, write_atomic};
 
-use crate::ui::Ui;
+use crate::ui::{OutputArgs, Ui};
 
-pub fn run(ui: &Ui, input: &Path, output: &Path, ascii: bool, weld: Option<f32>) -> Result<()> {
+pub fn run(
+    ui: &Ui,
+    input: &Path,
+    output: &Path,
+    ascii: bool,
+    weld: Option<f32>,
+    out: &OutputArgs,
+) -> Result<()> {
     let mut model = super::load(ui, input)?;
     if weld.is_some() && !matches!(model, Model::Mesh(_)) {
         return Err(crate::ui::usage(format!(
@@ -28,6 +35,7 @@ pub fn run(ui: &Ui, input: &Path, output: &Path, ascii: bool, weld: Option<f32>)
         *m = welded;
     }
     let format = Format::from_path(output);
+    out.check(format, &output.display().to_string())?;
     if ascii && !matches!(format, Some(Format::Ply | Format::Stl)) {
         return Err(crate::ui::usage(format!(
             "--ascii applies to .ply and .stl outputs, not to {}",
@@ -35,7 +43,13 @@ pub fn run(ui: &Ui, input: &Path, output: &Path, ascii: bool, weld: Option<f32>)
         )));
     }
     let step = ui.spinner(&format!("writing {}", output.display()));
-    save(output, &model, WriteOptions { ascii })?;
+    let format_known = format.ok_or_else(|| {
+        crate::ui::usage(format!("{}: unknown output extension", output.display()))
+    })?;
+    let bytes = out
+        .encode(format_known, &model, WriteOptions { ascii })
+        .map_err(|e| anyhow::anyhow!("{}: {e}", output.display()))?;
+    write_atomic(output, &bytes)?;
     step.finish();
     ui.status(format!(
         "wrote {} ({})",

@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Result, bail};
 use clap::Args;
-use lodkit_mesh::io::{WriteOptions, encode, write_atomic};
+use lodkit_mesh::io::{WriteOptions, write_atomic};
 use lodkit_mesh::{Model, TriMesh};
 use lodkit_simplify::{AttributeWeights, Options, Simplifier, Target};
 
@@ -90,6 +90,8 @@ pub struct SimplifyArgs {
     pub ratio: Option<f32>,
     #[command(flatten)]
     pub opts: SimplifyOpts,
+    #[command(flatten)]
+    pub out: crate::ui::OutputArgs,
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
@@ -126,6 +128,8 @@ pub fn target_of(
 
 pub fn run(ui: &Ui, a: &SimplifyArgs) -> Result<()> {
     let format = super::mesh_output(&a.output)?;
+    a.out
+        .check(Some(format), &a.output.display().to_string())?;
     let target = target_of(a.target, a.ratio, a.opts.max_error)?;
     let opts = a.opts.options(target)?;
     let mesh: TriMesh = super::load_mesh(ui, &a.input)?;
@@ -135,7 +139,9 @@ pub fn run(ui: &Ui, a: &SimplifyArgs) -> Result<()> {
         .map_err(|e| anyhow::anyhow!("{}: {e}", a.input.display()))?;
     let t = step.finish();
     let r = out.report;
-    let bytes = encode(format, &Model::Mesh(out.mesh), WriteOptions::default())
+    let bytes = a
+        .out
+        .encode(format, &Model::Mesh(out.mesh), WriteOptions::default())
         .map_err(|e| anyhow::anyhow!("{}: {e}", a.output.display()))?;
     write_atomic(&a.output, &bytes)?;
     if a.json {
