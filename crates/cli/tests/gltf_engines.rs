@@ -82,7 +82,10 @@ fn the_lod_chain_glb_is_an_msft_lod_chain_with_level_0_first() {
             .unwrap()
             .contains(&"MSFT_lod".into())
     );
-    assert!(j.get("extensionsRequired").is_none(), "MSFT_lod is optional");
+    assert!(
+        j.get("extensionsRequired").is_none(),
+        "MSFT_lod is optional"
+    );
     // One root: level 0, the input, with the three levels behind MSFT_lod.
     let roots = j["scenes"][0]["nodes"].as_array().unwrap();
     assert_eq!(roots.len(), 1);
@@ -160,16 +163,26 @@ fn normals_auto_splits_creases_keep_and_none_do_what_they_say() {
     // Default for a mesh without normals: auto at 60°, so the cube's
     // 90° edges stay hard: 3 vertices per corner.
     let v = info(&glb("auto.glb", &[]));
-    assert_eq!((v["vertices"].as_u64(), v["faces"].as_u64()), (Some(24), Some(12)));
+    assert_eq!(
+        (v["vertices"].as_u64(), v["faces"].as_u64()),
+        (Some(24), Some(12))
+    );
     assert!(has(&v, "normals"), "{v}");
     // No crease at 180°: smooth, no split.
-    assert_eq!(info(&glb("smooth.glb", &["--normals", "auto=180"]))["vertices"], 8);
+    assert_eq!(
+        info(&glb("smooth.glb", &["--normals", "auto=180"]))["vertices"],
+        8
+    );
     let v = info(&glb("none.glb", &["--normals", "none"]));
     assert_eq!(v["vertices"], 8);
     assert!(!has(&v, "normals"), "{v}");
     // PLY keeps the mesh as it is unless asked.
     let ply = dir.path().join("c.ply");
-    assert!(lodkit(&["-q", "convert", &cube, ply.to_str().unwrap()]).status.success());
+    assert!(
+        lodkit(&["-q", "convert", &cube, ply.to_str().unwrap()])
+            .status
+            .success()
+    );
     assert!(!has(&info(&ply), "normals"));
     // A bad value is a usage error naming the range.
     for bad in ["auto=200", "sharp", "auto=nan"] {
@@ -186,11 +199,16 @@ fn point_clouds_become_points_primitives_and_read_back() {
     let mut s = String::new();
     for i in 0..100 {
         let t = i as f32 * 0.1;
-        s += &format!("{} {} {} 0 0 1\n", t.cos(), t.sin(), t * 0.01);
+        s += &format!("{} {} {} 0.0 0.6 0.8\n", t.cos(), t.sin(), t * 0.01);
     }
     std::fs::write(&xyz, s).unwrap();
     let glb = dir.path().join("c.glb");
-    let o = lodkit(&["-q", "convert", xyz.to_str().unwrap(), glb.to_str().unwrap()]);
+    let o = lodkit(&[
+        "-q",
+        "convert",
+        xyz.to_str().unwrap(),
+        glb.to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let j = glb_json(&glb);
     let prim = &j["meshes"][0]["primitives"][0];
@@ -208,15 +226,26 @@ fn point_clouds_become_points_primitives_and_read_back() {
     std::fs::write(&ply, s).unwrap();
     let glb = dir.path().join("p.glb");
     assert!(
-        lodkit(&["-q", "convert", ply.to_str().unwrap(), glb.to_str().unwrap()])
-            .status
-            .success()
+        lodkit(&[
+            "-q",
+            "convert",
+            ply.to_str().unwrap(),
+            glb.to_str().unwrap()
+        ])
+        .status
+        .success()
     );
     let back = dir.path().join("back.ply");
     assert!(
-        lodkit(&["-q", "convert", glb.to_str().unwrap(), back.to_str().unwrap(), "--ascii"])
-            .status
-            .success()
+        lodkit(&[
+            "-q",
+            "convert",
+            glb.to_str().unwrap(),
+            back.to_str().unwrap(),
+            "--ascii"
+        ])
+        .status
+        .success()
     );
     let text = std::fs::read_to_string(&back).unwrap();
     assert!(text.contains("0 1 0 10 20 30"), "{text}");
@@ -232,7 +261,13 @@ fn compress_writes_meshopt_and_quantization_or_says_which_feature() {
             .status
             .success()
     );
-    let o = lodkit(&["-q", "convert", &bunny(), packed.to_str().unwrap(), "--compress"]);
+    let o = lodkit(&[
+        "-q",
+        "convert",
+        &bunny(),
+        packed.to_str().unwrap(),
+        "--compress",
+    ]);
     if !o.status.success() {
         // A build without the `compress` feature says how to get it.
         assert_eq!(o.status.code(), Some(1));
@@ -258,9 +293,14 @@ fn compress_writes_meshopt_and_quantization_or_says_which_feature() {
     assert_eq!(v["faces"], 69451, "{v}");
     let back = dir.path().join("back.ply");
     assert!(
-        lodkit(&["-q", "convert", packed.to_str().unwrap(), back.to_str().unwrap()])
-            .status
-            .success()
+        lodkit(&[
+            "-q",
+            "convert",
+            packed.to_str().unwrap(),
+            back.to_str().unwrap()
+        ])
+        .status
+        .success()
     );
     let o = lodkit(&[
         "compare",
@@ -278,11 +318,20 @@ fn compress_writes_meshopt_and_quantization_or_says_which_feature() {
     // Deterministic.
     let again = dir.path().join("again.glb");
     assert!(
-        lodkit(&["-q", "convert", &bunny(), again.to_str().unwrap(), "--compress"])
-            .status
-            .success()
+        lodkit(&[
+            "-q",
+            "convert",
+            &bunny(),
+            again.to_str().unwrap(),
+            "--compress"
+        ])
+        .status
+        .success()
     );
-    assert_eq!(std::fs::read(&packed).unwrap(), std::fs::read(&again).unwrap());
+    assert_eq!(
+        std::fs::read(&packed).unwrap(),
+        std::fs::read(&again).unwrap()
+    );
     // --compress is for .glb only.
     let o = lodkit(&["convert", &bunny(), "x.ply", "--compress"]);
     assert_eq!(o.status.code(), Some(2));
@@ -307,5 +356,8 @@ fn draco_files_are_refused_in_one_line_naming_the_extension() {
     assert_eq!(o.status.code(), Some(1));
     let e = stderr(&o);
     assert_eq!(e.trim().lines().count(), 1, "{e}");
-    assert!(e.contains("KHR_draco_mesh_compression") && e.contains("draco.gltf"), "{e}");
+    assert!(
+        e.contains("KHR_draco_mesh_compression") && e.contains("draco.gltf"),
+        "{e}"
+    );
 }

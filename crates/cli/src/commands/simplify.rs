@@ -128,8 +128,7 @@ pub fn target_of(
 
 pub fn run(ui: &Ui, a: &SimplifyArgs) -> Result<()> {
     let format = super::mesh_output(&a.output)?;
-    a.out
-        .check(Some(format), &a.output.display().to_string())?;
+    a.out.check(Some(format), &a.output.display().to_string())?;
     let target = target_of(a.target, a.ratio, a.opts.max_error)?;
     let opts = a.opts.options(target)?;
     let mesh: TriMesh = super::load_mesh(ui, &a.input)?;

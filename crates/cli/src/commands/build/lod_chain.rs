@@ -73,7 +73,10 @@ pub fn level_extras(
         error.insert("max_percent_of_diagonal".into(), finite(pct(max)));
     }
     error.insert("estimated".into(), finite(estimated));
-    error.insert("estimated_percent_of_diagonal".into(), finite(pct(estimated)));
+    error.insert(
+        "estimated_percent_of_diagonal".into(),
+        finite(pct(estimated)),
+    );
     let mut e = Map::new();
     e.insert("lod".into(), json!(lod));
     e.insert("error".into(), Value::Object(error));
@@ -131,7 +134,7 @@ pub fn write_chain(
                 &Model::Mesh(l.mesh.clone()),
                 WriteOptions::default(),
             )
-        .map_err(|e| anyhow::anyhow!("{}: {e}", out.join(&file).display()))?;
+            .map_err(|e| anyhow::anyhow!("{}: {e}", out.join(&file).display()))?;
         write_atomic(&out.join(&file), &bytes)?;
         levels.push(Level {
             level: i + 1,
@@ -153,8 +156,12 @@ pub fn write_chain(
     let diagonal = mesh.bbox().diagonal() as f64;
     // Level 0 is the input; then each non-empty level with its error (the
     // measured maximum when measured, else the simplifier's estimate).
-    let mut written: Vec<(usize, &TriMesh, Map<String, Value>, f64)> =
-        vec![(0, mesh, level_extras(0, Some((0.0, 0.0)), 0.0, diagonal), 0.0)];
+    let mut written: Vec<(usize, &TriMesh, Map<String, Value>, f64)> = vec![(
+        0,
+        mesh,
+        level_extras(0, Some((0.0, 0.0)), 0.0, diagonal),
+        0.0,
+    )];
     for (l, (m, me)) in levels.iter().zip(meshes.iter().zip(&measured)) {
         if m.faces.is_empty() {
             continue;
@@ -162,7 +169,12 @@ pub fn write_chain(
         let est = l.estimated_error as f64;
         let measured = me.map(|x| (x.mean, x.max));
         let error = measured.map_or(est, |(_, max)| max);
-        written.push((l.level, m, level_extras(l.level, measured, est, diagonal), error));
+        written.push((
+            l.level,
+            m,
+            level_extras(l.level, measured, est, diagonal),
+            error,
+        ));
     }
     let with_normals: Vec<std::borrow::Cow<TriMesh>> = written
         .iter()

@@ -118,7 +118,9 @@ pub(super) fn expand(bytes: &[u8], base_dir: Option<&Path>) -> Result<Option<Vec
             out.push(0);
         }
         let mut nv = v.clone();
-        let o = nv.as_object_mut().ok_or_else(|| parse_err!("buffer view {i} is not an object"))?;
+        let o = nv
+            .as_object_mut()
+            .ok_or_else(|| parse_err!("buffer view {i} is not an object"))?;
         o.insert("buffer".into(), json!(0));
         o.insert("byteOffset".into(), json!(out.len()));
         o.insert("byteLength".into(), json!(bytes.len()));
@@ -246,8 +248,9 @@ fn buffer_bytes<'a>(
             .map(Cow::Owned)
             .map_err(|e| parse_err!("buffer {i}: data URI is not valid base64: {e}"));
     }
-    let dir = base_dir
-        .ok_or_else(|| parse_err!("buffer {i}: external file but no directory to resolve it against"))?;
+    let dir = base_dir.ok_or_else(|| {
+        parse_err!("buffer {i}: external file but no directory to resolve it against")
+    })?;
     let path = crate::io::input::resolve_inside(dir, uri)
         .map_err(|why| parse_err!("buffer {i}: URI {why}"))?;
     crate::io::input::read_file(&path)
@@ -279,7 +282,11 @@ fn range<'a>(
     }
 }
 
-fn slice<'a>(i: usize, v: &Value, data: &'a [Option<Cow<'_, [u8]>>]) -> Result<&'a [u8], ParseError> {
+fn slice<'a>(
+    i: usize,
+    v: &Value,
+    data: &'a [Option<Cow<'_, [u8]>>],
+) -> Result<&'a [u8], ParseError> {
     range(&format!("buffer view {i}"), v, data)
 }
 
@@ -443,7 +450,11 @@ fn dequantise(ai: usize, acc: &Value, views: &[Value], bin: &[u8]) -> Result<Vec
         5120 | 5121 => 1,
         5122 | 5123 => 2,
         5125 => 4,
-        _ => return Err(parse_err!("accessor {ai}: component type {ct} cannot be dequantised")),
+        _ => {
+            return Err(parse_err!(
+                "accessor {ai}: component type {ct} cannot be dequantised"
+            ));
+        }
     };
     let normalized = acc["normalized"].as_bool().unwrap_or(false);
     let count = acc["count"].as_u64().unwrap_or(0);
@@ -488,7 +499,11 @@ fn dequantise(ai: usize, acc: &Value, views: &[Value], bin: &[u8]) -> Result<Vec
                 }
                 5122 => {
                     let v = i16::from_le_bytes([c[0], c[1]]) as f32;
-                    if normalized { (v / 32767.0).max(-1.0) } else { v }
+                    if normalized {
+                        (v / 32767.0).max(-1.0)
+                    } else {
+                        v
+                    }
                 }
                 5123 => {
                     let v = u16::from_le_bytes([c[0], c[1]]) as f32;

@@ -107,8 +107,8 @@ mod write;
 #[cfg(test)]
 mod tests;
 
-pub use read::{INSTANCING_FLOOR, MAX_INSTANCING_GROWTH, read};
 pub use points::read_model;
+pub use read::{INSTANCING_FLOOR, MAX_INSTANCING_GROWTH, read};
 pub use write::{
     GlbOptions, LodLevel, write_glb, write_glb_with, write_lod_glb, write_model_glb,
     write_points_glb,

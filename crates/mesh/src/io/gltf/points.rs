@@ -26,16 +26,10 @@ pub fn read_model(bytes: &[u8], base_dir: Option<&Path>) -> Result<Model, ParseE
     let expanded = super::extensions::expand(bytes, base_dir)?;
     let bytes = expanded.as_deref().unwrap_or(bytes);
     let (doc, _) = parse_document(bytes)?;
-    let mode_in_scene = |want: &dyn Fn(Mode) -> bool| {
-        doc.meshes()
-            .any(|m| m.primitives().any(|p| want(p.mode())))
-    };
-    let triangles = mode_in_scene(&|m| {
-        matches!(
-            m,
-            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
-        )
-    });
+    let mode_in_scene =
+        |want: &dyn Fn(Mode) -> bool| doc.meshes().any(|m| m.primitives().any(|p| want(p.mode())));
+    let triangles =
+        mode_in_scene(&|m| matches!(m, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan));
     if !triangles && mode_in_scene(&|m| m == Mode::Points) {
         return read_points(bytes, base_dir).map(Model::Points);
     }
@@ -63,7 +57,9 @@ fn read_points(bytes: &[u8], base_dir: Option<&Path>) -> Result<PointCloud, Pars
         }
     }
     if parts.is_empty() {
-        return Err(ParseError::new("no points: the scene has no POINTS primitives"));
+        return Err(ParseError::new(
+            "no points: the scene has no POINTS primitives",
+        ));
     }
     let all = |s: &Semantic| parts.iter().all(|(p, _)| p.get(s).is_some());
     let has_n = all(&Semantic::Normals);
@@ -161,10 +157,16 @@ fn read_points(bytes: &[u8], base_dir: Option<&Path>) -> Result<PointCloud, Pars
             }));
         }
         if let Some(dst) = out.colors.as_mut() {
-            dst.extend(reader.read_colors(0).ok_or_else(short)?.into_rgba_f32().map(|c| {
-                let [r, g, b] = [c[0], c[1], c[2]].map(linear_to_srgb8);
-                [r, g, b, unit8(c[3])]
-            }));
+            dst.extend(
+                reader
+                    .read_colors(0)
+                    .ok_or_else(short)?
+                    .into_rgba_f32()
+                    .map(|c| {
+                        let [r, g, b] = [c[0], c[1], c[2]].map(linear_to_srgb8);
+                        [r, g, b, unit8(c[3])]
+                    }),
+            );
         }
         let lens = [
             out.normals.as_ref().map(Vec::len),

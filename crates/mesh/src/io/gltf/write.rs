@@ -91,6 +91,8 @@ impl Quantise {
 enum Codec {
     /// Vertex data with this stride (bytes, a multiple of 4).
     Attributes(usize),
+    /// Unit vectors through the octahedral filter, 8-bit (stride 4).
+    Octahedral,
     /// A triangle list's indices of this size (2 or 4 bytes).
     Triangles(usize),
 }
@@ -146,13 +148,26 @@ fn color_u16_bytes(colors: &[[u8; 4]]) -> Vec<u8> {
     })
 }
 
-/// Unit normals as normalised i8 (the fourth byte pads to a 4-byte stride).
-fn normal_i8_bytes(normals: &[Vec3]) -> Vec<u8> {
-    le_bytes(normals, |n: Vec3| {
-        let n = n.try_normalize().unwrap_or(Vec3::Z);
-        let q = |x: f32| ((x * 127.0).round().clamp(-127.0, 127.0) as i8) as u8;
-        [q(n.x), q(n.y), q(n.z), 0]
-    })
+/// Unit normals through meshoptimizer's octahedral filter at 8 bits (the
+/// decoder's output is normalised i8 xyz plus a pad byte).
+#[cfg(feature = "meshopt")]
+fn octahedral_normals(normals: &[Vec3]) -> Vec<u8> {
+    let unit: Vec<[f32; 4]> = normals
+        .iter()
+        .map(|n| {
+            let n = n.try_normalize().unwrap_or(Vec3::Z);
+            [n.x, n.y, n.z, 0.0]
+        })
+        .collect();
+    meshopt::encode_filter_oct::<i8>(&unit, 8)
+        .iter()
+        .flat_map(|c| c.map(|x| x as u8))
+        .collect()
+}
+
+#[cfg(not(feature = "meshopt"))]
+fn octahedral_normals(normals: &[Vec3]) -> Vec<u8> {
+    vec![0; normals.len() * 4]
 }
 
 impl Builder {
@@ -215,7 +230,7 @@ impl Builder {
         min_max: Option<(json::Value, json::Value)>,
     ) -> Result<json::Index<json::Accessor>, ParseError> {
         let target = match codec {
-            Codec::Attributes(_) => ArrayBuffer,
+            Codec::Attributes(_) | Codec::Octahedral => ArrayBuffer,
             Codec::Triangles(_) => ElementArrayBuffer,
         };
         let view = if self.compress {
@@ -228,30 +243,32 @@ impl Builder {
             self.fallback_len += bytes.len().next_multiple_of(4);
             let (stride, mode) = match codec {
                 Codec::Attributes(s) => (s, "ATTRIBUTES"),
+                Codec::Octahedral => (4, "ATTRIBUTES"),
                 Codec::Triangles(s) => (s, "TRIANGLES"),
             };
             let view = self.root.push(json::buffer::View {
                 buffer: json::Index::new(1),
                 byte_length: bytes.len().into(),
                 byte_offset: Some(offset.into()),
-                byte_stride: matches!(codec, Codec::Attributes(_))
+                byte_stride: matches!(codec, Codec::Attributes(_) | Codec::Octahedral)
                     .then_some(json::buffer::Stride(stride)),
                 name: None,
                 target: Some(Valid(target)),
                 extensions: None,
                 extras: None,
             });
-            self.view_extensions.push((
-                view.value(),
-                serde_json::json!({
-                    "buffer": 0,
-                    "byteOffset": at,
-                    "byteLength": encoded.len(),
-                    "byteStride": stride,
-                    "count": count,
-                    "mode": mode,
-                }),
-            ));
+            let mut ext = serde_json::json!({
+                "buffer": 0,
+                "byteOffset": at,
+                "byteLength": encoded.len(),
+                "byteStride": stride,
+                "count": count,
+                "mode": mode,
+            });
+            if codec == Codec::Octahedral {
+                ext["filter"] = "OCTAHEDRAL".into();
+            }
+            self.view_extensions.push((view.value(), ext));
             view
         } else {
             self.align_bin();
@@ -297,7 +314,10 @@ impl Builder {
         normals: Option<&[Vec3]>,
         colors: Option<&[[u8; 4]]>,
         uvs: Option<&[Vec2]>,
-    ) -> Result<BTreeMap<json::validation::Checked<json::mesh::Semantic>, json::Index<json::Accessor>>, ParseError> {
+    ) -> Result<
+        BTreeMap<json::validation::Checked<json::mesh::Semantic>, json::Index<json::Accessor>>,
+        ParseError,
+    > {
         use json::mesh::Semantic;
         let n = positions.len();
         let mut attributes = BTreeMap::new();
@@ -350,8 +370,10 @@ impl Builder {
         attributes.insert(Valid(Semantic::Positions), pos);
         if let Some(normals) = normals {
             let a = if self.compress {
-                let bytes = normal_i8_bytes(normals);
-                self.accessor(&bytes, n, C::I8, T::Vec3, true, Codec::Attributes(4), None)?
+                // The octahedral filter (gltfpack's choice for normals)
+                // leaves two varying bytes instead of three: ~40% smaller.
+                let bytes = octahedral_normals(normals);
+                self.accessor(&bytes, n, C::I8, T::Vec3, true, Codec::Octahedral, None)?
             } else {
                 self.accessor(
                     &vec3_bytes(normals),
@@ -390,7 +412,15 @@ impl Builder {
                     let [v0, v1, v2, v3] = (1.0 - t.y).to_le_bytes();
                     [u0, u1, u2, u3, v0, v1, v2, v3]
                 });
-                self.accessor(&bytes, n, C::F32, T::Vec2, false, Codec::Attributes(8), None)?
+                self.accessor(
+                    &bytes,
+                    n,
+                    C::F32,
+                    T::Vec2,
+                    false,
+                    Codec::Attributes(8),
+                    None,
+                )?
             };
             attributes.insert(Valid(Semantic::TexCoords(0)), a);
         }
@@ -424,10 +454,26 @@ impl Builder {
         // value is reserved), u32 otherwise.
         let indices = if n < u16::MAX as usize {
             let bytes = le_bytes(&flat, |i: u32| (i as u16).to_le_bytes());
-            self.accessor(&bytes, flat.len(), C::U16, T::Scalar, false, Codec::Triangles(2), None)?
+            self.accessor(
+                &bytes,
+                flat.len(),
+                C::U16,
+                T::Scalar,
+                false,
+                Codec::Triangles(2),
+                None,
+            )?
         } else {
             let bytes = le_bytes(&flat, |i: u32| i.to_le_bytes());
-            self.accessor(&bytes, flat.len(), C::U32, T::Scalar, false, Codec::Triangles(4), None)?
+            self.accessor(
+                &bytes,
+                flat.len(),
+                C::U32,
+                T::Scalar,
+                false,
+                Codec::Triangles(4),
+                None,
+            )?
         };
         Ok(json::mesh::Primitive {
             attributes,
@@ -441,8 +487,13 @@ impl Builder {
     }
 
     /// One `POINTS` primitive for `cloud`.
-    fn points_primitive(&mut self, cloud: &PointCloud) -> Result<json::mesh::Primitive, ParseError> {
-        cloud.validate().map_err(|e| parse_err!("GLB points: {e}"))?;
+    fn points_primitive(
+        &mut self,
+        cloud: &PointCloud,
+    ) -> Result<json::mesh::Primitive, ParseError> {
+        cloud
+            .validate()
+            .map_err(|e| parse_err!("GLB points: {e}"))?;
         if cloud.positions.is_empty() {
             return Err(ParseError::new("GLB: the point cloud has no points"));
         }
@@ -552,7 +603,13 @@ impl Builder {
             patch(&mut doc, "bufferViews", i, MESHOPT, v);
         }
         if self.compress {
-            patch(&mut doc, "buffers", 1, MESHOPT, serde_json::json!({"fallback": true}));
+            patch(
+                &mut doc,
+                "buffers",
+                1,
+                MESHOPT,
+                serde_json::json!({"fallback": true}),
+            );
         }
         for (i, v) in node_extensions {
             patch(&mut doc, "nodes", i, MSFT_LOD, v);
@@ -608,7 +665,10 @@ pub fn write_glb(levels: &[(&str, &TriMesh)]) -> Result<Vec<u8>, ParseError> {
 /// `"{name} ({triangles} triangles)"`, node extras hold `triangles` and
 /// `vertices`. Errors as [`write_glb`], and `compress` without the
 /// `meshopt` feature.
-pub fn write_glb_with(levels: &[(&str, &TriMesh)], opts: &GlbOptions) -> Result<Vec<u8>, ParseError> {
+pub fn write_glb_with(
+    levels: &[(&str, &TriMesh)],
+    opts: &GlbOptions,
+) -> Result<Vec<u8>, ParseError> {
     if levels.is_empty() {
         return Err(ParseError::new("GLB: no levels to write"));
     }
@@ -697,7 +757,10 @@ pub fn write_points_glb(
 /// A model as a GLB: a mesh as one node named `mesh` ([`write_glb_with`]),
 /// a point cloud or a range image's valid samples as one `POINTS` node
 /// named `points` ([`write_points_glb`]). Errors as those.
-pub fn write_model_glb(model: &crate::mesh::Model, opts: &GlbOptions) -> Result<Vec<u8>, ParseError> {
+pub fn write_model_glb(
+    model: &crate::mesh::Model,
+    opts: &GlbOptions,
+) -> Result<Vec<u8>, ParseError> {
     use crate::mesh::Model;
     match model {
         Model::Mesh(m) => write_glb_with(&[("mesh", m)], opts),
@@ -714,7 +777,10 @@ pub fn write_model_glb(model: &crate::mesh::Model, opts: &GlbOptions) -> Result<
 #[cfg(feature = "meshopt")]
 fn reorder_for_codec(m: &TriMesh) -> TriMesh {
     let flat: Vec<u32> = m.faces.iter().flatten().copied().collect();
-    let mut cached = meshopt::optimize_vertex_cache(&flat, m.positions.len());
+    // The strip-like order: a little worse for a GPU's vertex cache than
+    // `optimize_vertex_cache`, but it compresses better (what meshoptimizer
+    // recommends when size is the goal).
+    let mut cached = meshopt::optimize_vertex_cache_strip(&flat, m.positions.len());
     // Vertices in first-use order (what optimizeVertexFetch does).
     let mut remap = vec![u32::MAX; m.positions.len()];
     let mut next = 0u32;
@@ -772,7 +838,7 @@ fn encode_view(bytes: &[u8], count: usize, codec: Codec) -> Result<Vec<u8>, Pars
             .map_err(|e| parse_err!("GLB: meshopt vertex encoder: {e:?}"))
     }
     match codec {
-        Codec::Attributes(4) => vertices::<4>(bytes),
+        Codec::Attributes(4) | Codec::Octahedral => vertices::<4>(bytes),
         Codec::Attributes(8) => vertices::<8>(bytes),
         Codec::Attributes(12) => vertices::<12>(bytes),
         Codec::Attributes(s) => Err(parse_err!("GLB: no vertex encoding for stride {s}")),
