@@ -44,12 +44,22 @@ pub fn coverage(error: f64, diagonal: f64) -> f64 {
     (h * h).min(1.0)
 }
 
+/// `x` to 4 significant digits: what the errors and coverages are good for
+/// (sampling noise is larger), and a tenth of the chain GLB's JSON.
+pub fn significant(x: f64) -> f64 {
+    if x == 0.0 || !x.is_finite() {
+        return x;
+    }
+    format!("{x:.3e}").parse().unwrap_or(x)
+}
+
 /// A level node's extras: `lod` (its number; 0 is the input) and `error`:
 /// `measured` (whether Metro distances were taken), `mean` / `max` (object
 /// units) and `mean_percent_of_diagonal` / `max_percent_of_diagonal` when
 /// measured, and always `estimated` (the simplifier's own estimate, object
 /// units) with `estimated_percent_of_diagonal`. Under `--no-measure` only
-/// the estimate is written, with `measured: false`.
+/// the estimate is written, with `measured: false`. Numbers have 4
+/// significant digits ([`significant`]).
 pub fn level_extras(
     lod: usize,
     measured: Option<(f64, f64)>,
@@ -63,7 +73,13 @@ pub fn level_extras(
             0.0
         }
     };
-    let finite = |x: f64| if x.is_finite() { json!(x) } else { Value::Null };
+    let finite = |x: f64| {
+        if x.is_finite() {
+            json!(significant(x))
+        } else {
+            Value::Null
+        }
+    };
     let mut error = Map::new();
     error.insert("measured".into(), json!(measured.is_some()));
     if let Some((mean, max)) = measured {
@@ -190,7 +206,9 @@ pub fn write_chain(
             extras: extras.clone(),
             // Level k is shown down to the coverage at which level k + 1
             // becomes good enough; the coarsest stays down to 0.
-            coverage: written.get(k + 1).map_or(0.0, |n| coverage(n.3, diagonal)),
+            coverage: written
+                .get(k + 1)
+                .map_or(0.0, |n| significant(coverage(n.3, diagonal))),
         })
         .collect();
     let glb = write_lod_glb(&glb_levels, &output.glb())
@@ -210,4 +228,29 @@ pub fn write_chain(
         meshes,
         measured,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn extras_say_what_was_measured_and_coverage_falls_with_error() {
+        let m = level_extras(2, Some((1e-4, 2.5e-3)), 1.234_567e-4, 0.25);
+        assert_eq!(m["lod"], 2);
+        let e = &m["error"];
+        assert_eq!(e["measured"], true);
+        assert_eq!(e["max"], 2.5e-3);
+        assert_eq!(e["max_percent_of_diagonal"], 1.0);
+        assert_eq!(e["estimated"], 1.235e-4);
+        // --no-measure: the estimate only.
+        let m = level_extras(1, None, 1e-4, 0.25);
+        assert_eq!(m["error"]["measured"], false);
+        assert!(m["error"].get("max").is_none());
+        assert!(m["error"]["estimated_percent_of_diagonal"].as_f64().unwrap() > 0.0);
+        // Zero error: full coverage; more error: less coverage.
+        assert_eq!(coverage(0.0, 1.0), 1.0);
+        assert!(coverage(1e-3, 1.0) > coverage(1e-2, 1.0));
+        assert_eq!(coverage(1e-2, 1.0), (1.0f64 / 1e-2 / 1080.0).powi(2));
+    }
 }
