@@ -247,7 +247,12 @@ mod tests {
         let m = level_extras(1, None, 1e-4, 0.25);
         assert_eq!(m["error"]["measured"], false);
         assert!(m["error"].get("max").is_none());
-        assert!(m["error"]["estimated_percent_of_diagonal"].as_f64().unwrap() > 0.0);
+        assert!(
+            m["error"]["estimated_percent_of_diagonal"]
+                .as_f64()
+                .unwrap()
+                > 0.0
+        );
         // Zero error: full coverage; more error: less coverage.
         assert_eq!(coverage(0.0, 1.0), 1.0);
         assert!(coverage(1e-3, 1.0) > coverage(1e-2, 1.0));

@@ -106,6 +106,8 @@ mod write;
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_engines;
 
 pub use points::read_model;
 pub use read::{INSTANCING_FLOOR, MAX_INSTANCING_GROWTH, read};
