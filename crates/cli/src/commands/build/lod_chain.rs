@@ -37,7 +37,8 @@ pub const COVERAGE_PIXELS: f64 = 1.0;
 /// `error × h / diagonal` pixels, so `h ≤ px × diagonal / error`, and the
 /// coverage is `(h / lines)²`, at most 1. Zero error: 1.
 pub fn coverage(error: f64, diagonal: f64) -> f64 {
-    if !(error > 0.0) || !(diagonal > 0.0) {
+    // A zero, negative or NaN error or diagonal: full coverage.
+    if error.is_nan() || diagonal.is_nan() || error <= 0.0 || diagonal <= 0.0 {
         return 1.0;
     }
     let h = COVERAGE_PIXELS * diagonal / error / COVERAGE_LINES;

@@ -324,7 +324,7 @@ fn decode_view(
             .collect())
     }
     let mut out = match (x["mode"].as_str(), stride) {
-        (Some("ATTRIBUTES"), s) if s % 4 == 0 && s <= 256 => {
+        (Some("ATTRIBUTES"), s) if s.is_multiple_of(4) && s <= 256 => {
             // The decoder takes the element size as its type: dispatch on
             // the sizes glTF attributes use.
             match s {
@@ -401,7 +401,7 @@ fn decode_view(
             meshopt::decode_filter_quat(&mut v);
             out = v.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
         }
-        Some("EXPONENTIAL") if stride % 4 == 0 => {
+        Some("EXPONENTIAL") if stride.is_multiple_of(4) => {
             let mut v: Vec<[u32; 1]> = out
                 .chunks_exact(4)
                 .map(|c| [u32::from_le_bytes([c[0], c[1], c[2], c[3]])])
