@@ -92,6 +92,8 @@ enum Command {
         /// materials (by default .glb and .obj outputs keep them).
         #[arg(long)]
         merge: bool,
+        #[command(flatten)]
+        out: ui::OutputArgs,
     },
     /// Metro-style surface distance between two meshes (Hausdorff, mean, RMS).
     #[command(
@@ -135,7 +137,8 @@ fn main() -> ExitCode {
             ascii,
             weld,
             merge,
-        } => commands::convert::run(&ui, &input, &output, ascii, weld, merge),
+            out,
+        } => commands::convert::run(&ui, &input, &output, ascii, weld, merge, &out),
         Command::Compare(args) => commands::compare::run(&ui, &args),
         Command::Simplify(args) => commands::simplify::run(&ui, &args),
         Command::Lods(args) => commands::lods::run(&ui, &args),

@@ -363,4 +363,134 @@ pub mod value {
 
     /// Output extensions that hold a triangle mesh.
     pub const MESH_OUT: &[&str] = &["ply", "obj", "stl", "glb"];
+
+    /// `--normals keep|none|auto[=DEGREES]`, DEGREES a crease angle in
+    /// [0, 180] ([`lodkit_mesh::normals::NormalsMode`]).
+    pub fn normals()
+    -> impl Fn(&str) -> Result<lodkit_mesh::normals::NormalsMode, String> + Clone + Send + Sync + 'static
+    {
+        use lodkit_mesh::normals::{DEFAULT_CREASE_DEGREES, NormalsMode};
+        |s: &str| {
+            let bad = || {
+                format!(
+                    "expected keep, none, auto or auto=DEGREES with DEGREES in [0, 180] (a crease angle; \
+                     auto alone is {DEFAULT_CREASE_DEGREES})"
+                )
+            };
+            match s.trim() {
+                "keep" => Ok(NormalsMode::Keep),
+                "none" => Ok(NormalsMode::None),
+                "auto" => Ok(NormalsMode::Auto(DEFAULT_CREASE_DEGREES)),
+                t => {
+                    let d = t.strip_prefix("auto=").ok_or_else(bad)?;
+                    let deg = Real::closed(0.0, 180.0).f32()(d).map_err(|_| bad())?;
+                    Ok(NormalsMode::Auto(deg))
+                }
+            }
+        }
+    }
+}
+
+/// The output options of the commands that write meshes (`convert`,
+/// `simplify`, `lods`, `build`): normals and GLB compression.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct OutputArgs {
+    /// Vertex normals of what is written: keep, none, or auto[=DEGREES]
+    /// (smooth normals, hard across edges sharper than DEGREES in [0, 180],
+    /// default 60; vertices split at creases). Default: auto for .glb
+    /// outputs of meshes without normals, keep otherwise.
+    #[arg(long, value_name = "MODE", value_parser = value::normals())]
+    pub normals: Option<lodkit_mesh::normals::NormalsMode>,
+    /// Write .glb outputs compressed: EXT_meshopt_compression with
+    /// KHR_mesh_quantization (needs lodkit built with `--features compress`).
+    #[arg(long)]
+    pub compress: bool,
+}
+
+impl OutputArgs {
+    /// The normals mode for `mesh` written as `format` (see `--normals`).
+    pub fn normals_for(
+        &self,
+        mesh: &lodkit_mesh::TriMesh,
+        format: lodkit_mesh::io::Format,
+    ) -> lodkit_mesh::normals::NormalsMode {
+        use lodkit_mesh::normals::NormalsMode;
+        match (self.normals, format) {
+            (Some(m), _) => m,
+            (None, lodkit_mesh::io::Format::Glb) => NormalsMode::default_for(mesh),
+            (None, _) => NormalsMode::Keep,
+        }
+    }
+
+    /// `scene` as `--normals` asks, each mesh on its own (as
+    /// [`OutputArgs::normals_for`] decides for one mesh; face order and
+    /// face materials unchanged). `--compress` is refused (exit 2): scenes
+    /// with materials are written uncompressed.
+    pub fn scene(
+        &self,
+        mut scene: lodkit_mesh::Scene,
+        output: &std::path::Path,
+    ) -> anyhow::Result<lodkit_mesh::Scene> {
+        if self.compress {
+            return Err(usage(format!(
+                "{}: --compress applies to single meshes; this input keeps materials and parts \
+                 (add --merge to write one compressed mesh)",
+                output.display()
+            )));
+        }
+        let format =
+            lodkit_mesh::io::Format::from_path(output).unwrap_or(lodkit_mesh::io::Format::Glb);
+        for m in &mut scene.meshes {
+            if let std::borrow::Cow::Owned(x) = self.normals_for(&m.mesh, format).apply(&m.mesh) {
+                m.mesh = x;
+            }
+        }
+        Ok(scene)
+    }
+
+    /// Refuses `--compress` for an output that is not .glb (exit 2).
+    pub fn check(&self, format: Option<lodkit_mesh::io::Format>, what: &str) -> anyhow::Result<()> {
+        if self.compress && format != Some(lodkit_mesh::io::Format::Glb) {
+            return Err(usage(format!(
+                "--compress applies to .glb outputs, not to {what}"
+            )));
+        }
+        Ok(())
+    }
+
+    /// The GLB writer's options.
+    pub fn glb(&self) -> lodkit_mesh::io::gltf::GlbOptions {
+        lodkit_mesh::io::gltf::GlbOptions {
+            compress: self.compress,
+        }
+    }
+
+    /// `model` as `format` bytes with these options: normals first (a
+    /// mesh only), then the GLB writer with `compress`, or
+    /// [`lodkit_mesh::io::encode`] for every other format.
+    pub fn encode(
+        &self,
+        format: lodkit_mesh::io::Format,
+        model: &lodkit_mesh::Model,
+        opts: lodkit_mesh::io::WriteOptions,
+    ) -> Result<Vec<u8>, lodkit_mesh::ParseError> {
+        use lodkit_mesh::Model;
+        use lodkit_mesh::io::Format;
+        let changed;
+        let model = match model {
+            Model::Mesh(m) => match self.normals_for(m, format).apply(m) {
+                std::borrow::Cow::Borrowed(_) => model,
+                std::borrow::Cow::Owned(x) => {
+                    changed = Model::Mesh(x);
+                    &changed
+                }
+            },
+            _ => model,
+        };
+        if format == Format::Glb && self.compress {
+            lodkit_mesh::io::check_readable(format, model)?;
+            return lodkit_mesh::io::gltf::write_model_glb(model, &self.glb());
+        }
+        lodkit_mesh::io::encode(format, model, opts)
+    }
 }

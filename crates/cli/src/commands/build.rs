@@ -32,7 +32,7 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use clap::Args;
 use lodkit_mesh::info::model_info;
-use lodkit_mesh::io::{Format, WriteOptions, encode, write_atomic};
+use lodkit_mesh::io::{Format, WriteOptions, write_atomic};
 use lodkit_mesh::metrics::Reference;
 use lodkit_mesh::{Model, TriMesh};
 use lodkit_simplify::halving_targets;
@@ -62,6 +62,8 @@ pub struct BuildArgs {
     /// Skip every error measurement (the report shows "-").
     #[arg(long)]
     pub no_measure: bool,
+    #[command(flatten)]
+    pub output: crate::ui::OutputArgs,
     /// Print the list of outputs as JSON.
     #[arg(long)]
     pub json: bool,
@@ -140,7 +142,9 @@ fn write_all(
         for (format, ext) in [(Format::Glb, "glb"), (Format::Ply, "ply")] {
             let file = format!("{name}.{ext}");
             let step = ui.spinner(&format!("writing {file}"));
-            let bytes = encode(format, &model, WriteOptions::default())
+            let bytes = args
+                .output
+                .encode(format, &model, WriteOptions::default())
                 .map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
             write_atomic(&dir.join(&file), &bytes)?;
             step.finish();
@@ -184,6 +188,7 @@ fn write_all(
                 ..lodkit_simplify::Options::DEFAULT
             },
             sampling,
+            &args.output,
             &mut |_| {},
         )
     })?;

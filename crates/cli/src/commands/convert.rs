@@ -3,10 +3,10 @@ use std::path::Path;
 
 use anyhow::Result;
 use lodkit_mesh::Model;
-use lodkit_mesh::io::{Format, WriteOptions, save};
+use lodkit_mesh::io::{Format, WriteOptions, write_atomic};
 
 use super::scene::Input;
-use crate::ui::Ui;
+use crate::ui::{OutputArgs, Ui};
 
 pub fn run(
     ui: &Ui,
@@ -15,12 +15,13 @@ pub fn run(
     ascii: bool,
     weld: Option<f32>,
     merge: bool,
+    out: &OutputArgs,
 ) -> Result<()> {
     // Welding works on one mesh: --weld merges a scene's parts.
     let keeps = !merge && weld.is_none() && super::scene::holds_scenes(output);
     let mut model = match super::scene::load_input(ui, input, keeps)? {
         Input::Model(m) => m,
-        Input::Scene(scene) => return write_scene(ui, &scene, output, ascii),
+        Input::Scene(scene) => return write_scene(ui, out.scene(scene, output)?, output, ascii),
     };
     if weld.is_some() && !matches!(model, Model::Mesh(_)) {
         return Err(crate::ui::usage(format!(
@@ -41,6 +42,7 @@ pub fn run(
         *m = welded;
     }
     let format = Format::from_path(output);
+    out.check(format, &output.display().to_string())?;
     if ascii && !matches!(format, Some(Format::Ply | Format::Stl)) {
         return Err(crate::ui::usage(format!(
             "--ascii applies to .ply and .stl outputs, not to {}",
@@ -48,7 +50,13 @@ pub fn run(
         )));
     }
     let step = ui.spinner(&format!("writing {}", output.display()));
-    save(output, &model, WriteOptions { ascii })?;
+    let format_known = format.ok_or_else(|| {
+        crate::ui::usage(format!("{}: unknown output extension", output.display()))
+    })?;
+    let bytes = out
+        .encode(format_known, &model, WriteOptions { ascii })
+        .map_err(|e| anyhow::anyhow!("{}: {e}", output.display()))?;
+    write_atomic(output, &bytes)?;
     step.finish();
     ui.status(format!(
         "wrote {} ({})",
@@ -59,7 +67,7 @@ pub fn run(
 }
 
 /// Writes a scene (materials, parts, nodes) to .glb or .obj.
-fn write_scene(ui: &Ui, scene: &lodkit_mesh::Scene, output: &Path, ascii: bool) -> Result<()> {
+fn write_scene(ui: &Ui, scene: lodkit_mesh::Scene, output: &Path, ascii: bool) -> Result<()> {
     if ascii {
         return Err(crate::ui::usage(format!(
             "--ascii applies to .ply and .stl outputs, not to {}",
@@ -67,12 +75,12 @@ fn write_scene(ui: &Ui, scene: &lodkit_mesh::Scene, output: &Path, ascii: bool) 
         )));
     }
     let step = ui.spinner(&format!("writing {}", output.display()));
-    lodkit_mesh::io::save_scene(output, scene, WriteOptions::default())?;
+    lodkit_mesh::io::save_scene(output, &scene, WriteOptions::default())?;
     step.finish();
     ui.status(format!(
         "wrote {} ({})",
         output.display(),
-        super::scene::describe(scene)
+        super::scene::describe(&scene)
     ));
     Ok(())
 }

@@ -1,6 +1,6 @@
 //! `lodkit lods IN --out DIR`: a discrete LOD chain — each level simplified
-//! from the previous one — written as one PLY per level, one GLB with a
-//! node per level, and `lods.json` (per level: triangles, vertices,
+//! from the previous one — written as one PLY per level, one GLB with the
+//! input and every level as an `MSFT_lod` chain, and `lods.json` (per level: triangles, vertices,
 //! estimated and measured error, time).
 use std::path::PathBuf;
 use std::time::Instant;
@@ -41,6 +41,8 @@ pub struct LodsArgs {
     /// by default each level gets 4 per face, within 50000..=1000000.
     #[arg(long, value_parser = value::int(1usize, value::MAX_SAMPLES))]
     pub samples: Option<usize>,
+    #[command(flatten)]
+    pub output: crate::ui::OutputArgs,
     /// Print lods.json on stdout too.
     #[arg(long)]
     pub json: bool,
@@ -111,6 +113,7 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
         &targets,
         &opts,
         sampling,
+        &a.output,
         &mut |l| {
             if !json {
                 ui.status(format!(

@@ -158,6 +158,9 @@ pub fn run_lods(
     let mut kept = Vec::new();
     let mut names = Vec::new();
     for (i, (level, reports)) in chain.into_iter().enumerate() {
+        let level = a
+            .output
+            .scene(level, &a.out.join(format!("{stem}_lods.glb")))?;
         let r = lodkit_simplify::scene::combined_report(&reports)
             .ok_or_else(|| anyhow::anyhow!("{}: the scene has no meshes", a.input.display()))?;
         let file = format!("{stem}_lod{}.glb", i + 1);

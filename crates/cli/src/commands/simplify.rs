@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Result, bail};
 use clap::Args;
-use lodkit_mesh::io::{WriteOptions, encode, write_atomic};
+use lodkit_mesh::io::{WriteOptions, write_atomic};
 use lodkit_mesh::{Model, TriMesh};
 use lodkit_simplify::{AttributeWeights, Options, Simplifier, Target};
 
@@ -95,6 +95,8 @@ pub struct SimplifyArgs {
     pub ratio: Option<f32>,
     #[command(flatten)]
     pub opts: SimplifyOpts,
+    #[command(flatten)]
+    pub out: crate::ui::OutputArgs,
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
@@ -131,6 +133,7 @@ pub fn target_of(
 
 pub fn run(ui: &Ui, a: &SimplifyArgs) -> Result<()> {
     let format = super::mesh_output(&a.output)?;
+    a.out.check(Some(format), &a.output.display().to_string())?;
     let target = target_of(a.target, a.ratio, a.opts.max_error)?;
     let opts = a.opts.options(target)?;
     let mesh: TriMesh = match super::scene::load_input(
@@ -152,7 +155,9 @@ pub fn run(ui: &Ui, a: &SimplifyArgs) -> Result<()> {
         .map_err(|e| anyhow::anyhow!("{}: {e}", a.input.display()))?;
     let t = step.finish();
     let r = out.report;
-    let bytes = encode(format, &Model::Mesh(out.mesh), WriteOptions::default())
+    let bytes = a
+        .out
+        .encode(format, &Model::Mesh(out.mesh), WriteOptions::default())
         .map_err(|e| anyhow::anyhow!("{}: {e}", a.output.display()))?;
     write_atomic(&a.output, &bytes)?;
     if a.json {
@@ -192,6 +197,7 @@ fn run_scene(ui: &Ui, a: &SimplifyArgs, scene: &lodkit_mesh::Scene, opts: &Optio
     let t = step.finish();
     let r = lodkit_simplify::scene::combined_report(&reports)
         .ok_or_else(|| anyhow::anyhow!("{}: the scene has no meshes", a.input.display()))?;
+    let out = a.out.scene(out, &a.output)?;
     lodkit_mesh::io::save_scene(&a.output, &out, WriteOptions::default())?;
     if a.json {
         return super::print_json(&Report {

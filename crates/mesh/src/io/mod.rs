@@ -130,7 +130,7 @@ pub fn decode(format: Format, bytes: &[u8], base_dir: Option<&Path>) -> Result<M
         Format::Ply => ply::read(bytes)?,
         Format::Obj => Model::Mesh(obj::read(bytes)?),
         Format::Stl => Model::Mesh(stl::read(bytes)?),
-        Format::Gltf | Format::Glb => Model::Mesh(gltf::read(bytes, base_dir)?),
+        Format::Gltf | Format::Glb => gltf::read_model(bytes, base_dir)?,
         Format::Xyz => Model::Points(xyz::read_xyz(bytes)?),
         Format::Pts => Model::Points(xyz::read_pts(bytes)?),
     };
@@ -228,8 +228,8 @@ pub fn encode(format: Format, model: &Model, opts: WriteOptions) -> Result<Vec<u
         }
         (Format::Obj, Model::Mesh(m)) => obj::write(&mut out, m),
         (Format::Stl, Model::Mesh(m)) => stl::write(&mut out, m, opts.ascii),
-        (Format::Glb, Model::Mesh(m)) => {
-            out = gltf::write_glb(&[("mesh", m)])?;
+        (Format::Glb, m) => {
+            out = gltf::write_model_glb(m, &gltf::GlbOptions::default())?;
             Ok(())
         }
         (Format::Xyz, m) => xyz::write_xyz(&mut out, &as_points(m)),
@@ -290,7 +290,7 @@ pub fn check_readable(format: Format, model: &Model) -> Result<(), ParseError> {
                 refuse("every triangle has coincident corners".into())
             }
         }
-        (Format::Xyz | Format::Pts, m) => {
+        (Format::Xyz | Format::Pts | Format::Glb, m) => {
             let n = match m {
                 Model::Mesh(m) => m.positions.len(),
                 Model::Points(p) => p.positions.len(),

@@ -2,18 +2,103 @@
 //! one, measured against the input through the shared [`Reference`], and
 //! written as `lods/NAME_lodN.ply`, `lods/NAME_lods.glb` and
 //! `lods/lods.json` (the files and layout of `lodkit lods`).
+//!
+//! The GLB is the chain as engines read it: level 0 (the input) is the
+//! scene's node `NAME_LOD0` and carries `MSFT_lod` over `NAME_LOD1 …
+//! NAME_LODn` (the suffix Unity's and Unreal's importers group by), with
+//! `MSFT_screencoverage` from each level's error ([`coverage`]); every
+//! level node's `extras.error` holds its measured error in object units
+//! and in % of the input's diagonal ([`level_extras`]).
 
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use lodkit_mesh::io::{Format, WriteOptions, encode, gltf::write_glb, write_atomic};
+use lodkit_mesh::io::gltf::{LodLevel, write_lod_glb};
+use lodkit_mesh::io::{Format, WriteOptions, write_atomic};
 use lodkit_mesh::metrics::Reference;
 use lodkit_mesh::{Model, TriMesh};
 use lodkit_simplify::{Options, Simplifier, Target};
+use serde_json::{Map, Value, json};
 
 use super::measure::{Measured, Sampling};
 use crate::commands::lods::{Level, Lods};
-use crate::ui::Ui;
+use crate::ui::{OutputArgs, Ui};
+
+/// The viewport height (pixels) and error (pixels) the screen coverages
+/// are set for: a level is shown from the coverage at which its error
+/// projects to one pixel on a 1080-line screen.
+pub const COVERAGE_LINES: f64 = 1080.0;
+pub const COVERAGE_PIXELS: f64 = 1.0;
+
+/// The screen coverage (projected area ÷ viewport area) below which an
+/// error of `error` object units on an object of diagonal `diagonal`
+/// projects to at most [`COVERAGE_PIXELS`] on a [`COVERAGE_LINES`] screen:
+/// the object spans `h` lines when its diagonal does, its error is
+/// `error × h / diagonal` pixels, so `h ≤ px × diagonal / error`, and the
+/// coverage is `(h / lines)²`, at most 1. Zero error: 1.
+pub fn coverage(error: f64, diagonal: f64) -> f64 {
+    // A zero, negative or NaN error or diagonal: full coverage.
+    if error.is_nan() || diagonal.is_nan() || error <= 0.0 || diagonal <= 0.0 {
+        return 1.0;
+    }
+    let h = COVERAGE_PIXELS * diagonal / error / COVERAGE_LINES;
+    (h * h).min(1.0)
+}
+
+/// `x` to 4 significant digits: what the errors and coverages are good for
+/// (sampling noise is larger), and a tenth of the chain GLB's JSON.
+pub fn significant(x: f64) -> f64 {
+    if x == 0.0 || !x.is_finite() {
+        return x;
+    }
+    format!("{x:.3e}").parse().unwrap_or(x)
+}
+
+/// A level node's extras: `lod` (its number; 0 is the input) and `error`:
+/// `measured` (whether Metro distances were taken), `mean` / `max` (object
+/// units) and `mean_percent_of_diagonal` / `max_percent_of_diagonal` when
+/// measured, and always `estimated` (the simplifier's own estimate, object
+/// units) with `estimated_percent_of_diagonal`. Under `--no-measure` only
+/// the estimate is written, with `measured: false`. Numbers have 4
+/// significant digits ([`significant`]).
+pub fn level_extras(
+    lod: usize,
+    measured: Option<(f64, f64)>,
+    estimated: f64,
+    diagonal: f64,
+) -> Map<String, Value> {
+    let pct = |x: f64| {
+        if diagonal > 0.0 {
+            x / diagonal * 100.0
+        } else {
+            0.0
+        }
+    };
+    let finite = |x: f64| {
+        if x.is_finite() {
+            json!(significant(x))
+        } else {
+            Value::Null
+        }
+    };
+    let mut error = Map::new();
+    error.insert("measured".into(), json!(measured.is_some()));
+    if let Some((mean, max)) = measured {
+        error.insert("mean".into(), finite(mean));
+        error.insert("max".into(), finite(max));
+        error.insert("mean_percent_of_diagonal".into(), finite(pct(mean)));
+        error.insert("max_percent_of_diagonal".into(), finite(pct(max)));
+    }
+    error.insert("estimated".into(), finite(estimated));
+    error.insert(
+        "estimated_percent_of_diagonal".into(),
+        finite(pct(estimated)),
+    );
+    let mut e = Map::new();
+    e.insert("lod".into(), json!(lod));
+    e.insert("error".into(), Value::Object(error));
+    e
+}
 
 /// The chain as written, with each level's mesh and measurement.
 pub struct Chain {
@@ -28,7 +113,9 @@ pub struct Chain {
 /// (`input` is what `lods.json` names as the input, and what errors
 /// name). `on_level` sees each level as soon as it is measured and
 /// written, so a long chain can report one line per level as it goes.
-/// `build` and `lodkit lods` both write their chains here.
+/// `build` and `lodkit lods` both write their chains here; `output`
+/// carries `--normals` (applied to what is written, after measuring) and
+/// `--compress` (the GLB).
 #[allow(clippy::too_many_arguments)]
 pub fn write_chain(
     ui: &Ui,
@@ -39,6 +126,7 @@ pub fn write_chain(
     targets: &[Target],
     opts: &Options,
     sampling: Sampling,
+    output: &OutputArgs,
     on_level: &mut dyn FnMut(&Level),
 ) -> Result<Chain> {
     let mesh = reference.mesh();
@@ -57,12 +145,13 @@ pub fn write_chain(
         let step = ui.spinner(&format!("measuring level {}", i + 1));
         let m = sampling.measure(reference, &l.mesh)?;
         step.finish();
-        let bytes = encode(
-            Format::Ply,
-            &Model::Mesh(l.mesh.clone()),
-            WriteOptions::default(),
-        )
-        .map_err(|e| anyhow::anyhow!("{}: {e}", out.join(&file).display()))?;
+        let bytes = output
+            .encode(
+                Format::Ply,
+                &Model::Mesh(l.mesh.clone()),
+                WriteOptions::default(),
+            )
+            .map_err(|e| anyhow::anyhow!("{}: {e}", out.join(&file).display()))?;
         write_atomic(&out.join(&file), &bytes)?;
         levels.push(Level {
             level: i + 1,
@@ -81,17 +170,50 @@ pub fn write_chain(
         measured.push(m);
     }
     let glb_name = format!("{stem}_lods.glb");
-    let names: Vec<String> = (1..=meshes.len())
-        .map(|i| format!("{stem}_lod{i}"))
-        .collect();
-    let named: Vec<(&str, &TriMesh)> = names
+    let diagonal = mesh.bbox().diagonal() as f64;
+    // Level 0 is the input; then each non-empty level with its error (the
+    // measured maximum when measured, else the simplifier's estimate).
+    let mut written: Vec<(usize, &TriMesh, Map<String, Value>, f64)> = vec![(
+        0,
+        mesh,
+        level_extras(0, Some((0.0, 0.0)), 0.0, diagonal),
+        0.0,
+    )];
+    for (l, (m, me)) in levels.iter().zip(meshes.iter().zip(&measured)) {
+        if m.faces.is_empty() {
+            continue;
+        }
+        let est = l.estimated_error as f64;
+        let measured = me.map(|x| (x.mean, x.max));
+        let error = measured.map_or(est, |(_, max)| max);
+        written.push((
+            l.level,
+            m,
+            level_extras(l.level, measured, est, diagonal),
+            error,
+        ));
+    }
+    let with_normals: Vec<std::borrow::Cow<TriMesh>> = written
         .iter()
-        .zip(&meshes)
-        .filter(|(_, m)| !m.faces.is_empty())
-        .map(|(n, m)| (n.as_str(), m))
+        .map(|(_, m, _, _)| output.normals_for(m, Format::Glb).apply(m))
         .collect();
-    let glb =
-        write_glb(&named).map_err(|e| anyhow::anyhow!("{}: {e}", out.join(&glb_name).display()))?;
+    let glb_levels: Vec<LodLevel> = written
+        .iter()
+        .zip(&with_normals)
+        .enumerate()
+        .map(|(k, ((lod, _, extras, _), m))| LodLevel {
+            name: format!("{stem}_LOD{lod}"),
+            mesh: m,
+            extras: extras.clone(),
+            // Level k is shown down to the coverage at which level k + 1
+            // becomes good enough; the coarsest stays down to 0.
+            coverage: written
+                .get(k + 1)
+                .map_or(0.0, |n| significant(coverage(n.3, diagonal))),
+        })
+        .collect();
+    let glb = write_lod_glb(&glb_levels, &output.glb())
+        .map_err(|e| anyhow::anyhow!("{}: {e}", out.join(&glb_name).display()))?;
     write_atomic(&out.join(&glb_name), &glb)?;
     let lods = Lods {
         input: input.to_string(),
@@ -107,4 +229,34 @@ pub fn write_chain(
         meshes,
         measured,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn extras_say_what_was_measured_and_coverage_falls_with_error() {
+        let m = level_extras(2, Some((1e-4, 2.5e-3)), 1.234_567e-4, 0.25);
+        assert_eq!(m["lod"], 2);
+        let e = &m["error"];
+        assert_eq!(e["measured"], true);
+        assert_eq!(e["max"], 2.5e-3);
+        assert_eq!(e["max_percent_of_diagonal"], 1.0);
+        assert_eq!(e["estimated"], 1.235e-4);
+        // --no-measure: the estimate only.
+        let m = level_extras(1, None, 1e-4, 0.25);
+        assert_eq!(m["error"]["measured"], false);
+        assert!(m["error"].get("max").is_none());
+        assert!(
+            m["error"]["estimated_percent_of_diagonal"]
+                .as_f64()
+                .unwrap()
+                > 0.0
+        );
+        // Zero error: full coverage; more error: less coverage.
+        assert_eq!(coverage(0.0, 1.0), 1.0);
+        assert!(coverage(1e-3, 1.0) > coverage(1e-2, 1.0));
+        assert_eq!(coverage(1e-2, 1.0), (1.0f64 / 1e-2 / 1080.0).powi(2));
+    }
 }

@@ -22,7 +22,7 @@ use json::validation::Checked::Valid;
 
 use super::color::srgb8_to_linear;
 use super::glb::join_glb;
-use super::write::{Builder, le_bytes, vec3_bytes};
+use super::write::{le_bytes, vec3_bytes};
 use crate::error::ParseError;
 use crate::mesh::TriMesh;
 use crate::parse_err;
@@ -273,6 +273,66 @@ fn material_json(
         extensions: None,
         extras,
     })
+}
+
+/// Builds a scene GLB's BIN chunk and the JSON objects that point into
+/// it: plain accessors only (a scene GLB is written uncompressed).
+struct Builder {
+    bin: Vec<u8>,
+    root: json::Root,
+}
+
+impl Builder {
+    /// Appends `bytes` as a new 4-byte-aligned buffer view and an accessor
+    /// over it; returns the accessor's index.
+    #[allow(clippy::too_many_arguments)]
+    fn accessor(
+        &mut self,
+        bytes: &[u8],
+        count: usize,
+        component: json::accessor::ComponentType,
+        ty: json::accessor::Type,
+        normalized: bool,
+        target: json::buffer::Target,
+        min_max: Option<(json::Value, json::Value)>,
+    ) -> json::Index<json::Accessor> {
+        debug_assert!(self.bin.len().is_multiple_of(4));
+        let offset = self.bin.len();
+        self.bin.extend_from_slice(bytes);
+        while !self.bin.len().is_multiple_of(4) {
+            self.bin.push(0);
+        }
+        let view = self.root.push(json::buffer::View {
+            buffer: json::Index::new(0),
+            byte_length: bytes.len().into(),
+            byte_offset: Some(offset.into()),
+            byte_stride: None,
+            name: None,
+            target: Some(json::validation::Checked::Valid(target)),
+            extensions: None,
+            extras: None,
+        });
+        let (min, max) = match min_max {
+            Some((a, b)) => (Some(a), Some(b)),
+            None => (None, None),
+        };
+        self.root.push(json::Accessor {
+            buffer_view: Some(view),
+            byte_offset: None,
+            count: count.into(),
+            component_type: json::validation::Checked::Valid(json::accessor::GenericComponentType(
+                component,
+            )),
+            extensions: None,
+            extras: None,
+            type_: json::validation::Checked::Valid(ty),
+            min,
+            max,
+            name: None,
+            normalized,
+            sparse: None,
+        })
+    }
 }
 
 /// Writes `scene` as one GLB (see the module docs for the layout).

@@ -52,7 +52,17 @@
 //! [`INSTANCING_FLOOR`] each, whichever is larger. All of these are
 //! one-line [`ParseError`]s.
 //!
-//! **Writing** ([`write_glb`]): one mesh + one node per level, all nodes
+//! **Reading a model** ([`read_model`], what `io::load` uses): the file
+//! first goes through `extensions` — `KHR_mesh_quantization` accessors are
+//! turned into floats, `EXT_meshopt_compression` / `KHR_meshopt_compression`
+//! views are decoded (with the `meshopt` feature; without it, a one-line
+//! error naming the extension), `KHR_draco_mesh_compression` is a one-line
+//! error (no maintained Rust Draco decoder exists) — then a scene with
+//! triangles is read as above, and one with only `POINTS` primitives as a
+//! point cloud (POSITION, NORMAL, COLOR_0, each kept only when every
+//! primitive has it).
+//!
+//! **Writing** ([`write_glb`], [`write_glb_with`]): one mesh + one node per level, all nodes
 //! siblings in the default scene. The node and mesh are named
 //! `"{name} ({triangles} triangles)"` and the node's `extras` hold
 //! `{"triangles": N, "vertices": M}`. Accessors: POSITION (f32 vec3 with
@@ -66,25 +76,52 @@
 //! serialised with `serde_json`, whose maps are ordered: the same levels
 //! always give the same bytes.
 //!
+//! **LOD chains** ([`write_lod_glb`]): level 0 is the only root node and
+//! carries `MSFT_lod` (the other levels' node ids) with
+//! `extras.MSFT_screencoverage`; the other levels' nodes are reachable
+//! only through it, so a loader without `MSFT_lod` shows level 0 alone.
+//! **Point clouds** ([`write_points_glb`]): one `POINTS` primitive.
+//!
+//! **Compression** ([`GlbOptions::compress`], `meshopt` feature): triangles
+//! reordered for the vertex cache and vertices in first-use order
+//! (meshoptimizer), then `KHR_mesh_quantization` — POSITION as 14-bit
+//! `u16` on a grid shared by every level (the node's translation + uniform
+//! scale undo it), NORMAL as normalised `i8`, TEXCOORD_0 as normalised
+//! `u16` when inside `[0, 1]` — and every view through meshoptimizer's
+//! vertex codec (version 0) or index codec (`TRIANGLES`) as
+//! `EXT_meshopt_compression`, with the uncompressed layout in a fallback
+//! buffer that has no data (both extensions are required). Lossy: 1/16383
+//! of the largest extent for positions, 1/127 for normals.
+//!
 //! Stages, one file each: `glb` (the binary container: chunks in, chunks
 //! out), `buffers` (where a buffer's bytes come from: BIN chunk, data URI,
 //! relative file), `read` (document → one mesh), `write` (levels → GLB),
-//! `color` (linear ↔ sRGB, shared by both directions).
+//! `color` (linear ↔ sRGB, shared by both directions), `extensions`
+//! (compressed and quantised files → plain ones, before reading), `points`
+//! (`POINTS` primitives → a point cloud; which reader a file needs).
 
 mod buffers;
 mod color;
+mod extensions;
 mod glb;
 mod materials_read;
 mod materials_write;
+mod points;
 mod read;
 mod write;
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_engines;
 
 pub use materials_write::write_scene_glb;
+pub use points::read_model;
 pub use read::{INSTANCING_FLOOR, MAX_INSTANCING_GROWTH, read, read_scene};
-pub use write::write_glb;
+pub use write::{
+    GlbOptions, LodLevel, write_glb, write_glb_with, write_lod_glb, write_model_glb,
+    write_points_glb,
+};
 
 #[cfg(doc)]
 use crate::{error::ParseError, mesh::TriMesh};

@@ -41,7 +41,7 @@ fn precheck(root: &json::Root) -> Result<(), ParseError> {
 }
 
 /// Parses and validates the document; returns it with the GLB BIN chunk.
-fn parse_document(bytes: &[u8]) -> Result<(gltf::Document, Option<&[u8]>), ParseError> {
+pub(super) fn parse_document(bytes: &[u8]) -> Result<(gltf::Document, Option<&[u8]>), ParseError> {
     if bytes.is_empty() {
         return Err(ParseError::new("empty file"));
     }
@@ -78,13 +78,13 @@ fn parse_document(bytes: &[u8]) -> Result<(gltf::Document, Option<&[u8]>), Parse
 }
 
 /// One mesh placed in the world by a node.
-struct Instance<'a> {
-    mesh: gltf::Mesh<'a>,
-    world: Mat4,
+pub(super) struct Instance<'a> {
+    pub(super) mesh: gltf::Mesh<'a>,
+    pub(super) world: Mat4,
 }
 
 /// The meshes to read, with world transforms (see the module docs).
-fn instances(doc: &gltf::Document) -> Result<Vec<Instance<'_>>, ParseError> {
+pub(super) fn instances(doc: &gltf::Document) -> Result<Vec<Instance<'_>>, ParseError> {
     if doc.nodes().len() == 0 {
         return Ok(doc
             .meshes()
@@ -138,7 +138,7 @@ fn root_nodes(doc: &gltf::Document) -> Vec<gltf::Node<'_>> {
 
 /// Verifies an accessor so that `gltf`'s reader can read all `count`
 /// elements without panicking or coming up short; returns the count.
-fn check_accessor(
+pub(super) fn check_accessor(
     acc: &Accessor<'_>,
     what: &str,
     allowed: &[(DataType, Dimensions)],

@@ -1,0 +1,518 @@
+//! Compressed and quantised glTF → a plain GLB, before reading:
+//! `KHR_mesh_quantization` (integer POSITION / NORMAL / TEXCOORD_n become
+//! float accessors), `EXT_meshopt_compression` and
+//! `KHR_meshopt_compression` (each compressed view decoded with
+//! meshoptimizer's decoders, `meshopt` feature), and a one-line refusal of
+//! `KHR_draco_mesh_compression` (no maintained Rust Draco decoder exists).
+//!
+//! The output has one buffer (the GLB BIN chunk) holding every view the
+//! input has, decoded, then the float copies of the quantised accessors; the
+//! three extensions are removed from `extensionsUsed` / `extensionsRequired`.
+//! Anything else in the document is kept as it is and read as usual.
+//!
+//! **Bounds**: decoded views and float copies together may not exceed
+//! [`MAX_EXPANSION`] times the input's bytes (plus 1 MiB), checked from the
+//! declared sizes before decoding; every view and accessor extent is
+//! checked in 64-bit arithmetic; a decoder error or a view whose declared
+//! size disagrees with `count × byteStride` is a one-line error.
+
+use std::borrow::Cow;
+use std::path::Path;
+
+use serde_json::{Value, json};
+
+use super::buffers::decode_base64;
+use super::glb::{GLB_MAGIC, join_glb, split_glb};
+use crate::error::ParseError;
+use crate::parse_err;
+
+/// Decoded views and dequantised copies may be at most this many times the
+/// file's size (plus 1 MiB): meshoptimizer's codecs stay well inside it on
+/// real data, and a hostile file cannot ask for unbounded memory.
+pub const MAX_EXPANSION: u64 = 256;
+
+const DRACO: &str = "KHR_draco_mesh_compression";
+const QUANTIZATION: &str = "KHR_mesh_quantization";
+const MESHOPT: [&str; 2] = ["EXT_meshopt_compression", "KHR_meshopt_compression"];
+
+/// The file as a plain GLB when it uses one of the extensions above, `None`
+/// when it uses none of them (or its JSON does not parse: the reader then
+/// reports that).
+pub(super) fn expand(bytes: &[u8], base_dir: Option<&Path>) -> Result<Option<Vec<u8>>, ParseError> {
+    let unbom = crate::io::input::strip_bom(bytes);
+    let (json_bytes, bin) = if bytes.starts_with(GLB_MAGIC) {
+        split_glb(bytes)?
+    } else {
+        (unbom, None)
+    };
+    let mentions = |s: &str| json_bytes.windows(s.len()).any(|w| w == s.as_bytes());
+    if !(mentions(DRACO) || mentions(QUANTIZATION) || mentions("_meshopt_compression")) {
+        return Ok(None);
+    }
+    let Ok(mut doc) = serde_json::from_slice::<Value>(json_bytes) else {
+        return Ok(None);
+    };
+    let listed: Vec<String> = ["extensionsUsed", "extensionsRequired"]
+        .iter()
+        .filter_map(|k| doc.get(*k).and_then(Value::as_array))
+        .flatten()
+        .filter_map(|v| v.as_str().map(str::to_string))
+        .collect();
+    let has = |e: &str| listed.iter().any(|l| l == e);
+    if has(DRACO) {
+        return Err(ParseError::new(
+            "KHR_draco_mesh_compression (Draco geometry) is not supported: there is no maintained \
+             Rust Draco decoder; re-export the file without Draco (or with EXT_meshopt_compression)",
+        ));
+    }
+    let meshopt: Vec<&str> = MESHOPT.iter().copied().filter(|e| has(e)).collect();
+    if !meshopt.is_empty() && !cfg!(feature = "meshopt") {
+        return Err(parse_err!(
+            "{}: meshopt-compressed geometry needs lodkit built with the `compress` feature \
+             (meshoptimizer, C++): cargo install lodkit --features compress",
+            meshopt[0]
+        ));
+    }
+    if meshopt.is_empty() && !has(QUANTIZATION) {
+        return Ok(None);
+    }
+    let budget = (bytes.len() as u64)
+        .saturating_mul(MAX_EXPANSION)
+        .saturating_add(1 << 20);
+
+    // Every buffer's bytes (fallback buffers have none).
+    let buffers = doc["buffers"].as_array().cloned().unwrap_or_default();
+    let mut data: Vec<Option<Cow<[u8]>>> = Vec::with_capacity(buffers.len());
+    for (i, b) in buffers.iter().enumerate() {
+        let fallback = MESHOPT
+            .iter()
+            .any(|e| b["extensions"][*e]["fallback"].as_bool() == Some(true));
+        data.push(if fallback {
+            None
+        } else {
+            Some(buffer_bytes(i, b, bin, base_dir)?)
+        });
+    }
+
+    // Every view, decoded, into one new BIN.
+    let mut out: Vec<u8> = Vec::new();
+    let mut used = 0u64;
+    let views = doc["bufferViews"].as_array().cloned().unwrap_or_default();
+    let mut new_views = Vec::with_capacity(views.len());
+    for (i, v) in views.iter().enumerate() {
+        let ext = MESHOPT.iter().find_map(|e| v["extensions"].get(*e));
+        let bytes: Cow<[u8]> = match ext {
+            Some(x) => {
+                let length = v["byteLength"].as_u64().unwrap_or(0);
+                used = used.saturating_add(length);
+                if used > budget {
+                    return Err(parse_err!(
+                        "buffer view {i}: decoded views exceed {budget} bytes ({MAX_EXPANSION}x the file)"
+                    ));
+                }
+                Cow::Owned(decode_view(i, x, length, &data)?)
+            }
+            None => Cow::Borrowed(slice(i, v, &data)?),
+        };
+        while !out.len().is_multiple_of(4) {
+            out.push(0);
+        }
+        let mut nv = v.clone();
+        let o = nv
+            .as_object_mut()
+            .ok_or_else(|| parse_err!("buffer view {i} is not an object"))?;
+        o.insert("buffer".into(), json!(0));
+        o.insert("byteOffset".into(), json!(out.len()));
+        o.insert("byteLength".into(), json!(bytes.len()));
+        strip(o, &MESHOPT);
+        out.extend_from_slice(&bytes);
+        new_views.push(nv);
+    }
+
+    // Quantised attributes → float copies.
+    let accessors = doc["accessors"].as_array().cloned().unwrap_or_default();
+    let mut new_accessors = accessors.clone();
+    let mut dequantised = vec![false; accessors.len()];
+    let meshes = doc["meshes"].as_array().cloned().unwrap_or_default();
+    for mesh in &meshes {
+        for prim in mesh["primitives"].as_array().into_iter().flatten() {
+            let Some(attrs) = prim["attributes"].as_object() else {
+                continue;
+            };
+            for (name, a) in attrs {
+                let float = name == "POSITION" || name == "NORMAL" || name.starts_with("TEXCOORD_");
+                let Some(ai) = a.as_u64().map(|a| a as usize) else {
+                    continue;
+                };
+                if !float || ai >= accessors.len() || dequantised[ai] {
+                    continue;
+                }
+                let acc = &accessors[ai];
+                if acc["componentType"].as_u64() == Some(5126) || acc.get("sparse").is_some() {
+                    continue;
+                }
+                dequantised[ai] = true;
+                let floats = dequantise(ai, acc, &new_views, &out)?;
+                used = used.saturating_add(floats.len() as u64 * 4);
+                if used > budget {
+                    return Err(parse_err!(
+                        "accessor {ai}: dequantised data exceeds {budget} bytes ({MAX_EXPANSION}x the file)"
+                    ));
+                }
+                while !out.len().is_multiple_of(4) {
+                    out.push(0);
+                }
+                let offset = out.len();
+                for f in &floats {
+                    out.extend_from_slice(&f.to_le_bytes());
+                }
+                let comps = components(acc)?;
+                new_views.push(json!({
+                    "buffer": 0,
+                    "byteOffset": offset,
+                    "byteLength": floats.len() * 4,
+                    "target": 34962,
+                }));
+                let na = new_accessors[ai]
+                    .as_object_mut()
+                    .ok_or_else(|| parse_err!("accessor {ai} is not an object"))?;
+                na.insert("bufferView".into(), json!(new_views.len() - 1));
+                na.insert("byteOffset".into(), json!(0));
+                na.insert("componentType".into(), json!(5126));
+                na.insert("normalized".into(), json!(false));
+                if name == "POSITION" {
+                    let mut lo = vec![f32::INFINITY; comps];
+                    let mut hi = vec![f32::NEG_INFINITY; comps];
+                    for e in floats.chunks_exact(comps) {
+                        for k in 0..comps {
+                            lo[k] = lo[k].min(e[k]);
+                            hi[k] = hi[k].max(e[k]);
+                        }
+                    }
+                    na.insert("min".into(), json!(lo));
+                    na.insert("max".into(), json!(hi));
+                } else {
+                    na.remove("min");
+                    na.remove("max");
+                }
+            }
+        }
+    }
+    while !out.len().is_multiple_of(4) {
+        out.push(0);
+    }
+    doc["bufferViews"] = Value::Array(new_views);
+    doc["accessors"] = Value::Array(new_accessors);
+    doc["buffers"] = json!([{ "byteLength": out.len() }]);
+    for key in ["extensionsUsed", "extensionsRequired"] {
+        if let Some(list) = doc.get_mut(key).and_then(Value::as_array_mut) {
+            list.retain(|e| {
+                e.as_str()
+                    .is_none_or(|s| s != QUANTIZATION && !MESHOPT.contains(&s))
+            });
+        }
+    }
+    let js = serde_json::to_vec(&doc).map_err(|e| parse_err!("glTF JSON: {e}"))?;
+    join_glb(js, &out).map(Some)
+}
+
+fn strip(o: &mut serde_json::Map<String, Value>, names: &[&str]) {
+    if let Some(e) = o.get_mut("extensions").and_then(Value::as_object_mut) {
+        for n in names {
+            e.remove(*n);
+        }
+        if e.is_empty() {
+            o.remove("extensions");
+        }
+    }
+}
+
+/// Buffer `i`'s bytes: the BIN chunk, a base64 data URI, or a file inside
+/// `base_dir` (the same rules as plain files, `buffers.rs`).
+fn buffer_bytes<'a>(
+    i: usize,
+    b: &Value,
+    bin: Option<&'a [u8]>,
+    base_dir: Option<&Path>,
+) -> Result<Cow<'a, [u8]>, ParseError> {
+    let Some(uri) = b["uri"].as_str() else {
+        return bin
+            .map(Cow::Borrowed)
+            .ok_or_else(|| parse_err!("buffer {i} has no uri and there is no GLB BIN chunk"));
+    };
+    if let Some(rest) = uri.strip_prefix("data:") {
+        let (_, data) = rest
+            .split_once(";base64,")
+            .ok_or_else(|| parse_err!("buffer {i}: data URI is not base64"))?;
+        return decode_base64(data)
+            .map(Cow::Owned)
+            .map_err(|e| parse_err!("buffer {i}: data URI is not valid base64: {e}"));
+    }
+    let dir = base_dir.ok_or_else(|| {
+        parse_err!("buffer {i}: external file but no directory to resolve it against")
+    })?;
+    let path = crate::io::input::resolve_inside(dir, uri)
+        .map_err(|why| parse_err!("buffer {i}: URI {why}"))?;
+    crate::io::input::read_file(&path)
+        .map(Cow::Owned)
+        .map_err(|e| parse_err!("buffer {i}: {e}"))
+}
+
+/// `byteOffset .. + byteLength` of buffer `buffer` in `data`, checked.
+fn range<'a>(
+    what: &str,
+    obj: &Value,
+    data: &'a [Option<Cow<'_, [u8]>>],
+) -> Result<&'a [u8], ParseError> {
+    let b = obj["buffer"].as_u64().unwrap_or(u64::MAX) as usize;
+    let start = obj["byteOffset"].as_u64().unwrap_or(0);
+    let len = obj["byteLength"]
+        .as_u64()
+        .ok_or_else(|| parse_err!("{what} has no byteLength"))?;
+    let src = data
+        .get(b)
+        .and_then(|d| d.as_deref())
+        .ok_or_else(|| parse_err!("{what}: buffer {b} is missing or has no data"))?;
+    match start.checked_add(len) {
+        Some(end) if end <= src.len() as u64 => Ok(&src[start as usize..end as usize]),
+        _ => Err(parse_err!(
+            "{what} (bytes {start}..+{len}) is outside buffer {b}, which has {} bytes",
+            src.len()
+        )),
+    }
+}
+
+fn slice<'a>(
+    i: usize,
+    v: &Value,
+    data: &'a [Option<Cow<'_, [u8]>>],
+) -> Result<&'a [u8], ParseError> {
+    range(&format!("buffer view {i}"), v, data)
+}
+
+/// One compressed view through meshoptimizer's decoders.
+#[cfg(feature = "meshopt")]
+fn decode_view(
+    i: usize,
+    x: &Value,
+    length: u64,
+    data: &[Option<Cow<'_, [u8]>>],
+) -> Result<Vec<u8>, ParseError> {
+    let src = range(&format!("buffer view {i}'s compressed data"), x, data)?;
+    let count = x["count"].as_u64().unwrap_or(0);
+    let stride = x["byteStride"].as_u64().unwrap_or(0);
+    if count.checked_mul(stride) != Some(length) || count == 0 {
+        return Err(parse_err!(
+            "buffer view {i}: meshopt count {count} x byteStride {stride} is not its byteLength {length}"
+        ));
+    }
+    let count = count as usize;
+    let bad = |e: meshopt::Error| parse_err!("buffer view {i}: meshopt decoder: {e:?}");
+    /// One element of `N` bytes (the decoder takes the size from the type).
+    #[derive(Clone, Copy)]
+    #[repr(transparent)]
+    struct Elem<const N: usize>([u8; N]);
+    impl<const N: usize> Default for Elem<N> {
+        fn default() -> Self {
+            Elem([0; N])
+        }
+    }
+    fn vertices<const N: usize>(src: &[u8], count: usize) -> Result<Vec<u8>, meshopt::Error> {
+        Ok(meshopt::decode_vertex_buffer::<Elem<N>>(src, count)?
+            .iter()
+            .flat_map(|e| e.0)
+            .collect())
+    }
+    let mut out = match (x["mode"].as_str(), stride) {
+        (Some("ATTRIBUTES"), s) if s.is_multiple_of(4) && s <= 256 => {
+            // The decoder takes the element size as its type: dispatch on
+            // the sizes glTF attributes use.
+            match s {
+                4 => vertices::<4>(src, count),
+                8 => vertices::<8>(src, count),
+                12 => vertices::<12>(src, count),
+                16 => vertices::<16>(src, count),
+                20 => vertices::<20>(src, count),
+                24 => vertices::<24>(src, count),
+                28 => vertices::<28>(src, count),
+                32 => vertices::<32>(src, count),
+                36 => vertices::<36>(src, count),
+                40 => vertices::<40>(src, count),
+                48 => vertices::<48>(src, count),
+                64 => vertices::<64>(src, count),
+                _ => {
+                    return Err(parse_err!(
+                        "buffer view {i}: meshopt attribute stride {s} is not supported"
+                    ));
+                }
+            }
+            .map_err(bad)?
+        }
+        (Some("TRIANGLES"), 2) => meshopt::decode_index_buffer::<u16>(src, count)
+            .map_err(bad)?
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect(),
+        (Some("TRIANGLES"), 4) => meshopt::decode_index_buffer::<u32>(src, count)
+            .map_err(bad)?
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect(),
+        (Some("INDICES"), 2) => meshopt::decode_index_sequence::<u16>(src, count)
+            .map_err(bad)?
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect(),
+        (Some("INDICES"), 4) => meshopt::decode_index_sequence::<u32>(src, count)
+            .map_err(bad)?
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect(),
+        (m, s) => {
+            return Err(parse_err!(
+                "buffer view {i}: meshopt mode {} with byteStride {s} is not supported",
+                m.unwrap_or("(none)")
+            ));
+        }
+    };
+    match x["filter"].as_str() {
+        None | Some("NONE") => {}
+        Some("OCTAHEDRAL") if stride == 4 => {
+            let mut v: Vec<[i8; 4]> = out
+                .chunks_exact(4)
+                .map(|c| [c[0] as i8, c[1] as i8, c[2] as i8, c[3] as i8])
+                .collect();
+            meshopt::decode_filter_oct(&mut v);
+            out = v.iter().flatten().map(|&b| b as u8).collect();
+        }
+        Some("OCTAHEDRAL") if stride == 8 => {
+            let mut v: Vec<[i16; 4]> = out
+                .chunks_exact(8)
+                .map(|c| std::array::from_fn(|k| i16::from_le_bytes([c[2 * k], c[2 * k + 1]])))
+                .collect();
+            meshopt::decode_filter_oct(&mut v);
+            out = v.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+        }
+        Some("QUATERNION") if stride == 8 => {
+            let mut v: Vec<[i16; 4]> = out
+                .chunks_exact(8)
+                .map(|c| std::array::from_fn(|k| i16::from_le_bytes([c[2 * k], c[2 * k + 1]])))
+                .collect();
+            meshopt::decode_filter_quat(&mut v);
+            out = v.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+        }
+        Some("EXPONENTIAL") if stride.is_multiple_of(4) => {
+            let mut v: Vec<[u32; 1]> = out
+                .chunks_exact(4)
+                .map(|c| [u32::from_le_bytes([c[0], c[1], c[2], c[3]])])
+                .collect();
+            meshopt::decode_filter_exp(&mut v);
+            out = v.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+        }
+        Some(f) => {
+            return Err(parse_err!(
+                "buffer view {i}: meshopt filter {f} with byteStride {stride} is not supported"
+            ));
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(not(feature = "meshopt"))]
+fn decode_view(
+    i: usize,
+    _: &Value,
+    _: u64,
+    _: &[Option<Cow<'_, [u8]>>],
+) -> Result<Vec<u8>, ParseError> {
+    Err(parse_err!(
+        "buffer view {i}: meshopt decoding needs the `meshopt` feature"
+    ))
+}
+
+fn components(acc: &Value) -> Result<usize, ParseError> {
+    Ok(match acc["type"].as_str() {
+        Some("SCALAR") => 1,
+        Some("VEC2") => 2,
+        Some("VEC3") => 3,
+        Some("VEC4") => 4,
+        t => return Err(parse_err!("accessor type {t:?} cannot be dequantised")),
+    })
+}
+
+/// Accessor `ai`'s elements as floats (glTF's rules for normalised
+/// integers: `max(c / (2^(b-1) - 1), -1)` signed, `c / (2^b - 1)` unsigned;
+/// plain integers as they are).
+fn dequantise(ai: usize, acc: &Value, views: &[Value], bin: &[u8]) -> Result<Vec<f32>, ParseError> {
+    let comps = components(acc)?;
+    let ct = acc["componentType"].as_u64().unwrap_or(0);
+    let size = match ct {
+        5120 | 5121 => 1,
+        5122 | 5123 => 2,
+        5125 => 4,
+        _ => {
+            return Err(parse_err!(
+                "accessor {ai}: component type {ct} cannot be dequantised"
+            ));
+        }
+    };
+    let normalized = acc["normalized"].as_bool().unwrap_or(false);
+    let count = acc["count"].as_u64().unwrap_or(0);
+    let vi = acc["bufferView"]
+        .as_u64()
+        .ok_or_else(|| parse_err!("accessor {ai} has no bufferView"))? as usize;
+    let view = views
+        .get(vi)
+        .ok_or_else(|| parse_err!("accessor {ai}: buffer view {vi} does not exist"))?;
+    let elem = (comps * size) as u64;
+    let stride = view["byteStride"].as_u64().unwrap_or(elem);
+    if stride < elem || count == 0 {
+        return Err(parse_err!(
+            "accessor {ai}: stride {stride} or count {count} is invalid for its {elem}-byte elements"
+        ));
+    }
+    let base = view["byteOffset"].as_u64().unwrap_or(0) + acc["byteOffset"].as_u64().unwrap_or(0);
+    let vlen = view["byteLength"].as_u64().unwrap_or(0);
+    let end = (count - 1)
+        .checked_mul(stride)
+        .and_then(|x| x.checked_add(elem))
+        .and_then(|x| x.checked_add(acc["byteOffset"].as_u64().unwrap_or(0)));
+    if end.is_none_or(|e| e > vlen) || base.saturating_add(vlen) > bin.len() as u64 {
+        return Err(parse_err!(
+            "accessor {ai}: {count} elements do not fit in buffer view {vi}"
+        ));
+    }
+    let mut out = Vec::with_capacity(count as usize * comps);
+    for e in 0..count {
+        let at = (base + e * stride) as usize;
+        for k in 0..comps {
+            let p = at + k * size;
+            let c = &bin[p..p + size];
+            let x = match ct {
+                5120 => {
+                    let v = c[0] as i8 as f32;
+                    if normalized { (v / 127.0).max(-1.0) } else { v }
+                }
+                5121 => {
+                    let v = c[0] as f32;
+                    if normalized { v / 255.0 } else { v }
+                }
+                5122 => {
+                    let v = i16::from_le_bytes([c[0], c[1]]) as f32;
+                    if normalized {
+                        (v / 32767.0).max(-1.0)
+                    } else {
+                        v
+                    }
+                }
+                5123 => {
+                    let v = u16::from_le_bytes([c[0], c[1]]) as f32;
+                    if normalized { v / 65535.0 } else { v }
+                }
+                _ => u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f32,
+            };
+            out.push(x);
+        }
+    }
+    Ok(out)
+}

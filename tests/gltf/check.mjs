@@ -1,0 +1,166 @@
+// Real glTF loaders on the GLBs lodkit writes (run by scripts/check-gltf.sh).
+//
+//   node check.mjs validate FILE.glb...      Khronos glTF-Validator: 0 errors,
+//                                            0 warnings, no UNUSED_OBJECT info
+//                                            on a TEXCOORD attribute
+//   node check.mjs chain FILE.glb LEVELS     Babylon.js (NullEngine) loads the
+//                                            MSFT_lod chain: LEVELS levels, coarsest
+//                                            first, names NAME_LODk, all at level
+//                                            0's place; three.js GLTFLoader (no
+//                                            MSFT_lod) shows level 0 alone
+//   node check.mjs load FILE.glb...          three.js GLTFLoader loads each file
+//
+// Exit 1 with one line per failure.
+import { readFileSync } from "node:fs";
+import validator from "gltf-validator";
+
+const failures = [];
+const fail = (msg) => {
+  failures.push(msg);
+  console.error(`FAIL ${msg}`);
+};
+
+async function validate(files) {
+  for (const file of files) {
+    const bytes = new Uint8Array(readFileSync(file));
+    const report = await validator.validateBytes(bytes, {
+      uri: file,
+      maxIssues: 1000,
+      // Buffers are all inside the GLB; nothing external to fetch.
+      externalResourceFunction: () => Promise.reject(new Error("no external resources")),
+    });
+    const { numErrors, numWarnings, messages } = report.issues;
+    const uvUnused = messages.filter(
+      (m) => m.code === "UNUSED_OBJECT" && /TEXCOORD/.test(m.pointer ?? ""),
+    );
+    const line = `${file}: ${numErrors} errors, ${numWarnings} warnings, ${report.issues.numInfos} infos, ${report.issues.numHints} hints`;
+    if (numErrors || numWarnings || uvUnused.length) {
+      fail(line);
+      for (const m of messages.filter((m) => m.severity <= 1 || m.code === "UNUSED_OBJECT")) {
+        console.error(`  ${m.code} ${m.pointer ?? ""}: ${m.message}`);
+      }
+    } else {
+      console.log(`ok ${line}`);
+    }
+  }
+}
+
+async function threeScene(file) {
+  const THREE = await import("three");
+  const { GLTFLoader } = await import("three/examples/jsm/loaders/GLTFLoader.js");
+  const { MeshoptDecoder } = await import("three/examples/jsm/libs/meshopt_decoder.module.js");
+  const loader = new GLTFLoader();
+  loader.setMeshoptDecoder(MeshoptDecoder);
+  const buf = readFileSync(file);
+  const ab = buf.buffer.slice(buf.byteOffset, buf.byteOffset + buf.byteLength);
+  const gltf = await new Promise((resolve, reject) => loader.parse(ab, "", resolve, reject));
+  const objects = [];
+  gltf.scene.updateMatrixWorld(true);
+  gltf.scene.traverse((o) => {
+    if (o.isMesh || o.isPoints) {
+      const box = new THREE.Box3().setFromObject(o);
+      const g = o.geometry;
+      const n = g.index ? g.index.count : g.attributes.position.count;
+      objects.push({ name: o.name, kind: o.isMesh ? "mesh" : "points", elements: n, box });
+    }
+  });
+  return objects;
+}
+
+async function load(files) {
+  for (const file of files) {
+    try {
+      const objects = await threeScene(file);
+      if (objects.length === 0) {
+        fail(`${file}: three.js loaded no mesh or points`);
+      } else {
+        console.log(`ok ${file}: three.js GLTFLoader: ${objects.map((o) => `${o.name} (${o.kind}, ${o.elements})`).join(", ")}`);
+      }
+    } catch (e) {
+      fail(`${file}: three.js GLTFLoader: ${e?.message ?? e}`);
+    }
+  }
+}
+
+async function babylonChain(file) {
+  const BABYLON = await import("@babylonjs/core");
+  await import("@babylonjs/loaders/glTF/index.js");
+  // Babylon fetches its meshopt decoder from a CDN with a <script> tag;
+  // in Node it gets the same meshoptimizer decoder from the three package.
+  const { MeshoptDecoder } = await import("three/examples/jsm/libs/meshopt_decoder.module.js");
+  await MeshoptDecoder.ready;
+  BABYLON.MeshoptCompression._Default = {
+    decodeGltfBufferAsync: async (source, count, stride, mode, filter) => {
+      const out = new Uint8Array(count * stride);
+      MeshoptDecoder.decodeGltfBuffer(out, count, stride, source, mode, filter);
+      return out;
+    },
+    dispose() {},
+  };
+  const engine = new BABYLON.NullEngine();
+  const scene = new BABYLON.Scene(engine);
+  // Each mesh as it loads (MSFT_lod: coarsest first, each replaced by the
+  // next), and how many LOD levels the extension reports loaded.
+  const meshes = [];
+  let lodsLoaded = 0;
+  const done = new Promise((resolve) => {
+    const obs = BABYLON.SceneLoader.OnPluginActivatedObservable.add((plugin) => {
+      BABYLON.SceneLoader.OnPluginActivatedObservable.remove(obs);
+      plugin.onMeshLoadedObservable.add((m) => {
+        if (m.name !== "__root__") meshes.push({ name: m.name });
+      });
+      plugin.onExtensionLoadedObservable.add((ext) => {
+        if (ext.name === "MSFT_lod") ext.onNodeLODsLoadedObservable.add(() => lodsLoaded++);
+      });
+      plugin.onCompleteObservable.add(() => resolve());
+    });
+  });
+  const bytes = new Uint8Array(readFileSync(file));
+  await BABYLON.SceneLoader.ImportMeshAsync("", "", bytes, scene, null, ".glb");
+  await done;
+  const enabled = scene.meshes.filter((m) => m.isEnabled() && m.getTotalIndices() > 0).map((m) => m.name);
+  engine.dispose();
+  return { meshes, lodsLoaded, enabled };
+}
+
+async function chain(file, levels) {
+  // Babylon: MSFT_lod levels arrive coarsest first, each replacing the last.
+  try {
+    const { meshes, lodsLoaded, enabled } = await babylonChain(file);
+    const names = meshes.map((m) => m.name);
+    if (lodsLoaded !== levels || meshes.length !== levels) {
+      fail(`${file}: Babylon.js loaded ${lodsLoaded} MSFT_lod levels and ${meshes.length} meshes, expected ${levels} (${names.join(", ")})`);
+    }
+    meshes.forEach((m, k) => {
+      const want = `_LOD${levels - 1 - k}`;
+      if (!m.name.endsWith(want)) fail(`${file}: Babylon.js LOD ${k} is ${m.name}, expected *${want}`);
+    });
+    if (enabled.length !== 1 || !enabled[0].endsWith("_LOD0")) {
+      fail(`${file}: Babylon.js ends showing ${enabled.join(", ")}, expected level 0 alone`);
+    }
+    console.log(`ok ${file}: Babylon.js MSFT_lod loaded ${lodsLoaded} levels: ${names.join(" -> ")}, then shows ${enabled.join(", ")}`);
+  } catch (e) {
+    fail(`${file}: Babylon.js: ${e?.stack ?? e}`);
+  }
+  // three.js: no MSFT_lod, so level 0 alone.
+  try {
+    const objects = await threeScene(file);
+    if (objects.length !== 1 || !objects[0].name.endsWith("_LOD0")) {
+      fail(`${file}: three.js shows ${objects.map((o) => o.name).join(", ")}, expected level 0 alone`);
+    } else {
+      console.log(`ok ${file}: three.js GLTFLoader shows ${objects[0].name} alone (${objects[0].elements / 3} triangles)`);
+    }
+  } catch (e) {
+    fail(`${file}: three.js GLTFLoader: ${e?.message ?? e}`);
+  }
+}
+
+const [cmd, ...args] = process.argv.slice(2);
+if (cmd === "validate") await validate(args);
+else if (cmd === "load") await load(args);
+else if (cmd === "chain") await chain(args[0], Number(args[1]));
+else {
+  console.error("usage: node check.mjs validate|load FILE... | chain FILE LEVELS");
+  process.exit(2);
+}
+process.exit(failures.length ? 1 : 0);
