@@ -68,7 +68,8 @@ if (popCli && +popCli[1] !== ref.pop.triangles) throw new Error(`pop decode says
 if (mcoCli && +mcoCli[1] !== ref.mco.triangles) throw new Error(`mco extract says ${mcoCli[1]} triangles, native ${ref.mco.triangles}`);
 ref.ply_faces = JSON.parse(fs.readFileSync(info, "utf8")).faces;
 const l = JSON.parse(fs.readFileSync(lods, "utf8"));
-ref.chain = l.levels.map((v, i) => ({ level: i + 1, triangles: v.triangles }));
+// Level 0 of the chain GLB is the input itself (the MSFT_lod base node).
+ref.chain = [{ level: 0, triangles: ref.ply_faces }].concat(l.levels.map((v, i) => ({ level: i + 1, triangles: v.triangles })));
 ref.files = { pop: "stanford_bunny.pop", mco: "stanford_bunny.mco", chain: "lods/" + l.glb, ply: "stanford_bunny.ply", bigPop: "blob_1m.pop" };
 fs.writeFileSync(out, JSON.stringify(ref, null, 1));
 ' "$work/native.json" "$work/ply_info.json" "$models/lods/lods.json" "$work/pop_decode.txt" "$work/mco_extract.txt" "$work/ref.json"

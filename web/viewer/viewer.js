@@ -325,6 +325,15 @@ async function openGlb(url) {
     hud();
   });
   const root = gltf.scene;
+  // An MSFT_lod chain (lodkit's chain GLB): the scene holds the base
+  // level only; its coarser levels are nodes the extension names. Load
+  // them beside the base so the switch below sees every level.
+  const nodes = gltf.parser.json.nodes || [];
+  for (const n of nodes) {
+    const ids = n.extensions && n.extensions.MSFT_lod && n.extensions.MSFT_lod.ids;
+    if (!Array.isArray(ids)) continue;
+    for (const id of ids) root.add(await gltf.parser.getDependency('node', id));
+  }
   scene.add(root);
   viewer.model = root;
   const meshes = [];
