@@ -76,6 +76,14 @@ run convert "$work/cloud.ply" "$work/points_ply.glb"
 run convert "$work/cloud.xyz" "$work/points_c.glb" --compress
 run simplify "$bunny" -o "$work/simplify.glb" --ratio 0.1
 run simplify "$bunny" -o "$work/simplify_c.glb" --ratio 0.1 --compress --normals none
+# Scenes with materials and textures (crates/mesh/tests/data/textured):
+# external PNG + JPEG, a shared material, nested nodes, a textured scan.
+tex=crates/mesh/tests/data/textured
+run convert "$tex/parts.obj" "$work/parts_obj.glb"
+run convert "$tex/parts.gltf" "$work/parts_gltf.glb"
+run simplify "$tex/parts.gltf" -o "$work/parts_simplified.glb" --ratio 0.5
+run simplify "$tex/mug_scan.ply" -o "$work/mug_10.glb" --ratio 0.1
+run lods "$tex/mug_scan.ply" --out "$work/lods_mug" --ratios 0.5,0.1 --samples 20000
 # lodkit reads back what it wrote (compressed and points included).
 for f in convert_c simplify_c points_xyz points_c; do
   "$bin" -q info "$work/$f.glb" >/dev/null

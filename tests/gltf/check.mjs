@@ -51,6 +51,18 @@ async function threeScene(file) {
   const { MeshoptDecoder } = await import("three/examples/jsm/libs/meshopt_decoder.module.js");
   const loader = new GLTFLoader();
   loader.setMeshoptDecoder(MeshoptDecoder);
+  // Node has no image decoder: textures resolve to an empty THREE.Texture
+  // through GLTFLoader's own plugin hook (materials, samplers and texture
+  // slots are still parsed by three.js; glTF-Validator checks the images'
+  // bytes against their MIME types).
+  const textures = { count: 0 };
+  loader.register(() => ({
+    name: "lodkit_node_textures",
+    loadTexture() {
+      textures.count++;
+      return Promise.resolve(new THREE.Texture());
+    },
+  }));
   const buf = readFileSync(file);
   const ab = buf.buffer.slice(buf.byteOffset, buf.byteOffset + buf.byteLength);
   const gltf = await new Promise((resolve, reject) => loader.parse(ab, "", resolve, reject));

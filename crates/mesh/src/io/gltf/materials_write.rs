@@ -452,7 +452,14 @@ pub fn write_scene_glb(scene: &Scene) -> Result<Vec<u8>, ParseError> {
         }
         let mut primitives = Vec::with_capacity(order.len());
         for id in order {
-            let sub = sub_mesh(m, &group[&id]);
+            let mut sub = sub_mesh(m, &group[&id]);
+            // UVs only where a texture samples them: an untextured
+            // primitive's TEXCOORD_0 would be an unused object.
+            let textured =
+                id != NO_MATERIAL && scene.materials[id as usize].texture_refs().next().is_some();
+            if !textured {
+                sub.uvs = None;
+            }
             let attributes = vertex_attributes(&mut b, &sub);
             let indices = index_accessor(&mut b, &sub.faces, sub.positions.len());
             primitives.push(json::mesh::Primitive {

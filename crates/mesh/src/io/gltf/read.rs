@@ -301,7 +301,13 @@ fn read_parts(
     let all = |s: &Semantic| parts.iter().all(|p| p.prim.get(s).is_some());
     let has_n = all(&Semantic::Normals);
     let has_c = all(&Semantic::Colors(0));
-    let has_uv = all(&Semantic::TexCoords(0));
+    // UVs are kept when any part has them: a writer leaves TEXCOORD_0 off
+    // an untextured primitive (lodkit's scene writer does), and the other
+    // parts' texture mapping must survive that. A part without them reads
+    // as (0, 0).
+    let has_uv = parts
+        .iter()
+        .any(|p| p.prim.get(&Semantic::TexCoords(0)).is_some());
 
     // Resolve exactly the buffers the accessors to read live in.
     let mut buffers: Vec<Option<Cow<[u8]>>> = vec![None; n_buffers];
@@ -476,8 +482,13 @@ fn read_parts(
             }
         }
         if let Some(dst) = out.uvs.as_mut() {
-            let it: ReadTexCoords = reader.read_tex_coords(0).ok_or_else(short)?;
-            dst.extend(it.into_f32().map(|[u, v]| Vec2::new(u, 1.0 - v)));
+            if p.prim.get(&Semantic::TexCoords(0)).is_some() {
+                let it: ReadTexCoords = reader.read_tex_coords(0).ok_or_else(short)?;
+                dst.extend(it.into_f32().map(|[u, v]| Vec2::new(u, 1.0 - v)));
+            } else {
+                let n = out.positions.len() - dst.len();
+                dst.resize(dst.len() + n, Vec2::ZERO);
+            }
         }
         if [
             out.normals.as_ref().map(Vec::len),
