@@ -44,9 +44,17 @@ pub fn load_input(ui: &Ui, input: &Path, keeps: bool) -> Result<Input> {
             other => return Ok(Input::Model(other)),
         }
     } else {
+        // The one-mesh reader first: its checks (instancing bounded by the
+        // file's size, world coordinates within ±MAX_COORDINATE after every
+        // node transform) hold for the scene path too, and a scene that is
+        // one plain mesh takes exactly the old path and bytes.
+        let model = super::load(ui, input)?;
         let step = ui.spinner(&format!("reading {}", input.display()));
         let s = lodkit_mesh::io::load_scene(input)?;
         step.finish();
+        if s.is_plain_mesh() {
+            return Ok(Input::Model(model));
+        }
         s
     };
     for w in &scene.warnings {
