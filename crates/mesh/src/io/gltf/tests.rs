@@ -235,14 +235,20 @@ fn strips_fans_and_normals_under_rotation() {
 }
 
 #[test]
-fn attribute_missing_from_one_primitive_is_dropped() {
+fn attribute_missing_from_one_primitive_is_dropped_but_uvs_are_zero_filled() {
+    // Normals and colours missing from one primitive are dropped; UVs are
+    // kept, (0, 0) where a primitive has none (writers leave TEXCOORD_0 off
+    // an untextured primitive, and the textured ones keep their mapping).
     let two = BODY.replace(
         r#"{"attributes":{"POSITION":0,"COLOR_0":2,"TEXCOORD_0":3},"indices":1}"#,
-        r#"{"attributes":{"POSITION":0,"COLOR_0":2,"TEXCOORD_0":3},"indices":1},{"attributes":{"POSITION":0,"COLOR_0":2},"indices":1}"#,
+        r#"{"attributes":{"POSITION":0,"COLOR_0":2,"TEXCOORD_0":3},"indices":1},{"attributes":{"POSITION":0},"indices":1}"#,
     );
     let m = read(doc(&two).as_bytes(), None).unwrap();
     assert_eq!(m.positions.len(), 8);
-    assert!(m.colors.is_some() && m.uvs.is_none());
+    assert!(m.colors.is_none());
+    let uvs = m.uvs.unwrap();
+    assert_eq!(uvs.len(), 8);
+    assert!(uvs[4..].iter().all(|t| *t == glam::Vec2::ZERO));
 }
 
 #[test]
