@@ -1,0 +1,243 @@
+//! The compact layout view cuts read (built at a model's first cut, in
+//! memory; the `.mco` format is unchanged): 32-byte search records and
+//! closure records on inner-node ranks, the per-cut rank bitset, and the
+//! triangles in node order so a run of unpatched children is one copy.
+
+use super::*;
+
+/// One inner node's fields the search reads, in one 32-byte record (two
+/// per cache line), so that testing a node touches one record, not the
+/// node, its metric, its bound and its children's records.
+#[derive(Debug, Clone, Copy, Default)]
+#[repr(C, align(32))]
+pub(super) struct Hot {
+    /// The cube's min corner, as [`McoModel::node_box`] computes it.
+    pub(super) lo: [f32; 3],
+    /// [`node_error`].
+    pub(super) err: f32,
+    /// The subtree bound ([`view_subtree_bounds`]).
+    pub(super) bound: f32,
+    /// Rank of the first inner child (the inner children's ranks are
+    /// consecutive: ranks follow node order and the children are one
+    /// node range).
+    pub(super) first_inner: u32,
+    pub(super) first_child: u32,
+    pub(super) level: u8,
+    pub(super) child_count: u8,
+    /// Bit `j`: child `first_child + j` is an inner node.
+    pub(super) inner_mask: u8,
+    pub(super) _pad: u8,
+}
+
+/// One inner node's fields the closure reads, by rank.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct Close {
+    /// Rank of the parent (`u32::MAX` for the root).
+    pub(super) parent: u32,
+    pub(super) deps_start: u32,
+    pub(super) deps_count: u32,
+    /// LOD number that expands the node (`u32::MAX`: none).
+    pub(super) prio: u32,
+}
+
+/// The compact, read-only layout view-dependent cuts of a regular model
+/// work on, built once per model from its arrays (`O(nodes + triangles)`;
+/// about 50 bytes per inner node and 8 per node, plus a copy of the
+/// triangles when the model's are not stored in node order).
+///
+/// Only inner nodes can be expanded, so the search, the closure and the
+/// per-cut flags work on *ranks*: inner nodes numbered in node order (about
+/// an eighth of the nodes: the flags are a bitset that fits a core's
+/// cache). The triangles are stored in node order, so the children of a
+/// node — one node range — have one triangle range, and a run of drawn
+/// children without an active crack patch is emitted as one copy.
+///
+/// A model is regular when every node has at most 8 children after it,
+/// node 0 is the root, and every node the closure can reach (parents of
+/// inner nodes, balance dependencies, LOD groups) is an inner node; every
+/// model the loaders accept and the pipeline builds is. Any other gets no
+/// layout, and its cuts read the node arrays (same result, slower).
+#[derive(Debug, Clone)]
+pub(crate) struct ViewLayout {
+    pub(super) hot: Vec<Hot>,
+    pub(super) close: Vec<Close>,
+    /// Cube edge length per level (as [`McoModel::node_size`]).
+    pub(super) sizes: Vec<f32>,
+    /// Balance dependencies as ranks, at `Close::deps_start`.
+    pub(super) deps: Vec<u32>,
+    /// The LOD array as ranks (same shape as [`McoModel::lod`]).
+    pub(super) lod: Vec<u32>,
+    /// Per node and one past: start of its triangles in `tris` (indices).
+    pub(super) toff: Vec<u32>,
+    /// The triangles in node order, or `None` when [`McoModel::tris`]
+    /// already is (then `toff[i]` is node `i`'s `tri_start`).
+    pub(super) tris: Option<Vec<u32>>,
+    /// Per node and one past: start of its crack patches in `patches`.
+    pub(super) poff: Vec<u32>,
+    /// `[coarse neighbour's rank (u32::MAX: never expanded), subs start,
+    /// subs count]` per patch, in node order.
+    pub(super) patches: Vec<[u32; 3]>,
+}
+
+impl ViewLayout {
+    /// The layout of `m`, or `None` when `m` is not regular (see the type
+    /// docs) or its arrays do not fit `u32` offsets.
+    pub(super) fn build(m: &McoModel, bounds: &[f32]) -> Option<ViewLayout> {
+        let n = m.nodes.len();
+        if n == 0 || n >= u32::MAX as usize || m.nodes[0].parent != u32::MAX {
+            return None;
+        }
+        let mut rank = vec![u32::MAX; n];
+        let mut inner = 0u32;
+        for (i, nd) in m.nodes.iter().enumerate() {
+            if nd.child_count > 0 {
+                if nd.child_count > 8
+                    || (nd.first_child as usize) <= i
+                    || nd.first_child as usize + nd.child_count as usize > n
+                {
+                    return None;
+                }
+                rank[i] = inner;
+                inner += 1;
+            }
+        }
+        if inner > 0 && rank[0] != 0 {
+            return None;
+        }
+        let ranked = |x: u32| rank.get(x as usize).copied().filter(|&r| r != u32::MAX);
+        let mut hot = Vec::with_capacity(inner as usize);
+        let mut close = Vec::with_capacity(inner as usize);
+        let mut deps = Vec::new();
+        for (i, nd) in m.nodes.iter().enumerate() {
+            if nd.child_count == 0 {
+                continue;
+            }
+            let (lo, _) = m.node_box(i as u32);
+            let mut inner_mask = 0u8;
+            let mut first_inner = u32::MAX;
+            for (j, c) in m.children(i as u32).enumerate() {
+                if let Some(r) = ranked(c) {
+                    inner_mask |= 1 << j;
+                    first_inner = first_inner.min(r);
+                }
+            }
+            hot.push(Hot {
+                lo: lo.to_array(),
+                err: node_error(m, i as u32),
+                bound: bounds[i],
+                first_inner,
+                first_child: nd.first_child,
+                level: nd.level,
+                child_count: nd.child_count,
+                inner_mask,
+                _pad: 0,
+            });
+            let parent = match nd.parent {
+                u32::MAX => u32::MAX,
+                p => ranked(p)?,
+            };
+            let d = m
+                .deps
+                .get(nd.deps_start as usize..nd.deps_start as usize + nd.deps_count as usize)?;
+            let deps_start = u32::try_from(deps.len()).ok()?;
+            for &x in d {
+                deps.push(ranked(x)?);
+            }
+            let prio = m.prio.get(i).copied().unwrap_or(u32::MAX);
+            if prio != u32::MAX && (prio == 0 || prio as usize >= m.groups.len()) {
+                return None;
+            }
+            close.push(Close {
+                parent,
+                deps_start,
+                deps_count: d.len() as u32,
+                prio,
+            });
+        }
+        if m.groups.first().is_some_and(|&g| g != 0)
+            || m.groups.windows(2).any(|w| w[0] > w[1])
+            || m.groups.last().is_some_and(|&g| g as usize > m.lod.len())
+        {
+            return None;
+        }
+        let lod = m
+            .lod
+            .iter()
+            .map(|&x| ranked(x))
+            .collect::<Option<Vec<u32>>>()?;
+        // Triangles and patches in node order.
+        let mut toff = Vec::with_capacity(n + 1);
+        let mut poff = Vec::with_capacity(n + 1);
+        let mut patches = Vec::new();
+        let mut in_order = true;
+        let mut t = 0usize;
+        for nd in &m.nodes {
+            let len = 3 * nd.tri_count as usize;
+            if nd.tri_start as usize + len > m.tris.len() {
+                return None;
+            }
+            in_order &= nd.tri_start as usize == t;
+            toff.push(u32::try_from(t).ok()?);
+            t += len;
+            poff.push(u32::try_from(patches.len()).ok()?);
+            let ps = m
+                .patches
+                .get(nd.patch_start as usize..nd.patch_start as usize + nd.patch_count as usize)?;
+            for p in ps {
+                m.subs
+                    .get(p.subs_start as usize..p.subs_start as usize + p.subs_count as usize)?;
+                let coarse = ranked(p.coarse).unwrap_or(u32::MAX);
+                patches.push([coarse, p.subs_start, p.subs_count]);
+            }
+        }
+        toff.push(u32::try_from(t).ok()?);
+        poff.push(u32::try_from(patches.len()).ok()?);
+        let tris = (!in_order).then(|| {
+            let mut v = Vec::with_capacity(t);
+            for i in 0..n as u32 {
+                v.extend_from_slice(m.node_tris(i));
+            }
+            v
+        });
+        let top = m.nodes.iter().map(|nd| nd.level).max().unwrap_or(0);
+        if top > 31 {
+            return None;
+        }
+        let sizes = (0..=top as u32)
+            .map(|l| m.grid.cube * (1u32 << l) as f32)
+            .collect();
+        Some(ViewLayout {
+            hot,
+            close,
+            sizes,
+            deps,
+            lod,
+            toff,
+            tris,
+            poff,
+            patches,
+        })
+    }
+
+    /// Inner nodes (ranks).
+    pub(super) fn ranks(&self) -> usize {
+        self.hot.len()
+    }
+
+    /// A ranked node's cube, bit for bit [`McoModel::node_box`].
+    #[inline(always)]
+    pub(super) fn cube(&self, h: &Hot) -> (Vec3, Vec3) {
+        let lo = Vec3::from_array(h.lo);
+        (lo, lo + Vec3::splat(self.sizes[h.level as usize]))
+    }
+
+    #[inline(always)]
+    pub(super) fn tris<'a>(&'a self, m: &'a McoModel) -> &'a [u32] {
+        self.tris.as_deref().unwrap_or(&m.tris)
+    }
+}
+
+#[inline(always)]
+pub(super) fn bit(bits: &[u64], r: u32) -> bool {
+    bits[(r >> 6) as usize] >> (r & 63) & 1 != 0
+}
