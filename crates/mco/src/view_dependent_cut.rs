@@ -376,22 +376,8 @@ impl ViewCut {
     /// Clears the previous cut's flags (through its list) and sizes the
     /// per-node and per-LOD arrays for `model`.
     fn reset(&mut self, model: &McoModel) {
-        if self.flags.len() == model.nodes.len() {
-            for &n in &self.expanded {
-                self.flags[n as usize] = false;
-            }
-        } else {
-            self.flags.clear();
-            self.flags.resize(model.nodes.len(), false);
-        }
-        if self.group_seen.len() == model.groups.len() {
-            for &k in &self.groups {
-                self.group_seen[k as usize] = false;
-            }
-        } else {
-            self.group_seen.clear();
-            self.group_seen.resize(model.groups.len(), false);
-        }
+        clear_listed(&mut self.flags, &self.expanded, model.nodes.len());
+        clear_listed(&mut self.group_seen, &self.groups, model.groups.len());
         self.expanded.clear();
         self.groups.clear();
         self.stack.clear();
@@ -547,14 +533,7 @@ impl ViewCut {
         let ranks = lay.ranks();
         self.bits.clear();
         self.bits.resize(ranks.div_ceil(64), 0);
-        if self.group_seen.len() == model.groups.len() {
-            for &k in &self.groups {
-                self.group_seen[k as usize] = false;
-            }
-        } else {
-            self.group_seen.clear();
-            self.group_seen.resize(model.groups.len(), false);
-        }
+        clear_listed(&mut self.group_seen, &self.groups, model.groups.len());
         self.groups.clear();
         self.stack.clear();
         let fr = Frustum::new(model, camera, tolerance_px);
@@ -694,6 +673,20 @@ fn emit_patched(model: &McoModel, lay: &ViewLayout, bits: &[u64], c: u32, out: &
 }
 
 /// Whether `model`'s cuts use the compact [`ViewLayout`].
+/// Makes `flags` `len` falses: through `set` (the indices the last cut
+/// set) when it already has that length, so a steady-state cut costs its
+/// own size, not the model's; reallocated for another model.
+fn clear_listed(flags: &mut Vec<bool>, set: &[u32], len: usize) {
+    if flags.len() == len {
+        for &i in set {
+            flags[i as usize] = false;
+        }
+    } else {
+        flags.clear();
+        flags.resize(len, false);
+    }
+}
+
 #[cfg(test)]
 pub(crate) fn has_layout(model: &McoModel) -> bool {
     matches!(model.view_data(), ViewData::Layout(_))
