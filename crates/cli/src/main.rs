@@ -74,13 +74,27 @@ enum Command {
     },
     /// Convert between formats, keeping every attribute the target can hold.
     #[command(
-        after_help = "Examples:\n  lodkit convert bunny.ply bunny.glb\n  lodkit convert part.stl part.obj\n  lodkit convert scan.ply scan.ply --ascii"
+        after_help = "Examples:\n  lodkit convert bunny.ply bunny.glb\n  lodkit convert part.stl -o part.obj\n  lodkit convert scan.ply scan.ply --ascii"
     )]
     Convert {
         input: PathBuf,
         /// Output file; the format follows its extension (.ply, .obj, .stl, .glb, .xyz, .pts).
-        #[arg(value_parser = ui::value::output(&["ply", "obj", "stl", "glb", "xyz", "pts", "txt"], "the converted model"))]
-        output: PathBuf,
+        #[arg(
+            value_parser = ui::value::output(&["ply", "obj", "stl", "glb", "xyz", "pts", "txt"], "the converted model"),
+            required_unless_present = "output_file",
+            conflicts_with = "output_file"
+        )]
+        output: Option<PathBuf>,
+        /// The output file, as `-o FILE` like every other command (same as
+        /// the positional OUTPUT).
+        #[arg(
+            short = 'o',
+            long = "output",
+            id = "output_file",
+            value_name = "OUTPUT",
+            value_parser = ui::value::output(&["ply", "obj", "stl", "glb", "xyz", "pts", "txt"], "the converted model")
+        )]
+        output_file: Option<PathBuf>,
         /// Write ASCII PLY/STL instead of binary.
         #[arg(long)]
         ascii: bool,
@@ -92,6 +106,9 @@ enum Command {
         /// materials (by default .glb and .obj outputs keep them).
         #[arg(long)]
         merge: bool,
+        /// Print what was written as JSON.
+        #[arg(long)]
+        json: bool,
         #[command(flatten)]
         out: ui::OutputArgs,
     },
@@ -134,11 +151,23 @@ fn main() -> ExitCode {
         Command::Convert {
             input,
             output,
+            output_file,
             ascii,
             weld,
             merge,
+            json,
             out,
-        } => commands::convert::run(&ui, &input, &output, ascii, weld, merge, &out),
+        } => {
+            // clap guarantees exactly one of the two output spellings.
+            let output = output.or(output_file).unwrap_or_default();
+            let opts = commands::convert::ConvertOptions {
+                ascii,
+                weld,
+                merge,
+                json,
+            };
+            commands::convert::run(&ui, &input, &output, &opts, &out)
+        }
         Command::Compare(args) => commands::compare::run(&ui, &args),
         Command::Simplify(args) => commands::simplify::run(&ui, &args),
         Command::Lods(args) => commands::lods::run(&ui, &args),

@@ -628,6 +628,25 @@ fn convert_to_points_says_it_drops_the_faces() {
 }
 
 #[test]
+fn convert_takes_dash_o_like_every_command_and_prints_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = octahedron(dir.path());
+    let out = dir.path().join("o.xyz");
+    let o = lodkit(&["convert", &mesh, "-o", out.to_str().unwrap(), "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["written"], "point cloud");
+    assert_eq!(v["vertices"], 6);
+    assert_eq!(v["faces_dropped"], 8);
+    assert_eq!(v["bytes"], std::fs::metadata(&out).unwrap().len());
+    // Both spellings at once, or neither, is a usage error.
+    let both = lodkit(&["convert", &mesh, "a.ply", "-o", "b.ply"]);
+    assert_eq!(both.status.code(), Some(2), "{}", stderr(&both));
+    let neither = lodkit(&["convert", &mesh]);
+    assert_eq!(neither.status.code(), Some(2), "{}", stderr(&neither));
+}
+
+#[test]
 fn a_txt_input_says_it_is_read_as_xyz() {
     let dir = tempfile::tempdir().unwrap();
     let txt = dir.path().join("cloud.txt");

@@ -1,4 +1,4 @@
-//! `lodkit convert IN OUT`.
+//! `lodkit convert IN OUT` (or `IN -o OUT`).
 use std::path::Path;
 
 use anyhow::Result;
@@ -8,20 +8,72 @@ use lodkit_mesh::io::{Format, WriteOptions, write_atomic};
 use super::scene::Input;
 use crate::ui::{OutputArgs, Ui};
 
+/// The options of `convert` besides its paths and the output-format flags.
+pub struct ConvertOptions {
+    /// ASCII PLY/STL instead of binary.
+    pub ascii: bool,
+    /// Weld vertices closer than this (object units) before writing.
+    pub weld: Option<f32>,
+    /// Merge a scene into one mesh.
+    pub merge: bool,
+    /// Print what was written as JSON instead of a status line.
+    pub json: bool,
+}
+
+/// What `convert --json` prints.
+#[derive(serde::Serialize)]
+struct Report<'a> {
+    input: &'a Path,
+    output: &'a Path,
+    /// What the output holds: "mesh", "point cloud", "range image" or
+    /// "scene".
+    written: &'static str,
+    vertices: usize,
+    faces: usize,
+    /// Faces of the input the output format cannot hold (a mesh written
+    /// as points).
+    faces_dropped: usize,
+    bytes: u64,
+}
+
 pub fn run(
     ui: &Ui,
     input: &Path,
     output: &Path,
-    ascii: bool,
-    weld: Option<f32>,
-    merge: bool,
+    opts: &ConvertOptions,
     out: &OutputArgs,
 ) -> Result<()> {
+    let ConvertOptions {
+        ascii,
+        weld,
+        merge,
+        json,
+    } = *opts;
     // Welding works on one mesh: --weld merges a scene's parts.
     let keeps = !merge && weld.is_none() && super::scene::holds_scenes(output);
     let mut model = match super::scene::load_input(ui, input, keeps)? {
         Input::Model(m) => m,
-        Input::Scene(scene) => return write_scene(ui, out.scene(scene, output)?, output, ascii),
+        Input::Scene(scene) => {
+            let scene = out.scene(scene, output)?;
+            write_scene(ui, &scene, output, ascii)?;
+            if json {
+                return super::print_json(&Report {
+                    input,
+                    output,
+                    written: "scene",
+                    vertices: scene.meshes.iter().map(|m| m.mesh.positions.len()).sum(),
+                    faces: scene.face_count(),
+                    faces_dropped: 0,
+                    bytes: std::fs::metadata(output).map_or(0, |m| m.len()),
+                });
+            }
+            ui.status(format!(
+                "wrote {} ({})",
+                output.display(),
+                super::scene::describe(&scene)
+            ));
+            return Ok(());
+        }
     };
     if weld.is_some() && !matches!(model, Model::Mesh(_)) {
         return Err(crate::ui::usage(format!(
@@ -58,6 +110,23 @@ pub fn run(
         .map_err(|e| anyhow::anyhow!("{}: {e}", output.display()))?;
     write_atomic(output, &bytes)?;
     step.finish();
+    if json {
+        let points = matches!(format, Some(Format::Xyz | Format::Pts));
+        let (vertices, faces) = match &model {
+            Model::Mesh(m) => (m.positions.len(), m.faces.len()),
+            Model::Points(p) => (p.positions.len(), 0),
+            Model::Range(r) => (r.to_point_cloud().len(), 0),
+        };
+        return super::print_json(&Report {
+            input,
+            output,
+            written: if points { "point cloud" } else { model.kind() },
+            vertices,
+            faces: if points { 0 } else { faces },
+            faces_dropped: if points { faces } else { 0 },
+            bytes: bytes.len() as u64,
+        });
+    }
     ui.status(format!(
         "wrote {} ({})",
         output.display(),
@@ -67,7 +136,7 @@ pub fn run(
 }
 
 /// Writes a scene (materials, parts, nodes) to .glb or .obj.
-fn write_scene(ui: &Ui, scene: lodkit_mesh::Scene, output: &Path, ascii: bool) -> Result<()> {
+fn write_scene(ui: &Ui, scene: &lodkit_mesh::Scene, output: &Path, ascii: bool) -> Result<()> {
     if ascii {
         return Err(crate::ui::usage(format!(
             "--ascii applies to .ply and .stl outputs, not to {}",
@@ -75,12 +144,7 @@ fn write_scene(ui: &Ui, scene: lodkit_mesh::Scene, output: &Path, ascii: bool) -
         )));
     }
     let step = ui.spinner(&format!("writing {}", output.display()));
-    lodkit_mesh::io::save_scene(output, &scene, WriteOptions::default())?;
+    lodkit_mesh::io::save_scene(output, scene, WriteOptions::default())?;
     step.finish();
-    ui.status(format!(
-        "wrote {} ({})",
-        output.display(),
-        super::scene::describe(&scene)
-    ));
     Ok(())
 }
