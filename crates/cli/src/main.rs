@@ -58,6 +58,12 @@ enum Command {
         after_help = "Examples:\n  lodkit lods bunny.ply --out lods/\n  lodkit lods scan.ply --out lods/ --ratios 0.5,0.2,0.05,0.01"
     )]
     Lods(commands::lods::LodsArgs),
+    /// Synthetic test meshes of any size, streamed to disk.
+    #[command(
+        subcommand,
+        after_help = "Examples:\n  lodkit generate blob --triangles 100000000 -o big.ply"
+    )]
+    Generate(commands::generate::GenerateCmd),
     /// In-process comparisons with peer libraries (simplify: meshoptimizer, with `--features peers`).
     #[command(
         after_help = "Examples:\n  lodkit bench simplify\n  lodkit bench simplify scan.ply --json"
@@ -171,6 +177,7 @@ fn main() -> ExitCode {
         Command::Compare(args) => commands::compare::run(&ui, &args),
         Command::Simplify(args) => commands::simplify::run(&ui, &args),
         Command::Lods(args) => commands::lods::run(&ui, &args),
+        Command::Generate(cmd) => commands::generate::run(&ui, &cmd),
         Command::Bench(args) => commands::bench::run(&ui, &args),
         Command::Build(args) => commands::build::run(&ui, &args),
         Command::Scan(args) => commands::scan::run(&ui, &args),

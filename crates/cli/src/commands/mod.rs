@@ -4,6 +4,7 @@ pub mod bench_mco;
 pub mod build;
 pub mod compare;
 pub mod convert;
+pub mod generate;
 pub mod info;
 pub mod lods;
 pub mod mco;

@@ -60,7 +60,7 @@ pub fn blob_with_seed(target_triangles: usize, seed: u32) -> TriMesh {
 }
 
 /// Fractal value noise in about [-1, 1]: four octaves, gain 0.5.
-fn fbm(p: Vec3, seed: u32) -> f32 {
+pub(crate) fn fbm(p: Vec3, seed: u32) -> f32 {
     let (mut sum, mut amp, mut freq) = (0.0, 0.5, 1.0);
     for octave in 0..4 {
         sum += amp * value_noise(p * freq, seed.wrapping_add(octave * 0x9E37));

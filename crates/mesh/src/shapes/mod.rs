@@ -11,11 +11,13 @@
 //! | [`non_manifold`] | no | fins and bow-tie vertices |
 
 mod blob;
+mod blob_stream;
 mod defects;
 mod spheres;
 mod torus;
 
 pub use blob::{blob, blob_with_seed};
+pub use blob_stream::{BlobCounts, blob_counts, write_blob_ply};
 pub use defects::{holey_sphere, non_manifold, terrain};
 pub use spheres::{icosphere, uv_sphere};
 pub use torus::torus;

@@ -37,11 +37,13 @@
 //! layout. Output is deterministic.
 //!
 //! Stages, one file each: `header` (text header → element list),
-//! `read` (body → model), `write` (model → bytes).
+//! `read` (body → model), `write` (model → bytes), `stream` (a binary
+//! mesh read in bounded memory, for inputs larger than memory).
 
 pub(crate) mod header;
 mod read;
 mod sources;
+pub mod stream;
 mod write;
 
 #[cfg(test)]

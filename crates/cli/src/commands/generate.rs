@@ -1,0 +1,50 @@
+//! `lodkit generate blob --triangles N -o big.ply`: synthetic test meshes
+//! of any size, streamed to disk (never held in memory), for the
+//! out-of-core simplifier and its benchmarks.
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::{Args, Subcommand};
+
+use crate::ui::Ui;
+use crate::ui::value;
+
+/// Most triangles of a generated blob: 32-bit indices (6 n² + 2 vertices).
+const MAX_TRIANGLES: u64 = 8_000_000_000;
+
+#[derive(Subcommand, Debug)]
+pub enum GenerateCmd {
+    /// The noise-displaced sphere of the benchmarks, as binary PLY.
+    Blob(BlobArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct BlobArgs {
+    /// About this many triangles (12 n², rounded), in 12..=8000000000.
+    #[arg(long, value_name = "N", value_parser = value::int(12u64, MAX_TRIANGLES))]
+    pub triangles: u64,
+    /// Noise seed, in 0..=4294967295.
+    #[arg(long, default_value_t = 1, value_parser = value::int(0u32, u32::MAX))]
+    pub seed: u32,
+    /// Output file (.ply).
+    #[arg(short, long, value_parser = value::output(&["ply"], "the generated mesh"))]
+    pub output: PathBuf,
+}
+
+pub fn run(ui: &Ui, cmd: &GenerateCmd) -> Result<()> {
+    match cmd {
+        GenerateCmd::Blob(a) => {
+            let step = ui.spinner(&format!("writing {}", a.output.display()));
+            let c = lodkit_mesh::shapes::write_blob_ply(&a.output, a.triangles, a.seed)?;
+            let t = step.finish();
+            ui.status(format!(
+                "wrote {} ({} triangles, {} vertices, {:.1} s)",
+                a.output.display(),
+                c.triangles,
+                c.vertices,
+                t.as_secs_f64()
+            ));
+            Ok(())
+        }
+    }
+}

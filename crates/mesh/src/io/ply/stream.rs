@@ -1,0 +1,298 @@
+//! Streaming a binary PLY mesh in bounded memory: the out-of-core
+//! simplifier's reader (inputs far larger than memory, past
+//! [`MAX_FILE_BYTES`](crate::io::MAX_FILE_BYTES)).
+//!
+//! [`PlyStream::open`] reads and checks the header only; the vertex
+//! positions and the faces are then read once each, in file order, through
+//! a fixed 1 MiB buffer ([`PlyStream::for_each_position`],
+//! [`PlyStream::for_each_face`]). The same checks as the in-core reader:
+//! the declared counts must fit in the file (at their smallest record
+//! size), coordinates must be finite, face indices in range; every problem
+//! is a one-line error naming the file. Supported layout: binary (either
+//! endianness), a `vertex` element whose properties are all scalars with
+//! float or double `x y z`, then a `face` element whose only list holds
+//! the indices (any integer types; polygons are fanned like the in-core
+//! reader); other scalar face properties are skipped, elements after
+//! `face` are ignored. Anything else is refused with a message that says
+//! so (the in-core reader handles every layout).
+
+use std::fs::File;
+use std::io::{BufReader, Read, Seek, SeekFrom};
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+
+use super::header::{self, Encoding, PropertyKind, ScalarType};
+use crate::error::{Error, ParseError, Result};
+use crate::parse_err;
+
+/// Bytes read ahead per `read` call.
+const BUFFER: usize = 1 << 20;
+/// The most header bytes read while looking for `end_header`.
+const MAX_HEADER: usize = 1 << 20;
+
+/// An opened binary PLY mesh whose body is read on demand.
+#[derive(Debug)]
+pub struct PlyStream {
+    path: PathBuf,
+    big_endian: bool,
+    body_start: u64,
+    vertex_count: u64,
+    vertex_stride: usize,
+    /// Offsets and types of x, y, z in a vertex record.
+    xyz: [(usize, ScalarType); 3],
+    face_count: u64,
+    /// Per face record: scalar bytes before the list, the list's count and
+    /// item types, scalar bytes after it.
+    face_layout: (usize, ScalarType, ScalarType, usize),
+    file_len: u64,
+}
+
+impl PlyStream {
+    /// Opens `path` and checks its header (see the module docs).
+    /// Errors: I/O, a malformed header, a layout this reader does not
+    /// stream, counts that cannot fit in the file. Cost: the header only.
+    pub fn open(path: &Path) -> Result<PlyStream> {
+        let io = |e: std::io::Error| Error::Io {
+            path: path.to_path_buf(),
+            source: e,
+        };
+        let bad = |e: ParseError| Error::Parse {
+            path: path.to_path_buf(),
+            message: e.0,
+        };
+        let mut f = File::open(path).map_err(io)?;
+        let file_len = f.metadata().map_err(io)?.len();
+        let mut head = Vec::new();
+        (&mut f)
+            .take(MAX_HEADER as u64)
+            .read_to_end(&mut head)
+            .map_err(io)?;
+        let h = header::parse(&head).map_err(bad)?;
+        let body_len = file_len - h.body_start as u64;
+        // check_counts takes usize; on 64-bit targets the cast is exact.
+        h.check_counts(usize::try_from(body_len).unwrap_or(usize::MAX))
+            .map_err(bad)?;
+        let big_endian = match h.encoding {
+            Encoding::Ascii => {
+                return Err(bad(ParseError::new(
+                    "ASCII PLY cannot be streamed; convert it to binary (lodkit convert) or give a smaller file",
+                )));
+            }
+            Encoding::BinaryLittleEndian => false,
+            Encoding::BinaryBigEndian => true,
+        };
+        let (Some(v), Some(fe)) = (h.elements.first(), h.elements.get(1)) else {
+            return Err(bad(ParseError::new(
+                "streaming needs a vertex element followed by a face element",
+            )));
+        };
+        if v.name != "vertex" || fe.name != "face" {
+            return Err(bad(ParseError::new(
+                "streaming needs the vertex element first and the face element second",
+            )));
+        }
+        let vertex_stride = v.fixed_stride().ok_or_else(|| {
+            bad(ParseError::new(
+                "streaming needs vertex records of fixed size (no list property)",
+            ))
+        })?;
+        let mut xyz = [(0usize, ScalarType::F32); 3];
+        for (k, name) in ["x", "y", "z"].into_iter().enumerate() {
+            let i = v
+                .property(name)
+                .ok_or_else(|| bad(parse_err!("vertex element has no '{name}' property")))?;
+            let PropertyKind::Scalar(t) = v.properties[i].kind else {
+                return Err(bad(parse_err!("vertex property '{name}' is a list")));
+            };
+            if !matches!(t, ScalarType::F32 | ScalarType::F64) {
+                return Err(bad(parse_err!(
+                    "vertex property '{name}' is {}, streaming reads float or double",
+                    t.name()
+                )));
+            }
+            xyz[k] = (v.offset_of(i).unwrap_or(0), t);
+        }
+        let lists: Vec<usize> = (0..fe.properties.len())
+            .filter(|&i| matches!(fe.properties[i].kind, PropertyKind::List { .. }))
+            .collect();
+        let [li] = lists[..] else {
+            return Err(bad(ParseError::new(
+                "streaming needs exactly one list property (the indices) in the face element",
+            )));
+        };
+        let PropertyKind::List { count, item } = fe.properties[li].kind else {
+            unreachable!("filtered to lists above")
+        };
+        if !item.is_integer() {
+            return Err(bad(ParseError::new("face indices are not integers")));
+        }
+        let scalar_bytes = |ps: &[header::Property]| -> usize {
+            ps.iter()
+                .map(|p| match p.kind {
+                    PropertyKind::Scalar(t) => t.size(),
+                    PropertyKind::List { .. } => 0,
+                })
+                .sum()
+        };
+        let before = scalar_bytes(&fe.properties[..li]);
+        let after = scalar_bytes(&fe.properties[li + 1..]);
+        Ok(PlyStream {
+            path: path.to_path_buf(),
+            big_endian,
+            body_start: h.body_start as u64,
+            vertex_count: v.count,
+            vertex_stride,
+            xyz,
+            face_count: fe.count,
+            face_layout: (before, count, item, after),
+            file_len,
+        })
+    }
+
+    /// Vertices declared in the header.
+    pub fn vertex_count(&self) -> u64 {
+        self.vertex_count
+    }
+
+    /// Face records declared in the header (a polygon gives several
+    /// triangles, a list under 3 none).
+    pub fn face_records(&self) -> u64 {
+        self.face_count
+    }
+
+    /// The file's size in bytes.
+    pub fn file_len(&self) -> u64 {
+        self.file_len
+    }
+
+    fn parse_error(&self, e: ParseError) -> Error {
+        Error::Parse {
+            path: self.path.clone(),
+            message: e.0,
+        }
+    }
+
+    fn reader(&self, at: u64) -> Result<Reader> {
+        let io = |e: std::io::Error| Error::Io {
+            path: self.path.clone(),
+            source: e,
+        };
+        let mut f = File::open(&self.path).map_err(io)?;
+        f.seek(SeekFrom::Start(at)).map_err(io)?;
+        Ok(Reader {
+            inner: BufReader::with_capacity(BUFFER, f),
+        })
+    }
+
+    fn truncated(&self, what: &str) -> Error {
+        self.parse_error(parse_err!("file ends inside the {what} records"))
+    }
+
+    /// Calls `f` with each vertex position in file order. Errors: I/O, a
+    /// truncated file, a non-finite coordinate or one past
+    /// [`MAX_COORDINATE`](crate::io::MAX_COORDINATE). Memory: the buffer.
+    pub fn for_each_position(&self, mut f: impl FnMut(Vec3)) -> Result<()> {
+        let mut r = self.reader(self.body_start)?;
+        let mut rec = vec![0u8; self.vertex_stride];
+        for i in 0..self.vertex_count {
+            if !r.fill(&mut rec) {
+                return Err(self.truncated("vertex"));
+            }
+            let mut p = [0.0f32; 3];
+            for (k, &(off, t)) in self.xyz.iter().enumerate() {
+                p[k] = read_scalar(&rec[off..], t, self.big_endian) as f32;
+            }
+            if !p
+                .iter()
+                .all(|c| c.is_finite() && c.abs() <= crate::io::MAX_COORDINATE)
+            {
+                return Err(self.parse_error(parse_err!(
+                    "vertex {i} has a non-finite or out-of-range coordinate"
+                )));
+            }
+            f(Vec3::from_array(p));
+        }
+        Ok(())
+    }
+
+    /// Calls `f` with each triangle in file order (polygons fanned from
+    /// their first corner). Errors: I/O, a truncated file, an index past
+    /// the vertex count, or whatever `f` returns. Memory: the buffer.
+    pub fn for_each_face(&self, mut f: impl FnMut([u32; 3]) -> Result<()>) -> Result<()> {
+        let start = self.body_start + self.vertex_count * self.vertex_stride as u64;
+        let mut r = self.reader(start)?;
+        let (before, count_t, item_t, after) = self.face_layout;
+        let mut skip = vec![0u8; before.max(after)];
+        let mut buf = [0u8; 8];
+        let mut poly: Vec<u32> = Vec::new();
+        for fi in 0..self.face_count {
+            if !r.fill(&mut skip[..before]) || !r.fill(&mut buf[..count_t.size()]) {
+                return Err(self.truncated("face"));
+            }
+            let n = read_scalar(&buf, count_t, self.big_endian);
+            if !(0.0..=1e6).contains(&n) {
+                return Err(self.parse_error(parse_err!("face {fi} lists {n} indices")));
+            }
+            poly.clear();
+            for _ in 0..n as usize {
+                if !r.fill(&mut buf[..item_t.size()]) {
+                    return Err(self.truncated("face"));
+                }
+                let ix = read_scalar(&buf, item_t, self.big_endian);
+                if !(ix >= 0.0 && ix < self.vertex_count as f64) {
+                    return Err(self.parse_error(parse_err!(
+                        "face {fi} has vertex index {ix} but the file has {} vertices",
+                        self.vertex_count
+                    )));
+                }
+                poly.push(ix as u32);
+            }
+            if !r.fill(&mut skip[..after]) {
+                return Err(self.truncated("face"));
+            }
+            for k in 2..poly.len() {
+                f([poly[0], poly[k - 1], poly[k]])?;
+            }
+        }
+        Ok(())
+    }
+}
+
+struct Reader {
+    inner: BufReader<File>,
+}
+
+impl Reader {
+    /// Fills `out`; false at end of file (or an I/O error, reported as a
+    /// truncation: the file changed or is unreadable under us).
+    fn fill(&mut self, out: &mut [u8]) -> bool {
+        self.inner.read_exact(out).is_ok()
+    }
+}
+
+/// One scalar of type `t` at the start of `b` (long enough), as f64
+/// (exact for every PLY integer type and for floats).
+fn read_scalar(b: &[u8], t: ScalarType, big: bool) -> f64 {
+    macro_rules! num {
+        ($ty:ty, $n:expr) => {{
+            let mut a = [0u8; $n];
+            a.copy_from_slice(&b[..$n]);
+            (if big {
+                <$ty>::from_be_bytes(a)
+            } else {
+                <$ty>::from_le_bytes(a)
+            }) as f64
+        }};
+    }
+    match t {
+        ScalarType::I8 => num!(i8, 1),
+        ScalarType::U8 => num!(u8, 1),
+        ScalarType::I16 => num!(i16, 2),
+        ScalarType::U16 => num!(u16, 2),
+        ScalarType::I32 => num!(i32, 4),
+        ScalarType::U32 => num!(u32, 4),
+        ScalarType::F32 => num!(f32, 4),
+        ScalarType::F64 => num!(f64, 8),
+    }
+}

@@ -1,0 +1,45 @@
+//! # lodkit-scale — out-of-core HQMS
+//!
+//! Meshes larger than memory, simplified in bounded memory: the input is
+//! streamed twice (positions, then faces) and cut into a grid of blocks on
+//! disk; each block is simplified in core with the vertices it shares with
+//! other blocks locked; a second round on a grid shifted by half a block
+//! frees the cuts of the first when the result is still too big for
+//! memory; the final pass runs the ordinary in-core simplifier on the
+//! whole reduced mesh, which releases every remaining lock and lands on
+//! the target exactly as the in-core path does. ARCHITECTURE.md
+//! ("Out of core") has the design and why.
+//!
+//! | item | what it does |
+//! |---|---|
+//! | [`simplify_file`] | a binary PLY file to a simplified [`TriMesh`] in about `memory` bytes |
+//! | [`needs_out_of_core`] | whether a file would not fit the in-core path in `memory` |
+//! | [`simplify_block`] | one block (the Ray task) |
+//! | [`staging_dir`] | the resumable staging folder for an input, output and options |
+//! | [`default_memory`] | the default budget: a third of `MemTotal` |
+
+#![deny(missing_docs)]
+#![forbid(unsafe_code)]
+
+mod block;
+mod partition;
+mod run;
+pub mod soup;
+mod staging;
+
+pub use block::{BlockReport, simplify_block};
+pub use run::{Event, Report, ScaleOptions, simplify_file};
+pub use staging::{default_memory, staging_dir};
+
+/// Bytes per input face the in-core path needs, about: the file's share
+/// (a face record and half a vertex, 19 B), the mesh (18 B), the
+/// simplifier's workspace (68–69 B per vertex, half a vertex per face).
+pub const IN_CORE_BYTES_PER_FACE: u64 = 80;
+
+/// Whether simplifying `path` (`bytes` long) in core would exceed `memory`
+/// bytes, at [`IN_CORE_BYTES_PER_FACE`] per face estimated from the file's
+/// size (a binary PLY triangle with its share of vertices is about 19
+/// bytes; text formats are larger per face, so this overestimates them).
+pub fn needs_out_of_core(bytes: u64, memory: u64) -> bool {
+    bytes / 19 * IN_CORE_BYTES_PER_FACE > memory
+}
