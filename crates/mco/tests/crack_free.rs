@@ -366,3 +366,84 @@ fn real_closed_scans_cuts_are_crack_free() {
         failures.join("\n")
     );
 }
+
+/// An axis-aligned box `[-h, h]` with each face split into `n × n`
+/// squares (two triangles each), outward wound, vertices shared.
+fn cube(n: u32, h: Vec3) -> TriMesh {
+    let mut positions = Vec::new();
+    let mut id: HashMap<[i32; 3], u32> = HashMap::new();
+    let mut faces = Vec::new();
+    let n = n as i32;
+    let mut vert = |g: [i32; 3]| -> u32 {
+        *id.entry(g).or_insert_with(|| {
+            let f = |c: i32, h: f32| h * (2.0 * c as f32 / n as f32 - 1.0);
+            positions.push(Vec3::new(f(g[0], h.x), f(g[1], h.y), f(g[2], h.z)));
+            positions.len() as u32 - 1
+        })
+    };
+    for axis in 0..3 {
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        for side in [0, n] {
+            for i in 0..n {
+                for j in 0..n {
+                    let g = |a: i32, b: i32| {
+                        let mut p = [0; 3];
+                        p[axis] = side;
+                        p[u] = a;
+                        p[v] = b;
+                        p
+                    };
+                    let q = [
+                        vert(g(i, j)),
+                        vert(g(i + 1, j)),
+                        vert(g(i + 1, j + 1)),
+                        vert(g(i, j + 1)),
+                    ];
+                    let (a, b) = if side == n {
+                        ([q[0], q[1], q[2]], [q[0], q[2], q[3]])
+                    } else {
+                        ([q[0], q[2], q[1]], [q[0], q[3], q[2]])
+                    };
+                    faces.push(a);
+                    faces.push(b);
+                }
+            }
+        }
+    }
+    TriMesh {
+        positions,
+        faces,
+        normals: None,
+        uvs: None,
+        ..Default::default()
+    }
+}
+
+/// Closed synthetic shapes, a cube and a flat box among them, at 10
+/// resolutions (odd sizes and 70 included): lattices whose cubes fall
+/// differently on the same surface.
+#[test]
+fn closed_shapes_at_many_resolutions_are_crack_free() {
+    let inputs: Vec<(&str, TriMesh)> = vec![
+        ("sphere", shapes::icosphere(4)),
+        ("torus", shapes::torus(1.0, 0.35, 64, 32)),
+        ("blob", shapes::blob(20_000)),
+        ("cube", cube(8, Vec3::ONE)),
+        ("box", cube(8, Vec3::new(1.0, 0.6, 0.35))),
+    ];
+    let mut failures = Vec::new();
+    for (name, mesh) in &inputs {
+        for res in [16, 17, 23, 31, 33, 47, 64, 65, 70, 71] {
+            failures.extend(failing_cuts(
+                &format!("{name} at resolution {res}"),
+                &build(mesh, res),
+            ));
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{} failing cuts:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
+}
