@@ -99,6 +99,7 @@
 // every other target runs, and a test runs both on the same input.
 #![deny(unsafe_code)]
 
+mod band_edge_pruning;
 mod cloud_spacing;
 mod crack_patch;
 mod extraction_by_referencing;

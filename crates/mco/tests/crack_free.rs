@@ -307,6 +307,54 @@ fn lobed_shape_cuts_are_crack_free() {
     }
 }
 
+/// `../shared/data/meshes/<file>` (`LODKIT_SHARED_DATA` names another
+/// `data` folder), or `None` when absent.
+fn shared_mesh(file: &str) -> Option<TriMesh> {
+    let p = std::env::var_os("LODKIT_SHARED_DATA")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| {
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data")
+        })
+        .join("meshes")
+        .join(file);
+    if !p.exists() {
+        eprintln!("skipped: {} is absent", p.display());
+        return None;
+    }
+    Some(lodkit_mesh::io::load_mesh(&p).unwrap())
+}
+
+/// The closed real meshes at resolutions where a band vertex 2.6–3.3
+/// cubes from its sample took the wrong side and drew a one-vertex bubble
+/// that the band's edge left open: a triangle-shaped loop of 5e-8 to
+/// 3e-6 × diagonal² at full resolution, so in every cut (up to 1e-3 in
+/// coarse ones). Closed since `band_edge_pruning.rs`. Skipped without the
+/// data.
+#[test]
+fn closed_real_meshes_at_band_edge_resolutions_are_crack_free() {
+    let mut failures = Vec::new();
+    for (file, resolutions) in [
+        ("stanford_bunny_closed_glmark2.ply", &[36, 107][..]),
+        ("stanford_armadillo_cgal26k.ply", &[77, 127][..]),
+    ] {
+        let Some(mesh) = shared_mesh(file) else {
+            continue;
+        };
+        for &res in resolutions {
+            failures.extend(failing_cuts(
+                &format!("{file} at resolution {res}"),
+                &build(&mesh, res),
+            ));
+        }
+    }
+    assert!(
+        failures.is_empty(),
+        "{} failing cuts:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
+}
+
 /// The closed real scans of `../shared/data/meshes` at their default
 /// resolution (skipped when absent; `LODKIT_SHARED_DATA` names another
 /// `data` folder). Slow in debug, so run on request:
@@ -419,7 +467,7 @@ fn cube(n: u32, h: Vec3) -> TriMesh {
     }
 }
 
-/// Closed synthetic shapes, a cube and a flat box among them, at 10
+/// Closed synthetic shapes, a cube and a flat box among them, at 6
 /// resolutions (odd sizes and 70 included): lattices whose cubes fall
 /// differently on the same surface.
 #[test]
@@ -433,7 +481,7 @@ fn closed_shapes_at_many_resolutions_are_crack_free() {
     ];
     let mut failures = Vec::new();
     for (name, mesh) in &inputs {
-        for res in [16, 17, 23, 31, 33, 47, 64, 65, 70, 71] {
+        for res in [17, 23, 33, 47, 65, 70] {
             failures.extend(failing_cuts(
                 &format!("{name} at resolution {res}"),
                 &build(mesh, res),
