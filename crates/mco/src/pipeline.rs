@@ -750,6 +750,16 @@ fn is_closed(mesh: &TriMesh) -> bool {
             .all(|e| e.count != 1)
 }
 
+/// Whether every model is a closed mesh (no boundary edge): the inputs
+/// whose builder takes [`IncrementalBuilder::with_band_edge_pruning`], as
+/// [`build_from_models`] does. Cost: one sort of each mesh's edges.
+pub fn all_closed_meshes(models: &[Model]) -> bool {
+    !models.is_empty()
+        && models
+            .iter()
+            .all(|m| matches!(m, Model::Mesh(mesh) if is_closed(mesh)))
+}
+
 /// Builds a model from a triangle mesh (object units; faces
 /// counter-clockwise seen from outside): its vertices with area-weighted
 /// normals (§4.3.1), densified on triangles longer than a cube. A closed

@@ -495,3 +495,20 @@ fn closed_shapes_at_many_resolutions_are_crack_free() {
         failures.join("\n")
     );
 }
+
+/// Band-edge pruning is for closed meshes only: a scan's or an open
+/// mesh's surface ends at the band's edge by design.
+#[test]
+fn only_closed_meshes_are_pruned() {
+    use lodkit_mco::all_closed_meshes;
+    use lodkit_mesh::Model;
+    assert!(all_closed_meshes(&[Model::Mesh(shapes::icosphere(2))]));
+    assert!(all_closed_meshes(&[
+        Model::Mesh(shapes::icosphere(2)),
+        Model::Mesh(cube(2, Vec3::ONE))
+    ]));
+    assert!(!all_closed_meshes(&[Model::Mesh(shapes::holey_sphere(
+        3, 2
+    ))]));
+    assert!(!all_closed_meshes(&[]));
+}
