@@ -99,6 +99,7 @@
 // every other target runs, and a test runs both on the same input.
 #![deny(unsafe_code)]
 
+mod band_edge_pruning;
 mod cloud_spacing;
 mod crack_patch;
 mod extraction_by_referencing;
@@ -130,8 +131,8 @@ pub use model::{LevelInfo, McoModel, ModelInfo};
 pub use model_file::FORMAT_VERSION;
 pub use model_file_v2::{ChunkInfo, Header as McoHeader, McoStream, PartialModel};
 pub use pipeline::{
-    AddReport, IncrementalBuilder, MAX_BUILD_BYTES, Options, build_from_conf, build_from_mesh,
-    build_from_models, build_from_points, build_from_range_images, densify_meshes,
+    AddReport, IncrementalBuilder, MAX_BUILD_BYTES, Options, all_closed_meshes, build_from_conf,
+    build_from_mesh, build_from_models, build_from_points, build_from_range_images, densify_meshes,
     estimate_build_bytes, grid_for, samples_of,
 };
 pub use scanner::{ScanOptions, scan_mesh, write_scans};

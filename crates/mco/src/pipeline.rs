@@ -255,6 +255,8 @@ pub struct IncrementalBuilder {
     /// The power of two the samples are multiplied by (1 for lattices of
     /// ordinary size; see [`normalising_scale`]).
     scale: f32,
+    /// Whether [`IncrementalBuilder::build`] prunes band-edge sheets.
+    prune_band_edges: bool,
 }
 
 /// Leaf cubes of at least this and at most [`MAX_PLAIN_CUBE`] (object
@@ -290,6 +292,29 @@ fn scaled_grid(grid: Grid, s: f32) -> Grid {
     }
 }
 
+/// Leaf cubes with a surface of `field`, from its per-brick
+/// configurations (`BRICK_VOLUME` a brick), `(key, configuration)` in key
+/// order; `surface` sizes the output.
+fn leaves_of(field: &SignedDistanceField, configs: &[u8], surface: usize) -> Vec<(u64, u8)> {
+    let mut out = Vec::with_capacity(surface);
+    for (b, cfgs) in configs.chunks_exact(BRICK_VOLUME).enumerate() {
+        let [bx, by, bz] = field.brick_coords(b).map(|c| c << BRICK_BITS);
+        for (li, &cfg) in cfgs.iter().enumerate() {
+            if cfg != 0 {
+                let li = li as u32;
+                let (x, y, z) = (
+                    bx + (li & (BRICK - 1)),
+                    by + (li >> BRICK_BITS & (BRICK - 1)),
+                    bz + (li >> (2 * BRICK_BITS)),
+                );
+                out.push((pack(x, y, z), cfg));
+            }
+        }
+    }
+    out.sort_unstable_by_key(|l| l.0);
+    out
+}
+
 impl IncrementalBuilder {
     /// Turns on Hoppe's tangential rule (`TANGENTIAL_LIMIT`
     /// = 1.5 cubes): a lattice vertex counts only where its closest
@@ -315,7 +340,18 @@ impl IncrementalBuilder {
             signs: None,
             grid,
             scale,
+            prune_band_edges: false,
         }
+    }
+
+    /// Turns on band-edge pruning (`band_edge_pruning.rs`): before the
+    /// octree is built, band vertices far from the data whose sign would
+    /// open a small bubble at the band's edge are dropped, so the leaf
+    /// surface is closed. For closed meshes only; a scan's or an open
+    /// mesh's surface ends at the band's edge by design.
+    pub fn with_band_edge_pruning(mut self) -> Self {
+        self.prune_band_edges = true;
+        self
     }
 
     /// The lattice this builder works on.
@@ -325,23 +361,7 @@ impl IncrementalBuilder {
 
     /// Leaf cubes with a surface, `(key, configuration)` in key order.
     pub(crate) fn leaves(&self) -> Vec<(u64, u8)> {
-        let mut out = Vec::with_capacity(self.surface_cubes);
-        for (b, cfgs) in self.configs.chunks_exact(BRICK_VOLUME).enumerate() {
-            let [bx, by, bz] = self.field.brick_coords(b).map(|c| c << BRICK_BITS);
-            for (li, &cfg) in cfgs.iter().enumerate() {
-                if cfg != 0 {
-                    let li = li as u32;
-                    let (x, y, z) = (
-                        bx + (li & (BRICK - 1)),
-                        by + (li >> BRICK_BITS & (BRICK - 1)),
-                        bz + (li >> (2 * BRICK_BITS)),
-                    );
-                    out.push((pack(x, y, z), cfg));
-                }
-            }
-        }
-        out.sort_unstable_by_key(|l| l.0);
-        out
+        leaves_of(&self.field, &self.configs, self.surface_cubes)
     }
 
     /// Adds a batch of oriented samples (a [`samples_of`] result: unit
@@ -466,12 +486,38 @@ impl IncrementalBuilder {
     /// ([`Error::Input`]): nothing added reached the lattice, or no leaf
     /// cube holds a surface. Cost: `O(n log n)` in the surface cubes.
     pub fn build(&self) -> Result<McoModel> {
-        let leaves = self.leaves();
-        let signs = self
-            .signs
-            .clone()
-            .unwrap_or_else(|| BandSigns::new(&self.field));
-        let mut tree = crate::octree_build::build_levels_with(&self.field, signs, &leaves)?;
+        // A band whose edge a sign change reaches is pruned first, so the
+        // leaf surface is closed (`band_edge_pruning.rs`); an untouched
+        // band builds from the configurations kept since the last add.
+        let pruned = if self.prune_band_edges {
+            crate::band_edge_pruning::pruned(&self.field)
+        } else {
+            None
+        };
+        let (field, leaves, signs) = match &pruned {
+            None => (
+                &self.field,
+                self.leaves(),
+                self.signs
+                    .clone()
+                    .unwrap_or_else(|| BandSigns::new(&self.field)),
+            ),
+            Some(f) => {
+                let masks: Vec<BrickMasks> =
+                    (0..f.brick_count()).map(|b| f.brick_masks(b)).collect();
+                let mut configs = vec![0u8; f.brick_count() * BRICK_VOLUME];
+                let mut surface = 0;
+                for (b, out) in configs.chunks_exact_mut(BRICK_VOLUME).enumerate() {
+                    surface += brick_configs(f, &masks, b, out).1;
+                }
+                (
+                    f,
+                    leaves_of(f, &configs, surface),
+                    BandSigns::from_masks(masks),
+                )
+            }
+        };
+        let mut tree = crate::octree_build::build_levels_with(field, signs, &leaves)?;
         let mut model = crate::octree_build::assemble(&mut tree);
         let together = crate::crack_patch::expand_together(&tree);
         crate::priority_numbering::number(&mut model, &together);
@@ -683,11 +729,35 @@ fn build_from_inputs(inputs: &[Input], opts: &Options) -> Result<McoModel> {
     let mut b = IncrementalBuilder::new(grid);
     if inputs.iter().any(|i| !matches!(i, Input::Mesh(_))) {
         b = b.with_tangential_rule();
+    } else if inputs
+        .iter()
+        .all(|i| matches!(i, Input::Mesh(m) if is_closed(m)))
+    {
+        b = b.with_band_edge_pruning();
     }
     for s in &samples {
         b.add(s);
     }
     b.build()
+}
+
+/// Whether every edge of `mesh` is shared by two or more faces (no
+/// boundary edge).
+fn is_closed(mesh: &TriMesh) -> bool {
+    !mesh.faces.is_empty()
+        && lodkit_mesh::topology::edge_multiplicities(mesh)
+            .iter()
+            .all(|e| e.count != 1)
+}
+
+/// Whether every model is a closed mesh (no boundary edge): the inputs
+/// whose builder takes [`IncrementalBuilder::with_band_edge_pruning`], as
+/// [`build_from_models`] does. Cost: one sort of each mesh's edges.
+pub fn all_closed_meshes(models: &[Model]) -> bool {
+    !models.is_empty()
+        && models
+            .iter()
+            .all(|m| matches!(m, Model::Mesh(mesh) if is_closed(mesh)))
 }
 
 /// Builds a model from a triangle mesh (object units; faces

@@ -459,6 +459,19 @@ impl SignedDistanceField {
         [defined, inside, reached]
     }
 
+    /// Makes vertex `(x, y, z)` of brick `b` unreached, as if no sample
+    /// had stamped it ([`crate::band_edge_pruning`] drops band-edge
+    /// vertices whose sign is a guess).
+    pub fn clear(&mut self, b: usize, x: u32, y: u32, z: u32) {
+        let i = b * BRICK_VOLUME + local_index(x, y, z);
+        if self.sample[i] != u32::MAX {
+            self.defined -= 1;
+        }
+        self.dist2[i] = f32::INFINITY;
+        self.distance[i] = 0.0;
+        self.sample[i] = u32::MAX;
+    }
+
     /// Number of bricks.
     pub fn brick_count(&self) -> usize {
         self.brick_coords.len()

@@ -198,6 +198,9 @@ fn build(
     // Scan data has edges: Hoppe's tangential rule (meshes build without it).
     if plain.iter().any(|m| !matches!(m, Model::Mesh(_))) {
         builder = builder.with_tangential_rule();
+    } else if lodkit_mco::all_closed_meshes(&plain) {
+        // Closed meshes give closed models (`band_edge_pruning.rs`).
+        builder = builder.with_band_edge_pruning();
     }
     let mut added = Vec::new();
     for ((name, _), s) in models.iter().zip(&samples) {
