@@ -21,7 +21,9 @@ pub fn run(
     let keeps = !merge && weld.is_none() && super::scene::holds_scenes(output);
     let mut model = match super::scene::load_input(ui, input, keeps)? {
         Input::Model(m) => m,
-        Input::Scene(scene) => return write_scene(ui, out.scene(scene, output)?, output, ascii),
+        Input::Scene(scene) => {
+            return write_scene(ui, out.scene(scene, output)?, output, ascii, &out.glb());
+        }
     };
     if weld.is_some() && !matches!(model, Model::Mesh(_)) {
         return Err(crate::ui::usage(format!(
@@ -67,7 +69,13 @@ pub fn run(
 }
 
 /// Writes a scene (materials, parts, nodes) to .glb or .obj.
-fn write_scene(ui: &Ui, scene: lodkit_mesh::Scene, output: &Path, ascii: bool) -> Result<()> {
+fn write_scene(
+    ui: &Ui,
+    scene: lodkit_mesh::Scene,
+    output: &Path,
+    ascii: bool,
+    glb: &lodkit_mesh::io::gltf::GlbOptions,
+) -> Result<()> {
     if ascii {
         return Err(crate::ui::usage(format!(
             "--ascii applies to .ply and .stl outputs, not to {}",
@@ -75,7 +83,7 @@ fn write_scene(ui: &Ui, scene: lodkit_mesh::Scene, output: &Path, ascii: bool) -
         )));
     }
     let step = ui.spinner(&format!("writing {}", output.display()));
-    lodkit_mesh::io::save_scene(output, &scene, WriteOptions::default())?;
+    lodkit_mesh::io::save_scene_with(output, &scene, WriteOptions::default(), glb)?;
     step.finish();
     ui.status(format!(
         "wrote {} ({})",
