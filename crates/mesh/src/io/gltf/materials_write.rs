@@ -32,7 +32,8 @@ use glam::{Mat4, Quat, Vec3};
 use gltf::json;
 use json::validation::Checked::Valid;
 
-use super::write::{Builder, GlbOptions, check_coverage, link_lods, union_box};
+use super::lod_links::{check_coverage, link_lods};
+use super::write::{Builder, GlbOptions, union_box};
 use crate::error::ParseError;
 use crate::mesh::TriMesh;
 use crate::parse_err;

@@ -104,6 +104,7 @@ mod buffers;
 mod color;
 mod extensions;
 mod glb;
+mod lod_links;
 mod materials_read;
 mod materials_write;
 mod points;

@@ -19,6 +19,7 @@ use json::validation::Checked::Valid;
 
 use super::color::srgb8_to_linear;
 use super::glb::join_glb;
+use super::lod_links::{check_coverage, link_lods};
 use crate::error::ParseError;
 use crate::mesh::{Aabb, PointCloud, TriMesh};
 use crate::parse_err;
@@ -734,49 +735,6 @@ pub fn write_lod_glb(levels: &[LodLevel<'_>], opts: &GlbOptions) -> Result<Vec<u
     let coverage: Vec<f64> = levels.iter().map(|l| l.coverage).collect();
     let node_extensions = link_lods(&mut b, &nodes, &coverage)?;
     b.finish(vec![nodes[0]], node_extensions)
-}
-
-/// Refuses a screen coverage outside `[0, 1]` (or NaN) for level `name`.
-pub(super) fn check_coverage(name: &str, coverage: f64) -> Result<(), ParseError> {
-    if !(0.0..=1.0).contains(&coverage) {
-        return Err(parse_err!(
-            "GLB level '{name}': screen coverage {coverage} is outside [0, 1]"
-        ));
-    }
-    Ok(())
-}
-
-/// Makes `nodes[0]` the `MSFT_lod` base of `nodes[1..]`: `MSFT_lod` used
-/// (not required), `extras.MSFT_screencoverage` on the base (the
-/// `coverage` values, checked by [`check_coverage`], made
-/// non-increasing); returns the base node's extension object for
-/// [`Builder::finish`]. One node: nothing to link.
-pub(super) fn link_lods(
-    b: &mut Builder,
-    nodes: &[json::Index<json::Node>],
-    coverage: &[f64],
-) -> Result<Vec<(usize, serde_json::Value)>, ParseError> {
-    if nodes.len() <= 1 {
-        return Ok(Vec::new());
-    }
-    let mut last = 1.0f64;
-    let coverage: Vec<f64> = coverage
-        .iter()
-        .map(|&c| {
-            last = last.min(c);
-            last
-        })
-        .collect();
-    b.uses(MSFT_LOD, false);
-    let ids: Vec<usize> = nodes[1..].iter().map(|n| n.value()).collect();
-    let base = &mut b.root.nodes[nodes[0].value()];
-    let mut extras: serde_json::Value =
-        serde_json::from_str(base.extras.as_ref().map_or("{}", |r| r.get()))
-            .map_err(|e| parse_err!("GLB: {e}"))?;
-    extras["MSFT_screencoverage"] = serde_json::json!(coverage);
-    base.extras =
-        Some(serde_json::value::to_raw_value(&extras).map_err(|e| parse_err!("GLB: {e}"))?);
-    Ok(vec![(nodes[0].value(), serde_json::json!({ "ids": ids }))])
 }
 
 /// Writes a point cloud as one GLB: one node `name` with one `POINTS`
