@@ -3,7 +3,8 @@
 # the Khronos glTF-Validator on every file (0 errors, 0 warnings, no
 # UNUSED_OBJECT on a UV attribute), Babylon.js (NullEngine) on the LOD
 # chains (it implements MSFT_lod: every level seen, coarsest first, in
-# place), three.js GLTFLoader on every file (no MSFT_lod: level 0 alone).
+# place; for scene chains, every level and then level 0's meshes alone),
+# three.js GLTFLoader on every file (no MSFT_lod: level 0 alone).
 #
 # Usage: scripts/check-gltf.sh [LODKIT_BINARY]
 # Without a binary it builds target/release/lodkit with `--features
@@ -84,8 +85,12 @@ run convert "$tex/parts.gltf" "$work/parts_gltf.glb"
 run simplify "$tex/parts.gltf" -o "$work/parts_simplified.glb" --ratio 0.5
 run simplify "$tex/mug_scan.ply" -o "$work/mug_10.glb" --ratio 0.1
 run lods "$tex/mug_scan.ply" --out "$work/lods_mug" --ratios 0.5,0.1 --samples 20000
+run lods "$tex/parts.gltf" --out "$work/lods_parts" --ratios 0.5,0.2 --samples 20000
+run lods "$tex/parts.obj" --out "$work/lods_parts_c" --ratios 0.5,0.2 --samples 20000 --compress
+run convert "$tex/parts.gltf" "$work/parts_c.glb" --compress
+run simplify "$tex/mug_scan.ply" -o "$work/mug_10_c.glb" --ratio 0.1 --compress
 # lodkit reads back what it wrote (compressed and points included).
-for f in convert_c simplify_c points_xyz points_c; do
+for f in convert_c simplify_c points_xyz points_c parts_c mug_10_c lods_parts_c/parts_lods; do
   "$bin" -q info "$work/$f.glb" >/dev/null
 done
 
@@ -96,4 +101,8 @@ node "$check" load "${glbs[@]}"
 node "$check" chain "$work/lods/stanford_bunny_lods.glb" 7
 node "$check" chain "$work/lods_c/stanford_bunny_lods.glb" 7
 node "$check" chain "$work/build/lods/stanford_bunny_lods.glb" 4
+# Scene chains: a root node per level over that level's meshes.
+node "$check" scenechain "$work/lods_mug/mug_scan_lods.glb" 3
+node "$check" scenechain "$work/lods_parts/parts_lods.glb" 3
+node "$check" scenechain "$work/lods_parts_c/parts_lods.glb" 3
 echo "glTF checks: ${#glbs[@]} GLBs valid; LOD chains seen by Babylon.js and three.js"

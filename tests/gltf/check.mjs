@@ -8,6 +8,12 @@
 //                                            first, names NAME_LODk, all at level
 //                                            0's place; three.js GLTFLoader (no
 //                                            MSFT_lod) shows level 0 alone
+//   node check.mjs scenechain FILE.glb LEVELS  the same for a scene chain (one
+//                                            root node NAME_LODk per level over
+//                                            that level's meshes): Babylon.js
+//                                            loads LEVELS MSFT_lod levels and ends
+//                                            showing meshes under NAME_LOD0 only;
+//                                            three.js shows level 0's meshes alone
 //   node check.mjs load FILE.glb...          three.js GLTFLoader loads each file
 //
 // Exit 1 with one line per failure.
@@ -73,7 +79,9 @@ async function threeScene(file) {
       const box = new THREE.Box3().setFromObject(o);
       const g = o.geometry;
       const n = g.index ? g.index.count : g.attributes.position.count;
-      objects.push({ name: o.name, kind: o.isMesh ? "mesh" : "points", elements: n, box });
+      const ancestors = [];
+      for (let p = o.parent; p; p = p.parent) ancestors.push(p.name);
+      objects.push({ name: o.name, kind: o.isMesh ? "mesh" : "points", elements: n, box, ancestors });
     }
   });
   return objects;
@@ -130,9 +138,16 @@ async function babylonChain(file) {
   const bytes = new Uint8Array(readFileSync(file));
   await BABYLON.SceneLoader.ImportMeshAsync("", "", bytes, scene, null, ".glb");
   await done;
-  const enabled = scene.meshes.filter((m) => m.isEnabled() && m.getTotalIndices() > 0).map((m) => m.name);
+  const shown = scene.meshes.filter((m) => m.isEnabled() && m.getTotalIndices() > 0);
+  const enabled = shown.map((m) => m.name);
+  // The names of each shown mesh's ancestors (for scene chains).
+  const lineage = shown.map((m) => {
+    const names = [];
+    for (let p = m.parent; p; p = p.parent) names.push(p.name);
+    return names;
+  });
   engine.dispose();
-  return { meshes, lodsLoaded, enabled };
+  return { meshes, lodsLoaded, enabled, lineage };
 }
 
 async function chain(file, levels) {
@@ -167,12 +182,39 @@ async function chain(file, levels) {
   }
 }
 
+async function sceneChain(file, levels) {
+  const under0 = (names) => names.some((n) => n.endsWith("_LOD0"));
+  try {
+    const { meshes, lodsLoaded, enabled, lineage } = await babylonChain(file);
+    if (lodsLoaded !== levels) {
+      fail(`${file}: Babylon.js loaded ${lodsLoaded} MSFT_lod levels, expected ${levels}`);
+    }
+    if (enabled.length === 0 || !lineage.every(under0)) {
+      fail(`${file}: Babylon.js ends showing ${enabled.join(", ")}, expected level 0's meshes alone`);
+    }
+    console.log(`ok ${file}: Babylon.js MSFT_lod loaded ${lodsLoaded} levels (${meshes.length} meshes), then shows ${enabled.length} meshes under *_LOD0`);
+  } catch (e) {
+    fail(`${file}: Babylon.js: ${e?.stack ?? e}`);
+  }
+  try {
+    const objects = await threeScene(file);
+    if (objects.length === 0 || !objects.every((o) => under0(o.ancestors))) {
+      fail(`${file}: three.js shows ${objects.map((o) => `${o.name} under ${o.ancestors.join("/")}`).join(", ")}, expected level 0 alone`);
+    } else {
+      console.log(`ok ${file}: three.js GLTFLoader shows level 0 alone (${objects.length} meshes)`);
+    }
+  } catch (e) {
+    fail(`${file}: three.js GLTFLoader: ${e?.message ?? e}`);
+  }
+}
+
 const [cmd, ...args] = process.argv.slice(2);
 if (cmd === "validate") await validate(args);
 else if (cmd === "load") await load(args);
 else if (cmd === "chain") await chain(args[0], Number(args[1]));
+else if (cmd === "scenechain") await sceneChain(args[0], Number(args[1]));
 else {
-  console.error("usage: node check.mjs validate|load FILE... | chain FILE LEVELS");
+  console.error("usage: node check.mjs validate|load FILE... | chain|scenechain FILE LEVELS");
   process.exit(2);
 }
 process.exit(failures.length ? 1 : 0);

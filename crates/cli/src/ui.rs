@@ -424,22 +424,16 @@ impl OutputArgs {
 
     /// `scene` as `--normals` asks, each mesh on its own (as
     /// [`OutputArgs::normals_for`] decides for one mesh; face order and
-    /// face materials unchanged). `--compress` is refused (exit 2): scenes
-    /// with materials are written uncompressed.
+    /// face materials unchanged). `--compress` for an output that is not
+    /// .glb is refused (exit 2).
     pub fn scene(
         &self,
         mut scene: lodkit_mesh::Scene,
         output: &std::path::Path,
     ) -> anyhow::Result<lodkit_mesh::Scene> {
-        if self.compress {
-            return Err(usage(format!(
-                "{}: --compress applies to single meshes; this input keeps materials and parts \
-                 (add --merge to write one compressed mesh)",
-                output.display()
-            )));
-        }
         let format =
             lodkit_mesh::io::Format::from_path(output).unwrap_or(lodkit_mesh::io::Format::Glb);
+        self.check(Some(format), &output.display().to_string())?;
         for m in &mut scene.meshes {
             if let std::borrow::Cow::Owned(x) = self.normals_for(&m.mesh, format).apply(&m.mesh) {
                 m.mesh = x;

@@ -86,6 +86,70 @@ fn lods_of_a_textured_scan_embed_its_texture_in_every_level() {
         assert_eq!(sc.images.len(), 1, "{f}");
         assert_eq!(sc.images[0].bytes, png, "{f}");
     }
+    // The chain: level 0 (the input) alone in the scene, MSFT_lod over
+    // the other levels' root nodes, measured error in extras.
     let chain = lodkit_mesh::io::load_scene(&out.join("mug_scan_lods.glb")).unwrap();
-    assert_eq!(chain.roots.len(), 2);
+    assert_eq!(chain.roots.len(), 1);
+    assert_eq!(
+        chain.nodes[chain.roots[0]].name.as_deref(),
+        Some("mug_scan_LOD0")
+    );
+    let input = lodkit_mesh::io::load_scene(&data("mug_scan.ply")).unwrap();
+    assert_eq!(chain.face_count(), input.face_count());
+    let glb = std::fs::read(out.join("mug_scan_lods.glb")).unwrap();
+    let len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+    let j: serde_json::Value = serde_json::from_slice(&glb[20..20 + len]).unwrap();
+    let base = &j["nodes"][j["scenes"][0]["nodes"][0].as_u64().unwrap() as usize];
+    let ids = base["extensions"]["MSFT_lod"]["ids"].as_array().unwrap();
+    assert_eq!(ids.len(), 2);
+    let lod1 = &j["nodes"][ids[0].as_u64().unwrap() as usize];
+    assert_eq!(lod1["name"], "mug_scan_LOD1");
+    assert_eq!(lod1["extras"]["error"]["measured"], true);
+    assert!(lod1["extras"]["error"]["max"].as_f64().unwrap() > 0.0);
+    assert_eq!(
+        base["extras"]["MSFT_screencoverage"]
+            .as_array()
+            .unwrap()
+            .len(),
+        3
+    );
+}
+
+#[test]
+fn compress_on_a_scene_needs_a_glb_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = lodkit(&[
+        "convert",
+        s(&data("parts.gltf")),
+        s(&dir.path().join("x.obj")),
+        "--compress",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+}
+
+#[cfg(feature = "compress")]
+#[test]
+fn compressed_scene_lods_keep_materials_and_images() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("lods");
+    let o = lodkit(&[
+        "lods",
+        s(&data("parts.gltf")),
+        "--out",
+        s(&out),
+        "--ratios",
+        "0.5",
+        "--samples",
+        "2000",
+        "--compress",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let input = lodkit_mesh::io::load_scene(&data("parts.gltf")).unwrap();
+    for f in ["parts_lod1.glb", "parts_lods.glb"] {
+        let sc = lodkit_mesh::io::load_scene(&out.join(f)).unwrap();
+        assert_eq!(sc.materials, input.materials, "{f}");
+        for (x, y) in sc.images.iter().zip(&input.images) {
+            assert_eq!(x.bytes, y.bytes, "{f}");
+        }
+    }
 }

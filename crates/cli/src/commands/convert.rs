@@ -55,7 +55,7 @@ pub fn run(
         Input::Model(m) => m,
         Input::Scene(scene) => {
             let scene = out.scene(scene, output)?;
-            write_scene(ui, &scene, output, ascii)?;
+            write_scene(ui, &scene, output, ascii, &out.glb())?;
             if json {
                 return super::print_json(&Report {
                     input,
@@ -136,7 +136,13 @@ pub fn run(
 }
 
 /// Writes a scene (materials, parts, nodes) to .glb or .obj.
-fn write_scene(ui: &Ui, scene: &lodkit_mesh::Scene, output: &Path, ascii: bool) -> Result<()> {
+fn write_scene(
+    ui: &Ui,
+    scene: &lodkit_mesh::Scene,
+    output: &Path,
+    ascii: bool,
+    glb: &lodkit_mesh::io::gltf::GlbOptions,
+) -> Result<()> {
     if ascii {
         return Err(crate::ui::usage(format!(
             "--ascii applies to .ply and .stl outputs, not to {}",
@@ -144,7 +150,7 @@ fn write_scene(ui: &Ui, scene: &lodkit_mesh::Scene, output: &Path, ascii: bool) 
         )));
     }
     let step = ui.spinner(&format!("writing {}", output.display()));
-    lodkit_mesh::io::save_scene(output, scene, WriteOptions::default())?;
+    lodkit_mesh::io::save_scene_with(output, scene, WriteOptions::default(), glb)?;
     step.finish();
     Ok(())
 }

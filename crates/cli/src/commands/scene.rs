@@ -99,41 +99,14 @@ pub fn describe(scene: &Scene) -> String {
     )
 }
 
-/// One scene holding every level: a root node per level, named by
-/// `names`, over a copy of the level's node tree; the material, texture,
-/// image and sampler tables are shared (every level has the input's).
-pub fn chain_scene(levels: &[Scene], names: &[String]) -> Scene {
-    let mut out = match levels.first() {
-        Some(l) => l.clone_tables(),
-        None => return Scene::default(),
-    };
-    out.nodes.clear();
-    out.roots.clear();
-    for (l, name) in levels.iter().zip(names) {
-        let (mesh_base, node_base) = (out.meshes.len(), out.nodes.len() + 1);
-        out.roots.push(out.nodes.len());
-        out.nodes.push(lodkit_mesh::scene::Node {
-            name: Some(name.clone()),
-            children: l.roots.iter().map(|r| r + node_base).collect(),
-            ..Default::default()
-        });
-        out.nodes
-            .extend(l.nodes.iter().map(|n| lodkit_mesh::scene::Node {
-                name: n.name.clone(),
-                transform: n.transform,
-                mesh: n.mesh.map(|m| m + mesh_base),
-                children: n.children.iter().map(|c| c + node_base).collect(),
-            }));
-        out.meshes.extend(l.meshes.iter().cloned());
-    }
-    out
-}
-
 /// `lodkit lods` on a scene: each level made by
 /// `lodkit_simplify::scene::scene_lod_chain`, written as `STEM_lodN.glb`
-/// (materials and images embedded), all levels in `STEM_lods.glb` (a root
-/// node per level, materials shared), measured against the merged input,
-/// and `lods.json`.
+/// (materials and images embedded), measured against the merged input,
+/// and `lods.json`; `STEM_lods.glb` holds the input as level 0 and every
+/// non-empty level, one root node `STEM_LODk` per level over that level's
+/// node tree, linked by `MSFT_lod` as the one-mesh chain is
+/// (`lodkit_mesh::io::gltf::write_scene_lod_glb`; screen coverages and
+/// error extras from `build::lod_chain`), tables written once.
 pub fn run_lods(
     ui: &Ui,
     a: &super::lods::LodsArgs,
@@ -162,24 +135,38 @@ pub fn run_lods(
     let chain = lodkit_simplify::scene::scene_lod_chain(scene, opts, targets)
         .map_err(|e| anyhow::anyhow!("{}: {e}", a.input.display()))?;
     step.finish();
+    use super::build::lod_chain::{coverage, level_extras, significant};
+    let glb_path = a.out.join(format!("{stem}_lods.glb"));
+    let diagonal = merged.bbox().diagonal() as f64;
+    let level0 = a.output.scene(scene.clone(), &glb_path)?;
+    // (lod, level, extras, error) of every level the chain GLB holds.
+    let mut kept = vec![(
+        0usize,
+        level0,
+        level_extras(0, Some((0.0, 0.0)), 0.0, diagonal),
+        0.0f64,
+    )];
     let mut levels = Vec::new();
-    let mut kept = Vec::new();
-    let mut names = Vec::new();
     for (i, (level, reports)) in chain.into_iter().enumerate() {
-        let level = a
-            .output
-            .scene(level, &a.out.join(format!("{stem}_lods.glb")))?;
+        let level = a.output.scene(level, &glb_path)?;
         let r = lodkit_simplify::scene::combined_report(&reports)
             .ok_or_else(|| anyhow::anyhow!("{}: the scene has no meshes", a.input.display()))?;
         let file = format!("{stem}_lod{}.glb", i + 1);
         let m = sampling.measure(&reference, &level.merged().mesh)?;
         if level.meshes.iter().all(|m| !m.mesh.faces.is_empty()) {
             let path = a.out.join(&file);
-            let bytes = lodkit_mesh::io::gltf::write_scene_glb(&level)
+            let bytes = lodkit_mesh::io::gltf::write_scene_glb_with(&level, &a.output.glb())
                 .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
             write_atomic(&path, &bytes)?;
-            names.push(format!("{stem}_lod{}", i + 1));
-            kept.push(level);
+            let est = r.estimated_error as f64;
+            let measured = m.map(|x| (x.mean, x.max));
+            let error = measured.map_or(est, |(_, max)| max);
+            kept.push((
+                i + 1,
+                level,
+                level_extras(i + 1, measured, est, diagonal),
+                error,
+            ));
         }
         let l = super::lods::Level {
             level: i + 1,
@@ -202,11 +189,25 @@ pub fn run_lods(
         levels.push(l);
     }
     let glb_name = format!("{stem}_lods.glb");
-    let all = chain_scene(&kept, &names);
-    let path = a.out.join(&glb_name);
-    let bytes = lodkit_mesh::io::gltf::write_scene_glb(&all)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-    write_atomic(&path, &bytes)?;
+    let glb_levels: Vec<lodkit_mesh::io::gltf::SceneLodLevel> = kept
+        .iter()
+        .enumerate()
+        .map(
+            |(k, (lod, level, extras, _))| lodkit_mesh::io::gltf::SceneLodLevel {
+                name: format!("{stem}_LOD{lod}"),
+                scene: level,
+                extras: extras.clone(),
+                // Level k is shown down to the coverage at which level k + 1
+                // becomes good enough; the coarsest stays down to 0.
+                coverage: kept
+                    .get(k + 1)
+                    .map_or(0.0, |n| significant(coverage(n.3, diagonal))),
+            },
+        )
+        .collect();
+    let bytes = lodkit_mesh::io::gltf::write_scene_lod_glb(&glb_levels, &a.output.glb())
+        .map_err(|e| anyhow::anyhow!("{}: {e}", glb_path.display()))?;
+    write_atomic(&glb_path, &bytes)?;
     let report = super::lods::Lods {
         input: a.input.display().to_string(),
         input_triangles: merged.faces.len(),

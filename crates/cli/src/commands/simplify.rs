@@ -198,7 +198,7 @@ fn run_scene(ui: &Ui, a: &SimplifyArgs, scene: &lodkit_mesh::Scene, opts: &Optio
     let r = lodkit_simplify::scene::combined_report(&reports)
         .ok_or_else(|| anyhow::anyhow!("{}: the scene has no meshes", a.input.display()))?;
     let out = a.out.scene(out, &a.output)?;
-    lodkit_mesh::io::save_scene(&a.output, &out, WriteOptions::default())?;
+    lodkit_mesh::io::save_scene_with(&a.output, &out, WriteOptions::default(), &a.out.glb())?;
     if a.json {
         return super::print_json(&Report {
             input: &a.input,

@@ -41,7 +41,7 @@ pub mod scene_io;
 pub mod stl;
 pub mod xyz;
 
-pub use scene_io::{load_scene, save_scene};
+pub use scene_io::{load_scene, save_scene, save_scene_with};
 
 #[cfg(not(target_arch = "wasm32"))]
 use std::io::Write;

@@ -215,6 +215,17 @@ fn place_image(dir: &Path, wanted: &str, bytes: &[u8], taken: &[String]) -> (Str
 /// names a file that is not there. Deterministic for the same scene and
 /// folder contents.
 pub fn save_scene(path: &Path, scene: &Scene, opts: WriteOptions) -> Result<()> {
+    save_scene_with(path, scene, opts, &super::gltf::GlbOptions::default())
+}
+
+/// [`save_scene`] with the GLB writer's options (`glb`: compression, for
+/// a `.glb` path; other formats ignore it).
+pub fn save_scene_with(
+    path: &Path,
+    scene: &Scene,
+    opts: WriteOptions,
+    glb: &super::gltf::GlbOptions,
+) -> Result<()> {
     let format = Format::from_path(path).ok_or_else(|| {
         Error::unsupported(
             path,
@@ -223,8 +234,8 @@ pub fn save_scene(path: &Path, scene: &Scene, opts: WriteOptions) -> Result<()> 
     })?;
     match format {
         Format::Glb => {
-            let bytes =
-                super::gltf::write_scene_glb(scene).map_err(|e| Error::unsupported(path, e.0))?;
+            let bytes = super::gltf::write_scene_glb_with(scene, glb)
+                .map_err(|e| Error::unsupported(path, e.0))?;
             super::write_atomic(path, &bytes)
         }
         Format::Obj => save_obj(path, scene),

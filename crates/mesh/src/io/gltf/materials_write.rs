@@ -2,27 +2,38 @@
 //! nodes with their names and transforms, and the materials, textures,
 //! samplers and images the faces use, images embedded in the BIN chunk.
 //!
-//! Layout: per mesh, one set of vertex accessors (POSITION with min/max,
-//! NORMAL, COLOR_0, TEXCOORD_0 as `write_glb` writes them) shared by its
-//! primitives, and one index accessor per primitive; primitives follow the
-//! order in which their material first appears among the mesh's faces.
+//! Layout: per mesh, one glTF mesh with one primitive per material (in
+//! the order in which the material first appears among the mesh's
+//! faces), each primitive holding only its own vertices and its index
+//! accessor, written by the one-mesh writer's builder (`write.rs`): plain
+//! floats, or under [`GlbOptions::compress`] the same quantisation and
+//! meshopt codecs as a one-mesh GLB (POSITION on one grid over every
+//! mesh of every level, in mesh-local coordinates, undone by the node
+//! that places the mesh: its transform composed with the grid's
+//! translation and uniform scale, or, for a node with children, which
+//! must not inherit the grid, a nameless child node that carries the
+//! mesh and the grid's transform alone).
 //! Only what is used is written (glTF-Validator reports unused objects):
 //! materials some face uses, the textures those materials use, and those
 //! textures' images and samplers, renumbered in their original order.
-//! Each image is a buffer view of its unchanged bytes with its MIME type.
-//! MTL scalars with no glTF slot (`Ka`, `Ks`, `Ns`, `Ni`, `illum`) go to
-//! the material's `extras.mtl`, which the reader takes back.
+//! Each image is a plain buffer view of its unchanged bytes with its MIME
+//! type (never compressed). MTL scalars with no glTF slot (`Ka`, `Ks`,
+//! `Ns`, `Ni`, `illum`) go to the material's `extras.mtl`, which the
+//! reader takes back.
+//!
+//! An LOD chain of scenes ([`write_scene_lod_glb`]) shares the tables and
+//! gives each level one root node over a copy of its node tree, linked as
+//! the one-mesh chain is (`MSFT_lod` on level 0, see `write_lod_glb`).
 //! Deterministic: the same scene always gives the same bytes.
 
 use std::collections::BTreeMap;
 
-use glam::Vec2;
+use glam::{Mat4, Quat, Vec3};
 use gltf::json;
 use json::validation::Checked::Valid;
 
-use super::color::srgb8_to_linear;
-use super::glb::join_glb;
-use super::write::{le_bytes, vec3_bytes};
+use super::lod_links::{check_coverage, link_lods};
+use super::write::{Builder, GlbOptions, union_box};
 use crate::error::ParseError;
 use crate::mesh::TriMesh;
 use crate::parse_err;
@@ -39,95 +50,6 @@ fn renumber(used: &[bool]) -> Vec<Option<u32>> {
             })
         })
         .collect()
-}
-
-/// The vertex accessors of `m` (see the module docs).
-fn vertex_attributes(
-    b: &mut Builder,
-    m: &TriMesh,
-) -> BTreeMap<json::validation::Checked<json::mesh::Semantic>, json::Index<json::Accessor>> {
-    use json::accessor::{ComponentType as C, Type as T};
-    use json::buffer::Target::ArrayBuffer;
-    let n = m.positions.len();
-    let bbox = m.bbox();
-    let mut attributes = BTreeMap::new();
-    let pos = b.accessor(
-        &vec3_bytes(&m.positions),
-        n,
-        C::F32,
-        T::Vec3,
-        false,
-        ArrayBuffer,
-        Some((
-            json::Value::from(bbox.min.to_array().to_vec()),
-            json::Value::from(bbox.max.to_array().to_vec()),
-        )),
-    );
-    attributes.insert(Valid(json::mesh::Semantic::Positions), pos);
-    if let Some(normals) = &m.normals {
-        let a = b.accessor(
-            &vec3_bytes(normals),
-            n,
-            C::F32,
-            T::Vec3,
-            false,
-            ArrayBuffer,
-            None,
-        );
-        attributes.insert(Valid(json::mesh::Semantic::Normals), a);
-    }
-    if let Some(colors) = &m.colors {
-        let q = |c: u8| ((srgb8_to_linear(c) * 65535.0).round() as u16).to_le_bytes();
-        let bytes = le_bytes(colors, |c: [u8; 4]| {
-            let [r0, r1] = q(c[0]);
-            let [g0, g1] = q(c[1]);
-            let [b0, b1] = q(c[2]);
-            let [a0, a1] = (c[3] as u16 * 257).to_le_bytes();
-            [r0, r1, g0, g1, b0, b1, a0, a1]
-        });
-        let a = b.accessor(&bytes, n, C::U16, T::Vec4, true, ArrayBuffer, None);
-        attributes.insert(Valid(json::mesh::Semantic::Colors(0)), a);
-    }
-    if let Some(uvs) = &m.uvs {
-        let bytes = le_bytes(uvs, |t: Vec2| {
-            let [u0, u1, u2, u3] = t.x.to_le_bytes();
-            let [v0, v1, v2, v3] = (1.0 - t.y).to_le_bytes();
-            [u0, u1, u2, u3, v0, v1, v2, v3]
-        });
-        let a = b.accessor(&bytes, n, C::F32, T::Vec2, false, ArrayBuffer, None);
-        attributes.insert(Valid(json::mesh::Semantic::TexCoords(0)), a);
-    }
-    attributes
-}
-
-/// One index accessor over `faces` (u16 when every index fits, else u32).
-fn index_accessor(b: &mut Builder, faces: &[[u32; 3]], n: usize) -> json::Index<json::Accessor> {
-    use json::accessor::{ComponentType as C, Type as T};
-    use json::buffer::Target::ElementArrayBuffer;
-    let flat: Vec<u32> = faces.iter().flatten().copied().collect();
-    if n < u16::MAX as usize {
-        let bytes = le_bytes(&flat, |i: u32| (i as u16).to_le_bytes());
-        b.accessor(
-            &bytes,
-            flat.len(),
-            C::U16,
-            T::Scalar,
-            false,
-            ElementArrayBuffer,
-            None,
-        )
-    } else {
-        let bytes = le_bytes(&flat, |i: u32| i.to_le_bytes());
-        b.accessor(
-            &bytes,
-            flat.len(),
-            C::U32,
-            T::Scalar,
-            false,
-            ElementArrayBuffer,
-            None,
-        )
-    }
 }
 
 /// The vertices `faces` use, in their order in `m`, and the faces
@@ -160,25 +82,6 @@ fn sub_mesh(m: &TriMesh, faces: &[[u32; 3]]) -> TriMesh {
         uvs: m.uvs.as_ref().map(|a| keep.iter().map(|&v| a[v]).collect()),
         faces: faces.iter().map(|f| f.map(|v| remap[v as usize])).collect(),
     }
-}
-
-/// A buffer view over `bytes` (4-byte aligned, no target), for an image.
-fn raw_view(b: &mut Builder, bytes: &[u8]) -> json::Index<json::buffer::View> {
-    let offset = b.bin.len();
-    b.bin.extend_from_slice(bytes);
-    while !b.bin.len().is_multiple_of(4) {
-        b.bin.push(0);
-    }
-    b.root.push(json::buffer::View {
-        buffer: json::Index::new(0),
-        byte_length: bytes.len().into(),
-        byte_offset: Some(offset.into()),
-        byte_stride: None,
-        name: None,
-        target: None,
-        extensions: None,
-        extras: None,
-    })
 }
 
 /// A glTF enum value as its `gltf-json` type (serde does the mapping).
@@ -275,88 +178,54 @@ fn material_json(
     })
 }
 
-/// Builds a scene GLB's BIN chunk and the JSON objects that point into
-/// it: plain accessors only (a scene GLB is written uncompressed).
-struct Builder {
-    bin: Vec<u8>,
-    root: json::Root,
+/// One level of a scene LOD chain for [`write_scene_lod_glb`].
+#[derive(Clone, Debug)]
+pub struct SceneLodLevel<'a> {
+    /// The level's root node name (`NAME_LOD0`, `NAME_LOD1`, …).
+    pub name: String,
+    /// The level; every level has the same material, texture, image and
+    /// sampler tables.
+    pub scene: &'a Scene,
+    /// The root node's `extras` (an object; the writer adds `triangles`
+    /// and `vertices`, summed over the level's meshes).
+    pub extras: serde_json::Map<String, serde_json::Value>,
+    /// The smallest screen coverage at which this level is still shown
+    /// (`MSFT_screencoverage`, in `[0, 1]`).
+    pub coverage: f64,
 }
 
-impl Builder {
-    /// Appends `bytes` as a new 4-byte-aligned buffer view and an accessor
-    /// over it; returns the accessor's index.
-    #[allow(clippy::too_many_arguments)]
-    fn accessor(
-        &mut self,
-        bytes: &[u8],
-        count: usize,
-        component: json::accessor::ComponentType,
-        ty: json::accessor::Type,
-        normalized: bool,
-        target: json::buffer::Target,
-        min_max: Option<(json::Value, json::Value)>,
-    ) -> json::Index<json::Accessor> {
-        debug_assert!(self.bin.len().is_multiple_of(4));
-        let offset = self.bin.len();
-        self.bin.extend_from_slice(bytes);
-        while !self.bin.len().is_multiple_of(4) {
-            self.bin.push(0);
+/// The written material and texture numbering shared by every level.
+struct Tables {
+    mat_new: Vec<Option<u32>>,
+}
+
+/// A builder over the levels' common grid with the tables the levels use
+/// written: samplers, images, textures, materials (in that order).
+fn start(scenes: &[&Scene], opts: &GlbOptions) -> Result<(Builder, Tables), ParseError> {
+    let first = scenes[0];
+    for s in scenes {
+        s.validate()?;
+        if s.materials != first.materials
+            || s.textures != first.textures
+            || s.images != first.images
+            || s.samplers != first.samplers
+        {
+            return Err(ParseError::new(
+                "GLB: the levels' material, texture, image or sampler tables differ",
+            ));
         }
-        let view = self.root.push(json::buffer::View {
-            buffer: json::Index::new(0),
-            byte_length: bytes.len().into(),
-            byte_offset: Some(offset.into()),
-            byte_stride: None,
-            name: None,
-            target: Some(json::validation::Checked::Valid(target)),
-            extensions: None,
-            extras: None,
-        });
-        let (min, max) = match min_max {
-            Some((a, b)) => (Some(a), Some(b)),
-            None => (None, None),
-        };
-        self.root.push(json::Accessor {
-            buffer_view: Some(view),
-            byte_offset: None,
-            count: count.into(),
-            component_type: json::validation::Checked::Valid(json::accessor::GenericComponentType(
-                component,
-            )),
-            extensions: None,
-            extras: None,
-            type_: json::validation::Checked::Valid(ty),
-            min,
-            max,
-            name: None,
-            normalized,
-            sparse: None,
-        })
     }
-}
-
-/// Writes `scene` as one GLB (see the module docs for the layout).
-///
-/// Errors: a scene that breaks [`Scene::validate`], a mesh with no faces,
-/// a sampler value that is not a glTF enum, or more data than a GLB holds
-/// (4 GiB). Cost: one pass over the geometry plus a copy of each image.
-pub fn write_scene_glb(scene: &Scene) -> Result<Vec<u8>, ParseError> {
-    scene.validate()?;
-    let mut b = Builder {
-        bin: Vec::new(),
-        root: json::Root {
-            asset: json::Asset {
-                generator: Some(format!("lodkit {}", env!("CARGO_PKG_VERSION"))),
-                ..Default::default()
-            },
-            ..Default::default()
-        },
-    };
+    let bbox = union_box(
+        scenes
+            .iter()
+            .flat_map(|s| s.meshes.iter().map(|m| m.mesh.positions.as_slice())),
+    );
+    let mut b = Builder::new(opts, Some(bbox))?;
     // What is used: materials by faces of meshes with UVs or not; textures
     // only by materials on meshes with UVs.
-    let mut mat_used = vec![false; scene.materials.len()];
-    let mut mat_uv = vec![false; scene.materials.len()];
-    for sm in &scene.meshes {
+    let mut mat_used = vec![false; first.materials.len()];
+    let mut mat_uv = vec![false; first.materials.len()];
+    for sm in scenes.iter().flat_map(|s| &s.meshes) {
         for &f in &sm.face_materials {
             if f != NO_MATERIAL {
                 mat_used[f as usize] = true;
@@ -364,17 +233,17 @@ pub fn write_scene_glb(scene: &Scene) -> Result<Vec<u8>, ParseError> {
             }
         }
     }
-    let mut tex_used = vec![false; scene.textures.len()];
-    for (i, m) in scene.materials.iter().enumerate() {
+    let mut tex_used = vec![false; first.textures.len()];
+    for (i, m) in first.materials.iter().enumerate() {
         if mat_uv[i] {
             for r in m.texture_refs() {
                 tex_used[r.texture] = true;
             }
         }
     }
-    let mut img_used = vec![false; scene.images.len()];
-    let mut smp_used = vec![false; scene.samplers.len()];
-    for (i, t) in scene.textures.iter().enumerate() {
+    let mut img_used = vec![false; first.images.len()];
+    let mut smp_used = vec![false; first.samplers.len()];
+    for (i, t) in first.textures.iter().enumerate() {
         if tex_used[i] {
             img_used[t.image] = true;
             if let Some(s) = t.sampler {
@@ -388,8 +257,7 @@ pub fn write_scene_glb(scene: &Scene) -> Result<Vec<u8>, ParseError> {
         renumber(&img_used),
         renumber(&smp_used),
     );
-
-    for (i, s) in scene.samplers.iter().enumerate() {
+    for (i, s) in first.samplers.iter().enumerate() {
         if smp_used[i] {
             b.root.samplers.push(json::texture::Sampler {
                 mag_filter: s.mag_filter.map(gl_enum).transpose()?,
@@ -402,9 +270,9 @@ pub fn write_scene_glb(scene: &Scene) -> Result<Vec<u8>, ParseError> {
             });
         }
     }
-    for (i, im) in scene.images.iter().enumerate() {
+    for (i, im) in first.images.iter().enumerate() {
         if img_used[i] {
-            let view = raw_view(&mut b, &im.bytes);
+            let view = b.raw_view(&im.bytes);
             b.root.images.push(json::Image {
                 buffer_view: Some(view),
                 mime_type: Some(json::image::MimeType(im.mime_type.clone())),
@@ -416,7 +284,7 @@ pub fn write_scene_glb(scene: &Scene) -> Result<Vec<u8>, ParseError> {
             });
         }
     }
-    for (i, t) in scene.textures.iter().enumerate() {
+    for (i, t) in first.textures.iter().enumerate() {
         if tex_used[i] {
             b.root.textures.push(json::Texture {
                 name: t.name.clone(),
@@ -427,19 +295,85 @@ pub fn write_scene_glb(scene: &Scene) -> Result<Vec<u8>, ParseError> {
             });
         }
     }
-    for (i, m) in scene.materials.iter().enumerate() {
+    for (i, m) in first.materials.iter().enumerate() {
         if mat_used[i] {
             let j = material_json(m, &tex_new, mat_uv[i])?;
             b.root.materials.push(j);
         }
     }
+    Ok((b, Tables { mat_new }))
+}
 
+/// A node's transform fields (`matrix`, `translation`, `rotation`,
+/// `scale`), each `None` where it is the identity's.
+type NodeTransform = (
+    Option<[f32; 16]>,
+    Option<[f32; 3]>,
+    Option<json::scene::UnitQuaternion>,
+    Option<[f32; 3]>,
+);
+
+/// `t` followed (on the mesh side) by the grid's translation `origin` and
+/// uniform scale `step`, as node fields; `None` grid: `t` alone. TRS stays
+/// TRS (`T R S · T(o) S(k) = T(t + R(s∘o)) R S(s·k)`), a matrix stays a
+/// matrix.
+fn node_transform(t: &Transform, grid: Option<(Vec3, f32)>) -> NodeTransform {
+    let t = if t.is_identity() {
+        Transform::IDENTITY
+    } else {
+        *t
+    };
+    match (t, grid) {
+        (Transform::Matrix(m), Some((o, k))) => {
+            let d = Mat4::from_scale_rotation_translation(Vec3::splat(k), Quat::IDENTITY, o);
+            (
+                Some((Mat4::from_cols_array(&m) * d).to_cols_array()),
+                None,
+                None,
+                None,
+            )
+        }
+        (Transform::Matrix(m), None) => (Some(m), None, None, None),
+        (
+            Transform::Trs {
+                translation,
+                rotation,
+                scale,
+            },
+            grid,
+        ) => {
+            let (t, s) = match grid {
+                Some((o, k)) => {
+                    let s = Vec3::from(scale);
+                    let t = Vec3::from(translation) + Quat::from_array(rotation) * (s * o);
+                    (t.to_array(), (s * k).to_array())
+                }
+                None => (translation, scale),
+            };
+            (
+                None,
+                (t != [0.0; 3]).then_some(t),
+                (rotation != [0.0, 0.0, 0.0, 1.0]).then_some(json::scene::UnitQuaternion(rotation)),
+                (s != [1.0; 3]).then_some(s),
+            )
+        }
+    }
+}
+
+/// Writes `scene`'s meshes and nodes into `b` (tables already written by
+/// [`start`]); returns its root nodes.
+fn add_scene(
+    b: &mut Builder,
+    tables: &Tables,
+    scene: &Scene,
+) -> Result<Vec<json::Index<json::Node>>, ParseError> {
     let mut mesh_index = Vec::with_capacity(scene.meshes.len());
     for (mi, sm) in scene.meshes.iter().enumerate() {
         let m = &sm.mesh;
         if m.faces.is_empty() {
             return Err(parse_err!("GLB: mesh {mi} has no faces"));
         }
+        let label = sm.name.clone().unwrap_or_else(|| format!("mesh {mi}"));
         // Materials in order of first appearance; faces grouped by them.
         let mut order: Vec<u32> = Vec::new();
         let mut group: BTreeMap<u32, Vec<[u32; 3]>> = BTreeMap::new();
@@ -460,20 +394,12 @@ pub fn write_scene_glb(scene: &Scene) -> Result<Vec<u8>, ParseError> {
             if !textured {
                 sub.uvs = None;
             }
-            let attributes = vertex_attributes(&mut b, &sub);
-            let indices = index_accessor(&mut b, &sub.faces, sub.positions.len());
-            primitives.push(json::mesh::Primitive {
-                attributes,
-                extensions: None,
-                extras: None,
-                indices: Some(indices),
-                material: (id != NO_MATERIAL)
-                    .then(|| mat_new[id as usize])
-                    .flatten()
-                    .map(json::Index::new),
-                mode: Valid(json::mesh::Mode::Triangles),
-                targets: None,
-            });
+            let mut prim = b.primitive(&label, &sub)?;
+            prim.material = (id != NO_MATERIAL)
+                .then(|| tables.mat_new[id as usize])
+                .flatten()
+                .map(json::Index::new);
+            primitives.push(prim);
         }
         mesh_index.push(b.root.push(json::Mesh {
             extensions: None,
@@ -483,33 +409,55 @@ pub fn write_scene_glb(scene: &Scene) -> Result<Vec<u8>, ParseError> {
             weights: None,
         }));
     }
+    let grid = b.quantise.map(|q| (q.origin, q.step));
+    let base = b.root.nodes.len();
+    // Nameless nodes that carry a quantised mesh under a node with
+    // children (so the children do not inherit the grid), after the
+    // scene's own nodes.
+    let mut carriers: Vec<json::Node> = Vec::new();
     for n in &scene.nodes {
-        let (mut matrix, mut translation, mut rotation, mut scale) = (None, None, None, None);
-        match n.transform {
-            _ if n.transform.is_identity() => {}
-            Transform::Matrix(m) => matrix = Some(m),
-            Transform::Trs {
-                translation: t,
-                rotation: r,
-                scale: s,
-            } => {
-                translation = (t != [0.0; 3]).then_some(t);
-                rotation = (r != [0.0, 0.0, 0.0, 1.0]).then_some(json::scene::UnitQuaternion(r));
-                scale = (s != [1.0; 3]).then_some(s);
-            }
+        let carried = grid.is_some() && n.mesh.is_some() && !n.children.is_empty();
+        let (matrix, translation, rotation, scale) = node_transform(
+            &n.transform,
+            if carried {
+                None
+            } else {
+                grid.filter(|_| n.mesh.is_some())
+            },
+        );
+        let mut children: Vec<json::Index<json::Node>> = n
+            .children
+            .iter()
+            .map(|&c| json::Index::new((base + c) as u32))
+            .collect();
+        let mut mesh = n.mesh.map(|m| mesh_index[m]);
+        if carried {
+            children.push(json::Index::new(
+                (base + scene.nodes.len() + carriers.len()) as u32,
+            ));
+            let (matrix, translation, rotation, scale) = node_transform(&Transform::IDENTITY, grid);
+            carriers.push(json::Node {
+                camera: None,
+                children: None,
+                extensions: None,
+                extras: None,
+                matrix,
+                mesh: mesh.take(),
+                name: None,
+                rotation,
+                scale,
+                translation,
+                skin: None,
+                weights: None,
+            });
         }
         b.root.nodes.push(json::Node {
             camera: None,
-            children: (!n.children.is_empty()).then(|| {
-                n.children
-                    .iter()
-                    .map(|&c| json::Index::new(c as u32))
-                    .collect()
-            }),
+            children: (!children.is_empty()).then_some(children),
             extensions: None,
             extras: None,
             matrix,
-            mesh: n.mesh.map(|m| mesh_index[m]),
+            mesh,
             name: n.name.clone(),
             rotation,
             scale,
@@ -518,31 +466,85 @@ pub fn write_scene_glb(scene: &Scene) -> Result<Vec<u8>, ParseError> {
             weights: None,
         });
     }
-    let bin_len = b.bin.len();
-    if bin_len > u32::MAX as usize - 1024 {
-        return Err(parse_err!(
-            "GLB: {bin_len} bytes of geometry and images, over the 4 GiB GLB limit"
-        ));
-    }
-    b.root.push(json::Buffer {
-        byte_length: bin_len.into(),
-        name: None,
-        uri: None,
-        extensions: None,
-        extras: None,
-    });
-    let root_nodes = scene
+    b.root.nodes.extend(carriers);
+    Ok(scene
         .roots
         .iter()
-        .map(|&r| json::Index::new(r as u32))
-        .collect();
-    let s = b.root.push(json::Scene {
-        extensions: None,
-        extras: None,
-        name: None,
-        nodes: root_nodes,
-    });
-    b.root.scene = Some(s);
-    let js = serde_json::to_vec(&b.root).map_err(|e| parse_err!("GLB: {e}"))?;
-    join_glb(js, &b.bin)
+        .map(|&r| json::Index::new((base + r) as u32))
+        .collect())
+}
+
+/// Writes `scene` as one GLB, uncompressed (see the module docs for the
+/// layout): [`write_scene_glb_with`] with default options.
+pub fn write_scene_glb(scene: &Scene) -> Result<Vec<u8>, ParseError> {
+    write_scene_glb_with(scene, &GlbOptions::default())
+}
+
+/// Writes `scene` as one GLB (see the module docs for the layout), plain
+/// or compressed (`opts.compress`: `KHR_mesh_quantization` +
+/// `EXT_meshopt_compression`, as for one mesh; images stay as stored).
+///
+/// Errors: a scene that breaks [`Scene::validate`], a mesh with no faces,
+/// a sampler value that is not a glTF enum, more data than a GLB holds
+/// (4 GiB), `compress` without the `meshopt` feature. Cost: one pass over
+/// the geometry plus a copy of each image (compressing: plus
+/// meshoptimizer's reordering and codecs, linear).
+pub fn write_scene_glb_with(scene: &Scene, opts: &GlbOptions) -> Result<Vec<u8>, ParseError> {
+    let (mut b, tables) = start(&[scene], opts)?;
+    let roots = add_scene(&mut b, &tables, scene)?;
+    b.finish(roots, Vec::new())
+}
+
+/// Writes an LOD chain of scenes as one GLB that engines read as one
+/// object: one root node per level, named [`SceneLodLevel::name`], whose
+/// children are a copy of that level's root nodes (meshes, nodes, names
+/// and transforms as [`write_scene_glb_with`] writes them; the tables
+/// written once). Level 0's root node is the scene's only root and
+/// carries `MSFT_lod` over the other levels' root nodes (finest first)
+/// and `extras.MSFT_screencoverage` (the levels' coverages, made
+/// non-increasing); the other levels are outside the scene, so a loader
+/// without `MSFT_lod` shows level 0 alone. Root node extras are
+/// [`SceneLodLevel::extras`] plus `triangles` and `vertices`.
+///
+/// Errors: no levels, levels whose tables differ, a coverage outside
+/// `[0, 1]`, and those of [`write_scene_glb_with`].
+pub fn write_scene_lod_glb(
+    levels: &[SceneLodLevel<'_>],
+    opts: &GlbOptions,
+) -> Result<Vec<u8>, ParseError> {
+    if levels.is_empty() {
+        return Err(ParseError::new("GLB: no levels to write"));
+    }
+    for l in levels {
+        check_coverage(&l.name, l.coverage)?;
+    }
+    let scenes: Vec<&Scene> = levels.iter().map(|l| l.scene).collect();
+    let (mut b, tables) = start(&scenes, opts)?;
+    let mut wrappers = Vec::with_capacity(levels.len());
+    for l in levels {
+        let roots = add_scene(&mut b, &tables, l.scene)?;
+        let mut extras = l.extras.clone();
+        extras.insert("triangles".into(), l.scene.face_count().into());
+        let vertices: usize = l.scene.meshes.iter().map(|m| m.mesh.positions.len()).sum();
+        extras.insert("vertices".into(), vertices.into());
+        let extras = serde_json::value::to_raw_value(&serde_json::Value::Object(extras))
+            .map_err(|e| parse_err!("GLB: {e}"))?;
+        wrappers.push(b.root.push(json::Node {
+            camera: None,
+            children: (!roots.is_empty()).then_some(roots),
+            extensions: None,
+            extras: Some(extras),
+            matrix: None,
+            mesh: None,
+            name: Some(l.name.clone()),
+            rotation: None,
+            scale: None,
+            translation: None,
+            skin: None,
+            weights: None,
+        }));
+    }
+    let coverage: Vec<f64> = levels.iter().map(|l| l.coverage).collect();
+    let ext = link_lods(&mut b, &wrappers, &coverage)?;
+    b.finish(vec![wrappers[0]], ext)
 }

@@ -104,6 +104,7 @@ mod buffers;
 mod color;
 mod extensions;
 mod glb;
+mod lod_links;
 mod materials_read;
 mod materials_write;
 mod points;
@@ -115,7 +116,9 @@ mod tests;
 #[cfg(test)]
 mod tests_engines;
 
-pub use materials_write::write_scene_glb;
+pub use materials_write::{
+    SceneLodLevel, write_scene_glb, write_scene_glb_with, write_scene_lod_glb,
+};
 pub use points::read_model;
 pub use read::{INSTANCING_FLOOR, MAX_INSTANCING_GROWTH, read, read_scene};
 pub use write::{

@@ -560,20 +560,34 @@ fn read_parts(
 }
 
 /// Reads a glTF or GLB file as a [`Scene`] (see the module docs): each
-/// mesh with triangle primitives becomes one [`SceneMesh`] in its own
+/// mesh with triangle primitives that a node of the default scene places
+/// (every mesh when the file has no nodes) becomes one [`SceneMesh`] in its own
 /// frame (its primitives' faces in order, each face tagged with its
 /// primitive's material), the nodes reachable from the default scene keep
 /// their names, local transforms and hierarchy (renumbered depth first),
 /// and the material, texture, sampler and image tables are read
-/// (`materials_read`). Same checks and errors as [`read`];
+/// (`materials_read`). Compressed and quantised files are expanded first,
+/// as by `read_model`. Same checks and errors as [`read`];
 /// instances are not expanded (a node refers to its mesh).
 pub fn read_scene(bytes: &[u8], base_dir: Option<&Path>) -> Result<Scene, ParseError> {
+    let expanded = super::extensions::expand(bytes, base_dir)?;
+    let bytes = expanded.as_deref().unwrap_or(bytes);
     let (doc, bin) = parse_document(bytes)?;
     // Checks the node graph (no cycle, one parent per node).
     instances(&doc)?;
+    // Only the meshes the default scene's nodes place (an MSFT_lod chain's
+    // other levels sit outside the scene); with no nodes at all, every mesh.
+    let mut placed = vec![doc.nodes().len() == 0; doc.meshes().len()];
+    let mut stack: Vec<gltf::Node> = root_nodes(&doc);
+    while let Some(n) = stack.pop() {
+        if let Some(m) = n.mesh() {
+            placed[m.index()] = true;
+        }
+        stack.extend(n.children());
+    }
     let mut scene = Scene::default();
     let mut mesh_map = vec![None; doc.meshes().len()];
-    for mesh in doc.meshes() {
+    for mesh in doc.meshes().filter(|m| placed[m.index()]) {
         let parts: Vec<Part> = mesh
             .primitives()
             .filter(|p| {

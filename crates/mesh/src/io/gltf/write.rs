@@ -19,6 +19,7 @@ use json::validation::Checked::Valid;
 
 use super::color::srgb8_to_linear;
 use super::glb::join_glb;
+use super::lod_links::{check_coverage, link_lods};
 use crate::error::ParseError;
 use crate::mesh::{Aabb, PointCloud, TriMesh};
 use crate::parse_err;
@@ -54,9 +55,9 @@ pub struct LodLevel<'a> {
 /// same grid). 14 bits is gltfpack's default: 1/16383 of the largest
 /// extent.
 #[derive(Clone, Copy, Debug)]
-struct Quantise {
-    origin: Vec3,
-    step: f32,
+pub(super) struct Quantise {
+    pub(super) origin: Vec3,
+    pub(super) step: f32,
 }
 
 const POSITION_BITS: u32 = 14;
@@ -97,12 +98,13 @@ enum Codec {
     Triangles(usize),
 }
 
-/// Builds the BIN chunk and the JSON objects that point into it.
-struct Builder {
+/// Builds the BIN chunk and the JSON objects that point into it (the
+/// one-mesh layouts here and the scene layouts of `materials_write`).
+pub(super) struct Builder {
     bin: Vec<u8>,
-    root: json::Root,
+    pub(super) root: json::Root,
     compress: bool,
-    quantise: Option<Quantise>,
+    pub(super) quantise: Option<Quantise>,
     /// The uncompressed size of the compressed views (the fallback buffer).
     fallback_len: usize,
     /// `EXT_meshopt_compression` objects of the views, added after
@@ -114,7 +116,7 @@ struct Builder {
 
 const MESHOPT: &str = "EXT_meshopt_compression";
 const QUANTIZATION: &str = "KHR_mesh_quantization";
-const MSFT_LOD: &str = "MSFT_lod";
+pub(super) const MSFT_LOD: &str = "MSFT_lod";
 
 pub(super) fn le_bytes<const N: usize, T: Copy>(items: &[T], f: impl Fn(T) -> [u8; N]) -> Vec<u8> {
     let mut v = Vec::with_capacity(items.len() * N);
@@ -171,7 +173,7 @@ fn octahedral_normals(normals: &[Vec3]) -> Vec<u8> {
 }
 
 impl Builder {
-    fn new(opts: &GlbOptions, quantise: Option<Aabb>) -> Result<Builder, ParseError> {
+    pub(super) fn new(opts: &GlbOptions, quantise: Option<Aabb>) -> Result<Builder, ParseError> {
         if opts.compress && !cfg!(feature = "meshopt") {
             return Err(ParseError::new(
                 "--compress needs lodkit built with the `compress` feature (meshoptimizer, C++): \
@@ -200,7 +202,7 @@ impl Builder {
         })
     }
 
-    fn uses(&mut self, ext: &'static str, required: bool) {
+    pub(super) fn uses(&mut self, ext: &'static str, required: bool) {
         if !self.used.contains(&ext) {
             self.used.push(ext);
         }
@@ -213,6 +215,25 @@ impl Builder {
         while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
+    }
+
+    /// Appends `bytes` as a plain buffer view of the BIN chunk (4-byte
+    /// aligned, no target, never compressed): an image's bytes.
+    pub(super) fn raw_view(&mut self, bytes: &[u8]) -> json::Index<json::buffer::View> {
+        self.align_bin();
+        let offset = self.bin.len();
+        self.bin.extend_from_slice(bytes);
+        self.align_bin();
+        self.root.push(json::buffer::View {
+            buffer: json::Index::new(0),
+            byte_length: bytes.len().into(),
+            byte_offset: Some(offset.into()),
+            byte_stride: None,
+            name: None,
+            target: None,
+            extensions: None,
+            extras: None,
+        })
     }
 
     /// Appends `bytes` (`count` elements) as a new buffer view — plain, or
@@ -429,7 +450,11 @@ impl Builder {
 
     /// One triangle primitive for `m` (checked); compressing reorders its
     /// triangles and vertices for the codecs first (the same surface).
-    fn primitive(&mut self, name: &str, m: &TriMesh) -> Result<json::mesh::Primitive, ParseError> {
+    pub(super) fn primitive(
+        &mut self,
+        name: &str,
+        m: &TriMesh,
+    ) -> Result<json::mesh::Primitive, ParseError> {
         m.validate()
             .map_err(|e| parse_err!("GLB level '{name}': {e}"))?;
         if m.faces.is_empty() {
@@ -554,7 +579,7 @@ impl Builder {
 
     /// The buffers, the scene of `roots`, the extension lists and the
     /// `node_extensions` patched in; then the GLB container.
-    fn finish(
+    pub(super) fn finish(
         mut self,
         roots: Vec<json::Index<json::Node>>,
         node_extensions: Vec<(usize, serde_json::Value)>,
@@ -626,7 +651,7 @@ impl Builder {
 }
 
 /// The union of the levels' boxes.
-fn union_box<'a>(meshes: impl Iterator<Item = &'a [Vec3]>) -> Aabb {
+pub(super) fn union_box<'a>(meshes: impl Iterator<Item = &'a [Vec3]>) -> Aabb {
     let mut b: Option<Aabb> = None;
     for p in meshes {
         let x = Aabb::from_points(p);
@@ -644,7 +669,7 @@ fn union_box<'a>(meshes: impl Iterator<Item = &'a [Vec3]>) -> Aabb {
     })
 }
 
-fn counts(m: &TriMesh) -> serde_json::Map<String, serde_json::Value> {
+pub(super) fn counts(m: &TriMesh) -> serde_json::Map<String, serde_json::Value> {
     let mut e = serde_json::Map::new();
     e.insert("triangles".into(), m.faces.len().into());
     e.insert("vertices".into(), m.positions.len().into());
@@ -700,36 +725,15 @@ pub fn write_lod_glb(levels: &[LodLevel<'_>], opts: &GlbOptions) -> Result<Vec<u
     let bbox = union_box(levels.iter().map(|l| l.mesh.positions.as_slice()));
     let mut b = Builder::new(opts, Some(bbox))?;
     let mut nodes = Vec::new();
-    let mut coverage = Vec::new();
-    let mut last = 1.0f64;
     for l in levels {
-        if !(0.0..=1.0).contains(&l.coverage) {
-            return Err(parse_err!(
-                "GLB level '{}': screen coverage {} is outside [0, 1]",
-                l.name,
-                l.coverage
-            ));
-        }
-        last = last.min(l.coverage);
-        coverage.push(last);
+        check_coverage(&l.name, l.coverage)?;
         let prim = b.primitive(&l.name, l.mesh)?;
         let mut extras = l.extras.clone();
         extras.extend(counts(l.mesh));
         nodes.push(b.node(&l.name, prim, extras)?);
     }
-    let mut node_extensions = Vec::new();
-    if nodes.len() > 1 {
-        b.uses(MSFT_LOD, false);
-        let ids: Vec<usize> = nodes[1..].iter().map(|n| n.value()).collect();
-        node_extensions.push((nodes[0].value(), serde_json::json!({ "ids": ids })));
-        let base = &mut b.root.nodes[nodes[0].value()];
-        let mut extras: serde_json::Value =
-            serde_json::from_str(base.extras.as_ref().map_or("{}", |r| r.get()))
-                .map_err(|e| parse_err!("GLB: {e}"))?;
-        extras["MSFT_screencoverage"] = serde_json::json!(coverage);
-        base.extras =
-            Some(serde_json::value::to_raw_value(&extras).map_err(|e| parse_err!("GLB: {e}"))?);
-    }
+    let coverage: Vec<f64> = levels.iter().map(|l| l.coverage).collect();
+    let node_extensions = link_lods(&mut b, &nodes, &coverage)?;
     b.finish(vec![nodes[0]], node_extensions)
 }
 
