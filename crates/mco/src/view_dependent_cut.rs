@@ -552,20 +552,24 @@ impl ViewCut {
         while let Some(r) = self.stack.pop() {
             let h = &lay.hot[r as usize];
             let (lo, hi) = lay.cube(h);
-            let descend = if fr.shows(lo, hi, h.err) {
-                wanted.push(r);
-                true
-            } else {
-                h.bound == f32::INFINITY || {
-                    let m = lo.abs().max(hi.abs()).max_element() * BOUND_GROWTH;
-                    let g = Vec3::splat(m + f32::MIN_POSITIVE);
-                    fr.shows(lo - g, hi + g, h.bound)
-                }
+            // The bound covers the node itself (it is at least the node's
+            // error, on a cube that contains the node's), so a subtree
+            // whose bound does not show holds no wanted node, this one
+            // included: one test rejects it, the most common outcome of a
+            // search's test. Only a subtree that may show tests its root.
+            let may_show = h.bound == f32::INFINITY || {
+                let m = lo.abs().max(hi.abs()).max_element() * BOUND_GROWTH;
+                let g = Vec3::splat(m + f32::MIN_POSITIVE);
+                fr.shows(lo - g, hi + g, h.bound)
             };
-            if descend {
-                let k = h.inner_mask.count_ones();
-                self.stack.extend(h.first_inner..h.first_inner + k);
+            if !may_show {
+                continue;
             }
+            if fr.shows(lo, hi, h.err) {
+                wanted.push(r);
+            }
+            let k = h.inner_mask.count_ones();
+            self.stack.extend(h.first_inner..h.first_inner + k);
         }
         self.last_wanted = wanted.len();
         // The closure, on ranks.
