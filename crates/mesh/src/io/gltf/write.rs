@@ -220,6 +220,16 @@ impl Builder {
     /// Appends `bytes` as a plain buffer view of the BIN chunk (4-byte
     /// aligned, no target, never compressed): an image's bytes.
     pub(super) fn raw_view(&mut self, bytes: &[u8]) -> json::Index<json::buffer::View> {
+        self.plain_view(bytes, None)
+    }
+
+    /// Appends `bytes` as an uncompressed buffer view of the BIN chunk
+    /// (4-byte aligned) with the given target.
+    fn plain_view(
+        &mut self,
+        bytes: &[u8],
+        target: Option<json::buffer::Target>,
+    ) -> json::Index<json::buffer::View> {
         self.align_bin();
         let offset = self.bin.len();
         self.bin.extend_from_slice(bytes);
@@ -230,7 +240,7 @@ impl Builder {
             byte_offset: Some(offset.into()),
             byte_stride: None,
             name: None,
-            target: None,
+            target: target.map(Valid),
             extensions: None,
             extras: None,
         })
@@ -292,20 +302,7 @@ impl Builder {
             self.view_extensions.push((view.value(), ext));
             view
         } else {
-            self.align_bin();
-            let offset = self.bin.len();
-            self.bin.extend_from_slice(bytes);
-            self.align_bin();
-            self.root.push(json::buffer::View {
-                buffer: json::Index::new(0),
-                byte_length: bytes.len().into(),
-                byte_offset: Some(offset.into()),
-                byte_stride: None,
-                name: None,
-                target: Some(Valid(target)),
-                extensions: None,
-                extras: None,
-            })
+            self.plain_view(bytes, Some(target))
         };
         let (min, max) = match min_max {
             Some((a, b)) => (Some(a), Some(b)),
