@@ -271,28 +271,11 @@ impl Reader {
     }
 }
 
-/// One scalar of type `t` at the start of `b` (long enough), as f64
-/// (exact for every PLY integer type and for floats).
+/// One scalar of type `t` at the start of `b`, as f64 (exact for every
+/// PLY integer type and for floats), decoded by the in-core reader's
+/// [`super::sources::decode_scalar`]. A `b` too short gives NaN, which
+/// every caller refuses (coordinates must be finite, counts and indices
+/// in range); callers pass buffers of the scalar's size anyway.
 fn read_scalar(b: &[u8], t: ScalarType, big: bool) -> f64 {
-    macro_rules! num {
-        ($ty:ty, $n:expr) => {{
-            let mut a = [0u8; $n];
-            a.copy_from_slice(&b[..$n]);
-            (if big {
-                <$ty>::from_be_bytes(a)
-            } else {
-                <$ty>::from_le_bytes(a)
-            }) as f64
-        }};
-    }
-    match t {
-        ScalarType::I8 => num!(i8, 1),
-        ScalarType::U8 => num!(u8, 1),
-        ScalarType::I16 => num!(i16, 2),
-        ScalarType::U16 => num!(u16, 2),
-        ScalarType::I32 => num!(i32, 4),
-        ScalarType::U32 => num!(u32, 4),
-        ScalarType::F32 => num!(f32, 4),
-        ScalarType::F64 => num!(f64, 8),
-    }
+    super::sources::decode_scalar(b, t, big).unwrap_or(f64::NAN)
 }
