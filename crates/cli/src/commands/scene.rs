@@ -135,7 +135,7 @@ pub fn run_lods(
     let chain = lodkit_simplify::scene::scene_lod_chain(scene, opts, targets)
         .map_err(|e| anyhow::anyhow!("{}: {e}", a.input.display()))?;
     step.finish();
-    use super::build::lod_chain::{coverage, level_extras, significant};
+    use super::build::lod_chain::{level_coverages, level_extras};
     let glb_path = a.out.join(format!("{stem}_lods.glb"));
     let diagonal = merged.bbox().diagonal() as f64;
     let level0 = a.output.scene(scene.clone(), &glb_path)?;
@@ -189,19 +189,16 @@ pub fn run_lods(
         levels.push(l);
     }
     let glb_name = format!("{stem}_lods.glb");
+    let errors: Vec<f64> = kept.iter().map(|k| k.3).collect();
     let glb_levels: Vec<lodkit_mesh::io::gltf::SceneLodLevel> = kept
         .iter()
-        .enumerate()
+        .zip(level_coverages(&errors, diagonal))
         .map(
-            |(k, (lod, level, extras, _))| lodkit_mesh::io::gltf::SceneLodLevel {
+            |((lod, level, extras, _), coverage)| lodkit_mesh::io::gltf::SceneLodLevel {
                 name: format!("{stem}_LOD{lod}"),
                 scene: level,
                 extras: extras.clone(),
-                // Level k is shown down to the coverage at which level k + 1
-                // becomes good enough; the coarsest stays down to 0.
-                coverage: kept
-                    .get(k + 1)
-                    .map_or(0.0, |n| significant(coverage(n.3, diagonal))),
+                coverage,
             },
         )
         .collect();

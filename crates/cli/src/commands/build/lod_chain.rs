@@ -45,6 +45,20 @@ pub fn coverage(error: f64, diagonal: f64) -> f64 {
     (h * h).min(1.0)
 }
 
+/// The screen coverage each level of a chain is shown down to, from each
+/// level's error (object units, level 0 first): level k is shown down to
+/// the coverage at which level k + 1 becomes good enough ([`coverage`],
+/// [`significant`]); the coarsest stays down to 0.
+pub fn level_coverages(errors: &[f64], diagonal: f64) -> Vec<f64> {
+    (0..errors.len())
+        .map(|k| {
+            errors
+                .get(k + 1)
+                .map_or(0.0, |&e| significant(coverage(e, diagonal)))
+        })
+        .collect()
+}
+
 /// `x` to 4 significant digits: what the errors and coverages are good for
 /// (sampling noise is larger), and a tenth of the chain GLB's JSON.
 pub fn significant(x: f64) -> f64 {
@@ -197,19 +211,16 @@ pub fn write_chain(
         .iter()
         .map(|(_, m, _, _)| output.normals_for(m, Format::Glb).apply(m))
         .collect();
+    let errors: Vec<f64> = written.iter().map(|w| w.3).collect();
     let glb_levels: Vec<LodLevel> = written
         .iter()
         .zip(&with_normals)
-        .enumerate()
-        .map(|(k, ((lod, _, extras, _), m))| LodLevel {
+        .zip(level_coverages(&errors, diagonal))
+        .map(|(((lod, _, extras, _), m), coverage)| LodLevel {
             name: format!("{stem}_LOD{lod}"),
             mesh: m,
             extras: extras.clone(),
-            // Level k is shown down to the coverage at which level k + 1
-            // becomes good enough; the coarsest stays down to 0.
-            coverage: written
-                .get(k + 1)
-                .map_or(0.0, |n| significant(coverage(n.3, diagonal))),
+            coverage,
         })
         .collect();
     let glb = write_lod_glb(&glb_levels, &output.glb())
