@@ -153,3 +153,62 @@ fn compressed_scene_lods_keep_materials_and_images() {
         }
     }
 }
+
+#[test]
+fn build_keeps_the_materials_of_a_multi_part_textured_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let o = lodkit(&[
+        "build",
+        s(&data("parts.gltf")),
+        "--out",
+        s(&out),
+        "--levels",
+        "2",
+        "--samples",
+        "2000",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let input = lodkit_mesh::io::load_scene(&data("parts.gltf")).unwrap();
+    let checker = std::fs::read(data("checker.png")).unwrap();
+    // The input GLB and every level of the chain keep the materials, the
+    // images byte for byte and the parts.
+    for f in [
+        "parts.glb",
+        "lods/parts_lod1.glb",
+        "lods/parts_lod2.glb",
+        "lods/parts_lods.glb",
+    ] {
+        let sc = lodkit_mesh::io::load_scene(&out.join(f)).unwrap();
+        assert_eq!(sc.materials.len(), input.materials.len(), "{f}");
+        assert_eq!(sc.images.len(), input.images.len(), "{f}");
+        assert!(sc.images.iter().any(|i| i.bytes == checker), "{f}");
+        assert!(sc.meshes.len() >= input.meshes.len(), "{f}");
+    }
+    let chain = lodkit_mesh::io::load_scene(&out.join("lods/parts_lods.glb")).unwrap();
+    assert_eq!(chain.roots.len(), 1);
+    assert_eq!(
+        chain.nodes[chain.roots[0]].name.as_deref(),
+        Some("parts_LOD0")
+    );
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(report.contains("materials are kept"), "{report}");
+    assert!(report.contains("`lods/parts_lod1.glb`"), "{report}");
+    assert!(out.join("report.html").is_file() && out.join("parts.pop").is_file());
+    // --merge: one mesh, no material anywhere, PLY levels as for any mesh.
+    let merged = dir.path().join("merged");
+    let o = lodkit(&[
+        "build",
+        s(&data("parts.gltf")),
+        "--out",
+        s(&merged),
+        "--levels",
+        "1",
+        "--no-measure",
+        "--merge",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let sc = lodkit_mesh::io::load_scene(&merged.join("parts.glb")).unwrap();
+    assert!(sc.materials.is_empty() && sc.images.is_empty());
+    assert!(merged.join("lods/parts_lod1.ply").is_file());
+}

@@ -62,6 +62,10 @@ pub struct BuildArgs {
     /// Skip every error measurement (the report shows "-").
     #[arg(long)]
     pub no_measure: bool,
+    /// Merge a textured or multi-part input into one mesh (materials and
+    /// textures dropped) instead of keeping them in the GLB outputs.
+    #[arg(long)]
+    pub merge: bool,
     #[command(flatten)]
     pub output: crate::ui::OutputArgs,
     /// Print the list of outputs as JSON.
@@ -91,7 +95,7 @@ pub fn run(ui: &Ui, args: &BuildArgs) -> Result<()> {
     // Everything that can fail on the input or the options fails here,
     // before the output folder is touched.
     let input = timings.time("reading the input", || match &args.input {
-        Some(path) => input::load(ui, path),
+        Some(path) => input::load(ui, path, args.merge),
         None => {
             ui.status("no input given: building the built-in Stanford bunny (Stanford 3D Scanning Repository)");
             let m = super::builtin_bunny()?;
@@ -101,6 +105,7 @@ pub fn run(ui: &Ui, args: &BuildArgs) -> Result<()> {
                 surface: m,
                 reconstruction: None,
                 path: input::InputPath::Mesh,
+                scene: None,
             })
         }
     })?;
@@ -142,10 +147,16 @@ fn write_all(
         for (format, ext) in [(Format::Glb, "glb"), (Format::Ply, "ply")] {
             let file = format!("{name}.{ext}");
             let step = ui.spinner(&format!("writing {file}"));
-            let bytes = args
-                .output
-                .encode(format, &model, WriteOptions::default())
-                .map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
+            let bytes = match (&input.scene, format) {
+                // A scene's GLB keeps its materials, images and nodes; its
+                // PLY is the scene merged (one mesh, UVs kept).
+                (Some(scene), Format::Glb) => {
+                    let scene = args.output.scene(scene.clone(), &dir.join(&file))?;
+                    lodkit_mesh::io::gltf::write_scene_glb_with(&scene, &args.output.glb())
+                }
+                _ => args.output.encode(format, &model, WriteOptions::default()),
+            }
+            .map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
             write_atomic(&dir.join(&file), &bytes)?;
             step.finish();
             outputs.push(file);
@@ -162,7 +173,16 @@ fn write_all(
         Some(p) => format!("Input: `{}`", p.display()),
     };
     writeln!(report, "{input_sentence}\n")?;
-    let path_sentence = path_sentence(&input.path, name);
+    let mut path_sentence = path_sentence(&input.path, name);
+    if let Some(scene) = &input.scene {
+        write!(
+            path_sentence,
+            " Its materials are kept ({}): `{name}.glb` and every level of the HQMS chain \
+             (`lods/*.glb`) carry them, one primitive per material, images byte for byte; \
+             `{name}.ply`, the octree and the stream hold its geometry merged into one mesh.",
+            super::scene::describe(scene)
+        )?;
+    }
     writeln!(report, "{path_sentence}\n")?;
     writeln!(
         report,
@@ -176,21 +196,38 @@ fn write_all(
 
     // Discrete LOD chain (HQMS).
     let chain = timings.time("HQMS chain (simplify, measure, write)", || {
-        lod_chain::write_chain(
-            ui,
-            &reference,
-            name,
-            name,
-            &dir.join("lods"),
-            &halving_targets(args.levels),
-            &lodkit_simplify::Options {
-                target: lodkit_simplify::Target::Ratio(1.0),
-                ..lodkit_simplify::Options::DEFAULT
-            },
-            sampling,
-            &args.output,
-            &mut |_| {},
-        )
+        let opts = lodkit_simplify::Options {
+            target: lodkit_simplify::Target::Ratio(1.0),
+            ..lodkit_simplify::Options::DEFAULT
+        };
+        let (out, targets) = (dir.join("lods"), halving_targets(args.levels));
+        match &input.scene {
+            Some(scene) => super::scene::write_scene_chain(
+                ui,
+                &reference,
+                name,
+                name,
+                &out,
+                scene,
+                &targets,
+                &opts,
+                sampling,
+                &args.output,
+                &mut |_| {},
+            ),
+            None => lod_chain::write_chain(
+                ui,
+                &reference,
+                name,
+                name,
+                &out,
+                &targets,
+                &opts,
+                sampling,
+                &args.output,
+                &mut |_| {},
+            ),
+        }
     })?;
     writeln!(
         report,

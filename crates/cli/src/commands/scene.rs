@@ -99,14 +99,8 @@ pub fn describe(scene: &Scene) -> String {
     )
 }
 
-/// `lodkit lods` on a scene: each level made by
-/// `lodkit_simplify::scene::scene_lod_chain`, written as `STEM_lodN.glb`
-/// (materials and images embedded), measured against the merged input,
-/// and `lods.json`; `STEM_lods.glb` holds the input as level 0 and every
-/// non-empty level, one root node `STEM_LODk` per level over that level's
-/// node tree, linked by `MSFT_lod` as the one-mesh chain is
-/// (`lodkit_mesh::io::gltf::write_scene_lod_glb`; screen coverages and
-/// error extras from `build::lod_chain`), tables written once.
+/// `lodkit lods` on a scene: [`write_scene_chain`] into `--out`, then the
+/// same last line (or `lods.json` on stdout) as the one-mesh chain.
 pub fn run_lods(
     ui: &Ui,
     a: &super::lods::LodsArgs,
@@ -114,16 +108,12 @@ pub fn run_lods(
     targets: &[Target],
     opts: &Options,
 ) -> Result<()> {
-    use anyhow::Context as _;
-    use lodkit_mesh::io::write_atomic;
     let stem = a
         .input
         .file_stem()
         .and_then(|s| s.to_str())
         .unwrap_or("mesh")
         .to_string();
-    std::fs::create_dir_all(&a.out)
-        .with_context(|| format!("{}: cannot create output directory", a.out.display()))?;
     let merged = scene.merged().mesh;
     let reference = lodkit_mesh::metrics::Reference::new(&merged)
         .map_err(|e| anyhow::anyhow!("{}: {e}", a.input.display()))?;
@@ -131,14 +121,84 @@ pub fn run_lods(
         super::build::Sampling::Adaptive,
         super::build::Sampling::PerKind,
     );
+    let json = a.json;
+    let chain = write_scene_chain(
+        ui,
+        &reference,
+        &a.input.display().to_string(),
+        &stem,
+        &a.out,
+        scene,
+        targets,
+        opts,
+        sampling,
+        &a.output,
+        &mut |l| {
+            if !json {
+                ui.status(format!(
+                    "level {}: {} triangles, {} vertices, error est. {:.3e} / measured mean {:.3e} max {:.3e}: {}",
+                    l.level, l.triangles, l.vertices, l.estimated_error, l.measured_mean_error, l.measured_max_error, l.stop
+                ));
+            }
+        },
+    )?;
+    let report = chain.lods;
+    if a.json {
+        let json = serde_json::to_string_pretty(&report)? + "\n";
+        crate::out!("{json}")?;
+        return Ok(());
+    }
+    ui.status(format!(
+        "wrote {} levels, {} and lods.json to {} ({})",
+        report.levels.len(),
+        report.glb,
+        a.out.display(),
+        describe(scene)
+    ));
+    Ok(())
+}
+
+/// The discrete LOD chain of a scene, materials kept, for `lodkit lods`
+/// and `lodkit build`: each level made by
+/// `lodkit_simplify::scene::scene_lod_chain` (each from the previous, face
+/// budgets shared by face count, material borders kept as seams), measured
+/// merged against `reference` (the merged input), written as
+/// `STEM_lodN.glb` (materials and images embedded); `STEM_lods.glb` holds
+/// the input as level 0 and every non-empty level, one root node
+/// `STEM_LODk` per level over that level's node tree, linked by `MSFT_lod`
+/// as the one-mesh chain is (`lodkit_mesh::io::gltf::write_scene_lod_glb`;
+/// screen coverages and error extras from `build::lod_chain`), tables
+/// written once; and `lods.json`. `on_level` sees each level as it is
+/// measured. Returns what the one-mesh chain returns: the levels, each
+/// level merged into one mesh (for renders), and their measurements.
+#[allow(clippy::too_many_arguments)]
+pub fn write_scene_chain(
+    ui: &Ui,
+    reference: &lodkit_mesh::metrics::Reference,
+    input: &str,
+    stem: &str,
+    out: &Path,
+    scene: &Scene,
+    targets: &[Target],
+    opts: &Options,
+    sampling: super::build::Sampling,
+    output: &crate::ui::OutputArgs,
+    on_level: &mut dyn FnMut(&super::lods::Level),
+) -> Result<super::build::lod_chain::Chain> {
+    use super::build::lod_chain::{level_coverages, level_extras};
+    use anyhow::Context as _;
+    use lodkit_mesh::io::write_atomic;
+    std::fs::create_dir_all(out)
+        .with_context(|| format!("{}: cannot create output directory", out.display()))?;
     let step = ui.spinner("simplifying");
     let chain = lodkit_simplify::scene::scene_lod_chain(scene, opts, targets)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", a.input.display()))?;
+        .map_err(|e| anyhow::anyhow!("{input}: {e}"))?;
     step.finish();
-    use super::build::lod_chain::{level_coverages, level_extras};
-    let glb_path = a.out.join(format!("{stem}_lods.glb"));
+    let glb_name = format!("{stem}_lods.glb");
+    let glb_path = out.join(&glb_name);
+    let merged = reference.mesh();
     let diagonal = merged.bbox().diagonal() as f64;
-    let level0 = a.output.scene(scene.clone(), &glb_path)?;
+    let level0 = output.scene(scene.clone(), &glb_path)?;
     // (lod, level, extras, error) of every level the chain GLB holds.
     let mut kept = vec![(
         0usize,
@@ -147,15 +207,20 @@ pub fn run_lods(
         0.0f64,
     )];
     let mut levels = Vec::new();
+    let mut meshes = Vec::new();
+    let mut measured = Vec::new();
     for (i, (level, reports)) in chain.into_iter().enumerate() {
-        let level = a.output.scene(level, &glb_path)?;
+        let level = output.scene(level, &glb_path)?;
         let r = lodkit_simplify::scene::combined_report(&reports)
-            .ok_or_else(|| anyhow::anyhow!("{}: the scene has no meshes", a.input.display()))?;
+            .ok_or_else(|| anyhow::anyhow!("{input}: the scene has no meshes"))?;
         let file = format!("{stem}_lod{}.glb", i + 1);
-        let m = sampling.measure(&reference, &level.merged().mesh)?;
+        let level_mesh = level.merged().mesh;
+        let step = ui.spinner(&format!("measuring level {}", i + 1));
+        let m = sampling.measure(reference, &level_mesh)?;
+        step.finish();
         if level.meshes.iter().all(|m| !m.mesh.faces.is_empty()) {
-            let path = a.out.join(&file);
-            let bytes = lodkit_mesh::io::gltf::write_scene_glb_with(&level, &a.output.glb())
+            let path = out.join(&file);
+            let bytes = lodkit_mesh::io::gltf::write_scene_glb_with(&level, &output.glb())
                 .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
             write_atomic(&path, &bytes)?;
             let est = r.estimated_error as f64;
@@ -168,7 +233,7 @@ pub fn run_lods(
                 error,
             ));
         }
-        let l = super::lods::Level {
+        levels.push(super::lods::Level {
             level: i + 1,
             file,
             target_triangles: r.target_faces,
@@ -179,16 +244,11 @@ pub fn run_lods(
             measured_max_error: m.map_or(f64::NAN, |m| m.max),
             seconds: r.seconds,
             stop: r.stop.to_string(),
-        };
-        if !a.json {
-            ui.status(format!(
-                "level {}: {} triangles, {} vertices, error est. {:.3e} / measured mean {:.3e} max {:.3e}: {}",
-                l.level, l.triangles, l.vertices, l.estimated_error, l.measured_mean_error, l.measured_max_error, l.stop
-            ));
-        }
-        levels.push(l);
+        });
+        on_level(levels.last().expect("just pushed"));
+        meshes.push(level_mesh);
+        measured.push(m);
     }
-    let glb_name = format!("{stem}_lods.glb");
     let errors: Vec<f64> = kept.iter().map(|k| k.3).collect();
     let glb_levels: Vec<lodkit_mesh::io::gltf::SceneLodLevel> = kept
         .iter()
@@ -202,28 +262,21 @@ pub fn run_lods(
             },
         )
         .collect();
-    let bytes = lodkit_mesh::io::gltf::write_scene_lod_glb(&glb_levels, &a.output.glb())
+    let bytes = lodkit_mesh::io::gltf::write_scene_lod_glb(&glb_levels, &output.glb())
         .map_err(|e| anyhow::anyhow!("{}: {e}", glb_path.display()))?;
     write_atomic(&glb_path, &bytes)?;
-    let report = super::lods::Lods {
-        input: a.input.display().to_string(),
+    let lods = super::lods::Lods {
+        input: input.to_string(),
         input_triangles: merged.faces.len(),
         input_vertices: merged.positions.len(),
         glb: glb_name,
         levels,
     };
-    let json = serde_json::to_string_pretty(&report)? + "\n";
-    write_atomic(&a.out.join("lods.json"), json.as_bytes())?;
-    if a.json {
-        crate::out!("{json}")?;
-        return Ok(());
-    }
-    ui.status(format!(
-        "wrote {} levels, {} and lods.json to {} ({})",
-        report.levels.len(),
-        report.glb,
-        a.out.display(),
-        describe(scene)
-    ));
-    Ok(())
+    let json = serde_json::to_string_pretty(&lods)? + "\n";
+    write_atomic(&out.join("lods.json"), json.as_bytes())?;
+    Ok(super::build::lod_chain::Chain {
+        lods,
+        meshes,
+        measured,
+    })
 }

@@ -48,11 +48,16 @@ pub struct BuildInput {
     pub reconstruction: Option<McoModel>,
     /// Which path the input took.
     pub path: InputPath,
+    /// The input as a scene, when it has materials, textures or parts a
+    /// single mesh would lose (and `--merge` is off): the input GLB and the
+    /// HQMS chain keep them; `surface` is then the scene merged.
+    pub scene: Option<lodkit_mesh::Scene>,
 }
 
 /// Loads `path` (any kind; see the module docs) and reconstructs it when
-/// it is not a mesh. Errors name the file.
-pub fn load(ui: &Ui, path: &Path) -> Result<BuildInput> {
+/// it is not a mesh; a mesh with materials, textures or parts is kept as a
+/// scene unless `merge`. Errors name the file.
+pub fn load(ui: &Ui, path: &Path, merge: bool) -> Result<BuildInput> {
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -73,7 +78,24 @@ pub fn load(ui: &Ui, path: &Path) -> Result<BuildInput> {
             scans.into_iter().map(|(_, r)| Model::Range(r)).collect(),
         )
     } else {
-        match super::super::load(ui, path)? {
+        let model = match super::super::scene::load_input(ui, path, !merge)? {
+            super::super::scene::Input::Scene(scene) => {
+                let surface = scene.merged().mesh;
+                if surface.faces.is_empty() {
+                    bail!("{}: the mesh has no faces", path.display());
+                }
+                return Ok(BuildInput {
+                    name,
+                    stream_source: Model::Mesh(surface.clone()),
+                    surface,
+                    reconstruction: None,
+                    path: InputPath::Mesh,
+                    scene: Some(scene),
+                });
+            }
+            super::super::scene::Input::Model(model) => model,
+        };
+        match model {
             Model::Mesh(m) => {
                 if m.faces.is_empty() {
                     bail!("{}: the mesh has no faces", path.display());
@@ -84,6 +106,7 @@ pub fn load(ui: &Ui, path: &Path) -> Result<BuildInput> {
                     surface: m,
                     reconstruction: None,
                     path: InputPath::Mesh,
+                    scene: None,
                 });
             }
             other => (other.kind().to_string(), vec![other]),
@@ -196,6 +219,7 @@ fn reconstruct(
         stream_source,
         reconstruction: Some(model),
         path: InputPath::Reconstructed(what),
+        scene: None,
     })
 }
 
@@ -243,5 +267,6 @@ fn carve(ui: &Ui, path: &Path, name: String) -> Result<BuildInput> {
             "calibrated image set of {} views, carved from its silhouettes at R = {}",
             c.report.views, c.report.depth
         )),
+        scene: None,
     })
 }
