@@ -453,3 +453,64 @@ fn compare_heatmap_colours_b_by_distance_and_states_the_scale() {
         assert!(stderr(&o).contains(".ply, .obj or .glb"), "{}", stderr(&o));
     }
 }
+
+#[test]
+fn a_textured_scene_renders_with_its_textures() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../mesh/tests/data/textured");
+    // Saturated texels (the checker's red, the stripes' blue and yellow)
+    // where the clay colour is nearly grey.
+    let saturated = |p: &Path| {
+        let (_, _, ch, px) = png(p);
+        px.chunks_exact(ch)
+            .filter(|c| c[0].max(c[1]).max(c[2]) - c[0].min(c[1]).min(c[2]) > 80)
+            .count()
+    };
+    let textured = dir.path().join("parts.png");
+    let o = lodkit(&[
+        "render",
+        s(&data.join("parts.gltf")),
+        "-o",
+        s(&textured),
+        "--size",
+        "128x128",
+    ]);
+    ok(&o);
+    assert!(
+        stderr(&o).contains("2 materials, 2 textures"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(saturated(&textured) > 500, "{}", saturated(&textured));
+    let again = dir.path().join("again.png");
+    ok(&lodkit(&[
+        "render",
+        s(&data.join("parts.gltf")),
+        "-o",
+        s(&again),
+        "--size",
+        "128x128",
+    ]));
+    assert_eq!(
+        std::fs::read(&textured).unwrap(),
+        std::fs::read(&again).unwrap()
+    );
+    // The same geometry without its materials is clay.
+    let merged = dir.path().join("merged.ply");
+    ok(&lodkit(&[
+        "convert",
+        s(&data.join("parts.gltf")),
+        s(&merged),
+        "--merge",
+    ]));
+    let clay = dir.path().join("clay.png");
+    ok(&lodkit(&[
+        "render",
+        s(&merged),
+        "-o",
+        s(&clay),
+        "--size",
+        "128x128",
+    ]));
+    assert_eq!(saturated(&clay), 0);
+}

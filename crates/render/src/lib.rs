@@ -39,8 +39,8 @@
 //! - **Bounded memory**: one band of 2²⁰ samples per thread whatever the
 //!   image size, plus about 100 bytes a face.
 //!
-//! Textures: lodkit meshes carry UVs but no texture image yet; the
-//! renderer shows vertex colours (or a clay base colour) and ignores UVs.
+//! Colour: vertex colours, or a clay base colour; [`render_textured`] adds
+//! materials (base colour factors and decoded textures, [`texture`]).
 //!
 //! # Conventions
 //!
@@ -122,12 +122,16 @@ mod raster;
 pub mod render;
 pub mod ring;
 pub mod shade;
+pub mod texture;
 
 pub use camera::{Camera, Intrinsics};
 pub use colour_scale::colour_scale;
 pub use image::{Image, Mask};
-pub use render::{MAX_SIZE, MAX_SUPERSAMPLE, Normals, RenderOptions, render, render_points};
+pub use render::{
+    MAX_SIZE, MAX_SUPERSAMPLE, Normals, RenderOptions, render, render_points, render_textured,
+};
 pub use ring::{CameraRing, RingView};
+pub use texture::{Look, Materials, TextureImage, Wrap};
 
 /// What can go wrong when rendering.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]

@@ -17,6 +17,7 @@ use crate::clip::{ScreenTri, clip_planes, setup_triangle};
 use crate::image::Image;
 use crate::raster::{Band, EMPTY};
 use crate::shade::{Surface, shade};
+use crate::texture::Materials;
 
 /// Largest image side accepted, in pixels.
 pub const MAX_SIZE: u32 = 8192;
@@ -115,8 +116,7 @@ impl Default for RenderOptions {
 /// `supersample == 1`); [`Image::mask`] is the object silhouette. Both
 /// windings are drawn; faces behind the camera or beyond the near plane
 /// are clipped, not dropped whole. Vertex colours are interpolated when
-/// present and enabled; UVs are ignored (lodkit meshes carry no texture
-/// image yet).
+/// present and enabled; textures are drawn by [`render_textured`].
 ///
 /// Errors: options out of range ([`RenderError::Options`]), a face index
 /// out of range, a non-finite vertex or an attribute of the wrong length
@@ -127,6 +127,37 @@ impl Default for RenderOptions {
 /// about 100 bytes a face plus one band of 2²⁰ samples per thread, on top
 /// of the image.
 pub fn render(mesh: &TriMesh, camera: &Camera, opts: &RenderOptions) -> Result<Image, RenderError> {
+    render_mesh(mesh, None, camera, opts)
+}
+
+/// [`render`] with materials: each face coloured by its material's base
+/// colour factor and texture at the interpolated UV (the factor alone
+/// when the mesh has no UVs), times the vertex colour when there is one
+/// ([`crate::texture`]); faces with [`Materials::NONE`] are drawn as
+/// [`render`] draws them.
+///
+/// Guarantees and cost as [`render`], plus one bilinear texture lookup a
+/// covered sample. Errors as [`render`], and [`RenderError::Mesh`] when
+/// `materials` does not fit the mesh (a face count, material or texture
+/// index, or pixel buffer that disagrees; UVs of the wrong length).
+pub fn render_textured(
+    mesh: &TriMesh,
+    materials: &Materials,
+    camera: &Camera,
+    opts: &RenderOptions,
+) -> Result<Image, RenderError> {
+    materials
+        .check(mesh.faces.len())
+        .map_err(RenderError::Mesh)?;
+    render_mesh(mesh, Some(materials), camera, opts)
+}
+
+fn render_mesh(
+    mesh: &TriMesh,
+    materials: Option<&Materials>,
+    camera: &Camera,
+    opts: &RenderOptions,
+) -> Result<Image, RenderError> {
     opts.check()?;
     check_mesh(mesh)?;
     let s = opts.supersample;
@@ -170,6 +201,7 @@ pub fn render(mesh: &TriMesh, camera: &Camera, opts: &RenderOptions) -> Result<I
             lodkit_mesh::normals::face_normals(mesh)
         },
         colours: colours(&mesh.colors, opts),
+        materials,
     };
     let layout = Layout::new(opts);
     let bins = layout.bin(tris.iter().map(|t| t.rows()));
@@ -400,6 +432,7 @@ fn check_mesh(mesh: &TriMesh) -> Result<(), RenderError> {
     for (what, len) in [
         ("normals", mesh.normals.as_ref().map(Vec::len)),
         ("colours", mesh.colors.as_ref().map(Vec::len)),
+        ("UVs", mesh.uvs.as_ref().map(Vec::len)),
     ] {
         if let Some(l) = len
             && l != n

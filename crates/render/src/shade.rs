@@ -7,8 +7,10 @@
 //! like their neighbours. Colours are multiplied in sRGB space (no
 //! linearisation): cheap, and what simple scan viewers do.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use lodkit_mesh::TriMesh;
+
+use crate::texture::Materials;
 
 /// Light reaching every surface regardless of its orientation.
 pub const AMBIENT: f32 = 0.22;
@@ -26,6 +28,8 @@ pub(crate) enum Surface<'a> {
         vertex_normals: Option<&'a [Vec3]>,
         face_normals: Vec<Vec3>,
         colours: Option<&'a [[u8; 4]]>,
+        /// Base colour factors and textures, when the mesh has materials.
+        materials: Option<&'a Materials>,
     },
     /// Points: the point's normal when given, else unlit but darkened
     /// with depth (nearest at full brightness, farthest at
@@ -56,6 +60,7 @@ pub(crate) fn shade(
             vertex_normals,
             face_normals,
             colours,
+            materials,
         } => {
             let f = mesh.faces[id];
             let n = match vertex_normals {
@@ -72,6 +77,20 @@ pub(crate) fn shade(
                         + rgb(c[f[2] as usize]) * bary.z
                 }
                 None => base,
+            };
+            // A material's base colour replaces the clay colour, and
+            // multiplies vertex colours (glTF's base colour).
+            let material = materials.and_then(|m| {
+                let uv = mesh.uvs.as_ref().map(|t| {
+                    let p = |k: usize| -> Vec2 { t[f[k] as usize] };
+                    p(0) * bary.x + p(1) * bary.y + p(2) * bary.z
+                });
+                m.colour(id, uv)
+            });
+            let c = match (material, colours) {
+                (Some(m), Some(_)) => c * m / 255.0,
+                (Some(m), None) => m,
+                (None, _) => c,
             };
             c * (AMBIENT + DIFFUSE * n.dot(light).abs())
         }

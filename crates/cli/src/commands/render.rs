@@ -180,6 +180,8 @@ fn check_kind(a: &RenderArgs) -> Kind {
 /// What is drawn: a mesh or a point cloud, and a line saying which.
 enum Drawable {
     Mesh(lodkit_mesh::TriMesh),
+    /// A scene merged into one mesh, drawn with its materials.
+    Textured(lodkit_mesh::TriMesh, lodkit_render::Materials),
     Points(lodkit_mesh::PointCloud),
 }
 
@@ -233,22 +235,102 @@ fn load(ui: &Ui, a: &RenderArgs, k: Kind) -> Result<(Drawable, String)> {
             );
             Ok((Drawable::Mesh(t.mesh), what))
         }
-        Kind::Geometry => match super::load(ui, &a.input)? {
-            Model::Mesh(m) => {
-                let what = format!("{} triangles", m.faces.len());
-                Ok((Drawable::Mesh(m), what))
+        Kind::Geometry => match super::scene::load_input(ui, &a.input, true)? {
+            super::scene::Input::Scene(scene) => {
+                let (mesh, materials) = textured(ui, &name, &scene);
+                let what = format!(
+                    "{} triangles, {} materials, {} textures",
+                    mesh.faces.len(),
+                    materials.looks.len(),
+                    materials.textures.len()
+                );
+                Ok((Drawable::Textured(mesh, materials), what))
             }
-            Model::Points(p) => {
-                let what = format!("{} points as discs", p.len());
-                Ok((Drawable::Points(p), what))
-            }
-            Model::Range(r) => {
-                let p = r.to_point_cloud();
-                let what = format!("range image, {} points as discs", p.len());
-                Ok((Drawable::Points(p), what))
-            }
+            super::scene::Input::Model(model) => geometry(model),
         },
     }
+}
+
+/// A model as it is drawn: a mesh, or points as discs.
+fn geometry(model: Model) -> Result<(Drawable, String)> {
+    match model {
+        Model::Mesh(m) => {
+            let what = format!("{} triangles", m.faces.len());
+            Ok((Drawable::Mesh(m), what))
+        }
+        Model::Points(p) => {
+            let what = format!("{} points as discs", p.len());
+            Ok((Drawable::Points(p), what))
+        }
+        Model::Range(r) => {
+            let p = r.to_point_cloud();
+            let what = format!("range image, {} points as discs", p.len());
+            Ok((Drawable::Points(p), what))
+        }
+    }
+}
+
+/// A scene merged into one mesh, with what the renderer needs of its
+/// materials: base colour factors and the base colour textures, decoded.
+/// A texture that does not decode is said in a warning and left out (its
+/// faces show the factor alone).
+fn textured(
+    ui: &Ui,
+    name: &str,
+    scene: &lodkit_mesh::Scene,
+) -> (lodkit_mesh::TriMesh, lodkit_render::Materials) {
+    use lodkit_render::{Look, TextureImage, Wrap};
+    let merged = scene.merged();
+    let mut textures = Vec::new();
+    // Scene texture index -> renderer texture index (decoded once).
+    let mut decoded: Vec<Option<Option<usize>>> = vec![None; scene.textures.len()];
+    let looks = scene
+        .materials
+        .iter()
+        .map(|m| {
+            let texture = m.base_color_texture.and_then(|r| {
+                let slot = decoded.get_mut(r.texture)?;
+                *slot.get_or_insert_with(|| {
+                    let t = &scene.textures[r.texture];
+                    let image = scene.images.get(t.image)?;
+                    match lodkit_particles::silhouette::images::decode_rgba(&image.bytes) {
+                        Ok(d) => {
+                            let s = t.sampler.and_then(|i| scene.samplers.get(i));
+                            textures.push(TextureImage {
+                                width: d.width,
+                                height: d.height,
+                                rgba: d.rgba,
+                                wrap: s.map_or([Wrap::Repeat; 2], |s| {
+                                    [Wrap::from_gltf(s.wrap_s), Wrap::from_gltf(s.wrap_t)]
+                                }),
+                            });
+                            Some(textures.len() - 1)
+                        }
+                        Err(e) => {
+                            let what = image.file_name.as_deref().unwrap_or("an embedded image");
+                            ui.status(format!(
+                                "warning: {name}: texture {} ({}): {e}; drawn without it",
+                                r.texture,
+                                lodkit_mesh::error::escape(what)
+                            ));
+                            None
+                        }
+                    }
+                })
+            });
+            let [r, g, b, _] = m.base_color;
+            Look {
+                factor: [r, g, b],
+                texture,
+            }
+        })
+        .collect();
+    let materials = lodkit_render::Materials {
+        face_looks: merged.face_materials.clone(),
+        looks,
+        textures,
+    };
+    (merged.mesh, materials)
 }
 
 impl Drawable {
@@ -256,7 +338,7 @@ impl Drawable {
     /// (a scan's stray unreferenced vertices are not drawn).
     fn points(&self) -> Vec<lodkit_mesh::glam::Vec3> {
         match self {
-            Drawable::Mesh(m) => {
+            Drawable::Mesh(m) | Drawable::Textured(m, _) => {
                 let mut used = vec![false; m.positions.len()];
                 for f in &m.faces {
                     for &v in f {
@@ -278,6 +360,7 @@ impl Drawable {
     fn draw(&self, cam: &Camera, opts: &RenderOptions) -> Result<Image> {
         Ok(match self {
             Drawable::Mesh(m) => render(m, cam, opts)?,
+            Drawable::Textured(m, t) => lodkit_render::render_textured(m, t, cam, opts)?,
             Drawable::Points(p) => render_points(p, cam, opts)?,
         })
     }

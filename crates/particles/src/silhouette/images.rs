@@ -47,12 +47,30 @@ pub struct ViewImage {
     pub silhouette: Vec<bool>,
 }
 
-struct Decoded {
-    width: u32,
-    height: u32,
-    /// RGBA8.
-    rgba: Vec<u8>,
-    has_alpha: bool,
+/// A PNG or JPEG decoded to RGBA8 ([`decode_rgba`]).
+#[derive(Debug, Clone)]
+pub struct Decoded {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `width × height × 4` bytes, rows top to bottom.
+    pub rgba: Vec<u8>,
+    /// Whether some pixel is not opaque (an alpha channel opaque
+    /// everywhere counts as none).
+    pub has_alpha: bool,
+}
+
+/// Decodes a PNG (any bit depth and colour type) or JPEG (by its
+/// signature) to RGBA8; the one image decoder of lodkit, used for
+/// photographs here and for textures by `lodkit render`.
+///
+/// Sizes are read from the header and bounded (`1..=MAX_SIDE` a side,
+/// [`crate::silhouette::calibration::MAX_SIDE`]) before any pixel buffer is
+/// allocated. Errors: one phrase saying what is wrong with the bytes
+/// (the caller names the file). Cost: `O(width × height)`.
+pub fn decode_rgba(bytes: &[u8]) -> std::result::Result<Decoded, String> {
+    decode(bytes)
 }
 
 fn is_jpeg(bytes: &[u8]) -> bool {
