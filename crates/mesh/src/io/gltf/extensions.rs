@@ -3,7 +3,9 @@
 //! float accessors), `EXT_meshopt_compression` and
 //! `KHR_meshopt_compression` (each compressed view decoded with
 //! meshoptimizer's decoders, `meshopt` feature), and a one-line refusal of
-//! `KHR_draco_mesh_compression` (no maintained Rust Draco decoder exists).
+//! `KHR_draco_mesh_compression` (no maintained Rust Draco decoder exists);
+//! and `KHR_texture_transform` (gltfpack's UV dequantisation among others)
+//! baked into the UVs it applies to (see [`texture_transforms`]).
 //!
 //! The output has one buffer (the GLB BIN chunk) holding every view the
 //! input has, decoded, then the float copies of the quantised accessors; the
@@ -34,6 +36,15 @@ pub const MAX_EXPANSION: u64 = 256;
 const DRACO: &str = "KHR_draco_mesh_compression";
 const QUANTIZATION: &str = "KHR_mesh_quantization";
 const MESHOPT: [&str; 2] = ["EXT_meshopt_compression", "KHR_meshopt_compression"];
+const TRANSFORM: &str = "KHR_texture_transform";
+/// A material's texture slots, as JSON paths from the material.
+const TEXTURE_SLOTS: [&[&str]; 5] = [
+    &["pbrMetallicRoughness", "baseColorTexture"],
+    &["pbrMetallicRoughness", "metallicRoughnessTexture"],
+    &["normalTexture"],
+    &["occlusionTexture"],
+    &["emissiveTexture"],
+];
 
 /// The file as a plain GLB when it uses one of the extensions above, `None`
 /// when it uses none of them (or its JSON does not parse: the reader then
@@ -46,7 +57,11 @@ pub(super) fn expand(bytes: &[u8], base_dir: Option<&Path>) -> Result<Option<Vec
         (unbom, None)
     };
     let mentions = |s: &str| json_bytes.windows(s.len()).any(|w| w == s.as_bytes());
-    if !(mentions(DRACO) || mentions(QUANTIZATION) || mentions("_meshopt_compression")) {
+    if !(mentions(DRACO)
+        || mentions(QUANTIZATION)
+        || mentions("_meshopt_compression")
+        || mentions(TRANSFORM))
+    {
         return Ok(None);
     }
     let Ok(mut doc) = serde_json::from_slice::<Value>(json_bytes) else {
@@ -73,7 +88,7 @@ pub(super) fn expand(bytes: &[u8], base_dir: Option<&Path>) -> Result<Option<Vec
             meshopt[0]
         ));
     }
-    if meshopt.is_empty() && !has(QUANTIZATION) {
+    if meshopt.is_empty() && !has(QUANTIZATION) && !has(TRANSFORM) {
         return Ok(None);
     }
     let budget = (bytes.len() as u64)
@@ -198,6 +213,17 @@ pub(super) fn expand(bytes: &[u8], base_dir: Option<&Path>) -> Result<Option<Vec
             }
         }
     }
+    if has(TRANSFORM) {
+        let mut state = Expanded {
+            views: new_views,
+            accessors: new_accessors,
+            bin: out,
+            used,
+            budget,
+        };
+        texture_transforms(&mut doc, &mut state)?;
+        (new_views, new_accessors, out) = (state.views, state.accessors, state.bin);
+    }
     while !out.len().is_multiple_of(4) {
         out.push(0);
     }
@@ -208,12 +234,216 @@ pub(super) fn expand(bytes: &[u8], base_dir: Option<&Path>) -> Result<Option<Vec
         if let Some(list) = doc.get_mut(key).and_then(Value::as_array_mut) {
             list.retain(|e| {
                 e.as_str()
-                    .is_none_or(|s| s != QUANTIZATION && !MESHOPT.contains(&s))
+                    .is_none_or(|s| s != QUANTIZATION && s != TRANSFORM && !MESHOPT.contains(&s))
             });
         }
     }
     let js = serde_json::to_vec(&doc).map_err(|e| parse_err!("glTF JSON: {e}"))?;
     join_glb(js, &out).map(Some)
+}
+
+/// The plain file being made: views, accessors and the one BIN, with the
+/// expansion budget.
+struct Expanded {
+    views: Vec<Value>,
+    accessors: Vec<Value>,
+    bin: Vec<u8>,
+    used: u64,
+    budget: u64,
+}
+
+/// One UV transform of `KHR_texture_transform`: offset, rotation
+/// (radians, counter-clockwise), scale.
+#[derive(Clone, Copy, PartialEq)]
+struct UvTransform {
+    offset: [f32; 2],
+    rotation: f32,
+    scale: [f32; 2],
+}
+
+impl UvTransform {
+    const IDENTITY: UvTransform = UvTransform {
+        offset: [0.0, 0.0],
+        rotation: 0.0,
+        scale: [1.0, 1.0],
+    };
+
+    fn bits(&self) -> [u32; 5] {
+        [
+            self.offset[0],
+            self.offset[1],
+            self.rotation,
+            self.scale[0],
+            self.scale[1],
+        ]
+        .map(f32::to_bits)
+    }
+
+    /// The spec's `T · R · S` applied to `(u, v)` in glTF's UV frame
+    /// (origin top-left): `u' = ox + cos·su·u + sin·sv·v`,
+    /// `v' = oy − sin·su·u + cos·sv·v`.
+    fn apply(&self, u: f32, v: f32) -> (f32, f32) {
+        let (s, c) = self.rotation.sin_cos();
+        let (x, y) = (u * self.scale[0], v * self.scale[1]);
+        (
+            self.offset[0] + c * x + s * y,
+            self.offset[1] - s * x + c * y,
+        )
+    }
+}
+
+/// Material `i`'s UV transform per UV set, from its texture slots' own
+/// `KHR_texture_transform` (identity where a slot has none); the
+/// extension's `texCoord` override moves the slot to that set. Slots on
+/// one set must agree (the transform is baked into that set's UVs), and
+/// values must be finite: otherwise a one-line error.
+fn material_transforms(i: usize, m: &Value) -> Result<Vec<(u64, UvTransform)>, ParseError> {
+    let mut sets: Vec<(u64, UvTransform)> = Vec::new();
+    for path in TEXTURE_SLOTS {
+        let info = path.iter().fold(m, |v, k| &v[*k]);
+        if !info.is_object() {
+            continue;
+        }
+        let x = &info["extensions"][TRANSFORM];
+        let set = x["texCoord"]
+            .as_u64()
+            .or_else(|| info["texCoord"].as_u64())
+            .unwrap_or(0);
+        let num = |v: &Value, d: f32| v.as_f64().map_or(d, |f| f as f32);
+        let t = UvTransform {
+            offset: [num(&x["offset"][0], 0.0), num(&x["offset"][1], 0.0)],
+            rotation: num(&x["rotation"], 0.0),
+            scale: [num(&x["scale"][0], 1.0), num(&x["scale"][1], 1.0)],
+        };
+        if !t.bits().iter().all(|b| f32::from_bits(*b).is_finite()) {
+            return Err(parse_err!(
+                "material {i}: {TRANSFORM} has a value that is not a finite number"
+            ));
+        }
+        match sets.iter().find(|(s, _)| *s == set) {
+            Some((_, other)) if *other != t => {
+                return Err(parse_err!(
+                    "material {i}: its textures transform UV set {set} differently ({TRANSFORM}); \
+                     lodkit bakes one transform into each UV set"
+                ));
+            }
+            Some(_) => {}
+            None => sets.push((set, t)),
+        }
+    }
+    sets.retain(|(_, t)| *t != UvTransform::IDENTITY);
+    Ok(sets)
+}
+
+/// `KHR_texture_transform` baked into the UVs: every primitive whose
+/// material transforms a UV set gets a float copy of that set's accessor
+/// with the transform applied (one copy per accessor and transform, shared
+/// by the primitives that agree), and the extension is removed from the
+/// materials, so readers that ignore it (lodkit's own) see the UVs it
+/// meant. A `texCoord` override becomes the slot's `texCoord`.
+fn texture_transforms(doc: &mut Value, x: &mut Expanded) -> Result<(), ParseError> {
+    let materials = doc["materials"].as_array().cloned().unwrap_or_default();
+    let transforms = materials
+        .iter()
+        .enumerate()
+        .map(|(i, m)| material_transforms(i, m))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut copies: Vec<((usize, [u32; 5]), usize)> = Vec::new();
+    // `get_mut` throughout: indexing a JSON value mutably inserts missing
+    // keys and panics on non-objects, and this is a hostile file's JSON.
+    let mut meshes = doc.get_mut("meshes").map(Value::take);
+    for prim in meshes
+        .as_mut()
+        .and_then(Value::as_array_mut)
+        .into_iter()
+        .flatten()
+        .filter_map(|m| m.get_mut("primitives").and_then(Value::as_array_mut))
+        .flatten()
+    {
+        let Some(sets) = prim["material"]
+            .as_u64()
+            .and_then(|mi| transforms.get(mi as usize))
+        else {
+            continue;
+        };
+        for (set, t) in sets {
+            let name = format!("TEXCOORD_{set}");
+            let Some(ai) = prim["attributes"][&name].as_u64().map(|a| a as usize) else {
+                continue;
+            };
+            let key = (ai, t.bits());
+            let copy = match copies.iter().find(|(k, _)| *k == key) {
+                Some(&(_, c)) => c,
+                None => {
+                    let acc = x
+                        .accessors
+                        .get(ai)
+                        .cloned()
+                        .ok_or_else(|| parse_err!("accessor {ai} does not exist"))?;
+                    if acc.get("sparse").is_some() || components(&acc)? != 2 {
+                        return Err(parse_err!(
+                            "accessor {ai}: {TRANSFORM} on UVs that are sparse or not VEC2"
+                        ));
+                    }
+                    let mut uv = dequantise(ai, &acc, &x.views, &x.bin)?;
+                    for p in uv.chunks_exact_mut(2) {
+                        (p[0], p[1]) = t.apply(p[0], p[1]);
+                    }
+                    x.used = x.used.saturating_add(uv.len() as u64 * 4);
+                    if x.used > x.budget {
+                        return Err(parse_err!(
+                            "accessor {ai}: transformed UVs exceed {} bytes ({MAX_EXPANSION}x the file)",
+                            x.budget
+                        ));
+                    }
+                    while !x.bin.len().is_multiple_of(4) {
+                        x.bin.push(0);
+                    }
+                    let offset = x.bin.len();
+                    for f in &uv {
+                        x.bin.extend_from_slice(&f.to_le_bytes());
+                    }
+                    x.views.push(json!({
+                        "buffer": 0,
+                        "byteOffset": offset,
+                        "byteLength": uv.len() * 4,
+                        "target": 34962,
+                    }));
+                    x.accessors.push(json!({
+                        "bufferView": x.views.len() - 1,
+                        "componentType": 5126,
+                        "count": uv.len() / 2,
+                        "type": "VEC2",
+                    }));
+                    copies.push((key, x.accessors.len() - 1));
+                    x.accessors.len() - 1
+                }
+            };
+            if let Some(a) = prim.get_mut("attributes").and_then(Value::as_object_mut) {
+                a.insert(name, json!(copy));
+            }
+        }
+    }
+    if let Some(m) = meshes {
+        doc["meshes"] = m;
+    }
+    let materials = doc.get_mut("materials").and_then(Value::as_array_mut);
+    for m in materials.into_iter().flatten() {
+        for path in TEXTURE_SLOTS {
+            let info = path.iter().try_fold(&mut *m, |v, k| v.get_mut(*k));
+            let Some(o) = info.and_then(Value::as_object_mut) else {
+                continue;
+            };
+            if let Some(set) = o
+                .get("extensions")
+                .and_then(|e| e[TRANSFORM]["texCoord"].as_u64())
+            {
+                o.insert("texCoord".into(), json!(set));
+            }
+            strip(o, &[TRANSFORM]);
+        }
+    }
+    Ok(())
 }
 
 fn strip(o: &mut serde_json::Map<String, Value>, names: &[&str]) {
@@ -442,14 +672,14 @@ fn components(acc: &Value) -> Result<usize, ParseError> {
 
 /// Accessor `ai`'s elements as floats (glTF's rules for normalised
 /// integers: `max(c / (2^(b-1) - 1), -1)` signed, `c / (2^b - 1)` unsigned;
-/// plain integers as they are).
+/// plain integers and floats as they are).
 fn dequantise(ai: usize, acc: &Value, views: &[Value], bin: &[u8]) -> Result<Vec<f32>, ParseError> {
     let comps = components(acc)?;
     let ct = acc["componentType"].as_u64().unwrap_or(0);
     let size = match ct {
         5120 | 5121 => 1,
         5122 | 5123 => 2,
-        5125 => 4,
+        5125 | 5126 => 4,
         _ => {
             return Err(parse_err!(
                 "accessor {ai}: component type {ct} cannot be dequantised"
@@ -509,7 +739,8 @@ fn dequantise(ai: usize, acc: &Value, views: &[Value], bin: &[u8]) -> Result<Vec
                     let v = u16::from_le_bytes([c[0], c[1]]) as f32;
                     if normalized { v / 65535.0 } else { v }
                 }
-                _ => u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f32,
+                5125 => u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f32,
+                _ => f32::from_le_bytes([c[0], c[1], c[2], c[3]]),
             };
             out.push(x);
         }

@@ -130,3 +130,52 @@ fn compression_round_trips_or_names_the_feature() {
         "{bb:?}"
     );
 }
+
+/// A triangle whose material scales and offsets its UVs with
+/// KHR_texture_transform (as gltfpack dequantises UVs): the UVs read are
+/// the transformed ones; slots that disagree on one set are refused.
+#[test]
+fn texture_transforms_are_baked_into_the_uvs() {
+    use base64::Engine as _;
+    let mut bin = Vec::new();
+    for p in [[0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] {
+        for c in p {
+            bin.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    for uv in [[0f32, 0.0], [1.0, 0.0], [0.0, 1.0]] {
+        for c in uv {
+            bin.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    let b64 = base64::engine::general_purpose::STANDARD.encode(&bin);
+    let doc = |normal: &str| {
+        format!(
+            r#"{{"asset":{{"version":"2.0"}},"extensionsUsed":["KHR_texture_transform"],
+"buffers":[{{"byteLength":{},"uri":"data:application/octet-stream;base64,{b64}"}}],
+"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":24}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+{{"bufferView":1,"componentType":5126,"count":3,"type":"VEC2"}}],
+"images":[{{"uri":"data:image/png;base64,AAAA"}}],"textures":[{{"source":0}}],
+"materials":[{{"pbrMetallicRoughness":{{"baseColorTexture":{{"index":0,
+"extensions":{{"KHR_texture_transform":{{"offset":[0.5,0.25],"scale":[0.5,0.5]}}}}}}}}{normal}}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"TEXCOORD_0":1}},"material":0}}]}}],
+"nodes":[{{"mesh":0}}],"scenes":[{{"nodes":[0]}}],"scene":0}}"#,
+            bin.len()
+        )
+    };
+    let Model::Mesh(m) = read_model(doc("").as_bytes(), None).unwrap() else {
+        panic!("a mesh")
+    };
+    // glTF UV (u, v) -> (0.5 + u/2, 0.25 + v/2); lodkit stores 1 - v.
+    let want = [[0.5, 0.75], [1.0, 0.75], [0.5, 0.25]];
+    for (uv, w) in m.uvs.unwrap().iter().zip(want) {
+        assert!(
+            (uv.x - w[0]).abs() < 1e-6 && (uv.y - w[1]).abs() < 1e-6,
+            "{uv:?}"
+        );
+    }
+    // A normal texture on the same set without the transform disagrees.
+    let e = read_model(doc(r#","normalTexture":{"index":0}"#).as_bytes(), None).unwrap_err();
+    assert!(e.0.contains("transform UV set 0 differently"), "{}", e.0);
+}
