@@ -89,6 +89,8 @@ run lods "$tex/parts.gltf" --out "$work/lods_parts" --ratios 0.5,0.2 --samples 2
 run lods "$tex/parts.obj" --out "$work/lods_parts_c" --ratios 0.5,0.2 --samples 20000 --compress
 run convert "$tex/parts.gltf" "$work/parts_c.glb" --compress
 run simplify "$tex/mug_scan.ply" -o "$work/mug_10_c.glb" --ratio 0.1 --compress
+# build keeps a scene's materials in its GLB and its HQMS chain.
+run build "$tex/parts.gltf" --out "$work/build_parts" --levels 2 --no-measure
 # lodkit reads back what it wrote (compressed and points included).
 for f in convert_c simplify_c points_xyz points_c parts_c mug_10_c lods_parts_c/parts_lods; do
   "$bin" -q info "$work/$f.glb" >/dev/null
@@ -105,4 +107,5 @@ node "$check" chain "$work/build/lods/stanford_bunny_lods.glb" 4
 node "$check" scenechain "$work/lods_mug/mug_scan_lods.glb" 3
 node "$check" scenechain "$work/lods_parts/parts_lods.glb" 3
 node "$check" scenechain "$work/lods_parts_c/parts_lods.glb" 3
+node "$check" scenechain "$work/build_parts/lods/parts_lods.glb" 3
 echo "glTF checks: ${#glbs[@]} GLBs valid; LOD chains seen by Babylon.js and three.js"
