@@ -348,6 +348,10 @@ fn write_all(
     write_atomic(&dir.join("report.md"), report.as_bytes())?;
     outputs.push("report.md".into());
     let step = ui.spinner("rendering report.html");
+    let materials = input
+        .scene
+        .as_ref()
+        .map(|s| super::scene::render_materials(ui, name, s, s.merged().face_materials));
     let html = html::report(&html::Inputs {
         name,
         intro: vec![
@@ -360,6 +364,7 @@ fn write_all(
         continuous: &cont,
         progressive: &prog,
         timings: &timings.0,
+        materials: materials.as_ref(),
     })?;
     write_atomic(&dir.join("report.html"), html.as_bytes())?;
     step.finish();

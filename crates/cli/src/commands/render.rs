@@ -237,7 +237,10 @@ fn load(ui: &Ui, a: &RenderArgs, k: Kind) -> Result<(Drawable, String)> {
         }
         Kind::Geometry => match super::scene::load_input(ui, &a.input, true)? {
             super::scene::Input::Scene(scene) => {
-                let (mesh, materials) = textured(ui, &name, &scene);
+                let merged = scene.merged();
+                let materials =
+                    super::scene::render_materials(ui, &name, &scene, merged.face_materials);
+                let mesh = merged.mesh;
                 let what = format!(
                     "{} triangles, {} materials, {} textures",
                     mesh.faces.len(),
@@ -268,69 +271,6 @@ fn geometry(model: Model) -> Result<(Drawable, String)> {
             Ok((Drawable::Points(p), what))
         }
     }
-}
-
-/// A scene merged into one mesh, with what the renderer needs of its
-/// materials: base colour factors and the base colour textures, decoded.
-/// A texture that does not decode is said in a warning and left out (its
-/// faces show the factor alone).
-fn textured(
-    ui: &Ui,
-    name: &str,
-    scene: &lodkit_mesh::Scene,
-) -> (lodkit_mesh::TriMesh, lodkit_render::Materials) {
-    use lodkit_render::{Look, TextureImage, Wrap};
-    let merged = scene.merged();
-    let mut textures = Vec::new();
-    // Scene texture index -> renderer texture index (decoded once).
-    let mut decoded: Vec<Option<Option<usize>>> = vec![None; scene.textures.len()];
-    let looks = scene
-        .materials
-        .iter()
-        .map(|m| {
-            let texture = m.base_color_texture.and_then(|r| {
-                let slot = decoded.get_mut(r.texture)?;
-                *slot.get_or_insert_with(|| {
-                    let t = &scene.textures[r.texture];
-                    let image = scene.images.get(t.image)?;
-                    match lodkit_particles::silhouette::images::decode_rgba(&image.bytes) {
-                        Ok(d) => {
-                            let s = t.sampler.and_then(|i| scene.samplers.get(i));
-                            textures.push(TextureImage {
-                                width: d.width,
-                                height: d.height,
-                                rgba: d.rgba,
-                                wrap: s.map_or([Wrap::Repeat; 2], |s| {
-                                    [Wrap::from_gltf(s.wrap_s), Wrap::from_gltf(s.wrap_t)]
-                                }),
-                            });
-                            Some(textures.len() - 1)
-                        }
-                        Err(e) => {
-                            let what = image.file_name.as_deref().unwrap_or("an embedded image");
-                            ui.status(format!(
-                                "warning: {name}: texture {} ({}): {e}; drawn without it",
-                                r.texture,
-                                lodkit_mesh::error::escape(what)
-                            ));
-                            None
-                        }
-                    }
-                })
-            });
-            let [r, g, b, _] = m.base_color;
-            Look {
-                factor: [r, g, b],
-                texture,
-            }
-        })
-        .collect();
-    let materials = lodkit_render::Materials {
-        face_looks: merged.face_materials.clone(),
-        looks,
-        textures,
-    };
-    (merged.mesh, materials)
 }
 
 impl Drawable {

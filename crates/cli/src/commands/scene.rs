@@ -170,7 +170,8 @@ pub fn run_lods(
 /// screen coverages and error extras from `build::lod_chain`), tables
 /// written once; and `lods.json`. `on_level` sees each level as it is
 /// measured. Returns what the one-mesh chain returns: the levels, each
-/// level merged into one mesh (for renders), and their measurements.
+/// level merged into one mesh (for renders), and their measurements, with
+/// each merged level's face materials.
 #[allow(clippy::too_many_arguments)]
 pub fn write_scene_chain(
     ui: &Ui,
@@ -209,12 +210,15 @@ pub fn write_scene_chain(
     let mut levels = Vec::new();
     let mut meshes = Vec::new();
     let mut measured = Vec::new();
+    let mut face_materials = Vec::new();
     for (i, (level, reports)) in chain.into_iter().enumerate() {
         let level = output.scene(level, &glb_path)?;
         let r = lodkit_simplify::scene::combined_report(&reports)
             .ok_or_else(|| anyhow::anyhow!("{input}: the scene has no meshes"))?;
         let file = format!("{stem}_lod{}.glb", i + 1);
-        let level_mesh = level.merged().mesh;
+        let merged_level = level.merged();
+        face_materials.push(merged_level.face_materials);
+        let level_mesh = merged_level.mesh;
         let step = ui.spinner(&format!("measuring level {}", i + 1));
         let m = sampling.measure(reference, &level_mesh)?;
         step.finish();
@@ -278,5 +282,70 @@ pub fn write_scene_chain(
         lods,
         meshes,
         measured,
+        face_materials: Some(face_materials),
     })
+}
+
+/// What `lodkit_render` needs to draw `scene`'s faces with their materials:
+/// each material's base colour factor and base colour texture, decoded
+/// (PNG or JPEG, by the one decoder, size-bounded before allocating), for
+/// a merged mesh whose faces have `face_materials`. A texture that does not
+/// decode is said in a warning naming `name` and left out (its faces show
+/// the factor alone).
+pub fn render_materials(
+    ui: &Ui,
+    name: &str,
+    scene: &Scene,
+    face_materials: Vec<u32>,
+) -> lodkit_render::Materials {
+    use lodkit_render::{Look, TextureImage, Wrap};
+    let mut textures = Vec::new();
+    // Scene texture index -> renderer texture index (decoded once).
+    let mut decoded: Vec<Option<Option<usize>>> = vec![None; scene.textures.len()];
+    let looks = scene
+        .materials
+        .iter()
+        .map(|m| {
+            let texture = m.base_color_texture.and_then(|r| {
+                let slot = decoded.get_mut(r.texture)?;
+                *slot.get_or_insert_with(|| {
+                    let t = &scene.textures[r.texture];
+                    let image = scene.images.get(t.image)?;
+                    match lodkit_particles::silhouette::images::decode_rgba(&image.bytes) {
+                        Ok(d) => {
+                            let s = t.sampler.and_then(|i| scene.samplers.get(i));
+                            textures.push(TextureImage {
+                                width: d.width,
+                                height: d.height,
+                                rgba: d.rgba,
+                                wrap: s.map_or([Wrap::Repeat; 2], |s| {
+                                    [Wrap::from_gltf(s.wrap_s), Wrap::from_gltf(s.wrap_t)]
+                                }),
+                            });
+                            Some(textures.len() - 1)
+                        }
+                        Err(e) => {
+                            let what = image.file_name.as_deref().unwrap_or("an embedded image");
+                            ui.status(format!(
+                                "warning: {name}: texture {} ({}): {e}; drawn without it",
+                                r.texture,
+                                lodkit_mesh::error::escape(what)
+                            ));
+                            None
+                        }
+                    }
+                })
+            });
+            let [r, g, b, _] = m.base_color;
+            Look {
+                factor: [r, g, b],
+                texture,
+            }
+        })
+        .collect();
+    lodkit_render::Materials {
+        face_looks: face_materials,
+        looks,
+        textures,
+    }
 }

@@ -31,6 +31,9 @@ pub struct Inputs<'a> {
     pub continuous: &'a Continuous,
     pub progressive: &'a Progressive,
     pub timings: &'a [(String, f64)],
+    /// A scene input's materials (its merged faces' looks), so the input
+    /// and the HQMS levels are drawn textured.
+    pub materials: Option<&'a lodkit_render::Materials>,
 }
 
 /// The page (deterministic except inside its `varies` block).
@@ -39,19 +42,35 @@ pub fn report(i: &Inputs) -> Result<String> {
     let diagonal = mesh.bbox().diagonal() as f64;
     let camera = Camera::orbit(&mesh.bbox(), 30.0, 20.0, 35.0, 1.0)
         .map_err(|e| anyhow::anyhow!("{}: cannot frame the model: {e}", i.name))?;
-    let shot = |m: &TriMesh, caption: String| -> Result<Picture> {
-        let opts = RenderOptions {
-            width: RENDER_SIZE,
-            height: RENDER_SIZE,
-            supersample: 2,
-            ..RenderOptions::DEFAULT
-        };
-        let img = render(m, &camera, &opts).map_err(|e| anyhow::anyhow!("{caption}: {e}"))?;
+    let opts = RenderOptions {
+        width: RENDER_SIZE,
+        height: RENDER_SIZE,
+        supersample: 2,
+        ..RenderOptions::DEFAULT
+    };
+    let picture = |img: lodkit_render::Image, caption: String| -> Result<Picture> {
         let png = img
             .over(opts.background)
             .to_png()
             .map_err(|e| anyhow::anyhow!("{caption}: {e}"))?;
         Ok(Picture { caption, png })
+    };
+    // The input and the HQMS levels of a scene, with its materials.
+    let mut looks = i.materials.cloned();
+    let mut textured = |m: &TriMesh, faces: Option<&Vec<u32>>, caption: String| {
+        let img = match (&mut looks, faces) {
+            (Some(l), Some(f)) => {
+                l.face_looks.clone_from(f);
+                lodkit_render::render_textured(m, l, &camera, &opts)
+            }
+            _ => render(m, &camera, &opts),
+        }
+        .map_err(|e| anyhow::anyhow!("{caption}: {e}"))?;
+        picture(img, caption)
+    };
+    let shot = |m: &TriMesh, caption: String| -> Result<Picture> {
+        let img = render(m, &camera, &opts).map_err(|e| anyhow::anyhow!("{caption}: {e}"))?;
+        picture(img, caption)
     };
     let pct = |x: f64| {
         if diagonal > 0.0 {
@@ -82,14 +101,18 @@ pub fn report(i: &Inputs) -> Result<String> {
          flat-shaded, both sides drawn."
             .into(),
     ));
-    b.push(Block::Gallery(vec![shot(
+    let input_faces = i.materials.map(|m| &m.face_looks);
+    b.push(Block::Gallery(vec![textured(
         mesh,
+        input_faces,
         format!("input: {} triangles", mesh.faces.len()),
     )?]));
     let mut pics = Vec::new();
-    for (l, m) in i.chain.lods.levels.iter().zip(&i.chain.meshes) {
-        pics.push(shot(
+    for (k, (l, m)) in i.chain.lods.levels.iter().zip(&i.chain.meshes).enumerate() {
+        let faces = i.chain.face_materials.as_ref().and_then(|f| f.get(k));
+        pics.push(textured(
             m,
+            faces,
             format!("HQMS level {}: {} triangles", l.level, l.triangles),
         )?);
     }

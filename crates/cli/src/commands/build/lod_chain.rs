@@ -119,6 +119,9 @@ pub struct Chain {
     pub lods: Lods,
     pub meshes: Vec<TriMesh>,
     pub measured: Vec<Option<Measured>>,
+    /// A scene's chain: each level's face materials (indices into the
+    /// input scene's materials, as `meshes` order the faces).
+    pub face_materials: Option<Vec<Vec<u32>>>,
 }
 
 /// Simplifies the reference's mesh into one level per target (each from
@@ -239,6 +242,7 @@ pub fn write_chain(
         lods,
         meshes,
         measured,
+        face_materials: None,
     })
 }
 
