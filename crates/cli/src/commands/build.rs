@@ -201,33 +201,19 @@ fn write_all(
             ..lodkit_simplify::Options::DEFAULT
         };
         let (out, targets) = (dir.join("lods"), halving_targets(args.levels));
-        match &input.scene {
-            Some(scene) => super::scene::write_scene_chain(
-                ui,
-                &reference,
-                name,
-                name,
-                &out,
-                scene,
-                &targets,
-                &opts,
-                sampling,
-                &args.output,
-                &mut |_| {},
-            ),
-            None => lod_chain::write_chain(
-                ui,
-                &reference,
-                name,
-                name,
-                &out,
-                &targets,
-                &opts,
-                sampling,
-                &args.output,
-                &mut |_| {},
-            ),
-        }
+        lod_chain::write_chain(
+            ui,
+            &reference,
+            name,
+            name,
+            &out,
+            input.scene.as_ref(),
+            &targets,
+            &opts,
+            sampling,
+            &args.output,
+            &mut |_| {},
+        )
     })?;
     writeln!(
         report,

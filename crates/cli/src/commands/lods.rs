@@ -83,16 +83,18 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
         ));
     }
     let opts = a.opts.options(Target::Ratio(1.0))?;
-    // A scene (materials, parts) keeps them unless --merge: its own path.
-    let mesh: TriMesh = match super::scene::load_input(ui, &a.input, !a.opts.merge)? {
-        super::scene::Input::Scene(s) => return super::scene::run_lods(ui, a, &s, &targets, &opts),
-        super::scene::Input::Model(lodkit_mesh::Model::Mesh(m)) => m,
-        super::scene::Input::Model(other) => anyhow::bail!(
-            "{}: holds a {} with no faces, a mesh is needed",
-            a.input.display(),
-            other.kind()
-        ),
-    };
+    // A scene (materials, parts) keeps them unless --merge: a chain of
+    // scene GLBs, measured merged.
+    let (mesh, scene): (TriMesh, Option<lodkit_mesh::Scene>) =
+        match super::scene::load_input(ui, &a.input, !a.opts.merge)? {
+            super::scene::Input::Scene(s) => (s.merged().mesh, Some(s)),
+            super::scene::Input::Model(lodkit_mesh::Model::Mesh(m)) => (m, None),
+            super::scene::Input::Model(other) => anyhow::bail!(
+                "{}: holds a {} with no faces, a mesh is needed",
+                a.input.display(),
+                other.kind()
+            ),
+        };
     let stem = a
         .input
         .file_stem()
@@ -104,24 +106,27 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
     let reference = lodkit_mesh::metrics::Reference::new(&mesh)
         .map_err(|e| anyhow::anyhow!("{}: {e}", a.input.display()))?;
     let sampling = a.samples.map_or(Sampling::Adaptive, Sampling::PerKind);
+    let input = a.input.display().to_string();
+    let mut on_level = |l: &Level| {
+        if !json {
+            ui.status(format!(
+                "level {}: {} triangles, {} vertices, error est. {:.3e} / measured mean {:.3e} max {:.3e}: {}",
+                l.level, l.triangles, l.vertices, l.estimated_error, l.measured_mean_error, l.measured_max_error, l.stop
+            ));
+        }
+    };
     let chain = write_chain(
         ui,
         &reference,
-        &a.input.display().to_string(),
+        &input,
         &stem,
         &a.out,
+        scene.as_ref(),
         &targets,
         &opts,
         sampling,
         &a.output,
-        &mut |l| {
-            if !json {
-                ui.status(format!(
-                    "level {}: {} triangles, {} vertices, error est. {:.3e} / measured mean {:.3e} max {:.3e}: {}",
-                    l.level, l.triangles, l.vertices, l.estimated_error, l.measured_mean_error, l.measured_max_error, l.stop
-                ));
-            }
-        },
+        &mut on_level,
     )?;
     let report = chain.lods;
     let total = start.elapsed().as_secs_f64();
@@ -130,12 +135,15 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
         crate::out!("{json}")?;
         return Ok(());
     }
+    let what = match &scene {
+        Some(s) => super::scene::describe(s),
+        None => format!("{total:.3} s"),
+    };
     ui.status(format!(
-        "wrote {} levels, {} and lods.json to {} ({:.3} s)",
+        "wrote {} levels, {} and lods.json to {} ({what})",
         report.levels.len(),
         report.glb,
         a.out.display(),
-        total
     ));
     Ok(())
 }

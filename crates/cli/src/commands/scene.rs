@@ -99,65 +99,6 @@ pub fn describe(scene: &Scene) -> String {
     )
 }
 
-/// `lodkit lods` on a scene: [`write_scene_chain`] into `--out`, then the
-/// same last line (or `lods.json` on stdout) as the one-mesh chain.
-pub fn run_lods(
-    ui: &Ui,
-    a: &super::lods::LodsArgs,
-    scene: &Scene,
-    targets: &[Target],
-    opts: &Options,
-) -> Result<()> {
-    let stem = a
-        .input
-        .file_stem()
-        .and_then(|s| s.to_str())
-        .unwrap_or("mesh")
-        .to_string();
-    let merged = scene.merged().mesh;
-    let reference = lodkit_mesh::metrics::Reference::new(&merged)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", a.input.display()))?;
-    let sampling = a.samples.map_or(
-        super::build::Sampling::Adaptive,
-        super::build::Sampling::PerKind,
-    );
-    let json = a.json;
-    let chain = write_scene_chain(
-        ui,
-        &reference,
-        &a.input.display().to_string(),
-        &stem,
-        &a.out,
-        scene,
-        targets,
-        opts,
-        sampling,
-        &a.output,
-        &mut |l| {
-            if !json {
-                ui.status(format!(
-                    "level {}: {} triangles, {} vertices, error est. {:.3e} / measured mean {:.3e} max {:.3e}: {}",
-                    l.level, l.triangles, l.vertices, l.estimated_error, l.measured_mean_error, l.measured_max_error, l.stop
-                ));
-            }
-        },
-    )?;
-    let report = chain.lods;
-    if a.json {
-        let json = serde_json::to_string_pretty(&report)? + "\n";
-        crate::out!("{json}")?;
-        return Ok(());
-    }
-    ui.status(format!(
-        "wrote {} levels, {} and lods.json to {} ({})",
-        report.levels.len(),
-        report.glb,
-        a.out.display(),
-        describe(scene)
-    ));
-    Ok(())
-}
-
 /// The discrete LOD chain of a scene, materials kept, for `lodkit lods`
 /// and `lodkit build`: each level made by
 /// `lodkit_simplify::scene::scene_lod_chain` (each from the previous, face

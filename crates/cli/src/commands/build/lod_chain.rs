@@ -124,6 +124,34 @@ pub struct Chain {
     pub face_materials: Option<Vec<Vec<u32>>>,
 }
 
+/// The chain of `lodkit lods` and `build`: of `scene` with its materials
+/// when given ([`crate::commands::scene::write_scene_chain`]: scene GLBs),
+/// else of the reference's mesh ([`write_mesh_chain`]: PLY levels); the
+/// arguments are theirs.
+#[allow(clippy::too_many_arguments)]
+pub fn write_chain(
+    ui: &Ui,
+    reference: &Reference,
+    input: &str,
+    stem: &str,
+    out: &Path,
+    scene: Option<&lodkit_mesh::Scene>,
+    targets: &[Target],
+    opts: &Options,
+    sampling: Sampling,
+    output: &OutputArgs,
+    on_level: &mut dyn FnMut(&Level),
+) -> Result<Chain> {
+    match scene {
+        Some(s) => crate::commands::scene::write_scene_chain(
+            ui, reference, input, stem, out, s, targets, opts, sampling, output, on_level,
+        ),
+        None => write_mesh_chain(
+            ui, reference, input, stem, out, targets, opts, sampling, output, on_level,
+        ),
+    }
+}
+
 /// Simplifies the reference's mesh into one level per target (each from
 /// the previous level, with `opts`), measures each with `sampling`, and
 /// writes `<stem>_lodN.ply`, `<stem>_lods.glb` and `lods.json` into `out`
@@ -134,7 +162,7 @@ pub struct Chain {
 /// carries `--normals` (applied to what is written, after measuring) and
 /// `--compress` (the GLB).
 #[allow(clippy::too_many_arguments)]
-pub fn write_chain(
+fn write_mesh_chain(
     ui: &Ui,
     reference: &Reference,
     input: &str,
