@@ -241,11 +241,12 @@ fn load(ui: &Ui, a: &RenderArgs, k: Kind) -> Result<(Drawable, String)> {
                 let materials =
                     super::scene::render_materials(ui, &name, &scene, merged.face_materials);
                 let mesh = merged.mesh;
+                let n = |k: usize, w: &str| format!("{k} {w}{}", if k == 1 { "" } else { "s" });
                 let what = format!(
-                    "{} triangles, {} materials, {} textures",
-                    mesh.faces.len(),
-                    materials.looks.len(),
-                    materials.textures.len()
+                    "{}, {}, {}",
+                    n(mesh.faces.len(), "triangle"),
+                    n(materials.looks.len(), "material"),
+                    n(materials.textures.len(), "texture")
                 );
                 Ok((Drawable::Textured(mesh, materials), what))
             }
