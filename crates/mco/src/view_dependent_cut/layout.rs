@@ -17,25 +17,32 @@ pub(super) struct Hot {
     pub(super) err: f32,
     /// The subtree bound ([`view_subtree_bounds`]).
     pub(super) bound: f32,
+    /// The growth of the cube for the subtree's bound test (see the
+    /// module docs of `view_dependent_cut`): `lo..hi` grown by `grow` on
+    /// every side covers every cube of the subtree.
+    pub(super) grow: f32,
     /// Rank of the first inner child (the inner children's ranks are
     /// consecutive: ranks follow node order and the children are one
     /// node range).
     pub(super) first_inner: u32,
-    pub(super) first_child: u32,
     pub(super) level: u8,
     pub(super) child_count: u8,
     /// Bit `j`: child `first_child + j` is an inner node.
     pub(super) inner_mask: u8,
-    pub(super) _pad: u8,
+    /// Bit `j`: child `first_child + j` has crack patches (so drawing it
+    /// may not be a plain copy of its triangles).
+    pub(super) patch_mask: u8,
 }
 
-/// One inner node's fields the closure reads, by rank.
+/// One inner node's fields the closure and the emission read, by rank.
 #[derive(Debug, Clone, Copy, Default)]
 pub(super) struct Close {
-    /// Rank of the parent (`u32::MAX` for the root).
-    pub(super) parent: u32,
-    pub(super) deps_start: u32,
-    pub(super) deps_count: u32,
+    /// Node number of the first child.
+    pub(super) first_child: u32,
+    /// Its range of `ViewLayout::links`: the ranks an expanded node
+    /// expands (its parent, then its balance dependencies).
+    pub(super) links_start: u32,
+    pub(super) links_count: u32,
     /// LOD number that expands the node (`u32::MAX`: none).
     pub(super) prio: u32,
 }
@@ -63,8 +70,9 @@ pub(crate) struct ViewLayout {
     pub(super) close: Vec<Close>,
     /// Cube edge length per level (as [`McoModel::node_size`]).
     pub(super) sizes: Vec<f32>,
-    /// Balance dependencies as ranks, at `Close::deps_start`.
-    pub(super) deps: Vec<u32>,
+    /// Per rank, at `Close::links_start`: the parent's rank (none for the
+    /// root), then the balance dependencies' ranks.
+    pub(super) links: Vec<u32>,
     /// The LOD array as ranks (same shape as [`McoModel::lod`]).
     pub(super) lod: Vec<u32>,
     /// Per node and one past: start of its triangles in `tris` (indices).
@@ -74,9 +82,19 @@ pub(crate) struct ViewLayout {
     pub(super) tris: Option<Vec<u32>>,
     /// Per node and one past: start of its crack patches in `patches`.
     pub(super) poff: Vec<u32>,
-    /// `[coarse neighbour's rank (u32::MAX: never expanded), subs start,
-    /// subs count]` per patch, in node order.
+    /// `[coarse neighbour's rank (u32::MAX: never expanded), start,
+    /// count]` per patch, in node order: a range of `edits` when the node's
+    /// bit in `scan` is clear, else of [`McoModel::subs`].
     pub(super) patches: Vec<[u32; 3]>,
+    /// A patch prepared at build time: `[position in the node's indices,
+    /// new index]`, to write over the node's copied triangles.
+    pub(super) edits: Vec<[u32; 2]>,
+    /// Per node, set where its patches interact (one index changed by two
+    /// patches, or a patch's result changed by another), so that what a
+    /// patch writes depends on which others apply: such a node's patches
+    /// are applied by scanning its substitutions, in order, as
+    /// [`McoModel::emit`] does. Clear for every node of a built model.
+    pub(super) scan: Vec<u64>,
 }
 
 impl ViewLayout {
@@ -107,18 +125,22 @@ impl ViewLayout {
         let ranked = |x: u32| rank.get(x as usize).copied().filter(|&r| r != u32::MAX);
         let mut hot = Vec::with_capacity(inner as usize);
         let mut close = Vec::with_capacity(inner as usize);
-        let mut deps = Vec::new();
+        let mut links = Vec::new();
         for (i, nd) in m.nodes.iter().enumerate() {
             if nd.child_count == 0 {
                 continue;
             }
-            let (lo, _) = m.node_box(i as u32);
+            let (lo, hi) = m.node_box(i as u32);
             let mut inner_mask = 0u8;
+            let mut patch_mask = 0u8;
             let mut first_inner = u32::MAX;
             for (j, c) in m.children(i as u32).enumerate() {
                 if let Some(r) = ranked(c) {
                     inner_mask |= 1 << j;
                     first_inner = first_inner.min(r);
+                }
+                if m.nodes[c as usize].patch_count > 0 {
+                    patch_mask |= 1 << j;
                 }
             }
             hot.push(Hot {
@@ -126,31 +148,30 @@ impl ViewLayout {
                 err: node_error(m, i as u32),
                 bound: bounds[i],
                 first_inner,
-                first_child: nd.first_child,
+                grow: lo.abs().max(hi.abs()).max_element() * BOUND_GROWTH + f32::MIN_POSITIVE,
                 level: nd.level,
                 child_count: nd.child_count,
                 inner_mask,
-                _pad: 0,
+                patch_mask,
             });
-            let parent = match nd.parent {
-                u32::MAX => u32::MAX,
-                p => ranked(p)?,
-            };
+            let links_start = u32::try_from(links.len()).ok()?;
+            if nd.parent != u32::MAX {
+                links.push(ranked(nd.parent)?);
+            }
             let d = m
                 .deps
                 .get(nd.deps_start as usize..nd.deps_start as usize + nd.deps_count as usize)?;
-            let deps_start = u32::try_from(deps.len()).ok()?;
             for &x in d {
-                deps.push(ranked(x)?);
+                links.push(ranked(x)?);
             }
             let prio = m.prio.get(i).copied().unwrap_or(u32::MAX);
             if prio != u32::MAX && (prio == 0 || prio as usize >= m.groups.len()) {
                 return None;
             }
             close.push(Close {
-                parent,
-                deps_start,
-                deps_count: d.len() as u32,
+                first_child: nd.first_child,
+                links_start,
+                links_count: links.len() as u32 - links_start,
                 prio,
             });
         }
@@ -169,9 +190,11 @@ impl ViewLayout {
         let mut toff = Vec::with_capacity(n + 1);
         let mut poff = Vec::with_capacity(n + 1);
         let mut patches = Vec::new();
+        let mut edits = Vec::new();
+        let mut scan = vec![0u64; n.div_ceil(64)];
         let mut in_order = true;
         let mut t = 0usize;
-        for nd in &m.nodes {
+        for (i, nd) in m.nodes.iter().enumerate() {
             let len = 3 * nd.tri_count as usize;
             if nd.tri_start as usize + len > m.tris.len() {
                 return None;
@@ -183,11 +206,32 @@ impl ViewLayout {
             let ps = m
                 .patches
                 .get(nd.patch_start as usize..nd.patch_start as usize + nd.patch_count as usize)?;
+            let mut subs = Vec::with_capacity(ps.len());
             for p in ps {
-                m.subs
-                    .get(p.subs_start as usize..p.subs_start as usize + p.subs_count as usize)?;
-                let coarse = ranked(p.coarse).unwrap_or(u32::MAX);
-                patches.push([coarse, p.subs_start, p.subs_count]);
+                subs.push(
+                    m.subs.get(
+                        p.subs_start as usize..p.subs_start as usize + p.subs_count as usize,
+                    )?,
+                );
+            }
+            let own = &m.tris[nd.tri_start as usize..][..len];
+            match (!ps.is_empty()).then(|| prepared_edits(own, &subs)) {
+                None => {}
+                Some(Some(per_patch)) => {
+                    for (p, e) in ps.iter().zip(per_patch) {
+                        let coarse = ranked(p.coarse).unwrap_or(u32::MAX);
+                        let start = u32::try_from(edits.len()).ok()?;
+                        patches.push([coarse, start, e.len() as u32]);
+                        edits.extend(e);
+                    }
+                }
+                Some(None) => {
+                    scan[i >> 6] |= 1 << (i & 63);
+                    for p in ps {
+                        let coarse = ranked(p.coarse).unwrap_or(u32::MAX);
+                        patches.push([coarse, p.subs_start, p.subs_count]);
+                    }
+                }
             }
         }
         toff.push(u32::try_from(t).ok()?);
@@ -210,12 +254,14 @@ impl ViewLayout {
             hot,
             close,
             sizes,
-            deps,
+            links,
             lod,
             toff,
             tris,
             poff,
             patches,
+            edits,
+            scan,
         })
     }
 
@@ -231,6 +277,14 @@ impl ViewLayout {
         (lo, lo + Vec3::splat(self.sizes[h.level as usize]))
     }
 
+    /// [`ViewLayout::cube`] grown by the node's `grow`: a box that
+    /// contains the cube of every node in its subtree.
+    #[inline(always)]
+    pub(super) fn grown(&self, h: &Hot, lo: Vec3, hi: Vec3) -> (Vec3, Vec3) {
+        let g = Vec3::splat(h.grow);
+        (lo - g, hi + g)
+    }
+
     #[inline(always)]
     pub(super) fn tris<'a>(&'a self, m: &'a McoModel) -> &'a [u32] {
         self.tris.as_deref().unwrap_or(&m.tris)
@@ -240,4 +294,48 @@ impl ViewLayout {
 #[inline(always)]
 pub(super) fn bit(bits: &[u64], r: u32) -> bool {
     bits[(r >> 6) as usize] >> (r & 63) & 1 != 0
+}
+
+/// `v` through one patch's substitutions, in order (as [`McoModel::emit`]
+/// applies them).
+fn substitute(subs: &[[u32; 2]], mut v: u32) -> u32 {
+    for s in subs {
+        if v == s[0] {
+            v = s[1];
+        }
+    }
+    v
+}
+
+/// Per patch, the `[position, new index]` writes it makes on a node's
+/// indices `own`, or `None` when the patches interact. They do not when
+/// every index is changed by at most one patch and what it becomes is left
+/// alone by every other: then, whichever patches apply and in their order,
+/// each index ends as its one patch makes it (or unchanged), and applying
+/// a patch is writing its list.
+fn prepared_edits(own: &[u32], subs: &[&[[u32; 2]]]) -> Option<Vec<Vec<[u32; 2]>>> {
+    let mut out = vec![Vec::new(); subs.len()];
+    for (pos, &v) in own.iter().enumerate() {
+        let mut changed = None;
+        for (p, s) in subs.iter().enumerate() {
+            let w = substitute(s, v);
+            if w != v {
+                if changed.is_some() {
+                    return None;
+                }
+                changed = Some((p, w));
+            }
+        }
+        if let Some((p, w)) = changed {
+            let others_keep = subs
+                .iter()
+                .enumerate()
+                .all(|(q, s)| q == p || substitute(s, w) == w);
+            if !others_keep {
+                return None;
+            }
+            out[p].push([pos as u32, w]);
+        }
+    }
+    Some(out)
 }
