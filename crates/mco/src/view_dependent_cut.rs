@@ -118,7 +118,7 @@ struct Frustum {
     min_d: f32,
     /// `height / (2 tan_v tol)` grown by 2⁻¹² (far above its rounding):
     /// a length `e` at distance `d` covers more than the tolerance only if
-    /// `e · reach > d` (see [`Frustum::may_project`]).
+    /// `e · reach > d` (see [`Frustum::distance_and_reach`]).
     reach: f32,
 }
 
@@ -174,13 +174,15 @@ impl Frustum {
     }
 
     /// A conservative [`Frustum::projects`] for subtree bounds, without
-    /// its division: true wherever `projects` is, as `reach`'s margin
-    /// covers the rounding of both (a few units in the last place of the
-    /// distance, the quotient and `reach`).
+    /// its division: `(d, r)`, the distance `projects` computes for the box
+    /// `lo..hi` (the same operations) and the reach of the length `e`;
+    /// `r > d` wherever `projects` is true, as `reach`'s margin covers the
+    /// rounding of both (a few units in the last place of the quotient and
+    /// of `reach`).
     #[inline(always)]
-    fn may_project(&self, lo: Vec3, hi: Vec3, e: f32) -> bool {
+    fn distance_and_reach(&self, lo: Vec3, hi: Vec3, e: f32) -> (f32, f32) {
         let closest = Vec3::ZERO.max(lo - self.eye).min(hi - self.eye);
-        e * self.reach > closest.length().max(self.min_d)
+        (closest.length().max(self.min_d), e * self.reach)
     }
 
     /// The second half of [`Frustum::shows`], for plane `k`: whether the
@@ -258,7 +260,7 @@ impl PartialEq for LazyViewBounds {
 /// model; its cuts read the node arrays directly, with the same result).
 #[derive(Debug, Clone)]
 enum ViewData {
-    Layout(ViewLayout),
+    Layout(Box<ViewLayout>),
     Bounds(Vec<f32>),
 }
 
@@ -308,7 +310,7 @@ impl McoModel {
         self.view_bounds.0.get_or_init(|| {
             let bounds = view_subtree_bounds(self);
             match ViewLayout::build(self, &bounds) {
-                Some(l) => ViewData::Layout(l),
+                Some(l) => ViewData::Layout(Box::new(l)),
                 None => ViewData::Bounds(bounds),
             }
         })
@@ -355,6 +357,29 @@ pub struct ViewCut {
     bits: Vec<u64>,
     /// Nodes the current cut expands.
     count: usize,
+    /// What the last cut on a [`ViewLayout`] left for the next one's
+    /// emission (see `compact_cut`): its layout's id (0: none), its
+    /// expanded ranks, its index buffer, and per rank expanded there, its
+    /// triangles' `[start, length]` in that buffer.
+    prev_layout: u64,
+    prev_bits: Vec<u64>,
+    prev: Vec<u32>,
+    seg: Vec<[u32; 2]>,
+    /// Per rank: its triangles may differ from the last cut's.
+    dirty: Vec<u64>,
+    /// A cut made once (`extract_view`): nothing kept for a next one.
+    one_shot: bool,
+    /// Per rank of a [`ViewLayout`], `[eye x, y, z, margin]`: while the
+    /// eye stays nearer than `margin` (> 0) to that eye, the rank's
+    /// subtree holds no wanted node (it projects its bound below the
+    /// tolerance: the distance to a box moves no faster than the eye, and
+    /// the margin is the distance's excess over the bound's reach, less a
+    /// relative 2⁻¹⁶ of the lengths and coordinates for the rounding of
+    /// both). Valid for the layout, reach and minimum distance in
+    /// `slack_key` (the tolerance, the field of view and the viewport
+    /// height enter the reach), whatever the direction.
+    slack: Vec<[f32; 4]>,
+    slack_key: (u64, u32, u32),
     indices: Vec<u32>,
 }
 
@@ -657,6 +682,10 @@ impl McoModel {
     ///   cutting every frame keeps a [`ViewCut`] instead, which gives the
     ///   same cut without that allocation.
     pub fn extract_view(&self, camera: &Camera, tolerance_px: f32, out: &mut Vec<u32>) -> usize {
-        ViewCut::new().cut_into(self, camera, tolerance_px, out)
+        let mut cut = ViewCut {
+            one_shot: true,
+            ..ViewCut::default()
+        };
+        cut.cut_into(self, camera, tolerance_px, out)
     }
 }

@@ -95,6 +95,17 @@ pub(crate) struct ViewLayout {
     /// are applied by scanning its substitutions, in order, as
     /// [`McoModel::emit`] does. Clear for every node of a built model.
     pub(super) scan: Vec<u64>,
+    /// Per rank `q` and one past: start of its range of `watchers`.
+    pub(super) watch_off: Vec<u32>,
+    /// The ranks whose emitted triangles depend on whether rank `q` is
+    /// expanded: its parent (`q` is a child it draws or not) and every
+    /// node with a child patched against `q`. A cut whose expanded set
+    /// differs from the last one's only in ranks none of a node watches
+    /// emits that node's triangles as the last cut did.
+    pub(super) watchers: Vec<u32>,
+    /// Unique per layout built (never 0): what a [`ViewCut`] keeps from
+    /// the last cut applies to this layout only.
+    pub(super) id: u64,
 }
 
 impl ViewLayout {
@@ -250,7 +261,42 @@ impl ViewLayout {
         let sizes = (0..=top as u32)
             .map(|l| m.grid.cube * (1u32 << l) as f32)
             .collect();
+        let watch_off;
+        let watchers;
+        {
+            // Pairs (watched rank, watcher rank), then a counting sort.
+            let mut pairs: Vec<[u32; 2]> = Vec::new();
+            for i in 0..n as u32 {
+                let Some(r) = ranked(i) else { continue };
+                for c in m.children(i) {
+                    if let Some(q) = ranked(c) {
+                        pairs.push([q, r]);
+                    }
+                    let c = c as usize;
+                    for p in &patches[poff[c] as usize..poff[c + 1] as usize] {
+                        if p[0] != u32::MAX {
+                            pairs.push([p[0], r]);
+                        }
+                    }
+                }
+            }
+            pairs.sort_unstable();
+            pairs.dedup();
+            let mut off = vec![0u32; inner as usize + 1];
+            for p in &pairs {
+                off[p[0] as usize + 1] += 1;
+            }
+            for q in 0..inner as usize {
+                off[q + 1] += off[q];
+            }
+            watchers = pairs.iter().map(|p| p[1]).collect::<Vec<u32>>();
+            watch_off = off;
+        }
+        static NEXT_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
         Some(ViewLayout {
+            id: NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
+            watch_off,
+            watchers,
             hot,
             close,
             sizes,
