@@ -203,6 +203,8 @@ impl ViewLayout {
         let mut patches = Vec::new();
         let mut edits = Vec::new();
         let mut scan = vec![0u64; n.div_ceil(64)];
+        let mut subs: Vec<&[[u32; 2]]> = Vec::new();
+        let mut writes: Vec<(usize, [u32; 2])> = Vec::new();
         let mut in_order = true;
         let mut t = 0usize;
         for (i, nd) in m.nodes.iter().enumerate() {
@@ -217,7 +219,10 @@ impl ViewLayout {
             let ps = m
                 .patches
                 .get(nd.patch_start as usize..nd.patch_start as usize + nd.patch_count as usize)?;
-            let mut subs = Vec::with_capacity(ps.len());
+            if ps.is_empty() {
+                continue;
+            }
+            subs.clear();
             for p in ps {
                 subs.push(
                     m.subs.get(
@@ -226,22 +231,18 @@ impl ViewLayout {
                 );
             }
             let own = &m.tris[nd.tri_start as usize..][..len];
-            match (!ps.is_empty()).then(|| prepared_edits(own, &subs)) {
-                None => {}
-                Some(Some(per_patch)) => {
-                    for (p, e) in ps.iter().zip(per_patch) {
-                        let coarse = ranked(p.coarse).unwrap_or(u32::MAX);
-                        let start = u32::try_from(edits.len()).ok()?;
-                        patches.push([coarse, start, e.len() as u32]);
-                        edits.extend(e);
-                    }
+            if prepared_edits(own, &subs, &mut writes) {
+                for (k, p) in ps.iter().enumerate() {
+                    let coarse = ranked(p.coarse).unwrap_or(u32::MAX);
+                    let start = u32::try_from(edits.len()).ok()?;
+                    edits.extend(writes.iter().filter(|w| w.0 == k).map(|w| w.1));
+                    patches.push([coarse, start, edits.len() as u32 - start]);
                 }
-                Some(None) => {
-                    scan[i >> 6] |= 1 << (i & 63);
-                    for p in ps {
-                        let coarse = ranked(p.coarse).unwrap_or(u32::MAX);
-                        patches.push([coarse, p.subs_start, p.subs_count]);
-                    }
+            } else {
+                scan[i >> 6] |= 1 << (i & 63);
+                for p in ps {
+                    let coarse = ranked(p.coarse).unwrap_or(u32::MAX);
+                    patches.push([coarse, p.subs_start, p.subs_count]);
                 }
             }
         }
@@ -280,8 +281,8 @@ impl ViewLayout {
                     }
                 }
             }
-            pairs.sort_unstable();
-            pairs.dedup();
+            // A counting sort by watched rank; stable, so each rank's
+            // watchers stay in increasing order and repeats are adjacent.
             let mut off = vec![0u32; inner as usize + 1];
             for p in &pairs {
                 off[p[0] as usize + 1] += 1;
@@ -289,7 +290,24 @@ impl ViewLayout {
             for q in 0..inner as usize {
                 off[q + 1] += off[q];
             }
-            watchers = pairs.iter().map(|p| p[1]).collect::<Vec<u32>>();
+            let mut sorted = vec![0u32; pairs.len()];
+            let mut at = off.clone();
+            for p in &pairs {
+                sorted[at[p[0] as usize] as usize] = p[1];
+                at[p[0] as usize] += 1;
+            }
+            let mut list = Vec::with_capacity(sorted.len());
+            for q in 0..inner as usize {
+                let start = list.len();
+                for &r in &sorted[off[q] as usize..off[q + 1] as usize] {
+                    if list.len() == start || list.last() != Some(&r) {
+                        list.push(r);
+                    }
+                }
+                off[q] = start as u32;
+            }
+            off[inner as usize] = list.len() as u32;
+            watchers = list;
             watch_off = off;
         }
         static NEXT_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
@@ -353,21 +371,21 @@ fn substitute(subs: &[[u32; 2]], mut v: u32) -> u32 {
     v
 }
 
-/// Per patch, the `[position, new index]` writes it makes on a node's
-/// indices `own`, or `None` when the patches interact. They do not when
-/// every index is changed by at most one patch and what it becomes is left
-/// alone by every other: then, whichever patches apply and in their order,
-/// each index ends as its one patch makes it (or unchanged), and applying
-/// a patch is writing its list.
-fn prepared_edits(own: &[u32], subs: &[&[[u32; 2]]]) -> Option<Vec<Vec<[u32; 2]>>> {
-    let mut out = vec![Vec::new(); subs.len()];
+/// The `(patch, [position, new index])` writes a node's patches make on
+/// its indices `own`, into `writes` (cleared); false when the patches
+/// interact. They do not when every index is changed by at most one patch
+/// and what it becomes is left alone by every other: then, whichever
+/// patches apply and in their order, each index ends as its one patch
+/// makes it (or unchanged), and applying a patch is writing its list.
+fn prepared_edits(own: &[u32], subs: &[&[[u32; 2]]], writes: &mut Vec<(usize, [u32; 2])>) -> bool {
+    writes.clear();
     for (pos, &v) in own.iter().enumerate() {
         let mut changed = None;
         for (p, s) in subs.iter().enumerate() {
             let w = substitute(s, v);
             if w != v {
                 if changed.is_some() {
-                    return None;
+                    return false;
                 }
                 changed = Some((p, w));
             }
@@ -378,10 +396,10 @@ fn prepared_edits(own: &[u32], subs: &[&[[u32; 2]]]) -> Option<Vec<Vec<[u32; 2]>
                 .enumerate()
                 .all(|(q, s)| q == p || substitute(s, w) == w);
             if !others_keep {
-                return None;
+                return false;
             }
-            out[p].push([pos as u32, w]);
+            writes.push((p, [pos as u32, w]));
         }
     }
-    Some(out)
+    true
 }
