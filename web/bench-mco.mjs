@@ -6,7 +6,9 @@
 // (as frames, through the handle's kept cut state), each camera's best of
 // ROUNDS rounds, then the median and worst camera.
 // Usage:
-//   node web/bench-mco.mjs MODEL.mco TOLERANCE_PX [ROUNDS]
+//   node web/bench-mco.mjs MODEL.mco TOLERANCE_PX [ROUNDS] [FRAMES]
+// FRAMES (64) cameras on the orbit, as MCO_FRAMES for the native bench
+// (240: the small steps of a viewer, where the kept cut is frame-coherent).
 // with the wasm of scripts/build-web.sh (target/web-wasm/...), or another
 // one in LODKIT_WASM. Use the tolerance the native bench printed for the
 // same file and budget (its "tolerance (px)" column), so both time the
@@ -16,15 +18,16 @@ import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 
 const root = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..');
-const [file, tolArg, roundsArg] = process.argv.slice(2);
+const [file, tolArg, roundsArg, framesArg] = process.argv.slice(2);
 if (!file || !tolArg) {
-  console.error('usage: node web/bench-mco.mjs MODEL.mco TOLERANCE_PX [ROUNDS]');
+  console.error('usage: node web/bench-mco.mjs MODEL.mco TOLERANCE_PX [ROUNDS] [FRAMES]');
   process.exit(2);
 }
 const tol = Number(tolArg);
 const rounds = Number(roundsArg || 5);
-if (!(tol > 0) || !(rounds >= 1)) {
-  console.error('bench-mco: TOLERANCE_PX must be > 0 and ROUNDS >= 1');
+const frames = Number(framesArg || 64);
+if (!(tol > 0) || !(rounds >= 1) || !(frames >= 1)) {
+  console.error('bench-mco: TOLERANCE_PX must be > 0, ROUNDS and FRAMES >= 1');
   process.exit(2);
 }
 const wasmPath = process.env.LODKIT_WASM || path.join(root, 'target/web-wasm/wasm32-unknown-unknown/release/lodkit_wasm.wasm');
@@ -45,8 +48,8 @@ const b = new Float32Array(w.memory.buffer, w.lk_mco_bounds(h), 6).slice();
 const c = [0, 1, 2].map((i) => Math.fround((b[i] + b[i + 3]) * 0.5));
 const r = Math.hypot(b[3] - b[0], b[4] - b[1], b[5] - b[2]);
 const cameras = [];
-for (let i = 0; i < 64; i++) {
-  const a = (i / 64) * 2 * Math.PI;
+for (let i = 0; i < frames; i++) {
+  const a = (i / frames) * 2 * Math.PI;
   const d = [Math.cos(a), 0.35, Math.sin(a)];
   const l = Math.hypot(...d);
   const pos = d.map((x, k) => c[k] + (x / l) * r * 1.2);
@@ -79,6 +82,7 @@ console.log(JSON.stringify({
   full_triangles: w.lk_mco_full_triangles(h),
   load_ms: +loadMs.toFixed(1),
   tolerance_px: tol,
+  frames,
   triangles_min_mean_max: [Math.min(...tris), mean, Math.max(...tris)],
   expanded_mean: Math.round(expanded / cameras.length),
   wasm_ms_median: +sorted[sorted.length >> 1].toFixed(3),

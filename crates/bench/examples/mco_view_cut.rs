@@ -12,7 +12,10 @@
 //! given is timed as read.
 //!
 //! `MCO_FRAMES` (64) and `MCO_ROUNDS` (5) set the cameras of the orbit
-//! and the rounds (fewer: for a run under callgrind).
+//! and the rounds (fewer: for a run under callgrind). The kept
+//! `ViewCut` is frame-coherent, so its time depends on the step between
+//! cameras: `MCO_FRAMES=240` gives the small steps of a viewer, 4 the
+//! jumps of a cut without a previous one.
 //!
 //! ```text
 //! cargo run --release -p lodkit-bench --no-default-features --example mco_view_cut

@@ -241,6 +241,11 @@ pub fn time_view_cuts(
             ));
             nodes[i] = nodes[i].min(t.elapsed().as_secs_f64());
             assert_eq!(out_nodes, out, "the two searches differ");
+            assert_eq!(
+                cut.indices(),
+                &out[..],
+                "the kept cut differs from a fresh one"
+            );
             if round == 0 {
                 tris[i] = out.len() / 3;
                 expanded += cut.expanded_nodes();

@@ -49,6 +49,16 @@
 //! [`ViewCut`] keeps the per-node flags and work lists between cuts (the
 //! flags set by one cut are cleared through its own list of expanded
 //! nodes at the next), so a cut allocates nothing in the steady state.
+//!
+//! **Frame to frame** (a kept [`ViewCut`] on a model's compact layout, see
+//! `compact_cut`): a viewer's camera moves a little between frames, and
+//! its expanded set changes in a few hundred nodes. The search skips a
+//! subtree it last rejected on its bound's projection while the eye stays
+//! nearer than the distance that rejection had to spare (the distance to
+//! a box moves no faster than the eye); the emission copies, from the last
+//! cut's buffer, the triangles of every node whose children and crack
+//! patches' coarse neighbours kept their state. Neither changes the
+//! result: the same triangles in the same order as a fresh cut.
 
 use std::sync::OnceLock;
 
@@ -56,6 +66,7 @@ use glam::Vec3;
 
 use crate::model::McoModel;
 
+mod compact_cut;
 mod layout;
 use layout::*;
 
@@ -115,6 +126,10 @@ struct Frustum {
     tol: f32,
     /// Distances below this count as this (a node around the eye).
     min_d: f32,
+    /// `height / (2 tan_v tol)` grown by 2⁻¹² (far above its rounding):
+    /// a length `e` at distance `d` covers more than the tolerance only if
+    /// `e · reach > d` (see [`Frustum::distance_and_reach`]).
+    reach: f32,
 }
 
 impl Frustum {
@@ -122,6 +137,8 @@ impl Frustum {
         let (f, r, u) = camera.frame();
         let tan_v = (camera.vfov_deg.to_radians() * 0.5).tan().max(1e-6);
         let tan_h = tan_v * camera.aspect.max(1e-6);
+        let tol = tolerance_px.max(1e-6);
+        let reach = camera.viewport_height / (2.0 * tan_v * tol) * (1.0 + 1.0 / 4096.0);
         Frustum {
             eye: camera.position,
             planes: [
@@ -133,8 +150,9 @@ impl Frustum {
             ],
             tan_v,
             height: camera.viewport_height,
-            tol: tolerance_px.max(1e-6),
+            tol,
             min_d: model.grid.cube * 1e-3,
+            reach,
         }
     }
 
@@ -148,6 +166,13 @@ impl Frustum {
     /// the whole model has every node in its frustum).
     #[inline]
     fn shows(&self, lo: Vec3, hi: Vec3, e: f32) -> bool {
+        self.projects(lo, hi, e) && (0..5).all(|k| self.meets(k, lo, hi))
+    }
+
+    /// The first half of [`Frustum::shows`]: whether the length `e` at the
+    /// nearest point of the box `lo..hi` covers more than the tolerance.
+    #[inline(always)]
+    fn projects(&self, lo: Vec3, hi: Vec3, e: f32) -> bool {
         let lo = lo - self.eye;
         let hi = hi - self.eye;
         // `clamp` without its debug check: a NaN camera gives NaN corners
@@ -156,10 +181,48 @@ impl Frustum {
         let d = closest.length().max(self.min_d);
         let px = e * self.height / (2.0 * d * self.tan_v);
         px > self.tol
-            && self.planes.iter().all(|p| {
-                let v = Vec3::select(p.cmpge(Vec3::ZERO), hi, lo);
-                p.dot(v) >= 0.0
-            })
+    }
+
+    /// A conservative [`Frustum::projects`] for subtree bounds, without
+    /// its division: `(d, r)`, the distance `projects` computes for the box
+    /// `lo..hi` (the same operations) and the reach of the length `e`;
+    /// `r > d` wherever `projects` is true, as `reach`'s margin covers the
+    /// rounding of both (a few units in the last place of the quotient and
+    /// of `reach`).
+    #[inline(always)]
+    fn distance_and_reach(&self, lo: Vec3, hi: Vec3, e: f32) -> (f32, f32) {
+        let closest = Vec3::ZERO.max(lo - self.eye).min(hi - self.eye);
+        (closest.length().max(self.min_d), e * self.reach)
+    }
+
+    /// The second half of [`Frustum::shows`], for plane `k`: whether the
+    /// box `lo..hi` is not entirely outside it.
+    #[inline(always)]
+    fn meets(&self, k: usize, lo: Vec3, hi: Vec3) -> bool {
+        let p = self.planes[k];
+        let v = Vec3::select(p.cmpge(Vec3::ZERO), hi - self.eye, lo - self.eye);
+        p.dot(v) >= 0.0
+    }
+
+    /// Whether the box `lo..hi` lies inside plane `k` by a margin that
+    /// covers the rounding of [`Frustum::meets`] on any box inside it up
+    /// to a few units in the last place of its coordinates: then `meets`
+    /// holds for every such box (the cubes of a subtree, see the module
+    /// docs), and a search need not test the plane below.
+    ///
+    /// The margin is 2⁻¹⁶ of `|p|₁ · (|v|∞ + |box|∞)`, where the rounding
+    /// of `meets` (two subtractions and a dot product in `f32`) is under
+    /// 2⁻²¹ of `|p|₁ · |v|∞`, and a box sticking out by `u` units in the
+    /// last place moves the dot product by at most `u · 2⁻²³ · |p|₁ ·
+    /// |box|∞`. A NaN anywhere makes it false.
+    #[inline(always)]
+    fn contains(&self, k: usize, lo: Vec3, hi: Vec3) -> bool {
+        let p = self.planes[k];
+        let (a, b) = (lo - self.eye, hi - self.eye);
+        let v = Vec3::select(p.cmpge(Vec3::ZERO), a, b);
+        let size = a.abs().max(b.abs()).max_element() + lo.abs().max(hi.abs()).max_element();
+        let margin = p.abs().element_sum() * size * (1.0 / 65536.0);
+        p.dot(v) >= margin
     }
 }
 
@@ -207,7 +270,7 @@ impl PartialEq for LazyViewBounds {
 /// model; its cuts read the node arrays directly, with the same result).
 #[derive(Debug, Clone)]
 enum ViewData {
-    Layout(ViewLayout),
+    Layout(Box<ViewLayout>),
     Bounds(Vec<f32>),
 }
 
@@ -257,7 +320,7 @@ impl McoModel {
         self.view_bounds.0.get_or_init(|| {
             let bounds = view_subtree_bounds(self);
             match ViewLayout::build(self, &bounds) {
-                Some(l) => ViewData::Layout(l),
+                Some(l) => ViewData::Layout(Box::new(l)),
                 None => ViewData::Bounds(bounds),
             }
         })
@@ -278,8 +341,12 @@ impl McoModel {
 ///   through the previous cut's list of expanded nodes. After a cut that
 ///   wanted more than a 40th of the nodes, the next one scans the nodes
 ///   instead of searching (cheaper at that size; the same set). The first
-///   cut of a model also builds its subtree bounds (`O(nodes)`, 4 bytes
-///   per node, kept in the model).
+///   cut of a model also builds its compact layout (`O(nodes + triangles)`,
+///   kept in the model). From one cut to the next of a moving camera, a
+///   kept state re-tests only the subtrees the eye may have come within
+///   reach of and re-emits only the nodes whose neighbourhood changed
+///   (the rest is copied from the last cut, kept here: one more index
+///   buffer and 16 bytes per inner node).
 #[derive(Debug, Clone, Default)]
 pub struct ViewCut {
     /// Per node: expanded in the current cut. True exactly for `expanded`.
@@ -292,6 +359,9 @@ pub struct ViewCut {
     groups: Vec<u32>,
     /// Work list of the search and of the closure.
     stack: Vec<u32>,
+    /// Work list of the search on a [`ViewLayout`]: a rank, and above it
+    /// the frustum planes its subtree still tests.
+    search: Vec<u64>,
     /// The wanted list, then the emission order.
     queue: Vec<u32>,
     /// Wanted nodes of the last cut (0 before the first): picks the search
@@ -301,6 +371,29 @@ pub struct ViewCut {
     bits: Vec<u64>,
     /// Nodes the current cut expands.
     count: usize,
+    /// What the last cut on a [`ViewLayout`] left for the next one's
+    /// emission (see `compact_cut`): its layout's id (0: none), its
+    /// expanded ranks, its index buffer, and per rank expanded there, its
+    /// triangles' `[start, length]` in that buffer.
+    prev_layout: u64,
+    prev_bits: Vec<u64>,
+    prev: Vec<u32>,
+    seg: Vec<[u32; 2]>,
+    /// Per rank: its triangles may differ from the last cut's.
+    dirty: Vec<u64>,
+    /// A cut made once (`extract_view`): nothing kept for a next one.
+    one_shot: bool,
+    /// Per rank of a [`ViewLayout`], `[eye x, y, z, margin]`: while the
+    /// eye stays nearer than `margin` (> 0) to that eye, the rank's
+    /// subtree holds no wanted node (it projects its bound below the
+    /// tolerance: the distance to a box moves no faster than the eye, and
+    /// the margin is the distance's excess over the bound's reach, less a
+    /// relative 2⁻¹⁶ of the lengths and coordinates for the rounding of
+    /// both). Valid for the layout, reach and minimum distance in
+    /// `slack_key` (the tolerance, the field of view and the viewport
+    /// height enter the reach), whatever the direction.
+    slack: Vec<[f32; 4]>,
+    slack_key: (u64, u32, u32),
     indices: Vec<u32>,
 }
 
@@ -518,165 +611,6 @@ impl ViewCut {
     }
 }
 
-impl ViewCut {
-    /// [`ViewCut::cut_into`] on a model's [`ViewLayout`]: the same search,
-    /// closure and emission as [`ViewCut::cut_nodes`], on ranks, so the
-    /// same expanded set and the same triangles in the same order.
-    fn cut_layout(
-        &mut self,
-        model: &McoModel,
-        lay: &ViewLayout,
-        camera: &Camera,
-        tolerance_px: f32,
-        out: &mut Vec<u32>,
-    ) -> usize {
-        let ranks = lay.ranks();
-        self.bits.clear();
-        self.bits.resize(ranks.div_ceil(64), 0);
-        clear_listed(&mut self.group_seen, &self.groups, model.groups.len());
-        self.groups.clear();
-        self.stack.clear();
-        let fr = Frustum::new(model, camera, tolerance_px);
-        let mut wanted: Vec<u32> = std::mem::take(&mut self.queue);
-        wanted.clear();
-        if self.last_wanted.saturating_mul(SCAN_SHARE) > model.nodes.len() {
-            for (r, h) in lay.hot.iter().enumerate() {
-                let (lo, hi) = lay.cube(h);
-                if fr.shows(lo, hi, h.err) {
-                    wanted.push(r as u32);
-                }
-            }
-        } else if ranks > 0 {
-            self.stack.push(0);
-        }
-        while let Some(r) = self.stack.pop() {
-            let h = &lay.hot[r as usize];
-            let (lo, hi) = lay.cube(h);
-            // The bound covers the node itself (it is at least the node's
-            // error, on a cube that contains the node's), so a subtree
-            // whose bound does not show holds no wanted node, this one
-            // included: one test rejects it, the most common outcome of a
-            // search's test. Only a subtree that may show tests its root.
-            let may_show = h.bound == f32::INFINITY || {
-                let m = lo.abs().max(hi.abs()).max_element() * BOUND_GROWTH;
-                let g = Vec3::splat(m + f32::MIN_POSITIVE);
-                fr.shows(lo - g, hi + g, h.bound)
-            };
-            if !may_show {
-                continue;
-            }
-            if fr.shows(lo, hi, h.err) {
-                wanted.push(r);
-            }
-            let k = h.inner_mask.count_ones();
-            self.stack.extend(h.first_inner..h.first_inner + k);
-        }
-        self.last_wanted = wanted.len();
-        // The closure, on ranks.
-        self.stack.append(&mut wanted);
-        self.queue = wanted;
-        let bits = &mut self.bits;
-        let mut count = 0usize;
-        while let Some(r) = self.stack.pop() {
-            let (w, b) = ((r >> 6) as usize, 1u64 << (r & 63));
-            if bits[w] & b != 0 {
-                continue;
-            }
-            bits[w] |= b;
-            count += 1;
-            let c = lay.close[r as usize];
-            if c.parent != u32::MAX {
-                self.stack.push(c.parent);
-            }
-            self.stack
-                .extend_from_slice(&lay.deps[c.deps_start as usize..][..c.deps_count as usize]);
-            let k = c.prio;
-            if k != u32::MAX && !std::mem::replace(&mut self.group_seen[k as usize], true) {
-                self.groups.push(k);
-                let g = &model.groups;
-                self.stack.extend_from_slice(
-                    &lay.lod[g[k as usize - 1] as usize..g[k as usize] as usize],
-                );
-            }
-        }
-        // The emission, in rank order (= node order): each expanded node's
-        // children that are not expanded, runs without an active crack
-        // patch copied as one triangle range.
-        let bits = &self.bits;
-        let tris = lay.tris(model);
-        let toff = &lay.toff;
-        if ranks == 0 || !bit(bits, 0) {
-            emit_patched(model, lay, bits, 0, out);
-            return count;
-        }
-        for (w, &word) in bits.iter().enumerate() {
-            let mut x = word;
-            while x != 0 {
-                let r = (w as u32) << 6 | x.trailing_zeros();
-                x &= x - 1;
-                let h = &lay.hot[r as usize];
-                let fc = h.first_child;
-                let mut run = toff[fc as usize];
-                let mut next_inner = h.first_inner;
-                for j in 0..h.child_count as u32 {
-                    let c = fc + j;
-                    let plain = if h.inner_mask >> j & 1 != 0 {
-                        next_inner += 1;
-                        !bit(bits, next_inner - 1)
-                    } else {
-                        true
-                    };
-                    if plain && !patch_active(lay, bits, c) {
-                        continue;
-                    }
-                    out.extend_from_slice(&tris[run as usize..toff[c as usize] as usize]);
-                    if plain {
-                        emit_patched(model, lay, bits, c, out);
-                    }
-                    run = toff[c as usize + 1];
-                }
-                out.extend_from_slice(
-                    &tris[run as usize..toff[(fc + h.child_count as u32) as usize] as usize],
-                );
-            }
-        }
-        count
-    }
-}
-
-/// Whether drawing node `c` now applies one of its crack patches (a coarse
-/// neighbour is not expanded).
-#[inline(always)]
-fn patch_active(lay: &ViewLayout, bits: &[u64], c: u32) -> bool {
-    let (a, b) = (lay.poff[c as usize], lay.poff[c as usize + 1]);
-    lay.patches[a as usize..b as usize]
-        .iter()
-        .any(|p| p[0] == u32::MAX || !bit(bits, p[0]))
-}
-
-/// Appends node `c`'s triangles, crack-patched against every coarse
-/// neighbour not expanded: [`McoModel::emit`] on the layout.
-fn emit_patched(model: &McoModel, lay: &ViewLayout, bits: &[u64], c: u32, out: &mut Vec<u32>) {
-    let tris = lay.tris(model);
-    let start = out.len();
-    out.extend_from_slice(&tris[lay.toff[c as usize] as usize..lay.toff[c as usize + 1] as usize]);
-    let (a, b) = (lay.poff[c as usize], lay.poff[c as usize + 1]);
-    for p in &lay.patches[a as usize..b as usize] {
-        if p[0] != u32::MAX && bit(bits, p[0]) {
-            continue;
-        }
-        let subs = &model.subs[p[1] as usize..][..p[2] as usize];
-        for idx in &mut out[start..] {
-            for s in subs {
-                if *idx == s[0] {
-                    *idx = s[1];
-                }
-            }
-        }
-    }
-}
-
-/// Whether `model`'s cuts use the compact [`ViewLayout`].
 /// Makes `flags` `len` falses: through `set` (the indices the last cut
 /// set) when it already has that length, so a steady-state cut costs its
 /// own size, not the model's; reallocated for another model.
@@ -691,6 +625,7 @@ fn clear_listed(flags: &mut Vec<bool>, set: &[u32], len: usize) {
     }
 }
 
+/// Whether `model`'s cuts use the compact [`ViewLayout`].
 #[cfg(test)]
 pub(crate) fn has_layout(model: &McoModel) -> bool {
     matches!(model.view_data(), ViewData::Layout(_))
@@ -761,6 +696,10 @@ impl McoModel {
     ///   cutting every frame keeps a [`ViewCut`] instead, which gives the
     ///   same cut without that allocation.
     pub fn extract_view(&self, camera: &Camera, tolerance_px: f32, out: &mut Vec<u32>) -> usize {
-        ViewCut::new().cut_into(self, camera, tolerance_px, out)
+        let mut cut = ViewCut {
+            one_shot: true,
+            ..ViewCut::default()
+        };
+        cut.cut_into(self, camera, tolerance_px, out)
     }
 }

@@ -155,3 +155,43 @@ fn non_finite_cameras_give_the_scans_cut() {
         assert_eq!(kept, reference, "{pos} {tol}");
     }
 }
+
+/// A kept [`ViewCut`] along a path of small steps (what a viewer does
+/// frame to frame, where it reuses the last cut's triangles and skips the
+/// subtrees it found far away) gives the fresh cut and the scan's at every
+/// step, with the view direction, the tolerance and the model changing on
+/// the way.
+#[test]
+fn a_kept_view_cut_along_small_steps_equals_the_scan() {
+    let blob = model(&shapes::blob(20_000), 48);
+    let loaded = McoModel::from_bytes(&blob.to_bytes()).unwrap();
+    let (lo, hi) = loaded.bounds();
+    let (c, r) = ((lo + hi) * 0.5, (hi - lo).length());
+    let mut state = ViewCut::new();
+    let (mut fresh, mut reference) = (Vec::new(), Vec::new());
+    let mut unchanged = 0;
+    for step in 0..160 {
+        let m = if (100..110).contains(&step) {
+            &blob
+        } else {
+            &loaded
+        };
+        let a = step as f32 * 0.02;
+        let dist = 0.4 + 0.5 * (0.5 + 0.5 * (step as f32 * 0.05).cos());
+        let eye = c + Vec3::new(a.cos(), 0.3, a.sin()) * r * dist;
+        let look = c + Vec3::new(0.2 * (a * 3.0).sin(), 0.0, 0.0) * r;
+        let cam = Camera::looking_at(eye, look);
+        let tol = if step < 80 { 1.0 } else { 2.0 };
+        let before = state.indices().to_vec();
+        let kept = state.update(m, &cam, tol).to_vec();
+        m.extract_view(&cam, tol, &mut fresh);
+        assert_eq!(kept, fresh, "step {step}: kept state vs fresh cut");
+        m.extract_expanded(&select(m, &cam, tol), &mut reference);
+        assert_eq!(kept, reference, "step {step}: vs the scan");
+        if kept.len() == before.len() {
+            unchanged += 1;
+        }
+    }
+    // Steps this small often leave the cut as it was.
+    assert!(unchanged > 0);
+}

@@ -17,25 +17,32 @@ pub(super) struct Hot {
     pub(super) err: f32,
     /// The subtree bound ([`view_subtree_bounds`]).
     pub(super) bound: f32,
+    /// The growth of the cube for the subtree's bound test (see the
+    /// module docs of `view_dependent_cut`): `lo..hi` grown by `grow` on
+    /// every side covers every cube of the subtree.
+    pub(super) grow: f32,
     /// Rank of the first inner child (the inner children's ranks are
     /// consecutive: ranks follow node order and the children are one
     /// node range).
     pub(super) first_inner: u32,
-    pub(super) first_child: u32,
     pub(super) level: u8,
     pub(super) child_count: u8,
     /// Bit `j`: child `first_child + j` is an inner node.
     pub(super) inner_mask: u8,
-    pub(super) _pad: u8,
+    /// Bit `j`: child `first_child + j` has crack patches (so drawing it
+    /// may not be a plain copy of its triangles).
+    pub(super) patch_mask: u8,
 }
 
-/// One inner node's fields the closure reads, by rank.
+/// One inner node's fields the closure and the emission read, by rank.
 #[derive(Debug, Clone, Copy, Default)]
 pub(super) struct Close {
-    /// Rank of the parent (`u32::MAX` for the root).
-    pub(super) parent: u32,
-    pub(super) deps_start: u32,
-    pub(super) deps_count: u32,
+    /// Node number of the first child.
+    pub(super) first_child: u32,
+    /// Its range of `ViewLayout::links`: the ranks an expanded node
+    /// expands (its parent, then its balance dependencies).
+    pub(super) links_start: u32,
+    pub(super) links_count: u32,
     /// LOD number that expands the node (`u32::MAX`: none).
     pub(super) prio: u32,
 }
@@ -63,8 +70,9 @@ pub(crate) struct ViewLayout {
     pub(super) close: Vec<Close>,
     /// Cube edge length per level (as [`McoModel::node_size`]).
     pub(super) sizes: Vec<f32>,
-    /// Balance dependencies as ranks, at `Close::deps_start`.
-    pub(super) deps: Vec<u32>,
+    /// Per rank, at `Close::links_start`: the parent's rank (none for the
+    /// root), then the balance dependencies' ranks.
+    pub(super) links: Vec<u32>,
     /// The LOD array as ranks (same shape as [`McoModel::lod`]).
     pub(super) lod: Vec<u32>,
     /// Per node and one past: start of its triangles in `tris` (indices).
@@ -74,9 +82,30 @@ pub(crate) struct ViewLayout {
     pub(super) tris: Option<Vec<u32>>,
     /// Per node and one past: start of its crack patches in `patches`.
     pub(super) poff: Vec<u32>,
-    /// `[coarse neighbour's rank (u32::MAX: never expanded), subs start,
-    /// subs count]` per patch, in node order.
+    /// `[coarse neighbour's rank (u32::MAX: never expanded), start,
+    /// count]` per patch, in node order: a range of `edits` when the node's
+    /// bit in `scan` is clear, else of [`McoModel::subs`].
     pub(super) patches: Vec<[u32; 3]>,
+    /// A patch prepared at build time: `[position in the node's indices,
+    /// new index]`, to write over the node's copied triangles.
+    pub(super) edits: Vec<[u32; 2]>,
+    /// Per node, set where its patches interact (one index changed by two
+    /// patches, or a patch's result changed by another), so that what a
+    /// patch writes depends on which others apply: such a node's patches
+    /// are applied by scanning its substitutions, in order, as
+    /// [`McoModel::emit`] does. Clear for every node of a built model.
+    pub(super) scan: Vec<u64>,
+    /// Per rank `q` and one past: start of its range of `watchers`.
+    pub(super) watch_off: Vec<u32>,
+    /// The ranks whose emitted triangles depend on whether rank `q` is
+    /// expanded: its parent (`q` is a child it draws or not) and every
+    /// node with a child patched against `q`. A cut whose expanded set
+    /// differs from the last one's only in ranks none of a node watches
+    /// emits that node's triangles as the last cut did.
+    pub(super) watchers: Vec<u32>,
+    /// Unique per layout built (never 0): what a [`ViewCut`] keeps from
+    /// the last cut applies to this layout only.
+    pub(super) id: u64,
 }
 
 impl ViewLayout {
@@ -107,18 +136,22 @@ impl ViewLayout {
         let ranked = |x: u32| rank.get(x as usize).copied().filter(|&r| r != u32::MAX);
         let mut hot = Vec::with_capacity(inner as usize);
         let mut close = Vec::with_capacity(inner as usize);
-        let mut deps = Vec::new();
+        let mut links = Vec::new();
         for (i, nd) in m.nodes.iter().enumerate() {
             if nd.child_count == 0 {
                 continue;
             }
-            let (lo, _) = m.node_box(i as u32);
+            let (lo, hi) = m.node_box(i as u32);
             let mut inner_mask = 0u8;
+            let mut patch_mask = 0u8;
             let mut first_inner = u32::MAX;
             for (j, c) in m.children(i as u32).enumerate() {
                 if let Some(r) = ranked(c) {
                     inner_mask |= 1 << j;
                     first_inner = first_inner.min(r);
+                }
+                if m.nodes[c as usize].patch_count > 0 {
+                    patch_mask |= 1 << j;
                 }
             }
             hot.push(Hot {
@@ -126,31 +159,30 @@ impl ViewLayout {
                 err: node_error(m, i as u32),
                 bound: bounds[i],
                 first_inner,
-                first_child: nd.first_child,
+                grow: lo.abs().max(hi.abs()).max_element() * BOUND_GROWTH + f32::MIN_POSITIVE,
                 level: nd.level,
                 child_count: nd.child_count,
                 inner_mask,
-                _pad: 0,
+                patch_mask,
             });
-            let parent = match nd.parent {
-                u32::MAX => u32::MAX,
-                p => ranked(p)?,
-            };
+            let links_start = u32::try_from(links.len()).ok()?;
+            if nd.parent != u32::MAX {
+                links.push(ranked(nd.parent)?);
+            }
             let d = m
                 .deps
                 .get(nd.deps_start as usize..nd.deps_start as usize + nd.deps_count as usize)?;
-            let deps_start = u32::try_from(deps.len()).ok()?;
             for &x in d {
-                deps.push(ranked(x)?);
+                links.push(ranked(x)?);
             }
             let prio = m.prio.get(i).copied().unwrap_or(u32::MAX);
             if prio != u32::MAX && (prio == 0 || prio as usize >= m.groups.len()) {
                 return None;
             }
             close.push(Close {
-                parent,
-                deps_start,
-                deps_count: d.len() as u32,
+                first_child: nd.first_child,
+                links_start,
+                links_count: links.len() as u32 - links_start,
                 prio,
             });
         }
@@ -169,9 +201,13 @@ impl ViewLayout {
         let mut toff = Vec::with_capacity(n + 1);
         let mut poff = Vec::with_capacity(n + 1);
         let mut patches = Vec::new();
+        let mut edits = Vec::new();
+        let mut scan = vec![0u64; n.div_ceil(64)];
+        let mut subs: Vec<&[[u32; 2]]> = Vec::new();
+        let mut writes: Vec<(usize, [u32; 2])> = Vec::new();
         let mut in_order = true;
         let mut t = 0usize;
-        for nd in &m.nodes {
+        for (i, nd) in m.nodes.iter().enumerate() {
             let len = 3 * nd.tri_count as usize;
             if nd.tri_start as usize + len > m.tris.len() {
                 return None;
@@ -183,11 +219,31 @@ impl ViewLayout {
             let ps = m
                 .patches
                 .get(nd.patch_start as usize..nd.patch_start as usize + nd.patch_count as usize)?;
+            if ps.is_empty() {
+                continue;
+            }
+            subs.clear();
             for p in ps {
-                m.subs
-                    .get(p.subs_start as usize..p.subs_start as usize + p.subs_count as usize)?;
-                let coarse = ranked(p.coarse).unwrap_or(u32::MAX);
-                patches.push([coarse, p.subs_start, p.subs_count]);
+                subs.push(
+                    m.subs.get(
+                        p.subs_start as usize..p.subs_start as usize + p.subs_count as usize,
+                    )?,
+                );
+            }
+            let own = &m.tris[nd.tri_start as usize..][..len];
+            if prepared_edits(own, &subs, &mut writes) {
+                for (k, p) in ps.iter().enumerate() {
+                    let coarse = ranked(p.coarse).unwrap_or(u32::MAX);
+                    let start = u32::try_from(edits.len()).ok()?;
+                    edits.extend(writes.iter().filter(|w| w.0 == k).map(|w| w.1));
+                    patches.push([coarse, start, edits.len() as u32 - start]);
+                }
+            } else {
+                scan[i >> 6] |= 1 << (i & 63);
+                for p in ps {
+                    let coarse = ranked(p.coarse).unwrap_or(u32::MAX);
+                    patches.push([coarse, p.subs_start, p.subs_count]);
+                }
             }
         }
         toff.push(u32::try_from(t).ok()?);
@@ -206,16 +262,70 @@ impl ViewLayout {
         let sizes = (0..=top as u32)
             .map(|l| m.grid.cube * (1u32 << l) as f32)
             .collect();
+        let watch_off;
+        let watchers;
+        {
+            // Pairs (watched rank, watcher rank), then a counting sort.
+            let mut pairs: Vec<[u32; 2]> = Vec::new();
+            for i in 0..n as u32 {
+                let Some(r) = ranked(i) else { continue };
+                for c in m.children(i) {
+                    if let Some(q) = ranked(c) {
+                        pairs.push([q, r]);
+                    }
+                    let c = c as usize;
+                    for p in &patches[poff[c] as usize..poff[c + 1] as usize] {
+                        if p[0] != u32::MAX {
+                            pairs.push([p[0], r]);
+                        }
+                    }
+                }
+            }
+            // A counting sort by watched rank; stable, so each rank's
+            // watchers stay in increasing order and repeats are adjacent.
+            let mut off = vec![0u32; inner as usize + 1];
+            for p in &pairs {
+                off[p[0] as usize + 1] += 1;
+            }
+            for q in 0..inner as usize {
+                off[q + 1] += off[q];
+            }
+            let mut sorted = vec![0u32; pairs.len()];
+            let mut at = off.clone();
+            for p in &pairs {
+                sorted[at[p[0] as usize] as usize] = p[1];
+                at[p[0] as usize] += 1;
+            }
+            let mut list = Vec::with_capacity(sorted.len());
+            for q in 0..inner as usize {
+                let start = list.len();
+                for &r in &sorted[off[q] as usize..off[q + 1] as usize] {
+                    if list.len() == start || list.last() != Some(&r) {
+                        list.push(r);
+                    }
+                }
+                off[q] = start as u32;
+            }
+            off[inner as usize] = list.len() as u32;
+            watchers = list;
+            watch_off = off;
+        }
+        static NEXT_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
         Some(ViewLayout {
+            id: NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
+            watch_off,
+            watchers,
             hot,
             close,
             sizes,
-            deps,
+            links,
             lod,
             toff,
             tris,
             poff,
             patches,
+            edits,
+            scan,
         })
     }
 
@@ -231,6 +341,14 @@ impl ViewLayout {
         (lo, lo + Vec3::splat(self.sizes[h.level as usize]))
     }
 
+    /// [`ViewLayout::cube`] grown by the node's `grow`: a box that
+    /// contains the cube of every node in its subtree.
+    #[inline(always)]
+    pub(super) fn grown(&self, h: &Hot, lo: Vec3, hi: Vec3) -> (Vec3, Vec3) {
+        let g = Vec3::splat(h.grow);
+        (lo - g, hi + g)
+    }
+
     #[inline(always)]
     pub(super) fn tris<'a>(&'a self, m: &'a McoModel) -> &'a [u32] {
         self.tris.as_deref().unwrap_or(&m.tris)
@@ -240,4 +358,48 @@ impl ViewLayout {
 #[inline(always)]
 pub(super) fn bit(bits: &[u64], r: u32) -> bool {
     bits[(r >> 6) as usize] >> (r & 63) & 1 != 0
+}
+
+/// `v` through one patch's substitutions, in order (as [`McoModel::emit`]
+/// applies them).
+fn substitute(subs: &[[u32; 2]], mut v: u32) -> u32 {
+    for s in subs {
+        if v == s[0] {
+            v = s[1];
+        }
+    }
+    v
+}
+
+/// The `(patch, [position, new index])` writes a node's patches make on
+/// its indices `own`, into `writes` (cleared); false when the patches
+/// interact. They do not when every index is changed by at most one patch
+/// and what it becomes is left alone by every other: then, whichever
+/// patches apply and in their order, each index ends as its one patch
+/// makes it (or unchanged), and applying a patch is writing its list.
+fn prepared_edits(own: &[u32], subs: &[&[[u32; 2]]], writes: &mut Vec<(usize, [u32; 2])>) -> bool {
+    writes.clear();
+    for (pos, &v) in own.iter().enumerate() {
+        let mut changed = None;
+        for (p, s) in subs.iter().enumerate() {
+            let w = substitute(s, v);
+            if w != v {
+                if changed.is_some() {
+                    return false;
+                }
+                changed = Some((p, w));
+            }
+        }
+        if let Some((p, w)) = changed {
+            let others_keep = subs
+                .iter()
+                .enumerate()
+                .all(|(q, s)| q == p || substitute(s, w) == w);
+            if !others_keep {
+                return false;
+            }
+            writes.push((p, [pos as u32, w]));
+        }
+    }
+    true
 }
