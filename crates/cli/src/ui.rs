@@ -454,7 +454,7 @@ pub mod value {
     fn short(n: u64) -> String {
         for (i, u) in ["P", "T", "G", "M", "K"].iter().enumerate() {
             let unit = 1u64 << (10 * (5 - i));
-            if n >= unit && n % unit == 0 {
+            if n >= unit && n.is_multiple_of(unit) {
                 return format!("{}{u}", n / unit);
             }
         }

@@ -399,7 +399,6 @@ fn run_out_of_core(
     // simplify_file's final pass always reports on success.
     let last = rep
         .last
-        .clone()
         .ok_or_else(|| anyhow::anyhow!("{}: no final pass report", a.input.display()))?;
     let (triangles, vertices) = (mesh.faces.len(), mesh.positions.len());
     let bytes = a
