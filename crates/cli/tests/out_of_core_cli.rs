@@ -165,3 +165,21 @@ fn a_failed_run_keeps_its_blocks_and_the_rerun_resumes() {
     assert_eq!(std::fs::read(&fresh).unwrap(), std::fs::read(&out).unwrap());
     assert!(staging_left(dir.path()).is_empty());
 }
+
+#[test]
+fn the_block_path_gives_the_same_bytes_on_any_thread_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = blob(dir.path());
+    let run = |threads: &str, name: &str| {
+        let out = dir.path().join(name);
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_lodkit"))
+            .args(["simplify", &input, "-o", out.to_str().unwrap()])
+            .args(["--ratio", "0.1", "--memory", "1M"])
+            .env("RAYON_NUM_THREADS", threads)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", stderr(&o));
+        std::fs::read(out).unwrap()
+    };
+    assert_eq!(run("1", "one.ply"), run("16", "sixteen.ply"));
+}

@@ -350,15 +350,8 @@ fn run_out_of_core(
     plan: &Plan,
 ) -> Result<()> {
     // The staging key holds everything that changes the blocks: the
-    // options, the budget and rayon's thread count (the block size is the
-    // budget shared among the threads, so the grid depends on it).
-    let threads = std::env::var("RAYON_NUM_THREADS")
-        .ok()
-        .and_then(|v| v.parse::<usize>().ok())
-        .filter(|&n| n > 0)
-        .or_else(|| std::thread::available_parallelism().ok().map(|n| n.get()))
-        .unwrap_or(1);
-    let settings = format!("{opts:?}; memory {}; threads {threads}", plan.memory);
+    // options and the budget (the grid depends on nothing else).
+    let settings = format!("{opts:?}; memory {}", plan.memory);
     let staging = lodkit_scale::staging_dir(&a.input, &a.output, &settings);
     ui.status(format!(
         "out of core: {} ({}) needs about {} in core ({} B per face), over --memory {}; \
