@@ -28,6 +28,11 @@ impl Ui {
         }
     }
 
+    /// Whether `-v` is on (and `-q` off).
+    pub fn is_verbose(&self) -> bool {
+        self.verbose && !self.quiet
+    }
+
     /// The error chain on one line: `lodkit: error: <outer>: <inner>`.
     pub fn error(&self, e: &anyhow::Error) {
         let mut line = e.to_string();
@@ -79,6 +84,93 @@ impl Ui {
         }
         self.spinner(msg)
     }
+}
+
+impl Ui {
+    /// Progress of a job in phases of known size (the out-of-core
+    /// simplifier's `Event`s): on a terminal a bar per phase with its
+    /// ETA; off a terminal one line per phase as it starts, like
+    /// [`Ui::stage`]; `-q` hides both. Shareable across threads (the
+    /// phases advance from rayon's workers).
+    pub fn phases(&self) -> Phases {
+        Phases {
+            bar: std::sync::Mutex::new(None),
+            tty: self.tty && !self.quiet,
+            lines: !self.tty && !self.quiet,
+        }
+    }
+}
+
+/// See [`Ui::phases`].
+pub struct Phases {
+    /// The current phase's bar (a hidden one off a terminal); `None`
+    /// before the first phase.
+    bar: std::sync::Mutex<Option<ProgressBar>>,
+    tty: bool,
+    lines: bool,
+}
+
+impl Phases {
+    /// A phase starts with `len` units of work: the previous bar is
+    /// cleared, a new one drawn (or its name printed off a terminal).
+    pub fn phase(&self, msg: &str, len: u64) {
+        let bar = if self.tty {
+            let b = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr());
+            b.set_style(
+                ProgressStyle::with_template(
+                    "{msg} [{bar:30}] {percent:>3}% {elapsed} (ETA {eta})",
+                )
+                .expect("static template")
+                .progress_chars("=> "),
+            );
+            b.enable_steady_tick(Duration::from_millis(200));
+            b
+        } else {
+            if self.lines {
+                eprintln!("{msg}");
+            }
+            ProgressBar::hidden()
+        };
+        bar.set_message(msg.to_string());
+        // A poisoned lock only means a worker panicked mid-update; the bar
+        // itself is still sound, and the panic is reported on its own.
+        let mut cur = self.bar.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(old) = cur.replace(bar) {
+            old.finish_and_clear();
+        }
+    }
+
+    /// `n` more units of the current phase are done.
+    pub fn advance(&self, n: u64) {
+        let cur = self.bar.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(b) = cur.as_ref() {
+            b.inc(n);
+        }
+    }
+
+    /// The last bar cleared.
+    pub fn finish(&self) {
+        let mut cur = self.bar.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(old) = cur.take() {
+            old.finish_and_clear();
+        }
+    }
+}
+
+/// A byte count in words, in the largest binary unit that keeps it at
+/// least 1 (`64.0 MiB`, `2.9 GiB`, `512 B`).
+pub fn human_bytes(n: u64) -> String {
+    const UNITS: [&str; 5] = ["KiB", "MiB", "GiB", "TiB", "PiB"];
+    if n < 1024 {
+        return format!("{n} B");
+    }
+    let mut v = n as f64 / 1024.0;
+    let mut u = 0;
+    while v >= 1024.0 && u + 1 < UNITS.len() {
+        v /= 1024.0;
+        u += 1;
+    }
+    format!("{v:.1} {}", UNITS[u])
 }
 
 /// A usage error (exit 2) as an `anyhow::Error`.
@@ -309,6 +401,66 @@ pub mod value {
         }
     }
 
+    /// A size in bytes in `lo..=hi`: a whole number of bytes, or a number
+    /// (decimals allowed) with a unit K, M, G, T or P, powers of 1024 (a
+    /// trailing `B` or `iB` and any case accepted: `8G`, `512MiB`, `1.5g`).
+    pub fn bytes(
+        lo: u64,
+        hi: u64,
+    ) -> impl Fn(&str) -> Result<u64, String> + Clone + Send + Sync + 'static {
+        move |s: &str| {
+            let bad = || {
+                format!(
+                    "expected a size in {}..={}: a number of bytes, or a number with K, M, G, T or P \
+                     (powers of 1024), e.g. 8G or 512M",
+                    short(lo),
+                    short(hi)
+                )
+            };
+            let t = s.trim().to_ascii_lowercase();
+            let (body, unit_needed) = match t.strip_suffix("ib") {
+                Some(b) => (b, true),
+                None => (t.strip_suffix('b').unwrap_or(&t), false),
+            };
+            let (num, shift) = match body.char_indices().last() {
+                Some((i, c)) if "kmgtp".contains(c) => {
+                    (&body[..i], 10 * (1 + "kmgtp".find(c).unwrap_or(0)))
+                }
+                _ if unit_needed => return Err(bad()),
+                _ => (body, 0),
+            };
+            let v = if shift == 0 {
+                num.parse::<u64>().map_err(|_| bad())?
+            } else {
+                // Decimals only with a unit; the product is checked against
+                // `hi` as a float first, so it cannot overflow the cast.
+                let x: f64 = num.parse().map_err(|_| bad())?;
+                let b = x * (1u64 << shift) as f64;
+                if !b.is_finite() || b < 0.0 || b > hi as f64 {
+                    return Err(bad());
+                }
+                b.round() as u64
+            };
+            if (lo..=hi).contains(&v) {
+                Ok(v)
+            } else {
+                Err(bad())
+            }
+        }
+    }
+
+    /// `n` bytes in the largest unit of [`bytes`] that divides it (`1M`,
+    /// `1P`), else in bytes.
+    fn short(n: u64) -> String {
+        for (i, u) in ["P", "T", "G", "M", "K"].iter().enumerate() {
+            let unit = 1u64 << (10 * (5 - i));
+            if n >= unit && n.is_multiple_of(unit) {
+                return format!("{}{u}", n / unit);
+            }
+        }
+        n.to_string()
+    }
+
     /// `WIDTHxHEIGHT`, each side in `min..=max`.
     pub fn size(
         min: u32,
@@ -486,5 +638,27 @@ impl OutputArgs {
             return lodkit_mesh::io::gltf::write_model_glb(model, &self.glb());
         }
         lodkit_mesh::io::encode(format, model, opts)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::value::bytes;
+
+    #[test]
+    fn sizes_parse_with_binary_units_and_refuse_out_of_range() {
+        let p = bytes(1 << 20, 1 << 50);
+        assert_eq!(p("8G"), Ok(8 << 30));
+        assert_eq!(p("512m"), Ok(512 << 20));
+        assert_eq!(p("512MiB"), Ok(512 << 20));
+        assert_eq!(p("1.5GB"), Ok(3 << 29));
+        assert_eq!(p("1048576"), Ok(1 << 20));
+        assert_eq!(p("1P"), Ok(1 << 50));
+        for bad in [
+            "0", "", "G", "8x", "8iB", "-1G", "nanG", "infG", "1023K", "2P", "1e30G",
+        ] {
+            let e = p(bad).unwrap_err();
+            assert!(e.contains("1M..=1P"), "{bad}: {e}");
+        }
     }
 }

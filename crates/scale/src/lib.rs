@@ -16,6 +16,7 @@
 //! | [`needs_out_of_core`] | whether a file would not fit the in-core path in `memory` |
 //! | [`simplify_block`] | one block (the Ray task) |
 //! | [`staging_dir`] | the resumable staging folder for an input, output and options |
+//! | [`finished_blocks`] | blocks an interrupted run left done in a staging folder |
 //! | [`default_memory`] | the default budget: a third of `MemTotal` |
 
 #![deny(missing_docs)]
@@ -29,7 +30,7 @@ mod staging;
 
 pub use block::{BlockReport, simplify_block};
 pub use run::{Event, Report, ScaleOptions, simplify_file};
-pub use staging::{default_memory, staging_dir};
+pub use staging::{default_memory, finished_blocks, staging_dir};
 
 /// Bytes per input face the in-core path needs, about: the file's share
 /// (a face record and half a vertex, 19 B), the mesh (18 B), the

@@ -22,6 +22,11 @@ use crate::soup::{self, Welder};
 const BLOCK_BYTES_PER_FACE: u64 = 100;
 /// Most blocks per axis (at most 512 files open while partitioning).
 const MAX_GRID: u32 = 8;
+/// Blocks simplified at once, at most: the budget is shared among this
+/// many, whatever the thread count, so the grid (and so the output) depends
+/// on `--memory` alone; a machine with more threads runs this many blocks
+/// at a time.
+const BLOCKS_IN_FLIGHT: u64 = 4;
 
 /// Options of [`simplify_file`].
 #[derive(Debug, Clone)]
@@ -94,8 +99,11 @@ pub fn simplify_file(
     std::fs::create_dir_all(&o.staging).map_err(io(&o.staging))?;
     let mut rep = Report::default();
     let faces = s.face_records();
-    let threads = rayon::current_num_threads().max(1) as u64;
-    let block_faces = (o.memory / (BLOCK_BYTES_PER_FACE * threads)).max(256);
+    let block_faces = (o.memory / (BLOCK_BYTES_PER_FACE * BLOCKS_IN_FLIGHT)).max(256);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(rayon::current_num_threads().clamp(1, BLOCKS_IN_FLIGHT as usize))
+        .build()
+        .map_err(|e| format!("cannot start the block threads: {e}"))?;
     let blocks = faces.div_ceil(block_faces).max(2);
     let g = ((blocks as f64).cbrt().ceil() as u32).clamp(2, MAX_GRID);
 
@@ -170,20 +178,21 @@ pub fn simplify_file(
             &format!("simplifying blocks (round {})", round + 1),
             before,
         ));
-        let done: Vec<Result<(u64, bool), String>> = todo
-            .par_iter()
-            .map(|&b| {
-                let out = block_output(&dir, b);
-                if out.exists() {
+        let done: Vec<Result<(u64, bool), String>> = pool.install(|| {
+            todo.par_iter()
+                .map(|&b| {
+                    let out = block_output(&dir, b);
+                    if out.exists() {
+                        progress(Event::Advance(counts[b]));
+                        return soup::faces_in(&out).map(|n| (n, true)).map_err(io(&out));
+                    }
+                    let r = simplify_block(&block_input(&dir, b), &out, ratio, &o.simplify)?;
+                    let _ = std::fs::remove_file(block_input(&dir, b));
                     progress(Event::Advance(counts[b]));
-                    return soup::faces_in(&out).map(|n| (n, true)).map_err(io(&out));
-                }
-                let r = simplify_block(&block_input(&dir, b), &out, ratio, &o.simplify)?;
-                let _ = std::fs::remove_file(block_input(&dir, b));
-                progress(Event::Advance(counts[b]));
-                Ok((r.faces_out, false))
-            })
-            .collect();
+                    Ok((r.faces_out, false))
+                })
+                .collect()
+        });
         total = 0;
         for r in done {
             let (n, resumed) = r?;

@@ -51,3 +51,18 @@ pub fn staging_dir(input: &Path, output: &Path, settings: &str) -> PathBuf {
         .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
     dir.join(format!(".{name}.lodkit-staging-{h:016x}"))
 }
+
+/// Blocks an earlier run left finished in `staging` (their `.out` files,
+/// over every round folder): what a rerun of the same job will skip. 0
+/// where the folder does not exist. Cost: one directory listing per round.
+pub fn finished_blocks(staging: &Path) -> usize {
+    // Round folders are `r0`, `r1` (see `run.rs`); a block's output is
+    // `bNNNNN.out` (`partition::block_output`), written atomically, so its
+    // presence means the block is done.
+    (0..2)
+        .filter_map(|r| std::fs::read_dir(staging.join(format!("r{r}"))).ok())
+        .flatten()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.path().extension().is_some_and(|x| x == "out"))
+        .count()
+}

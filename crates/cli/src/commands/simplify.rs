@@ -8,8 +8,8 @@ use lodkit_mesh::io::{WriteOptions, write_atomic};
 use lodkit_mesh::{Model, TriMesh};
 use lodkit_simplify::{AttributeWeights, Options, Simplifier, Target};
 
-use crate::ui::Ui;
 use crate::ui::value::{self, Real};
+use crate::ui::{Ui, human_bytes};
 
 /// Largest `--heap-size`: 2^24 records (a few hundred MB at most).
 pub const MAX_HEAP_SIZE: usize = 1 << 24;
@@ -95,12 +95,26 @@ pub struct SimplifyArgs {
     pub ratio: Option<f32>,
     #[command(flatten)]
     pub opts: SimplifyOpts,
+    /// Memory budget, in 1M..=1P bytes (K, M, G, T, P: powers of 1024; e.g.
+    /// 8G, 512M). A binary PLY whose in-core estimate (80 bytes per face)
+    /// exceeds it is simplified out of core, in blocks staged beside the
+    /// output (positions only; --target or --ratio). Default: a third of
+    /// the machine's memory.
+    #[arg(long, value_name = "SIZE", value_parser = value::bytes(MIN_MEMORY, MAX_MEMORY))]
+    pub memory: Option<u64>,
     #[command(flatten)]
     pub out: crate::ui::OutputArgs,
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
 }
+
+/// Smallest `--memory`: 1 MiB (below it the block size is already at the
+/// simplifier's floor of 256 faces, so a smaller budget changes nothing).
+pub const MIN_MEMORY: u64 = 1 << 20;
+/// Largest `--memory`: 1 PiB, far past any machine's memory (a budget
+/// above the machine's memory only means the in-core path is taken).
+pub const MAX_MEMORY: u64 = 1 << 50;
 
 #[derive(serde::Serialize)]
 struct Report<'a> {
@@ -114,6 +128,26 @@ struct Report<'a> {
     passes: u32,
     stop: String,
     seconds: f64,
+    /// Present only out of core, so the in-core report is unchanged.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    out_of_core: Option<OutOfCoreReport>,
+}
+
+/// The out-of-core run in `--json` (`estimated_error` and `passes` above
+/// are then the final in-core pass's, over the merged blocks).
+#[derive(serde::Serialize)]
+struct OutOfCoreReport {
+    memory: u64,
+    estimated_in_core_bytes: u64,
+    /// Non-empty blocks per round.
+    round_blocks: Vec<usize>,
+    /// Triangles after each round.
+    round_triangles: Vec<u64>,
+    resumed_blocks: usize,
+    bytes_read: u64,
+    bytes_written: u64,
+    /// Seconds per phase, in order.
+    phases: Vec<(String, f64)>,
 }
 
 /// The target from `--target` / `--ratio` / `--max-error` (error alone: no face budget).
@@ -136,6 +170,9 @@ pub fn run(ui: &Ui, a: &SimplifyArgs) -> Result<()> {
     a.out.check(Some(format), &a.output.display().to_string())?;
     let target = target_of(a.target, a.ratio, a.opts.max_error)?;
     let opts = a.opts.options(target)?;
+    if let Some(plan) = out_of_core_plan(ui, a)? {
+        return run_out_of_core(ui, a, format, &opts, &plan);
+    }
     let mesh: TriMesh = match super::scene::load_input(
         ui,
         &a.input,
@@ -172,6 +209,7 @@ pub fn run(ui: &Ui, a: &SimplifyArgs) -> Result<()> {
             passes: r.passes,
             stop: r.stop.to_string(),
             seconds: t.as_secs_f64(),
+            out_of_core: None,
         });
     }
     ui.status(format!(
@@ -211,6 +249,7 @@ fn run_scene(ui: &Ui, a: &SimplifyArgs, scene: &lodkit_mesh::Scene, opts: &Optio
             passes: r.passes,
             stop: r.stop.to_string(),
             seconds: t.as_secs_f64(),
+            out_of_core: None,
         });
     }
     ui.status(format!(
@@ -223,6 +262,195 @@ fn run_scene(ui: &Ui, a: &SimplifyArgs, scene: &lodkit_mesh::Scene, opts: &Optio
         t.as_secs_f64(),
         super::scene::describe(&out),
         r.stop
+    ));
+    Ok(())
+}
+
+/// Why an input goes out of core: its estimated in-core bytes over the
+/// budget.
+struct Plan {
+    memory: u64,
+    in_core: u64,
+    file_bytes: u64,
+}
+
+/// Whether `a.input` is simplified out of core: a `.ply` that
+/// [`lodkit_scale::needs_out_of_core`] says would not fit `--memory` and
+/// that the stream reader accepts (binary, vertices then faces). A `.ply`
+/// too big but not streamable (ASCII, another layout) is simplified in
+/// core as before, with one line saying so; every other input takes the
+/// in-core path untouched. Options the out-of-core path cannot honour are
+/// refused here (exit 2), before anything is written: falling back in
+/// core would risk exactly the memory exhaustion `--memory` guards.
+fn out_of_core_plan(ui: &Ui, a: &SimplifyArgs) -> Result<Option<Plan>> {
+    use lodkit_mesh::io::Format;
+    if Format::from_path(&a.input) != Some(Format::Ply) {
+        return Ok(None);
+    }
+    let Ok(meta) = std::fs::metadata(&a.input) else {
+        // The in-core reader reports a missing file as it always has.
+        return Ok(None);
+    };
+    let memory = a.memory.unwrap_or_else(lodkit_scale::default_memory);
+    let file_bytes = meta.len();
+    if !meta.is_file() || !lodkit_scale::needs_out_of_core(file_bytes, memory) {
+        return Ok(None);
+    }
+    let in_core = file_bytes / 19 * lodkit_scale::IN_CORE_BYTES_PER_FACE;
+    if let Err(e) = lodkit_mesh::io::ply::stream::PlyStream::open(&a.input) {
+        ui.status(format!(
+            "note: {} needs about {} in core, over --memory {}, but cannot be streamed ({e}); simplifying in core",
+            a.input.display(),
+            human_bytes(in_core),
+            human_bytes(memory),
+        ));
+        return Ok(None);
+    }
+    let d = AttributeWeights::DEFAULT;
+    let o = &a.opts;
+    let refused = [
+        (o.max_error.is_some(), "--max-error"),
+        (o.prune.is_some(), "--prune"),
+        (o.normal_weight != d.normal, "--normal-weight"),
+        (o.color_weight != d.color, "--color-weight"),
+        (o.uv_weight != d.uv, "--uv-weight"),
+    ];
+    let refused: Vec<&str> = refused.iter().filter(|r| r.0).map(|r| r.1).collect();
+    if !refused.is_empty() {
+        return Err(crate::ui::usage(format!(
+            "{}: needs about {} in core, over --memory {}, so it would be simplified out of core, \
+             which honours --target or --ratio on positions only, not {}; drop {} or give a --memory \
+             of at least {} to simplify in core",
+            a.input.display(),
+            human_bytes(in_core),
+            human_bytes(memory),
+            refused.join(", "),
+            if refused.len() == 1 { "it" } else { "them" },
+            human_bytes(in_core),
+        )));
+    }
+    Ok(Some(Plan {
+        memory,
+        in_core,
+        file_bytes,
+    }))
+}
+
+/// `simplify` out of core (`lodkit_scale::simplify_file`): blocks staged
+/// in a folder beside the output, the phases shown as progress, the
+/// result written atomically. The staging folder is removed only after
+/// the output is in place; a failed or interrupted run leaves it (it is
+/// not listed for removal on a signal), and the same command then resumes
+/// from the blocks it finished.
+fn run_out_of_core(
+    ui: &Ui,
+    a: &SimplifyArgs,
+    format: lodkit_mesh::io::Format,
+    opts: &Options,
+    plan: &Plan,
+) -> Result<()> {
+    // The staging key holds everything that changes the blocks: the
+    // options and the budget (the grid depends on nothing else).
+    let settings = format!("{opts:?}; memory {}", plan.memory);
+    let staging = lodkit_scale::staging_dir(&a.input, &a.output, &settings);
+    ui.status(format!(
+        "out of core: {} ({}) needs about {} in core ({} B per face), over --memory {}; \
+         simplifying in blocks (positions only: normals, colours and UVs are dropped)",
+        a.input.display(),
+        human_bytes(plan.file_bytes),
+        human_bytes(plan.in_core),
+        lodkit_scale::IN_CORE_BYTES_PER_FACE,
+        human_bytes(plan.memory),
+    ));
+    if staging.exists() {
+        ui.status(format!(
+            "resuming: {} blocks already done (in {})",
+            lodkit_scale::finished_blocks(&staging),
+            staging.display()
+        ));
+    }
+    let so = lodkit_scale::ScaleOptions {
+        simplify: opts.clone(),
+        memory: plan.memory,
+        staging: staging.clone(),
+    };
+    let progress = ui.phases();
+    let start = std::time::Instant::now();
+    let result = lodkit_scale::simplify_file(&a.input, &so, &|e| match e {
+        lodkit_scale::Event::Phase(name, len) => progress.phase(name, len),
+        lodkit_scale::Event::Advance(n) => progress.advance(n),
+    });
+    progress.finish();
+    let kept = |e: &dyn std::fmt::Display| {
+        anyhow::anyhow!(
+            "{e} (finished blocks are kept in {}: the same command resumes from them)",
+            staging.display()
+        )
+    };
+    let (mesh, rep) = result.map_err(|e| kept(&e))?;
+    let t = start.elapsed();
+    // simplify_file's final pass always reports on success.
+    let last = rep
+        .last
+        .ok_or_else(|| anyhow::anyhow!("{}: no final pass report", a.input.display()))?;
+    let (triangles, vertices) = (mesh.faces.len(), mesh.positions.len());
+    let bytes = a
+        .out
+        .encode(format, &Model::Mesh(mesh), WriteOptions::default())
+        .map_err(|e| anyhow::anyhow!("{}: {e}", a.output.display()))?;
+    write_atomic(&a.output, &bytes).map_err(|e| kept(&e))?;
+    // The output is in place: the blocks are no longer needed. A folder
+    // that cannot be removed is said, not an error (the output is good).
+    if let Err(e) = std::fs::remove_dir_all(&staging) {
+        ui.status(format!(
+            "note: could not remove the staging folder {}: {e}",
+            staging.display()
+        ));
+    }
+    if ui.is_verbose() {
+        for (name, secs) in &rep.phases {
+            ui.status(format!("{name}: {secs:.3} s"));
+        }
+    }
+    if a.json {
+        return super::print_json(&Report {
+            input: &a.input,
+            output: &a.output,
+            input_triangles: rep.input_faces as usize,
+            target_triangles: last.target_faces,
+            triangles,
+            vertices,
+            estimated_error: last.estimated_error,
+            passes: last.passes,
+            stop: last.stop.to_string(),
+            seconds: t.as_secs_f64(),
+            out_of_core: Some(OutOfCoreReport {
+                memory: plan.memory,
+                estimated_in_core_bytes: plan.in_core,
+                round_blocks: rep.round_blocks,
+                round_triangles: rep.round_faces,
+                resumed_blocks: rep.resumed_blocks,
+                bytes_read: rep.bytes_read,
+                bytes_written: rep.bytes_written,
+                phases: rep.phases,
+            }),
+        });
+    }
+    let rounds = rep.round_blocks.len();
+    ui.status(format!(
+        "wrote {} ({} → {} triangles, {} vertices, {:.3} s; out of core: {} blocks in {} round{}, \
+         {} resumed, then a final pass with estimated error {:.3e} over the merged blocks): {}",
+        a.output.display(),
+        rep.input_faces,
+        triangles,
+        vertices,
+        t.as_secs_f64(),
+        rep.round_blocks.iter().sum::<usize>(),
+        rounds,
+        if rounds == 1 { "" } else { "s" },
+        rep.resumed_blocks,
+        last.estimated_error,
+        last.stop
     ));
     Ok(())
 }

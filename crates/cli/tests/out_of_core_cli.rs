@@ -1,0 +1,185 @@
+//! End-to-end tests of `lodkit simplify` out of core (`--memory`): a
+//! small blob with a budget tiny enough to force the block path, the
+//! in-core path untouched otherwise, bad budgets refused, a failed run
+//! resumed.
+
+use std::path::Path;
+
+use lodkit_mesh::{Model, TriMesh};
+
+mod common;
+use common::{lodkit, stderr};
+
+/// A binary PLY blob of 20172 triangles (374 KiB: about 1.5 MiB in core
+/// at 80 B per face, so `--memory 1M` sends it out of core).
+fn blob(dir: &Path) -> String {
+    let p = dir.join("blob.ply");
+    lodkit_mesh::shapes::write_blob_ply(&p, 20_000, 3).unwrap();
+    p.display().to_string()
+}
+
+fn mesh_at(p: &Path) -> TriMesh {
+    match lodkit_mesh::io::load(p).unwrap() {
+        Model::Mesh(m) => m,
+        other => panic!("{}", other.kind()),
+    }
+}
+
+/// Staging folders left in `dir`.
+fn staging_left(dir: &Path) -> Vec<String> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.contains("lodkit-staging"))
+        .collect()
+}
+
+fn simplify(input: &str, out: &Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec!["simplify", input, "-o", out.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    lodkit(&args)
+}
+
+#[test]
+fn a_tiny_budget_goes_out_of_core_to_the_target_deterministically() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = blob(dir.path());
+    let (a, b) = (dir.path().join("a.ply"), dir.path().join("b.ply"));
+    let args = ["--target", "2000", "--memory", "1M"];
+    let o = simplify(&input, &a, &args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    let line: Vec<&str> = err
+        .lines()
+        .filter(|l| l.starts_with("out of core:"))
+        .collect();
+    assert_eq!(line.len(), 1, "{err}");
+    assert!(
+        line[0].contains("over --memory 1.0 MiB") && line[0].contains("in core"),
+        "{err}"
+    );
+    // Off a terminal: one line per phase.
+    assert!(err.contains("\npartitioning faces\n"), "{err}");
+    let m = mesh_at(&a);
+    let off = (m.faces.len() as f64 - 2000.0).abs() / 2000.0;
+    assert!(off <= 0.005, "{} faces", m.faces.len());
+    assert!(!m.positions.is_empty());
+    assert!(
+        staging_left(dir.path()).is_empty(),
+        "{:?}",
+        staging_left(dir.path())
+    );
+
+    // The same job again, with the report as JSON: the same bytes.
+    let o = simplify(&input, &b, &[&args[..], &["--json"]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["triangles"], m.faces.len());
+    assert_eq!(j["input_triangles"], 20_172);
+    assert_eq!(j["out_of_core"]["memory"], 1 << 20);
+    assert!(staging_left(dir.path()).is_empty());
+
+    // -q: nothing on stderr, same output.
+    let o = simplify(&input, &b, &[&args[..], &["-q"]].concat());
+    assert!(o.status.success() && o.stderr.is_empty(), "{}", stderr(&o));
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+}
+
+#[test]
+fn without_a_tiny_budget_the_in_core_path_is_taken_unchanged() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = blob(dir.path());
+    let (a, b) = (dir.path().join("a.ply"), dir.path().join("b.ply"));
+    let o = simplify(&input, &a, &["--ratio", "0.1"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("out of core"), "{}", stderr(&o));
+    let o = simplify(&input, &b, &["--ratio", "0.1", "--memory", "2G", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("out of core"), "{}", stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(j.get("out_of_core").is_none(), "{j}");
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+    assert!(staging_left(dir.path()).is_empty());
+}
+
+#[test]
+fn a_bad_budget_is_a_usage_error_naming_the_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = blob(dir.path());
+    let out = dir.path().join("a.ply");
+    for bad in ["0", "lots", "-1G", "1023K", "2P", "nan", "8iB"] {
+        let o = simplify(
+            &input,
+            &out,
+            &["--target", "2000", &format!("--memory={bad}")],
+        );
+        assert_eq!(o.status.code(), Some(2), "{bad}: {}", stderr(&o));
+        assert!(stderr(&o).contains("1M..=1P"), "{bad}: {}", stderr(&o));
+    }
+    assert!(!out.exists());
+}
+
+#[test]
+fn options_the_block_path_cannot_honour_are_refused_in_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = blob(dir.path());
+    let out = dir.path().join("a.ply");
+    let o = simplify(&input, &out, &["--max-error", "0.01", "--memory", "1M"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("--max-error") && err.contains("--memory"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    assert!(staging_left(dir.path()).is_empty());
+}
+
+#[test]
+fn a_failed_run_keeps_its_blocks_and_the_rerun_resumes() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = blob(dir.path());
+    let args = ["--ratio", "0.1", "--memory", "1M"];
+    let fresh = dir.path().join("fresh.ply");
+    assert!(simplify(&input, &fresh, &args).status.success());
+    // A folder where the output goes: the blocks all finish, then the
+    // final rename fails, as a run killed just before the end would.
+    let out = dir.path().join("a.ply");
+    std::fs::create_dir(&out).unwrap();
+    let o = simplify(&input, &out, &args);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("resumes"), "{}", stderr(&o));
+    assert_eq!(staging_left(dir.path()).len(), 1);
+    std::fs::remove_dir(&out).unwrap();
+    let o = simplify(&input, &out, &args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    let resumed = err
+        .lines()
+        .find_map(|l| l.strip_prefix("resuming: "))
+        .unwrap_or_else(|| panic!("{err}"));
+    let n: usize = resumed.split(' ').next().unwrap().parse().unwrap();
+    assert!(n > 0, "{err}");
+    assert_eq!(std::fs::read(&fresh).unwrap(), std::fs::read(&out).unwrap());
+    assert!(staging_left(dir.path()).is_empty());
+}
+
+#[test]
+fn the_block_path_gives_the_same_bytes_on_any_thread_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = blob(dir.path());
+    let run = |threads: &str, name: &str| {
+        let out = dir.path().join(name);
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_lodkit"))
+            .args(["simplify", &input, "-o", out.to_str().unwrap()])
+            .args(["--ratio", "0.1", "--memory", "1M"])
+            .env("RAYON_NUM_THREADS", threads)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", stderr(&o));
+        std::fs::read(out).unwrap()
+    };
+    assert_eq!(run("1", "one.ply"), run("16", "sixteen.ply"));
+}
