@@ -66,6 +66,7 @@ use glam::Vec3;
 
 use crate::model::McoModel;
 
+mod closure;
 mod compact_cut;
 mod layout;
 use layout::*;
@@ -394,6 +395,17 @@ pub struct ViewCut {
     /// height enter the reach), whatever the direction.
     slack: Vec<[f32; 4]>,
     slack_key: (u64, u32, u32),
+    /// The incremental closure's state (see `closure`), valid for the
+    /// layout `inc_layout` (0: none) and the bits in `bits`: the wanted
+    /// ranks, per rank outside every group and per LOD group its support,
+    /// and the expanded count. `new_want` and `work` are its scratch.
+    inc_layout: u64,
+    want: Vec<u64>,
+    new_want: Vec<u64>,
+    support: Vec<i32>,
+    gsupport: Vec<i32>,
+    inc_count: usize,
+    work: Vec<u64>,
     indices: Vec<u32>,
 }
 
