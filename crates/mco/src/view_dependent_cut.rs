@@ -55,10 +55,12 @@
 //! its expanded set changes in a few hundred nodes. The search skips a
 //! subtree it last rejected on its bound's projection while the eye stays
 //! nearer than the distance that rejection had to spare (the distance to
-//! a box moves no faster than the eye); the emission copies, from the last
-//! cut's buffer, the triangles of every node whose children and crack
-//! patches' coarse neighbours kept their state. Neither changes the
-//! result: the same triangles in the same order as a fresh cut.
+//! a box moves no faster than the eye); the closure is updated from the
+//! last one, only around the wanted nodes that changed (see `closure`);
+//! the emission copies, from the last cut's buffer, the triangles of every
+//! node whose children and crack patches' coarse neighbours kept their
+//! state. None of these changes the result: the same triangles in the
+//! same order as a fresh cut.
 
 use std::sync::OnceLock;
 
@@ -66,6 +68,7 @@ use glam::Vec3;
 
 use crate::model::McoModel;
 
+mod closure;
 mod compact_cut;
 mod layout;
 use layout::*;
@@ -344,9 +347,10 @@ impl McoModel {
 ///   cut of a model also builds its compact layout (`O(nodes + triangles)`,
 ///   kept in the model). From one cut to the next of a moving camera, a
 ///   kept state re-tests only the subtrees the eye may have come within
-///   reach of and re-emits only the nodes whose neighbourhood changed
+///   reach of, updates the closure only around the wanted nodes that
+///   changed, and re-emits only the nodes whose neighbourhood changed
 ///   (the rest is copied from the last cut, kept here: one more index
-///   buffer and 16 bytes per inner node).
+///   buffer, about 20 bytes per inner node and 4 per LOD step).
 #[derive(Debug, Clone, Default)]
 pub struct ViewCut {
     /// Per node: expanded in the current cut. True exactly for `expanded`.
@@ -394,6 +398,17 @@ pub struct ViewCut {
     /// height enter the reach), whatever the direction.
     slack: Vec<[f32; 4]>,
     slack_key: (u64, u32, u32),
+    /// The incremental closure's state (see `closure`), valid for the
+    /// layout `inc_layout` (0: none) and the bits in `bits`: the wanted
+    /// ranks, per rank outside every group and per LOD group its support,
+    /// and the expanded count. `new_want` and `work` are its scratch.
+    inc_layout: u64,
+    want: Vec<u64>,
+    new_want: Vec<u64>,
+    support: Vec<i32>,
+    gsupport: Vec<i32>,
+    inc_count: usize,
+    work: Vec<u64>,
     indices: Vec<u32>,
 }
 

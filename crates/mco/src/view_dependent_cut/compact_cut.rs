@@ -19,15 +19,25 @@ impl ViewCut {
         tolerance_px: f32,
         out: &mut Vec<u32>,
     ) -> usize {
-        let ranks = lay.ranks();
-        self.bits.clear();
-        self.bits.resize(ranks.div_ceil(64), 0);
-        clear_listed(&mut self.group_seen, &self.groups, model.groups.len());
-        self.groups.clear();
+        // A kept state on a layered layout updates its last closure (see
+        // `closure`); a one-shot cut, or any other layout, closes anew.
+        let incremental = lay.incremental && !self.one_shot;
+        if !incremental {
+            let ranks = lay.ranks();
+            self.bits.clear();
+            self.bits.resize(ranks.div_ceil(64), 0);
+            clear_listed(&mut self.group_seen, &self.groups, model.groups.len());
+            self.groups.clear();
+            self.inc_layout = 0;
+        }
         self.queue.clear();
         let fr = Frustum::new(model, camera, tolerance_px);
         self.last_wanted = self.search(model, lay, &fr);
-        let count = self.close(model, lay);
+        let count = if incremental {
+            self.close_incremental(model, lay)
+        } else {
+            self.close(model, lay)
+        };
         self.emit(model, lay, out);
         count
     }
@@ -150,7 +160,7 @@ impl ViewCut {
     /// already set is not pushed again, so each expanded rank is popped
     /// once from the wanted list or once per node that adds it first.
     #[inline(never)]
-    fn close(&mut self, model: &McoModel, lay: &ViewLayout) -> usize {
+    pub(super) fn close(&mut self, model: &McoModel, lay: &ViewLayout) -> usize {
         let bits = &mut self.bits;
         let stack = &mut self.queue;
         let mut count = 0usize;

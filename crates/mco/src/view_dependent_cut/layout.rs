@@ -106,6 +106,13 @@ pub(crate) struct ViewLayout {
     /// Unique per layout built (never 0): what a [`ViewCut`] keeps from
     /// the last cut applies to this layout only.
     pub(super) id: u64,
+    /// Whether a kept [`ViewCut`] may update its closure incrementally
+    /// (see `closure`): every link goes to a strictly coarser rank, and
+    /// every LOD group is one level of ranks whose LOD number is that
+    /// group's, each ranked node with a LOD number in its group once. Then
+    /// the groups with the ranks outside every group, ordered by level,
+    /// make the closure's links acyclic. True for every built model.
+    pub(super) incremental: bool,
 }
 
 impl ViewLayout {
@@ -310,9 +317,11 @@ impl ViewLayout {
             watchers = list;
             watch_off = off;
         }
+        let incremental = closure_is_layered(m, &hot, &close, &links, &lod);
         static NEXT_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
         Some(ViewLayout {
             id: NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
+            incremental,
             watch_off,
             watchers,
             hot,
@@ -353,6 +362,44 @@ impl ViewLayout {
     pub(super) fn tris<'a>(&'a self, m: &'a McoModel) -> &'a [u32] {
         self.tris.as_deref().unwrap_or(&m.tris)
     }
+}
+
+/// [`ViewLayout::incremental`] for the layout's records: links to
+/// strictly coarser ranks, and each group one level of ranks that name it,
+/// every ranked node with a LOD number in exactly one group (its own).
+fn closure_is_layered(
+    m: &McoModel,
+    hot: &[Hot],
+    close: &[Close],
+    links: &[u32],
+    lod: &[u32],
+) -> bool {
+    let coarser = close.iter().zip(hot).all(|(c, h)| {
+        links[c.links_start as usize..][..c.links_count as usize]
+            .iter()
+            .all(|&x| hot[x as usize].level > h.level)
+    });
+    if !coarser {
+        return false;
+    }
+    let mut seen = vec![false; hot.len()];
+    for k in 1..m.groups.len() {
+        let g = &lod[m.groups[k - 1] as usize..m.groups[k] as usize];
+        let level = g.first().map(|&x| hot[x as usize].level);
+        for &x in g {
+            let x = x as usize;
+            if close[x].prio != k as u32
+                || Some(hot[x].level) != level
+                || std::mem::replace(&mut seen[x], true)
+            {
+                return false;
+            }
+        }
+    }
+    close
+        .iter()
+        .zip(&seen)
+        .all(|(c, &s)| c.prio == u32::MAX || s)
 }
 
 #[inline(always)]
