@@ -49,6 +49,20 @@ fn exercise(m: &McoModel) {
     m.extract_triangles(1000, &mut idx);
     let cam = lodkit_mco::Camera::looking_at([0.0, 0.0, 5.0].into(), [0.0; 3].into());
     m.extract_view(&cam, 1.0, &mut idx);
+    // A viewer's kept cut: frame-coherent state carried across cameras
+    // (the incremental closure and the re-emission from the last frame),
+    // each cut equal to a fresh one.
+    let mut kept = lodkit_mco::ViewCut::new();
+    for (i, tol) in [(0u8, 1.0f32), (1, 1.0), (2, 0.25), (3, 4.0)] {
+        let a = f32::from(i) * 0.7;
+        let cam = lodkit_mco::Camera::looking_at(
+            [5.0 * a.sin(), 0.5, 5.0 * a.cos()].into(),
+            [0.0; 3].into(),
+        );
+        let cut = kept.update(m, &cam, tol).to_vec();
+        m.extract_view(&cam, tol, &mut idx);
+        assert_eq!(cut, idx, "a kept cut differs from a fresh one");
+    }
 }
 
 fuzz_target!(|data: &[u8]| {
