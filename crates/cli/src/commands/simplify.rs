@@ -437,9 +437,19 @@ fn run_out_of_core(
         });
     }
     let rounds = rep.round_blocks.len();
+    // The final pass's estimate covers its own collapses only, not the
+    // blocks' (which are not carried through the soups): say which.
+    let last_pass = if last.estimated_error > 0.0 {
+        format!(
+            "its own collapses estimated at {:.3e}, the blocks' not included",
+            last.estimated_error
+        )
+    } else {
+        "no collapse needed".to_string()
+    };
     ui.status(format!(
         "wrote {} ({} → {} triangles, {} vertices, {:.3} s; out of core: {} blocks in {} round{}, \
-         {} resumed, then a final pass with estimated error {:.3e} over the merged blocks): {}",
+         {} resumed, then a final pass over the merged blocks: {}): {}",
         a.output.display(),
         rep.input_faces,
         triangles,
@@ -449,7 +459,7 @@ fn run_out_of_core(
         rounds,
         if rounds == 1 { "" } else { "s" },
         rep.resumed_blocks,
-        last.estimated_error,
+        last_pass,
         last.stop
     ));
     Ok(())
