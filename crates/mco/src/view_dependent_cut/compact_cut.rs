@@ -109,7 +109,7 @@ impl ViewCut {
             self.slack.clear();
         } else if self.slack_key != key || self.slack.len() != ranks {
             self.slack.clear();
-            self.slack.resize(ranks, [0.0, 0.0, 0.0, -1.0]);
+            self.slack.resize(ranks, [0.0; 4]);
             self.slack_key = key;
         }
         let slack = &mut self.slack;
@@ -118,11 +118,27 @@ impl ViewCut {
         stack.push((ALL_PLANES as u64) << 32);
         while let Some(entry) = stack.pop() {
             let (r, planes) = (entry as u32, (entry >> 32) as u32);
-            if let Some(s) = slack.get(r as usize)
-                && s[3] > 0.0
-                && (eye - Vec3::new(s[0], s[1], s[2])).length() < s[3]
-            {
-                continue;
+            if let Some(s) = slack.get(r as usize) {
+                // False on a NaN eye, and on no certificate (0).
+                let m = s[3];
+                if (eye - Vec3::new(s[0], s[1], s[2])).length() < m.abs() {
+                    if m > 0.0 {
+                        continue;
+                    }
+                    if planes == 0 {
+                        // Still projects above the tolerance, and in view
+                        // (no plane left to test): wanted, and its subtree
+                        // searched (its bound is at least its error, on a
+                        // cube around its own), with no plane to test
+                        // below (its bound is finite: see the
+                        // certificate).
+                        let h = &lay.hot[r as usize];
+                        wanted.push(r);
+                        let k = h.inner_mask.count_ones();
+                        stack.extend((h.first_inner..h.first_inner + k).map(|c| c as u64));
+                        continue;
+                    }
+                }
             }
             let h = &lay.hot[r as usize];
             let (lo, hi) = lay.cube(h);
@@ -145,6 +161,25 @@ impl ViewCut {
             }
             if shows(lo, hi, h.err, planes) {
                 wanted.push(r);
+                if h.bound != f32::INFINITY
+                    && let Some(s) = slack.get_mut(r as usize)
+                {
+                    // The certificate that the node keeps projecting
+                    // above the tolerance: the distance `projects`
+                    // computes is below the error's reach by the margin,
+                    // less the reach's own growth and the rounding of both
+                    // (the relative 2⁻¹⁶ above, and 2⁻¹¹ of the reach,
+                    // far above the 2⁻¹² growth `reach` carries).
+                    let (d, reach) = fr.distance_and_reach(lo, hi, h.err);
+                    let low = reach * (1.0 - 1.0 / 2048.0);
+                    let size = lo.abs().max(hi.abs()).max_element() + eye_size;
+                    let margin = low - d - (d + low + size) * (1.0 / 65536.0);
+                    *s = if margin > 0.0 {
+                        [eye.x, eye.y, eye.z, -margin]
+                    } else {
+                        [0.0; 4]
+                    };
+                }
             }
             let k = h.inner_mask.count_ones();
             if k > 0 {
