@@ -381,8 +381,9 @@ pub struct ViewCut {
     count: usize,
     /// What the last cut on a [`ViewLayout`] left for the next one's
     /// emission (see `compact_cut`): its layout's id (0: none), its
-    /// expanded ranks, its index buffer, and per rank expanded there, its
-    /// triangles' `[start, length]` in that buffer.
+    /// expanded ranks, its index buffer (the last cut's, on any path:
+    /// [`ViewCut::indices`]), and per rank expanded there, its triangles'
+    /// `[start, length]` in that buffer.
     prev_layout: u64,
     prev_bits: Vec<u64>,
     prev: Vec<u32>,
@@ -416,7 +417,9 @@ pub struct ViewCut {
     gsupport: Vec<i32>,
     inc_count: usize,
     work: Vec<u64>,
-    indices: Vec<u32>,
+    /// The buffer the next [`ViewCut::update`] emits into (the one before
+    /// the last cut's, its allocation reused).
+    spare: Vec<u32>,
 }
 
 impl ViewCut {
@@ -429,18 +432,22 @@ impl ViewCut {
     /// index buffer (3 `u32` per triangle into [`McoModel::positions`]),
     /// also kept as [`ViewCut::indices`] until the next update. Same
     /// inputs, units and guarantees as [`McoModel::extract_view`]; the
-    /// cost is in the type's docs.
+    /// cost is in the type's docs. The buffer is the one the next cut
+    /// copies its unchanged triangles from, so no copy of it is made.
     pub fn update(&mut self, model: &McoModel, camera: &Camera, tolerance_px: f32) -> &[u32] {
-        let mut out = std::mem::take(&mut self.indices);
+        let mut out = std::mem::take(&mut self.spare);
         self.cut_into(model, camera, tolerance_px, &mut out);
-        self.indices = out;
-        &self.indices
+        // `prev` (the last cut's buffer, read by the emission) becomes the
+        // spare, and this cut's buffer the one the next cut reads.
+        self.spare = std::mem::replace(&mut self.prev, out);
+        &self.prev
     }
 
     /// [`ViewCut::update`] into the caller's buffer: the cut's index
     /// buffer goes into `out` (cleared; its allocation reused), and the
-    /// expanded node count is returned. [`ViewCut::indices`] is left as
-    /// it was. Same guarantees and cost as [`ViewCut::update`].
+    /// expanded node count is returned; [`ViewCut::indices`] holds a copy
+    /// (the buffer the next cut copies its unchanged triangles from). Same
+    /// guarantees and cost as [`ViewCut::update`], plus that copy.
     pub fn update_into(
         &mut self,
         model: &McoModel,
@@ -448,7 +455,10 @@ impl ViewCut {
         tolerance_px: f32,
         out: &mut Vec<u32>,
     ) -> usize {
-        self.cut_into(model, camera, tolerance_px, out)
+        let n = self.cut_into(model, camera, tolerance_px, out);
+        self.prev.clear();
+        self.prev.extend_from_slice(out);
+        n
     }
 
     /// The same cut as [`ViewCut::update_into`] by the search on the node
@@ -473,14 +483,15 @@ impl ViewCut {
         self.count
     }
 
-    /// The index buffer of the last [`ViewCut::update`] (empty before).
+    /// The index buffer of the last [`ViewCut::update`] or
+    /// [`ViewCut::update_into`] (empty before).
     pub fn indices(&self) -> &[u32] {
-        &self.indices
+        &self.prev
     }
 
     /// Triangles of the last cut.
     pub fn triangles(&self) -> usize {
-        self.indices.len() / 3
+        self.prev.len() / 3
     }
 
     /// Nodes the last cut expanded (0: the root alone is drawn).
@@ -509,12 +520,18 @@ impl ViewCut {
     ) -> usize {
         out.clear();
         if model.nodes.is_empty() {
+            self.prev_layout = 0;
             self.count = 0;
             return 0;
         }
+        // Only a cut on a layout leaves `prev` for the next one's emission
+        // (the caller makes `prev` this cut's buffer, whatever the path).
         self.count = match model.view_data() {
             ViewData::Layout(l) => self.cut_layout(model, l, camera, tolerance_px, out),
-            ViewData::Bounds(b) => self.cut_nodes(model, b, camera, tolerance_px, out),
+            ViewData::Bounds(b) => {
+                self.prev_layout = 0;
+                self.cut_nodes(model, b, camera, tolerance_px, out)
+            }
         };
         self.count
     }

@@ -197,17 +197,11 @@ pub struct View {
     pub aspect: f32,
 }
 
-/// View-dependent index buffer at `tolerance_px` pixels of projected error
-/// into `out` (cleared), through `cut`, the handle's kept state (so a cut
-/// per frame allocates nothing once warm; the same cut as
+/// View-dependent index buffer at `tolerance_px` pixels of projected error,
+/// left in `cut`, the handle's kept state ([`ViewCut::indices`]: so a cut
+/// per frame allocates and copies nothing once warm; the same cut as
 /// `McoModel::extract_view`); returns the number of expanded nodes.
-pub fn mco_extract_view(
-    m: &McoModel,
-    cut: &mut ViewCut,
-    v: &View,
-    tolerance_px: f32,
-    out: &mut Vec<u32>,
-) -> usize {
+pub fn mco_extract_view(m: &McoModel, cut: &mut ViewCut, v: &View, tolerance_px: f32) -> usize {
     let cam = Camera {
         position: v.position,
         direction: v.direction,
@@ -216,7 +210,8 @@ pub fn mco_extract_view(
         viewport_height: v.viewport_height,
         aspect: v.aspect,
     };
-    cut.update_into(m, &cam, tolerance_px, out)
+    cut.update(m, &cam, tolerance_px);
+    cut.expanded_nodes()
 }
 
 #[cfg(test)]

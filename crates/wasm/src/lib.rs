@@ -95,6 +95,10 @@ enum Slot {
         bounds: [f32; 6],
         /// The view-dependent cut's scratch state, kept between frames.
         cut: Box<ViewCut>,
+        /// The last cut was a view cut: the index buffer is the cut
+        /// state's own ([`ViewCut::indices`], kept there for the next cut
+        /// to copy from, so not copied again), not `mesh.indices`.
+        view_cut: bool,
     },
 }
 
@@ -102,6 +106,18 @@ impl Slot {
     fn mesh(&self) -> &MeshOut {
         match self {
             Slot::Pop { mesh, .. } | Slot::Mco { mesh, .. } => mesh,
+        }
+    }
+
+    /// The index buffer of the handle's mesh.
+    fn indices(&self) -> &[u32] {
+        match self {
+            Slot::Mco {
+                cut,
+                view_cut: true,
+                ..
+            } => cut.indices(),
+            _ => &self.mesh().indices,
         }
     }
 }
@@ -375,6 +391,7 @@ pub unsafe extern "C" fn lk_mco_open(ptr: *const u8, len: usize) -> u32 {
             stream: None,
             mesh: MeshOut::default(),
             cut: Box::default(),
+            view_cut: false,
         }),
         Err(e) => {
             fail(e);
@@ -398,6 +415,7 @@ pub extern "C" fn lk_mco_stream_new() -> u32 {
         mesh: MeshOut::default(),
         bounds: [0.0; 6],
         cut: Box::default(),
+        view_cut: false,
     })
 }
 
@@ -513,17 +531,35 @@ pub extern "C" fn lk_mco_bounds(h: u32) -> *const f32 {
 /// Index buffer at LOD number `k` (clamped); returns the LOD number used.
 #[unsafe(no_mangle)]
 pub extern "C" fn lk_mco_extract_lod(h: u32, k: u32) -> i32 {
-    mco_do(h, |m, mesh| {
-        engine::mco_extract_lod(m, k as usize, &mut mesh.indices)
+    mco_cut(h, |m, indices| {
+        engine::mco_extract_lod(m, k as usize, indices)
     })
 }
 
 /// Index buffer closest to `triangles` triangles; returns the LOD number.
 #[unsafe(no_mangle)]
 pub extern "C" fn lk_mco_extract_triangles(h: u32, triangles: u32) -> i32 {
-    mco_do(h, |m, mesh| {
-        engine::mco_extract_triangles(m, triangles as usize, &mut mesh.indices)
+    mco_cut(h, |m, indices| {
+        engine::mco_extract_triangles(m, triangles as usize, indices)
     })
+}
+
+/// A cut by LOD number into the handle's `mesh.indices` (no longer the
+/// view cut's buffer).
+fn mco_cut(h: u32, f: impl FnOnce(&McoModel, &mut Vec<u32>) -> usize) -> i32 {
+    with_slot(h, |slot| match slot {
+        Slot::Mco {
+            model: Some(model),
+            mesh,
+            view_cut,
+            ..
+        } => {
+            *view_cut = false;
+            f(model, &mut mesh.indices) as i32
+        }
+        _ => -1,
+    })
+    .unwrap_or(-1)
 }
 
 /// View-dependent index buffer: camera at `p`, looking along `d`, up hint
@@ -566,10 +602,13 @@ pub extern "C" fn lk_mco_extract_view(
     with_slot(h, |slot| match slot {
         Slot::Mco {
             model: Some(model),
-            mesh,
             cut,
+            view_cut,
             ..
-        } => engine::mco_extract_view(model, cut, &v, tol, &mut mesh.indices) as i32,
+        } => {
+            *view_cut = true;
+            engine::mco_extract_view(model, cut, &v, tol) as i32
+        }
         _ => -1,
     })
     .unwrap_or(-1)
@@ -611,16 +650,16 @@ pub extern "C" fn lk_mesh_colors(h: u32) -> *const u8 {
 
 #[unsafe(no_mangle)]
 pub extern "C" fn lk_mesh_index_count(h: u32) -> u32 {
-    mesh_query(h, 0, |m| m.indices.len() as u32)
+    with_slot(h, |slot| slot.indices().len() as u32).unwrap_or(0)
 }
 
 #[unsafe(no_mangle)]
 pub extern "C" fn lk_mesh_indices(h: u32) -> *const u32 {
-    mesh_query(h, std::ptr::null(), |m| m.indices.as_ptr())
+    with_slot(h, |slot| slot.indices().as_ptr()).unwrap_or(std::ptr::null())
 }
 
 /// [`digest`] of the handle's index buffer and positions.
 #[unsafe(no_mangle)]
 pub extern "C" fn lk_mesh_digest(h: u32) -> u64 {
-    mesh_query(h, 0, |m| digest(&m.indices, &m.positions))
+    with_slot(h, |slot| digest(slot.indices(), &slot.mesh().positions)).unwrap_or(0)
 }

@@ -303,11 +303,11 @@ impl ViewCut {
             self.prev_layout = 0;
             return;
         }
+        // The caller makes `prev` this cut's buffer (`ViewCut::update`
+        // by a swap, `ViewCut::update_into` by a copy).
         self.prev_layout = lay.id;
         self.prev_bits.clear();
         self.prev_bits.extend_from_slice(bits);
-        self.prev.clear();
-        self.prev.extend_from_slice(out);
     }
 }
 
