@@ -206,6 +206,7 @@ fn the_block_path_keeps_the_in_core_error() {
         let o = simplify(&input, &b, &["--ratio", ratio, "--memory", "1M"]);
         assert!(o.status.success(), "{}", stderr(&o));
         assert!(stderr(&o).contains("out of core"), "{}", stderr(&o));
+        assert!(!stderr(&o).contains("coarser"), "{}", stderr(&o));
         let (in_core, blocks) = (mesh_at(&a), mesh_at(&b));
         let target = (original.faces.len() as f64 * ratio.parse::<f64>().unwrap()).floor();
         let off = (blocks.faces.len() as f64 - target).abs() / target;
@@ -225,4 +226,25 @@ fn the_block_path_keeps_the_in_core_error() {
             ei.max
         );
     }
+}
+
+#[test]
+fn a_budget_too_small_for_in_core_quality_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = blob(dir.path());
+    let out = dir.path().join("a.ply");
+    // Half of 20172 faces: the final pass holds 13107 (1 MiB at 80 B per
+    // face), under 4× the target, so the result still hits the target but
+    // is coarser than in core, and the run says which budget would do.
+    let o = simplify(&input, &out, &["--ratio", "0.5", "--memory", "1M"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    let note: Vec<&str> = err.lines().filter(|l| l.contains("coarser")).collect();
+    assert_eq!(note.len(), 1, "{err}");
+    assert!(
+        note[0].starts_with("note: --memory 1.0 MiB") && note[0].contains("target of 10086"),
+        "{err}"
+    );
+    let off = (mesh_at(&out).faces.len() as f64 - 10086.0).abs() / 10086.0;
+    assert!(off <= 0.005, "{err}");
 }
