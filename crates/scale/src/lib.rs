@@ -3,7 +3,9 @@
 //! Meshes larger than memory, simplified in bounded memory: the input is
 //! streamed twice (positions, then faces) and cut into a grid of blocks on
 //! disk; each block is simplified in core with the vertices it shares with
-//! other blocks locked; a second round on a grid shifted by half a block
+//! other blocks locked, only as far as the final pass needs to fit the
+//! budget (so the final pass, seams free, does the rest in global error
+//! order, as in core); a second round on a grid shifted by half a block
 //! frees the cuts of the first when the result is still too big for
 //! memory; the final pass runs the ordinary in-core simplifier on the
 //! whole reduced mesh, which releases every remaining lock and lands on
