@@ -98,8 +98,9 @@ pub struct SimplifyArgs {
     /// Memory budget, in 1M..=1P bytes (K, M, G, T, P: powers of 1024; e.g.
     /// 8G, 512M). A binary PLY whose in-core estimate (80 bytes per face)
     /// exceeds it is simplified out of core, in blocks staged beside the
-    /// output (positions only; --target or --ratio). Default: a third of
-    /// the machine's memory.
+    /// output (positions only; --target or --ratio), with the in-core
+    /// error when SIZE is at least 320 bytes per target face. Default: a
+    /// third of the machine's memory.
     #[arg(long, value_name = "SIZE", value_parser = value::bytes(MIN_MEMORY, MAX_MEMORY))]
     pub memory: Option<u64>,
     #[command(flatten)]
