@@ -19,7 +19,7 @@ pub fn default_memory() -> u64 {
 /// Names how blocks are cut and simplified: part of the staging key, so
 /// a rerun never resumes from blocks an earlier version (another goal per
 /// block, another grid) left behind. Change it with any such change.
-const BLOCKS_VERSION: &str = "border-aware goal, final-pass headroom";
+const BLOCKS_VERSION: &str = "border-aware goal, final-pass headroom, shifted round when tight";
 
 /// FNV-1a, 64 bits: a stable hash (the key must not change between runs
 /// or builds, which std's hasher does not promise).

@@ -159,3 +159,51 @@ fn no_more_inward_faces_than_in_core() {
         );
     }
 }
+
+/// A budget whose final pass holds under twice the target (here 1.5×):
+/// round 0 stops at twice what the final pass holds and the round on the
+/// shifted grid does the rest, so round 0's cuts are re-simplified inside
+/// round-1 blocks. Quality is short of the in-core bounds here (the
+/// known gap, ARCHITECTURE.md), but within a looser one that the straight
+/// round missed.
+#[test]
+fn a_tight_budget_takes_a_shifted_round_before_the_final_pass() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("blob.ply");
+    lodkit_mesh::shapes::write_blob_ply(&input, 60_000, 1).unwrap();
+    let mesh = lodkit_mesh::io::load_mesh(&input).unwrap();
+    let cmp = CompareOptions {
+        samples: Some(200_000),
+        ..CompareOptions::default()
+    };
+    let ratio = 0.1f32;
+    let target = (mesh.faces.len() as f32 * ratio) as usize;
+    // The final pass holds 9000 faces at 80 B each: 1.5× the target.
+    let o = opts(dir.path(), ratio, 9000 * 80);
+    let (a, rep) = simplify_file(&input, &o, &quiet).unwrap();
+    assert_eq!(rep.round_blocks.len(), 2, "{rep:?}");
+    assert!(rep.round_faces[0] >= 2 * 8100, "{rep:?}");
+    assert!(
+        faces_off(a.faces.len(), target) <= 0.005,
+        "{} faces for {target}",
+        a.faces.len()
+    );
+    let in_core = simplify(&mesh, &Options::ratio(ratio)).unwrap().mesh;
+    let eb = compare(&mesh, &in_core, &cmp).unwrap().symmetric;
+    let ea = compare(&mesh, &a, &cmp).unwrap().symmetric;
+    // One straight round to the goal (round 0 overflowing into a second
+    // round at the final goal) gave 1.16× / 1.47× here; this way 1.10× /
+    // 1.32×.
+    assert!(
+        ea.mean <= 1.15 * eb.mean,
+        "mean {} vs in core {}",
+        ea.mean,
+        eb.mean
+    );
+    assert!(
+        ea.max <= 1.4 * eb.max,
+        "max {} vs in core {}",
+        ea.max,
+        eb.max
+    );
+}
