@@ -170,18 +170,26 @@ fn a_failed_run_keeps_its_blocks_and_the_rerun_resumes() {
 fn the_block_path_gives_the_same_bytes_on_any_thread_count() {
     let dir = tempfile::tempdir().unwrap();
     let input = blob(dir.path());
-    let run = |threads: &str, name: &str| {
+    let run = |threads: &str, ratio: &str, name: &str| {
         let out = dir.path().join(name);
         let o = std::process::Command::new(env!("CARGO_BIN_EXE_lodkit"))
             .args(["simplify", &input, "-o", out.to_str().unwrap()])
-            .args(["--ratio", "0.1", "--memory", "1M"])
+            .args(["--ratio", ratio, "--memory", "1M", "--json"])
             .env("RAYON_NUM_THREADS", threads)
             .output()
             .unwrap();
         assert!(o.status.success(), "{}", stderr(&o));
-        std::fs::read(out).unwrap()
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let rounds = j["out_of_core"]["round_blocks"].as_array().unwrap().len();
+        (std::fs::read(out).unwrap(), rounds)
     };
-    assert_eq!(run("1", "one.ply"), run("16", "sixteen.ply"));
+    // 10 %: one round; 50 %: the final pass holds under 2× the target, so
+    // a second round on the shifted grid.
+    for (ratio, rounds) in [("0.1", 1), ("0.5", 2)] {
+        let one = run("1", ratio, "one.ply");
+        assert_eq!(one.1, rounds, "{ratio}");
+        assert_eq!(one, run("16", ratio, "sixteen.ply"), "{ratio}");
+    }
 }
 
 /// Issue #19's quality bound end to end: the same blob simplified in core
