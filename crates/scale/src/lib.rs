@@ -14,7 +14,7 @@
 //!
 //! | item | what it does |
 //! |---|---|
-//! | [`simplify_file`] | a binary PLY file to a simplified [`TriMesh`] in about `memory` bytes |
+//! | [`simplify_file`] | a binary PLY file to a simplified [`TriMesh`](lodkit_mesh::TriMesh) in about `memory` bytes |
 //! | [`needs_out_of_core`] | whether a file would not fit the in-core path in `memory` |
 //! | [`quality_memory`] | the budget from which the result matches the in-core error |
 //! | [`simplify_block`] | one block (the Ray task) |
