@@ -114,7 +114,9 @@ pub struct Report {
 /// plus 12 bytes per input vertex while partitioning (the position
 /// table). The blocks stop at what the final in-core pass holds in
 /// `o.memory` (at [`IN_CORE_BYTES_PER_FACE`](crate::IN_CORE_BYTES_PER_FACE)),
-/// so it fits too, unless the target itself does not.
+/// so it fits too, but for a target that does not fit itself or block
+/// borders (kept to the final pass) that overshoot even after the second
+/// round.
 ///
 /// Guarantees: the final pass is the in-core simplifier on the whole
 /// reduced mesh, so its target, fold-over, topology and border checks all
