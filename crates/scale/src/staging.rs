@@ -16,6 +16,11 @@ pub fn default_memory() -> u64 {
         .unwrap_or(4 << 30)
 }
 
+/// Names how blocks are cut and simplified: part of the staging key, so
+/// a rerun never resumes from blocks an earlier version (another goal per
+/// block, another grid) left behind. Change it with any such change.
+const BLOCKS_VERSION: &str = "border-aware goal, final-pass headroom, shifted round when tight";
+
 /// FNV-1a, 64 bits: a stable hash (the key must not change between runs
 /// or builds, which std's hasher does not promise).
 fn fnv(bytes: &[u8], mut h: u64) -> u64 {
@@ -42,6 +47,7 @@ pub fn staging_dir(input: &Path, output: &Path, settings: &str) -> PathBuf {
     h = fnv(&mtime.to_le_bytes(), h);
     h = fnv(input.as_os_str().as_encoded_bytes(), h);
     h = fnv(settings.as_bytes(), h);
+    h = fnv(BLOCKS_VERSION.as_bytes(), h);
     let dir = match output.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),

@@ -29,8 +29,45 @@ fn inward(m: &TriMesh) -> usize {
         .count()
 }
 
+fn faces_off(n: usize, target: usize) -> f64 {
+    (n as f64 - target as f64).abs() / target as f64
+}
+
 #[test]
 fn out_of_core_hits_the_target_deterministically() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("blob.ply");
+    lodkit_mesh::shapes::write_blob_ply(&input, 60_000, 1).unwrap();
+    let mesh = lodkit_mesh::io::load_mesh(&input).unwrap();
+    for ratio in [0.1f32, 0.02] {
+        // 400 kB: ~16 blocks of a few thousand faces, two rounds, and a
+        // final pass that holds less than the target (the budget is then
+        // exceeded there, and quality is not promised: see the next test).
+        let o = opts(dir.path(), ratio, 400_000);
+        let (a, rep) = simplify_file(&input, &o, &quiet).unwrap();
+        assert!(rep.round_blocks[0] > 4, "{rep:?}");
+        let target = (mesh.faces.len() as f32 * ratio) as usize;
+        assert!(
+            faces_off(a.faces.len(), target) <= 0.005,
+            "{} faces for {target}",
+            a.faces.len()
+        );
+        // Same again from scratch: same mesh, bit for bit.
+        std::fs::remove_dir_all(&o.staging).unwrap();
+        let (b, _) = simplify_file(&input, &o, &quiet).unwrap();
+        assert_eq!(a, b);
+        std::fs::remove_dir_all(&o.staging).unwrap();
+    }
+}
+
+/// Issue #19's quality bound (mean error within 1.1× in core, max within
+/// 1.2×), on a mesh small enough to run both ways in a test: budgets that
+/// force blocks (one round of 8 blocks; two rounds of 26 and 25) but let
+/// the final pass hold more than the target, which is what the block goal
+/// (`run.rs`, `round_goal`) leaves it. The runs are deterministic, so the
+/// ratios are the same on every run.
+#[test]
+fn out_of_core_error_stays_within_the_in_core_bounds() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("blob.ply");
     lodkit_mesh::shapes::write_blob_ply(&input, 60_000, 1).unwrap();
@@ -41,36 +78,34 @@ fn out_of_core_hits_the_target_deterministically() {
     };
     for ratio in [0.1f32, 0.02] {
         let in_core = simplify(&mesh, &Options::ratio(ratio)).unwrap().mesh;
-        // 400 kB: ~16 blocks of a few thousand faces, two rounds.
-        let o = opts(dir.path(), ratio, 400_000);
-        let (a, rep) = simplify_file(&input, &o, &quiet).unwrap();
-        assert!(rep.round_blocks[0] > 4, "{rep:?}");
-        let target = (mesh.faces.len() as f32 * ratio) as usize;
-        let off = (a.faces.len() as f64 - target as f64).abs() / target as f64;
-        assert!(off <= 0.005, "{} faces for {target}", a.faces.len());
-        if std::env::var_os("LODKIT_SCALE_QUALITY").is_some() {
-            // Known gap (issue #19): fails today, mean error about 5x in
-            // core at 10 %; run with LODKIT_SCALE_QUALITY=1.
+        let eb = compare(&mesh, &in_core, &cmp).unwrap().symmetric;
+        for (memory, rounds) in [(3 << 20, 1), (2 << 20, 2)] {
+            let o = opts(dir.path(), ratio, memory);
+            let (a, rep) = simplify_file(&input, &o, &quiet).unwrap();
+            std::fs::remove_dir_all(&o.staging).unwrap();
+            assert_eq!(rep.round_blocks.len(), rounds, "{rep:?}");
+            assert!(rep.round_blocks[0] >= 8, "{rep:?}");
+            let target = (mesh.faces.len() as f32 * ratio) as usize;
+            assert!(
+                faces_off(a.faces.len(), target) <= 0.005,
+                "{} faces for {target}",
+                a.faces.len()
+            );
             let ea = compare(&mesh, &a, &cmp).unwrap().symmetric;
-            let eb = compare(&mesh, &in_core, &cmp).unwrap().symmetric;
+            let at = format!("ratio {ratio}, memory {memory}");
             assert!(
                 ea.mean <= 1.1 * eb.mean,
-                "ratio {ratio}: mean {} vs {}",
+                "{at}: mean {} vs in core {}",
                 ea.mean,
                 eb.mean
             );
             assert!(
                 ea.max <= 1.2 * eb.max,
-                "ratio {ratio}: max {} vs {}",
+                "{at}: max {} vs in core {}",
                 ea.max,
                 eb.max
             );
         }
-        // Same again from scratch: same mesh, bit for bit.
-        std::fs::remove_dir_all(&o.staging).unwrap();
-        let (b, _) = simplify_file(&input, &o, &quiet).unwrap();
-        assert_eq!(a, b);
-        std::fs::remove_dir_all(&o.staging).unwrap();
     }
 }
 
@@ -100,22 +135,75 @@ fn bad_input_is_one_line_naming_the_file() {
     assert!(e.contains("bad.ply") && !e.contains('\n'), "{e}");
 }
 
-/// Known gap (issue #19): blocks simplified with locked cut borders leave
-/// about 2 % of faces leaning inward at 10 % (in core: 0.05 %), so the
-/// "no fold-over" guarantee does not yet hold out of core.
+/// No fold-over beyond what the in-core path leaves: blocks keep their
+/// interiors at the target density (the border-aware goal, `block.rs`)
+/// and the final pass, which frees the seams, has room to work. Inward
+/// faces are a count of a few (in core leaves 0–12 on blobs of 1 k–200 k
+/// output faces), so the allowance is 0.25 % of the output.
 #[test]
-#[ignore = "known gap: block simplification leaves inward faces"]
 fn no_more_inward_faces_than_in_core() {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("blob.ply");
     lodkit_mesh::shapes::write_blob_ply(&input, 60_000, 1).unwrap();
     let mesh = lodkit_mesh::io::load_mesh(&input).unwrap();
-    let in_core = simplify(&mesh, &Options::ratio(0.1)).unwrap().mesh;
-    let (a, _) = simplify_file(&input, &opts(dir.path(), 0.1, 400_000), &quiet).unwrap();
+    for ratio in [0.1f32, 0.02] {
+        let in_core = simplify(&mesh, &Options::ratio(ratio)).unwrap().mesh;
+        let o = opts(dir.path(), ratio, 2 << 20);
+        let (a, _) = simplify_file(&input, &o, &quiet).unwrap();
+        std::fs::remove_dir_all(&o.staging).unwrap();
+        assert!(
+            inward(&a) <= inward(&in_core) + a.faces.len() / 400,
+            "ratio {ratio}: inward faces: {} vs in core {}",
+            inward(&a),
+            inward(&in_core)
+        );
+    }
+}
+
+/// A budget whose final pass holds under twice the target (here 1.5×):
+/// round 0 stops at twice what the final pass holds and the round on the
+/// shifted grid does the rest, so round 0's cuts are re-simplified inside
+/// round-1 blocks. Quality is short of the in-core bounds here (the
+/// known gap, ARCHITECTURE.md), but within a looser one that the straight
+/// round missed.
+#[test]
+fn a_tight_budget_takes_a_shifted_round_before_the_final_pass() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("blob.ply");
+    lodkit_mesh::shapes::write_blob_ply(&input, 60_000, 1).unwrap();
+    let mesh = lodkit_mesh::io::load_mesh(&input).unwrap();
+    let cmp = CompareOptions {
+        samples: Some(200_000),
+        ..CompareOptions::default()
+    };
+    let ratio = 0.1f32;
+    let target = (mesh.faces.len() as f32 * ratio) as usize;
+    // The final pass holds 9000 faces at 80 B each: 1.5× the target.
+    let o = opts(dir.path(), ratio, 9000 * 80);
+    let (a, rep) = simplify_file(&input, &o, &quiet).unwrap();
+    assert_eq!(rep.round_blocks.len(), 2, "{rep:?}");
+    assert!(rep.round_faces[0] >= 2 * 8100, "{rep:?}");
     assert!(
-        inward(&a) <= inward(&in_core) + a.faces.len() / 1000,
-        "inward faces: {} vs in core {}",
-        inward(&a),
-        inward(&in_core)
+        faces_off(a.faces.len(), target) <= 0.005,
+        "{} faces for {target}",
+        a.faces.len()
+    );
+    let in_core = simplify(&mesh, &Options::ratio(ratio)).unwrap().mesh;
+    let eb = compare(&mesh, &in_core, &cmp).unwrap().symmetric;
+    let ea = compare(&mesh, &a, &cmp).unwrap().symmetric;
+    // One straight round to the goal (round 0 overflowing into a second
+    // round at the final goal) gave 1.16× / 1.47× here; this way 1.10× /
+    // 1.32×.
+    assert!(
+        ea.mean <= 1.15 * eb.mean,
+        "mean {} vs in core {}",
+        ea.mean,
+        eb.mean
+    );
+    assert!(
+        ea.max <= 1.4 * eb.max,
+        "max {} vs in core {}",
+        ea.max,
+        eb.max
     );
 }

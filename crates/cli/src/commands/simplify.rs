@@ -98,8 +98,9 @@ pub struct SimplifyArgs {
     /// Memory budget, in 1M..=1P bytes (K, M, G, T, P: powers of 1024; e.g.
     /// 8G, 512M). A binary PLY whose in-core estimate (80 bytes per face)
     /// exceeds it is simplified out of core, in blocks staged beside the
-    /// output (positions only; --target or --ratio). Default: a third of
-    /// the machine's memory.
+    /// output (positions only; --target or --ratio), with the in-core
+    /// error when SIZE is at least 320 bytes per target face. Default: a
+    /// third of the machine's memory.
     #[arg(long, value_name = "SIZE", value_parser = value::bytes(MIN_MEMORY, MAX_MEMORY))]
     pub memory: Option<u64>,
     #[command(flatten)]
@@ -272,6 +273,8 @@ struct Plan {
     memory: u64,
     in_core: u64,
     file_bytes: u64,
+    /// Face records in the file's header.
+    faces: u64,
 }
 
 /// Whether `a.input` is simplified out of core: a `.ply` that
@@ -297,15 +300,18 @@ fn out_of_core_plan(ui: &Ui, a: &SimplifyArgs) -> Result<Option<Plan>> {
         return Ok(None);
     }
     let in_core = file_bytes / 19 * lodkit_scale::IN_CORE_BYTES_PER_FACE;
-    if let Err(e) = lodkit_mesh::io::ply::stream::PlyStream::open(&a.input) {
-        ui.status(format!(
-            "note: {} needs about {} in core, over --memory {}, but cannot be streamed ({e}); simplifying in core",
-            a.input.display(),
-            human_bytes(in_core),
-            human_bytes(memory),
-        ));
-        return Ok(None);
-    }
+    let faces = match lodkit_mesh::io::ply::stream::PlyStream::open(&a.input) {
+        Ok(s) => s.face_records(),
+        Err(e) => {
+            ui.status(format!(
+                "note: {} needs about {} in core, over --memory {}, but cannot be streamed ({e}); simplifying in core",
+                a.input.display(),
+                human_bytes(in_core),
+                human_bytes(memory),
+            ));
+            return Ok(None);
+        }
+    };
     let d = AttributeWeights::DEFAULT;
     let o = &a.opts;
     let refused = [
@@ -333,6 +339,7 @@ fn out_of_core_plan(ui: &Ui, a: &SimplifyArgs) -> Result<Option<Plan>> {
         memory,
         in_core,
         file_bytes,
+        faces,
     }))
 }
 
@@ -362,6 +369,19 @@ fn run_out_of_core(
         lodkit_scale::IN_CORE_BYTES_PER_FACE,
         human_bytes(plan.memory),
     ));
+    let target = opts.target.faces(plan.faces as usize) as u64;
+    let quality = lodkit_scale::quality_memory(target);
+    if plan.memory < quality {
+        ui.status(format!(
+            "note: --memory {} leaves the final pass room for under {}× the target of {} triangles, \
+             so the blocks do most of the reduction and the result is coarser than in core; \
+             --memory {} or more gives in-core quality",
+            human_bytes(plan.memory),
+            lodkit_scale::QUALITY_HEADROOM,
+            target,
+            human_bytes(quality),
+        ));
+    }
     if staging.exists() {
         ui.status(format!(
             "resuming: {} blocks already done (in {})",
