@@ -9,7 +9,8 @@
 #   (default: every target of crates/{mesh,particles,mco}/fuzz).
 #
 # Needs nightly and cargo-fuzz (`cargo install cargo-fuzz`). Runs under
-# `nice -n 19` with one job, so it can share a machine. Crashes are kept in
+# `nice -n 19` (FUZZ_NICE=N for another niceness: at 19 a fuzzer beside a
+# build gets almost no CPU) with one job, so it can share a machine. Crashes are kept in
 # crates/<crate>/fuzz/artifacts/<target>/ (ignored by git) and make the
 # script exit 1 once every target has run.
 set -euo pipefail
@@ -56,7 +57,7 @@ for t in "${targets[@]}"; do
     # a second corpus and never written to or minimised.
     seeds=()
     [ -d "$fuzz/seeds/$name" ] && seeds=("$fuzz/seeds/$name")
-    if ! nice -n 19 cargo +nightly fuzz run -O "$name" "$corpus" "${seeds[@]}" -- \
+    if ! nice -n "${FUZZ_NICE:-19}" cargo +nightly fuzz run -O "$name" "$corpus" "${seeds[@]}" -- \
         -max_total_time=$((minutes * 60)) -rss_limit_mb=2048 \
         -malloc_limit_mb=2048 -print_final_stats=1 >"$log" 2>&1; then
         status="CRASH (see $log and artifacts/$name/)"
