@@ -19,6 +19,8 @@
 
 use std::path::Path;
 
+use lodkit_mesh::TriMesh;
+use lodkit_mesh::topology::edge_multiplicities;
 use lodkit_simplify::{Options, Simplifier, Target};
 
 use crate::soup::{self, Welder};
@@ -48,7 +50,7 @@ pub fn simplify_block(
     soup::for_each(input, |t| w.add(t)).map_err(|e| format!("{}: {e}", input.display()))?;
     let mesh = w.finish();
     let faces_in = mesh.faces.len() as u64;
-    let border = border_vertices(&mesh.faces) as u64;
+    let border = border_vertices(&mesh) as u64;
     let free = faces_in.saturating_sub(border) as f64;
     let target = ((free * ratio.clamp(0.0, 1.0)).ceil() as u64 + border).min(faces_in) as usize;
     let o = Options {
@@ -69,22 +71,15 @@ pub fn simplify_block(
     })
 }
 
-/// Vertices on a border edge (an edge of exactly one face) of `faces`:
-/// the vertices `lock_border` keeps. Edges are sorted as `u64` keys, 24
-/// bytes per face while it runs, so the count is the same on every run.
-fn border_vertices(faces: &[[u32; 3]]) -> usize {
-    let mut edges: Vec<u64> = faces
-        .iter()
-        .flat_map(|f| [(f[0], f[1]), (f[1], f[2]), (f[2], f[0])])
-        .map(|(a, b)| (u64::from(a.min(b)) << 32) | u64::from(a.max(b)))
+/// Vertices on a border edge (an edge of exactly one face) of `mesh`:
+/// the vertices `lock_border` keeps. From the sorted edge list of
+/// [`edge_multiplicities`], so the count is the same on every run.
+fn border_vertices(mesh: &TriMesh) -> usize {
+    let mut ends: Vec<u32> = edge_multiplicities(mesh)
+        .into_iter()
+        .filter(|e| e.count == 1)
+        .flat_map(|e| [e.a, e.b])
         .collect();
-    edges.sort_unstable();
-    let mut ends = Vec::new();
-    for run in edges.chunk_by(|a, b| a == b) {
-        if let [e] = run {
-            ends.extend([(e >> 32) as u32, *e as u32]);
-        }
-    }
     ends.sort_unstable();
     ends.dedup();
     ends.len()
@@ -92,7 +87,12 @@ fn border_vertices(faces: &[[u32; 3]]) -> usize {
 
 #[cfg(test)]
 mod tests {
-    use super::border_vertices;
+    use glam::Vec3;
+    use lodkit_mesh::TriMesh;
+
+    fn border_vertices(faces: &[[u32; 3]]) -> usize {
+        super::border_vertices(&TriMesh::new(vec![Vec3::ZERO; 5], faces.to_vec()))
+    }
 
     #[test]
     fn border_vertices_of_a_strip_and_a_closed_mesh() {
