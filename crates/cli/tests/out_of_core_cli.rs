@@ -256,3 +256,28 @@ fn a_budget_too_small_for_in_core_quality_says_so() {
     let off = (mesh_at(&out).faces.len() as f64 - 10086.0).abs() / 10086.0;
     assert!(off <= 0.005, "{err}");
 }
+
+#[test]
+fn ray_without_pylodkit_fails_in_one_line_before_any_block() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = blob(dir.path());
+    let out = dir.path().join("o.ply");
+    // A bad address is a usage error.
+    let o = simplify(&input, &out, &["--ratio", "0.1", "--memory", "1M", "--ray", "nowhere"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("local, auto or HOST:PORT"), "{}", stderr(&o));
+    // A Python that is not there: exit 1, one error line, nothing staged.
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_lodkit"))
+        .args(["simplify", &input, "-o", out.to_str().unwrap()])
+        .args(["--ratio", "0.1", "--memory", "1M", "--ray", "local"])
+        .env("LODKIT_PYTHON", "/nonexistent/python3")
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    let errors: Vec<&str> = err.lines().filter(|l| l.contains("error")).collect();
+    assert_eq!(errors.len(), 1, "{err}");
+    assert!(errors[0].contains("--ray") && errors[0].contains("LODKIT_PYTHON"), "{err}");
+    assert!(!out.exists());
+    assert!(staging_left(dir.path()).is_empty(), "{:?}", staging_left(dir.path()));
+}

@@ -10,9 +10,8 @@ use glam::Vec3;
 use lodkit_mesh::TriMesh;
 use lodkit_mesh::io::ply::stream::PlyStream;
 use lodkit_simplify::{Options, Simplifier, Target};
-use rayon::prelude::*;
-
-use crate::block::simplify_block;
+use crate::runner::{BLOCKS_IN_FLIGHT, Runner};
+use crate::tasks::BlockTask;
 use crate::partition::{Grid, Writers, block_input, block_output};
 use crate::soup::{self, Welder};
 
@@ -22,11 +21,6 @@ use crate::soup::{self, Welder};
 const BLOCK_BYTES_PER_FACE: u64 = 100;
 /// Most blocks per axis (at most 512 files open while partitioning).
 const MAX_GRID: u32 = 8;
-/// Blocks simplified at once, at most: the budget is shared among this
-/// many, whatever the thread count, so the grid (and so the output) depends
-/// on `--memory` alone; a machine with more threads runs this many blocks
-/// at a time.
-const BLOCKS_IN_FLIGHT: u64 = 4;
 
 /// The block rounds aim at this share of what the final pass holds in
 /// the budget: a block's border excess (`block.rs`) comes on top of its
@@ -77,6 +71,8 @@ pub struct ScaleOptions {
     pub memory: u64,
     /// The staging folder (created; the caller removes it).
     pub staging: PathBuf,
+    /// Where the blocks run; the result is the same either way.
+    pub runner: Runner,
 }
 
 /// Progress of [`simplify_file`].
@@ -138,6 +134,7 @@ pub fn simplify_file(
     progress: &(dyn Fn(Event) + Sync),
 ) -> Result<(TriMesh, Report), String> {
     let s = PlyStream::open(input).map_err(|e| e.to_string())?;
+    o.runner.check()?;
     let io = |p: &Path| {
         let p = p.to_path_buf();
         move |e: std::io::Error| format!("{}: {e}", p.display())
@@ -146,10 +143,6 @@ pub fn simplify_file(
     let mut rep = Report::default();
     let faces = s.face_records();
     let block_faces = (o.memory / (BLOCK_BYTES_PER_FACE * BLOCKS_IN_FLIGHT)).max(256);
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(rayon::current_num_threads().clamp(1, BLOCKS_IN_FLIGHT as usize))
-        .build()
-        .map_err(|e| format!("cannot start the block threads: {e}"))?;
     let blocks = faces.div_ceil(block_faces).max(2);
     let g = ((blocks as f64).cbrt().ceil() as u32).clamp(2, MAX_GRID);
 
@@ -225,26 +218,29 @@ pub fn simplify_file(
             &format!("simplifying blocks (round {})", round + 1),
             before,
         ));
-        let done: Vec<Result<(u64, bool), String>> = pool.install(|| {
-            todo.par_iter()
-                .map(|&b| {
-                    let out = block_output(&dir, b);
-                    if out.exists() {
-                        progress(Event::Advance(counts[b]));
-                        return soup::faces_in(&out).map(|n| (n, true)).map_err(io(&out));
-                    }
-                    let r = simplify_block(&block_input(&dir, b), &out, ratio, &o.simplify)?;
-                    let _ = std::fs::remove_file(block_input(&dir, b));
-                    progress(Event::Advance(counts[b]));
-                    Ok((r.faces_out, false))
-                })
-                .collect()
-        });
+        // Blocks an interrupted run finished are not run again.
+        let mut tasks = Vec::new();
+        for &b in &todo {
+            let output = block_output(&dir, b);
+            if output.exists() {
+                rep.resumed_blocks += 1;
+                progress(Event::Advance(counts[b]));
+            } else {
+                tasks.push(BlockTask {
+                    input: block_input(&dir, b),
+                    output,
+                    ratio,
+                    faces: counts[b],
+                });
+            }
+        }
+        o.runner.run(&dir, &tasks, &o.simplify, &|i| {
+            progress(Event::Advance(tasks[i].faces))
+        })?;
         total = 0;
-        for r in done {
-            let (n, resumed) = r?;
-            total += n;
-            rep.resumed_blocks += resumed as usize;
+        for &b in &todo {
+            let out = block_output(&dir, b);
+            total += soup::faces_in(&out).map_err(io(&out))?;
         }
         rep.bytes_read += before * soup::FACE_BYTES;
         rep.bytes_written += (before + total) * soup::FACE_BYTES;

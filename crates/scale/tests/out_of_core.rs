@@ -15,6 +15,7 @@ fn opts(dir: &Path, ratio: f32, memory: u64) -> ScaleOptions {
         simplify: Options::ratio(ratio),
         memory,
         staging: dir.join("staging"),
+        runner: Default::default(),
     }
 }
 

@@ -103,6 +103,13 @@ pub struct SimplifyArgs {
     /// third of the machine's memory.
     #[arg(long, value_name = "SIZE", value_parser = value::bytes(MIN_MEMORY, MAX_MEMORY))]
     pub memory: Option<u64>,
+    /// Run the blocks of an out-of-core simplification as Ray tasks:
+    /// `local` starts a local cluster for the run, `auto` or HOST:PORT
+    /// joins a running one (every node must see the output's folder at
+    /// the same path). Needs a Python with pylodkit and ray (`python3`,
+    /// or $LODKIT_PYTHON). The output is the same bytes as without.
+    #[arg(long, value_name = "ADDRESS", value_parser = value::ray_address)]
+    pub ray: Option<String>,
     #[command(flatten)]
     pub out: crate::ui::OutputArgs,
     /// Print the report as JSON.
@@ -173,6 +180,12 @@ pub fn run(ui: &Ui, a: &SimplifyArgs) -> Result<()> {
     let opts = a.opts.options(target)?;
     if let Some(plan) = out_of_core_plan(ui, a)? {
         return run_out_of_core(ui, a, format, &opts, &plan);
+    }
+    if a.ray.is_some() {
+        ui.status(format!(
+            "note: {} fits --memory, so it is simplified in core here and --ray is not used",
+            a.input.display()
+        ));
     }
     let mesh: TriMesh = match super::scene::load_input(
         ui,
@@ -393,6 +406,15 @@ fn run_out_of_core(
         simplify: opts.clone(),
         memory: plan.memory,
         staging: staging.clone(),
+        runner: match &a.ray {
+            None => lodkit_scale::Runner::Threads,
+            Some(address) => lodkit_scale::Runner::Ray {
+                address: address.clone(),
+                python: std::env::var_os("LODKIT_PYTHON")
+                    .map_or_else(|| "python3".into(), std::path::PathBuf::from),
+                workers: None,
+            },
+        },
     };
     let progress = ui.phases();
     let start = std::time::Instant::now();
@@ -402,6 +424,11 @@ fn run_out_of_core(
     });
     progress.finish();
     let kept = |e: &dyn std::fmt::Display| {
+        if !staging.exists() {
+            // Refused before any block was staged (a bad input, --ray
+            // without pylodkit): nothing to resume from.
+            return anyhow::anyhow!("{e}");
+        }
         anyhow::anyhow!(
             "{e} (finished blocks are kept in {}: the same command resumes from them)",
             staging.display()
