@@ -15,6 +15,8 @@
 //! | item | what it does |
 //! |---|---|
 //! | [`simplify_file`] | a binary PLY file to a simplified [`TriMesh`](lodkit_mesh::TriMesh) in about `memory` bytes |
+//! | [`lod_chain_file`] | a binary PLY file to an LOD chain in about `memory` bytes: levels too big for memory as block soups, the rest in core |
+//! | [`write_soups_ply`] | a level's block soups to one welded binary PLY, streaming |
 //! | [`needs_out_of_core`] | whether a file would not fit the in-core path in `memory` |
 //! | [`quality_memory`] | the budget from which the result matches the in-core error |
 //! | [`simplify_block`] | one block |
@@ -28,6 +30,7 @@
 #![forbid(unsafe_code)]
 
 mod block;
+mod level_ply;
 mod partition;
 mod run;
 mod runner;
@@ -35,8 +38,9 @@ pub mod soup;
 mod staging;
 mod tasks;
 
-pub use block::{BlockReport, simplify_block};
-pub use run::{Event, Report, ScaleOptions, simplify_file};
+pub use block::{BlockReport, Goal, simplify_block};
+pub use level_ply::write_soups_ply;
+pub use run::{ChainLevel, Event, Report, ScaleOptions, lod_chain_file, simplify_file};
 pub use runner::Runner;
 pub use staging::{default_memory, finished_blocks, staging_dir};
 pub use tasks::{BlockTask, read_tasks, run_task, write_tasks};

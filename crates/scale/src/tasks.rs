@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use lodkit_simplify::{AttributeWeights, Options};
 use serde::{Deserialize, Serialize};
 
-use crate::block::{BlockReport, simplify_block};
+use crate::block::{BlockReport, Goal, simplify_block};
 
 /// Version of the task file; [`read_tasks`] refuses any other.
 const TASKS_VERSION: u32 = 1;
@@ -32,8 +32,8 @@ pub struct BlockTask {
     pub input: PathBuf,
     /// Where its simplified soup goes (written atomically).
     pub output: PathBuf,
-    /// The share of the block's free faces to keep (`simplify_block`).
-    pub ratio: f64,
+    /// How far the block goes.
+    pub goal: Goal,
     /// Faces in the input (for progress).
     pub faces: u64,
 }
@@ -50,6 +50,8 @@ struct TaskRecord {
     input: String,
     output: String,
     ratio: f64,
+    /// `interior` or `total` ([`Goal`]).
+    goal: String,
     faces: u64,
 }
 
@@ -119,7 +121,12 @@ pub fn write_tasks(path: &Path, opts: &Options, tasks: &[BlockTask]) -> Result<(
                 Ok(TaskRecord {
                     input: name(&t.input)?,
                     output: name(&t.output)?,
-                    ratio: t.ratio,
+                    ratio: t.goal.ratio(),
+                    goal: match t.goal {
+                        Goal::Interior(_) => "interior",
+                        Goal::Total(_) => "total",
+                    }
+                    .into(),
                     faces: t.faces,
                 })
             })
@@ -184,10 +191,15 @@ pub fn read_tasks(path: &Path) -> Result<(Options, Vec<BlockTask>), String> {
             if !(0.0..=1.0).contains(&t.ratio) {
                 return Err(bad(format!("ratio {} outside [0, 1]", t.ratio)));
             }
+            let goal = match t.goal.as_str() {
+                "interior" => Goal::Interior(t.ratio),
+                "total" => Goal::Total(t.ratio),
+                g => return Err(bad(format!("goal {g:?}, expected interior or total"))),
+            };
             Ok(BlockTask {
                 input: plain(&t.input)?,
                 output: plain(&t.output)?,
-                ratio: t.ratio,
+                goal,
                 faces: t.faces,
             })
         })
@@ -217,7 +229,7 @@ pub fn run_task(path: &Path, index: usize) -> Result<BlockReport, String> {
             faces_out,
         });
     }
-    let r = simplify_block(&t.input, &t.output, t.ratio, &opts)?;
+    let r = simplify_block(&t.input, &t.output, t.goal, &opts)?;
     Ok(r)
 }
 
@@ -237,7 +249,7 @@ mod tests {
         let tasks = vec![BlockTask {
             input: d.path().join("b00001.in"),
             output: d.path().join("b00001.out"),
-            ratio: 0.25,
+            goal: Goal::Total(0.25),
             faces: 10,
         }];
         write_tasks(&path, &opts, &tasks).unwrap();
@@ -253,7 +265,7 @@ mod tests {
         assert!(write_tasks(&path, &opts, &outside).is_err());
         for name in ["../x.in", "/etc/passwd", "..", "", "a/b"] {
             let json = format!(
-                r#"{{"version":1,"options":{{"max_error":null,"heap_size":1,"normal_weight":0,"color_weight":0,"uv_weight":0,"prune":null,"max_passes":8}},"tasks":[{{"input":{name:?},"output":"o","ratio":0.5,"faces":1}}]}}"#
+                r#"{{"version":1,"options":{{"max_error":null,"heap_size":1,"normal_weight":0,"color_weight":0,"uv_weight":0,"prune":null,"max_passes":8}},"tasks":[{{"input":{name:?},"output":"o","ratio":0.5,"goal":"interior","faces":1}}]}}"#
             );
             std::fs::write(&path, json).unwrap();
             let e = read_tasks(&path).unwrap_err();
