@@ -454,7 +454,9 @@ pub mod value {
     /// not a failed cluster start minutes later.
     pub fn ray_address(s: &str) -> Result<String, String> {
         let bad = || {
-            format!("expected local, auto or HOST:PORT (a running Ray cluster's address), got {s:?}")
+            format!(
+                "expected local, auto or HOST:PORT (a running Ray cluster's address), got {s:?}"
+            )
         };
         if s == "local" || s == "auto" {
             return Ok(s.to_string());

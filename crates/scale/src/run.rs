@@ -6,15 +6,15 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use crate::block::Goal;
+use crate::partition::{Grid, Writers, block_input, block_output};
+use crate::runner::{BLOCKS_IN_FLIGHT, Runner};
+use crate::soup::{self, Welder};
+use crate::tasks::BlockTask;
 use glam::Vec3;
 use lodkit_mesh::TriMesh;
 use lodkit_mesh::io::ply::stream::PlyStream;
 use lodkit_simplify::{Options, Simplified, Simplifier, Target};
-use crate::block::Goal;
-use crate::runner::{BLOCKS_IN_FLIGHT, Runner};
-use crate::tasks::BlockTask;
-use crate::partition::{Grid, Writers, block_input, block_output};
-use crate::soup::{self, Welder};
 
 /// Bytes per block face while a block is simplified: the soup welded
 /// (12 B per face, 12 per vertex, the weld map), the simplifier's
@@ -361,9 +361,8 @@ impl<'a> Pipeline<'a> {
                     if n.is_multiple_of(1 << 20) {
                         progress(Event::Advance(1 << 20));
                     }
-                    w.put(grid.block_of(&tri), tri).map_err(|e| {
-                        lodkit_mesh::Error::Invalid(format!("{}: {e}", r0.display()))
-                    })
+                    w.put(grid.block_of(&tri), tri)
+                        .map_err(|e| lodkit_mesh::Error::Invalid(format!("{}: {e}", r0.display())))
                 })
                 .map_err(|e| e.to_string())?;
                 drop(pos);

@@ -61,7 +61,11 @@ impl Runner {
             return Ok(());
         }
         let err = String::from_utf8_lossy(&out.stderr);
-        let last = err.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("");
+        let last = err
+            .lines()
+            .rev()
+            .find(|l| !l.trim().is_empty())
+            .unwrap_or("");
         Err(format!(
             "--ray: {} cannot import pylodkit and ray ({last}): pip install 'pylodkit[batch]' there, \
              or set LODKIT_PYTHON to a Python that has them",

@@ -222,8 +222,8 @@ pub fn run_task(path: &Path, index: usize) -> Result<BlockReport, String> {
         )
     })?;
     if t.output.exists() {
-        let faces_out = crate::soup::faces_in(&t.output)
-            .map_err(|e| format!("{}: {e}", t.output.display()))?;
+        let faces_out =
+            crate::soup::faces_in(&t.output).map_err(|e| format!("{}: {e}", t.output.display()))?;
         return Ok(BlockReport {
             faces_in: t.faces,
             faces_out,
@@ -272,6 +272,10 @@ mod tests {
             assert!(e.contains("plain file name"), "{name}: {e}");
         }
         std::fs::write(&path, "{").unwrap();
-        assert!(read_tasks(&path).unwrap_err().contains("not a block task file"));
+        assert!(
+            read_tasks(&path)
+                .unwrap_err()
+                .contains("not a block task file")
+        );
     }
 }

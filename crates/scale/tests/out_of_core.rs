@@ -267,13 +267,20 @@ fn an_out_of_core_chain_gives_crack_free_levels_on_target() {
         Ok(levels)
     };
     let a = run("a", None).unwrap();
-    assert_eq!(a.iter().map(|l| l.1).collect::<Vec<_>>(), [true, true, true, false]);
+    assert_eq!(
+        a.iter().map(|l| l.1).collect::<Vec<_>>(),
+        [true, true, true, false]
+    );
     for (i, (bytes, _)) in a.iter().enumerate() {
         let path = dir.path().join(format!("a{i}.ply"));
         assert_eq!(&std::fs::read(&path).unwrap(), bytes);
         let m = lodkit_mesh::io::load_mesh(&path).unwrap();
         let target = targets[i].faces(n);
-        assert!(faces_off(m.faces.len(), target) <= 0.005, "level {i}: {} for {target}", m.faces.len());
+        assert!(
+            faces_off(m.faces.len(), target) <= 0.005,
+            "level {i}: {} for {target}",
+            m.faces.len()
+        );
         assert_eq!(open_edges(&m), 0, "level {i}");
     }
     let last = lodkit_mesh::io::load_mesh(&dir.path().join("a3.ply")).unwrap();
