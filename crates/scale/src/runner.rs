@@ -159,10 +159,10 @@ fn run_on_ray(
         for line in BufReader::new(out).lines() {
             let Ok(line) = line else { break };
             let mut w = line.split_whitespace();
-            if let (Some("done"), Some(i)) = (w.next(), w.next().and_then(|i| i.parse().ok())) {
-                if i < tasks.len() {
-                    done(i);
-                }
+            if let (Some("done"), Some(i)) = (w.next(), w.next().and_then(|i| i.parse().ok()))
+                && i < tasks.len()
+            {
+                done(i);
             }
         }
     }
