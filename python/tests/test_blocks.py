@@ -46,7 +46,7 @@ def test_ray_blocks_give_the_single_process_bytes(lodkit_bin, tmp_path):
 
 def task_file(path, name):
     path.write_text(json.dumps({
-        "version": 1,
+        "version": 2,
         "options": {"max_error": None, "heap_size": 1, "normal_weight": 0.0, "color_weight": 0.0,
                     "uv_weight": 0.0, "prune": None, "max_passes": 64},
         "tasks": [{"input": name, "output": "b.out", "ratio": 0.5, "goal": "total", "faces": 1}],

@@ -16,8 +16,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::block::{BlockReport, Goal, simplify_block};
 
-/// Version of the task file; [`read_tasks`] refuses any other.
-const TASKS_VERSION: u32 = 1;
+/// Version of the task file; [`read_tasks`] refuses any other, and any
+/// field it does not know, so a worker with another lodkit never runs a
+/// block by other rules than the driver's (2: each task names its goal).
+const TASKS_VERSION: u32 = 2;
 
 /// Most tasks a task file may hold (a round has at most 512 blocks).
 const MAX_TASKS: usize = 4096;
@@ -39,6 +41,7 @@ pub struct BlockTask {
 }
 
 #[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 struct TaskFile {
     version: u32,
     options: OptionsRecord,
@@ -46,6 +49,7 @@ struct TaskFile {
 }
 
 #[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 struct TaskRecord {
     input: String,
     output: String,
@@ -58,6 +62,7 @@ struct TaskRecord {
 /// The options a block uses (its target is set per block, `lock_border`
 /// and `fill_holes` by [`simplify_block`]).
 #[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 struct OptionsRecord {
     max_error: Option<f32>,
     heap_size: usize,
@@ -265,7 +270,7 @@ mod tests {
         assert!(write_tasks(&path, &opts, &outside).is_err());
         for name in ["../x.in", "/etc/passwd", "..", "", "a/b"] {
             let json = format!(
-                r#"{{"version":1,"options":{{"max_error":null,"heap_size":1,"normal_weight":0,"color_weight":0,"uv_weight":0,"prune":null,"max_passes":8}},"tasks":[{{"input":{name:?},"output":"o","ratio":0.5,"goal":"interior","faces":1}}]}}"#
+                r#"{{"version":2,"options":{{"max_error":null,"heap_size":1,"normal_weight":0,"color_weight":0,"uv_weight":0,"prune":null,"max_passes":8}},"tasks":[{{"input":{name:?},"output":"o","ratio":0.5,"goal":"interior","faces":1}}]}}"#
             );
             std::fs::write(&path, json).unwrap();
             let e = read_tasks(&path).unwrap_err();
