@@ -11,7 +11,7 @@ use crate::errors::input;
 /// round of an out-of-core simplification, written by lodkit).
 #[pyfunction]
 pub fn block_task_count(py: Python<'_>, path: PathBuf) -> PyResult<usize> {
-    let (_, tasks) = py
+    let (_, _, tasks) = py
         .detach(|| lodkit_scale::read_tasks(&path))
         .map_err(input)?;
     Ok(tasks.len())

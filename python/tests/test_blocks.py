@@ -49,6 +49,7 @@ def task_file(path, name):
         "version": 2,
         "options": {"max_error": None, "heap_size": 1, "normal_weight": 0.0, "color_weight": 0.0,
                     "uv_weight": 0.0, "prune": None, "max_passes": 64},
+        "layout": "-",
         "tasks": [{"input": name, "output": "b.out", "ratio": 0.5, "goal": "total", "faces": 1}],
     }))
 

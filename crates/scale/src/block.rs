@@ -23,7 +23,7 @@ use lodkit_mesh::TriMesh;
 use lodkit_mesh::topology::edge_multiplicities;
 use lodkit_simplify::{Options, Simplifier, Target};
 
-use crate::soup::{self, Welder};
+use crate::soup::{self, Layout, Welder};
 
 /// What [`simplify_block`] did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -69,9 +69,10 @@ pub fn simplify_block(
     output: &Path,
     goal: Goal,
     opts: &Options,
+    layout: Layout,
 ) -> Result<BlockReport, String> {
-    let mut w = Welder::default();
-    soup::for_each(input, |t| w.add(t)).map_err(|e| format!("{}: {e}", input.display()))?;
+    let mut w = Welder::new(layout);
+    soup::for_each(input, layout, |t| w.add(t)).map_err(|e| format!("{}: {e}", input.display()))?;
     let mesh = w.finish();
     let faces_in = mesh.faces.len() as u64;
     let border = border_vertices(&mesh) as u64;
@@ -94,7 +95,8 @@ pub fn simplify_block(
     let out = Simplifier::new()
         .simplify(&mesh, &o)
         .map_err(|e| format!("{}: {e}", input.display()))?;
-    soup::write_mesh(output, &out.mesh).map_err(|e| format!("{}: {e}", output.display()))?;
+    soup::write_mesh(output, layout, &out.mesh)
+        .map_err(|e| format!("{}: {e}", output.display()))?;
     Ok(BlockReport {
         faces_in,
         faces_out: out.mesh.faces.len() as u64,

@@ -13,21 +13,28 @@
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-use glam::Vec3;
 use lodkit_mesh::TriMesh;
 use rustc_hash::FxHashMap;
 
 use crate::block::border_flags;
-use crate::soup::{self, Welder};
+use crate::soup::{self, Corner, Layout, Welder, corner};
 
 /// The global numbering of the vertices, block after block.
-#[derive(Default)]
 struct Numbering {
-    shared: FxHashMap<[u32; 3], u32>,
+    layout: Layout,
+    shared: FxHashMap<[u32; 9], u32>,
     next: u64,
 }
 
 impl Numbering {
+    fn new(layout: Layout) -> Numbering {
+        Numbering {
+            layout,
+            shared: FxHashMap::default(),
+            next: 0,
+        }
+    }
+
     /// Numbers the vertices of one welded block (`border`: its border
     /// flags), calling `new` with each vertex the first time it appears;
     /// returns the block's local-to-global map.
@@ -35,12 +42,13 @@ impl Numbering {
         &mut self,
         mesh: &TriMesh,
         border: &[bool],
-        mut new: impl FnMut(Vec3) -> std::io::Result<()>,
+        mut new: impl FnMut(&Corner) -> std::io::Result<()>,
     ) -> std::io::Result<Vec<u32>> {
         let mut global = Vec::with_capacity(mesh.positions.len());
-        for (v, p) in mesh.positions.iter().enumerate() {
+        for v in 0..mesh.positions.len() {
+            let c = corner(mesh, v as u32);
             if border[v] {
-                let key = p.to_array().map(f32::to_bits);
+                let key = self.layout.key(&c);
                 if let Some(&g) = self.shared.get(&key) {
                     global.push(g);
                     continue;
@@ -54,15 +62,15 @@ impl Numbering {
             }
             global.push(self.next as u32);
             self.next += 1;
-            new(*p)?;
+            new(&c)?;
         }
         Ok(global)
     }
 }
 
-fn weld(path: &Path) -> std::io::Result<(TriMesh, Vec<bool>)> {
-    let mut w = Welder::default();
-    soup::for_each(path, |t| w.add(t))
+fn weld(path: &Path, layout: Layout) -> std::io::Result<(TriMesh, Vec<bool>)> {
+    let mut w = Welder::new(layout);
+    soup::for_each(path, layout, |t| w.add(t))
         .map_err(|e| std::io::Error::other(format!("{}: {e}", path.display())))?;
     let mesh = w.finish();
     let border = border_flags(&mesh);
@@ -76,11 +84,15 @@ fn weld(path: &Path) -> std::io::Result<(TriMesh, Vec<bool>)> {
 /// Deterministic. Errors: I/O (naming the file), over 2^32 − 1 vertices.
 /// Memory: one welded block, plus the shared border vertices (about 24 B
 /// each). Cost: each file read and welded three times.
-pub fn write_soups_ply(files: &[PathBuf], out: &Path) -> Result<(u64, u64), String> {
+pub fn write_soups_ply(
+    files: &[PathBuf],
+    layout: Layout,
+    out: &Path,
+) -> Result<(u64, u64), String> {
     let mut faces = 0u64;
-    let mut count = Numbering::default();
+    let mut count = Numbering::new(layout);
     for f in files {
-        let (mesh, border) = weld(f).map_err(|e| e.to_string())?;
+        let (mesh, border) = weld(f, layout).map_err(|e| e.to_string())?;
         count
             .block(&mesh, &border, |_| Ok(()))
             .map_err(|e| format!("{}: {e}", out.display()))?;
@@ -90,25 +102,51 @@ pub fn write_soups_ply(files: &[PathBuf], out: &Path) -> Result<(u64, u64), Stri
     drop(count);
     lodkit_mesh::io::write_atomic_with(out, |file| {
         let mut w = BufWriter::with_capacity(1 << 20, file);
+        let mut props = String::from("property float x\nproperty float y\nproperty float z\n");
+        if layout.normals {
+            props.push_str("property float nx\nproperty float ny\nproperty float nz\n");
+        }
+        if layout.colors {
+            props.push_str(
+                "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar alpha\n",
+            );
+        }
+        if layout.uvs {
+            props.push_str("property float u\nproperty float v\n");
+        }
         write!(
             w,
             "ply\nformat binary_little_endian 1.0\ncomment lodkit out-of-core level\n\
-             element vertex {vertices}\nproperty float x\nproperty float y\nproperty float z\n\
+             element vertex {vertices}\n{props}\
              element face {faces}\nproperty list uchar uint vertex_indices\nend_header\n"
         )?;
-        let mut numbering = Numbering::default();
+        let mut numbering = Numbering::new(layout);
         for f in files {
-            let (mesh, border) = weld(f)?;
-            numbering.block(&mesh, &border, |p| {
-                for c in p.to_array() {
-                    w.write_all(&c.to_le_bytes())?;
+            let (mesh, border) = weld(f, layout)?;
+            numbering.block(&mesh, &border, |c| {
+                let mut rec = Vec::with_capacity(36);
+                for x in c.position.to_array() {
+                    rec.extend_from_slice(&x.to_le_bytes());
                 }
-                Ok(())
+                if layout.normals {
+                    for x in c.normal.to_array() {
+                        rec.extend_from_slice(&x.to_le_bytes());
+                    }
+                }
+                if layout.colors {
+                    rec.extend_from_slice(&c.color);
+                }
+                if layout.uvs {
+                    for x in c.uv.to_array() {
+                        rec.extend_from_slice(&x.to_le_bytes());
+                    }
+                }
+                w.write_all(&rec)
             })?;
         }
-        let mut numbering = Numbering::default();
+        let mut numbering = Numbering::new(layout);
         for f in files {
-            let (mesh, border) = weld(f)?;
+            let (mesh, border) = weld(f, layout)?;
             let global = numbering.block(&mesh, &border, |_| Ok(()))?;
             for t in &mesh.faces {
                 let mut rec = [3u8; 13];

@@ -9,7 +9,7 @@ use std::time::Instant;
 use crate::block::Goal;
 use crate::partition::{Grid, Writers, block_input, block_output};
 use crate::runner::{BLOCKS_IN_FLIGHT, Runner};
-use crate::soup::{self, Welder};
+use crate::soup::{self, Corner, Layout, Welder};
 use crate::tasks::BlockTask;
 use glam::Vec3;
 use lodkit_mesh::TriMesh;
@@ -123,12 +123,17 @@ pub struct Report {
 /// expected within 1.1× (mean) and 1.2× (max) of the in-core path's
 /// (measured, not proven); with less, coarser. Deterministic: blocks are independent and merged in block
 /// order, so the result does not depend on thread count or scheduling
-/// (nor on whether blocks ran here or as Ray tasks). Positions only:
-/// normals, colours and UVs are not carried through the blocks.
+/// (nor on whether blocks ran here or as Ray tasks). Normals, colours
+/// and UVs the file carries (as the in-core PLY reader finds them) go
+/// through the blocks with each corner and are simplified as in core
+/// (`o.simplify.weights`); corners that differ in an attribute stay
+/// apart (seams).
 ///
 /// Errors: a message naming the file: an input the stream reader refuses
 /// ([`PlyStream`]), I/O in the staging folder, the simplifier refusing a
-/// block. Cost: linear in the input; disk: 36 bytes per input face.
+/// block. Cost: linear in the input; disk: 36 bytes per input face
+/// (positions alone; 108 with normals, colours and UVs). Memory while
+/// partitioning: 12 B per input vertex (36 with every attribute).
 pub fn simplify_file(
     input: &Path,
     o: &ScaleOptions,
@@ -151,6 +156,8 @@ pub enum ChainLevel<'a> {
     Soups {
         /// Faces in all of them.
         faces: u64,
+        /// Their corners' attributes.
+        layout: Layout,
         /// The block outputs, in block order.
         files: &'a [PathBuf],
     },
@@ -193,7 +200,8 @@ pub enum ChainLevel<'a> {
 /// and hands over a level an earlier run finished as
 /// [`ChainLevel::Resumed`]. Errors: those of [`simplify_file`], and the
 /// first error `on_level` returns. Cost: linear in the input and in each
-/// level; disk: 36 B per face of the largest level, twice.
+/// level; disk: 36 B per face of the largest level (more with
+/// attributes, as [`simplify_file`]), twice.
 pub fn lod_chain_file(
     input: &Path,
     targets: &[Target],
@@ -237,6 +245,7 @@ pub fn lod_chain_file(
             i,
             ChainLevel::Soups {
                 faces,
+                layout: p.layout,
                 files: &files,
             },
         )?;
@@ -297,6 +306,8 @@ struct Pipeline<'a> {
     min: Vec3,
     max: Vec3,
     g: u32,
+    /// The attributes the input carries, through every soup.
+    layout: Layout,
     /// The round whose folder holds (or will hold) the next block inputs.
     round: u32,
     /// The soup files holding the current mesh when they are the outputs
@@ -324,6 +335,12 @@ impl<'a> Pipeline<'a> {
         std::fs::create_dir_all(&o.staging).map_err(io_err(&o.staging))?;
         let mut rep = Report::default();
         let faces = s.face_records();
+        let a = s.attributes();
+        let layout = Layout {
+            normals: a.normals,
+            colors: a.colors,
+            uvs: a.uvs,
+        };
         let block_faces = (o.memory / (BLOCK_BYTES_PER_FACE * BLOCKS_IN_FLIGHT)).max(256);
         let blocks = faces.div_ceil(block_faces).max(2);
         let g = ((blocks as f64).cbrt().ceil() as u32).clamp(2, MAX_GRID);
@@ -337,13 +354,13 @@ impl<'a> Pipeline<'a> {
                 let t = Instant::now();
                 std::fs::create_dir_all(&r0).map_err(io_err(&r0))?;
                 progress(Event::Phase("reading vertices", s.vertex_count()));
-                let mut pos = Vec::with_capacity(s.vertex_count() as usize);
+                let mut table = VertexTable::new(layout, s.vertex_count() as usize);
                 let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
-                s.for_each_position(|p| {
-                    lo = lo.min(p);
-                    hi = hi.max(p);
-                    pos.push(p);
-                    if pos.len().is_multiple_of(1 << 20) {
+                s.for_each_vertex(|v| {
+                    lo = lo.min(v.position);
+                    hi = hi.max(v.position);
+                    table.push(v);
+                    if table.positions.len().is_multiple_of(1 << 20) {
                         progress(Event::Advance(1 << 20));
                     }
                 })
@@ -353,23 +370,23 @@ impl<'a> Pipeline<'a> {
                 let t = Instant::now();
                 progress(Event::Phase("partitioning faces", faces));
                 let grid = Grid::new(lo, hi, g, 0.0);
-                let mut w = Writers::new(&r0, grid.blocks());
+                let mut w = Writers::new(&r0, grid.blocks(), layout);
                 let mut n = 0u64;
                 s.for_each_face(|f| {
-                    let tri = f.map(|i| pos[i as usize]);
+                    let tri = f.map(|i| table.corner(i));
                     n += 1;
                     if n.is_multiple_of(1 << 20) {
                         progress(Event::Advance(1 << 20));
                     }
-                    w.put(grid.block_of(&tri), tri)
+                    w.put(grid.block_of(&tri), &tri)
                         .map_err(|e| lodkit_mesh::Error::Invalid(format!("{}: {e}", r0.display())))
                 })
                 .map_err(|e| e.to_string())?;
-                drop(pos);
+                drop(table);
                 let counts = w.finish().map_err(io_err(&r0))?;
                 write_manifest(&r0, lo, hi, &counts).map_err(io_err(&r0))?;
                 rep.input_faces = counts.iter().sum();
-                rep.bytes_written += rep.input_faces * soup::FACE_BYTES;
+                rep.bytes_written += rep.input_faces * layout.face_bytes();
                 rep.phases
                     .push(("partition".into(), t.elapsed().as_secs_f64()));
                 (lo, hi)
@@ -385,6 +402,7 @@ impl<'a> Pipeline<'a> {
             min,
             max,
             g,
+            layout,
             round: 0,
             current: None,
             current_faces,
@@ -413,13 +431,13 @@ impl<'a> Pipeline<'a> {
             ));
             let shift = if self.round % 2 == 1 { 0.5 } else { 0.0 };
             let grid = Grid::new(self.min, self.max, self.g, shift);
-            let mut w = Writers::new(&next, grid.blocks());
+            let mut w = Writers::new(&next, grid.blocks(), self.layout);
             for &b in &todo {
                 let p = block_output(&prev, b);
                 let mut err = Ok(());
-                soup::for_each(&p, |tri| {
+                soup::for_each(&p, self.layout, |tri| {
                     if err.is_ok() {
-                        err = w.put(grid.block_of(&tri), tri);
+                        err = w.put(grid.block_of(tri), tri);
                     }
                 })
                 .and(err)
@@ -427,8 +445,8 @@ impl<'a> Pipeline<'a> {
             }
             let counts = w.finish().map_err(io_err(&next))?;
             write_manifest(&next, self.min, self.max, &counts).map_err(io_err(&next))?;
-            self.rep.bytes_read += self.current_faces * soup::FACE_BYTES;
-            self.rep.bytes_written += self.current_faces * soup::FACE_BYTES;
+            self.rep.bytes_read += self.current_faces * self.layout.face_bytes();
+            self.rep.bytes_written += self.current_faces * self.layout.face_bytes();
             self.rep
                 .phases
                 .push(("re-partition".into(), t.elapsed().as_secs_f64()));
@@ -467,18 +485,20 @@ impl<'a> Pipeline<'a> {
             }
         }
         let progress = self.progress;
-        self.o.runner.run(&dir, &tasks, &self.o.simplify, &|i| {
-            progress(Event::Advance(tasks[i].faces))
-        })?;
+        self.o
+            .runner
+            .run(&dir, &tasks, &self.o.simplify, self.layout, &|i| {
+                progress(Event::Advance(tasks[i].faces))
+            })?;
         let mut total = 0;
         let mut files = Vec::with_capacity(todo.len());
         for &b in &todo {
             let out = block_output(&dir, b);
-            total += soup::faces_in(&out).map_err(io_err(&out))?;
+            total += soup::faces_in(&out, self.layout).map_err(io_err(&out))?;
             files.push(out);
         }
-        self.rep.bytes_read += before * soup::FACE_BYTES;
-        self.rep.bytes_written += total * soup::FACE_BYTES;
+        self.rep.bytes_read += before * self.layout.face_bytes();
+        self.rep.bytes_written += total * self.layout.face_bytes();
         self.rep.round_faces.push(total);
         self.rep.round_blocks.push(todo.len());
         self.rep
@@ -527,13 +547,13 @@ impl<'a> Pipeline<'a> {
             "final pass on the merged blocks",
             self.current_faces,
         ));
-        let mut w = Welder::default();
+        let mut w = Welder::new(self.layout);
         let files: Vec<PathBuf> = match &self.current {
             Some((dir, todo)) => todo.iter().map(|&b| block_output(dir, b)).collect(),
             None => Vec::new(),
         };
         for p in &files {
-            soup::for_each(p, |tri| w.add(tri)).map_err(io_err(p))?;
+            soup::for_each(p, self.layout, |tri| w.add(tri)).map_err(io_err(p))?;
         }
         let merged = w.finish();
         let opts = Options {
@@ -548,6 +568,51 @@ impl<'a> Pipeline<'a> {
             .phases
             .push(("final pass".into(), t.elapsed().as_secs_f64()));
         Ok(out)
+    }
+}
+
+/// The input's vertices while its faces are partitioned: the positions
+/// and the attributes of the layout, no more (12 B per vertex for
+/// positions alone).
+struct VertexTable {
+    positions: Vec<Vec3>,
+    normals: Option<Vec<Vec3>>,
+    colors: Option<Vec<[u8; 4]>>,
+    uvs: Option<Vec<glam::Vec2>>,
+}
+
+impl VertexTable {
+    fn new(layout: Layout, n: usize) -> VertexTable {
+        VertexTable {
+            positions: Vec::with_capacity(n),
+            normals: layout.normals.then(|| Vec::with_capacity(n)),
+            colors: layout.colors.then(|| Vec::with_capacity(n)),
+            uvs: layout.uvs.then(|| Vec::with_capacity(n)),
+        }
+    }
+
+    fn push(&mut self, v: &Corner) {
+        self.positions.push(v.position);
+        if let Some(n) = self.normals.as_mut() {
+            n.push(v.normal);
+        }
+        if let Some(c) = self.colors.as_mut() {
+            c.push(v.color);
+        }
+        if let Some(u) = self.uvs.as_mut() {
+            u.push(v.uv);
+        }
+    }
+
+    /// Vertex `i` (checked against the vertex count by the reader).
+    fn corner(&self, i: u32) -> Corner {
+        let i = i as usize;
+        Corner {
+            position: self.positions[i],
+            normal: self.normals.as_ref().map_or(Vec3::ZERO, |n| n[i]),
+            color: self.colors.as_ref().map_or([0; 4], |c| c[i]),
+            uv: self.uvs.as_ref().map_or(glam::Vec2::ZERO, |u| u[i]),
+        }
     }
 }
 

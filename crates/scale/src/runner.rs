@@ -11,6 +11,7 @@ use lodkit_simplify::Options;
 use rayon::prelude::*;
 
 use crate::block::simplify_block;
+use crate::soup::Layout;
 use crate::tasks::{BlockTask, write_tasks};
 
 /// Blocks simplified at once on this machine, at most: the budget is
@@ -83,6 +84,7 @@ impl Runner {
         dir: &Path,
         tasks: &[BlockTask],
         opts: &Options,
+        layout: Layout,
         done: &(dyn Fn(usize) + Sync),
     ) -> Result<(), String> {
         match self {
@@ -93,7 +95,7 @@ impl Runner {
                     .map_err(|e| format!("cannot start the block threads: {e}"))?;
                 pool.install(|| {
                     tasks.par_iter().enumerate().try_for_each(|(i, t)| {
-                        simplify_block(&t.input, &t.output, t.goal, opts)?;
+                        simplify_block(&t.input, &t.output, t.goal, opts, layout)?;
                         let _ = std::fs::remove_file(&t.input);
                         done(i);
                         Ok(())
@@ -104,7 +106,7 @@ impl Runner {
                 address,
                 python,
                 workers,
-            } => run_on_ray(dir, tasks, opts, address, python, *workers, done),
+            } => run_on_ray(dir, tasks, opts, layout, address, python, *workers, done),
         }
     }
 }
@@ -113,10 +115,12 @@ impl Runner {
 /// on it; each `done I FACES_IN FACES_OUT` line it prints is task `I`
 /// finished. Its stderr (Ray's own chatter) goes to `ray.log` in `dir`,
 /// whose last line is the error when the run fails.
+#[allow(clippy::too_many_arguments)]
 fn run_on_ray(
     dir: &Path,
     tasks: &[BlockTask],
     opts: &Options,
+    layout: Layout,
     address: &str,
     python: &Path,
     workers: Option<usize>,
@@ -132,7 +136,7 @@ fn run_on_ray(
             ..t.clone()
         })
         .collect();
-    write_tasks(&file, opts, &tasks)?;
+    write_tasks(&file, opts, layout, &tasks)?;
     let log = dir.join("ray.log");
     let log_file = std::fs::File::create(&log).map_err(|e| format!("{}: {e}", log.display()))?;
     let mut cmd = Command::new(python);

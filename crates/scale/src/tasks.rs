@@ -15,6 +15,7 @@ use lodkit_simplify::{AttributeWeights, Options};
 use serde::{Deserialize, Serialize};
 
 use crate::block::{BlockReport, Goal, simplify_block};
+use crate::soup::Layout;
 
 /// Version of the task file; [`read_tasks`] refuses any other, and any
 /// field it does not know, so a worker with another lodkit never runs a
@@ -45,6 +46,8 @@ pub struct BlockTask {
 struct TaskFile {
     version: u32,
     options: OptionsRecord,
+    /// The soups' attributes ([`Layout::tag`]).
+    layout: String,
     tasks: Vec<TaskRecord>,
 }
 
@@ -102,10 +105,16 @@ impl OptionsRecord {
     }
 }
 
-/// Writes `tasks` (all in the folder of `path`) and the options `opts` to
+/// Writes `tasks` (all in the folder of `path`), the options `opts` and
+/// the soups' `layout` to
 /// the task file `path`, atomically. Errors: a task outside that folder,
 /// I/O (messages name the file).
-pub fn write_tasks(path: &Path, opts: &Options, tasks: &[BlockTask]) -> Result<(), String> {
+pub fn write_tasks(
+    path: &Path,
+    opts: &Options,
+    layout: Layout,
+    tasks: &[BlockTask],
+) -> Result<(), String> {
     let dir = path.parent().unwrap_or(Path::new(""));
     let name = |p: &Path| -> Result<String, String> {
         match (p.parent(), p.file_name().and_then(|n| n.to_str())) {
@@ -120,6 +129,7 @@ pub fn write_tasks(path: &Path, opts: &Options, tasks: &[BlockTask]) -> Result<(
     let file = TaskFile {
         version: TASKS_VERSION,
         options: OptionsRecord::of(opts),
+        layout: layout.tag(),
         tasks: tasks
             .iter()
             .map(|t| {
@@ -149,7 +159,7 @@ pub fn write_tasks(path: &Path, opts: &Options, tasks: &[BlockTask]) -> Result<(
 /// a file over 4 MiB, JSON that is not a task file of this version, more
 /// than 4,096 tasks, a block name that is not a plain file name (a
 /// separator, `..`, empty), a ratio outside [0, 1].
-pub fn read_tasks(path: &Path) -> Result<(Options, Vec<BlockTask>), String> {
+pub fn read_tasks(path: &Path) -> Result<(Options, Layout, Vec<BlockTask>), String> {
     let bad = |what: String| format!("{}: {what}", path.display());
     let len = std::fs::metadata(path)
         .map_err(|e| bad(e.to_string()))?
@@ -174,6 +184,8 @@ pub fn read_tasks(path: &Path) -> Result<(Options, Vec<BlockTask>), String> {
             file.tasks.len()
         )));
     }
+    let layout = Layout::from_tag(&file.layout)
+        .ok_or_else(|| bad(format!("layout {:?}, expected -, or n, c, u", file.layout)))?;
     let dir = path.parent().unwrap_or(Path::new(""));
     let plain = |n: &str| -> Result<PathBuf, String> {
         let ok = !n.is_empty()
@@ -209,7 +221,7 @@ pub fn read_tasks(path: &Path) -> Result<(Options, Vec<BlockTask>), String> {
             })
         })
         .collect::<Result<_, String>>()?;
-    Ok((file.options.options(), tasks))
+    Ok((file.options.options(), layout, tasks))
 }
 
 /// Runs task `index` of the task file `path` ([`read_tasks`], then
@@ -218,7 +230,7 @@ pub fn read_tasks(path: &Path) -> Result<(Options, Vec<BlockTask>), String> {
 /// those of [`read_tasks`] and [`simplify_block`], an index past the
 /// tasks.
 pub fn run_task(path: &Path, index: usize) -> Result<BlockReport, String> {
-    let (opts, tasks) = read_tasks(path)?;
+    let (opts, layout, tasks) = read_tasks(path)?;
     let t = tasks.get(index).ok_or_else(|| {
         format!(
             "{}: task {index}, the file has {}",
@@ -227,14 +239,14 @@ pub fn run_task(path: &Path, index: usize) -> Result<BlockReport, String> {
         )
     })?;
     if t.output.exists() {
-        let faces_out =
-            crate::soup::faces_in(&t.output).map_err(|e| format!("{}: {e}", t.output.display()))?;
+        let faces_out = crate::soup::faces_in(&t.output, layout)
+            .map_err(|e| format!("{}: {e}", t.output.display()))?;
         return Ok(BlockReport {
             faces_in: t.faces,
             faces_out,
         });
     }
-    let r = simplify_block(&t.input, &t.output, t.goal, &opts)?;
+    let r = simplify_block(&t.input, &t.output, t.goal, &opts, layout)?;
     Ok(r)
 }
 
@@ -257,8 +269,13 @@ mod tests {
             goal: Goal::Total(0.25),
             faces: 10,
         }];
-        write_tasks(&path, &opts, &tasks).unwrap();
-        let (o, t) = read_tasks(&path).unwrap();
+        let layout = Layout {
+            colors: true,
+            ..Layout::default()
+        };
+        write_tasks(&path, &opts, layout, &tasks).unwrap();
+        let (o, l, t) = read_tasks(&path).unwrap();
+        assert_eq!(l, layout);
         assert_eq!(t, tasks);
         assert_eq!((o.heap_size, o.max_passes), (7, 9));
         assert_eq!(format!("{:?}", o.weights), format!("{:?}", opts.weights));
@@ -267,10 +284,10 @@ mod tests {
             input: d.path().join("sub").join("x.in"),
             ..tasks[0].clone()
         }];
-        assert!(write_tasks(&path, &opts, &outside).is_err());
+        assert!(write_tasks(&path, &opts, layout, &outside).is_err());
         for name in ["../x.in", "/etc/passwd", "..", "", "a/b"] {
             let json = format!(
-                r#"{{"version":2,"options":{{"max_error":null,"heap_size":1,"normal_weight":0,"color_weight":0,"uv_weight":0,"prune":null,"max_passes":8}},"tasks":[{{"input":{name:?},"output":"o","ratio":0.5,"goal":"interior","faces":1}}]}}"#
+                r#"{{"version":2,"options":{{"max_error":null,"heap_size":1,"normal_weight":0,"color_weight":0,"uv_weight":0,"prune":null,"max_passes":8}},"layout":"-","tasks":[{{"input":{name:?},"output":"o","ratio":0.5,"goal":"interior","faces":1}}]}}"#
             );
             std::fs::write(&path, json).unwrap();
             let e = read_tasks(&path).unwrap_err();

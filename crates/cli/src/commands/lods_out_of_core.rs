@@ -41,8 +41,7 @@ pub fn run(ui: &Ui, a: &LodsArgs, targets: &[Target], opts: &Options, plan: &Pla
     if !a.json {
         ui.status(format!(
             "out of core: {} ({}) needs about {} in core ({} B per face), over --memory {}; \
-             making the chain in blocks (positions only: normals, colours and UVs are dropped; \
-             levels are not measured)",
+             making the chain in blocks (levels are not measured)",
             a.input.display(),
             human_bytes(plan.file_bytes),
             human_bytes(plan.in_core),
@@ -82,9 +81,13 @@ pub fn run(ui: &Ui, a: &LodsArgs, targets: &[Target], opts: &Options, plan: &Pla
             let file = format!("{stem}_lod{}.ply", i + 1);
             let path = a.out.join(&file);
             let (triangles, vertices, estimated, stop) = match l {
-                ChainLevel::Soups { faces, files } => {
+                ChainLevel::Soups {
+                    faces,
+                    layout,
+                    files,
+                } => {
                     progress.phase(&format!("writing {file}"), faces);
-                    let (f, v) = write_soups_ply(files, &path)?;
+                    let (f, v) = write_soups_ply(files, layout, &path)?;
                     progress.advance(faces);
                     (f, v, f32::NAN, "out of core: one block round".to_string())
                 }

@@ -110,7 +110,7 @@ pub struct OutOfCoreArgs {
     /// Memory budget, in 1M..=1P bytes (K, M, G, T, P: powers of 1024; e.g.
     /// 8G, 512M). A binary PLY whose in-core estimate (80 bytes per face)
     /// exceeds it is simplified out of core, in blocks staged beside the
-    /// output (positions only; --target or --ratio), with the in-core
+    /// output (--target or --ratio; normals, colours, UVs kept), with the in-core
     /// error when SIZE is at least 320 bytes per target face. Default: a
     /// third of the machine's memory.
     #[arg(long, value_name = "SIZE", value_parser = value::bytes(MIN_MEMORY, MAX_MEMORY))]
@@ -352,19 +352,15 @@ pub fn out_of_core_plan(
             return Ok(None);
         }
     };
-    let d = AttributeWeights::DEFAULT;
     let refused = [
         (o.max_error.is_some(), "--max-error"),
         (o.prune.is_some(), "--prune"),
-        (o.normal_weight != d.normal, "--normal-weight"),
-        (o.color_weight != d.color, "--color-weight"),
-        (o.uv_weight != d.uv, "--uv-weight"),
     ];
     let refused: Vec<&str> = refused.iter().filter(|r| r.0).map(|r| r.1).collect();
     if !refused.is_empty() {
         return Err(crate::ui::usage(format!(
             "{}: needs about {} in core, over --memory {}, so it would be simplified out of core, \
-             which simplifies to a face budget on positions only and does not honour {}; drop {} \
+             which simplifies to a face budget and does not honour {}; drop {} \
              or give a --memory of at least {} to simplify in core",
             input.display(),
             human_bytes(in_core),
@@ -401,7 +397,7 @@ fn run_out_of_core(
     let staging = lodkit_scale::staging_dir(&a.input, &a.output, &settings);
     ui.status(format!(
         "out of core: {} ({}) needs about {} in core ({} B per face), over --memory {}; \
-         simplifying in blocks (positions only: normals, colours and UVs are dropped)",
+         simplifying in blocks",
         a.input.display(),
         human_bytes(plan.file_bytes),
         human_bytes(plan.in_core),

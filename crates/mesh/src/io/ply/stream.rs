@@ -4,8 +4,11 @@
 //!
 //! [`PlyStream::open`] reads and checks the header only; the vertex
 //! positions and the faces are then read once each, in file order, through
-//! a fixed 1 MiB buffer ([`PlyStream::for_each_position`],
-//! [`PlyStream::for_each_face`]). The same checks as the in-core reader:
+//! a fixed 1 MiB buffer ([`PlyStream::for_each_position`] or
+//! [`PlyStream::for_each_vertex`] with the attributes, then
+//! [`PlyStream::for_each_face`]). Normals, colours and texture
+//! coordinates are found and converted as the in-core reader does
+//! (its property names, colour scaling). The same checks as the in-core reader:
 //! the declared counts must fit in the file (at their smallest record
 //! size), coordinates must be finite, face indices in range; every problem
 //! is a one-line error naming the file. Supported layout: binary (either
@@ -20,9 +23,10 @@ use std::fs::File;
 use std::io::{BufReader, Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use super::header::{self, Encoding, PropertyKind, ScalarType};
+use super::read::{VertexPlan, color_channel, vertex_plan};
 use crate::error::{Error, ParseError, Result};
 use crate::parse_err;
 
@@ -30,6 +34,31 @@ use crate::parse_err;
 const BUFFER: usize = 1 << 20;
 /// The most header bytes read while looking for `end_header`.
 const MAX_HEADER: usize = 1 << 20;
+
+/// Which vertex attributes a streamed file carries besides positions.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct StreamAttributes {
+    /// `nx ny nz`.
+    pub normals: bool,
+    /// `red green blue [alpha]` (or `diffuse_*`).
+    pub colors: bool,
+    /// `u v`, `s t`, `texture_u texture_v` or `texture_s texture_t`.
+    pub uvs: bool,
+}
+
+/// One vertex of [`PlyStream::for_each_vertex`]: attributes the file does
+/// not carry are zero.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StreamVertex {
+    /// Position, object units.
+    pub position: Vec3,
+    /// Normal as stored (not renormalised).
+    pub normal: Vec3,
+    /// sRGB RGBA8 (alpha 255 when the file has none).
+    pub color: [u8; 4],
+    /// Texture coordinates.
+    pub uv: Vec2,
+}
 
 /// An opened binary PLY mesh whose body is read on demand.
 #[derive(Debug)]
@@ -39,8 +68,8 @@ pub struct PlyStream {
     body_start: u64,
     vertex_count: u64,
     vertex_stride: usize,
-    /// Offsets and types of x, y, z in a vertex record.
-    xyz: [(usize, ScalarType); 3],
+    /// Where each attribute sits in a vertex record.
+    plan: VertexPlan,
     face_count: u64,
     /// Per face record: scalar bytes before the list, the list's count and
     /// item types, scalar bytes after it.
@@ -97,21 +126,14 @@ impl PlyStream {
                 "streaming needs vertex records of fixed size (no list property)",
             ))
         })?;
-        let mut xyz = [(0usize, ScalarType::F32); 3];
-        for (k, name) in ["x", "y", "z"].into_iter().enumerate() {
-            let i = v
-                .property(name)
-                .ok_or_else(|| bad(parse_err!("vertex element has no '{name}' property")))?;
-            let PropertyKind::Scalar(t) = v.properties[i].kind else {
-                return Err(bad(parse_err!("vertex property '{name}' is a list")));
-            };
-            if !matches!(t, ScalarType::F32 | ScalarType::F64) {
+        let plan = vertex_plan(v).map_err(bad)?;
+        for (name, slot) in ["x", "y", "z"].iter().zip(plan.position) {
+            if !matches!(slot.ty, ScalarType::F32 | ScalarType::F64) {
                 return Err(bad(parse_err!(
                     "vertex property '{name}' is {}, streaming reads float or double",
-                    t.name()
+                    slot.ty.name()
                 )));
             }
-            xyz[k] = (v.offset_of(i).unwrap_or(0), t);
         }
         let lists: Vec<usize> = (0..fe.properties.len())
             .filter(|&i| matches!(fe.properties[i].kind, PropertyKind::List { .. }))
@@ -143,11 +165,20 @@ impl PlyStream {
             body_start: h.body_start as u64,
             vertex_count: v.count,
             vertex_stride,
-            xyz,
+            plan,
             face_count: fe.count,
             face_layout: (before, count, item, after),
             file_len,
         })
+    }
+
+    /// The vertex attributes the file carries besides positions.
+    pub fn attributes(&self) -> StreamAttributes {
+        StreamAttributes {
+            normals: self.plan.normal.is_some(),
+            colors: self.plan.color.is_some(),
+            uvs: self.plan.uv.is_some(),
+        }
     }
 
     /// Vertices declared in the header.
@@ -193,17 +224,33 @@ impl PlyStream {
     /// truncated file, a non-finite coordinate or one past
     /// [`MAX_COORDINATE`](crate::io::MAX_COORDINATE). Memory: the buffer.
     pub fn for_each_position(&self, mut f: impl FnMut(Vec3)) -> Result<()> {
+        self.vertices(false, |v| f(v.position))
+    }
+
+    /// [`for_each_position`](Self::for_each_position) with the attributes
+    /// of [`attributes`](Self::attributes) (the others are zero), each
+    /// converted as the in-core reader converts it.
+    pub fn for_each_vertex(&self, f: impl FnMut(&StreamVertex)) -> Result<()> {
+        self.vertices(true, f)
+    }
+
+    fn vertices(&self, attributes: bool, mut f: impl FnMut(&StreamVertex)) -> Result<()> {
         let mut r = self.reader(self.body_start)?;
         let mut rec = vec![0u8; self.vertex_stride];
+        let big = self.big_endian;
+        let mut v = StreamVertex::default();
         for i in 0..self.vertex_count {
             if !r.fill(&mut rec) {
                 return Err(self.truncated("vertex"));
             }
-            let mut p = [0.0f32; 3];
-            for (k, &(off, t)) in self.xyz.iter().enumerate() {
-                p[k] = read_scalar(&rec[off..], t, self.big_endian) as f32;
-            }
-            if !p
+            let get = |s: super::read::Slot| read_scalar(&rec[s.offset..], s.ty, big);
+            let vec3 = |s: [super::read::Slot; 3]| {
+                Vec3::new(get(s[0]) as f32, get(s[1]) as f32, get(s[2]) as f32)
+            };
+            v.position = vec3(self.plan.position);
+            if !v
+                .position
+                .to_array()
                 .iter()
                 .all(|c| c.is_finite() && c.abs() <= crate::io::MAX_COORDINATE)
             {
@@ -211,7 +258,20 @@ impl PlyStream {
                     "vertex {i} has a non-finite or out-of-range coordinate"
                 )));
             }
-            f(Vec3::from_array(p));
+            if attributes {
+                if let Some(s) = self.plan.normal {
+                    v.normal = vec3(s);
+                }
+                if let Some((rgb, alpha)) = self.plan.color {
+                    let [r, g, b] = rgb.map(|s| color_channel(get(s), s.ty));
+                    let a = alpha.map_or(255, |s| color_channel(get(s), s.ty));
+                    v.color = [r, g, b, a];
+                }
+                if let Some([s, t]) = self.plan.uv {
+                    v.uv = Vec2::new(get(s) as f32, get(t) as f32);
+                }
+            }
+            f(&v);
         }
         Ok(())
     }
