@@ -45,9 +45,9 @@ impl Numbering {
         mut new: impl FnMut(&Corner) -> std::io::Result<()>,
     ) -> std::io::Result<Vec<u32>> {
         let mut global = Vec::with_capacity(mesh.positions.len());
-        for v in 0..mesh.positions.len() {
+        for (v, &on_border) in border.iter().enumerate() {
             let c = corner(mesh, v as u32);
-            if border[v] {
+            if on_border {
                 let key = self.layout.key(&c);
                 if let Some(&g) = self.shared.get(&key) {
                     global.push(g);

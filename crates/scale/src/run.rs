@@ -9,7 +9,7 @@ use std::time::Instant;
 use crate::block::Goal;
 use crate::partition::{Grid, Writers, block_input, block_output};
 use crate::runner::{BLOCKS_IN_FLIGHT, Runner};
-use crate::soup::{self, Corner, Layout, Welder};
+use crate::soup::{self, Layout, Welder};
 use crate::tasks::BlockTask;
 use glam::Vec3;
 use lodkit_mesh::TriMesh;
@@ -354,12 +354,24 @@ impl<'a> Pipeline<'a> {
                 let t = Instant::now();
                 std::fs::create_dir_all(&r0).map_err(io_err(&r0))?;
                 progress(Event::Phase("reading vertices", s.vertex_count()));
-                let mut table = VertexTable::new(layout, s.vertex_count() as usize);
+                // The vertex table: positions and the layout's attributes.
+                let mut table = Welder::new(layout).finish();
+                let n = s.vertex_count() as usize;
+                table.positions.reserve_exact(n);
+                if let Some(x) = table.normals.as_mut() {
+                    x.reserve_exact(n);
+                }
+                if let Some(x) = table.colors.as_mut() {
+                    x.reserve_exact(n);
+                }
+                if let Some(x) = table.uvs.as_mut() {
+                    x.reserve_exact(n);
+                }
                 let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
                 s.for_each_vertex(|v| {
                     lo = lo.min(v.position);
                     hi = hi.max(v.position);
-                    table.push(v);
+                    soup::push_vertex(&mut table, v);
                     if table.positions.len().is_multiple_of(1 << 20) {
                         progress(Event::Advance(1 << 20));
                     }
@@ -373,7 +385,7 @@ impl<'a> Pipeline<'a> {
                 let mut w = Writers::new(&r0, grid.blocks(), layout);
                 let mut n = 0u64;
                 s.for_each_face(|f| {
-                    let tri = f.map(|i| table.corner(i));
+                    let tri = f.map(|i| soup::corner(&table, i));
                     n += 1;
                     if n.is_multiple_of(1 << 20) {
                         progress(Event::Advance(1 << 20));
@@ -568,51 +580,6 @@ impl<'a> Pipeline<'a> {
             .phases
             .push(("final pass".into(), t.elapsed().as_secs_f64()));
         Ok(out)
-    }
-}
-
-/// The input's vertices while its faces are partitioned: the positions
-/// and the attributes of the layout, no more (12 B per vertex for
-/// positions alone).
-struct VertexTable {
-    positions: Vec<Vec3>,
-    normals: Option<Vec<Vec3>>,
-    colors: Option<Vec<[u8; 4]>>,
-    uvs: Option<Vec<glam::Vec2>>,
-}
-
-impl VertexTable {
-    fn new(layout: Layout, n: usize) -> VertexTable {
-        VertexTable {
-            positions: Vec::with_capacity(n),
-            normals: layout.normals.then(|| Vec::with_capacity(n)),
-            colors: layout.colors.then(|| Vec::with_capacity(n)),
-            uvs: layout.uvs.then(|| Vec::with_capacity(n)),
-        }
-    }
-
-    fn push(&mut self, v: &Corner) {
-        self.positions.push(v.position);
-        if let Some(n) = self.normals.as_mut() {
-            n.push(v.normal);
-        }
-        if let Some(c) = self.colors.as_mut() {
-            c.push(v.color);
-        }
-        if let Some(u) = self.uvs.as_mut() {
-            u.push(v.uv);
-        }
-    }
-
-    /// Vertex `i` (checked against the vertex count by the reader).
-    fn corner(&self, i: u32) -> Corner {
-        let i = i as usize;
-        Corner {
-            position: self.positions[i],
-            normal: self.normals.as_ref().map_or(Vec3::ZERO, |n| n[i]),
-            color: self.colors.as_ref().map_or([0; 4], |c| c[i]),
-            uv: self.uvs.as_ref().map_or(glam::Vec2::ZERO, |u| u[i]),
-        }
     }
 }
 

@@ -224,17 +224,7 @@ impl Welder {
             let next = self.mesh.positions.len() as u32;
             f[k] = *self.map.entry(key).or_insert(next);
             if f[k] == next {
-                let m = &mut self.mesh;
-                m.positions.push(c.position);
-                if let Some(n) = m.normals.as_mut() {
-                    n.push(c.normal);
-                }
-                if let Some(col) = m.colors.as_mut() {
-                    col.push(c.color);
-                }
-                if let Some(uv) = m.uvs.as_mut() {
-                    uv.push(c.uv);
-                }
+                push_vertex(&mut self.mesh, c);
             }
         }
         self.mesh.faces.push(f);
@@ -243,6 +233,20 @@ impl Welder {
     /// The welded mesh.
     pub fn finish(self) -> TriMesh {
         self.mesh
+    }
+}
+
+/// Appends `c` as a vertex of `mesh`, with the attributes `mesh` has.
+pub fn push_vertex(mesh: &mut TriMesh, c: &Corner) {
+    mesh.positions.push(c.position);
+    if let Some(n) = mesh.normals.as_mut() {
+        n.push(c.normal);
+    }
+    if let Some(col) = mesh.colors.as_mut() {
+        col.push(c.color);
+    }
+    if let Some(uv) = mesh.uvs.as_mut() {
+        uv.push(c.uv);
     }
 }
 

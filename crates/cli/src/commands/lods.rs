@@ -85,8 +85,14 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
         ));
     }
     let opts = a.opts.options(Target::Ratio(1.0))?;
+    let stem = a
+        .input
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("mesh")
+        .to_string();
     if let Some(plan) = out_of_core_plan(ui, &a.input, &a.scale, &a.opts)? {
-        return super::lods_out_of_core::run(ui, a, &targets, &opts, &plan);
+        return super::lods_out_of_core::run(ui, a, &stem, &targets, &opts, &plan);
     }
     if a.scale.ray.is_some() {
         ui.status(format!(
@@ -106,12 +112,6 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
                 other.kind()
             ),
         };
-    let stem = a
-        .input
-        .file_stem()
-        .and_then(|s| s.to_str())
-        .unwrap_or("mesh")
-        .to_string();
     let start = Instant::now();
     let json = a.json;
     let reference = lodkit_mesh::metrics::Reference::new(&mesh)

@@ -26,15 +26,16 @@ use crate::ui::{Ui, human_bytes};
 /// says why and with which budget). The staging folder sits in the
 /// output folder and is removed once `lods.json` is written; a failed or
 /// interrupted run keeps it, and the same command resumes from it.
-pub fn run(ui: &Ui, a: &LodsArgs, targets: &[Target], opts: &Options, plan: &Plan) -> Result<()> {
+pub fn run(
+    ui: &Ui,
+    a: &LodsArgs,
+    stem: &str,
+    targets: &[Target],
+    opts: &Options,
+    plan: &Plan,
+) -> Result<()> {
     std::fs::create_dir_all(&a.out)
         .map_err(|e| anyhow::anyhow!("{}: cannot create output directory: {e}", a.out.display()))?;
-    let stem = a
-        .input
-        .file_stem()
-        .and_then(|s| s.to_str())
-        .unwrap_or("mesh")
-        .to_string();
     let settings = format!("lods {targets:?} {opts:?}; memory {}", plan.memory);
     let staging =
         lodkit_scale::staging_dir(&a.input, &a.out.join(format!("{stem}_lods")), &settings);
@@ -157,7 +158,7 @@ pub fn run(ui: &Ui, a: &LodsArgs, targets: &[Target], opts: &Options, plan: &Pla
         }
     })?;
     let glb = format!("{stem}_lods.glb");
-    write_glb(&a.out.join(&glb), &stem, &in_core, a)?;
+    write_glb(&a.out.join(&glb), stem, &in_core, a)?;
     let input_vertices = lodkit_mesh::io::ply::stream::PlyStream::open(&a.input)
         .map_or(0, |s| s.vertex_count() as usize);
     let lods = Lods {
