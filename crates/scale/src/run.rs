@@ -37,6 +37,13 @@ const FINAL_PASS_SHARE: f64 = 0.9;
 /// target: max error 2.6× in core in one straight round, 1.4× this way).
 const SHIFTED_ROUND_BELOW: u64 = 2;
 
+/// Bytes of the partition's vertex cache for a budget of `memory`: an
+/// eighth of it, within 16 MiB..=512 MiB (a scan's faces reach back a few
+/// rows of vertices; 16 MiB holds a million of them).
+fn vertex_cache(memory: u64) -> usize {
+    (memory / 8).clamp(16 << 20, 512 << 20) as usize
+}
+
 /// Faces block round `round` should leave (before its blocks' border
 /// excess) out of `before`, for a final target of `target` in `memory`
 /// bytes: as many as the final in-core pass holds in the budget, never
@@ -107,9 +114,9 @@ pub struct Report {
 }
 
 /// Simplifies the binary PLY mesh `input` to `o.simplify.target` faces
-/// (a ratio applies to the input's triangles) in about `o.memory` bytes,
-/// plus 12 bytes per input vertex while partitioning (the position
-/// table). The blocks stop at what the final in-core pass holds in
+/// (a ratio applies to the input's triangles) in about `o.memory` bytes
+/// whatever the input's size (the partition reads vertices through a
+/// cache of an eighth of the budget, at most 512 MiB). The blocks stop at what the final in-core pass holds in
 /// `o.memory` (at [`IN_CORE_BYTES_PER_FACE`](crate::IN_CORE_BYTES_PER_FACE)),
 /// so it fits too, but for a target that does not fit itself or block
 /// borders (kept to the final pass) that overshoot even after the second
@@ -132,8 +139,7 @@ pub struct Report {
 /// Errors: a message naming the file: an input the stream reader refuses
 /// ([`PlyStream`]), I/O in the staging folder, the simplifier refusing a
 /// block. Cost: linear in the input; disk: 36 bytes per input face
-/// (positions alone; 108 with normals, colours and UVs). Memory while
-/// partitioning: 12 B per input vertex (36 with every attribute).
+/// (positions alone; 108 with normals, colours and UVs).
 pub fn simplify_file(
     input: &Path,
     o: &ScaleOptions,
@@ -354,25 +360,14 @@ impl<'a> Pipeline<'a> {
                 let t = Instant::now();
                 std::fs::create_dir_all(&r0).map_err(io_err(&r0))?;
                 progress(Event::Phase("reading vertices", s.vertex_count()));
-                // The vertex table: positions and the layout's attributes.
-                let mut table = Welder::new(layout).finish();
-                let n = s.vertex_count() as usize;
-                table.positions.reserve_exact(n);
-                if let Some(x) = table.normals.as_mut() {
-                    x.reserve_exact(n);
-                }
-                if let Some(x) = table.colors.as_mut() {
-                    x.reserve_exact(n);
-                }
-                if let Some(x) = table.uvs.as_mut() {
-                    x.reserve_exact(n);
-                }
+                // Pass 1: the bounding box (and every coordinate checked).
                 let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
-                s.for_each_vertex(|v| {
-                    lo = lo.min(v.position);
-                    hi = hi.max(v.position);
-                    soup::push_vertex(&mut table, v);
-                    if table.positions.len().is_multiple_of(1 << 20) {
+                let mut n = 0u64;
+                s.for_each_position(|p| {
+                    lo = lo.min(p);
+                    hi = hi.max(p);
+                    n += 1;
+                    if n.is_multiple_of(1 << 20) {
                         progress(Event::Advance(1 << 20));
                     }
                 })
@@ -383,9 +378,20 @@ impl<'a> Pipeline<'a> {
                 progress(Event::Phase("partitioning faces", faces));
                 let grid = Grid::new(lo, hi, g, 0.0);
                 let mut w = Writers::new(&r0, grid.blocks(), layout);
+                // Pass 2: each face's corners through a bounded vertex
+                // cache, not a table of every vertex (12 B or more per
+                // vertex: 6 GB for a billion triangles), so memory stays
+                // flat in the input's size.
+                let mut vertices = s
+                    .vertex_reader(vertex_cache(o.memory))
+                    .map_err(|e| e.to_string())?;
                 let mut n = 0u64;
                 s.for_each_face(|f| {
-                    let tri = f.map(|i| soup::corner(&table, i));
+                    let tri = [
+                        vertices.get(f[0])?,
+                        vertices.get(f[1])?,
+                        vertices.get(f[2])?,
+                    ];
                     n += 1;
                     if n.is_multiple_of(1 << 20) {
                         progress(Event::Advance(1 << 20));
@@ -394,7 +400,7 @@ impl<'a> Pipeline<'a> {
                         .map_err(|e| lodkit_mesh::Error::Invalid(format!("{}: {e}", r0.display())))
                 })
                 .map_err(|e| e.to_string())?;
-                drop(table);
+                drop(vertices);
                 let counts = w.finish().map_err(io_err(&r0))?;
                 write_manifest(&r0, lo, hi, &counts).map_err(io_err(&r0))?;
                 rep.input_faces = counts.iter().sum();

@@ -243,11 +243,7 @@ impl PlyStream {
             if !r.fill(&mut rec) {
                 return Err(self.truncated("vertex"));
             }
-            let get = |s: super::read::Slot| read_scalar(&rec[s.offset..], s.ty, big);
-            let vec3 = |s: [super::read::Slot; 3]| {
-                Vec3::new(get(s[0]) as f32, get(s[1]) as f32, get(s[2]) as f32)
-            };
-            v.position = vec3(self.plan.position);
+            decode_vertex(&self.plan, &rec, big, attributes, &mut v);
             if !v
                 .position
                 .to_array()
@@ -258,22 +254,38 @@ impl PlyStream {
                     "vertex {i} has a non-finite or out-of-range coordinate"
                 )));
             }
-            if attributes {
-                if let Some(s) = self.plan.normal {
-                    v.normal = vec3(s);
-                }
-                if let Some((rgb, alpha)) = self.plan.color {
-                    let [r, g, b] = rgb.map(|s| color_channel(get(s), s.ty));
-                    let a = alpha.map_or(255, |s| color_channel(get(s), s.ty));
-                    v.color = [r, g, b, a];
-                }
-                if let Some([s, t]) = self.plan.uv {
-                    v.uv = Vec2::new(get(s) as f32, get(t) as f32);
-                }
-            }
             f(&v);
         }
         Ok(())
+    }
+
+    /// Random access to the vertices through a cache of about
+    /// `cache_bytes` (pages of 1 MiB, or of the whole cache when smaller;
+    /// at least one vertex record): what the
+    /// out-of-core partition uses instead of a table of every vertex, so
+    /// its memory does not grow with the input. Pages of whole vertex
+    /// records, direct-mapped; scans write vertices and faces in scan
+    /// order, so a face's vertices are nearly always in the last pages
+    /// read, and any order is still correct (a miss reads one page).
+    /// Read [`for_each_vertex`](Self::for_each_vertex) first: this reader
+    /// does not check coordinates again. Errors: I/O (when opened or on a
+    /// miss).
+    pub fn vertex_reader(&self, cache_bytes: usize) -> Result<VertexReader<'_>> {
+        let per_page = (VERTEX_PAGE.min(cache_bytes) / self.vertex_stride.max(1)).max(1);
+        let page_bytes = per_page * self.vertex_stride;
+        let slots = (cache_bytes / page_bytes.max(1)).clamp(1, 1 << 16);
+        let file = File::open(&self.path).map_err(|e| Error::Io {
+            path: self.path.clone(),
+            source: e,
+        })?;
+        Ok(VertexReader {
+            s: self,
+            file,
+            per_page: per_page as u64,
+            tags: vec![u64::MAX; slots],
+            pages: vec![0u8; slots * page_bytes],
+            page_bytes,
+        })
     }
 
     /// Calls `f` with each triangle in file order (polygons fanned from
@@ -319,6 +331,85 @@ impl PlyStream {
     }
 }
 
+/// Bytes of vertex records per page of a [`VertexReader`] (rounded down
+/// to whole records).
+const VERTEX_PAGE: usize = 1 << 20;
+
+/// Random access to a [`PlyStream`]'s vertices ([`PlyStream::vertex_reader`]).
+pub struct VertexReader<'a> {
+    s: &'a PlyStream,
+    file: File,
+    per_page: u64,
+    /// The page held by each slot (`u64::MAX`: none).
+    tags: Vec<u64>,
+    pages: Vec<u8>,
+    page_bytes: usize,
+}
+
+impl VertexReader<'_> {
+    /// Vertex `i` with the attributes of [`PlyStream::attributes`].
+    /// Errors: an index past the vertex count, I/O.
+    pub fn get(&mut self, i: u32) -> Result<StreamVertex> {
+        let s = self.s;
+        if i as u64 >= s.vertex_count {
+            return Err(s.parse_error(parse_err!(
+                "vertex index {i} but the file has {} vertices",
+                s.vertex_count
+            )));
+        }
+        let page = i as u64 / self.per_page;
+        let slot = (page % self.tags.len() as u64) as usize;
+        let base = slot * self.page_bytes;
+        if self.tags[slot] != page {
+            let first = page * self.per_page;
+            let n = self.per_page.min(s.vertex_count - first) as usize * s.vertex_stride;
+            let at = s.body_start + first * s.vertex_stride as u64;
+            let io = |e: std::io::Error| Error::Io {
+                path: s.path.clone(),
+                source: e,
+            };
+            self.file.seek(SeekFrom::Start(at)).map_err(io)?;
+            self.file
+                .read_exact(&mut self.pages[base..base + n])
+                .map_err(io)?;
+            self.tags[slot] = page;
+        }
+        let off = base + (i as u64 % self.per_page) as usize * s.vertex_stride;
+        let mut v = StreamVertex::default();
+        decode_vertex(
+            &s.plan,
+            &self.pages[off..off + s.vertex_stride],
+            s.big_endian,
+            true,
+            &mut v,
+        );
+        Ok(v)
+    }
+}
+
+/// Decodes the vertex record `rec` with `plan` into `v` (the attributes
+/// too when `attributes`), as the in-core reader converts them.
+fn decode_vertex(plan: &VertexPlan, rec: &[u8], big: bool, attributes: bool, v: &mut StreamVertex) {
+    let get = |s: super::read::Slot| read_scalar(&rec[s.offset..], s.ty, big);
+    let vec3 =
+        |s: [super::read::Slot; 3]| Vec3::new(get(s[0]) as f32, get(s[1]) as f32, get(s[2]) as f32);
+    v.position = vec3(plan.position);
+    if !attributes {
+        return;
+    }
+    if let Some(s) = plan.normal {
+        v.normal = vec3(s);
+    }
+    if let Some((rgb, alpha)) = plan.color {
+        let [r, g, b] = rgb.map(|s| color_channel(get(s), s.ty));
+        let a = alpha.map_or(255, |s| color_channel(get(s), s.ty));
+        v.color = [r, g, b, a];
+    }
+    if let Some([s, t]) = plan.uv {
+        v.uv = Vec2::new(get(s) as f32, get(t) as f32);
+    }
+}
+
 struct Reader {
     inner: BufReader<File>,
 }
@@ -338,4 +429,45 @@ impl Reader {
 /// in range); callers pass buffers of the scalar's size anyway.
 fn read_scalar(b: &[u8], t: ScalarType, big: bool) -> f64 {
     super::sources::decode_scalar(b, t, big).unwrap_or(f64::NAN)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The vertex reader gives every vertex as the sequential pass does,
+    /// in any order, with a cache far smaller than the vertices (every
+    /// page missed and read again), attributes included.
+    #[test]
+    fn random_access_through_a_tiny_cache_matches_the_sequential_pass() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("c.ply");
+        let mut m = crate::shapes::blob_with_seed(2_000, 3);
+        m.colors = Some(
+            (0..m.positions.len())
+                .map(|i| [i as u8, 7, 9, 255])
+                .collect(),
+        );
+        m.uvs = Some(
+            m.positions
+                .iter()
+                .map(|p| glam::Vec2::new(p.x, p.z))
+                .collect(),
+        );
+        crate::io::save_mesh(&path, &m, Default::default()).unwrap();
+        let s = PlyStream::open(&path).unwrap();
+        assert!(s.attributes().colors && s.attributes().uvs && !s.attributes().normals);
+        let mut all = Vec::new();
+        s.for_each_vertex(|v| all.push(*v)).unwrap();
+        assert_eq!(all.len(), m.positions.len());
+        assert_eq!(all[5].color, [5, 7, 9, 255]);
+        // 100 bytes: pages of 4 records of 24 bytes, one slot.
+        let mut r = s.vertex_reader(100).unwrap();
+        let n = all.len() as u32;
+        for k in 0..3 * n {
+            let i = (k.wrapping_mul(2_654_435_761)) % n;
+            assert_eq!(r.get(i).unwrap(), all[i as usize], "vertex {i}");
+        }
+        assert!(r.get(n).is_err());
+    }
 }
