@@ -37,6 +37,13 @@ const FINAL_PASS_SHARE: f64 = 0.9;
 /// target: max error 2.6× in core in one straight round, 1.4× this way).
 const SHIFTED_ROUND_BELOW: u64 = 2;
 
+/// The share of the budget the partition's vertex table may take; an
+/// input with more vertices reads them through a cache instead. A table
+/// is faster: the cache's misses read the file, and at a billion faces
+/// the staging writes evict those pages from the OS cache (partition
+/// 339 s through the cache, 128 s with the table).
+const TABLE_SHARE: f64 = 0.9;
+
 /// Bytes of the partition's vertex cache for a budget of `memory`: an
 /// eighth of it, within 16 MiB..=512 MiB (a scan's faces reach back a few
 /// rows of vertices; 16 MiB holds a million of them).
@@ -115,8 +122,9 @@ pub struct Report {
 
 /// Simplifies the binary PLY mesh `input` to `o.simplify.target` faces
 /// (a ratio applies to the input's triangles) in about `o.memory` bytes
-/// whatever the input's size (the partition reads vertices through a
-/// cache of an eighth of the budget, at most 512 MiB). The blocks stop at what the final in-core pass holds in
+/// whatever the input's size (the partition keeps a table of the
+/// vertices when it takes under 0.9 × the budget, else reads them
+/// through a cache of an eighth of it, at most 512 MiB). The blocks stop at what the final in-core pass holds in
 /// `o.memory` (at [`IN_CORE_BYTES_PER_FACE`](crate::IN_CORE_BYTES_PER_FACE)),
 /// so it fits too, but for a target that does not fit itself or block
 /// borders (kept to the final pass) that overshoot even after the second
@@ -360,12 +368,34 @@ impl<'a> Pipeline<'a> {
                 let t = Instant::now();
                 std::fs::create_dir_all(&r0).map_err(io_err(&r0))?;
                 progress(Event::Phase("reading vertices", s.vertex_count()));
-                // Pass 1: the bounding box (and every coordinate checked).
+                // Pass 1: the bounding box (and every coordinate checked),
+                // and the vertex table when it fits the budget.
+                let table_bytes = s
+                    .vertex_count()
+                    .saturating_mul(layout.corner_bytes() as u64);
+                let mut table = (table_bytes as f64 <= o.memory as f64 * TABLE_SHARE).then(|| {
+                    let mut t = Welder::new(layout).finish();
+                    let n = s.vertex_count() as usize;
+                    t.positions.reserve_exact(n);
+                    if let Some(v) = t.normals.as_mut() {
+                        v.reserve_exact(n);
+                    }
+                    if let Some(v) = t.colors.as_mut() {
+                        v.reserve_exact(n);
+                    }
+                    if let Some(v) = t.uvs.as_mut() {
+                        v.reserve_exact(n);
+                    }
+                    t
+                });
                 let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
                 let mut n = 0u64;
-                s.for_each_position(|p| {
-                    lo = lo.min(p);
-                    hi = hi.max(p);
+                s.for_each_vertex(|v| {
+                    lo = lo.min(v.position);
+                    hi = hi.max(v.position);
+                    if let Some(t) = table.as_mut() {
+                        soup::push_vertex(t, v);
+                    }
                     n += 1;
                     if n.is_multiple_of(1 << 20) {
                         progress(Event::Advance(1 << 20));
@@ -378,20 +408,27 @@ impl<'a> Pipeline<'a> {
                 progress(Event::Phase("partitioning faces", faces));
                 let grid = Grid::new(lo, hi, g, 0.0);
                 let mut w = Writers::new(&r0, grid.blocks(), layout);
-                // Pass 2: each face's corners through a bounded vertex
-                // cache, not a table of every vertex (12 B or more per
-                // vertex: 6 GB for a billion triangles), so memory stays
-                // flat in the input's size.
-                let mut vertices = s
-                    .vertex_reader(vertex_cache(o.memory))
-                    .map_err(|e| e.to_string())?;
+                // Pass 2: each face's corners from the table, or, for an
+                // input whose vertices alone exceed the budget, through a
+                // bounded cache (PlyStream::vertex_reader), so memory stays
+                // within the budget whatever the input's size.
+                let mut cache = match table {
+                    Some(_) => None,
+                    None => Some(
+                        s.vertex_reader(vertex_cache(o.memory))
+                            .map_err(|e| e.to_string())?,
+                    ),
+                };
+                let mut corner = |i: u32| -> lodkit_mesh::Result<soup::Corner> {
+                    match (&table, cache.as_mut()) {
+                        (Some(t), _) => Ok(soup::corner(t, i)),
+                        (None, Some(c)) => c.get(i),
+                        (None, None) => unreachable!("a table or a cache is made above"),
+                    }
+                };
                 let mut n = 0u64;
                 s.for_each_face(|f| {
-                    let tri = [
-                        vertices.get(f[0])?,
-                        vertices.get(f[1])?,
-                        vertices.get(f[2])?,
-                    ];
+                    let tri = [corner(f[0])?, corner(f[1])?, corner(f[2])?];
                     n += 1;
                     if n.is_multiple_of(1 << 20) {
                         progress(Event::Advance(1 << 20));
@@ -400,7 +437,7 @@ impl<'a> Pipeline<'a> {
                         .map_err(|e| lodkit_mesh::Error::Invalid(format!("{}: {e}", r0.display())))
                 })
                 .map_err(|e| e.to_string())?;
-                drop(vertices);
+                drop(table);
                 let counts = w.finish().map_err(io_err(&r0))?;
                 write_manifest(&r0, lo, hi, &counts).map_err(io_err(&r0))?;
                 rep.input_faces = counts.iter().sum();
