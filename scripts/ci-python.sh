@@ -2,7 +2,8 @@
 # The Python package's CI: builds the pylodkit wheel (maturin, abi3) in a
 # virtual environment it makes, installs it, and runs the pytest suite in
 # python/tests (numpy API, errors, mco/pop, trimesh and open3d round trips,
-# a small Ray batch with a broken asset and a resume).
+# a small Ray batch with a broken asset and a resume, `lodkit simplify
+# --ray local` against the single-process bytes).
 #
 # Needs: python3 >= 3.9 with venv, cargo; PyPI reachable. open3d is tried
 # and its tests skip where it does not install. Takes ~4-6 minutes on the
@@ -33,6 +34,11 @@ wheels="$root/target/python-ci/wheels"
 rm -rf "$wheels"
 (cd python && nice -n 10 "$venv/bin/maturin" build --release --quiet --out "$wheels" -i "$vpy")
 "$vpy" -m pip install -q --disable-pip-version-check --force-reinstall --no-deps "$wheels"/pylodkit-*.whl
+
+# The CLI, for the `lodkit simplify --ray` test (already built by the
+# browser checks in .ci/run; a no-op then).
+nice -n 10 cargo build --release --quiet -p lodkit
+export LODKIT_BIN="$root/target/release/lodkit"
 
 # Run from outside the source tree so `import pylodkit` is the installed wheel.
 cd "$root/target/python-ci"

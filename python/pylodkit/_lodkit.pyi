@@ -12,7 +12,8 @@ Example::
     >>> from pylodkit import _lodkit
     >>> d, report = _lodkit.simplify(_lodkit.bunny(), None, 0.1)
 """
-from typing import Any, Dict, List, Optional, Sequence, Tuple
+import os
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -149,3 +150,9 @@ def pop_decode(
     strict: bool = False,
 ) -> Tuple[str, Dict[str, Optional[np.ndarray]], Dict[str, Any]]:
     """``(kind, dict, info)``. Example: ``kind, d, info = pop_decode(data, 5)``"""
+
+def block_task_count(path: Union[str, os.PathLike]) -> int:
+    """Tasks in a block task file. Example: ``n = block_task_count("r0/tasks.json")``"""
+
+def run_block_task(path: Union[str, os.PathLike], index: int) -> Tuple[int, int]:
+    """``(faces_in, faces_out)``. Example: ``run_block_task("r0/tasks.json", 0)``"""

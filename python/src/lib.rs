@@ -27,6 +27,7 @@ mod convert;
 mod errors;
 mod mco;
 mod pop;
+mod scale;
 
 use convert::{json_to_py, mesh_from_py, mesh_to_py, model_from_py, model_to_py};
 use errors::input;
@@ -336,6 +337,8 @@ fn _lodkit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(simplify, m)?)?;
     m.add_function(wrap_pyfunction!(lod_chain, m)?)?;
     m.add_function(wrap_pyfunction!(compare, m)?)?;
+    m.add_function(wrap_pyfunction!(scale::block_task_count, m)?)?;
+    m.add_function(wrap_pyfunction!(scale::run_block_task, m)?)?;
     mco::register(m)?;
     pop::register(m)?;
     m.add("MAX_SAMPLES", MAX_SAMPLES)?;

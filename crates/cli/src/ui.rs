@@ -449,6 +449,30 @@ pub mod value {
         }
     }
 
+    /// A Ray address for `--ray`: `local`, `auto`, or `HOST:PORT` (a
+    /// `ray://` prefix allowed) — checked here so a typo is a usage error,
+    /// not a failed cluster start minutes later.
+    pub fn ray_address(s: &str) -> Result<String, String> {
+        let bad = || {
+            format!(
+                "expected local, auto or HOST:PORT (a running Ray cluster's address), got {s:?}"
+            )
+        };
+        if s == "local" || s == "auto" {
+            return Ok(s.to_string());
+        }
+        let hp = s.strip_prefix("ray://").unwrap_or(s);
+        let (host, port) = hp.rsplit_once(':').ok_or_else(bad)?;
+        let host_ok = !host.is_empty()
+            && host
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || ".-_[]:".contains(c));
+        match port.parse::<u16>() {
+            Ok(p) if p > 0 && host_ok => Ok(s.to_string()),
+            _ => Err(bad()),
+        }
+    }
+
     /// `n` bytes in the largest unit of [`bytes`] that divides it (`1M`,
     /// `1P`), else in bytes.
     fn short(n: u64) -> String {

@@ -256,3 +256,106 @@ fn a_budget_too_small_for_in_core_quality_says_so() {
     let off = (mesh_at(&out).faces.len() as f64 - 10086.0).abs() / 10086.0;
     assert!(off <= 0.005, "{err}");
 }
+
+#[test]
+fn ray_without_pylodkit_fails_in_one_line_before_any_block() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = blob(dir.path());
+    let out = dir.path().join("o.ply");
+    // A bad address is a usage error.
+    let o = simplify(
+        &input,
+        &out,
+        &["--ratio", "0.1", "--memory", "1M", "--ray", "nowhere"],
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("local, auto or HOST:PORT"),
+        "{}",
+        stderr(&o)
+    );
+    // A Python that is not there: exit 1, one error line, nothing staged.
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_lodkit"))
+        .args(["simplify", &input, "-o", out.to_str().unwrap()])
+        .args(["--ratio", "0.1", "--memory", "1M", "--ray", "local"])
+        .env("LODKIT_PYTHON", "/nonexistent/python3")
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    let errors: Vec<&str> = err.lines().filter(|l| l.contains("error")).collect();
+    assert_eq!(errors.len(), 1, "{err}");
+    assert!(
+        errors[0].contains("--ray") && errors[0].contains("LODKIT_PYTHON"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    assert!(
+        staging_left(dir.path()).is_empty(),
+        "{:?}",
+        staging_left(dir.path())
+    );
+}
+
+#[test]
+fn lods_over_the_budget_make_big_levels_out_of_core_and_the_rest_in_core() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("blob.ply");
+    lodkit_mesh::shapes::write_blob_ply(&path, 60_000, 3).unwrap();
+    let input = path.display().to_string();
+    let run = |out: &Path| {
+        let o = lodkit(&[
+            "lods",
+            &input,
+            "--out",
+            out.to_str().unwrap(),
+            "--memory",
+            "1M",
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let err = stderr(&o);
+        assert!(err.contains("out of core:"), "{err}");
+        let json: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("lods.json")).unwrap()).unwrap();
+        json
+    };
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    let json = run(&a);
+    let levels = json["levels"].as_array().unwrap();
+    assert_eq!(levels.len(), 6);
+    // The final pass holds 0.9 × 1 MiB / 80 B = 11.8 k faces: levels 1
+    // and 2 (30 k, 15 k) are made out of core, the rest in core.
+    let stops: Vec<&str> = levels.iter().map(|l| l["stop"].as_str().unwrap()).collect();
+    assert!(
+        stops[..2].iter().all(|s| s.starts_with("out of core")),
+        "{stops:?}"
+    );
+    assert!(
+        stops[2..].iter().all(|s| *s == "reached the target"),
+        "{stops:?}"
+    );
+    for l in levels {
+        let (t, n) = (
+            l["target_triangles"].as_u64().unwrap(),
+            l["triangles"].as_u64().unwrap(),
+        );
+        assert!((n as f64 - t as f64).abs() <= 0.005 * t as f64, "{l}");
+        assert!(l["measured_mean_error"].is_null());
+        let m = mesh_at(&a.join(l["file"].as_str().unwrap()));
+        assert_eq!(m.faces.len() as u64, n);
+    }
+    assert!(a.join("blob_lods.glb").is_file());
+    assert!(staging_left(&a).is_empty(), "{:?}", staging_left(&a));
+    // Deterministic: a second run writes the same bytes.
+    run(&b);
+    for f in std::fs::read_dir(&a).unwrap() {
+        let name = f.unwrap().file_name();
+        if name != "lods.json" {
+            assert_eq!(
+                std::fs::read(a.join(&name)).unwrap(),
+                std::fs::read(b.join(&name)).unwrap(),
+                "{name:?}"
+            );
+        }
+    }
+}

@@ -23,7 +23,7 @@ use lodkit_mesh::TriMesh;
 use lodkit_mesh::topology::edge_multiplicities;
 use lodkit_simplify::{Options, Simplifier, Target};
 
-use crate::soup::{self, Welder};
+use crate::soup::{self, Layout, Welder};
 
 /// What [`simplify_block`] did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -34,7 +34,31 @@ pub struct BlockReport {
     pub faces_out: u64,
 }
 
-/// Simplifies the soup `input` to `ratio` of its faces (rounded up) with
+/// How far a block goes ([`simplify_block`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Goal {
+    /// `⌈ratio × (faces − B)⌉ + B`, `B` the block's border vertices: the
+    /// interior ends at the density an in-core run gives it and the
+    /// border's excess is left to a later pass (the block rounds before
+    /// a final in-core pass).
+    Interior(f64),
+    /// `⌈ratio × faces⌉`, but at least `B`: the round's total is `ratio`
+    /// of its input (the out-of-core levels of a chain, which are outputs
+    /// themselves; with blocks of millions of faces the border is well
+    /// under 1 % of a block, so the interior's extra share is small).
+    Total(f64),
+}
+
+impl Goal {
+    /// The ratio, whichever the rule.
+    pub fn ratio(self) -> f64 {
+        match self {
+            Goal::Interior(r) | Goal::Total(r) => r,
+        }
+    }
+}
+
+/// Simplifies the soup `input` to `goal` with
 /// `opts` (its target is replaced; `lock_border` forced on, `fill_holes` off) and writes the
 /// soup `output` atomically. Deterministic: the same file and options give
 /// the same bytes on any machine. Errors: I/O, or the simplifier refusing
@@ -43,16 +67,23 @@ pub struct BlockReport {
 pub fn simplify_block(
     input: &Path,
     output: &Path,
-    ratio: f64,
+    goal: Goal,
     opts: &Options,
+    layout: Layout,
 ) -> Result<BlockReport, String> {
-    let mut w = Welder::default();
-    soup::for_each(input, |t| w.add(t)).map_err(|e| format!("{}: {e}", input.display()))?;
+    let mut w = Welder::new(layout);
+    soup::for_each(input, layout, |t| w.add(t)).map_err(|e| format!("{}: {e}", input.display()))?;
     let mesh = w.finish();
     let faces_in = mesh.faces.len() as u64;
     let border = border_vertices(&mesh) as u64;
-    let free = faces_in.saturating_sub(border) as f64;
-    let target = ((free * ratio.clamp(0.0, 1.0)).ceil() as u64 + border).min(faces_in) as usize;
+    let target = match goal {
+        Goal::Interior(ratio) => {
+            let free = faces_in.saturating_sub(border) as f64;
+            (free * ratio.clamp(0.0, 1.0)).ceil() as u64 + border
+        }
+        Goal::Total(ratio) => ((faces_in as f64 * ratio.clamp(0.0, 1.0)).ceil() as u64).max(border),
+    }
+    .min(faces_in) as usize;
     let o = Options {
         target: Target::Faces(target),
         lock_border: true,
@@ -64,7 +95,8 @@ pub fn simplify_block(
     let out = Simplifier::new()
         .simplify(&mesh, &o)
         .map_err(|e| format!("{}: {e}", input.display()))?;
-    soup::write_mesh(output, &out.mesh).map_err(|e| format!("{}: {e}", output.display()))?;
+    soup::write_mesh(output, layout, &out.mesh)
+        .map_err(|e| format!("{}: {e}", output.display()))?;
     Ok(BlockReport {
         faces_in,
         faces_out: out.mesh.faces.len() as u64,
@@ -72,17 +104,22 @@ pub fn simplify_block(
 }
 
 /// Vertices on a border edge (an edge of exactly one face) of `mesh`:
-/// the vertices `lock_border` keeps. From the sorted edge list of
-/// [`edge_multiplicities`], so the count is the same on every run.
+/// the vertices `lock_border` keeps.
 fn border_vertices(mesh: &TriMesh) -> usize {
-    let mut ends: Vec<u32> = edge_multiplicities(mesh)
-        .into_iter()
-        .filter(|e| e.count == 1)
-        .flat_map(|e| [e.a, e.b])
-        .collect();
-    ends.sort_unstable();
-    ends.dedup();
-    ends.len()
+    border_flags(mesh).iter().filter(|&&b| b).count()
+}
+
+/// Per vertex of `mesh`, whether it is on a border edge (an edge of
+/// exactly one face), from [`edge_multiplicities`].
+pub(crate) fn border_flags(mesh: &TriMesh) -> Vec<bool> {
+    let mut flags = vec![false; mesh.positions.len()];
+    for e in edge_multiplicities(mesh) {
+        if e.count == 1 {
+            flags[e.a as usize] = true;
+            flags[e.b as usize] = true;
+        }
+    }
+    flags
 }
 
 #[cfg(test)]

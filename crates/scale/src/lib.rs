@@ -15,9 +15,13 @@
 //! | item | what it does |
 //! |---|---|
 //! | [`simplify_file`] | a binary PLY file to a simplified [`TriMesh`](lodkit_mesh::TriMesh) in about `memory` bytes |
+//! | [`lod_chain_file`] | a binary PLY file to an LOD chain in about `memory` bytes: levels too big for memory as block soups, the rest in core |
+//! | [`write_soups_ply`] | a level's block soups to one welded binary PLY, streaming |
 //! | [`needs_out_of_core`] | whether a file would not fit the in-core path in `memory` |
 //! | [`quality_memory`] | the budget from which the result matches the in-core error |
-//! | [`simplify_block`] | one block (the Ray task) |
+//! | [`simplify_block`] | one block |
+//! | [`Runner`] | where the blocks run: this process's threads, or Ray tasks (`pylodkit.blocks`) |
+//! | [`write_tasks`], [`read_tasks`], [`run_task`] | a round's blocks as a task file, and one task run from it (what a Ray worker does) |
 //! | [`staging_dir`] | the resumable staging folder for an input, output and options |
 //! | [`finished_blocks`] | blocks an interrupted run left done in a staging folder |
 //! | [`default_memory`] | the default budget: a third of `MemTotal` |
@@ -26,14 +30,20 @@
 #![forbid(unsafe_code)]
 
 mod block;
+mod level_ply;
 mod partition;
 mod run;
+mod runner;
 pub mod soup;
 mod staging;
+mod tasks;
 
-pub use block::{BlockReport, simplify_block};
-pub use run::{Event, Report, ScaleOptions, simplify_file};
+pub use block::{BlockReport, Goal, simplify_block};
+pub use level_ply::write_soups_ply;
+pub use run::{ChainLevel, Event, Report, ScaleOptions, lod_chain_file, simplify_file};
+pub use runner::Runner;
 pub use staging::{default_memory, finished_blocks, staging_dir};
+pub use tasks::{BlockTask, read_tasks, run_task, write_tasks};
 
 /// Bytes per input face the in-core path needs, about: the file's share
 /// (a face record and half a vertex, 19 B), the mesh (18 B), the

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 
-use crate::soup;
+use crate::soup::{self, Corner, Layout};
 
 /// The grid of one round.
 #[derive(Debug, Clone, Copy)]
@@ -44,8 +44,8 @@ impl Grid {
     }
 
     /// The block of a face (by its centroid; NaN-free input).
-    pub fn block_of(&self, t: &[Vec3; 3]) -> usize {
-        let c = (t[0] + t[1] + t[2]) / 3.0;
+    pub fn block_of(&self, t: &[Corner; 3]) -> usize {
+        let c = (t[0].position + t[1].position + t[2].position) / 3.0;
         let g = self.g as i64;
         let axis = |x: f32| -> i64 {
             let k = (x + self.shift).floor() as i64;
@@ -59,6 +59,7 @@ impl Grid {
 /// Per-block soup writers of one round, opened on first use.
 pub struct Writers {
     dir: PathBuf,
+    layout: Layout,
     files: Vec<Option<BufWriter<File>>>,
     /// Faces written per block.
     pub counts: Vec<u64>,
@@ -75,24 +76,25 @@ pub fn block_output(dir: &Path, b: usize) -> PathBuf {
 }
 
 impl Writers {
-    /// Writers for `blocks` blocks in `dir` (which must exist).
-    pub fn new(dir: &Path, blocks: usize) -> Writers {
+    /// Writers for `blocks` blocks of `layout` in `dir` (which must exist).
+    pub fn new(dir: &Path, blocks: usize, layout: Layout) -> Writers {
         Writers {
             dir: dir.to_path_buf(),
+            layout,
             files: (0..blocks).map(|_| None).collect(),
             counts: vec![0; blocks],
         }
     }
 
     /// Appends face `t` to block `b`.
-    pub fn put(&mut self, b: usize, t: [Vec3; 3]) -> std::io::Result<()> {
+    pub fn put(&mut self, b: usize, t: &[Corner; 3]) -> std::io::Result<()> {
         if self.files[b].is_none() {
             let f = File::create(block_input(&self.dir, b))?;
             self.files[b] = Some(BufWriter::with_capacity(1 << 16, f));
         }
         self.counts[b] += 1;
         match self.files[b].as_mut() {
-            Some(w) => soup::put(w, t),
+            Some(w) => soup::put(w, self.layout, t),
             None => unreachable!("opened above"),
         }
     }

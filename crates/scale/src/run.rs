@@ -6,15 +6,15 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use crate::block::Goal;
+use crate::partition::{Grid, Writers, block_input, block_output};
+use crate::runner::{BLOCKS_IN_FLIGHT, Runner};
+use crate::soup::{self, Layout, Welder};
+use crate::tasks::BlockTask;
 use glam::Vec3;
 use lodkit_mesh::TriMesh;
 use lodkit_mesh::io::ply::stream::PlyStream;
-use lodkit_simplify::{Options, Simplifier, Target};
-use rayon::prelude::*;
-
-use crate::block::simplify_block;
-use crate::partition::{Grid, Writers, block_input, block_output};
-use crate::soup::{self, Welder};
+use lodkit_simplify::{Options, Simplified, Simplifier, Target};
 
 /// Bytes per block face while a block is simplified: the soup welded
 /// (12 B per face, 12 per vertex, the weld map), the simplifier's
@@ -22,11 +22,6 @@ use crate::soup::{self, Welder};
 const BLOCK_BYTES_PER_FACE: u64 = 100;
 /// Most blocks per axis (at most 512 files open while partitioning).
 const MAX_GRID: u32 = 8;
-/// Blocks simplified at once, at most: the budget is shared among this
-/// many, whatever the thread count, so the grid (and so the output) depends
-/// on `--memory` alone; a machine with more threads runs this many blocks
-/// at a time.
-const BLOCKS_IN_FLIGHT: u64 = 4;
 
 /// The block rounds aim at this share of what the final pass holds in
 /// the budget: a block's border excess (`block.rs`) comes on top of its
@@ -41,6 +36,20 @@ const FINAL_PASS_SHARE: f64 = 0.9;
 /// (2M-face blob at 10 % in 16 MiB, the final pass holding 1.05× the
 /// target: max error 2.6× in core in one straight round, 1.4× this way).
 const SHIFTED_ROUND_BELOW: u64 = 2;
+
+/// The share of the budget the partition's vertex table may take; an
+/// input with more vertices reads them through a cache instead. A table
+/// is faster: the cache's misses read the file, and at a billion faces
+/// the staging writes evict those pages from the OS cache (partition
+/// 339 s through the cache, 128 s with the table).
+const TABLE_SHARE: f64 = 0.9;
+
+/// Bytes of the partition's vertex cache for a budget of `memory`: an
+/// eighth of it, within 16 MiB..=512 MiB (a scan's faces reach back a few
+/// rows of vertices; 16 MiB holds a million of them).
+fn vertex_cache(memory: u64) -> usize {
+    (memory / 8).clamp(16 << 20, 512 << 20) as usize
+}
 
 /// Faces block round `round` should leave (before its blocks' border
 /// excess) out of `before`, for a final target of `target` in `memory`
@@ -77,6 +86,8 @@ pub struct ScaleOptions {
     pub memory: u64,
     /// The staging folder (created; the caller removes it).
     pub staging: PathBuf,
+    /// Where the blocks run; the result is the same either way.
+    pub runner: Runner,
 }
 
 /// Progress of [`simplify_file`].
@@ -110,9 +121,10 @@ pub struct Report {
 }
 
 /// Simplifies the binary PLY mesh `input` to `o.simplify.target` faces
-/// (a ratio applies to the input's triangles) in about `o.memory` bytes,
-/// plus 12 bytes per input vertex while partitioning (the position
-/// table). The blocks stop at what the final in-core pass holds in
+/// (a ratio applies to the input's triangles) in about `o.memory` bytes
+/// whatever the input's size (the partition keeps a table of the
+/// vertices when it takes under 0.9 × the budget, else reads them
+/// through a cache of an eighth of it, at most 512 MiB). The blocks stop at what the final in-core pass holds in
 /// `o.memory` (at [`IN_CORE_BYTES_PER_FACE`](crate::IN_CORE_BYTES_PER_FACE)),
 /// so it fits too, but for a target that does not fit itself or block
 /// borders (kept to the final pass) that overshoot even after the second
@@ -126,188 +138,492 @@ pub struct Report {
 /// expected within 1.1× (mean) and 1.2× (max) of the in-core path's
 /// (measured, not proven); with less, coarser. Deterministic: blocks are independent and merged in block
 /// order, so the result does not depend on thread count or scheduling
-/// (nor on whether blocks ran here or as Ray tasks). Positions only:
-/// normals, colours and UVs are not carried through the blocks.
+/// (nor on whether blocks ran here or as Ray tasks). Normals, colours
+/// and UVs the file carries (as the in-core PLY reader finds them) go
+/// through the blocks with each corner and are simplified as in core
+/// (`o.simplify.weights`); corners that differ in an attribute stay
+/// apart (seams).
 ///
 /// Errors: a message naming the file: an input the stream reader refuses
 /// ([`PlyStream`]), I/O in the staging folder, the simplifier refusing a
-/// block. Cost: linear in the input; disk: 36 bytes per input face.
+/// block. Cost: linear in the input; disk: 36 bytes per input face
+/// (positions alone; 108 with normals, colours and UVs).
 pub fn simplify_file(
     input: &Path,
     o: &ScaleOptions,
     progress: &(dyn Fn(Event) + Sync),
 ) -> Result<(TriMesh, Report), String> {
-    let s = PlyStream::open(input).map_err(|e| e.to_string())?;
-    let io = |p: &Path| {
-        let p = p.to_path_buf();
-        move |e: std::io::Error| format!("{}: {e}", p.display())
-    };
-    std::fs::create_dir_all(&o.staging).map_err(io(&o.staging))?;
-    let mut rep = Report::default();
-    let faces = s.face_records();
-    let block_faces = (o.memory / (BLOCK_BYTES_PER_FACE * BLOCKS_IN_FLIGHT)).max(256);
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(rayon::current_num_threads().clamp(1, BLOCKS_IN_FLIGHT as usize))
-        .build()
-        .map_err(|e| format!("cannot start the block threads: {e}"))?;
-    let blocks = faces.div_ceil(block_faces).max(2);
-    let g = ((blocks as f64).cbrt().ceil() as u32).clamp(2, MAX_GRID);
+    let mut p = Pipeline::start(input, o, progress)?;
+    let target = o.simplify.target.faces(p.rep.input_faces as usize) as u64;
+    let out = p.reduce_then_final_pass(target)?;
+    p.rep.last = Some(out.report);
+    Ok((out.mesh, p.rep))
+}
 
-    // Round 0: read positions, cut the faces into blocks.
-    let r0 = o.staging.join("r0");
-    let (min, max) = match read_manifest(&r0) {
-        Some((min, max, counts)) => {
-            rep.input_faces = counts.iter().sum();
-            (min, max)
-        }
-        None => {
-            let t = Instant::now();
-            std::fs::create_dir_all(&r0).map_err(io(&r0))?;
-            progress(Event::Phase("reading vertices", s.vertex_count()));
-            let mut pos = Vec::with_capacity(s.vertex_count() as usize);
-            let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
-            s.for_each_position(|p| {
-                lo = lo.min(p);
-                hi = hi.max(p);
-                pos.push(p);
-                if pos.len().is_multiple_of(1 << 20) {
-                    progress(Event::Advance(1 << 20));
-                }
-            })
-            .map_err(|e| e.to_string())?;
-            rep.phases
-                .push(("read vertices".into(), t.elapsed().as_secs_f64()));
-            let t = Instant::now();
-            progress(Event::Phase("partitioning faces", faces));
-            let grid = Grid::new(lo, hi, g, 0.0);
-            let mut w = Writers::new(&r0, grid.blocks());
-            let mut n = 0u64;
-            s.for_each_face(|f| {
-                let tri = f.map(|i| pos[i as usize]);
-                n += 1;
-                if n.is_multiple_of(1 << 20) {
-                    progress(Event::Advance(1 << 20));
-                }
-                w.put(grid.block_of(&tri), tri)
-                    .map_err(|e| lodkit_mesh::Error::Invalid(format!("{}: {e}", r0.display())))
-            })
-            .map_err(|e| e.to_string())?;
-            drop(pos);
-            let counts = w.finish().map_err(io(&r0))?;
-            write_manifest(&r0, lo, hi, &counts).map_err(io(&r0))?;
-            rep.input_faces = counts.iter().sum();
-            rep.phases
-                .push(("partition".into(), t.elapsed().as_secs_f64()));
-            (lo, hi)
-        }
-    };
-    rep.bytes_read += s.file_len();
-    let target = o.simplify.target.faces(rep.input_faces as usize) as u64;
+/// One level of [`lod_chain_file`], as it is made.
+#[derive(Debug)]
+pub enum ChainLevel<'a> {
+    /// A level too big for the final in-core pass: the soup files whose
+    /// faces together make it (write it with
+    /// [`write_soups_ply`](crate::write_soups_ply) before returning: the
+    /// files are gone once the next level is made).
+    Soups {
+        /// Faces in all of them.
+        faces: u64,
+        /// Their corners' attributes.
+        layout: Layout,
+        /// The block outputs, in block order.
+        files: &'a [PathBuf],
+    },
+    /// A level an interrupted earlier run of the same job already handed
+    /// over (its blocks are gone); its faces.
+    Resumed {
+        /// Faces of the level as it was made.
+        faces: u64,
+    },
+    /// A level made in core (the final pass, then the in-core chain).
+    Mesh {
+        /// The level.
+        mesh: &'a TriMesh,
+        /// The simplifier's report of it (its estimated error covers the
+        /// in-core passes only).
+        report: &'a lodkit_simplify::LevelReport,
+    },
+}
 
-    // Block rounds: round 0 on the first grid; round 1, on the grid shifted
-    // by half a block, only if the result still does not fit in memory.
-    let mut dir = r0;
-    let mut round = 0u32;
-    let mut total;
-    loop {
-        let (_, _, counts) = read_manifest(&dir)
-            .ok_or_else(|| format!("{}: staging manifest unreadable", dir.display()))?;
-        let before: u64 = counts.iter().sum();
-        let goal = round_goal(before, target, o.memory, round);
-        let ratio = if before == 0 {
-            1.0
-        } else {
-            goal as f64 / before as f64
-        };
-        let todo: Vec<usize> = (0..counts.len()).filter(|&b| counts[b] > 0).collect();
-        let t = Instant::now();
-        progress(Event::Phase(
-            &format!("simplifying blocks (round {})", round + 1),
-            before,
-        ));
-        let done: Vec<Result<(u64, bool), String>> = pool.install(|| {
-            todo.par_iter()
-                .map(|&b| {
-                    let out = block_output(&dir, b);
-                    if out.exists() {
-                        progress(Event::Advance(counts[b]));
-                        return soup::faces_in(&out).map(|n| (n, true)).map_err(io(&out));
-                    }
-                    let r = simplify_block(&block_input(&dir, b), &out, ratio, &o.simplify)?;
-                    let _ = std::fs::remove_file(block_input(&dir, b));
-                    progress(Event::Advance(counts[b]));
-                    Ok((r.faces_out, false))
-                })
-                .collect()
-        });
-        total = 0;
-        for r in done {
-            let (n, resumed) = r?;
-            total += n;
-            rep.resumed_blocks += resumed as usize;
-        }
-        rep.bytes_read += before * soup::FACE_BYTES;
-        rep.bytes_written += (before + total) * soup::FACE_BYTES;
-        rep.round_faces.push(total);
-        rep.round_blocks.push(todo.len());
-        rep.phases.push((
-            format!("blocks round {}", round + 1),
-            t.elapsed().as_secs_f64(),
-        ));
-        if round == 1 || total * crate::IN_CORE_BYTES_PER_FACE <= o.memory {
+/// An LOD chain of the binary PLY mesh `input` in about `o.memory` bytes:
+/// one level per target of `targets` (ratios apply to the input's
+/// triangles; a target over the previous level's repeats it), each made
+/// from the previous one, handed to `on_level(i, level)` in order.
+///
+/// Levels over 0.9 × what the final in-core pass holds in `o.memory` (80
+/// B per face) are made out of core, one block round each on a grid
+/// shifted by half a block from the previous round's (so no cut stays
+/// locked for two levels), and handed over as soup files
+/// ([`ChainLevel::Soups`]); the first level that fits is made as
+/// [`simplify_file`] makes its result (block rounds down to what the final
+/// pass holds, then the final in-core pass to the target), and the
+/// levels after it by the in-core chain from it ([`ChainLevel::Mesh`]).
+///
+/// Guarantees: in-core levels as [`simplify_file`]; an out-of-core level
+/// has its target plus the excess of the block borders it had to keep
+/// (`(1 − ratio)` of each block's border vertices: about 0.1 % of a
+/// 500 M-face level in 64 blocks); blocks weld back crack-free; the same
+/// input, options and budget give the same levels, wherever the blocks
+/// run. Resumable as [`simplify_file`]: a rerun redoes no finished block
+/// and hands over a level an earlier run finished as
+/// [`ChainLevel::Resumed`]. Errors: those of [`simplify_file`], and the
+/// first error `on_level` returns. Cost: linear in the input and in each
+/// level; disk: 36 B per face of the largest level (more with
+/// attributes, as [`simplify_file`]), twice.
+pub fn lod_chain_file(
+    input: &Path,
+    targets: &[Target],
+    o: &ScaleOptions,
+    progress: &(dyn Fn(Event) + Sync),
+    on_level: &mut dyn FnMut(usize, ChainLevel) -> Result<(), String>,
+) -> Result<Report, String> {
+    let mut p = Pipeline::start(input, o, progress)?;
+    let n = p.rep.input_faces;
+    let holds = o.memory / crate::IN_CORE_BYTES_PER_FACE;
+    let fits = |t: u64| (t as f64) <= holds as f64 * FINAL_PASS_SHARE;
+    let mut previous = n;
+    let mut i = 0;
+    while i < targets.len() {
+        let t = (targets[i].faces(n as usize) as u64).min(previous);
+        if fits(t) {
             break;
         }
-        // Re-partition the outputs on the shifted grid.
+        // Level i out of core: one block round to `t`.
+        let round = p.round;
         let next = o.staging.join(format!("r{}", round + 1));
+        if let Some((_, _, counts)) = read_manifest(&next) {
+            // An earlier run handed this level over and moved on.
+            previous = counts.iter().sum();
+            on_level(i, ChainLevel::Resumed { faces: previous })?;
+            p.current = None;
+            p.current_faces = previous;
+            p.round += 1;
+            i += 1;
+            continue;
+        }
+        p.prepare_round()?;
+        let ratio = if p.current_faces == 0 {
+            1.0
+        } else {
+            t as f64 / p.current_faces as f64
+        };
+        let label = format!("level {} out of core", i + 1);
+        let (faces, files) = p.block_round(Goal::Total(ratio), &label)?;
+        on_level(
+            i,
+            ChainLevel::Soups {
+                faces,
+                layout: p.layout,
+                files: &files,
+            },
+        )?;
+        previous = faces;
+        p.round += 1;
+        i += 1;
+    }
+    if i == targets.len() {
+        return Ok(p.rep);
+    }
+    // The first level that fits: as simplify_file, then the rest in core.
+    let first = (targets[i].faces(n as usize) as u64).min(previous);
+    let out = p.reduce_then_final_pass(first)?;
+    on_level(
+        i,
+        ChainLevel::Mesh {
+            mesh: &out.mesh,
+            report: &out.report,
+        },
+    )?;
+    let rest: Vec<Target> = targets[i + 1..]
+        .iter()
+        .map(|t| Target::Faces(t.faces(n as usize)))
+        .collect();
+    if !rest.is_empty() {
+        let t = Instant::now();
+        progress(Event::Phase("in-core levels", out.mesh.faces.len() as u64));
+        let levels = Simplifier::new()
+            .lod_chain(&out.mesh, &o.simplify, &rest)
+            .map_err(|e| format!("{}: {e}", input.display()))?;
+        progress(Event::Advance(out.mesh.faces.len() as u64));
+        for (k, l) in levels.iter().enumerate() {
+            on_level(
+                i + 1 + k,
+                ChainLevel::Mesh {
+                    mesh: &l.mesh,
+                    report: &l.report,
+                },
+            )?;
+        }
+        p.rep
+            .phases
+            .push(("in-core levels".into(), t.elapsed().as_secs_f64()));
+    }
+    p.rep.last = Some(out.report);
+    Ok(p.rep)
+}
+
+/// The staged pipeline's state: the input partitioned into round 0, then
+/// rounds `r1`, `r2`, … each on the grid shifted by half a block from the
+/// one before.
+struct Pipeline<'a> {
+    input: &'a Path,
+    o: &'a ScaleOptions,
+    progress: &'a (dyn Fn(Event) + Sync),
+    rep: Report,
+    /// The bounding box of the input and the blocks per axis.
+    min: Vec3,
+    max: Vec3,
+    g: u32,
+    /// The attributes the input carries, through every soup.
+    layout: Layout,
+    /// The round whose folder holds (or will hold) the next block inputs.
+    round: u32,
+    /// The soup files holding the current mesh when they are the outputs
+    /// of the previous round (None: the current round's inputs hold it).
+    current: Option<(PathBuf, Vec<usize>)>,
+    /// Faces of the current mesh.
+    current_faces: u64,
+}
+
+fn io_err(p: &Path) -> impl Fn(std::io::Error) -> String + use<> {
+    let p = p.to_path_buf();
+    move |e| format!("{}: {e}", p.display())
+}
+
+impl<'a> Pipeline<'a> {
+    /// Reads and partitions `input` into round 0 (or finds an earlier
+    /// run's partition in the staging folder).
+    fn start(
+        input: &'a Path,
+        o: &'a ScaleOptions,
+        progress: &'a (dyn Fn(Event) + Sync),
+    ) -> Result<Pipeline<'a>, String> {
+        let s = PlyStream::open(input).map_err(|e| e.to_string())?;
+        o.runner.check()?;
+        std::fs::create_dir_all(&o.staging).map_err(io_err(&o.staging))?;
+        let mut rep = Report::default();
+        let faces = s.face_records();
+        let a = s.attributes();
+        let layout = Layout {
+            normals: a.normals,
+            colors: a.colors,
+            uvs: a.uvs,
+        };
+        let block_faces = (o.memory / (BLOCK_BYTES_PER_FACE * BLOCKS_IN_FLIGHT)).max(256);
+        let blocks = faces.div_ceil(block_faces).max(2);
+        let g = ((blocks as f64).cbrt().ceil() as u32).clamp(2, MAX_GRID);
+        let r0 = o.staging.join("r0");
+        let (min, max) = match read_manifest(&r0) {
+            Some((min, max, counts)) => {
+                rep.input_faces = counts.iter().sum();
+                (min, max)
+            }
+            None => {
+                let t = Instant::now();
+                std::fs::create_dir_all(&r0).map_err(io_err(&r0))?;
+                progress(Event::Phase("reading vertices", s.vertex_count()));
+                // Pass 1: the bounding box (and every coordinate checked),
+                // and the vertex table when it fits the budget.
+                let table_bytes = s
+                    .vertex_count()
+                    .saturating_mul(layout.corner_bytes() as u64);
+                let mut table = (table_bytes as f64 <= o.memory as f64 * TABLE_SHARE).then(|| {
+                    let mut t = Welder::new(layout).finish();
+                    let n = s.vertex_count() as usize;
+                    t.positions.reserve_exact(n);
+                    if let Some(v) = t.normals.as_mut() {
+                        v.reserve_exact(n);
+                    }
+                    if let Some(v) = t.colors.as_mut() {
+                        v.reserve_exact(n);
+                    }
+                    if let Some(v) = t.uvs.as_mut() {
+                        v.reserve_exact(n);
+                    }
+                    t
+                });
+                let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+                let mut n = 0u64;
+                s.for_each_vertex(|v| {
+                    lo = lo.min(v.position);
+                    hi = hi.max(v.position);
+                    if let Some(t) = table.as_mut() {
+                        soup::push_vertex(t, v);
+                    }
+                    n += 1;
+                    if n.is_multiple_of(1 << 20) {
+                        progress(Event::Advance(1 << 20));
+                    }
+                })
+                .map_err(|e| e.to_string())?;
+                rep.phases
+                    .push(("read vertices".into(), t.elapsed().as_secs_f64()));
+                let t = Instant::now();
+                progress(Event::Phase("partitioning faces", faces));
+                let grid = Grid::new(lo, hi, g, 0.0);
+                let mut w = Writers::new(&r0, grid.blocks(), layout);
+                // Pass 2: each face's corners from the table, or, for an
+                // input whose vertices alone exceed the budget, through a
+                // bounded cache (PlyStream::vertex_reader), so memory stays
+                // within the budget whatever the input's size.
+                let mut cache = match table {
+                    Some(_) => None,
+                    None => Some(
+                        s.vertex_reader(vertex_cache(o.memory))
+                            .map_err(|e| e.to_string())?,
+                    ),
+                };
+                let mut corner = |i: u32| -> lodkit_mesh::Result<soup::Corner> {
+                    match (&table, cache.as_mut()) {
+                        (Some(t), _) => Ok(soup::corner(t, i)),
+                        (None, Some(c)) => c.get(i),
+                        (None, None) => unreachable!("a table or a cache is made above"),
+                    }
+                };
+                let mut n = 0u64;
+                s.for_each_face(|f| {
+                    let tri = [corner(f[0])?, corner(f[1])?, corner(f[2])?];
+                    n += 1;
+                    if n.is_multiple_of(1 << 20) {
+                        progress(Event::Advance(1 << 20));
+                    }
+                    w.put(grid.block_of(&tri), &tri)
+                        .map_err(|e| lodkit_mesh::Error::Invalid(format!("{}: {e}", r0.display())))
+                })
+                .map_err(|e| e.to_string())?;
+                drop(table);
+                let counts = w.finish().map_err(io_err(&r0))?;
+                write_manifest(&r0, lo, hi, &counts).map_err(io_err(&r0))?;
+                rep.input_faces = counts.iter().sum();
+                rep.bytes_written += rep.input_faces * layout.face_bytes();
+                rep.phases
+                    .push(("partition".into(), t.elapsed().as_secs_f64()));
+                (lo, hi)
+            }
+        };
+        rep.bytes_read += s.file_len();
+        let current_faces = rep.input_faces;
+        Ok(Pipeline {
+            input,
+            o,
+            progress,
+            rep,
+            min,
+            max,
+            g,
+            layout,
+            round: 0,
+            current: None,
+            current_faces,
+        })
+    }
+
+    fn dir(&self, round: u32) -> PathBuf {
+        self.o.staging.join(format!("r{round}"))
+    }
+
+    /// Makes sure the folder of `self.round` holds the current mesh as
+    /// block inputs: re-partitions the previous round's outputs on this
+    /// round's grid (shifted by half a block on odd rounds) unless an
+    /// earlier run did, then deletes those outputs.
+    fn prepare_round(&mut self) -> Result<(), String> {
+        let Some((prev, todo)) = self.current.take() else {
+            return Ok(());
+        };
+        let next = self.dir(self.round);
         if read_manifest(&next).is_none() {
             let t = Instant::now();
-            std::fs::create_dir_all(&next).map_err(io(&next))?;
-            progress(Event::Phase("re-partitioning on the shifted grid", total));
-            let grid = Grid::new(min, max, g, 0.5);
-            let mut w = Writers::new(&next, grid.blocks());
+            std::fs::create_dir_all(&next).map_err(io_err(&next))?;
+            (self.progress)(Event::Phase(
+                "re-partitioning on the shifted grid",
+                self.current_faces,
+            ));
+            let shift = if self.round % 2 == 1 { 0.5 } else { 0.0 };
+            let grid = Grid::new(self.min, self.max, self.g, shift);
+            let mut w = Writers::new(&next, grid.blocks(), self.layout);
             for &b in &todo {
-                let p = block_output(&dir, b);
+                let p = block_output(&prev, b);
                 let mut err = Ok(());
-                soup::for_each(&p, |tri| {
+                soup::for_each(&p, self.layout, |tri| {
                     if err.is_ok() {
-                        err = w.put(grid.block_of(&tri), tri);
+                        err = w.put(grid.block_of(tri), tri);
                     }
                 })
                 .and(err)
-                .map_err(io(&p))?;
+                .map_err(io_err(&p))?;
             }
-            let counts = w.finish().map_err(io(&next))?;
-            write_manifest(&next, min, max, &counts).map_err(io(&next))?;
-            rep.phases
+            let counts = w.finish().map_err(io_err(&next))?;
+            write_manifest(&next, self.min, self.max, &counts).map_err(io_err(&next))?;
+            self.rep.bytes_read += self.current_faces * self.layout.face_bytes();
+            self.rep.bytes_written += self.current_faces * self.layout.face_bytes();
+            self.rep
+                .phases
                 .push(("re-partition".into(), t.elapsed().as_secs_f64()));
         }
-        dir = next;
-        round += 1;
+        // The outputs are in the new round's inputs now.
+        for &b in &todo {
+            let _ = std::fs::remove_file(block_output(&prev, b));
+        }
+        Ok(())
     }
 
-    // Final pass: the whole reduced mesh in core, to the target.
-    let t = Instant::now();
-    progress(Event::Phase("final pass on the merged blocks", total));
-    let (_, _, counts) = read_manifest(&dir)
-        .ok_or_else(|| format!("{}: staging manifest unreadable", dir.display()))?;
-    let mut w = Welder::default();
-    for b in (0..counts.len()).filter(|&b| counts[b] > 0) {
-        let p = block_output(&dir, b);
-        soup::for_each(&p, |tri| w.add(tri)).map_err(io(&p))?;
+    /// Runs the blocks of `self.round` (prepared) at `ratio`, skipping
+    /// those an earlier run finished; returns the faces out and the
+    /// output files, which become the current mesh.
+    fn block_round(&mut self, goal: Goal, label: &str) -> Result<(u64, Vec<PathBuf>), String> {
+        let dir = self.dir(self.round);
+        let (_, _, counts) = read_manifest(&dir)
+            .ok_or_else(|| format!("{}: staging manifest unreadable", dir.display()))?;
+        let before: u64 = counts.iter().sum();
+        let todo: Vec<usize> = (0..counts.len()).filter(|&b| counts[b] > 0).collect();
+        let t = Instant::now();
+        (self.progress)(Event::Phase(label, before));
+        let mut tasks = Vec::new();
+        for &b in &todo {
+            let output = block_output(&dir, b);
+            if output.exists() {
+                self.rep.resumed_blocks += 1;
+                (self.progress)(Event::Advance(counts[b]));
+            } else {
+                tasks.push(BlockTask {
+                    input: block_input(&dir, b),
+                    output,
+                    goal,
+                    faces: counts[b],
+                });
+            }
+        }
+        let progress = self.progress;
+        self.o
+            .runner
+            .run(&dir, &tasks, &self.o.simplify, self.layout, &|i| {
+                progress(Event::Advance(tasks[i].faces))
+            })?;
+        let mut total = 0;
+        let mut files = Vec::with_capacity(todo.len());
+        for &b in &todo {
+            let out = block_output(&dir, b);
+            total += soup::faces_in(&out, self.layout).map_err(io_err(&out))?;
+            files.push(out);
+        }
+        self.rep.bytes_read += before * self.layout.face_bytes();
+        self.rep.bytes_written += total * self.layout.face_bytes();
+        self.rep.round_faces.push(total);
+        self.rep.round_blocks.push(todo.len());
+        self.rep
+            .phases
+            .push((label.to_string(), t.elapsed().as_secs_f64()));
+        self.current = Some((dir, todo));
+        self.current_faces = total;
+        Ok((total, files))
     }
-    let merged = w.finish();
-    let opts = Options {
-        target: Target::Faces(target as usize),
-        ..o.simplify.clone()
-    };
-    let out = Simplifier::new()
-        .simplify(&merged, &opts)
-        .map_err(|e| format!("{}: {e}", input.display()))?;
-    progress(Event::Advance(total));
-    rep.phases
-        .push(("final pass".into(), t.elapsed().as_secs_f64()));
-    rep.last = Some(out.report);
-    Ok((out.mesh, rep))
+
+    /// Block rounds until the current mesh fits the final pass (at most
+    /// two, the second on the shifted grid), then the final in-core pass
+    /// to `target` faces.
+    fn reduce_then_final_pass(&mut self, target: u64) -> Result<Simplified, String> {
+        let o = self.o;
+        for k in 0..2 {
+            // Round 0 of simplify_file always runs (its input did not fit);
+            // after a round, or after the out-of-core levels of a chain,
+            // a mesh that fits goes straight to the final pass.
+            let fits = self.current_faces * crate::IN_CORE_BYTES_PER_FACE <= o.memory;
+            if fits && (k > 0 || self.round > 0) {
+                break;
+            }
+            if let Some((_, _, counts)) = read_manifest(&self.dir(self.round + 1)) {
+                // An earlier run finished this round and re-partitioned
+                // its output (then deleted it): go on from there.
+                self.current = None;
+                self.current_faces = counts.iter().sum();
+                self.round += 1;
+                continue;
+            }
+            self.prepare_round()?;
+            let goal = round_goal(self.current_faces, target, o.memory, k);
+            let ratio = if self.current_faces == 0 {
+                1.0
+            } else {
+                goal as f64 / self.current_faces as f64
+            };
+            let label = format!("simplifying blocks (round {})", self.round + 1);
+            self.block_round(Goal::Interior(ratio), &label)?;
+            self.round += 1;
+        }
+        // Final pass: the whole reduced mesh in core, to the target.
+        let t = Instant::now();
+        (self.progress)(Event::Phase(
+            "final pass on the merged blocks",
+            self.current_faces,
+        ));
+        let mut w = Welder::new(self.layout);
+        let files: Vec<PathBuf> = match &self.current {
+            Some((dir, todo)) => todo.iter().map(|&b| block_output(dir, b)).collect(),
+            None => Vec::new(),
+        };
+        for p in &files {
+            soup::for_each(p, self.layout, |tri| w.add(tri)).map_err(io_err(p))?;
+        }
+        let merged = w.finish();
+        let opts = Options {
+            target: Target::Faces(target as usize),
+            ..o.simplify.clone()
+        };
+        let out = Simplifier::new()
+            .simplify(&merged, &opts)
+            .map_err(|e| format!("{}: {e}", self.input.display()))?;
+        (self.progress)(Event::Advance(self.current_faces));
+        self.rep
+            .phases
+            .push(("final pass".into(), t.elapsed().as_secs_f64()));
+        Ok(out)
+    }
 }
 
 /// Writes a round's manifest (bounding box and per-block face counts)

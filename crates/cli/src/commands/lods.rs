@@ -12,7 +12,7 @@ use lodkit_simplify::{Target, halving_targets};
 
 use super::build::Sampling;
 use super::build::lod_chain::write_chain;
-use super::simplify::SimplifyOpts;
+use super::simplify::{OutOfCoreArgs, SimplifyOpts, out_of_core_plan};
 use crate::ui::Ui;
 use crate::ui::value::{self, Real};
 
@@ -37,6 +37,8 @@ pub struct LodsArgs {
     pub levels: Option<usize>,
     #[command(flatten)]
     pub opts: SimplifyOpts,
+    #[command(flatten)]
+    pub scale: OutOfCoreArgs,
     /// Samples per kind for the measured error (`compare`), in 1..=10000000;
     /// by default each level gets 4 per face, within 50000..=1000000.
     #[arg(long, value_parser = value::int(1usize, value::MAX_SAMPLES))]
@@ -83,6 +85,21 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
         ));
     }
     let opts = a.opts.options(Target::Ratio(1.0))?;
+    let stem = a
+        .input
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("mesh")
+        .to_string();
+    if let Some(plan) = out_of_core_plan(ui, &a.input, &a.scale, &a.opts)? {
+        return super::lods_out_of_core::run(ui, a, &stem, &targets, &opts, &plan);
+    }
+    if a.scale.ray.is_some() {
+        ui.status(format!(
+            "note: {} fits --memory, so its chain is made in core here and --ray is not used",
+            a.input.display()
+        ));
+    }
     // A scene (materials, parts) keeps them unless --merge: a chain of
     // scene GLBs, measured merged.
     let (mesh, scene): (TriMesh, Option<lodkit_mesh::Scene>) =
@@ -95,12 +112,6 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
                 other.kind()
             ),
         };
-    let stem = a
-        .input
-        .file_stem()
-        .and_then(|s| s.to_str())
-        .unwrap_or("mesh")
-        .to_string();
     let start = Instant::now();
     let json = a.json;
     let reference = lodkit_mesh::metrics::Reference::new(&mesh)

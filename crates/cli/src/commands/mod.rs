@@ -7,6 +7,7 @@ pub mod convert;
 pub mod generate;
 pub mod info;
 pub mod lods;
+pub mod lods_out_of_core;
 pub mod mco;
 pub mod pop;
 pub mod render;

@@ -95,19 +95,48 @@ pub struct SimplifyArgs {
     pub ratio: Option<f32>,
     #[command(flatten)]
     pub opts: SimplifyOpts,
-    /// Memory budget, in 1M..=1P bytes (K, M, G, T, P: powers of 1024; e.g.
-    /// 8G, 512M). A binary PLY whose in-core estimate (80 bytes per face)
-    /// exceeds it is simplified out of core, in blocks staged beside the
-    /// output (positions only; --target or --ratio), with the in-core
-    /// error when SIZE is at least 320 bytes per target face. Default: a
-    /// third of the machine's memory.
-    #[arg(long, value_name = "SIZE", value_parser = value::bytes(MIN_MEMORY, MAX_MEMORY))]
-    pub memory: Option<u64>,
+    #[command(flatten)]
+    pub scale: OutOfCoreArgs,
     #[command(flatten)]
     pub out: crate::ui::OutputArgs,
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
+}
+
+/// `--memory` and `--ray`, shared by `simplify` and `lods`.
+#[derive(Args, Debug)]
+pub struct OutOfCoreArgs {
+    /// Memory budget, in 1M..=1P bytes (K, M, G, T, P: powers of 1024; e.g.
+    /// 8G, 512M). A binary PLY whose in-core estimate (80 bytes per face)
+    /// exceeds it is simplified out of core, in blocks staged beside the
+    /// output (--target or --ratio; normals, colours, UVs kept), with the in-core
+    /// error when SIZE is at least 320 bytes per target face. Default: a
+    /// third of the machine's memory.
+    #[arg(long, value_name = "SIZE", value_parser = value::bytes(MIN_MEMORY, MAX_MEMORY))]
+    pub memory: Option<u64>,
+    /// Run the blocks of an out-of-core run as Ray tasks: `local` starts a
+    /// local cluster for the run, `auto` or HOST:PORT joins a running one
+    /// (every node must see the output's folder at the same path). Needs a
+    /// Python with pylodkit and ray (`python3`, or $LODKIT_PYTHON). The
+    /// output is the same bytes as without.
+    #[arg(long, value_name = "ADDRESS", value_parser = value::ray_address)]
+    pub ray: Option<String>,
+}
+
+impl OutOfCoreArgs {
+    /// Where the blocks run.
+    pub fn runner(&self) -> lodkit_scale::Runner {
+        match &self.ray {
+            None => lodkit_scale::Runner::Threads,
+            Some(address) => lodkit_scale::Runner::Ray {
+                address: address.clone(),
+                python: std::env::var_os("LODKIT_PYTHON")
+                    .map_or_else(|| "python3".into(), PathBuf::from),
+                workers: None,
+            },
+        }
+    }
 }
 
 /// Smallest `--memory`: 1 MiB (below it the block size is already at the
@@ -171,8 +200,14 @@ pub fn run(ui: &Ui, a: &SimplifyArgs) -> Result<()> {
     a.out.check(Some(format), &a.output.display().to_string())?;
     let target = target_of(a.target, a.ratio, a.opts.max_error)?;
     let opts = a.opts.options(target)?;
-    if let Some(plan) = out_of_core_plan(ui, a)? {
+    if let Some(plan) = out_of_core_plan(ui, &a.input, &a.scale, &a.opts)? {
         return run_out_of_core(ui, a, format, &opts, &plan);
+    }
+    if a.scale.ray.is_some() {
+        ui.status(format!(
+            "note: {} fits --memory, so it is simplified in core here and --ray is not used",
+            a.input.display()
+        ));
     }
     let mesh: TriMesh = match super::scene::load_input(
         ui,
@@ -269,12 +304,12 @@ fn run_scene(ui: &Ui, a: &SimplifyArgs, scene: &lodkit_mesh::Scene, opts: &Optio
 
 /// Why an input goes out of core: its estimated in-core bytes over the
 /// budget.
-struct Plan {
-    memory: u64,
-    in_core: u64,
-    file_bytes: u64,
+pub struct Plan {
+    pub memory: u64,
+    pub in_core: u64,
+    pub file_bytes: u64,
     /// Face records in the file's header.
-    faces: u64,
+    pub faces: u64,
 }
 
 /// Whether `a.input` is simplified out of core: a `.ply` that
@@ -285,49 +320,49 @@ struct Plan {
 /// in-core path untouched. Options the out-of-core path cannot honour are
 /// refused here (exit 2), before anything is written: falling back in
 /// core would risk exactly the memory exhaustion `--memory` guards.
-fn out_of_core_plan(ui: &Ui, a: &SimplifyArgs) -> Result<Option<Plan>> {
+pub fn out_of_core_plan(
+    ui: &Ui,
+    input: &Path,
+    scale: &OutOfCoreArgs,
+    o: &SimplifyOpts,
+) -> Result<Option<Plan>> {
     use lodkit_mesh::io::Format;
-    if Format::from_path(&a.input) != Some(Format::Ply) {
+    if Format::from_path(input) != Some(Format::Ply) {
         return Ok(None);
     }
-    let Ok(meta) = std::fs::metadata(&a.input) else {
+    let Ok(meta) = std::fs::metadata(input) else {
         // The in-core reader reports a missing file as it always has.
         return Ok(None);
     };
-    let memory = a.memory.unwrap_or_else(lodkit_scale::default_memory);
+    let memory = scale.memory.unwrap_or_else(lodkit_scale::default_memory);
     let file_bytes = meta.len();
     if !meta.is_file() || !lodkit_scale::needs_out_of_core(file_bytes, memory) {
         return Ok(None);
     }
     let in_core = file_bytes / 19 * lodkit_scale::IN_CORE_BYTES_PER_FACE;
-    let faces = match lodkit_mesh::io::ply::stream::PlyStream::open(&a.input) {
+    let faces = match lodkit_mesh::io::ply::stream::PlyStream::open(input) {
         Ok(s) => s.face_records(),
         Err(e) => {
             ui.status(format!(
                 "note: {} needs about {} in core, over --memory {}, but cannot be streamed ({e}); simplifying in core",
-                a.input.display(),
+                input.display(),
                 human_bytes(in_core),
                 human_bytes(memory),
             ));
             return Ok(None);
         }
     };
-    let d = AttributeWeights::DEFAULT;
-    let o = &a.opts;
     let refused = [
         (o.max_error.is_some(), "--max-error"),
         (o.prune.is_some(), "--prune"),
-        (o.normal_weight != d.normal, "--normal-weight"),
-        (o.color_weight != d.color, "--color-weight"),
-        (o.uv_weight != d.uv, "--uv-weight"),
     ];
     let refused: Vec<&str> = refused.iter().filter(|r| r.0).map(|r| r.1).collect();
     if !refused.is_empty() {
         return Err(crate::ui::usage(format!(
             "{}: needs about {} in core, over --memory {}, so it would be simplified out of core, \
-             which honours --target or --ratio on positions only, not {}; drop {} or give a --memory \
-             of at least {} to simplify in core",
-            a.input.display(),
+             which simplifies to a face budget and does not honour {}; drop {} \
+             or give a --memory of at least {} to simplify in core",
+            input.display(),
             human_bytes(in_core),
             human_bytes(memory),
             refused.join(", "),
@@ -362,7 +397,7 @@ fn run_out_of_core(
     let staging = lodkit_scale::staging_dir(&a.input, &a.output, &settings);
     ui.status(format!(
         "out of core: {} ({}) needs about {} in core ({} B per face), over --memory {}; \
-         simplifying in blocks (positions only: normals, colours and UVs are dropped)",
+         simplifying in blocks",
         a.input.display(),
         human_bytes(plan.file_bytes),
         human_bytes(plan.in_core),
@@ -393,6 +428,7 @@ fn run_out_of_core(
         simplify: opts.clone(),
         memory: plan.memory,
         staging: staging.clone(),
+        runner: a.scale.runner(),
     };
     let progress = ui.phases();
     let start = std::time::Instant::now();
@@ -402,6 +438,11 @@ fn run_out_of_core(
     });
     progress.finish();
     let kept = |e: &dyn std::fmt::Display| {
+        if !staging.exists() {
+            // Refused before any block was staged (a bad input, --ray
+            // without pylodkit): nothing to resume from.
+            return anyhow::anyhow!("{e}");
+        }
         anyhow::anyhow!(
             "{e} (finished blocks are kept in {}: the same command resumes from them)",
             staging.display()

@@ -68,19 +68,19 @@ pub fn read(bytes: &[u8]) -> Result<Model, ParseError> {
 /// A scalar property to read: its index in the element, type, and byte
 /// offset in a binary record (meaningful only for fixed-size records).
 #[derive(Debug, Clone, Copy)]
-struct Slot {
+pub(super) struct Slot {
     index: usize,
-    ty: ScalarType,
-    offset: usize,
+    pub(super) ty: ScalarType,
+    pub(super) offset: usize,
 }
 
 #[derive(Debug, Clone)]
-struct VertexPlan {
-    position: [Slot; 3],
-    normal: Option<[Slot; 3]>,
+pub(super) struct VertexPlan {
+    pub(super) position: [Slot; 3],
+    pub(super) normal: Option<[Slot; 3]>,
     /// `red green blue` and the optional `alpha`.
-    color: Option<([Slot; 3], Option<Slot>)>,
-    uv: Option<[Slot; 2]>,
+    pub(super) color: Option<([Slot; 3], Option<Slot>)>,
+    pub(super) uv: Option<[Slot; 2]>,
 }
 
 /// What to do with each element, in file order.
@@ -274,7 +274,7 @@ fn slots<const N: usize>(el: &Element, names: [&str; N]) -> Result<Option<[Slot;
     Ok(Some(out))
 }
 
-fn vertex_plan(el: &Element) -> Result<VertexPlan, ParseError> {
+pub(super) fn vertex_plan(el: &Element) -> Result<VertexPlan, ParseError> {
     let Some(position) = slots(el, ["x", "y", "z"])? else {
         return Err(ParseError::new(
             "vertex element lacks one of the x, y, z properties",
@@ -389,7 +389,7 @@ impl Decoded {
 
 /// Converts a colour value of type `ty` to 8 bits: floats are in [0, 1],
 /// `ushort` in [0, 65535], every other integer type in [0, 255] (clamped).
-fn color_channel(v: f64, ty: ScalarType) -> u8 {
+pub(super) fn color_channel(v: f64, ty: ScalarType) -> u8 {
     let scaled = match ty {
         ScalarType::F32 | ScalarType::F64 => v * 255.0,
         ScalarType::U16 => v / 257.0,
