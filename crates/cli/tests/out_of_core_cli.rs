@@ -359,3 +359,26 @@ fn lods_over_the_budget_make_big_levels_out_of_core_and_the_rest_in_core() {
         }
     }
 }
+
+#[test]
+fn a_binary_stl_over_the_budget_goes_out_of_core_too() {
+    let dir = tempfile::tempdir().unwrap();
+    let stl = dir.path().join("blob.stl");
+    let m = lodkit_mesh::shapes::blob_with_seed(20_000, 3);
+    lodkit_mesh::io::save_mesh(&stl, &m, Default::default()).unwrap();
+    let out = dir.path().join("o.ply");
+    let o = simplify(
+        stl.to_str().unwrap(),
+        &out,
+        &["--target", "2000", "--memory", "1M"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("out of core:"), "{}", stderr(&o));
+    let r = mesh_at(&out);
+    assert!(
+        r.faces.len() <= 2000 && r.faces.len() >= 1990,
+        "{}",
+        r.faces.len()
+    );
+    assert!(staging_left(dir.path()).is_empty());
+}

@@ -1,7 +1,7 @@
 //! # lodkit-scale — out-of-core HQMS
 //!
-//! Meshes larger than memory, simplified in bounded memory: the input is
-//! streamed twice (positions, then faces) and cut into a grid of blocks on
+//! Meshes larger than memory, simplified in bounded memory: the input (a
+//! binary PLY or STL) is streamed twice (positions, then faces) and cut into a grid of blocks on
 //! disk; each block is simplified in core with the vertices it shares with
 //! other blocks locked, only as far as the final pass needs to fit the
 //! budget (so the final pass, seams free, does the rest in global error
@@ -71,5 +71,19 @@ pub fn quality_memory(target_faces: u64) -> u64 {
 /// size (a binary PLY triangle with its share of vertices is about 19
 /// bytes; text formats are larger per face, so this overestimates them).
 pub fn needs_out_of_core(bytes: u64, memory: u64) -> bool {
-    bytes / 19 * IN_CORE_BYTES_PER_FACE > memory
+    in_core_bytes(bytes, PLY_BYTES_PER_FACE) > memory
+}
+
+/// Bytes per triangle of a binary PLY mesh, its share of vertices
+/// included, about.
+pub const PLY_BYTES_PER_FACE: u64 = 19;
+
+/// Bytes per triangle of a binary STL (a 50-byte facet).
+pub const STL_BYTES_PER_FACE: u64 = 50;
+
+/// The in-core path's estimated memory for a file of `bytes` holding
+/// `bytes_per_face` per triangle ([`PLY_BYTES_PER_FACE`],
+/// [`STL_BYTES_PER_FACE`]), at [`IN_CORE_BYTES_PER_FACE`].
+pub fn in_core_bytes(bytes: u64, bytes_per_face: u64) -> u64 {
+    (bytes / bytes_per_face.max(1)).saturating_mul(IN_CORE_BYTES_PER_FACE)
 }

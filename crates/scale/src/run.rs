@@ -14,6 +14,7 @@ use crate::tasks::BlockTask;
 use glam::Vec3;
 use lodkit_mesh::TriMesh;
 use lodkit_mesh::io::ply::stream::PlyStream;
+use lodkit_mesh::io::stl_stream::StlStream;
 use lodkit_simplify::{Options, Simplified, Simplifier, Target};
 
 /// Bytes per block face while a block is simplified: the soup welded
@@ -36,6 +37,169 @@ const FINAL_PASS_SHARE: f64 = 0.9;
 /// (2M-face blob at 10 % in 16 MiB, the final pass holding 1.05× the
 /// target: max error 2.6× in core in one straight round, 1.4× this way).
 const SHIFTED_ROUND_BELOW: u64 = 2;
+
+/// The input of the pipeline: a binary PLY or a binary STL, streamed.
+enum Source {
+    Ply(Box<PlyStream>),
+    Stl(StlStream),
+}
+
+impl Source {
+    /// `.stl` (any case) is read as STL, anything else as PLY.
+    fn open(input: &Path) -> Result<Source, String> {
+        let stl = input
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("stl"));
+        if stl {
+            StlStream::open(input).map(Source::Stl)
+        } else {
+            PlyStream::open(input).map(|s| Source::Ply(Box::new(s)))
+        }
+        .map_err(|e| e.to_string())
+    }
+}
+
+/// Round 0 from a binary PLY: the bounding box, then each face to its
+/// block, its corners from a vertex table or a bounded cache.
+fn partition_ply(
+    s: &PlyStream,
+    r0: &Path,
+    layout: Layout,
+    g: u32,
+    o: &ScaleOptions,
+    progress: &(dyn Fn(Event) + Sync),
+    rep: &mut Report,
+) -> Result<(Vec3, Vec3), String> {
+    let t = Instant::now();
+    progress(Event::Phase("reading vertices", s.vertex_count()));
+    // Pass 1: the bounding box (and every coordinate checked),
+    // and the vertex table when it fits the budget.
+    let table_bytes = s
+        .vertex_count()
+        .saturating_mul(layout.corner_bytes() as u64);
+    let mut table = (table_bytes as f64 <= o.memory as f64 * TABLE_SHARE).then(|| {
+        let mut t = Welder::new(layout).finish();
+        let n = s.vertex_count() as usize;
+        t.positions.reserve_exact(n);
+        if let Some(v) = t.normals.as_mut() {
+            v.reserve_exact(n);
+        }
+        if let Some(v) = t.colors.as_mut() {
+            v.reserve_exact(n);
+        }
+        if let Some(v) = t.uvs.as_mut() {
+            v.reserve_exact(n);
+        }
+        t
+    });
+    let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+    let mut n = 0u64;
+    s.for_each_vertex(|v| {
+        lo = lo.min(v.position);
+        hi = hi.max(v.position);
+        if let Some(t) = table.as_mut() {
+            soup::push_vertex(t, v);
+        }
+        n += 1;
+        if n.is_multiple_of(1 << 20) {
+            progress(Event::Advance(1 << 20));
+        }
+    })
+    .map_err(|e| e.to_string())?;
+    rep.phases
+        .push(("read vertices".into(), t.elapsed().as_secs_f64()));
+    let t = Instant::now();
+    progress(Event::Phase("partitioning faces", s.face_records()));
+    let grid = Grid::new(lo, hi, g, 0.0);
+    let mut w = Writers::new(r0, grid.blocks(), layout);
+    // Pass 2: each face's corners from the table, or, for an
+    // input whose vertices alone exceed the budget, through a
+    // bounded cache (PlyStream::vertex_reader), so memory stays
+    // within the budget whatever the input's size.
+    let mut cache = match table {
+        Some(_) => None,
+        None => Some(
+            s.vertex_reader(vertex_cache(o.memory))
+                .map_err(|e| e.to_string())?,
+        ),
+    };
+    let mut corner = |i: u32| -> lodkit_mesh::Result<soup::Corner> {
+        match (&table, cache.as_mut()) {
+            (Some(t), _) => Ok(soup::corner(t, i)),
+            (None, Some(c)) => c.get(i),
+            (None, None) => unreachable!("a table or a cache is made above"),
+        }
+    };
+    let mut n = 0u64;
+    s.for_each_face(|f| {
+        let tri = [corner(f[0])?, corner(f[1])?, corner(f[2])?];
+        n += 1;
+        if n.is_multiple_of(1 << 20) {
+            progress(Event::Advance(1 << 20));
+        }
+        w.put(grid.block_of(&tri), &tri)
+            .map_err(|e| lodkit_mesh::Error::Invalid(format!("{}: {e}", r0.display())))
+    })
+    .map_err(|e| e.to_string())?;
+    drop(table);
+    let counts = w.finish().map_err(io_err(r0))?;
+    write_manifest(r0, lo, hi, &counts).map_err(io_err(r0))?;
+    rep.input_faces = counts.iter().sum();
+    rep.bytes_written += rep.input_faces * layout.face_bytes();
+    rep.phases
+        .push(("partition".into(), t.elapsed().as_secs_f64()));
+    Ok((lo, hi))
+}
+
+/// Round 0 from a binary STL: the bounding box, then each facet to its
+/// block (STL corners are positions already: no vertex table).
+fn partition_stl(
+    s: &StlStream,
+    r0: &Path,
+    g: u32,
+    progress: &(dyn Fn(Event) + Sync),
+    rep: &mut Report,
+) -> Result<(Vec3, Vec3), String> {
+    let t = Instant::now();
+    progress(Event::Phase("reading facets", s.triangles()));
+    let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+    s.for_each_triangle(|t| {
+        for p in t {
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+        Ok(())
+    })
+    .map_err(|e| e.to_string())?;
+    rep.phases
+        .push(("read facets".into(), t.elapsed().as_secs_f64()));
+    let t = Instant::now();
+    progress(Event::Phase("partitioning faces", s.triangles()));
+    let layout = Layout::default();
+    let grid = Grid::new(lo, hi, g, 0.0);
+    let mut w = Writers::new(r0, grid.blocks(), layout);
+    let mut n = 0u64;
+    s.for_each_triangle(|t| {
+        let tri = t.map(|p| soup::Corner {
+            position: p,
+            ..Default::default()
+        });
+        n += 1;
+        if n.is_multiple_of(1 << 20) {
+            progress(Event::Advance(1 << 20));
+        }
+        w.put(grid.block_of(&tri), &tri)
+            .map_err(|e| lodkit_mesh::Error::Invalid(format!("{}: {e}", r0.display())))
+    })
+    .map_err(|e| e.to_string())?;
+    let counts = w.finish().map_err(io_err(r0))?;
+    write_manifest(r0, lo, hi, &counts).map_err(io_err(r0))?;
+    rep.input_faces = counts.iter().sum();
+    rep.bytes_written += rep.input_faces * layout.face_bytes();
+    rep.phases
+        .push(("partition".into(), t.elapsed().as_secs_f64()));
+    Ok((lo, hi))
+}
 
 /// The share of the budget the partition's vertex table may take; an
 /// input with more vertices reads them through a cache instead. A table
@@ -344,16 +508,21 @@ impl<'a> Pipeline<'a> {
         o: &'a ScaleOptions,
         progress: &'a (dyn Fn(Event) + Sync),
     ) -> Result<Pipeline<'a>, String> {
-        let s = PlyStream::open(input).map_err(|e| e.to_string())?;
+        let source = Source::open(input)?;
         o.runner.check()?;
         std::fs::create_dir_all(&o.staging).map_err(io_err(&o.staging))?;
         let mut rep = Report::default();
-        let faces = s.face_records();
-        let a = s.attributes();
-        let layout = Layout {
-            normals: a.normals,
-            colors: a.colors,
-            uvs: a.uvs,
+        let (faces, layout) = match &source {
+            Source::Ply(s) => {
+                let a = s.attributes();
+                let layout = Layout {
+                    normals: a.normals,
+                    colors: a.colors,
+                    uvs: a.uvs,
+                };
+                (s.face_records(), layout)
+            }
+            Source::Stl(s) => (s.triangles(), Layout::default()),
         };
         let block_faces = (o.memory / (BLOCK_BYTES_PER_FACE * BLOCKS_IN_FLIGHT)).max(256);
         let blocks = faces.div_ceil(block_faces).max(2);
@@ -365,89 +534,14 @@ impl<'a> Pipeline<'a> {
                 (min, max)
             }
             None => {
-                let t = Instant::now();
                 std::fs::create_dir_all(&r0).map_err(io_err(&r0))?;
-                progress(Event::Phase("reading vertices", s.vertex_count()));
-                // Pass 1: the bounding box (and every coordinate checked),
-                // and the vertex table when it fits the budget.
-                let table_bytes = s
-                    .vertex_count()
-                    .saturating_mul(layout.corner_bytes() as u64);
-                let mut table = (table_bytes as f64 <= o.memory as f64 * TABLE_SHARE).then(|| {
-                    let mut t = Welder::new(layout).finish();
-                    let n = s.vertex_count() as usize;
-                    t.positions.reserve_exact(n);
-                    if let Some(v) = t.normals.as_mut() {
-                        v.reserve_exact(n);
-                    }
-                    if let Some(v) = t.colors.as_mut() {
-                        v.reserve_exact(n);
-                    }
-                    if let Some(v) = t.uvs.as_mut() {
-                        v.reserve_exact(n);
-                    }
-                    t
-                });
-                let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
-                let mut n = 0u64;
-                s.for_each_vertex(|v| {
-                    lo = lo.min(v.position);
-                    hi = hi.max(v.position);
-                    if let Some(t) = table.as_mut() {
-                        soup::push_vertex(t, v);
-                    }
-                    n += 1;
-                    if n.is_multiple_of(1 << 20) {
-                        progress(Event::Advance(1 << 20));
-                    }
-                })
-                .map_err(|e| e.to_string())?;
-                rep.phases
-                    .push(("read vertices".into(), t.elapsed().as_secs_f64()));
-                let t = Instant::now();
-                progress(Event::Phase("partitioning faces", faces));
-                let grid = Grid::new(lo, hi, g, 0.0);
-                let mut w = Writers::new(&r0, grid.blocks(), layout);
-                // Pass 2: each face's corners from the table, or, for an
-                // input whose vertices alone exceed the budget, through a
-                // bounded cache (PlyStream::vertex_reader), so memory stays
-                // within the budget whatever the input's size.
-                let mut cache = match table {
-                    Some(_) => None,
-                    None => Some(
-                        s.vertex_reader(vertex_cache(o.memory))
-                            .map_err(|e| e.to_string())?,
-                    ),
-                };
-                let mut corner = |i: u32| -> lodkit_mesh::Result<soup::Corner> {
-                    match (&table, cache.as_mut()) {
-                        (Some(t), _) => Ok(soup::corner(t, i)),
-                        (None, Some(c)) => c.get(i),
-                        (None, None) => unreachable!("a table or a cache is made above"),
-                    }
-                };
-                let mut n = 0u64;
-                s.for_each_face(|f| {
-                    let tri = [corner(f[0])?, corner(f[1])?, corner(f[2])?];
-                    n += 1;
-                    if n.is_multiple_of(1 << 20) {
-                        progress(Event::Advance(1 << 20));
-                    }
-                    w.put(grid.block_of(&tri), &tri)
-                        .map_err(|e| lodkit_mesh::Error::Invalid(format!("{}: {e}", r0.display())))
-                })
-                .map_err(|e| e.to_string())?;
-                drop(table);
-                let counts = w.finish().map_err(io_err(&r0))?;
-                write_manifest(&r0, lo, hi, &counts).map_err(io_err(&r0))?;
-                rep.input_faces = counts.iter().sum();
-                rep.bytes_written += rep.input_faces * layout.face_bytes();
-                rep.phases
-                    .push(("partition".into(), t.elapsed().as_secs_f64()));
-                (lo, hi)
+                match &source {
+                    Source::Ply(s) => partition_ply(s, &r0, layout, g, o, progress, &mut rep)?,
+                    Source::Stl(s) => partition_stl(s, &r0, g, progress, &mut rep)?,
+                }
             }
         };
-        rep.bytes_read += s.file_len();
+        rep.bytes_read += std::fs::metadata(input).map_or(0, |m| m.len());
         let current_faces = rep.input_faces;
         Ok(Pipeline {
             input,

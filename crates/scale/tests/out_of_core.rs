@@ -372,3 +372,21 @@ fn attributes_go_through_the_blocks() {
     std::fs::remove_dir_all(&o.staging).unwrap();
     assert_eq!(simplify_file(&input, &o, &quiet).unwrap().0, out);
 }
+
+/// A binary STL goes through the same pipeline (streamed facets instead
+/// of a vertex table): the same result as the same mesh in PLY.
+#[test]
+fn a_binary_stl_simplifies_out_of_core_like_the_same_ply() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = lodkit_mesh::shapes::blob_with_seed(30_000, 6);
+    let (ply, stl) = (dir.path().join("m.ply"), dir.path().join("m.stl"));
+    lodkit_mesh::io::save_mesh(&ply, &m, Default::default()).unwrap();
+    lodkit_mesh::io::save_mesh(&stl, &m, Default::default()).unwrap();
+    let mut o = opts(dir.path(), 0.1, 300_000);
+    let (a, ra) = simplify_file(&ply, &o, &quiet).unwrap();
+    o.staging = dir.path().join("staging-stl");
+    let (b, rb) = simplify_file(&stl, &o, &quiet).unwrap();
+    assert_eq!(ra.input_faces, rb.input_faces);
+    assert!(rb.round_blocks[0] > 4, "{rb:?}");
+    assert_eq!(a, b);
+}

@@ -108,7 +108,7 @@ pub struct SimplifyArgs {
 #[derive(Args, Debug)]
 pub struct OutOfCoreArgs {
     /// Memory budget, in 1M..=1P bytes (K, M, G, T, P: powers of 1024; e.g.
-    /// 8G, 512M). A binary PLY whose in-core estimate (80 bytes per face)
+    /// 8G, 512M). A binary PLY or STL whose in-core estimate (80 bytes per face)
     /// exceeds it is simplified out of core, in blocks staged beside the
     /// output (--target or --ratio; normals, colours, UVs kept), with the in-core
     /// error when SIZE is at least 320 bytes per target face. Default: a
@@ -327,21 +327,28 @@ pub fn out_of_core_plan(
     o: &SimplifyOpts,
 ) -> Result<Option<Plan>> {
     use lodkit_mesh::io::Format;
-    if Format::from_path(input) != Some(Format::Ply) {
-        return Ok(None);
-    }
+    let per_face = match Format::from_path(input) {
+        Some(Format::Ply) => lodkit_scale::PLY_BYTES_PER_FACE,
+        Some(Format::Stl) => lodkit_scale::STL_BYTES_PER_FACE,
+        _ => return Ok(None),
+    };
     let Ok(meta) = std::fs::metadata(input) else {
         // The in-core reader reports a missing file as it always has.
         return Ok(None);
     };
     let memory = scale.memory.unwrap_or_else(lodkit_scale::default_memory);
     let file_bytes = meta.len();
-    if !meta.is_file() || !lodkit_scale::needs_out_of_core(file_bytes, memory) {
+    let in_core = lodkit_scale::in_core_bytes(file_bytes, per_face);
+    if !meta.is_file() || in_core <= memory {
         return Ok(None);
     }
-    let in_core = file_bytes / 19 * lodkit_scale::IN_CORE_BYTES_PER_FACE;
-    let faces = match lodkit_mesh::io::ply::stream::PlyStream::open(input) {
-        Ok(s) => s.face_records(),
+    let streamed = if per_face == lodkit_scale::STL_BYTES_PER_FACE {
+        lodkit_mesh::io::stl_stream::StlStream::open(input).map(|s| s.triangles())
+    } else {
+        lodkit_mesh::io::ply::stream::PlyStream::open(input).map(|s| s.face_records())
+    };
+    let faces = match streamed {
+        Ok(n) => n,
         Err(e) => {
             ui.status(format!(
                 "note: {} needs about {} in core, over --memory {}, but cannot be streamed ({e}); simplifying in core",

@@ -39,6 +39,7 @@ pub mod obj;
 pub mod ply;
 pub mod scene_io;
 pub mod stl;
+pub mod stl_stream;
 pub mod xyz;
 
 pub use scene_io::{load_scene, save_scene, save_scene_with};
