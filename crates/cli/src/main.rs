@@ -61,7 +61,7 @@ enum Command {
     /// Synthetic test meshes of any size, streamed to disk.
     #[command(
         subcommand,
-        after_help = "Examples:\n  lodkit generate blob --triangles 100000000 -o big.ply"
+        after_help = "Examples:\n  lodkit generate blob --triangles 100000000 -o big.ply\n  lodkit generate subdivided bunny.ply --triangles 100000000 -o big_bunny.ply"
     )]
     Generate(commands::generate::GenerateCmd),
     /// In-process comparisons with peer libraries (simplify: meshoptimizer, with `--features peers`).

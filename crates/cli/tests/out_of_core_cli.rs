@@ -382,3 +382,31 @@ fn a_binary_stl_over_the_budget_goes_out_of_core_too() {
     );
     assert!(staging_left(dir.path()).is_empty());
 }
+
+#[test]
+fn a_subdivided_scan_is_generated_and_simplified_out_of_core() {
+    let dir = tempfile::tempdir().unwrap();
+    let big = dir.path().join("big.ply");
+    let o = lodkit(&[
+        "generate",
+        "subdivided",
+        &common::bunny(),
+        "--triangles",
+        "300000",
+        "-o",
+        big.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // The bunny's 69,451 triangles split 3 × 3.
+    assert!(stderr(&o).contains("625059 triangles"), "{}", stderr(&o));
+    let out = dir.path().join("o.ply");
+    let o = simplify(
+        big.to_str().unwrap(),
+        &out,
+        &["--ratio", "0.01", "--memory", "8M"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("out of core:"), "{}", stderr(&o));
+    let n = mesh_at(&out).faces.len();
+    assert!((6200..=6251).contains(&n), "{n}");
+}

@@ -14,12 +14,14 @@ mod blob;
 mod blob_stream;
 mod defects;
 mod spheres;
+mod subdivided;
 mod torus;
 
 pub use blob::{blob, blob_with_seed};
 pub use blob_stream::{BlobCounts, blob_counts, write_blob_ply};
 pub use defects::{holey_sphere, non_manifold, terrain};
 pub use spheres::{icosphere, uv_sphere};
+pub use subdivided::write_subdivided_ply;
 pub use torus::torus;
 
 #[cfg(test)]
