@@ -55,10 +55,7 @@
 //! its expanded set changes in a few hundred nodes. The search skips a
 //! subtree it last rejected on its bound's projection while the eye stays
 //! nearer than the distance that rejection had to spare (the distance to
-//! a box moves no faster than the eye), and takes a node it last found
-//! projecting above the tolerance as wanted without projecting it again
-//! while the eye stays within that test's spare distance and no frustum
-//! plane is left to test (a camera that sees the whole model); the
+//! a box moves no faster than the eye); the
 //! closure is updated from the last one, only around the wanted nodes
 //! that changed (see `closure`);
 //! the emission copies, from the last cut's buffer, the triangles of every
@@ -395,12 +392,9 @@ pub struct ViewCut {
     /// Per rank of a [`ViewLayout`], `[eye x, y, z, margin]`: the
     /// certificate the last cut that tested the rank made at its eye. While
     /// the eye stays nearer than `|margin|` to that eye, the rank's subtree
-    /// holds no wanted node (`margin > 0`: it projects its bound below the
-    /// tolerance), or the rank projects its own error above the tolerance
-    /// (`margin < 0`; whether it is in view is tested apart): the distance
-    /// to a box moves no faster than the eye, and the margin is the
-    /// distance's excess over the reach (or the reach's over the
-    /// distance), less a relative 2⁻¹⁶ of the lengths and coordinates for
+    /// holds no wanted node (it projects its bound below the tolerance):
+    /// the distance to a box moves no faster than the eye, and the margin
+    /// is the distance's excess over the reach, less a relative 2⁻¹⁶ of the lengths and coordinates for
     /// the rounding of both. 0: none. Valid for the layout, reach and
     /// minimum distance in `slack_key` (the tolerance, the field of view
     /// and the viewport height enter the reach), whatever the direction.

@@ -34,15 +34,6 @@ pub struct Layout {
 }
 
 impl Layout {
-    /// The attributes `mesh` has.
-    pub fn of(mesh: &TriMesh) -> Layout {
-        Layout {
-            normals: mesh.normals.is_some(),
-            colors: mesh.colors.is_some(),
-            uvs: mesh.uvs.is_some(),
-        }
-    }
-
     /// Bytes per corner.
     pub fn corner_bytes(self) -> usize {
         12 + 12 * self.normals as usize + 4 * self.colors as usize + 8 * self.uvs as usize

@@ -124,13 +124,12 @@ impl ViewCut {
                 if m > 0.0 && (eye - Vec3::new(s[0], s[1], s[2])).length() < m {
                     continue;
                 }
-                // Wanted-node certificates (m < 0) are recorded below but
-                // not used: taking a certified node as wanted without its
-                // test gave a cut that differed from a fresh one on the
-                // 1M-triangle orbit (`lodkit-bench` example
-                // `mco_view_cut`, tolerance 0.569 px: 93,024 triangles
-                // against 93,020 for the same camera twice), a fault not
-                // yet found.
+                // No certificate for wanted nodes: taking a node as wanted
+                // without its test while the eye stayed near (commit
+                // 2c6ee5d) gave a cut that differed from a fresh one on the
+                // 1M-triangle orbit (`lodkit-bench` example `mco_view_cut`,
+                // tolerance 0.569 px: 93,024 triangles against 93,020 for
+                // the same camera twice), a fault not yet found.
             }
             let h = &lay.hot[r as usize];
             let (lo, hi) = lay.cube(h);
@@ -153,25 +152,6 @@ impl ViewCut {
             }
             if shows(lo, hi, h.err, planes) {
                 wanted.push(r);
-                if h.bound != f32::INFINITY
-                    && let Some(s) = slack.get_mut(r as usize)
-                {
-                    // The certificate that the node keeps projecting
-                    // above the tolerance: the distance `projects`
-                    // computes is below the error's reach by the margin,
-                    // less the reach's own growth and the rounding of both
-                    // (the relative 2⁻¹⁶ above, and 2⁻¹¹ of the reach,
-                    // far above the 2⁻¹² growth `reach` carries).
-                    let (d, reach) = fr.distance_and_reach(lo, hi, h.err);
-                    let low = reach * (1.0 - 1.0 / 2048.0);
-                    let size = lo.abs().max(hi.abs()).max_element() + eye_size;
-                    let margin = low - d - (d + low + size) * (1.0 / 65536.0);
-                    *s = if margin > 0.0 {
-                        [eye.x, eye.y, eye.z, -margin]
-                    } else {
-                        [0.0; 4]
-                    };
-                }
             }
             let k = h.inner_mask.count_ones();
             if k > 0 {
