@@ -55,7 +55,10 @@
 //! its expanded set changes in a few hundred nodes. The search skips a
 //! subtree it last rejected on its bound's projection while the eye stays
 //! nearer than the distance that rejection had to spare (the distance to
-//! a box moves no faster than the eye); the
+//! a box moves no faster than the eye), and takes a node it last found
+//! projecting above the tolerance as wanted without projecting it again
+//! while the eye stays within that test's spare distance and no frustum
+//! plane is left to test (a camera that sees the whole model); the
 //! closure is updated from the last one, only around the wanted nodes
 //! that changed (see `closure`);
 //! the emission copies, from the last cut's buffer, the triangles of every
@@ -392,10 +395,14 @@ pub struct ViewCut {
     /// Per rank of a [`ViewLayout`], `[eye x, y, z, margin]`: the
     /// certificate the last cut that tested the rank made at its eye. While
     /// the eye stays nearer than `|margin|` to that eye, the rank's subtree
-    /// holds no wanted node (it projects its bound below the tolerance):
-    /// the distance to a box moves no faster than the eye, and the margin
-    /// is the distance's excess over the reach, less a relative 2⁻¹⁶ of the lengths and coordinates for
-    /// the rounding of both. 0: none. Valid for the layout, reach and
+    /// holds no wanted node (`margin > 0`: it projects its bound below the
+    /// tolerance), or the rank projects its own error above the tolerance
+    /// (`margin < 0`; whether it is in view is tested apart): the distance
+    /// to a box moves no faster than the eye, and the margin is the
+    /// distance's excess over the reach (or the reach's over the
+    /// distance), less a relative 2⁻¹⁶ of the lengths and coordinates for
+    /// the rounding of both; a test whose excess does not cover that
+    /// rounding records no certificate (0). Valid for the layout, reach and
     /// minimum distance in `slack_key` (the tolerance, the field of view
     /// and the viewport height enter the reach), whatever the direction.
     slack: Vec<[f32; 4]>,
@@ -702,6 +709,46 @@ pub(crate) fn select(model: &McoModel, camera: &Camera, tolerance_px: f32) -> Ve
         }
     }
     expanded
+}
+
+/// Tolerances at which a subtree's bound, seen from `camera`, reaches a
+/// hair (under the rounding margin of [`ViewCut::slack`]) short of the
+/// distance to its grown cube: the search rejects the subtree, but with
+/// too little to spare to certify anything. Up to `n`, for ranks spread
+/// over the layout.
+#[cfg(test)]
+pub(crate) fn hairline_tolerances(model: &McoModel, camera: &Camera, n: usize) -> Vec<f32> {
+    let ViewData::Layout(lay) = model.view_data() else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    let step = (lay.ranks() / (4 * n.max(1))).max(1);
+    for r in (1..lay.ranks()).step_by(step) {
+        let h = &lay.hot[r];
+        if h.bound == f32::INFINITY || h.bound <= 0.0 {
+            continue;
+        }
+        let (lo, hi) = lay.cube(h);
+        let (glo, ghi) = lay.grown(h, lo, hi);
+        let probe = Frustum::new(model, camera, 1.0);
+        let (d, reach) = probe.distance_and_reach(glo, ghi, h.bound);
+        // `reach` scales as 1 / tolerance: start where it meets `d`, then
+        // raise the tolerance by units in the last place until it falls
+        // short.
+        let mut tol = reach / d;
+        for _ in 0..64 {
+            let (d, reach) = Frustum::new(model, camera, tol).distance_and_reach(glo, ghi, h.bound);
+            if reach <= d {
+                out.push(tol);
+                break;
+            }
+            tol = f32::from_bits(tol.to_bits() + 1);
+        }
+        if out.len() == n {
+            break;
+        }
+    }
+    out
 }
 
 impl McoModel {

@@ -8,7 +8,7 @@
 use super::support;
 
 use crate::pipeline::{Options, build_from_mesh};
-use crate::view_dependent_cut::{has_layout, select, view_subtree_bounds};
+use crate::view_dependent_cut::{hairline_tolerances, has_layout, select, view_subtree_bounds};
 use crate::{Camera, McoModel, ViewCut};
 use lodkit_mesh::glam::Vec3;
 use lodkit_mesh::shapes;
@@ -217,5 +217,29 @@ fn a_kept_view_cut_orbiting_the_whole_model_equals_the_scan() {
         let kept = state.update(&blob, &cam, 8.0).to_vec();
         blob.extract_expanded(&select(&blob, &cam, 8.0), &mut reference);
         assert_eq!(kept, reference, "step {step}: kept state vs the scan");
+    }
+}
+
+/// A subtree rejected with less to spare than the rounding margin
+/// certifies nothing: a kept state cutting the same camera again (the
+/// eye has not moved, so every certificate applies) gives the scan's cut.
+/// The tolerances put one subtree's bound a hair short of its distance
+/// each, with the whole model in view (no frustum plane left to test).
+#[test]
+fn a_subtree_rejected_by_a_hair_is_searched_again() {
+    let blob = McoModel::from_bytes(&model(&shapes::blob(20_000), 48).to_bytes()).unwrap();
+    let (lo, hi) = blob.bounds();
+    let (c, r) = ((lo + hi) * 0.5, (hi - lo).length());
+    let cam = Camera::looking_at(c + Vec3::new(0.8, 0.35, 0.5) * r * 1.2, c);
+    let tols = hairline_tolerances(&blob, &cam, 40);
+    assert!(tols.len() >= 20, "{} tolerances", tols.len());
+    let mut reference = Vec::new();
+    for tol in tols {
+        let mut state = ViewCut::new();
+        blob.extract_expanded(&select(&blob, &cam, tol), &mut reference);
+        for pass in 0..2 {
+            let kept = state.update(&blob, &cam, tol).to_vec();
+            assert_eq!(kept, reference, "tolerance {tol}, pass {pass}");
+        }
     }
 }

@@ -121,15 +121,24 @@ impl ViewCut {
             if let Some(s) = slack.get(r as usize) {
                 // False on a NaN eye, and on no certificate (0).
                 let m = s[3];
-                if m > 0.0 && (eye - Vec3::new(s[0], s[1], s[2])).length() < m {
-                    continue;
+                if (eye - Vec3::new(s[0], s[1], s[2])).length() < m.abs() {
+                    if m > 0.0 {
+                        continue;
+                    }
+                    if planes == 0 {
+                        // Still projects above the tolerance, and in view
+                        // (no plane left to test): wanted, and its subtree
+                        // searched (its bound is at least its error, on a
+                        // cube around its own), with no plane to test
+                        // below (its bound is finite: see the
+                        // certificate).
+                        let h = &lay.hot[r as usize];
+                        wanted.push(r);
+                        let k = h.inner_mask.count_ones();
+                        stack.extend((h.first_inner..h.first_inner + k).map(|c| c as u64));
+                        continue;
+                    }
                 }
-                // No certificate for wanted nodes: taking a node as wanted
-                // without its test while the eye stayed near (commit
-                // 2c6ee5d) gave a cut that differed from a fresh one on the
-                // 1M-triangle orbit (`lodkit-bench` example `mco_view_cut`,
-                // tolerance 0.569 px: 93,024 triangles against 93,020 for
-                // the same camera twice), a fault not yet found.
             }
             let h = &lay.hot[r as usize];
             let (lo, hi) = lay.cube(h);
@@ -141,8 +150,15 @@ impl ViewCut {
                 if !may_project {
                     if let Some(s) = slack.get_mut(r as usize) {
                         let size = glo.abs().max(ghi.abs()).max_element() + eye_size;
-                        let margin = (d + reach + size) * (1.0 / 65536.0);
-                        *s = [eye.x, eye.y, eye.z, d - reach - margin];
+                        let spare = d - reach - (d + reach + size) * (1.0 / 65536.0);
+                        // A spare under the rounding margin certifies
+                        // nothing; recorded as negative, it would read as
+                        // the certificate of a wanted node.
+                        *s = if spare > 0.0 {
+                            [eye.x, eye.y, eye.z, spare]
+                        } else {
+                            [0.0; 4]
+                        };
                     }
                     continue;
                 }
@@ -152,6 +168,25 @@ impl ViewCut {
             }
             if shows(lo, hi, h.err, planes) {
                 wanted.push(r);
+                if h.bound != f32::INFINITY
+                    && let Some(s) = slack.get_mut(r as usize)
+                {
+                    // The certificate that the node keeps projecting
+                    // above the tolerance: the distance `projects`
+                    // computes is below the error's reach by the margin,
+                    // less the reach's own growth and the rounding of both
+                    // (the relative 2⁻¹⁶ above, and 2⁻¹¹ of the reach,
+                    // far above the 2⁻¹² growth `reach` carries).
+                    let (d, reach) = fr.distance_and_reach(lo, hi, h.err);
+                    let low = reach * (1.0 - 1.0 / 2048.0);
+                    let size = lo.abs().max(hi.abs()).max_element() + eye_size;
+                    let margin = low - d - (d + low + size) * (1.0 / 65536.0);
+                    *s = if margin > 0.0 {
+                        [eye.x, eye.y, eye.z, -margin]
+                    } else {
+                        [0.0; 4]
+                    };
+                }
             }
             let k = h.inner_mask.count_ones();
             if k > 0 {
