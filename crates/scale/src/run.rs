@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use crate::block::Goal;
-use crate::partition::{Grid, Writers, block_input, block_output};
+use crate::partition::{Cuts, Grid, Writers, block_input, block_output};
 use crate::runner::{BLOCKS_IN_FLIGHT, Runner};
 use crate::soup::{self, Layout, Welder};
 use crate::tasks::BlockTask;
@@ -142,8 +142,16 @@ fn partition_ply(
     })
     .map_err(|e| e.to_string())?;
     drop(table);
+    let reach = w.reach();
     let counts = w.finish().map_err(io_err(r0))?;
-    write_manifest(r0, lo, hi, &counts).map_err(io_err(r0))?;
+    let m = Manifest {
+        min: lo,
+        max: hi,
+        reach,
+        counts,
+    };
+    write_manifest(r0, &m).map_err(io_err(r0))?;
+    let counts = m.counts;
     rep.input_faces = counts.iter().sum();
     rep.bytes_written += rep.input_faces * layout.face_bytes();
     rep.phases
@@ -192,8 +200,16 @@ fn partition_stl(
             .map_err(|e| lodkit_mesh::Error::Invalid(format!("{}: {e}", r0.display())))
     })
     .map_err(|e| e.to_string())?;
+    let reach = w.reach();
     let counts = w.finish().map_err(io_err(r0))?;
-    write_manifest(r0, lo, hi, &counts).map_err(io_err(r0))?;
+    let m = Manifest {
+        min: lo,
+        max: hi,
+        reach,
+        counts,
+    };
+    write_manifest(r0, &m).map_err(io_err(r0))?;
+    let counts = m.counts;
     rep.input_faces = counts.iter().sum();
     rep.bytes_written += rep.input_faces * layout.face_bytes();
     rep.phases
@@ -401,9 +417,9 @@ pub fn lod_chain_file(
         // Level i out of core: one block round to `t`.
         let round = p.round;
         let next = o.staging.join(format!("r{}", round + 1));
-        if let Some((_, _, counts)) = read_manifest(&next) {
+        if let Some(m) = read_manifest(&next) {
             // An earlier run handed this level over and moved on.
-            previous = counts.iter().sum();
+            previous = m.counts.iter().sum();
             on_level(i, ChainLevel::Resumed { faces: previous })?;
             p.current = None;
             p.current_faces = previous;
@@ -529,9 +545,9 @@ impl<'a> Pipeline<'a> {
         let g = ((blocks as f64).cbrt().ceil() as u32).clamp(2, MAX_GRID);
         let r0 = o.staging.join("r0");
         let (min, max) = match read_manifest(&r0) {
-            Some((min, max, counts)) => {
-                rep.input_faces = counts.iter().sum();
-                (min, max)
+            Some(m) => {
+                rep.input_faces = m.counts.iter().sum();
+                (m.min, m.max)
             }
             None => {
                 std::fs::create_dir_all(&r0).map_err(io_err(&r0))?;
@@ -562,6 +578,12 @@ impl<'a> Pipeline<'a> {
         self.o.staging.join(format!("r{round}"))
     }
 
+    /// The grid of `round`: shifted by half a block on odd rounds.
+    fn grid(&self, round: u32) -> Grid {
+        let shift = if round % 2 == 1 { 0.5 } else { 0.0 };
+        Grid::new(self.min, self.max, self.g, shift)
+    }
+
     /// Makes sure the folder of `self.round` holds the current mesh as
     /// block inputs: re-partitions the previous round's outputs on this
     /// round's grid (shifted by half a block on odd rounds) unless an
@@ -578,8 +600,7 @@ impl<'a> Pipeline<'a> {
                 "re-partitioning on the shifted grid",
                 self.current_faces,
             ));
-            let shift = if self.round % 2 == 1 { 0.5 } else { 0.0 };
-            let grid = Grid::new(self.min, self.max, self.g, shift);
+            let grid = self.grid(self.round);
             let mut w = Writers::new(&next, grid.blocks(), self.layout);
             for &b in &todo {
                 let p = block_output(&prev, b);
@@ -592,8 +613,15 @@ impl<'a> Pipeline<'a> {
                 .and(err)
                 .map_err(io_err(&p))?;
             }
+            let reach = w.reach();
             let counts = w.finish().map_err(io_err(&next))?;
-            write_manifest(&next, self.min, self.max, &counts).map_err(io_err(&next))?;
+            let m = Manifest {
+                min: self.min,
+                max: self.max,
+                reach,
+                counts,
+            };
+            write_manifest(&next, &m).map_err(io_err(&next))?;
             self.rep.bytes_read += self.current_faces * self.layout.face_bytes();
             self.rep.bytes_written += self.current_faces * self.layout.face_bytes();
             self.rep
@@ -612,8 +640,12 @@ impl<'a> Pipeline<'a> {
     /// output files, which become the current mesh.
     fn block_round(&mut self, goal: Goal, label: &str) -> Result<(u64, Vec<PathBuf>), String> {
         let dir = self.dir(self.round);
-        let (_, _, counts) = read_manifest(&dir)
+        let Manifest { counts, reach, .. } = read_manifest(&dir)
             .ok_or_else(|| format!("{}: staging manifest unreadable", dir.display()))?;
+        let cuts = Cuts {
+            grid: self.grid(self.round),
+            reach,
+        };
         let before: u64 = counts.iter().sum();
         let todo: Vec<usize> = (0..counts.len()).filter(|&b| counts[b] > 0).collect();
         let t = Instant::now();
@@ -629,6 +661,7 @@ impl<'a> Pipeline<'a> {
                     input: block_input(&dir, b),
                     output,
                     goal,
+                    cuts,
                     faces: counts[b],
                 });
             }
@@ -671,11 +704,11 @@ impl<'a> Pipeline<'a> {
             if fits && (k > 0 || self.round > 0) {
                 break;
             }
-            if let Some((_, _, counts)) = read_manifest(&self.dir(self.round + 1)) {
+            if let Some(m) = read_manifest(&self.dir(self.round + 1)) {
                 // An earlier run finished this round and re-partitioned
                 // its output (then deleted it): go on from there.
                 self.current = None;
-                self.current_faces = counts.iter().sum();
+                self.current_faces = m.counts.iter().sum();
                 self.round += 1;
                 continue;
             }
@@ -720,15 +753,24 @@ impl<'a> Pipeline<'a> {
     }
 }
 
-/// Writes a round's manifest (bounding box and per-block face counts)
-/// atomically: its presence means the round's block inputs are complete.
-fn write_manifest(dir: &Path, min: Vec3, max: Vec3, counts: &[u64]) -> std::io::Result<()> {
+/// A round folder's record that its partition is complete: the bounding
+/// box, the round's [`Cuts::reach`] and the faces per block.
+struct Manifest {
+    min: Vec3,
+    max: Vec3,
+    reach: f32,
+    counts: Vec<u64>,
+}
+
+/// Writes a round's manifest atomically: its presence means the round's
+/// block inputs are complete.
+fn write_manifest(dir: &Path, m: &Manifest) -> std::io::Result<()> {
     let mut s = String::new();
-    for c in min.to_array().into_iter().chain(max.to_array()) {
+    for c in m.min.to_array().into_iter().chain(m.max.to_array()) {
         s.push_str(&format!("{:08x} ", c.to_bits()));
     }
-    s.push('\n');
-    for c in counts {
+    s.push_str(&format!("{:08x}\n", m.reach.to_bits()));
+    for c in &m.counts {
         s.push_str(&format!("{c}\n"));
     }
     let tmp = dir.join("parted.partial");
@@ -736,7 +778,10 @@ fn write_manifest(dir: &Path, min: Vec3, max: Vec3, counts: &[u64]) -> std::io::
     std::fs::rename(tmp, dir.join("parted"))
 }
 
-fn read_manifest(dir: &Path) -> Option<(Vec3, Vec3, Vec<u64>)> {
+/// The manifest of a round folder; `None` if there is none, or one this
+/// lodkit does not read (an earlier version's: the round is partitioned
+/// again).
+fn read_manifest(dir: &Path) -> Option<Manifest> {
     let s = std::fs::read_to_string(dir.join("parted")).ok()?;
     let mut lines = s.lines();
     let bb: Vec<f32> = lines
@@ -745,15 +790,16 @@ fn read_manifest(dir: &Path) -> Option<(Vec3, Vec3, Vec<u64>)> {
         .map(|w| u32::from_str_radix(w, 16).map(f32::from_bits))
         .collect::<Result<_, _>>()
         .ok()?;
-    if bb.len() != 6 {
+    if bb.len() != 7 {
         return None;
     }
     let counts = lines
         .map(|l| l.parse().ok())
         .collect::<Option<Vec<u64>>>()?;
-    Some((
-        Vec3::new(bb[0], bb[1], bb[2]),
-        Vec3::new(bb[3], bb[4], bb[5]),
+    Some(Manifest {
+        min: Vec3::new(bb[0], bb[1], bb[2]),
+        max: Vec3::new(bb[3], bb[4], bb[5]),
+        reach: bb[6],
         counts,
-    ))
+    })
 }

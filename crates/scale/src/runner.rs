@@ -95,7 +95,7 @@ impl Runner {
                     .map_err(|e| format!("cannot start the block threads: {e}"))?;
                 pool.install(|| {
                     tasks.par_iter().enumerate().try_for_each(|(i, t)| {
-                        simplify_block(&t.input, &t.output, t.goal, opts, layout)?;
+                        simplify_block(&t.input, &t.output, t.goal, &t.cuts, opts, layout)?;
                         let _ = std::fs::remove_file(&t.input);
                         done(i);
                         Ok(())

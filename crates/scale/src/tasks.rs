@@ -15,12 +15,15 @@ use lodkit_simplify::{AttributeWeights, Options};
 use serde::{Deserialize, Serialize};
 
 use crate::block::{BlockReport, Goal, simplify_block};
+use crate::partition::{Cuts, Grid};
 use crate::soup::Layout;
+use glam::Vec3;
 
 /// Version of the task file; [`read_tasks`] refuses any other, and any
 /// field it does not know, so a worker with another lodkit never runs a
-/// block by other rules than the driver's (2: each task names its goal).
-const TASKS_VERSION: u32 = 2;
+/// block by other rules than the driver's (2: each task names its goal;
+/// 3: and the round's cuts, so a block locks only what may lie on one).
+const TASKS_VERSION: u32 = 3;
 
 /// Most tasks a task file may hold (a round has at most 512 blocks).
 const MAX_TASKS: usize = 4096;
@@ -37,6 +40,8 @@ pub struct BlockTask {
     pub output: PathBuf,
     /// How far the block goes.
     pub goal: Goal,
+    /// The round's cuts: where the block's vertices may be shared.
+    pub cuts: Cuts,
     /// Faces in the input (for progress).
     pub faces: u64,
 }
@@ -59,7 +64,44 @@ struct TaskRecord {
     ratio: f64,
     /// `interior` or `total` ([`Goal`]).
     goal: String,
+    cuts: CutsRecord,
     faces: u64,
+}
+
+/// [`Cuts`], its floats as written by `serde_json` (shortest form that
+/// reads back the same bits).
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CutsRecord {
+    min: [f32; 3],
+    cell: [f32; 3],
+    g: u32,
+    shift: f32,
+    reach: f32,
+}
+
+impl CutsRecord {
+    fn of(c: &Cuts) -> CutsRecord {
+        CutsRecord {
+            min: c.grid.min.to_array(),
+            cell: c.grid.cell.to_array(),
+            g: c.grid.g,
+            shift: c.grid.shift,
+            reach: c.reach,
+        }
+    }
+
+    fn cuts(&self) -> Cuts {
+        Cuts {
+            grid: Grid {
+                min: Vec3::from_array(self.min),
+                cell: Vec3::from_array(self.cell),
+                g: self.g,
+                shift: self.shift,
+            },
+            reach: self.reach,
+        }
+    }
 }
 
 /// The options a block uses (its target is set per block, `lock_border`
@@ -142,6 +184,7 @@ pub fn write_tasks(
                         Goal::Total(_) => "total",
                     }
                     .into(),
+                    cuts: CutsRecord::of(&t.cuts),
                     faces: t.faces,
                 })
             })
@@ -217,6 +260,7 @@ pub fn read_tasks(path: &Path) -> Result<(Options, Layout, Vec<BlockTask>), Stri
                 input: plain(&t.input)?,
                 output: plain(&t.output)?,
                 goal,
+                cuts: t.cuts.cuts(),
                 faces: t.faces,
             })
         })
@@ -246,7 +290,7 @@ pub fn run_task(path: &Path, index: usize) -> Result<BlockReport, String> {
             faces_out,
         });
     }
-    let r = simplify_block(&t.input, &t.output, t.goal, &opts, layout)?;
+    let r = simplify_block(&t.input, &t.output, t.goal, &t.cuts, &opts, layout)?;
     Ok(r)
 }
 
@@ -267,6 +311,10 @@ mod tests {
             input: d.path().join("b00001.in"),
             output: d.path().join("b00001.out"),
             goal: Goal::Total(0.25),
+            cuts: Cuts {
+                grid: Grid::new(Vec3::new(-1.5, 0.1, 2.0), Vec3::new(0.3, 7.0, 2.5), 3, 0.5),
+                reach: 0.1 + 0.2,
+            },
             faces: 10,
         }];
         let layout = Layout {
@@ -287,7 +335,7 @@ mod tests {
         assert!(write_tasks(&path, &opts, layout, &outside).is_err());
         for name in ["../x.in", "/etc/passwd", "..", "", "a/b"] {
             let json = format!(
-                r#"{{"version":2,"options":{{"max_error":null,"heap_size":1,"normal_weight":0,"color_weight":0,"uv_weight":0,"prune":null,"max_passes":8}},"layout":"-","tasks":[{{"input":{name:?},"output":"o","ratio":0.5,"goal":"interior","faces":1}}]}}"#
+                r#"{{"version":3,"options":{{"max_error":null,"heap_size":1,"normal_weight":0,"color_weight":0,"uv_weight":0,"prune":null,"max_passes":8}},"layout":"-","tasks":[{{"input":{name:?},"output":"o","ratio":0.5,"goal":"interior","cuts":{{"min":[0,0,0],"cell":[1,1,1],"g":2,"shift":0,"reach":0.5}},"faces":1}}]}}"#
             );
             std::fs::write(&path, json).unwrap();
             let e = read_tasks(&path).unwrap_err();

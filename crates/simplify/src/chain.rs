@@ -57,7 +57,7 @@ impl Simplifier {
         targets: &[Target],
     ) -> Result<Vec<(Simplified, Vec<u32>)>, Error> {
         let mut t0 = std::time::Instant::now();
-        self.start(mesh, opts, groups)?;
+        self.start(mesh, opts, groups, None)?;
         let mut out = Vec::with_capacity(targets.len());
         for &t in targets {
             let goal = t.faces(self.input_faces);

@@ -98,7 +98,7 @@ pub fn collapse(
     // Border rules.
     let s_border = ss.border();
     let t_border = st.border();
-    if s_border && (opts.lock_border || m_st != 1) {
+    if (s_border && (opts.lock_border || m_st != 1)) || m.is_locked(s) {
         return Err(Reject::Topology);
     }
 
@@ -184,7 +184,7 @@ pub fn collapse(
     // Border placement: a border edge's vertex stays on the old border
     // polyline (the segment); an interior vertex collapsing onto a border
     // vertex leaves it where it is. Otherwise the free optimum.
-    let t_fixed = t_border && (opts.lock_border || !s_border);
+    let t_fixed = (t_border && (opts.lock_border || !s_border)) || m.is_locked(t);
     if s_border && !t_fixed {
         candidates[n_cand] = q.segment_minimum(ls, lt).0;
         n_cand += 1;

@@ -345,7 +345,7 @@ pub fn best_contraction(
         return None;
     }
     let border = sc.scan_s.border();
-    if border && opts.lock_border {
+    if (border && opts.lock_border) || m.is_locked(s) {
         return None;
     }
     let scan = &sc.scan_s;

@@ -53,6 +53,7 @@ pub fn compact(m: &mut WorkMesh, index: &mut Vec<u32>) {
     // Number the marked vertices in their old order.
     let mut next = 0u32;
     let (idx, pos, err) = (&mut index[..n], &mut m.pos[..n], &mut m.err[..n]);
+    let locked = !m.locked.is_empty();
     for v in 0..n {
         // Branch-free too: `next <= v`, so the copy is always in bounds
         // and an unmarked vertex's copy is overwritten or cut.
@@ -61,6 +62,15 @@ pub fn compact(m: &mut WorkMesh, index: &mut Vec<u32>) {
         pos[next as usize] = pos[v];
         err[next as usize] = err[v];
         next += used as u32;
+    }
+    if locked {
+        for v in 0..n {
+            let i = index[v];
+            if i != NONE {
+                m.locked[i as usize] = m.locked[v];
+            }
+        }
+        m.locked.truncate(next as usize);
     }
     let k = m.layout.k;
     if k > 0 && !has_wedges {

@@ -70,7 +70,25 @@ impl Simplifier {
     /// vertex and face arrays instead of copying them (that copy would be
     /// the peak), so the next call allocates those two again.
     pub fn simplify(&mut self, mesh: &TriMesh, opts: &Options) -> Result<Simplified, Error> {
-        self.simplify_with(mesh, None, opts)
+        self.simplify_with(mesh, None, None, opts)
+    }
+
+    /// [`Simplifier::simplify`] with the vertices flagged in `locked` (one
+    /// flag per input vertex) kept where they are: never contracted, and a
+    /// collapse onto one leaves it in place. Like `opts.lock_border`, but
+    /// for any chosen set: the vertices a part shares with its neighbours,
+    /// say, while the rest of its border simplifies freely. The target
+    /// may then be out of reach (the locked vertices stay). Errors: as
+    /// [`Simplifier::simplify`], and [`Error::AttributeLength`] when
+    /// `locked` is not one per vertex. Cost: as `simplify`, plus one byte
+    /// per vertex.
+    pub fn simplify_locked(
+        &mut self,
+        mesh: &TriMesh,
+        locked: &[bool],
+        opts: &Options,
+    ) -> Result<Simplified, Error> {
+        self.simplify_with(mesh, None, Some(locked), opts)
     }
 
     /// [`Simplifier::simplify`] with one group id per vertex (a material,
@@ -89,7 +107,7 @@ impl Simplifier {
         groups: &[u32],
         opts: &Options,
     ) -> Result<(Simplified, Vec<u32>), Error> {
-        let out = self.simplify_with(mesh, Some(groups), opts)?;
+        let out = self.simplify_with(mesh, Some(groups), None, opts)?;
         Ok((out, std::mem::take(&mut self.m.group)))
     }
 
@@ -97,10 +115,11 @@ impl Simplifier {
         &mut self,
         mesh: &TriMesh,
         groups: Option<&[u32]>,
+        locked: Option<&[bool]>,
         opts: &Options,
     ) -> Result<Simplified, Error> {
         let t0 = std::time::Instant::now();
-        self.start(mesh, opts, groups)?;
+        self.start(mesh, opts, groups, locked)?;
         let goal = opts.target.faces(self.input_faces);
         let stop = self.run_to(goal, opts);
         let estimated_error = self.m.max_error();
@@ -128,6 +147,7 @@ impl Simplifier {
         mesh: &TriMesh,
         opts: &Options,
         groups: Option<&[u32]>,
+        locked: Option<&[bool]>,
     ) -> Result<(), Error> {
         self.peak_bytes = 0;
         self.passes = 0;
@@ -138,7 +158,7 @@ impl Simplifier {
         // serves as the weld map here and as the vertex index table of
         // every compaction (it is rebuilt at the start of each pass).
         self.m
-            .load(mesh, &opts.weights, groups, &mut self.rings.off)?;
+            .load(mesh, &opts.weights, groups, locked, &mut self.rings.off)?;
         self.m.border_weight = crate::quadric::BORDER_WEIGHT;
         self.note_memory();
         if let Some(p) = opts.prune {

@@ -65,6 +65,10 @@ pub struct WorkMesh {
     /// Group id per wedge (per vertex when there are no wedges); empty
     /// when the input has no groups.
     pub group: Vec<u32>,
+    /// Per vertex: never contracted, and never moved by a collapse onto
+    /// it (see [`Simplifier::simplify_locked`](crate::Simplifier::simplify_locked));
+    /// empty when no vertex is locked this way.
+    pub locked: Vec<bool>,
     /// Weight of border planes (see `quadric::BORDER_WEIGHT`).
     pub border_weight: f64,
     /// The working frame: `pos` and `err` are the input's object-space
@@ -101,10 +105,11 @@ impl WorkMesh {
         mesh: &TriMesh,
         weights: &AttributeWeights,
         groups: Option<&[u32]>,
+        locked: Option<&[bool]>,
         scratch: &mut Vec<u32>,
     ) -> Result<(), Error> {
         let n = mesh.positions.len();
-        if groups.is_some_and(|g| g.len() != n) {
+        if groups.is_some_and(|g| g.len() != n) || locked.is_some_and(|l| l.len() != n) {
             return Err(Error::AttributeLength);
         }
         if n >= u32::MAX as usize - 1 {
@@ -171,6 +176,15 @@ impl WorkMesh {
         remap.reserve_exact(n + 1);
         let welded = weld_exact(&mesh.positions, remap);
         let has_dups = welded < n;
+        // A welded vertex is locked if any of its copies is.
+        self.locked.clear();
+        if let Some(l) = locked {
+            self.locked.reserve_exact(welded);
+            self.locked.resize(welded, false);
+            for (&w, &k) in remap.iter().zip(l) {
+                self.locked[w as usize] |= k;
+            }
+        }
 
         self.faces.clear();
         self.wedges.clear();
@@ -284,6 +298,13 @@ impl WorkMesh {
             + self.attr.capacity() * 4
             + self.wedges.capacity() * 12
             + self.group.capacity() * 4
+            + self.locked.capacity()
+    }
+
+    /// Whether vertex `v` is locked ([`WorkMesh::locked`]).
+    #[inline]
+    pub fn is_locked(&self, v: u32) -> bool {
+        !self.locked.is_empty() && self.locked[v as usize]
     }
 
     /// `2^scale_exp`: one object-space unit in the working frame.

@@ -294,6 +294,52 @@ fn lock_border_keeps_every_border_vertex_in_place() {
     assert_eq!(border_before, border_after);
 }
 
+/// `simplify_locked` keeps the chosen vertices, bit for bit, and
+/// simplifies the rest of the border: here the left half of the rim is
+/// locked and the right half is free.
+#[test]
+fn locked_vertices_stay_and_the_rest_of_the_border_simplifies() {
+    let m = terrain(30, 30);
+    let border: Vec<bool> = {
+        let mut b = vec![false; m.positions.len()];
+        for e in lodkit_mesh::topology::edge_multiplicities(&m) {
+            if e.count == 1 {
+                b[e.a as usize] = true;
+                b[e.b as usize] = true;
+            }
+        }
+        b
+    };
+    let mid = m.bbox().center().x;
+    let locked: Vec<bool> = (0..m.positions.len())
+        .map(|v| border[v] && m.positions[v].x < mid)
+        .collect();
+    let bits = |p: &Vec3| p.to_array().map(f32::to_bits);
+    let mut kept: Vec<[u32; 3]> = (0..m.positions.len())
+        .filter(|&v| locked[v])
+        .map(|v| bits(&m.positions[v]))
+        .collect();
+    kept.sort_unstable();
+    let out = lodkit_simplify::Simplifier::new()
+        .simplify_locked(&m, &locked, &Options::ratio(0.2))
+        .unwrap();
+    let after: std::collections::HashSet<[u32; 3]> = out.mesh.positions.iter().map(bits).collect();
+    assert!(
+        kept.iter().all(|k| after.contains(k)),
+        "a locked vertex moved"
+    );
+    // The free half of the rim lost vertices.
+    let free_before = border_positions(&m).len() - kept.len();
+    let free_after = border_positions(&out.mesh).len() - kept.len();
+    assert!(
+        free_after < free_before / 2,
+        "{free_after} of {free_before}"
+    );
+    let short =
+        lodkit_simplify::Simplifier::new().simplify_locked(&m, &locked[1..], &Options::ratio(0.2));
+    assert!(short.is_err());
+}
+
 fn border_positions(m: &TriMesh) -> Vec<[u32; 3]> {
     let mut v: Vec<[u32; 3]> = lodkit_mesh::topology::edge_multiplicities(m)
         .iter()
