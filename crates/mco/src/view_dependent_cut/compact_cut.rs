@@ -8,6 +8,31 @@ use super::*;
 
 /// All five planes of a [`Frustum`] still to test.
 const ALL_PLANES: u32 = 0b1_1111;
+/// Flags of a search stack entry, above its rank and planes: the rank's
+/// certificate was read when it was pushed and said nothing (`CHECKED`),
+/// or said it is wanted (`CERTIFIED`; no plane left to test).
+const CHECKED: u64 = 1 << 37;
+const CERTIFIED: u64 = 1 << 38;
+
+/// What rank `r`'s certificate in `slack` (see `ViewCut::slack`) says at
+/// `eye`, with `planes` still to test: `Some(false)`, its subtree holds
+/// no wanted node; `Some(true)`, it is wanted; `None`, nothing (none, one
+/// the eye has moved out of, or a wanted one while a plane is left).
+#[inline(always)]
+fn certificate(slack: &[[f32; 4]], eye: Vec3, r: u32, planes: u32) -> Option<bool> {
+    let s = slack.get(r as usize)?;
+    let m = s[3];
+    // False on a NaN eye, and on no certificate (0).
+    if (eye - Vec3::new(s[0], s[1], s[2])).length() < m.abs() {
+        if m > 0.0 {
+            return Some(false);
+        }
+        if planes == 0 {
+            return Some(true);
+        }
+    }
+    None
+}
 
 impl ViewCut {
     /// [`ViewCut::cut_into`] on a model's [`ViewLayout`].
@@ -115,30 +140,39 @@ impl ViewCut {
         let slack = &mut self.slack;
         let eye = fr.eye;
         let eye_size = eye.abs().max_element();
+        // A parent reads its children's certificates as it pushes them
+        // (ranks consecutive, so their entries are too): a rejected
+        // subtree is not pushed, and a pushed child carries what its
+        // certificate said.
+        let push_children = |stack: &mut Vec<u64>, slack: &[[f32; 4]], h: &Hot, planes: u32| {
+            let k = h.inner_mask.count_ones();
+            for c in h.first_inner..h.first_inner + k {
+                match certificate(slack, eye, c, planes) {
+                    Some(false) => {}
+                    Some(true) => stack.push(CERTIFIED | c as u64),
+                    None => stack.push(CHECKED | (planes as u64) << 32 | c as u64),
+                }
+            }
+        };
         stack.push((ALL_PLANES as u64) << 32);
         while let Some(entry) = stack.pop() {
-            let (r, planes) = (entry as u32, (entry >> 32) as u32);
-            if let Some(s) = slack.get(r as usize) {
-                // False on a NaN eye, and on no certificate (0).
-                let m = s[3];
-                if (eye - Vec3::new(s[0], s[1], s[2])).length() < m.abs() {
-                    if m > 0.0 {
-                        continue;
-                    }
-                    if planes == 0 {
-                        // Still projects above the tolerance, and in view
-                        // (no plane left to test): wanted, and its subtree
-                        // searched (its bound is at least its error, on a
-                        // cube around its own), with no plane to test
-                        // below (its bound is finite: see the
-                        // certificate).
-                        let h = &lay.hot[r as usize];
-                        wanted.push(r);
-                        let k = h.inner_mask.count_ones();
-                        stack.extend((h.first_inner..h.first_inner + k).map(|c| c as u64));
-                        continue;
-                    }
-                }
+            let (r, planes) = (entry as u32, (entry >> 32) as u32 & ALL_PLANES);
+            let certified = entry & CERTIFIED != 0
+                || (entry & CHECKED == 0
+                    && match certificate(slack, eye, r, planes) {
+                        Some(false) => continue,
+                        Some(w) => w,
+                        None => false,
+                    });
+            if certified {
+                // Still projects above the tolerance, and in view (no
+                // plane left to test): wanted, and its subtree searched
+                // (its bound is at least its error, on a cube around its
+                // own), with no plane to test below (its bound is finite:
+                // see the certificate).
+                wanted.push(r);
+                push_children(stack, slack, &lay.hot[r as usize], 0);
+                continue;
             }
             let h = &lay.hot[r as usize];
             let (lo, hi) = lay.cube(h);
@@ -188,10 +222,8 @@ impl ViewCut {
                     };
                 }
             }
-            let k = h.inner_mask.count_ones();
-            if k > 0 {
-                let below = (inner_planes(h, glo, ghi, planes) as u64) << 32;
-                stack.extend((h.first_inner..h.first_inner + k).map(|c| below | c as u64));
+            if h.inner_mask != 0 {
+                push_children(stack, slack, h, inner_planes(h, glo, ghi, planes));
             }
         }
         wanted.len()
