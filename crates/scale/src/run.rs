@@ -133,30 +133,11 @@ fn partition_ply(
     let mut n = 0u64;
     s.for_each_face(|f| {
         let tri = [corner(f[0])?, corner(f[1])?, corner(f[2])?];
-        n += 1;
-        if n.is_multiple_of(1 << 20) {
-            progress(Event::Advance(1 << 20));
-        }
-        w.put(grid.block_of(&tri), &tri)
-            .map_err(|e| lodkit_mesh::Error::Invalid(format!("{}: {e}", r0.display())))
+        put_face(&mut w, &grid, &tri, &mut n, progress, r0)
     })
     .map_err(|e| e.to_string())?;
     drop(table);
-    let reach = w.reach();
-    let counts = w.finish().map_err(io_err(r0))?;
-    let m = Manifest {
-        min: lo,
-        max: hi,
-        reach,
-        counts,
-    };
-    write_manifest(r0, &m).map_err(io_err(r0))?;
-    let counts = m.counts;
-    rep.input_faces = counts.iter().sum();
-    rep.bytes_written += rep.input_faces * layout.face_bytes();
-    rep.phases
-        .push(("partition".into(), t.elapsed().as_secs_f64()));
-    Ok((lo, hi))
+    finish_partition(w, r0, (lo, hi), layout, rep, t)
 }
 
 /// Round 0 from a binary STL: the bounding box, then each facet to its
@@ -192,16 +173,43 @@ fn partition_stl(
             position: p,
             ..Default::default()
         });
-        n += 1;
-        if n.is_multiple_of(1 << 20) {
-            progress(Event::Advance(1 << 20));
-        }
-        w.put(grid.block_of(&tri), &tri)
-            .map_err(|e| lodkit_mesh::Error::Invalid(format!("{}: {e}", r0.display())))
+        put_face(&mut w, &grid, &tri, &mut n, progress, r0)
     })
     .map_err(|e| e.to_string())?;
+    finish_partition(w, r0, (lo, hi), layout, rep, t)
+}
+
+/// One face of round 0's partition to its block, with progress every
+/// 2²⁰ faces (`n` counts them).
+fn put_face(
+    w: &mut Writers,
+    grid: &Grid,
+    tri: &[soup::Corner; 3],
+    n: &mut u64,
+    progress: &(dyn Fn(Event) + Sync),
+    r0: &Path,
+) -> lodkit_mesh::Result<()> {
+    *n += 1;
+    if n.is_multiple_of(1 << 20) {
+        progress(Event::Advance(1 << 20));
+    }
+    w.put(grid.block_of(tri), tri)
+        .map_err(|e| lodkit_mesh::Error::Invalid(format!("{}: {e}", r0.display())))
+}
+
+/// Closes round 0's writers: the manifest (bounding box `lo..hi`, reach,
+/// counts), and the partition's line in the report.
+fn finish_partition(
+    w: Writers,
+    r0: &Path,
+    (lo, hi): (Vec3, Vec3),
+    layout: Layout,
+    rep: &mut Report,
+    started: Instant,
+) -> Result<(Vec3, Vec3), String> {
     let reach = w.reach();
     let counts = w.finish().map_err(io_err(r0))?;
+    rep.input_faces = counts.iter().sum();
     let m = Manifest {
         min: lo,
         max: hi,
@@ -209,11 +217,9 @@ fn partition_stl(
         counts,
     };
     write_manifest(r0, &m).map_err(io_err(r0))?;
-    let counts = m.counts;
-    rep.input_faces = counts.iter().sum();
     rep.bytes_written += rep.input_faces * layout.face_bytes();
     rep.phases
-        .push(("partition".into(), t.elapsed().as_secs_f64()));
+        .push(("partition".into(), started.elapsed().as_secs_f64()));
     Ok((lo, hi))
 }
 
