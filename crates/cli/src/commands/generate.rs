@@ -52,36 +52,38 @@ pub struct BlobArgs {
 }
 
 pub fn run(ui: &Ui, cmd: &GenerateCmd) -> Result<()> {
-    match cmd {
-        GenerateCmd::Blob(a) => {
-            let step = ui.spinner(&format!("writing {}", a.output.display()));
-            let c = lodkit_mesh::shapes::write_blob_ply(&a.output, a.triangles, a.seed)?;
-            let t = step.finish();
-            ui.status(format!(
-                "wrote {} ({} triangles, {} vertices, {:.1} s)",
-                a.output.display(),
-                c.triangles,
-                c.vertices,
-                t.as_secs_f64()
-            ));
-            Ok(())
-        }
+    let (output, write): (&PathBuf, Box<dyn Fn() -> Result<_>>) = match cmd {
+        GenerateCmd::Blob(a) => (
+            &a.output,
+            Box::new(|| {
+                Ok(lodkit_mesh::shapes::write_blob_ply(
+                    &a.output,
+                    a.triangles,
+                    a.seed,
+                )?)
+            }),
+        ),
         GenerateCmd::Subdivided(a) => {
             let mesh =
                 lodkit_mesh::io::load_mesh(&a.input).map_err(|e| anyhow::anyhow!("{}", e))?;
-            let step = ui.spinner(&format!("writing {}", a.output.display()));
-            let c =
-                lodkit_mesh::shapes::write_subdivided_ply(&mesh, a.triangles, a.seed, &a.output)
-                    .map_err(|e| anyhow::anyhow!("{}: {e}", a.input.display()))?;
-            let t = step.finish();
-            ui.status(format!(
-                "wrote {} ({} triangles, {} vertices, {:.1} s)",
-                a.output.display(),
-                c.triangles,
-                c.vertices,
-                t.as_secs_f64()
-            ));
-            Ok(())
+            (
+                &a.output,
+                Box::new(move || {
+                    lodkit_mesh::shapes::write_subdivided_ply(&mesh, a.triangles, a.seed, &a.output)
+                        .map_err(|e| anyhow::anyhow!("{}: {e}", a.input.display()))
+                }),
+            )
         }
-    }
+    };
+    let step = ui.spinner(&format!("writing {}", output.display()));
+    let c = write()?;
+    let t = step.finish();
+    ui.status(format!(
+        "wrote {} ({} triangles, {} vertices, {:.1} s)",
+        output.display(),
+        c.triangles,
+        c.vertices,
+        t.as_secs_f64()
+    ));
+    Ok(())
 }
