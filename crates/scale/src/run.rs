@@ -784,9 +784,8 @@ fn write_manifest(dir: &Path, m: &Manifest) -> std::io::Result<()> {
     std::fs::rename(tmp, dir.join("parted"))
 }
 
-/// The manifest of a round folder; `None` if there is none, or one this
-/// lodkit does not read (an earlier version's: the round is partitioned
-/// again).
+/// The manifest of a round folder; `None` if there is none or it is
+/// unreadable (the round is partitioned again).
 fn read_manifest(dir: &Path) -> Option<Manifest> {
     let s = std::fs::read_to_string(dir.join("parted")).ok()?;
     let mut lines = s.lines();
@@ -796,16 +795,53 @@ fn read_manifest(dir: &Path) -> Option<Manifest> {
         .map(|w| u32::from_str_radix(w, 16).map(f32::from_bits))
         .collect::<Result<_, _>>()
         .ok()?;
-    if bb.len() != 7 {
-        return None;
-    }
+    // Six values: an earlier lodkit's manifest, without the reach; an
+    // infinite reach locks every border vertex, as that lodkit did, so a
+    // run it left is resumed by its rules.
+    let reach = match bb.len() {
+        6 => f32::INFINITY,
+        7 => bb[6],
+        _ => return None,
+    };
     let counts = lines
         .map(|l| l.parse().ok())
         .collect::<Option<Vec<u64>>>()?;
     Some(Manifest {
         min: Vec3::new(bb[0], bb[1], bb[2]),
         max: Vec3::new(bb[3], bb[4], bb[5]),
-        reach: bb[6],
+        reach,
         counts,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A manifest reads back as written; an earlier lodkit's (no reach)
+    /// reads with an infinite reach (every border vertex locked, its
+    /// rule); anything else is no manifest.
+    #[test]
+    fn manifests_read_back_and_earlier_ones_lock_every_border() {
+        let d = tempfile::tempdir().unwrap();
+        let m = Manifest {
+            min: Vec3::new(-1.0, 0.5, 2.0),
+            max: Vec3::new(3.0, 4.5, 6.25),
+            reach: 0.125,
+            counts: vec![3, 0, 7],
+        };
+        write_manifest(d.path(), &m).unwrap();
+        let r = read_manifest(d.path()).unwrap();
+        assert_eq!(
+            (r.min, r.max, r.reach, r.counts),
+            (m.min, m.max, m.reach, m.counts)
+        );
+        let old = "bf800000 3f000000 40000000 40400000 40900000 40c80000\n3\n0\n7\n";
+        std::fs::write(d.path().join("parted"), old).unwrap();
+        let r = read_manifest(d.path()).unwrap();
+        assert_eq!(r.reach, f32::INFINITY);
+        assert_eq!(r.counts, vec![3, 0, 7]);
+        std::fs::write(d.path().join("parted"), "bf800000 3f000000\n3\n").unwrap();
+        assert!(read_manifest(d.path()).is_none());
+    }
 }
