@@ -181,6 +181,7 @@ fn partition_stl(
 
 /// One face of round 0's partition to its block, with progress every
 /// 2²⁰ faces (`n` counts them).
+#[inline]
 fn put_face(
     w: &mut Writers,
     grid: &Grid,
