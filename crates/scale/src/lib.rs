@@ -20,6 +20,7 @@
 //! | [`needs_out_of_core`] | whether a file would not fit the in-core path in `memory` |
 //! | [`quality_memory`] | the budget from which the result matches the in-core error |
 //! | [`simplify_block`] | one block |
+//! | [`Cuts`], [`Grid`] | a round's grid, and which vertices may lie on its cuts (the ones a block locks) |
 //! | [`Runner`] | where the blocks run: this process's threads, or Ray tasks (`pylodkit.blocks`) |
 //! | [`write_tasks`], [`read_tasks`], [`run_task`] | a round's blocks as a task file, and one task run from it (what a Ray worker does) |
 //! | [`staging_dir`] | the resumable staging folder for an input, output and options |
@@ -40,6 +41,7 @@ mod tasks;
 
 pub use block::{BlockReport, Goal, simplify_block};
 pub use level_ply::write_soups_ply;
+pub use partition::{Cuts, Grid};
 pub use run::{ChainLevel, Event, Report, ScaleOptions, lod_chain_file, simplify_file};
 pub use runner::Runner;
 pub use staging::{default_memory, finished_blocks, staging_dir};
