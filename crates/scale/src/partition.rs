@@ -60,9 +60,10 @@ impl Grid {
     fn axis(&self, q: f32) -> usize {
         // The largest float below `g` (g >= 1); `max` first takes a NaN
         // to 0.
-        let top = f32::from_bits((self.g as f32).to_bits() - 1);
+        let g = self.g.max(1);
+        let top = f32::from_bits((g as f32).to_bits() - 1);
         let k = (q.max(0.0).min(top) + self.shift).floor() as i64;
-        k.rem_euclid(self.g as i64) as usize
+        k.rem_euclid(g as i64) as usize
     }
 }
 

@@ -91,8 +91,22 @@ impl CutsRecord {
         }
     }
 
-    fn cuts(&self) -> Cuts {
-        Cuts {
+    /// The cuts, or what is wrong with them: a grid of 1 to 64 blocks per
+    /// axis, finite corner and shift, cells finite and positive (a NaN or
+    /// negative reach is not refused: it locks every border vertex).
+    fn cuts(&self) -> Result<Cuts, String> {
+        let finite = |v: &[f32]| v.iter().all(|x| x.is_finite());
+        if !(1..=64).contains(&self.g)
+            || !finite(&self.min)
+            || !finite(&[self.shift])
+            || !self.cell.iter().all(|&c| c.is_finite() && c > 0.0)
+        {
+            return Err(format!(
+                "cuts {{ min {:?}, cell {:?}, g {}, shift {} }} are not a block grid",
+                self.min, self.cell, self.g, self.shift
+            ));
+        }
+        Ok(Cuts {
             grid: Grid {
                 min: Vec3::from_array(self.min),
                 cell: Vec3::from_array(self.cell),
@@ -100,7 +114,7 @@ impl CutsRecord {
                 shift: self.shift,
             },
             reach: self.reach,
-        }
+        })
     }
 }
 
@@ -201,7 +215,8 @@ pub fn write_tasks(
 /// resolved in the file's folder. Errors (one line naming the file): I/O,
 /// a file over 4 MiB, JSON that is not a task file of this version, more
 /// than 4,096 tasks, a block name that is not a plain file name (a
-/// separator, `..`, empty), a ratio outside [0, 1].
+/// separator, `..`, empty), a ratio outside [0, 1], cuts that are not a
+/// block grid.
 pub fn read_tasks(path: &Path) -> Result<(Options, Layout, Vec<BlockTask>), String> {
     let bad = |what: String| format!("{}: {what}", path.display());
     let len = std::fs::metadata(path)
@@ -260,7 +275,7 @@ pub fn read_tasks(path: &Path) -> Result<(Options, Layout, Vec<BlockTask>), Stri
                 input: plain(&t.input)?,
                 output: plain(&t.output)?,
                 goal,
-                cuts: t.cuts.cuts(),
+                cuts: t.cuts.cuts().map_err(bad)?,
                 faces: t.faces,
             })
         })
@@ -341,6 +356,10 @@ mod tests {
             let e = read_tasks(&path).unwrap_err();
             assert!(e.contains("plain file name"), "{name}: {e}");
         }
+        let json = r#"{"version":3,"options":{"max_error":null,"heap_size":1,"normal_weight":0,"color_weight":0,"uv_weight":0,"prune":null,"max_passes":8},"layout":"-","tasks":[{"input":"i","output":"o","ratio":0.5,"goal":"interior","cuts":{"min":[0,0,0],"cell":[1,1,1],"g":0,"shift":0,"reach":0.5},"faces":1}]}"#;
+        std::fs::write(&path, json).unwrap();
+        let e = read_tasks(&path).unwrap_err();
+        assert!(e.contains("not a block grid"), "{e}");
         std::fs::write(&path, "{").unwrap();
         assert!(
             read_tasks(&path)
