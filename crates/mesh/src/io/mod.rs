@@ -194,6 +194,19 @@ pub fn check_coordinates(model: &Model) -> Result<(), ParseError> {
     }
 }
 
+/// Opens `path` for a streaming reader: the file, its length, and its
+/// first `max` bytes (fewer in a shorter file), read from the start (the
+/// file is left after them). Errors: I/O, naming the path.
+pub(crate) fn open_head(path: &Path, max: u64) -> Result<(std::fs::File, u64, Vec<u8>)> {
+    use std::io::Read;
+    let io = |e| Error::io(path, e);
+    let mut f = std::fs::File::open(path).map_err(io)?;
+    let len = f.metadata().map_err(io)?.len();
+    let mut head = Vec::with_capacity(max.min(1 << 16) as usize);
+    (&mut f).take(max).read_to_end(&mut head).map_err(io)?;
+    Ok((f, len, head))
+}
+
 fn within_range(p: glam::Vec3) -> bool {
     p.abs().max_element() <= MAX_COORDINATE
 }

@@ -34,18 +34,8 @@ impl StlStream {
     /// file that is not a binary STL (ASCII, a count that disagrees with
     /// the size). Cost: the header only.
     pub fn open(path: &Path) -> Result<StlStream> {
-        let io = |e: std::io::Error| Error::Io {
-            path: path.to_path_buf(),
-            source: e,
-        };
-        let bad = |e: ParseError| Error::Parse {
-            path: path.to_path_buf(),
-            message: e.0,
-        };
-        let mut f = File::open(path).map_err(io)?;
-        let len = f.metadata().map_err(io)?.len();
-        let mut head = Vec::with_capacity(HEADER as usize);
-        (&mut f).take(HEADER).read_to_end(&mut head).map_err(io)?;
+        let bad = |e| Error::parse(path, e);
+        let (_, len, head) = crate::io::open_head(path, HEADER)?;
         let ascii = head.trim_ascii_start().starts_with(b"solid");
         let count = head
             .get(80..84)
@@ -76,10 +66,7 @@ impl StlStream {
     /// Calls `f` with each facet's corners in file order. Errors: I/O, a
     /// non-finite coordinate, or whatever `f` returns. Memory: the buffer.
     pub fn for_each_triangle(&self, mut f: impl FnMut([Vec3; 3]) -> Result<()>) -> Result<()> {
-        let io = |e: std::io::Error| Error::Io {
-            path: self.path.clone(),
-            source: e,
-        };
+        let io = |e| Error::io(&self.path, e);
         let mut file = File::open(&self.path).map_err(io)?;
         let mut head = [0u8; HEADER as usize];
         file.read_exact(&mut head).map_err(io)?;

@@ -82,21 +82,8 @@ impl PlyStream {
     /// Errors: I/O, a malformed header, a layout this reader does not
     /// stream, counts that cannot fit in the file. Cost: the header only.
     pub fn open(path: &Path) -> Result<PlyStream> {
-        let io = |e: std::io::Error| Error::Io {
-            path: path.to_path_buf(),
-            source: e,
-        };
-        let bad = |e: ParseError| Error::Parse {
-            path: path.to_path_buf(),
-            message: e.0,
-        };
-        let mut f = File::open(path).map_err(io)?;
-        let file_len = f.metadata().map_err(io)?.len();
-        let mut head = Vec::new();
-        (&mut f)
-            .take(MAX_HEADER as u64)
-            .read_to_end(&mut head)
-            .map_err(io)?;
+        let bad = |e| Error::parse(path, e);
+        let (_, file_len, head) = crate::io::open_head(path, MAX_HEADER as u64)?;
         let h = header::parse(&head).map_err(bad)?;
         let body_len = file_len - h.body_start as u64;
         // check_counts takes usize; on 64-bit targets the cast is exact.
@@ -198,17 +185,11 @@ impl PlyStream {
     }
 
     fn parse_error(&self, e: ParseError) -> Error {
-        Error::Parse {
-            path: self.path.clone(),
-            message: e.0,
-        }
+        Error::parse(&self.path, e)
     }
 
     fn reader(&self, at: u64) -> Result<Reader> {
-        let io = |e: std::io::Error| Error::Io {
-            path: self.path.clone(),
-            source: e,
-        };
+        let io = |e| Error::io(&self.path, e);
         let mut f = File::open(&self.path).map_err(io)?;
         f.seek(SeekFrom::Start(at)).map_err(io)?;
         Ok(Reader {
@@ -368,10 +349,7 @@ impl VertexReader<'_> {
             let first = page * self.per_page;
             let n = self.per_page.min(s.vertex_count - first) as usize * s.vertex_stride;
             let at = s.body_start + first * s.vertex_stride as u64;
-            let io = |e: std::io::Error| Error::Io {
-                path: s.path.clone(),
-                source: e,
-            };
+            let io = |e| Error::io(&s.path, e);
             self.file.seek(SeekFrom::Start(at)).map_err(io)?;
             self.file
                 .read_exact(&mut self.pages[base..base + n])
