@@ -52,15 +52,14 @@
 //!
 //! **Frame to frame** (a kept [`ViewCut`] on a model's compact layout, see
 //! `compact_cut`): a viewer's camera moves a little between frames, and
-//! its expanded set changes in a few hundred nodes. The search skips a
+//! its expanded set changes in a few hundred nodes. While the camera sees
+//! the whole model, the searched part of the tree is kept from cut to cut
+//! and only the nodes whose last test the eye's path may have overturned
+//! are tested again (see `frontier`); otherwise the search skips a
 //! subtree it last rejected on its bound's projection while the eye stays
 //! nearer than the distance that rejection had to spare (the distance to
-//! a box moves no faster than the eye), and takes a node it last found
-//! projecting above the tolerance as wanted without projecting it again
-//! while the eye stays within that test's spare distance and no frustum
-//! plane is left to test (a camera that sees the whole model); the
-//! closure is updated from the last one, only around the wanted nodes
-//! that changed (see `closure`);
+//! a box moves no faster than the eye). The closure is updated from the
+//! last one, only around the wanted nodes that changed (see `closure`);
 //! the emission copies, from the last cut's buffer, the triangles of every
 //! node whose children and crack patches' coarse neighbours kept their
 //! state. None of these changes the result: the same triangles in the
@@ -74,6 +73,7 @@ use crate::model::McoModel;
 
 mod closure;
 mod compact_cut;
+mod frontier;
 mod layout;
 use layout::*;
 
@@ -350,11 +350,11 @@ impl McoModel {
 ///   instead of searching (cheaper at that size; the same set). The first
 ///   cut of a model also builds its compact layout (`O(nodes + triangles)`,
 ///   kept in the model). From one cut to the next of a moving camera, a
-///   kept state re-tests only the subtrees the eye may have come within
-///   reach of, updates the closure only around the wanted nodes that
+///   kept state re-tests only the nodes whose answer the eye's move may
+///   have changed, updates the closure only around the wanted nodes that
 ///   changed, and re-emits only the nodes whose neighbourhood changed
 ///   (the rest is copied from the last cut, kept here: one more index
-///   buffer, about 20 bytes per inner node and 4 per LOD step).
+///   buffer, about 40 bytes per inner node and 4 per LOD step).
 #[derive(Debug, Clone, Default)]
 pub struct ViewCut {
     /// Per node: expanded in the current cut. True exactly for `expanded`.
@@ -418,6 +418,9 @@ pub struct ViewCut {
     gsupport: Vec<i32>,
     inc_count: usize,
     work: Vec<u64>,
+    /// The searched tree a kept cut updates while the camera sees the
+    /// whole model (see `frontier`); it keeps `want` as its wanted set.
+    front: frontier::Frontier,
     /// The buffer the next [`ViewCut::update`] emits into (the one before
     /// the last cut's, its allocation reused).
     spare: Vec<u32>,
@@ -493,6 +496,12 @@ impl ViewCut {
     /// Triangles of the last cut.
     pub fn triangles(&self) -> usize {
         self.prev.len() / 3
+    }
+
+    /// Whether the last cut searched through a kept frontier (tests).
+    #[cfg(test)]
+    pub(crate) fn used_frontier(&self) -> bool {
+        self.front.kept()
     }
 
     /// Nodes the last cut expanded (0: the root alone is drawn).

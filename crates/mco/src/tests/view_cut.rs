@@ -243,3 +243,63 @@ fn a_subtree_rejected_by_a_hair_is_searched_again() {
         }
     }
 }
+
+/// A kept [`ViewCut`] whose camera sees the whole model keeps its
+/// searched tree from cut to cut and tests again only what the eye's path
+/// may have changed (see `frontier`): along a long path — orbits in steps
+/// of 0.3° to 8°, steps of one unit in the last place, the same camera
+/// again, jumps far away and back, an orbit farther than the expiry
+/// queue's ring reaches, zooms
+/// into the model (where frustum planes are tested, so the tree is
+/// searched anew after) and a tolerance change, long enough that the
+/// path is re-based several times — every cut equals a fresh one, and
+/// every tenth the scan's.
+#[test]
+fn a_kept_frontier_along_a_long_path_equals_fresh_cuts() {
+    let blob = McoModel::from_bytes(&model(&shapes::blob(20_000), 48).to_bytes()).unwrap();
+    let (lo, hi) = blob.bounds();
+    let (c, r) = ((lo + hi) * 0.5, (hi - lo).length());
+    let mut state = ViewCut::new();
+    let (mut fresh, mut reference) = (Vec::new(), Vec::new());
+    let mut a = 0.0f32;
+    let mut frontier = 0;
+    let mut last = Camera::looking_at(c + Vec3::X * r, c);
+    for step in 0..420 {
+        let tol = if step < 300 { 6.0 } else { 9.0 };
+        let cam = match step % 60 {
+            // Far away (a re-based path), then back.
+            20..=22 => Camera::looking_at(c + Vec3::new(0.3, 0.5, 1.0) * r * 60.0, c),
+            // Away by more than the ring spans, and an orbit there
+            // (expiries beyond the ring).
+            25..=32 => {
+                a += 8f32.to_radians();
+                Camera::looking_at(c + Vec3::new(a.cos(), 0.35, a.sin()) * r * 12.0, c)
+            }
+            // Into the model: planes to test.
+            40..=42 => Camera::looking_at(c + Vec3::new(a.cos(), 0.1, a.sin()) * r * 0.3, c),
+            // One unit in the last place, and the same camera again.
+            50 | 51 => {
+                let mut cam = last;
+                if step % 60 == 50 {
+                    cam.position.x = f32::from_bits(cam.position.x.to_bits() + 1);
+                }
+                cam
+            }
+            k => {
+                a += (0.3 + 7.7 * ((k % 9) as f32 / 8.0)).to_radians();
+                let dist = 1.2 + 0.4 * (step as f32 * 0.07).sin();
+                Camera::looking_at(c + Vec3::new(a.cos(), 0.35, a.sin()) * r * dist, c)
+            }
+        };
+        last = cam;
+        let kept = state.update(&blob, &cam, tol).to_vec();
+        frontier += state.used_frontier() as usize;
+        blob.extract_view(&cam, tol, &mut fresh);
+        assert_eq!(kept, fresh, "step {step}: kept state vs fresh cut");
+        if step % 10 == 0 {
+            blob.extract_expanded(&select(&blob, &cam, tol), &mut reference);
+            assert_eq!(kept, reference, "step {step}: vs the scan");
+        }
+    }
+    assert!(frontier > 300, "{frontier} cuts through the kept frontier");
+}

@@ -25,36 +25,50 @@
 use super::*;
 
 impl ViewCut {
+    /// Makes the incremental closure's state fit `lay`: kept when it is
+    /// this layout's (returns true), else reset to nothing wanted and
+    /// nothing expanded (false).
+    pub(super) fn closure_state(&mut self, model: &McoModel, lay: &ViewLayout) -> bool {
+        let ranks = lay.ranks();
+        let words = ranks.div_ceil(64);
+        if self.inc_layout == lay.id && self.want.len() == words {
+            return true;
+        }
+        for v in [&mut self.bits, &mut self.want] {
+            v.clear();
+            v.resize(words, 0);
+        }
+        self.support.clear();
+        self.support.resize(ranks, 0);
+        self.gsupport.clear();
+        self.gsupport.resize(model.groups.len(), 0);
+        self.inc_count = 0;
+        self.inc_layout = lay.id;
+        false
+    }
+
     /// The closure of the wanted ranks in `queue`, from the last cut's
     /// state where it is kept for this layout (else from nothing); the bits
     /// are left in `bits`, and the expanded count is returned.
     #[inline(never)]
     pub(super) fn close_incremental(&mut self, model: &McoModel, lay: &ViewLayout) -> usize {
-        let ranks = lay.ranks();
-        let words = ranks.div_ceil(64);
-        if self.inc_layout != lay.id || self.want.len() != words {
-            for v in [&mut self.bits, &mut self.want] {
-                v.clear();
-                v.resize(words, 0);
-            }
-            self.support.clear();
-            self.support.resize(ranks, 0);
-            self.gsupport.clear();
-            self.gsupport.resize(model.groups.len(), 0);
-            self.inc_count = 0;
-            self.inc_layout = lay.id;
-        }
+        self.closure_state(model, lay);
         let now = &mut self.new_want;
         now.clear();
-        now.resize(words, 0);
+        now.resize(self.want.len(), 0);
         for &r in &self.queue {
             now[(r >> 6) as usize] |= 1 << (r & 63);
         }
-        // The changes, as worklist entries: a rank, and above it 1 for a
-        // unit of support gained, 0 for one lost.
+        self.work.clear();
+        self.want_changes();
+        self.apply_closure_work(model, lay)
+    }
+
+    /// Onto `work`, the changes from `want` to `new_want` (see
+    /// `apply_closure_work`); `new_want` becomes `want`.
+    pub(super) fn want_changes(&mut self) {
         let work = &mut self.work;
-        work.clear();
-        for (w, (&n, &o)) in now.iter().zip(&self.want).enumerate() {
+        for (w, (&n, &o)) in self.new_want.iter().zip(&self.want).enumerate() {
             let mut x = n ^ o;
             while x != 0 {
                 let j = x.trailing_zeros();
@@ -63,6 +77,14 @@ impl ViewCut {
             }
         }
         std::mem::swap(&mut self.want, &mut self.new_want);
+    }
+
+    /// Applies the wanted set's changes in `work` (a rank, and above it 1
+    /// for a unit of support gained, 0 for one lost) to the closure kept
+    /// for `lay` (`closure_state`); returns the expanded count.
+    #[inline(never)]
+    pub(super) fn apply_closure_work(&mut self, model: &McoModel, lay: &ViewLayout) -> usize {
+        let work = &mut self.work;
         let bits = &mut self.bits;
         let mut count = self.inc_count as isize;
         let g = &model.groups;

@@ -57,11 +57,23 @@ impl ViewCut {
         }
         self.queue.clear();
         let fr = Frustum::new(model, camera, tolerance_px);
-        self.last_wanted = self.search(model, lay, &fr);
-        let count = if incremental {
-            self.close_incremental(model, lay)
+        let count = if incremental && Self::frontier_applies(lay, &fr) {
+            // A camera that sees the whole model: the searched tree kept
+            // from the last cut, updated where the step changed it (see
+            // `frontier`), and its changes into the closure.
+            let kept = self.closure_state(model, lay);
+            self.last_wanted = self.search_frontier(lay, &fr, kept);
+            self.apply_closure_work(model, lay)
         } else {
-            self.close(model, lay)
+            // The closure's wanted set now changes without the searched
+            // tree: it is searched anew when next used.
+            self.front.forget();
+            self.last_wanted = self.search(model, lay, &fr);
+            if incremental {
+                self.close_incremental(model, lay)
+            } else {
+                self.close(model, lay)
+            }
         };
         self.emit(model, lay, out);
         count

@@ -113,6 +113,10 @@ pub(crate) struct ViewLayout {
     /// the groups with the ranks outside every group, ordered by level,
     /// make the closure's links acyclic. True for every built model.
     pub(super) incremental: bool,
+    /// Whether every subtree bound is finite (true for every built model):
+    /// then a subtree's cubes all lie in its root's grown cube, and a
+    /// camera that contains the root's sees every node (see `frontier`).
+    pub(super) finite: bool,
 }
 
 impl ViewLayout {
@@ -318,10 +322,12 @@ impl ViewLayout {
             watch_off = off;
         }
         let incremental = closure_is_layered(m, &hot, &close, &links, &lod);
+        let finite = hot.iter().all(|h| h.bound.is_finite());
         static NEXT_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
         Some(ViewLayout {
             id: NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
             incremental,
+            finite,
             watch_off,
             watchers,
             hot,
