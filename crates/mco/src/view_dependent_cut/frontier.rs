@@ -84,6 +84,8 @@ pub(super) struct Frontier {
     /// Ranks to add to the searched tree, and to remove from it.
     add: Vec<u32>,
     drop: Vec<u32>,
+    /// Per rank: its expiry is passed (to test again, in rank order).
+    due: Vec<u64>,
     /// An empty list, its allocation kept.
     scratch: Vec<u64>,
 }
@@ -160,10 +162,10 @@ impl Frontier {
         }
     }
 
-    /// Tests again the live entries of `list` the path passed (`passed`:
+    /// Marks due the live entries of `list` the path passed (`passed`:
     /// the path rounded up to an `f32`), queues the other live ones
     /// again, and drops the stale ones; `list` is left empty.
-    fn sort_out(&mut self, u: &mut Update, list: &mut Vec<u64>, passed: f32) {
+    fn sort_out(&mut self, list: &mut Vec<u64>, passed: f32) {
         for entry in list.drain(..) {
             let (r, bits) = (entry as u32, (entry >> 32) as u32);
             if self.expiry[r as usize].to_bits() != bits {
@@ -171,9 +173,7 @@ impl Frontier {
             }
             let e = f32::from_bits(bits);
             if e < passed {
-                if self.visit(u, r) {
-                    self.settle(u);
-                }
+                self.due[(r >> 6) as usize] |= 1 << (r & 63);
             } else {
                 self.queue(r, e);
             }
@@ -182,9 +182,9 @@ impl Frontier {
 
     /// Tests again every searched rank whose expiry the path passed (and
     /// a few more: an expiry under the path rounded up to an `f32`, and
-    /// the buckets' rounding), in no particular order: a rank tested
-    /// before its ancestor is removed with it after, or stays searched
-    /// with the answers of its test.
+    /// the buckets' rounding), in rank order: a parent before its
+    /// children (a rank its ancestor removed is not tested), and the
+    /// layout's records read forward.
     fn retest_due(&mut self, u: &mut Update) {
         let passed = {
             let p = self.path as f32;
@@ -196,7 +196,7 @@ impl Frontier {
         };
         let mut list = std::mem::take(&mut self.scratch);
         std::mem::swap(&mut list, &mut self.soon);
-        self.sort_out(u, &mut list, passed);
+        self.sort_out(&mut list, passed);
         // Every bucket that starts before the path; past a whole ring,
         // every ring bucket once, and `far` at once.
         let end = (self.path / self.width).ceil() as u32;
@@ -208,14 +208,25 @@ impl Frontier {
         while self.next < end {
             std::mem::swap(&mut list, &mut self.ring[self.next as usize % RING]);
             self.next += 1;
-            self.sort_out(u, &mut list, passed);
+            self.sort_out(&mut list, passed);
         }
         if far_now || self.next >= self.far_check {
             std::mem::swap(&mut list, &mut self.far);
-            self.sort_out(u, &mut list, passed);
+            self.sort_out(&mut list, passed);
             self.far_check = self.next + RING as u32 / 2;
         }
         self.scratch = list;
+        for w in 0..self.due.len() {
+            let mut x = std::mem::take(&mut self.due[w]);
+            while x != 0 {
+                let r = (w as u32) << 6 | x.trailing_zeros();
+                x &= x - 1;
+                // Removed with an ancestor tested before it.
+                if self.expiry[r as usize] != f32::INFINITY && self.visit(u, r) {
+                    self.settle(u);
+                }
+            }
+        }
     }
 
     /// Drops the state: the next [`ViewCut::search_frontier`] searches
@@ -336,6 +347,8 @@ impl ViewCut {
             f.expiry.resize(ranks, f32::INFINITY);
             f.pass.clear();
             f.pass.resize(ranks.div_ceil(64), 0);
+            f.due.clear();
+            f.due.resize(ranks.div_ceil(64), 0);
             f.ring.resize_with(RING, Vec::new);
             f.width = (root_size * WIDTH_ROOTS) as f64;
             f.per_width = (1.0 / f.width) as f32;
