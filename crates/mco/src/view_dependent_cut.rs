@@ -347,7 +347,9 @@ impl McoModel {
 ///   per-node flags are allocated once (one byte per node) and cleared
 ///   through the previous cut's list of expanded nodes. After a cut that
 ///   wanted more than a 40th of the nodes, the next one scans the nodes
-///   instead of searching (cheaper at that size; the same set). The first
+///   instead of searching (cheaper at that size; the same set), unless a
+///   kept state updates its searched tree (a camera that sees the whole
+///   model: the cost is then that of what the step changed). The first
 ///   cut of a model also builds its compact layout (`O(nodes + triangles)`,
 ///   kept in the model). From one cut to the next of a moving camera, a
 ///   kept state re-tests only the nodes whose answer the eye's move may
