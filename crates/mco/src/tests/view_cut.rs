@@ -23,6 +23,15 @@ fn model(mesh: &lodkit_mesh::TriMesh, resolution: u32) -> McoModel {
     .unwrap()
 }
 
+/// The 20k-triangle blob as read back from its `.mco` (nodes in LOD
+/// order, as a reader sees them), its bounds' centre and diagonal.
+fn loaded_blob() -> (McoModel, Vec3, f32) {
+    let blob = McoModel::from_bytes(&model(&shapes::blob(20_000), 48).to_bytes()).unwrap();
+    let (lo, hi) = blob.bounds();
+    let (c, r) = ((lo + hi) * 0.5, (hi - lo).length());
+    (blob, c, r)
+}
+
 /// A camera path around the model's root cube: an orbit that zooms from
 /// far outside to inside the cube, glances past it, looks away, and
 /// changes the tolerance and viewport on the way.
@@ -198,15 +207,11 @@ fn a_kept_view_cut_along_small_steps_equals_the_scan() {
 
 /// A camera that sees the whole model, orbiting in steps of a viewer
 /// (0.75° to 6°, the distance changing too): no frustum plane is left to
-/// test below the root, so a kept state takes the nodes it last found
-/// projecting above the tolerance as wanted while the eye stays near
-/// enough; the cut still equals the scan's at every step. (8 pixels: a
-/// cut small enough on this small model for the search, not the scan.)
+/// test below the root, so a kept state updates its searched tree (see
+/// `frontier`); the cut still equals the scan's at every step.
 #[test]
 fn a_kept_view_cut_orbiting_the_whole_model_equals_the_scan() {
-    let blob = McoModel::from_bytes(&model(&shapes::blob(20_000), 48).to_bytes()).unwrap();
-    let (lo, hi) = blob.bounds();
-    let (c, r) = ((lo + hi) * 0.5, (hi - lo).length());
+    let (blob, c, r) = loaded_blob();
     let mut state = ViewCut::new();
     let mut reference = Vec::new();
     let mut a = 0.0f32;
@@ -224,22 +229,28 @@ fn a_kept_view_cut_orbiting_the_whole_model_equals_the_scan() {
 /// certifies nothing: a kept state cutting the same camera again (the
 /// eye has not moved, so every certificate applies) gives the scan's cut.
 /// The tolerances put one subtree's bound a hair short of its distance
-/// each, with the whole model in view (no frustum plane left to test).
+/// each; one camera sees the whole model (the kept searched tree of
+/// `frontier`), the other stands nearer, where the frustum cuts the
+/// root's cube (the search with its certificates).
 #[test]
 fn a_subtree_rejected_by_a_hair_is_searched_again() {
-    let blob = McoModel::from_bytes(&model(&shapes::blob(20_000), 48).to_bytes()).unwrap();
-    let (lo, hi) = blob.bounds();
-    let (c, r) = ((lo + hi) * 0.5, (hi - lo).length());
-    let cam = Camera::looking_at(c + Vec3::new(0.8, 0.35, 0.5) * r * 1.2, c);
-    let tols = hairline_tolerances(&blob, &cam, 40);
-    assert!(tols.len() >= 20, "{} tolerances", tols.len());
-    let mut reference = Vec::new();
-    for tol in tols {
-        let mut state = ViewCut::new();
-        blob.extract_expanded(&select(&blob, &cam, tol), &mut reference);
-        for pass in 0..2 {
-            let kept = state.update(&blob, &cam, tol).to_vec();
-            assert_eq!(kept, reference, "tolerance {tol}, pass {pass}");
+    let (blob, c, r) = loaded_blob();
+    for (dist, whole) in [(1.2, true), (0.75, false)] {
+        let cam = Camera::looking_at(c + Vec3::new(0.8, 0.35, 0.5) * r * dist, c);
+        let tols = hairline_tolerances(&blob, &cam, 40);
+        assert!(tols.len() >= 20, "{} tolerances", tols.len());
+        let mut reference = Vec::new();
+        for tol in tols {
+            let mut state = ViewCut::new();
+            blob.extract_expanded(&select(&blob, &cam, tol), &mut reference);
+            for pass in 0..2 {
+                let kept = state.update(&blob, &cam, tol).to_vec();
+                assert_eq!(
+                    kept, reference,
+                    "distance {dist}, tolerance {tol}, pass {pass}"
+                );
+                assert_eq!(state.used_frontier(), whole, "distance {dist}");
+            }
         }
     }
 }
@@ -256,9 +267,7 @@ fn a_subtree_rejected_by_a_hair_is_searched_again() {
 /// every tenth the scan's.
 #[test]
 fn a_kept_frontier_along_a_long_path_equals_fresh_cuts() {
-    let blob = McoModel::from_bytes(&model(&shapes::blob(20_000), 48).to_bytes()).unwrap();
-    let (lo, hi) = blob.bounds();
-    let (c, r) = ((lo + hi) * 0.5, (hi - lo).length());
+    let (blob, c, r) = loaded_blob();
     let mut state = ViewCut::new();
     let (mut fresh, mut reference) = (Vec::new(), Vec::new());
     let mut a = 0.0f32;
