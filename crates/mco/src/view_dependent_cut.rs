@@ -233,6 +233,27 @@ impl Frustum {
     }
 }
 
+/// How far the eye may move while `a > b` holds, for `a` and `b` a
+/// distance and a reach as [`Frustum::distance_and_reach`] computes them
+/// (either way round): their difference less the rounding of both, a
+/// relative 2⁻¹⁶ of the lengths and of `size`, the coordinates'
+/// magnitude (the box's plus the eye's). Not positive: no margin. The
+/// certificates of a kept [`ViewCut`] (`ViewCut::slack`, and the
+/// frontier's expiries) are made of it.
+#[inline(always)]
+fn excess(a: f32, b: f32, size: f32) -> f32 {
+    a - b - (a + b + size) * (1.0 / 65536.0)
+}
+
+/// How far the eye may move while [`Frustum::projects`] stays true for a
+/// box at distance `d` whose error reaches `reach` (`distance_and_reach`):
+/// [`excess`] less 2⁻¹¹ of the reach, far above the 2⁻¹² growth the
+/// reach carries and the rounding of the quotient in `projects`.
+#[inline(always)]
+fn projecting_margin(d: f32, reach: f32, size: f32) -> f32 {
+    excess(reach * (1.0 - 1.0 / 2048.0), d, size)
+}
+
 /// A node's geometric error: the square root of its LOD metric (object
 /// units; a negative or NaN metric counts as 0).
 #[inline]

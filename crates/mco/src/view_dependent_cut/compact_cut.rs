@@ -157,8 +157,7 @@ impl ViewCut {
         // subtree is not pushed, and a pushed child carries what its
         // certificate said.
         let push_children = |stack: &mut Vec<u64>, slack: &[[f32; 4]], h: &Hot, planes: u32| {
-            let k = h.inner_mask.count_ones();
-            for c in h.first_inner..h.first_inner + k {
+            for c in h.inner_children() {
                 match certificate(slack, eye, c, planes) {
                     Some(false) => {}
                     Some(true) => stack.push(CERTIFIED | c as u64),
@@ -196,7 +195,7 @@ impl ViewCut {
                 if !may_project {
                     if let Some(s) = slack.get_mut(r as usize) {
                         let size = glo.abs().max(ghi.abs()).max_element() + eye_size;
-                        let spare = d - reach - (d + reach + size) * (1.0 / 65536.0);
+                        let spare = excess(d, reach, size);
                         // A spare under the rounding margin certifies
                         // nothing; recorded as negative, it would read as
                         // the certificate of a wanted node.
@@ -218,15 +217,10 @@ impl ViewCut {
                     && let Some(s) = slack.get_mut(r as usize)
                 {
                     // The certificate that the node keeps projecting
-                    // above the tolerance: the distance `projects`
-                    // computes is below the error's reach by the margin,
-                    // less the reach's own growth and the rounding of both
-                    // (the relative 2⁻¹⁶ above, and 2⁻¹¹ of the reach,
-                    // far above the 2⁻¹² growth `reach` carries).
+                    // above the tolerance.
                     let (d, reach) = fr.distance_and_reach(lo, hi, h.err);
-                    let low = reach * (1.0 - 1.0 / 2048.0);
                     let size = lo.abs().max(hi.abs()).max_element() + eye_size;
-                    let margin = low - d - (d + low + size) * (1.0 / 65536.0);
+                    let margin = projecting_margin(d, reach, size);
                     *s = if margin > 0.0 {
                         [eye.x, eye.y, eye.z, -margin]
                     } else {

@@ -105,23 +105,19 @@ fn test(lay: &ViewLayout, fr: &Frustum, eye_size: f32, r: u32) -> (bool, bool, f
     // that of the grown cube, and so of the cube.
     let size = h.grow * (262_144.0 + 16.0) + eye_size;
     let (d, reach) = fr.distance_and_reach(glo, ghi, h.bound);
-    let rounding = (d + reach + size) * (1.0 / 65536.0);
     // False on a NaN, as in the search.
     let may_project = reach > d;
     if !may_project {
-        return (false, false, d - reach - rounding);
+        return (false, false, excess(d, reach, size));
     }
-    let passes = reach - d - rounding;
+    let passes = excess(reach, d, size);
     let wanted = fr.projects(lo, hi, h.err);
     let (d, reach) = fr.distance_and_reach(lo, hi, h.err);
     let own = if wanted {
-        // As the search's certificate of a wanted node: 2⁻¹¹ of the reach
-        // for its growth and the quotient's rounding in `projects`.
-        let low = reach * (1.0 - 1.0 / 2048.0);
-        low - d - (d + low + size) * (1.0 / 65536.0)
+        projecting_margin(d, reach, size)
     } else {
         // `reach ≤ d` rules `projects` out (see `distance_and_reach`).
-        d - reach - (d + reach + size) * (1.0 / 65536.0)
+        excess(d, reach, size)
     };
     (true, wanted, passes.min(own))
 }
@@ -269,7 +265,7 @@ impl Frontier {
         if (self.pass[w] & bit != 0) != passes {
             self.pass[w] ^= bit;
             let h = &u.lay.hot[r as usize];
-            let children = h.first_inner..h.first_inner + h.inner_mask.count_ones();
+            let children = h.inner_children();
             if passes {
                 self.add.extend(children);
             } else {
@@ -298,8 +294,7 @@ impl Frontier {
             if self.pass[w] & bit != 0 {
                 self.pass[w] ^= bit;
                 let h = &u.lay.hot[r as usize];
-                self.drop
-                    .extend(h.first_inner..h.first_inner + h.inner_mask.count_ones());
+                self.drop.extend(h.inner_children());
             }
         }
         // A rank added is not searched: neither wanted nor passing, so

@@ -119,6 +119,15 @@ pub(crate) struct ViewLayout {
     pub(super) finite: bool,
 }
 
+impl Hot {
+    /// The ranks of the node's inner children (consecutive, see
+    /// `first_inner`).
+    #[inline(always)]
+    pub(super) fn inner_children(&self) -> std::ops::Range<u32> {
+        self.first_inner..self.first_inner + self.inner_mask.count_ones()
+    }
+}
+
 impl ViewLayout {
     /// The layout of `m`, or `None` when `m` is not regular (see the type
     /// docs) or its arrays do not fit `u32` offsets.
