@@ -51,6 +51,23 @@ if [ ! -f "$models/blob_1m.pop" ]; then
   "$lodkit" --quiet pop encode "$work/blob_1m.ply" -o "$models/blob_1m.pop"
   rm -f "$work/blob_1m.ply"
 fi
+# A coloured point cloud (a bumpy sphere, 40,000 points, colours by
+# position): its `.mco` and its `.pop`, for the checks of other input kinds.
+if [ ! -f "$models/cloud.mco" ] || [ "$lodkit" -nt "$models/cloud.mco" ]; then
+  node -e '
+const n = 40000, lines = [];
+for (let i = 0; i < n; i++) {
+  const z = 1 - (2 * (i + 0.5)) / n, r = Math.sqrt(1 - z * z), a = i * 2.399963229728653;
+  const x = r * Math.cos(a), y = r * Math.sin(a);
+  const s = 1 + 0.08 * Math.sin(5 * x) * Math.sin(4 * y) * Math.sin(3 * z);
+  const c = [x, y, z].map((v) => Math.round(40 + 200 * (v + 1) / 2));
+  lines.push(`${(x * s).toFixed(6)} ${(y * s).toFixed(6)} ${(z * s).toFixed(6)} ${c.join(" ")}`);
+}
+process.stdout.write(`ply\nformat ascii 1.0\nelement vertex ${n}\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n${lines.join("\n")}\n`);
+' > "$work/cloud.ply"
+  "$lodkit" --quiet mco build "$work/cloud.ply" -o "$models/cloud.mco"
+  "$lodkit" --quiet pop encode "$work/cloud.ply" -o "$models/cloud.pop"
+fi
 # The finest level, as the CLI reports it.
 level=$("$lodkit" pop stats "$models/$stem.pop" --json | node -e 'let s="";process.stdin.on("data",d=>s+=d).on("end",()=>{const j=JSON.parse(s);console.log(j.depth)})')
 "$native" digest "$models/$stem.pop" "$level" "$models/$stem.mco" 20000 > "$work/native.json"
@@ -70,7 +87,7 @@ ref.ply_faces = JSON.parse(fs.readFileSync(info, "utf8")).faces;
 const l = JSON.parse(fs.readFileSync(lods, "utf8"));
 // Level 0 of the chain GLB is the input itself (the MSFT_lod base node).
 ref.chain = [{ level: 0, triangles: ref.ply_faces }].concat(l.levels.map((v, i) => ({ level: i + 1, triangles: v.triangles })));
-ref.files = { pop: "stanford_bunny.pop", mco: "stanford_bunny.mco", chain: "lods/" + l.glb, ply: "stanford_bunny.ply", bigPop: "blob_1m.pop" };
+ref.files = { pop: "stanford_bunny.pop", mco: "stanford_bunny.mco", chain: "lods/" + l.glb, ply: "stanford_bunny.ply", bigPop: "blob_1m.pop", colouredMco: "cloud.mco", cloudPop: "cloud.pop" };
 fs.writeFileSync(out, JSON.stringify(ref, null, 1));
 ' "$work/native.json" "$work/ply_info.json" "$models/lods/lods.json" "$work/pop_decode.txt" "$work/mco_extract.txt" "$work/ref.json"
 

@@ -311,6 +311,35 @@ await check('mco at 1 Mbit/s: a coarse cut on screen before the file is complete
   };
 });
 
+// Outputs of the other input kinds: a coloured `.mco` and a `.pop` made
+// from a point cloud (scripts/ci-web.sh builds both from a coloured cloud
+// it writes), opened as a user would.
+if (ref.files.colouredMco) {
+  await check('coloured mco: opens, shows the model in its colours', async () => {
+    const { p, state, cov } = await openModel(`/models/${ref.files.colouredMco}`, 'mco-coloured.png');
+    const colours = await p.evaluate(() => {
+      const g = window.lodkitViewer.model.geometry;
+      const c = g.getAttribute('color');
+      if (!c) return 0;
+      const seen = new Set();
+      for (let i = 0; i < Math.min(c.count, 20000); i++) seen.add(`${c.getX(i).toFixed(2)},${c.getY(i).toFixed(2)},${c.getZ(i).toFixed(2)}`);
+      return seen.size;
+    });
+    assert(state.triangles > 0, `HUD ${state.triangles} triangles`);
+    assert(colours > 8, `${colours} distinct vertex colours in the cut`);
+    await p.close();
+    return { triangles: state.triangles, colours, coverage: +cov.toFixed(3) };
+  });
+}
+if (ref.files.cloudPop) {
+  await check('pop of a point cloud: streamed levels down to the finest', async () => {
+    const { p, state, cov } = await openModel(`/models/${ref.files.cloudPop}`, 'pop-cloud.png');
+    assert(state.triangles > 1000, `finest level ${state.level}: ${state.triangles} triangles`);
+    await p.close();
+    return { level: state.level, triangles: state.triangles, coverage: +cov.toFixed(3) };
+  });
+}
+
 await browser.close();
 if (server) await server.close();
 fs.writeFileSync(path.join(outDir, 'results.json'), JSON.stringify(results, null, 2));
