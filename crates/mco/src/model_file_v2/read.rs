@@ -42,6 +42,12 @@ pub struct Header {
     pub file_bytes: u64,
 }
 
+impl Header {
+    /// Bytes of the header at the start of a file: a prefix this long
+    /// gives [`McoStream::header`].
+    pub const BYTES: usize = HEADER_BYTES;
+}
+
 pub(super) fn le32(b: &[u8], at: usize) -> u32 {
     u32::from_le_bytes(b[at..at + 4].try_into().expect("4 bytes"))
 }
@@ -748,7 +754,7 @@ pub fn decode(bytes: &[u8]) -> Res<McoModel> {
 
 /// Reads a prefix of a version-2 file: the model of its complete chunks
 /// (a chunk cut short is ignored). Errors when the header or chunk 0 is
-/// incomplete, or on any bad byte in what is complete.
+/// incomplete, or on any bad byte or table in what is complete.
 pub fn decode_prefix(bytes: &[u8]) -> Res<PartialModel> {
     let mut s = McoStream::new();
     s.push_bytes(bytes)?;
@@ -758,8 +764,13 @@ pub fn decode_prefix(bytes: &[u8]) -> Res<PartialModel> {
             bytes.len()
         ));
     }
-    s.partial()
-        .ok_or_else(|| "no complete chunk yet (chunk 0 serves LOD 0)".into())
+    let model = s.snapshot()?;
+    Ok(PartialModel {
+        max_lod: model.max_lod(),
+        complete: s.is_complete(),
+        chunks: s.chunks.len(),
+        model,
+    })
 }
 
 /// The chunk table of a whole version-2 file (for `lodkit mco info`).
