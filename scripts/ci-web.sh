@@ -68,6 +68,11 @@ process.stdout.write(`ply\nformat ascii 1.0\nelement vertex ${n}\nproperty float
   "$lodkit" --quiet mco build "$work/cloud.ply" -o "$models/cloud.mco"
   "$lodkit" --quiet pop encode "$work/cloud.ply" -o "$models/cloud.pop"
 fi
+# The .mco decoder of the browser under Node: the bunny's model and a
+# coloured point cloud's (an open surface, its root cube holds triangles).
+node web/tests/mco-decode.mjs --write-sheet "$work/sheet.ply"
+"$lodkit" --quiet mco build "$work/sheet.ply" -o "$work/sheet.mco"
+LODKIT_WASM=$work/site/lodkit/lodkit.wasm node web/tests/mco-decode.mjs "$models/$stem.mco" "$work/sheet.mco:colors"
 # The finest level, as the CLI reports it.
 level=$("$lodkit" pop stats "$models/$stem.pop" --json | node -e 'let s="";process.stdin.on("data",d=>s+=d).on("end",()=>{const j=JSON.parse(s);console.log(j.depth)})')
 "$native" digest "$models/$stem.pop" "$level" "$models/$stem.mco" 20000 > "$work/native.json"

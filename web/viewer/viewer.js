@@ -130,7 +130,12 @@ function hud() {
     `bytes     ${fmtBytes(state.loaded)} / ${fmtBytes(state.total)}`,
   ];
   if (state.kind === 'pop') lines.push(`level     ${state.level} of ${state.levels ? state.levels - 1 : '?'}  (${state.precision} bits)`);
-  if (state.kind === 'mco') lines.push(state.level >= 0 ? `LOD       ${state.level}` : `view cut  ${state.expanded} nodes refined`);
+  if (state.kind === 'mco') {
+    // Before the first cut (or when the file cannot be read) there is none.
+    if (state.level >= 0) lines.push(`LOD       ${state.level}`);
+    else if (state.expanded >= 0) lines.push(`view cut  ${state.expanded} nodes refined`);
+    else lines.push('cut       -');
+  }
   if (state.kind === 'chain') lines.push(`level     ${state.level} of ${state.levels} (lod${state.level})`);
   lines.push(`triangles ${state.triangles.toLocaleString('en')}`);
   lines.push(`decode    ${state.decodeMs.toFixed(1)} ms`);

@@ -12,9 +12,9 @@
 //! or scan by scan with [`IncrementalBuilder`] —, keep it as a `.mco` file
 //! ([`McoModel::save`] / [`McoModel::load`], or [`McoModel::to_bytes`] /
 //! [`McoModel::from_bytes`] for an in-memory buffer), then cut it as often
-//! as needed. The file is LOD-ordered (`.mco` version 2, quantised and
-//! deflated chunks): any prefix of it serves every cut up to some LOD
-//! number, read with [`McoModel::from_prefix`], or with [`McoStream`] as
+//! as needed. The file is LOD-ordered (`.mco` version 2, deflated chunks)
+//! and lossless: the model read back cuts exactly as the model built. Any
+//! prefix of it serves every cut up to some LOD number, read with [`McoModel::from_prefix`], or with [`McoStream`] as
 //! the bytes arrive; [`McoModel::chunk_table`] lists what each chunk adds.
 //! Cuts:
 //!

@@ -540,10 +540,13 @@ fn validate_lod_tables(m: &McoModel) -> std::result::Result<(), String> {
 
 impl McoModel {
     /// The model as `.mco` bytes (`docs/formats/mco.md`, version
-    /// [`FORMAT_VERSION`]: LOD-ordered, quantised, deflated chunks, so any
-    /// prefix serves a coarse cut): deterministic — the same model always
-    /// gives the same bytes (no time stamps, no paths). Smaller than the
-    /// model's binary PLY on the shipped bunny. `O(size)`.
+    /// [`FORMAT_VERSION`]: LOD-ordered, deflated chunks, so any prefix
+    /// serves a coarse cut): deterministic — the same model always gives
+    /// the same bytes (no time stamps, no paths). Lossless for a built model
+    /// (or one read from version 2): [`McoModel::from_bytes`] gives a model whose every cut
+    /// is this one's, bit for bit (positions, normals, colours; vertices
+    /// renumbered). No larger than the model's binary PLY on the shipped
+    /// bunny. `O(size)`.
     pub fn to_bytes(&self) -> Vec<u8> {
         crate::model_file_v2::encode(self)
     }

@@ -8,7 +8,8 @@
 //! root, LOD number 0): for each step, the nodes it expands (their metric,
 //! balance dependencies and child count) and the records of the children
 //! that expansion makes drawable (octant, configuration, triangles, crack
-//! patches), then the vertices those records reference first. After chunks
+//! patches), then the vertices those records reference first (chunk 0's
+//! include the root's). After chunks
 //! `0..=c` every LOD number up to `K[c]` is served with exactly the
 //! triangles the whole file gives it.
 //!
@@ -32,10 +33,17 @@
 //! view-dependent cut equals the whole model's whenever that cut expands
 //! only covered LOD numbers.
 //!
-//! **Compactness.** Positions are quantised on the lattice box with
-//! [`position_bits`] bits per axis (error at most a 1024th of a leaf cube,
-//! [`position_error`]), normals octahedral with 2 × 16 bits, colours stored
-//! only when meaningful, indices as LEB128 varints relative to the running
+//! **Exactness.** A model read from its file cuts exactly as the model
+//! written, bit for bit: positions are quantised on the lattice box with
+//! [`position_bits`] bits per axis (within a 1024th of a leaf cube,
+//! [`position_error`]) and each coordinate's residual follows (header flag
+//! `FLAG_EXACT_POSITIONS`), so crack patching's compensation points stay on
+//! the coarse segments they close; a build puts its marching-cubes vertices
+//! on that grid ([`snapped_position`]), so most residuals are 0. Normals
+//! are octahedral with 2 × 16 bits, and a build keeps the normals those
+//! codes decode to ([`stored_normal`]).
+//!
+//! **Compactness.** Colours are stored only when meaningful, indices as LEB128 varints relative to the running
 //! vertex count (0 = a new vertex), node records 3 bytes plus their
 //! triangles and patches; each payload then deflated (a quarter smaller on
 //! the bunny). The accumulation table is not stored: it is
@@ -80,6 +88,9 @@ pub const MAX_CHUNK_TARGET: usize = 1 << 20;
 pub const NORMAL_BITS: u32 = 16;
 /// Header flag: vertex colours are meaningful (stored).
 const FLAG_COLORS: u32 = 1;
+/// Header flag: each vertex section ends with the positions' residuals, so
+/// positions read back bit for bit (every file lodkit writes sets it).
+const FLAG_EXACT_POSITIONS: u32 = 2;
 /// Node record byte 0: the cube coordinates and level are written out
 /// instead of derived from the parent (octant in bits 0–2).
 const EXPLICIT: u8 = 1 << 3;
@@ -181,7 +192,6 @@ fn dequantise(grid: &Grid, bits: u32, q: [u32; 3]) -> Vec3 {
 
 const NORMAL_MAX: f32 = ((1u32 << (NORMAL_BITS - 1)) - 1) as f32;
 
-/// Octahedral normal, two signed 16-bit components (as `u16`).
 /// Octahedral normal, two signed 16-bit components (as `u16`). Of the
 /// rounded code and its eight neighbours, the one that decodes closest to
 /// `n` (ties to the smaller code); repeated from that code's own normal
@@ -244,9 +254,75 @@ fn oct_decode(e: [u16; 2]) -> Vec3 {
     Vec3::new(x, y, z).normalize_or(Vec3::Z)
 }
 
-/// Bytes of the vertex section of a chunk with `n` new vertices.
+/// The normal a model stores for `n`: the octahedral code's own normal,
+/// which encodes back to the same code. A build keeps these normals, so a
+/// model and the model read from its file have the same normals, bit for
+/// bit. A zero or non-finite `n` stores +z.
+pub(crate) fn stored_normal(n: Vec3) -> Vec3 {
+    oct_decode(oct_encode(n))
+}
+
+/// `p` moved onto the position grid a file of a model on `grid` stores
+/// (the quantised position, read back), when that is within
+/// [`position_error`] (it is for every point of the lattice box); else `p`.
+/// A model whose vertices are snapped costs one byte per coordinate of
+/// residual, which deflates away. The grid scales with a power-of-two
+/// scaling of `grid`, exactly.
+pub(crate) fn snapped_position(grid: &Grid, p: Vec3) -> Vec3 {
+    let bits = position_bits(grid.depth.min(KEY_BITS - 1));
+    let d = dequantise(grid, bits, quantise(grid, bits, p));
+    let err = grid.cube / (1u64 << (bits - grid.depth.min(KEY_BITS - 1) + 1)) as f32;
+    if (d - p).abs().max_element() <= 1.5 * err {
+        d
+    } else {
+        p
+    }
+}
+
+/// Bytes of the fixed-size part of the vertex section of a chunk with `n`
+/// new vertices (positions' residuals, when present, follow it: at least
+/// `3n` more bytes).
 fn vertex_section_bytes(n: u64, bits: u32, colors: bool) -> u64 {
     (3 * bits as u64 * n).div_ceil(8) + 4 * n + if colors { 4 * n } else { 0 }
+}
+
+/// `f32` bits in an order that follows the values (negative below
+/// positive): consecutive floats are consecutive integers.
+fn ordered(x: f32) -> u32 {
+    let b = x.to_bits();
+    if b & 0x8000_0000 != 0 {
+        !b
+    } else {
+        b | 0x8000_0000
+    }
+}
+
+fn unordered(o: u32) -> f32 {
+    f32::from_bits(if o & 0x8000_0000 != 0 {
+        o & 0x7FFF_FFFF
+    } else {
+        !o
+    })
+}
+
+/// The residual of `p` against its quantised position `q`, per axis, as
+/// `zigzag(ordered(p) − ordered(dequantised))` (a few units of the last
+/// place on a built model: usually one byte as a varint).
+fn residuals(grid: &Grid, bits: u32, p: Vec3, q: [u32; 3]) -> [u64; 3] {
+    let d = dequantise(grid, bits, q).to_array();
+    let p = p.to_array();
+    std::array::from_fn(|a| {
+        let x = ordered(p[a]) as i64 - ordered(d[a]) as i64;
+        ((x << 1) ^ (x >> 63)) as u64
+    })
+}
+
+fn put_var64(out: &mut Vec<u8>, mut x: u64) {
+    while x >= 0x80 {
+        out.push(x as u8 | 0x80);
+        x >>= 7;
+    }
+    out.push(x as u8);
 }
 
 /// The stream order of a model: node numbering (old → new) and, per LOD
@@ -370,10 +446,17 @@ impl Writer<'_> {
 
     fn vertex_section(&mut self, out: &mut Vec<u8>, bits: u32) {
         let vb = &self.m.vertices;
+        let grid = &self.m.grid;
         let mut packed = Bits::default();
+        let mut residual = Vec::with_capacity(3 * self.chunk_verts.len());
         for &v in &self.chunk_verts {
-            for q in quantise(&self.m.grid, bits, vb.positions[v as usize]) {
-                packed.put(q, bits);
+            let p = vb.positions[v as usize];
+            let q = quantise(grid, bits, p);
+            for x in q {
+                packed.put(x, bits);
+            }
+            for r in residuals(grid, bits, p, q) {
+                put_var64(&mut residual, r);
             }
         }
         out.extend_from_slice(&packed.finish());
@@ -387,6 +470,7 @@ impl Writer<'_> {
                 out.extend_from_slice(&vb.colors.get(v as usize).copied().unwrap_or(NO_COLOR));
             }
         }
+        out.extend_from_slice(&residual);
         self.chunk_verts.clear();
     }
 }
@@ -471,7 +555,8 @@ fn encode_numbered(m: &McoModel) -> (Vec<u8>, Vec<u32>) {
             steps_in_chunk += 1;
             let target = (FIRST_CHUNK_BYTES << chunk_count.min(16)).min(MAX_CHUNK_TARGET);
             let size = records.len()
-                + vertex_section_bytes(w.chunk_verts.len() as u64, bits, m.has_colors) as usize;
+                + vertex_section_bytes(w.chunk_verts.len() as u64, bits, m.has_colors) as usize
+                + 3 * w.chunk_verts.len();
             if size >= target || i + 1 == max_lod {
                 payload.clear();
                 put_var(&mut payload, steps_in_chunk);
@@ -494,7 +579,10 @@ fn encode_numbered(m: &McoModel) -> (Vec<u8>, Vec<u32>) {
     let mut out = Vec::with_capacity(HEADER_BYTES + chunks.len());
     out.extend_from_slice(&MAGIC);
     put_u32(&mut out, VERSION);
-    put_u32(&mut out, if m.has_colors { FLAG_COLORS } else { 0 });
+    put_u32(
+        &mut out,
+        FLAG_EXACT_POSITIONS | if m.has_colors { FLAG_COLORS } else { 0 },
+    );
     for c in m.grid.origin.to_array() {
         out.extend_from_slice(&c.to_le_bytes());
     }

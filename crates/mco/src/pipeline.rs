@@ -519,6 +519,13 @@ impl IncrementalBuilder {
         };
         let mut tree = crate::octree_build::build_levels_with(field, signs, &leaves)?;
         let mut model = crate::octree_build::assemble(&mut tree);
+        // Every marching-cubes vertex on the position grid a `.mco` file
+        // stores (at most 1/1024 of a leaf cube away), before crack patching
+        // puts its compensation points on the segments between them: the
+        // file then holds the model exactly at little cost.
+        for p in &mut tree.vertices.positions {
+            *p = crate::model_file_v2::snapped_position(&field.grid, *p);
+        }
         let together = crate::crack_patch::expand_together(&tree);
         crate::priority_numbering::number(&mut model, &together);
         crate::crack_patch::patch(&mut tree, &mut model);
@@ -535,6 +542,11 @@ impl IncrementalBuilder {
             for x in &mut model.metric {
                 *x = (*x * back * back).min(f32::MAX);
             }
+        }
+        // The normals a `.mco` file stores (octahedral, 2 × 16 bits): the
+        // model and the model read from its file cut alike, bit for bit.
+        for n in &mut model.vertices.normals {
+            *n = crate::model_file_v2::stored_normal(*n);
         }
         Ok(model)
     }

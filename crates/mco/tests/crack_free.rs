@@ -9,9 +9,11 @@
 //! `½ Σ (p_i − p_0) × (p_{i+1} − p_0)`, in f64; every cut must have no loop
 //! above `1e-8 × diagonal²`.
 //!
-//! Cuts checked on each closed input: 24 triangle budgets spread over the
-//! model's range, and view-dependent cuts from 6 cameras at 3 pixel
-//! tolerances. Inputs: the synthetic closed shapes of `lodkit_mesh::shapes`
+//! Every model is cut as users cut it: written to a `.mco` file and loaded
+//! back (`lodkit mco build`, then `mco extract`). Cuts checked on each
+//! closed input: 24 triangle budgets spread over the model's range, 8 LOD
+//! numbers, and view-dependent cuts from 6 cameras at 3 pixel tolerances.
+//! Inputs: the synthetic closed shapes of `lodkit_mesh::shapes`
 //! (sphere, torus, blob) and closed shapes built here with thin parts (a
 //! thin disc, a thin ring, two spheres a cube apart, a non-convex lobed
 //! shape), at small resolutions so the test runs in seconds in debug.
@@ -135,13 +137,23 @@ fn cracks(m: &McoModel, indices: &[u32], diag2: f64) -> Vec<Loop> {
 }
 
 fn build(mesh: &TriMesh, resolution: u32) -> McoModel {
-    build_from_mesh(
-        mesh,
-        &Options {
-            resolution: Some(resolution),
-        },
+    through_file(
+        &build_from_mesh(
+            mesh,
+            &Options {
+                resolution: Some(resolution),
+            },
+        )
+        .unwrap(),
     )
-    .unwrap()
+}
+
+/// `m` saved as a `.mco` file and loaded back.
+fn through_file(m: &McoModel) -> McoModel {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("model.mco");
+    m.save(&path).unwrap();
+    McoModel::load(&path).unwrap()
 }
 
 /// Checks every cut of `m` (budgets and cameras); returns a description
@@ -174,6 +186,11 @@ fn failing_cuts(name: &str, m: &McoModel) -> Vec<String> {
         let target = ((full as f64 * t * t) as usize).max(1);
         let k = m.extract_triangles(target, &mut idx);
         check(format!("budget {target} (lod {k})"), &idx);
+    }
+    let n = m.max_lod();
+    for k in [1, n / 50, n / 20, n / 10, n / 5, n / 3, n / 2, 3 * n / 4] {
+        m.extract_lod(k.min(n), &mut idx);
+        check(format!("LOD {k}"), &idx);
     }
     let centre = (lo + hi) * 0.5;
     let r = (hi - lo).length();
@@ -356,11 +373,10 @@ fn closed_real_meshes_at_band_edge_resolutions_are_crack_free() {
 }
 
 /// The closed real scans of `../shared/data/meshes` at their default
-/// resolution (skipped when absent; `LODKIT_SHARED_DATA` names another
-/// `data` folder). Slow in debug, so run on request:
-/// `cargo test -p lodkit-mco --release --test crack_free -- --ignored`.
+/// resolution, saved and loaded back as `lodkit mco build` and `mco
+/// extract` do (skipped when absent; `LODKIT_SHARED_DATA` names another
+/// `data` folder). A few seconds in the test profile.
 #[test]
-#[ignore]
 fn real_closed_scans_cuts_are_crack_free() {
     let dir = std::env::var_os("LODKIT_SHARED_DATA")
         .map(std::path::PathBuf::from)
@@ -384,7 +400,7 @@ fn real_closed_scans_cuts_are_crack_free() {
             .map(|v| v.split(',').map(|r| r.trim().parse().ok()).collect())
             .unwrap_or_else(|_| vec![None]);
         for resolution in resolutions {
-            let m = build_from_mesh(&mesh, &Options { resolution }).unwrap();
+            let m = through_file(&build_from_mesh(&mesh, &Options { resolution }).unwrap());
             let mut f = failing_cuts(file, &m);
             let mut idx = Vec::new();
             let (lo, hi) = m.bounds();

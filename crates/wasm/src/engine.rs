@@ -297,6 +297,57 @@ mod tests {
         assert_eq!(a, b);
     }
 
+    /// A coloured point cloud's model (an open surface: its root cube
+    /// holds triangles) loads whole and streamed, colours kept, and its
+    /// view cut refines nodes.
+    #[test]
+    fn a_coloured_point_cloud_mco_loads_and_cuts() {
+        let n = 40;
+        let mut cloud = lodkit_mesh::PointCloud::default();
+        let mut colors = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                let (x, y) = (i as f32 / n as f32, j as f32 / n as f32);
+                cloud
+                    .positions
+                    .push(Vec3::new(x, y, 0.1 * (6.0 * x).sin() * (4.0 * y).cos()));
+                colors.push([(x * 255.0) as u8, (y * 255.0) as u8, 90, 255]);
+            }
+        }
+        cloud.colors = Some(colors);
+        let model =
+            lodkit_mco::build_from_points(&cloud, &lodkit_mco::Options::default()).expect("builds");
+        let bytes = model.to_bytes();
+        let whole = mco_load(&bytes).unwrap();
+        let v = mco_vertices(&whole);
+        assert_eq!(v.colors.as_ref().map(Vec::len), Some(v.positions.len()));
+        let mut s = mco_stream_new();
+        let mut last = None;
+        for piece in bytes.chunks(301) {
+            if let Some(m) = mco_stream_push(&mut s, piece).unwrap() {
+                last = Some(m);
+            }
+        }
+        assert!(mco_stream_complete(&s));
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        mco_extract_lod(&last.expect("a model"), whole.max_lod(), &mut a);
+        mco_extract_lod(&whole, whole.max_lod(), &mut b);
+        assert_eq!(a, b);
+        assert!(!a.is_empty());
+        let (lo, hi) = mco_bounds(&whole);
+        let c = (lo + hi) * 0.5;
+        let view = View {
+            position: c + Vec3::new(0.0, 0.0, 2.0),
+            direction: Vec3::new(0.0, 0.0, -1.0),
+            up: Vec3::Y,
+            vfov_deg: 60.0,
+            viewport_height: 1080.0,
+            aspect: 1.0,
+        };
+        let mut cut = ViewCut::default();
+        assert!(mco_extract_view(&whole, &mut cut, &view, 1.0) > 0);
+    }
+
     #[test]
     fn a_damaged_header_is_an_error_not_a_panic() {
         let mut bytes = stream(false);

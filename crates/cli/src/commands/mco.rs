@@ -5,7 +5,8 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand};
 use lodkit_mco::{
-    Camera, IncrementalBuilder, McoModel, Options, densify_meshes, grid_for, samples_of,
+    Camera, IncrementalBuilder, McoHeader, McoModel, McoStream, Options, densify_meshes, grid_for,
+    samples_of,
 };
 use lodkit_mesh::glam::Vec3;
 use lodkit_mesh::io::{WriteOptions, save_mesh};
@@ -44,6 +45,10 @@ pub enum McoCommand {
     /// Nodes and triangles per level, LOD-array length, input samples.
     Info {
         model: PathBuf,
+        /// Refuse a file cut short (default: describe what its complete
+        /// chunks hold and say where it stopped).
+        #[arg(long)]
+        strict: bool,
         /// Print as JSON.
         #[arg(long)]
         json: bool,
@@ -85,6 +90,10 @@ pub struct ExtractArgs {
     /// Largest projected error allowed, pixels (a finite number > 0; default 1).
     #[arg(long, requires = "view", value_parser = Real::POSITIVE.f32())]
     pub tolerance: Option<f32>,
+    /// Refuse a file cut short (default: cut from its complete chunks,
+    /// which serve the LOD numbers they cover, and say where it stopped).
+    #[arg(long)]
+    pub strict: bool,
     /// Print what was extracted as JSON.
     #[arg(long)]
     pub json: bool,
@@ -105,8 +114,93 @@ pub fn run(ui: &Ui, cmd: &McoCommand) -> Result<()> {
             json,
         } => build(ui, inputs, output, *resolution, *json),
         McoCommand::Extract(args) => extract(ui, args),
-        McoCommand::Info { model, json } => info(ui, model, *json),
+        McoCommand::Info {
+            model,
+            strict,
+            json,
+        } => info(ui, model, *strict, *json),
     }
+}
+
+/// Largest `.mco` file read (as `McoModel::load`).
+const MAX_FILE_BYTES: u64 = 16 << 30;
+
+/// Where a `.mco` file cut short stopped: what its complete chunks hold.
+#[derive(Serialize, Clone, Copy)]
+struct Cut {
+    /// Bytes present.
+    bytes: u64,
+    /// Bytes the header announces.
+    file_bytes: u64,
+    /// Complete chunks read, of `total_chunks`.
+    chunks: usize,
+    total_chunks: u32,
+    /// The highest LOD number served, of the whole file's `total_max_lod`.
+    max_lod: usize,
+    total_max_lod: u32,
+}
+
+/// Reads a `.mco` file. A version-2 file cut short (a partial download or
+/// copy) gives the model of its complete chunks, which serve every LOD
+/// number they cover as the whole file would, and one line on stderr says
+/// where it stopped; `strict` refuses it. Errors name the file. Returns
+/// the model, what was cut, and the file's bytes.
+fn load_model(ui: &Ui, path: &Path, strict: bool) -> Result<(McoModel, Option<Cut>, Vec<u8>)> {
+    let name = path.display().to_string();
+    let len = std::fs::metadata(path).with_context(|| name.clone())?.len();
+    if len > MAX_FILE_BYTES {
+        bail!("{name}: {len} bytes is larger than the {MAX_FILE_BYTES}-byte limit");
+    }
+    let bytes = std::fs::read(path).with_context(|| name.clone())?;
+    // A version-2 header that announces more bytes than the file holds: a
+    // prefix. Anything else is read whole (and refused as the reader says).
+    let mut probe = McoStream::new();
+    let head = &bytes[..bytes.len().min(McoHeader::BYTES)];
+    let header = match probe.push(head) {
+        Ok(_) => probe.header().copied(),
+        Err(_) => None,
+    };
+    let h = match header {
+        Some(h) if len < h.file_bytes => h,
+        _ => {
+            let m = McoModel::from_bytes(&bytes).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+            return Ok((m, None, bytes));
+        }
+    };
+    if strict {
+        bail!(
+            "{name}: cut short: {len} bytes, the header says {} (--strict refuses a file cut short)",
+            h.file_bytes
+        );
+    }
+    let mut s = McoStream::new();
+    s.push(&bytes).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+    if s.chunks().is_empty() {
+        bail!(
+            "{name}: cut short at byte {len} of {}, before chunk 0 (LOD number 0) is complete",
+            h.file_bytes
+        );
+    }
+    let p = McoModel::from_prefix(&bytes).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+    let cut = Cut {
+        bytes: len,
+        file_bytes: h.file_bytes,
+        chunks: p.chunks,
+        total_chunks: h.chunks,
+        max_lod: p.max_lod,
+        total_max_lod: h.max_lod,
+    };
+    ui.status(format!(
+        "{name}: stopped at byte {} of {}, where chunk {} is incomplete; read the {} complete chunks of {} (LOD numbers 0..={} of 0..={}; --strict refuses a file cut short)",
+        s.bytes_read(),
+        h.file_bytes,
+        p.chunks,
+        p.chunks,
+        h.chunks,
+        p.max_lod,
+        h.max_lod
+    ));
+    Ok((p.model, Some(cut), bytes))
 }
 
 /// Loads an input: a `.conf` expands to its posed scans.
@@ -256,6 +350,8 @@ struct Extracted {
     lod: Option<usize>,
     triangles: usize,
     vertices: usize,
+    /// Where a file cut short stopped (`None`: the whole file was read).
+    cut_short: Option<Cut>,
 }
 
 fn extract(ui: &Ui, a: &ExtractArgs) -> Result<()> {
@@ -281,14 +377,19 @@ fn extract(ui: &Ui, a: &ExtractArgs) -> Result<()> {
         a.viewport.unwrap_or(1080.0),
         a.tolerance.unwrap_or(1.0),
     );
-    let model = McoModel::load(&a.model)?;
+    let (model, cut, _) = load_model(ui, &a.model, a.strict)?;
     let mut idx = Vec::new();
     let step = ui.spinner("extracting");
     let (what, lod) = if let Some(k) = a.lod {
         if k > model.max_lod() {
             return Err(crate::ui::usage(format!(
-                "--lod {k} is outside 0..={} for {}",
+                "--lod {k} is outside 0..={}: the LOD numbers {} {}",
                 model.max_lod(),
+                if cut.is_some() {
+                    "the complete chunks of"
+                } else {
+                    "of"
+                },
                 a.model.display()
             )));
         }
@@ -325,6 +426,7 @@ fn extract(ui: &Ui, a: &ExtractArgs) -> Result<()> {
             lod,
             triangles: mesh.faces.len(),
             vertices: mesh.positions.len(),
+            cut_short: cut,
         });
     }
     ui.status(format!(
@@ -360,6 +462,9 @@ struct Info {
     /// `.mco` format version (1: flat arrays, 2: LOD-ordered chunks).
     version: u32,
     file_bytes: u64,
+    /// Where a file cut short stopped (`None`: the whole file was read);
+    /// the rest describes its complete chunks.
+    cut_short: Option<Cut>,
     /// Version 2: the chunks in file order (a prefix through chunk `c`
     /// serves LOD numbers up to its `last_lod`).
     chunks: Vec<ChunkRow>,
@@ -376,9 +481,9 @@ struct Info {
     levels: Vec<LevelRow>,
 }
 
-fn info(_ui: &Ui, path: &Path, json: bool) -> Result<()> {
-    let m = McoModel::load(path)?.info();
-    let bytes = std::fs::read(path).with_context(|| path.display().to_string())?;
+fn info(ui: &Ui, path: &Path, strict: bool, json: bool) -> Result<()> {
+    let (model, cut, bytes) = load_model(ui, path, strict)?;
+    let m = model.info();
     let version = McoModel::file_version(&bytes).unwrap_or(0);
     let chunks = if version == 1 {
         Vec::new()
@@ -401,6 +506,7 @@ fn info(_ui: &Ui, path: &Path, json: bool) -> Result<()> {
         file: path.display().to_string(),
         version,
         file_bytes: bytes.len() as u64,
+        cut_short: cut,
         chunks,
         resolution: m.grid.resolution(),
         cube: m.grid.cube(),
@@ -427,16 +533,28 @@ fn info(_ui: &Ui, path: &Path, json: bool) -> Result<()> {
         return super::print_json(&info);
     }
     crate::outln!("file: {}", info.file)?;
-    crate::outln!(
-        "format: version {}, {} bytes{}",
-        info.version,
-        info.file_bytes,
-        if info.chunks.is_empty() {
-            String::new()
-        } else {
-            format!(" in {} chunks", info.chunks.len())
-        }
-    )?;
+    match &info.cut_short {
+        Some(c) => crate::outln!(
+            "format: version {}, cut short: {} of {} bytes, {} of {} chunks complete (LOD numbers 0..={} of 0..={}); below, what they hold",
+            info.version,
+            c.bytes,
+            c.file_bytes,
+            c.chunks,
+            c.total_chunks,
+            c.max_lod,
+            c.total_max_lod
+        )?,
+        None => crate::outln!(
+            "format: version {}, {} bytes{}",
+            info.version,
+            info.file_bytes,
+            if info.chunks.is_empty() {
+                String::new()
+            } else {
+                format!(" in {} chunks", info.chunks.len())
+            }
+        )?,
+    }
     crate::outln!(
         "lattice: resolution {}, cube {:.6}, octree depth {}",
         info.resolution,

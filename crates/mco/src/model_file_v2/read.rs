@@ -10,6 +10,10 @@ pub(super) type Res<T> = std::result::Result<T, String>;
 pub struct Header {
     /// Whether the vertices carry the input's colours.
     pub has_colors: bool,
+    /// Whether each vertex section ends with the positions' residuals
+    /// (positions exact; set in every file lodkit writes). Without them
+    /// positions are the quantised ones.
+    pub exact_positions: bool,
     /// The lattice the model was built on.
     pub grid: Grid,
     /// Oriented samples the model was built from.
@@ -36,6 +40,12 @@ pub struct Header {
     pub chunks: u32,
     /// Bytes of the whole file.
     pub file_bytes: u64,
+}
+
+impl Header {
+    /// Bytes of the header at the start of a file: a prefix this long
+    /// gives [`McoStream::header`].
+    pub const BYTES: usize = HEADER_BYTES;
 }
 
 pub(super) fn le32(b: &[u8], at: usize) -> u32 {
@@ -66,7 +76,7 @@ pub fn parse_header(b: &[u8]) -> Res<Header> {
         return Err("header checksum mismatch (corrupted file)".into());
     }
     let flags = le32(b, 12);
-    if flags & !FLAG_COLORS != 0 {
+    if flags & !(FLAG_COLORS | FLAG_EXACT_POSITIONS) != 0 {
         return Err(format!("unknown flags {flags:#x}"));
     }
     let f = |at| f32::from_bits(le32(b, at));
@@ -83,6 +93,7 @@ pub fn parse_header(b: &[u8]) -> Res<Header> {
     }
     let h = Header {
         has_colors: flags & FLAG_COLORS != 0,
+        exact_positions: flags & FLAG_EXACT_POSITIONS != 0,
         grid,
         input_samples: le64(b, 40),
         unpatched: le64(b, 48),
@@ -135,6 +146,21 @@ impl Cursor<'_> {
         let s = self.b.get(self.at..self.at + 4).ok_or("record truncated")?;
         self.at += 4;
         Ok(f32::from_le_bytes(s.try_into().expect("4 bytes")))
+    }
+    /// A varint of at most 10 bytes (below 2^64).
+    fn var64(&mut self) -> Res<u64> {
+        let mut x = 0u64;
+        for i in 0..10 {
+            let b = self.u8()?;
+            if i == 9 && b > 1 {
+                break;
+            }
+            x |= ((b & 0x7F) as u64) << (7 * i);
+            if b & 0x80 == 0 {
+                return Ok(x);
+            }
+        }
+        Err("varint overflows 64 bits".into())
     }
     fn var(&mut self) -> Res<u32> {
         let mut x = 0u64;
@@ -564,6 +590,9 @@ pub(super) fn read_chunk(
 ) -> Res<()> {
     let mut r = Cursor { b, at: 0 };
     let steps = r.count(1, "LOD step")?;
+    // The vertex section holds every vertex this chunk's records introduce,
+    // the root's (chunk 0) included.
+    let first_new_vertex = *vertices;
     if first {
         m.grid = h.grid;
         m.has_colors = h.has_colors;
@@ -580,7 +609,6 @@ pub(super) fn read_chunk(
     if m.groups.len() as u64 + steps as u64 > h.max_lod as u64 + 1 {
         return Err("more LOD numbers than the header announces".into());
     }
-    let first_new_vertex = *vertices;
     for _ in 0..steps {
         let k = m.groups.len() as u32;
         let expand = r.count(7, "expanded node")?;
@@ -632,15 +660,20 @@ pub(super) fn read_chunk(
     }
     let new = (*vertices - first_new_vertex) as u64;
     let bits = h.position_bits;
-    if vertex_section_bytes(new, bits, h.has_colors) != r.left() as u64 {
+    // Fixed-size part, then (exact positions) one varint of at least one
+    // byte per coordinate.
+    let fixed = vertex_section_bytes(new, bits, h.has_colors);
+    let least = fixed + if h.exact_positions { 3 * new } else { 0 };
+    let left = r.left() as u64;
+    if left < least || (!h.exact_positions && left != fixed) {
         return Err(format!(
-            "{} bytes left for {new} new vertices (expected {})",
-            r.left(),
-            vertex_section_bytes(new, bits, h.has_colors)
+            "{left} bytes left for {new} new vertices (expected {}{least})",
+            if h.exact_positions { "at least " } else { "" }
         ));
     }
     let rest = &b[r.at..];
     let new = new as usize;
+    let start = m.vertices.positions.len();
     let vb = &mut m.vertices;
     vb.positions.reserve(new);
     let (mut acc, mut nbits, mut at) = (0u64, 0u32, 0usize);
@@ -668,12 +701,34 @@ pub(super) fn read_chunk(
         }));
     if h.has_colors {
         vb.colors.extend(
-            normals[4 * new..]
+            normals[4 * new..8 * new]
                 .chunks_exact(4)
                 .map(|c| [c[0], c[1], c[2], c[3]]),
         );
     } else {
         vb.colors.resize(vb.positions.len(), NO_COLOR);
+    }
+    r.at += fixed as usize;
+    if h.exact_positions {
+        for (i, p) in vb.positions[start..].iter_mut().enumerate() {
+            let mut xyz = p.to_array();
+            for x in &mut xyz {
+                let z = r.var64()?;
+                let d = (z >> 1) as i128 ^ -((z & 1) as i128);
+                let o = ordered(*x) as i128 + d;
+                if !(0..=u32::MAX as i128).contains(&o) {
+                    return Err(format!(
+                        "vertex {}: position residual out of range",
+                        first_new_vertex as usize + i
+                    ));
+                }
+                *x = unordered(o as u32);
+            }
+            *p = Vec3::from_array(xyz);
+        }
+        if r.left() != 0 {
+            return Err(format!("{} bytes after the vertex section", r.left()));
+        }
     }
     Ok(())
 }
@@ -699,7 +754,7 @@ pub fn decode(bytes: &[u8]) -> Res<McoModel> {
 
 /// Reads a prefix of a version-2 file: the model of its complete chunks
 /// (a chunk cut short is ignored). Errors when the header or chunk 0 is
-/// incomplete, or on any bad byte in what is complete.
+/// incomplete, or on any bad byte or table in what is complete.
 pub fn decode_prefix(bytes: &[u8]) -> Res<PartialModel> {
     let mut s = McoStream::new();
     s.push_bytes(bytes)?;
@@ -709,8 +764,13 @@ pub fn decode_prefix(bytes: &[u8]) -> Res<PartialModel> {
             bytes.len()
         ));
     }
-    s.partial()
-        .ok_or_else(|| "no complete chunk yet (chunk 0 serves LOD 0)".into())
+    let model = s.snapshot()?;
+    Ok(PartialModel {
+        max_lod: model.max_lod(),
+        complete: s.is_complete(),
+        chunks: s.chunks.len(),
+        model,
+    })
 }
 
 /// The chunk table of a whole version-2 file (for `lodkit mco info`).

@@ -495,3 +495,32 @@ fn mutated_payloads_never_panic() {
         "{accepted} accepted, {refused} refused"
     );
 }
+
+/// Positions read back bit for bit, wherever they lie: on the grid, off
+/// it, outside the lattice box (clamped when quantised), signed zeros.
+#[test]
+fn positions_read_back_exactly() {
+    for x in [0.0f32, -0.0, 1.0, -1.0, 1e-30, -3.5e7, f32::MAX, f32::MIN] {
+        assert_eq!(unordered(ordered(x)).to_bits(), x.to_bits(), "{x}");
+    }
+    assert!(ordered(-1.0) < ordered(-0.0) && ordered(-0.0) < ordered(0.0));
+    assert!(ordered(0.0) < ordered(1e-30) && ordered(1e-30) < ordered(1.0));
+    let mut m = small();
+    let n = m.vertices.positions.len();
+    let far = m.grid.origin - Vec3::splat(1e3 * m.grid.cube);
+    m.vertices.positions[n - 1] = far;
+    m.vertices.positions[n - 2] += Vec3::new(1e-7, -3e-8, 0.0);
+    m.vertices.positions[n - 3] = Vec3::new(-0.0, 0.0, -0.0);
+    let (bytes, map) = encode_numbered(&m);
+    let back = decode(&bytes).unwrap();
+    for (v, &k) in map.iter().enumerate() {
+        if k != u32::MAX {
+            let (a, b) = (m.vertices.positions[v], back.vertices.positions[k as usize]);
+            assert_eq!(
+                a.to_array().map(f32::to_bits),
+                b.to_array().map(f32::to_bits)
+            );
+        }
+    }
+    assert_eq!(encode(&back), bytes);
+}
