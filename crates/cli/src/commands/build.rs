@@ -341,11 +341,10 @@ fn write_all(
     writeln!(
         report,
         "## Detail against the input\n\nEach product's finest level beside the input's samples it \
-         should keep (about as many; under {} % of them, under {} {}, or a mean error over {} % of \
-         the diagonal is a degenerate product, and the build fails).\n",
+         should keep (about as many; under {} % of them, under {} triangles or particles, or a mean \
+         error over {} % of the diagonal is a degenerate product, and the build fails).\n",
         measure::SMALLEST_SHARE * 100.0,
         measure::FEWEST_PRIMITIVES,
-        "triangles or particles",
         measure::LARGEST_MEAN_ERROR * 100.0
     )?;
     writeln!(

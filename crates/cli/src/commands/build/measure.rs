@@ -136,11 +136,14 @@ impl Detail {
             ));
         }
         match self.mean {
-            Some(m) if diagonal > 0.0 && !(m <= LARGEST_MEAN_ERROR * diagonal) => Some(format!(
-                "its finest level's mean error is {:.2} % of the input's diagonal (over {} %)",
-                100.0 * m / diagonal,
-                LARGEST_MEAN_ERROR * 100.0
-            )),
+            // A NaN error is degenerate too.
+            Some(m) if diagonal > 0.0 && (m.is_nan() || m > LARGEST_MEAN_ERROR * diagonal) => {
+                Some(format!(
+                    "its finest level's mean error is {:.2} % of the input's diagonal (over {} %)",
+                    100.0 * m / diagonal,
+                    LARGEST_MEAN_ERROR * 100.0
+                ))
+            }
             _ => None,
         }
     }
