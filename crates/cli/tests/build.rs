@@ -111,7 +111,7 @@ fn point_clouds_are_reconstructed_first() {
             "{ext}: {report}"
         );
         assert!(
-            report.contains("from the input's points"),
+            report.contains("from the reconstructed surface"),
             "{ext}: {report}"
         );
         // No virtual scans: the reconstruction is the model.
@@ -419,8 +419,8 @@ fn within_2x(x: usize, of: usize) -> bool {
 }
 
 /// A one-sided point cloud keeps its detail in the stream (no outer
-/// thinning eating the sheet; a leaf at the sample spacing) and in the
-/// octree; the stream, read back, has it at its finest level.
+/// thinning eating the sheet; leaves about as many as its points) and in
+/// the octree; the stream, read back, has it at its finest level.
 #[test]
 fn a_one_sided_cloud_keeps_its_detail_in_every_product() {
     let dir = tempfile::tempdir().unwrap();

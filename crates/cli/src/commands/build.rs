@@ -101,6 +101,7 @@ pub fn run(ui: &Ui, args: &BuildArgs) -> Result<()> {
             let m = super::builtin_bunny()?;
             Ok(input::BuildInput {
                 name: BUILTIN_NAME.to_string(),
+                samples: (m.positions.len(), "vertices"),
                 stream_source: Model::Mesh(m.clone()),
                 surface: m,
                 reconstruction: None,
@@ -328,6 +329,7 @@ fn write_all(
             ui,
             &reference,
             &input.stream_source,
+            progressive::plan(input),
             name,
             dir,
             sampling,
@@ -443,7 +445,7 @@ fn details(
     cont: &continuous::Continuous,
     prog: &progressive::Progressive,
 ) -> Vec<measure::Detail> {
-    let (samples, unit) = measure::sample_count(&input.stream_source);
+    let (samples, unit) = input.samples;
     let finest = prog.levels.last();
     let stream = measure::Detail {
         product: format!("stream {}", prog.file),
@@ -482,7 +484,7 @@ fn path_sentence(path: &input::InputPath, name: &str) -> String {
         input::InputPath::Reconstructed(what) => format!(
             "Path: a {what}, reconstructed first as a marching cube octree (`lodkit mco build`); \
              its full-resolution surface (`{name}.ply`) feeds the HQMS chain and is the reference \
-             every error is measured against; the progressive stream encodes the input's points."
+             every error is measured against; the progressive stream encodes it too."
         ),
         input::InputPath::Carved(what) => format!(
             "Path: a {what} (`lodkit pop encode --silhouettes`); the finest level of its particles, \
