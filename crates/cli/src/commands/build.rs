@@ -325,16 +325,7 @@ fn write_all(
     outputs.extend(cont.files.iter().cloned());
 
     let prog = timings.time("progressive stream (encode, decode, measure)", || {
-        progressive::section(
-            ui,
-            &reference,
-            &input.stream_source,
-            progressive::plan(input),
-            name,
-            dir,
-            sampling,
-            &mut report,
-        )
+        progressive::section(ui, &reference, input, dir, sampling, &mut report)
     })?;
     outputs.push(prog.file.clone());
 

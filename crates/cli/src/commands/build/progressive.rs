@@ -115,18 +115,17 @@ pub fn surface_depth(surface: &TriMesh, samples: usize) -> Option<u8> {
     Some((size / leaf).log2().round().clamp(1.0, f64::from(DEEPEST)) as u8)
 }
 
-/// Encodes `source`, writes it, measures every level, and appends the
+/// Encodes `input`'s stream source as [`plan`] says, writes it, measures every level, and appends the
 /// section to `report`.
 pub fn section(
     ui: &Ui,
     reference: &Reference,
-    source: &Model,
-    plan: Plan,
-    name: &str,
+    input: &BuildInput,
     out: &Path,
     sampling: Sampling,
     report: &mut String,
 ) -> Result<Progressive> {
+    let (source, plan, name) = (&input.stream_source, plan(input), input.name.as_str());
     let step = ui.spinner("encoding the progressive particle stream");
     let opts = EncodeOptions {
         depth: plan.depth,
