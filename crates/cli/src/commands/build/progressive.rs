@@ -29,7 +29,7 @@ use lodkit_mesh::io::write_atomic;
 use lodkit_mesh::metrics::Reference;
 use lodkit_mesh::{Model, TriMesh};
 use lodkit_particles::{
-    EncodeOptions, ThinningOptions, TriangulateOptions, encode, progressive_levels,
+    EncodeOptions, Encoded, ThinningOptions, TriangulateOptions, encode, progressive_levels,
 };
 
 use super::input::{BuildInput, InputPath};
@@ -80,6 +80,44 @@ pub fn plan(input: &BuildInput) -> Plan {
             depth: None,
             outer: true,
         },
+    }
+}
+
+/// Encodes `source` with `opts`; when `opts` sets a depth and the finest
+/// level's particles fall outside `[samples / 2, 2 · samples]`, one level
+/// deeper (too few) or shallower (too many) is tried too, and the encoding
+/// whose count is nearer `samples` (by ratio) kept. [`surface_depth`]'s
+/// estimate of the occupied leaves is good to a factor of about 1.5 (flat
+/// axis-aligned tables occupy fewer leaves than curved surfaces), and a
+/// level is 4 times the one above it: the count decides. Errors as
+/// [`encode`]'s. Cost: one or two encodings.
+fn encode_near(source: &Model, opts: &EncodeOptions, samples: usize) -> Result<Encoded> {
+    let first = encode(source, opts)?;
+    let Some(depth) = opts.depth else {
+        return Ok(first);
+    };
+    let n = first.report.particles;
+    let next = if 2 * n < samples && depth < DEEPEST {
+        depth + 1
+    } else if n > 2 * samples && depth > 1 {
+        depth - 1
+    } else {
+        return Ok(first);
+    };
+    let off = |e: &Encoded| {
+        (e.report.particles.max(1) as f64 / samples.max(1) as f64)
+            .ln()
+            .abs()
+    };
+    match encode(
+        source,
+        &EncodeOptions {
+            depth: Some(next),
+            ..*opts
+        },
+    ) {
+        Ok(second) if off(&second) < off(&first) => Ok(second),
+        _ => Ok(first),
     }
 }
 
@@ -138,7 +176,7 @@ pub fn section(
     // The plan can still fail (outer thinning leaving nothing of a thin
     // part, a depth over the mesh's sample limit): the crate's defaults
     // then, and the report says so.
-    let (enc, planned) = match encode(source, &opts) {
+    let (enc, planned) = match encode_near(source, &opts, input.samples.0) {
         Ok(e) => (e, true),
         Err(_) => (
             encode(source, &EncodeOptions::DEFAULT).map_err(|e| anyhow::anyhow!("{name}: {e}"))?,
