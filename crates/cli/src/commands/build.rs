@@ -477,7 +477,7 @@ fn path_sentence(path: &input::InputPath, name: &str) -> String {
              its full-resolution surface (`{name}.ply`) feeds the HQMS chain and is the reference \
              every error is measured against; the progressive stream encodes it too."
         ),
-        input::InputPath::Carved(what) => format!(
+        input::InputPath::Carved(what, _) => format!(
             "Path: a {what} (`lodkit pop encode --silhouettes`); the finest level of its particles, \
              triangulated (`{name}.ply`), feeds the HQMS chain and the marching cube octree (built from it) and is \
              the reference every error is measured against; the progressive stream encodes the \

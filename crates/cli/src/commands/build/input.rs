@@ -32,8 +32,9 @@ pub enum InputPath {
     /// image"`, `"scan set of 8 range images"`).
     Reconstructed(String),
     /// A calibrated image set carved into octree particles: what it was
-    /// (`"calibrated image set of 36 views, carved … at R = 8"`).
-    Carved(String),
+    /// (`"calibrated image set of 36 views, carved … at R = 8"`), and the
+    /// octree depth it was carved at.
+    Carved(String, u8),
 }
 
 /// The loaded input.
@@ -260,10 +261,13 @@ fn carve(ui: &Ui, path: &Path, name: String) -> Result<BuildInput> {
         samples: (particles.positions.len(), "particles"),
         stream_source: Model::Points(particles),
         reconstruction: None,
-        path: InputPath::Carved(format!(
-            "calibrated image set of {} views, carved from its silhouettes at R = {}",
-            c.report.views, c.report.depth
-        )),
+        path: InputPath::Carved(
+            format!(
+                "calibrated image set of {} views, carved from its silhouettes at R = {}",
+                c.report.views, c.report.depth
+            ),
+            c.report.depth,
+        ),
         scene: None,
     })
 }

@@ -63,8 +63,8 @@ pub struct Plan {
 
 /// The plan for `input` (see the module docs): a mesh at the encoder's
 /// depth, a reconstructed surface at [`surface_depth`], carved particles
-/// at the encoder's depth with outer thinning; outer thinning for closed
-/// surfaces only.
+/// at the carving's depth with outer thinning (a closed shell); outer
+/// thinning for closed surfaces only.
 pub fn plan(input: &BuildInput) -> Plan {
     let closed = is_closed_mesh(&input.stream_source);
     match input.path {
@@ -76,8 +76,9 @@ pub fn plan(input: &BuildInput) -> Plan {
             depth: surface_depth(&input.surface, input.samples.0),
             outer: closed,
         },
-        InputPath::Carved(_) => Plan {
-            depth: None,
+        // Every carved particle is a cell of the carving's depth.
+        InputPath::Carved(_, depth) => Plan {
+            depth: Some(depth),
             outer: true,
         },
     }
@@ -190,7 +191,7 @@ pub fn section(
     let step = ui.spinner("decoding and measuring every level");
     let decoded = progressive_levels(&enc.bytes, &TriangulateOptions::DEFAULT)
         .map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
-    let from = if plan.depth.is_some() {
+    let from = if matches!(input.path, InputPath::Reconstructed(_)) {
         " from the reconstructed surface, its depth set so its leaves number about the input's samples"
     } else {
         ""
