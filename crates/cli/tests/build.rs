@@ -249,36 +249,8 @@ fn report_html_is_self_contained_and_deterministic() {
             "{bad}"
         );
     }
-    let imgs: Vec<&str> = html.split("<img ").skip(1).collect();
     // Input, 2 HQMS levels, the MCO cuts, the stream levels, the heat map.
-    assert!(imgs.len() >= 6, "{} images", imgs.len());
-    use base64::Engine as _;
-    for img in &imgs {
-        let src = img
-            .split("src=\"data:image/png;base64,")
-            .nth(1)
-            .expect("every <img> is a data: PNG");
-        let b64 = &src[..src.find('"').unwrap()];
-        let png = base64::engine::general_purpose::STANDARD
-            .decode(b64)
-            .unwrap();
-        let mut reader = png::Decoder::new(std::io::Cursor::new(png))
-            .read_info()
-            .unwrap();
-        let mut buf = vec![0; reader.output_buffer_size().unwrap()];
-        let info = reader.next_frame(&mut buf).unwrap();
-        assert_eq!((info.width, info.height), (256, 256));
-        let px = info.line_size * info.height as usize;
-        let step = info.color_type.samples();
-        let drawn = buf[..px]
-            .chunks_exact(step)
-            .filter(|p| p[..3] != [255, 255, 255])
-            .count();
-        assert!(
-            drawn > 500,
-            "a picture shows almost nothing ({drawn} pixels)"
-        );
-    }
+    assert!(every_picture_shows_the_model(&html) >= 6);
     for needle in [
         "error against triangle count, every form",
         ".pop error against bytes received",
@@ -448,6 +420,9 @@ fn a_one_sided_cloud_keeps_its_detail_in_every_product() {
     let d = lodkit_particles::decode(&bytes, &lodkit_particles::DecodeOptions::default()).unwrap();
     let finest = d.surface(d.finest_level()).unwrap();
     assert_eq!(finest.positions.len(), particles);
+    // Every render of the cloud's report shows it.
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(every_picture_shows_the_model(&html) >= 6);
 }
 
 /// A mesh's octree comes from the mesh (its full cut about the input's
@@ -532,4 +507,38 @@ fn a_degenerate_product_is_a_warning_and_exit_1() {
     assert!(triangles < 100 && points == n + 1, "{report}");
     assert!(verdict.starts_with("its finest level has"), "{report}");
     no_staging_left(&out);
+}
+
+/// Every `<img>` of a report page is an embedded 256 × 256 PNG with more
+/// than 500 pixels that are not the white background; returns how many.
+fn every_picture_shows_the_model(html: &str) -> usize {
+    let imgs: Vec<&str> = html.split("<img ").skip(1).collect();
+    use base64::Engine as _;
+    for img in &imgs {
+        let src = img
+            .split("src=\"data:image/png;base64,")
+            .nth(1)
+            .expect("every <img> is a data: PNG");
+        let b64 = &src[..src.find('"').unwrap()];
+        let png = base64::engine::general_purpose::STANDARD
+            .decode(b64)
+            .unwrap();
+        let mut reader = png::Decoder::new(std::io::Cursor::new(png))
+            .read_info()
+            .unwrap();
+        let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+        let info = reader.next_frame(&mut buf).unwrap();
+        assert_eq!((info.width, info.height), (256, 256));
+        let px = info.line_size * info.height as usize;
+        let step = info.color_type.samples();
+        let drawn = buf[..px]
+            .chunks_exact(step)
+            .filter(|p| p[..3] != [255, 255, 255])
+            .count();
+        assert!(
+            drawn > 500,
+            "a picture shows almost nothing ({drawn} pixels)"
+        );
+    }
+    imgs.len()
 }
