@@ -77,7 +77,7 @@ pub fn cell(x: Option<f64>) -> String {
 }
 
 /// A product whose finest level has fewer triangles or particles than this
-/// (and fewer than its input's samples) is degenerate: a handful of
+/// (and than half its input's samples) is degenerate: a handful of
 /// primitives says the stage lost the input, whatever its size.
 pub const FEWEST_PRIMITIVES: usize = 100;
 /// A product whose finest level has fewer than this share of its input's
@@ -114,8 +114,8 @@ impl Detail {
     /// [`SMALLEST_SHARE`], [`LARGEST_MEAN_ERROR`] against `diagonal`, the
     /// input's bounding-box diagonal), or `None` when it is not.
     pub fn degenerate(&self, diagonal: f64) -> Option<String> {
-        let few = FEWEST_PRIMITIVES.min(self.expected);
-        if self.count < few || self.triangles < FEWEST_PRIMITIVES.min(self.expected) {
+        let few = FEWEST_PRIMITIVES.min(self.expected / 2);
+        if self.count < few || self.triangles < few {
             return Some(if self.unit == "triangles" {
                 format!("its finest level has {} triangles", self.count)
             } else {
@@ -159,5 +159,46 @@ pub fn sample_count(model: &lodkit_mesh::Model) -> (usize, &'static str) {
             "points",
         ),
         lodkit_mesh::Model::Range(r) => (r.valid_count(), "samples"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn detail(count: usize, expected: usize, mean: Option<f64>) -> Detail {
+        Detail {
+            product: "stream x.pop".into(),
+            count,
+            unit: "particles",
+            triangles: 2 * count,
+            expected,
+            expected_unit: "points",
+            mean,
+        }
+    }
+
+    #[test]
+    fn a_product_is_degenerate_for_a_handful_a_small_share_or_a_large_error() {
+        // At the input's detail: fine.
+        assert_eq!(detail(40_000, 50_000, Some(1e-3)).degenerate(1.0), None);
+        // A handful of particles (the LMS400 cloud outer-thinned: 189).
+        let why = detail(6, 22_000, Some(1e-3)).degenerate(1.0).unwrap();
+        assert!(why.contains("6 particles and 12 triangles"), "{why}");
+        // A tiny input may keep a tiny count.
+        assert_eq!(detail(30, 40, Some(1e-3)).degenerate(1.0), None);
+        // Under 5 % of the samples.
+        let why = detail(189, 460_400, Some(1e-3)).degenerate(1.0).unwrap();
+        assert!(why.contains("under 5 %"), "{why}");
+        // A mean error over 5 % of the diagonal, or not a number.
+        let why = detail(40_000, 50_000, Some(0.42)).degenerate(1.0).unwrap();
+        assert!(why.contains("42.00 %"), "{why}");
+        assert!(
+            detail(40_000, 50_000, Some(f64::NAN))
+                .degenerate(1.0)
+                .is_some()
+        );
+        // Not measured (--no-measure): the counts alone decide.
+        assert_eq!(detail(40_000, 50_000, None).degenerate(1.0), None);
     }
 }
