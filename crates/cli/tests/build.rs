@@ -85,7 +85,8 @@ fn meshes_of_every_format_take_the_mesh_path() {
         let out = dir.path().join(format!("out_{ext}"));
         let report = build_ok(&input, &out);
         assert!(report.contains("Path: a mesh."), "{ext}: {report}");
-        assert!(out.join("scans/small.conf").is_file(), "{ext}");
+        // The octree is built from the mesh itself: no virtual scans.
+        assert!(!out.join("scans").exists(), "{ext}");
         assert!(out.join("small.mco").is_file() && out.join("small.pop").is_file());
         no_staging_left(&out);
     }
@@ -110,7 +111,7 @@ fn point_clouds_are_reconstructed_first() {
             "{ext}: {report}"
         );
         assert!(
-            report.contains("from the input's points"),
+            report.contains("from the reconstructed surface"),
             "{ext}: {report}"
         );
         // No virtual scans: the reconstruction is the model.
@@ -248,36 +249,8 @@ fn report_html_is_self_contained_and_deterministic() {
             "{bad}"
         );
     }
-    let imgs: Vec<&str> = html.split("<img ").skip(1).collect();
     // Input, 2 HQMS levels, the MCO cuts, the stream levels, the heat map.
-    assert!(imgs.len() >= 6, "{} images", imgs.len());
-    use base64::Engine as _;
-    for img in &imgs {
-        let src = img
-            .split("src=\"data:image/png;base64,")
-            .nth(1)
-            .expect("every <img> is a data: PNG");
-        let b64 = &src[..src.find('"').unwrap()];
-        let png = base64::engine::general_purpose::STANDARD
-            .decode(b64)
-            .unwrap();
-        let mut reader = png::Decoder::new(std::io::Cursor::new(png))
-            .read_info()
-            .unwrap();
-        let mut buf = vec![0; reader.output_buffer_size().unwrap()];
-        let info = reader.next_frame(&mut buf).unwrap();
-        assert_eq!((info.width, info.height), (256, 256));
-        let px = info.line_size * info.height as usize;
-        let step = info.color_type.samples();
-        let drawn = buf[..px]
-            .chunks_exact(step)
-            .filter(|p| p[..3] != [255, 255, 255])
-            .count();
-        assert!(
-            drawn > 500,
-            "a picture shows almost nothing ({drawn} pixels)"
-        );
-    }
+    assert!(every_picture_shows_the_model(&html) >= 6);
     for needle in [
         "error against triangle count, every form",
         ".pop error against bytes received",
@@ -370,4 +343,202 @@ fn small_input(dir: &Path) -> PathBuf {
     let p = dir.join("small_in.ply");
     save(&p, &Model::Mesh(small_bunny()), WriteOptions::default()).unwrap();
     p
+}
+
+/// A one-sided scan, as a laser or stereo scanner sees a table top: `n × n`
+/// points on a gently wavy open sheet, jittered (deterministically) by a
+/// tenth of their spacing, no normals.
+fn wavy_sheet(n: usize) -> PointCloud {
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut jitter = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 40) as f32 / (1u64 << 24) as f32 - 0.5
+    };
+    let step = 1.0 / n as f32;
+    let mut positions = Vec::with_capacity(n * n);
+    for i in 0..n {
+        for j in 0..n {
+            let x = i as f32 * step + 0.1 * step * jitter();
+            let y = j as f32 * step + 0.1 * step * jitter();
+            let z = 0.08 * (3.0 * x).sin() * (2.0 * y).cos();
+            positions.push(lodkit_mesh::glam::Vec3::new(x, y, z));
+        }
+    }
+    PointCloud {
+        positions,
+        normals: None,
+        colors: None,
+    }
+}
+
+/// The row of report.md's detail table for `product` (`stream` or
+/// `octree`): its finest level's count and the input's.
+fn detail_row(report: &str, product: &str) -> (usize, usize, String) {
+    let row = report
+        .lines()
+        .find(|l| l.starts_with(&format!("| {product} ")))
+        .unwrap_or_else(|| panic!("no {product} row: {report}"));
+    let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+    let first = |c: &str| c.split(' ').next().unwrap().parse::<usize>().unwrap();
+    (first(cells[2]), first(cells[3]), cells[6].to_string())
+}
+
+/// `x` is within a factor 2 of `of`.
+fn within_2x(x: usize, of: usize) -> bool {
+    2 * x >= of && x <= 2 * of
+}
+
+/// A one-sided point cloud keeps its detail in the stream (no outer
+/// thinning eating the sheet; leaves about as many as its points) and in
+/// the octree; the stream, read back, has it at its finest level.
+#[test]
+fn a_one_sided_cloud_keeps_its_detail_in_every_product() {
+    let dir = tempfile::tempdir().unwrap();
+    let cloud = wavy_sheet(60);
+    let n = cloud.positions.len();
+    let input = dir.path().join("sheet.xyz");
+    save(&input, &Model::Points(cloud), WriteOptions::default()).unwrap();
+    let out = dir.path().join("out");
+    let report = build_ok(&input, &out);
+    let (particles, samples, verdict) = detail_row(&report, "stream");
+    assert_eq!(samples, n, "{report}");
+    assert!(
+        within_2x(particles, n),
+        "{particles} particles for {n} points: {report}"
+    );
+    assert_eq!(verdict, "ok", "{report}");
+    let (triangles, _, verdict) = detail_row(&report, "octree");
+    assert!(
+        within_2x(triangles, n),
+        "{triangles} triangles for {n} points: {report}"
+    );
+    assert_eq!(verdict, "ok", "{report}");
+    // Read back: the finest level decoded from the file.
+    let bytes = std::fs::read(out.join("sheet.pop")).unwrap();
+    let d = lodkit_particles::decode(&bytes, &lodkit_particles::DecodeOptions::default()).unwrap();
+    let finest = d.surface(d.finest_level()).unwrap();
+    assert_eq!(finest.positions.len(), particles);
+    // Every render of the cloud's report shows it.
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(every_picture_shows_the_model(&html) >= 6);
+}
+
+/// A mesh's octree comes from the mesh (its full cut about the input's
+/// triangle count, read back from the `.mco`), and its stream's finest
+/// level holds about the mesh's vertex count.
+#[test]
+fn a_mesh_keeps_its_detail_in_the_octree_and_the_stream() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = small_bunny();
+    let (faces, vertices) = (mesh.faces.len(), mesh.positions.len());
+    let input = dir.path().join("small.ply");
+    save(&input, &Model::Mesh(mesh), WriteOptions::default()).unwrap();
+    let out = dir.path().join("out");
+    let report = build_ok(&input, &out);
+    let model = lodkit_mco::McoModel::load(&out.join("small.mco")).unwrap();
+    assert!(
+        within_2x(model.full_triangles(), faces),
+        "{} triangles for {faces}: {report}",
+        model.full_triangles()
+    );
+    assert_eq!(detail_row(&report, "octree").0, model.full_triangles());
+    let bytes = std::fs::read(out.join("small.pop")).unwrap();
+    let d = lodkit_particles::decode(&bytes, &lodkit_particles::DecodeOptions::default()).unwrap();
+    let particles = d.surface(d.finest_level()).unwrap().positions.len();
+    assert!(
+        within_2x(particles, vertices),
+        "{particles} particles for {vertices} vertices: {report}"
+    );
+    for product in ["stream", "octree"] {
+        assert_eq!(detail_row(&report, product).2, "ok", "{report}");
+    }
+}
+
+/// A cloud whose one far outlier makes the reconstruction's lattice
+/// coarser than the whole object: the octree keeps a handful of triangles.
+/// The build writes everything, says which product is degenerate and why
+/// (a warning even under -q, a row of report.md), and exits 1.
+#[test]
+fn a_degenerate_product_is_a_warning_and_exit_1() {
+    let dir = tempfile::tempdir().unwrap();
+    let n = 2000;
+    let mut positions: Vec<lodkit_mesh::glam::Vec3> = (0..n)
+        .map(|i| {
+            // A Fibonacci sphere of radius 0.01.
+            let z = 1.0 - 2.0 * (i as f32 + 0.5) / n as f32;
+            let (r, t) = ((1.0 - z * z).sqrt(), i as f32 * 2.399_963);
+            lodkit_mesh::glam::Vec3::new(r * t.cos(), r * t.sin(), z) * 0.01
+        })
+        .collect();
+    positions.push(lodkit_mesh::glam::Vec3::splat(100.0));
+    let input = dir.path().join("outlier.xyz");
+    let cloud = PointCloud {
+        positions,
+        normals: None,
+        colors: None,
+    };
+    save(&input, &Model::Points(cloud), WriteOptions::default()).unwrap();
+    let out = dir.path().join("out");
+    let o = lodkit(&[
+        "-q",
+        "build",
+        s(&input),
+        "--out",
+        s(&out),
+        "--levels",
+        "2",
+        "--samples",
+        "2000",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains(&format!(
+            "warning: {}: degenerate octree outlier.mco",
+            s(&input)
+        )),
+        "{err}"
+    );
+    assert!(err.contains("degenerate product(s)"), "{err}");
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    let (triangles, points, verdict) = detail_row(&report, "octree");
+    assert!(triangles < 100 && points == n + 1, "{report}");
+    assert!(verdict.starts_with("its finest level has"), "{report}");
+    no_staging_left(&out);
+}
+
+/// Every `<img>` of a report page is an embedded 256 × 256 PNG with more
+/// than 500 pixels that are not the white background; returns how many.
+fn every_picture_shows_the_model(html: &str) -> usize {
+    let imgs: Vec<&str> = html.split("<img ").skip(1).collect();
+    use base64::Engine as _;
+    for img in &imgs {
+        let src = img
+            .split("src=\"data:image/png;base64,")
+            .nth(1)
+            .expect("every <img> is a data: PNG");
+        let b64 = &src[..src.find('"').unwrap()];
+        let png = base64::engine::general_purpose::STANDARD
+            .decode(b64)
+            .unwrap();
+        let mut reader = png::Decoder::new(std::io::Cursor::new(png))
+            .read_info()
+            .unwrap();
+        let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+        let info = reader.next_frame(&mut buf).unwrap();
+        assert_eq!((info.width, info.height), (256, 256));
+        let px = info.line_size * info.height as usize;
+        let step = info.color_type.samples();
+        let drawn = buf[..px]
+            .chunks_exact(step)
+            .filter(|p| p[..3] != [255, 255, 255])
+            .count();
+        assert!(
+            drawn > 500,
+            "a picture shows almost nothing ({drawn} pixels)"
+        );
+    }
+    imgs.len()
 }

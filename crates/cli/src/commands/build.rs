@@ -101,6 +101,7 @@ pub fn run(ui: &Ui, args: &BuildArgs) -> Result<()> {
             let m = super::builtin_bunny()?;
             Ok(input::BuildInput {
                 name: BUILTIN_NAME.to_string(),
+                samples: (m.positions.len(), "vertices"),
                 stream_source: Model::Mesh(m.clone()),
                 surface: m,
                 reconstruction: None,
@@ -110,9 +111,28 @@ pub fn run(ui: &Ui, args: &BuildArgs) -> Result<()> {
         }
     })?;
     let staging = staging::Staging::new(&args.out)?;
-    let outputs = write_all(ui, args, &input, sampling, staging.dir(), &mut timings)?;
+    let Written {
+        outputs,
+        degenerate,
+    } = write_all(ui, args, &input, sampling, staging.dir(), &mut timings)?;
     staging.commit()?;
     let out = args.out.as_path();
+    if !degenerate.is_empty() {
+        // Written whole (the report says what went wrong), but not a
+        // success: a warning per product, even under -q, and exit 1.
+        let source = args
+            .input
+            .as_ref()
+            .map_or(input.name.clone(), |p| p.display().to_string());
+        for d in &degenerate {
+            eprintln!("warning: {source}: degenerate {d}");
+        }
+        anyhow::bail!(
+            "{source}: {} degenerate product(s) in {}; see its report.md",
+            degenerate.len(),
+            out.display()
+        );
+    }
     if args.json {
         let list: Vec<_> = outputs
             .iter()
@@ -138,7 +158,7 @@ fn write_all(
     sampling: Sampling,
     dir: &Path,
     timings: &mut Timings,
-) -> Result<Vec<(String, usize)>> {
+) -> Result<Written> {
     let name = input.name.as_str();
     let mesh: &TriMesh = &input.surface;
     let model = Model::Mesh(mesh.clone());
@@ -305,17 +325,45 @@ fn write_all(
     outputs.extend(cont.files.iter().cloned());
 
     let prog = timings.time("progressive stream (encode, decode, measure)", || {
-        progressive::section(
-            ui,
-            &reference,
-            &input.stream_source,
-            name,
-            dir,
-            sampling,
-            &mut report,
-        )
+        progressive::section(ui, &reference, input, dir, sampling, &mut report)
     })?;
     outputs.push(prog.file.clone());
+
+    let details = details(input, &cont, &prog);
+    let diagonal = mesh.bbox().diagonal() as f64;
+    writeln!(
+        report,
+        "## Detail against the input\n\nEach product's finest level beside the input's samples it \
+         should keep (about as many; under {} % of them, under {} triangles or particles, or a mean \
+         error over {} % of the diagonal is a degenerate product, and the build fails).\n",
+        measure::SMALLEST_SHARE * 100.0,
+        measure::FEWEST_PRIMITIVES,
+        measure::LARGEST_MEAN_ERROR * 100.0
+    )?;
+    writeln!(
+        report,
+        "| product | finest level | input | share | mean error | verdict |\n|---|---:|---:|---:|---:|---|"
+    )?;
+    let mut degenerate = Vec::new();
+    for d in &details {
+        let verdict = d.degenerate(diagonal);
+        writeln!(
+            report,
+            "| {} | {} {} | {} {} | {:.2} | {} | {} |",
+            d.product,
+            d.count,
+            d.unit,
+            d.expected,
+            d.expected_unit,
+            d.count as f64 / d.expected.max(1) as f64,
+            measure::cell(d.mean),
+            verdict.as_deref().unwrap_or("ok"),
+        )?;
+        if let Some(v) = verdict {
+            degenerate.push(format!("{}: {v}", d.product));
+        }
+    }
+    writeln!(report)?;
 
     writeln!(report, "## Outputs\n\n| file | bytes |\n|---|---:|")?;
     for file in &outputs {
@@ -350,12 +398,13 @@ fn write_all(
         continuous: &cont,
         progressive: &prog,
         timings: &timings.0,
+        degenerate: &degenerate,
         materials: materials.as_ref(),
     })?;
     write_atomic(&dir.join("report.html"), html.as_bytes())?;
     step.finish();
     outputs.push("report.html".into());
-    outputs
+    let outputs = outputs
         .into_iter()
         .map(|file| {
             let path = dir.join(&file);
@@ -364,7 +413,55 @@ fn write_all(
                 .len() as usize;
             Ok((file, len))
         })
-        .collect()
+        .collect::<Result<_>>()?;
+    Ok(Written {
+        outputs,
+        degenerate,
+    })
+}
+
+/// What [`write_all`] wrote: each file (relative) with its size, and the
+/// degenerate products (one line each; see [`measure::Detail`]).
+struct Written {
+    outputs: Vec<(String, usize)>,
+    degenerate: Vec<String>,
+}
+
+/// Each product's finest level against the input's samples: the stream's
+/// particles against the samples it encodes (a mesh's vertices, a cloud's
+/// points), the octree's full cut against a mesh's triangles, or against
+/// the reconstructed input's samples.
+fn details(
+    input: &input::BuildInput,
+    cont: &continuous::Continuous,
+    prog: &progressive::Progressive,
+) -> Vec<measure::Detail> {
+    let (samples, unit) = input.samples;
+    let finest = prog.levels.last();
+    let stream = measure::Detail {
+        product: format!("stream {}", prog.file),
+        count: finest.map_or(0, |l| l.particles),
+        unit: "particles",
+        triangles: finest.map_or(0, |l| l.mesh.faces.len()),
+        expected: samples,
+        expected_unit: unit,
+        mean: finest.and_then(|l| l.measured).map(|m| m.mean),
+    };
+    let (expected, expected_unit) = match input.path {
+        input::InputPath::Mesh => (input.surface.faces.len(), "triangles"),
+        _ => (samples, unit),
+    };
+    let full = cont.cuts.iter().find(|c| c.percent == 100.0);
+    let octree = measure::Detail {
+        product: format!("octree {}", cont.file),
+        count: cont.full_triangles,
+        unit: "triangles",
+        triangles: cont.full_triangles,
+        expected,
+        expected_unit,
+        mean: full.and_then(|c| c.mco).map(|m| m.mean),
+    };
+    vec![octree, stream]
 }
 
 /// The report's sentence on which path the input took.
@@ -372,18 +469,17 @@ fn path_sentence(path: &input::InputPath, name: &str) -> String {
     match path {
         input::InputPath::Mesh => {
             "Path: a mesh. The HQMS chain simplifies it, the marching cube octree is \
-             rebuilt from virtual scans of it, the progressive stream encodes it; every error is \
-             measured against it."
+             built from it, the progressive stream encodes it; every error is measured against it."
                 .to_string()
         }
         input::InputPath::Reconstructed(what) => format!(
             "Path: a {what}, reconstructed first as a marching cube octree (`lodkit mco build`); \
              its full-resolution surface (`{name}.ply`) feeds the HQMS chain and is the reference \
-             every error is measured against; the progressive stream encodes the input's points."
+             every error is measured against; the progressive stream encodes it too."
         ),
-        input::InputPath::Carved(what) => format!(
+        input::InputPath::Carved(what, _) => format!(
             "Path: a {what} (`lodkit pop encode --silhouettes`); the finest level of its particles, \
-             triangulated (`{name}.ply`), feeds the HQMS chain and the marching cube octree (rebuilt from virtual scans of it) and is \
+             triangulated (`{name}.ply`), feeds the HQMS chain and the marching cube octree (built from it) and is \
              the reference every error is measured against; the progressive stream encodes the \
              carved particles as points."
         ),

@@ -2,8 +2,10 @@
 //! its cuts at 50 / 10 / 1 % of full size, each measured against the input
 //! next to HQMS simplifying the input to the same triangle count.
 //!
-//! A mesh input is first scanned from 8 virtual views (`scans/`, the
-//! thesis's experiment) and rebuilt from the scans; a non-mesh input's own
+//! A mesh input is built into the octree from the mesh itself (as `lodkit
+//! mco build MESH` does, [`lodkit_mco::build_from_mesh`]) on a lattice
+//! fine enough that the full-resolution cut has about as many triangles
+//! as the input ([`mesh_resolution`]); a non-mesh input's own
 //! reconstruction (see [`super::input`]) is the model.
 
 use std::fmt::Write as _;
@@ -11,27 +13,69 @@ use std::path::Path;
 
 use anyhow::Result;
 use lodkit_mco::McoModel;
-use lodkit_mesh::TriMesh;
 use lodkit_mesh::metrics::Reference;
+use lodkit_mesh::{Model, TriMesh};
 use lodkit_simplify::{Options, Target};
 
 use super::measure::{Measured, Sampling, cell};
 use crate::ui::Ui;
 
-/// The virtual scans of a mesh input: 8 views, alternately 30° above and
-/// below the horizon, 300 × 300 samples each.
-pub const BUILD_SCANS: lodkit_mco::ScanOptions = lodkit_mco::ScanOptions {
-    views: 8,
-    width: 300,
-    height: 300,
-    elevation_deg: 30.0,
-    alternate: true,
-    noise: 0.0,
-    seed: 1,
-};
+/// Full-cut triangles per lattice cube of surface area: a surface crosses
+/// about 1.5 leaf cubes per cube² of its area (`|nx| + |ny| + |nz|`
+/// averaged over orientations) and marching cubes puts about 2 triangles
+/// in each. With it, [`mesh_resolution`] picks the cube whose full cut has
+/// about the input's triangle count.
+const CUT_TRIANGLES_PER_AREA: f64 = 3.0;
 
-/// Fractions of the full triangle count the report cuts, per cent.
-const PERCENTS: [f64; 3] = [50.0, 10.0, 1.0];
+/// Largest memory (bytes) the octree of a mesh input may plan for: a
+/// quarter of [`lodkit_mco::MAX_BUILD_BYTES`], so `build` stays well inside
+/// the library's limit on a machine doing other work; a finer lattice is
+/// coarsened until its estimate fits.
+const MESH_BUILD_BYTES: u64 = lodkit_mco::MAX_BUILD_BYTES / 4;
+
+/// The lattice resolution (cubes along the longest axis) for the octree
+/// of `mesh`: a cube edge of `sqrt(CUT_TRIANGLES_PER_AREA · area /
+/// triangles)`, so the full cut keeps about the input's triangle count
+/// (its detail), clamped to `8..=`[`lodkit_mco::MAX_RESOLUTION`] and
+/// lowered by quarters while [`lodkit_mco::estimate_build_bytes`] is above
+/// [`MESH_BUILD_BYTES`]. `None` when the mesh has no area (the library's
+/// default then decides). Cost: one pass over the faces, plus one
+/// estimate (`O(input)`) per try.
+pub fn mesh_resolution(mesh: &TriMesh) -> Result<Option<u32>> {
+    let area: f64 = mesh
+        .faces
+        .iter()
+        .filter(|f| f.iter().all(|&i| (i as usize) < mesh.positions.len()))
+        .map(|f| {
+            let [a, b, c] = f.map(|i| mesh.positions[i as usize].as_dvec3());
+            0.5 * (b - a).cross(c - a).length()
+        })
+        .filter(|x| x.is_finite())
+        .sum();
+    let longest = f64::from(mesh.bbox().size().max_element());
+    if !(area > 0.0 && longest > 0.0) || mesh.faces.is_empty() {
+        return Ok(None);
+    }
+    let cube = (CUT_TRIANGLES_PER_AREA * area / mesh.faces.len() as f64).sqrt();
+    let mut r = (longest / cube)
+        .ceil()
+        .clamp(8.0, f64::from(lodkit_mco::MAX_RESOLUTION)) as u32;
+    let model = [Model::Mesh(mesh.clone())];
+    while r > 8 {
+        let opts = lodkit_mco::Options {
+            resolution: Some(r),
+        };
+        if lodkit_mco::estimate_build_bytes(&model, &opts)? <= MESH_BUILD_BYTES {
+            break;
+        }
+        r = (r * 3 / 4).max(8);
+    }
+    Ok(Some(r))
+}
+
+/// Fractions of the full triangle count the report cuts, per cent (the
+/// full cut first: it is the product's finest level).
+const PERCENTS: [f64; 4] = [100.0, 50.0, 10.0, 1.0];
 
 /// One cut of the model, with the HQMS simplification of the same size.
 pub struct Cut {
@@ -42,9 +86,24 @@ pub struct Cut {
     pub hqms: Option<Measured>,
 }
 
+impl Cut {
+    /// The cut's measured mean error over HQMS's at the same size, when
+    /// both were measured and HQMS's is not zero.
+    pub fn mean_ratio(&self) -> Option<f64> {
+        match (self.mco, self.hqms) {
+            (Some(m), Some(h)) if h.mean > 0.0 => Some(m.mean / h.mean),
+            _ => None,
+        }
+    }
+}
+
 /// What the section produced.
 pub struct Continuous {
     pub cuts: Vec<Cut>,
+    /// The `.mco` file, relative to the output folder.
+    pub file: String,
+    /// Triangles of the full-resolution cut.
+    pub full_triangles: usize,
     /// Files written, relative to the output folder.
     pub files: Vec<String>,
 }
@@ -66,15 +125,12 @@ pub fn section(
     let model = match reconstruction {
         Some(m) => m,
         None => {
-            let step = ui.spinner("scanning the input from 8 virtual views");
-            let scans = lodkit_mco::scan_mesh(mesh, &BUILD_SCANS)?;
-            let written = lodkit_mco::write_scans(&out.join("scans"), name, &scans)?;
-            step.finish();
-            for p in written {
-                files.push(p.strip_prefix(out).unwrap_or(&p).display().to_string());
-            }
-            let step = ui.spinner("building the marching cube octree");
-            built = lodkit_mco::build_from_range_images(&scans, &lodkit_mco::Options::default())?;
+            let step = ui.spinner("building the marching cube octree from the mesh");
+            let opts = lodkit_mco::Options {
+                resolution: mesh_resolution(mesh).map_err(|e| anyhow::anyhow!("{name}: {e}"))?,
+            };
+            built = lodkit_mco::build_from_mesh(mesh, &opts)
+                .map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
             step.finish();
             &built
         }
@@ -94,15 +150,22 @@ pub fn section(
             continue;
         }
         let mco = sampling.measure(reference, &cut)?;
-        let s = lodkit_simplify::simplify(
-            mesh,
-            &Options {
-                target: Target::Faces(cut.faces.len()),
-                ..Options::DEFAULT
-            },
-        )
-        .map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
-        let hqms = sampling.measure(reference, &s.mesh)?;
+        // The full cut is the product's finest level, held against the
+        // input itself (the detail check); HQMS at about the input's size
+        // is the input, nothing to compare.
+        let hqms = if percent < 100.0 && cut.faces.len() < mesh.faces.len() {
+            let s = lodkit_simplify::simplify(
+                mesh,
+                &Options {
+                    target: Target::Faces(cut.faces.len()),
+                    ..Options::DEFAULT
+                },
+            )
+            .map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+            sampling.measure(reference, &s.mesh)?
+        } else {
+            None
+        };
         cuts.push(Cut {
             percent,
             lod,
@@ -116,29 +179,31 @@ pub fn section(
         format!("The input's reconstruction (`{mco_file}`")
     } else {
         format!(
-            "{} virtual range scans of the input ({}×{}, `scans/`, with `{name}.conf`) rebuilt as a \
-             marching cube octree (`{mco_file}`",
-            BUILD_SCANS.views, BUILD_SCANS.width, BUILD_SCANS.height
+            "The input mesh built into a marching cube octree (`{mco_file}`, lattice resolution {}, \
+             cube {:.3e}, chosen so the full cut keeps about the input's triangle count",
+            model.grid().resolution(),
+            model.grid().cube()
         )
     };
     writeln!(
         report,
         "## Continuous LOD (marching cube octree)\n\n{origin}: {} triangles at full resolution, LOD \
          numbers 0..={}). Any triangle budget is cut from it by referencing only; below, extractions \
-         at fractions of full size, next to HQMS simplifying the input to the same count; errors {}.\n",
+         at fractions of full size, next to HQMS simplifying the input to the same count (*ratio*: \
+         MCO mean ÷ HQMS mean); errors {}.\n",
         model.full_triangles(),
         model.max_lod(),
         sampling.describe(),
     )?;
     writeln!(
         report,
-        "| % of full | LOD | triangles | samples | MCO mean | MCO max | HQMS mean | HQMS max |\n\
-         |---:|---:|---:|---:|---:|---:|---:|---:|"
+        "| % of full | LOD | triangles | samples | MCO mean | MCO max | HQMS mean | HQMS max | ratio |\n\
+         |---:|---:|---:|---:|---:|---:|---:|---:|---:|"
     )?;
     for c in &cuts {
         writeln!(
             report,
-            "| {} | {} | {} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} |",
             c.percent,
             c.lod,
             c.mesh.faces.len(),
@@ -147,8 +212,14 @@ pub fn section(
             cell(c.mco.map(|m| m.max)),
             cell(c.hqms.map(|m| m.mean)),
             cell(c.hqms.map(|m| m.max)),
+            c.mean_ratio().map_or("-".into(), |r| format!("{r:.2}")),
         )?;
     }
     writeln!(report)?;
-    Ok(Continuous { cuts, files })
+    Ok(Continuous {
+        cuts,
+        file: mco_file,
+        full_triangles: full,
+        files,
+    })
 }

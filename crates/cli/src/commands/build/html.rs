@@ -31,6 +31,8 @@ pub struct Inputs<'a> {
     pub continuous: &'a Continuous,
     pub progressive: &'a Progressive,
     pub timings: &'a [(String, f64)],
+    /// Degenerate products, one line each (shown first when any).
+    pub degenerate: &'a [String],
     /// A scene input's materials (its merged faces' looks), so the input
     /// and the HQMS levels are drawn textured.
     pub materials: Option<&'a lodkit_render::Materials>,
@@ -86,6 +88,11 @@ pub fn report(i: &Inputs) -> Result<String> {
     let samples = |m: &Option<Measured>| m.map_or("-".into(), |m| m.samples.to_string());
 
     let mut b: Vec<Block> = i.intro.iter().cloned().map(Block::Text).collect();
+    for d in i.degenerate {
+        b.push(Block::Text(format!(
+            "Warning: degenerate {d}; the build failed."
+        )));
+    }
     b.push(Block::Text(format!(
         "All errors are distances to the input surface in object units, with the same figure as a \
          percentage of its bounding-box diagonal ({diagonal:.6}) beside it. Errors {}.",
@@ -357,7 +364,7 @@ pub fn report(i: &Inputs) -> Result<String> {
             col("triangles", "Triangles of the cut (and of the HQMS simplification beside it)."),
             samples_col.clone(),
             col("MCO mean", "Measured mean distance of the cut to the input."),
-            col("MCO max", "Measured maximum distance of the cut to the input; it includes what the scanning and reconstruction missed, not only the cut."),
+            col("MCO max", "Measured maximum distance of the cut to the input; for a reconstructed input it includes what the reconstruction missed, not only the cut."),
             col("HQMS mean", "Measured mean distance of HQMS simplifying the input to the same triangle count."),
             col("HQMS max", "Measured maximum distance of that HQMS simplification."),
         ],

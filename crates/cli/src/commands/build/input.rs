@@ -8,8 +8,8 @@
 //!   range images, posed by the one `.conf` in it if there is one) is
 //!   first reconstructed as a marching cube octree (`lodkit_mco`, as
 //!   `lodkit mco build` does); its full-resolution cut is the surface, and
-//!   the stream is built from the points themselves (range images as their
-//!   posed samples);
+//!   the stream encodes that surface (a direct triangulation of raw
+//!   points at their own spacing is full of holes);
 //! - a **calibrated image set** (a NeRF `transforms.json`, a COLMAP
 //!   `cameras.txt` / `images.txt`) is carved from its silhouettes into
 //!   octree particles (`lodkit pop encode --silhouettes`); the finest
@@ -20,7 +20,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use lodkit_mco::McoModel;
-use lodkit_mesh::{Model, PointCloud, TriMesh};
+use lodkit_mesh::{Model, TriMesh};
 
 use crate::ui::Ui;
 
@@ -32,8 +32,9 @@ pub enum InputPath {
     /// image"`, `"scan set of 8 range images"`).
     Reconstructed(String),
     /// A calibrated image set carved into octree particles: what it was
-    /// (`"calibrated image set of 36 views, carved … at R = 8"`).
-    Carved(String),
+    /// (`"calibrated image set of 36 views, carved … at R = 8"`), and the
+    /// octree depth it was carved at.
+    Carved(String, u8),
 }
 
 /// The loaded input.
@@ -42,8 +43,13 @@ pub struct BuildInput {
     pub name: String,
     /// The surface: the mesh itself, or the reconstruction.
     pub surface: TriMesh,
-    /// What the progressive stream encodes: the mesh, or the input's points.
+    /// What the progressive stream encodes: the mesh, the reconstructed
+    /// surface, or the carved particles.
     pub stream_source: Model,
+    /// The input's own samples (a mesh's vertices, a cloud's points, range
+    /// images' valid pixels, carved particles) and what they are: the count
+    /// each product's finest level is held against.
+    pub samples: (usize, &'static str),
     /// The reconstruction, for non-mesh inputs.
     pub reconstruction: Option<McoModel>,
     /// Which path the input took.
@@ -86,6 +92,7 @@ pub fn load(ui: &Ui, path: &Path, merge: bool) -> Result<BuildInput> {
                 }
                 return Ok(BuildInput {
                     name,
+                    samples: (surface.positions.len(), "vertices"),
                     stream_source: Model::Mesh(surface.clone()),
                     surface,
                     reconstruction: None,
@@ -102,6 +109,7 @@ pub fn load(ui: &Ui, path: &Path, merge: bool) -> Result<BuildInput> {
                 }
                 return Ok(BuildInput {
                     name,
+                    samples: (m.positions.len(), "vertices"),
                     stream_source: Model::Mesh(m.clone()),
                     surface: m,
                     reconstruction: None,
@@ -176,7 +184,7 @@ fn scan_folder(ui: &Ui, dir: &Path) -> Result<(String, Vec<Model>)> {
 }
 
 /// Reconstructs `models` as a marching cube octree; its full cut is the
-/// surface, and the posed samples of every model are the stream's points.
+/// surface, and the stream's source.
 fn reconstruct(
     ui: &Ui,
     path: &Path,
@@ -192,31 +200,19 @@ fn reconstruct(
     if surface.faces.is_empty() {
         bail!("{}: the reconstruction has no triangles", path.display());
     }
-    let stream_source = match models {
-        [Model::Points(c)] => Model::Points(c.clone()),
-        _ => {
-            let mut cloud = PointCloud::default();
-            let mut colors = Vec::new();
-            let mut all_coloured = true;
-            for m in models {
-                let s = lodkit_mco::samples_of(m)
-                    .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-                all_coloured &= s.colors.is_some();
-                if let Some(c) = &s.colors {
-                    colors.extend_from_slice(c);
-                }
-                cloud.positions.extend_from_slice(&s.positions);
-            }
-            if all_coloured && colors.len() == cloud.positions.len() {
-                cloud.colors = Some(colors);
-            }
-            Model::Points(cloud)
-        }
+    let samples = models
+        .iter()
+        .map(|m| super::measure::sample_count(m).0)
+        .sum();
+    let unit = match models {
+        [Model::Points(_)] => "points",
+        _ => "samples",
     };
     Ok(BuildInput {
         name,
+        samples: (samples, unit),
+        stream_source: Model::Mesh(surface.clone()),
         surface,
-        stream_source,
         reconstruction: Some(model),
         path: InputPath::Reconstructed(what),
         scene: None,
@@ -258,15 +254,20 @@ fn carve(ui: &Ui, path: &Path, name: String) -> Result<BuildInput> {
     if surface.faces.is_empty() {
         bail!("{}: the carved hull has no triangles", path.display());
     }
+    let particles = c.particles();
     Ok(BuildInput {
         name,
         surface,
-        stream_source: Model::Points(c.particles()),
+        samples: (particles.positions.len(), "particles"),
+        stream_source: Model::Points(particles),
         reconstruction: None,
-        path: InputPath::Carved(format!(
-            "calibrated image set of {} views, carved from its silhouettes at R = {}",
-            c.report.views, c.report.depth
-        )),
+        path: InputPath::Carved(
+            format!(
+                "calibrated image set of {} views, carved from its silhouettes at R = {}",
+                c.report.views, c.report.depth
+            ),
+            c.report.depth,
+        ),
         scene: None,
     })
 }
