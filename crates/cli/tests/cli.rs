@@ -791,7 +791,11 @@ fn an_output_never_replaces_an_input() {
         let o = lodkit(&["render", &input, "-o", &d(out), "--size", "32x32"]);
         let e = stderr(&o);
         assert_eq!(o.status.code(), Some(2), "{out}: {e}");
-        let says = if out == "in.ply" { "is written as .png" } else { "is the input" };
+        let says = if out == "in.ply" {
+            "is written as .png"
+        } else {
+            "is the input"
+        };
         assert!(e.contains(says), "{out}: {e}");
     }
     let dotted = format!("{}/./in.ply", dir.path().display());
@@ -864,7 +868,10 @@ fn build_replaces_only_a_folder_that_is_provably_an_earlier_build() {
     let o = build(&input, &out);
     assert!(o.status.success(), "{}", stderr(&o));
     let files = tree(&out);
-    assert!(files.contains(&".lodkit-build.json".to_string()), "{files:?}");
+    assert!(
+        files.contains(&".lodkit-build.json".to_string()),
+        "{files:?}"
+    );
     // Its own input: a file of the build, listed in its manifest.
     refused(&out.join("blob.ply"), &out, "holds the input");
     // Rebuilt over itself: replaced.

@@ -418,10 +418,17 @@ fn a_subdivided_scan_is_generated_and_simplified_out_of_core() {
 fn damaged(dir: &Path, how: &str) -> String {
     let src = blob(dir);
     let bytes = std::fs::read(&src).unwrap();
-    let end = bytes.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
+    let end = bytes
+        .windows(11)
+        .position(|w| w == b"end_header\n")
+        .unwrap()
+        + 11;
     let header = String::from_utf8(bytes[..end].to_vec()).unwrap();
     let count = |name: &str| -> u64 {
-        let l = header.lines().find(|l| l.starts_with(&format!("element {name} "))).unwrap();
+        let l = header
+            .lines()
+            .find(|l| l.starts_with(&format!("element {name} ")))
+            .unwrap();
         l.rsplit(' ').next().unwrap().parse().unwrap()
     };
     let (nv, nf) = (count("vertex"), count("face"));
@@ -463,9 +470,15 @@ fn the_out_of_core_reader_refuses_what_the_in_core_one_refuses() {
     let dir = tempfile::tempdir().unwrap();
     for (how, says) in [
         ("vertex+1", ""),
-        ("faces-1000", "13000 bytes follow the last element the header declares"),
+        (
+            "faces-1000",
+            "13000 bytes follow the last element the header declares",
+        ),
         ("7 7 7", "face 0: repeats a vertex index (7 7 7)"),
-        ("junk", "5 bytes follow the last element the header declares"),
+        (
+            "junk",
+            "5 bytes follow the last element the header declares",
+        ),
     ] {
         let input = damaged(dir.path(), how);
         let out = dir.path().join("out.ply");
@@ -474,11 +487,21 @@ fn the_out_of_core_reader_refuses_what_the_in_core_one_refuses() {
             let o = simplify(&input, &out, &["--ratio", "0.1", "--memory", memory]);
             let e = stderr(&o);
             assert_eq!(o.status.code(), Some(1), "{how} at {memory}: {e}");
-            let line = e.lines().find(|l| l.starts_with("lodkit: error")).unwrap_or_else(|| panic!("{e}"));
-            assert!(line.contains(&input) && line.contains(says), "{how} at {memory}: {e}");
+            let line = e
+                .lines()
+                .find(|l| l.starts_with("lodkit: error"))
+                .unwrap_or_else(|| panic!("{e}"));
+            assert!(
+                line.contains(&input) && line.contains(says),
+                "{how} at {memory}: {e}"
+            );
             msgs.push(line.split(&input).nth(1).unwrap().to_string());
             assert!(!out.exists(), "{how}");
-            assert!(staging_left(dir.path()).is_empty(), "{how}: {:?}", staging_left(dir.path()));
+            assert!(
+                staging_left(dir.path()).is_empty(),
+                "{how}: {:?}",
+                staging_left(dir.path())
+            );
         }
         if !says.is_empty() {
             assert_eq!(msgs[0], msgs[1], "{how}");
@@ -521,7 +544,11 @@ fn two_runs_of_the_same_job_at_once_never_share_the_staging_folder() {
         }
         assert!(ok >= 1);
         assert_eq!(std::fs::read(&out).unwrap(), expected);
-        assert!(staging_left(dir.path()).is_empty(), "{:?}", staging_left(dir.path()));
+        assert!(
+            staging_left(dir.path()).is_empty(),
+            "{:?}",
+            staging_left(dir.path())
+        );
         std::fs::remove_file(&out).unwrap();
     }
 }
@@ -553,7 +580,10 @@ fn an_abandoned_staging_folder_is_removed_by_the_next_run_for_that_output() {
     assert_eq!(o.status.code(), Some(1), "{e}");
     let left = staging_left(dir.path());
     assert_eq!(left.len(), 1);
-    assert!(e.contains(&left[0]) && e.contains("finished blocks are kept in"), "{e}");
+    assert!(
+        e.contains(&left[0]) && e.contains("finished blocks are kept in"),
+        "{e}"
+    );
     std::fs::remove_dir(&out).unwrap();
     // Not lodkit's: no lock file of lodkit's.
     let foreign = dir.path().join(".a.ply.lodkit-staging-0123456789abcdef");
@@ -562,7 +592,13 @@ fn an_abandoned_staging_folder_is_removed_by_the_next_run_for_that_output() {
     let o = simplify(&input, &out, &["--ratio", "0.2", "--memory", "1M"]);
     let e = stderr(&o);
     assert!(o.status.success(), "{e}");
-    assert!(e.contains(&format!("removed {}", dir.path().join(&left[0]).display())), "{e}");
-    assert_eq!(staging_left(dir.path()), vec![".a.ply.lodkit-staging-0123456789abcdef"]);
+    assert!(
+        e.contains(&format!("removed {}", dir.path().join(&left[0]).display())),
+        "{e}"
+    );
+    assert_eq!(
+        staging_left(dir.path()),
+        vec![".a.ply.lodkit-staging-0123456789abcdef"]
+    );
     assert_eq!(std::fs::read(foreign.join("mine.txt")).unwrap(), b"mine");
 }

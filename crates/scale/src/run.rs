@@ -847,7 +847,10 @@ fn read_manifest(dir: &Path, blocks: usize) -> Option<Manifest> {
     if bb.len() != 7 || !bb.iter().all(|v| v.is_finite()) || bb[6] < 0.0 {
         return None;
     }
-    let (min, max) = (Vec3::new(bb[0], bb[1], bb[2]), Vec3::new(bb[3], bb[4], bb[5]));
+    let (min, max) = (
+        Vec3::new(bb[0], bb[1], bb[2]),
+        Vec3::new(bb[3], bb[4], bb[5]),
+    );
     if !min.cmple(max).all() {
         return None;
     }

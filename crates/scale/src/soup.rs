@@ -400,5 +400,8 @@ pub fn write_mesh(path: &Path, layout: Layout, mesh: &TriMesh) -> std::io::Resul
         w.into_inner().map_err(|e| e.into_error())?.sync_all()?;
     }
     std::fs::rename(&tmp, path)?;
-    write_small(&sum_path(path), format!("{len} {:016x}\n", sum.0).as_bytes())
+    write_small(
+        &sum_path(path),
+        format!("{len} {:016x}\n", sum.0).as_bytes(),
+    )
 }

@@ -518,7 +518,8 @@ fn a_tampered_staging_folder_is_redone_to_the_same_bytes() {
         simplify_file(&input, &o, &quiet).unwrap();
         tamper(&o.staging, &victim);
         let t = std::time::Instant::now();
-        let (again, _) = simplify_file(&input, &o, &quiet).unwrap_or_else(|e| panic!("{what}: {e}"));
+        let (again, _) =
+            simplify_file(&input, &o, &quiet).unwrap_or_else(|e| panic!("{what}: {e}"));
         assert!(t.elapsed().as_secs() < 60, "{what}");
         assert!(again == clean, "{what}: another mesh");
         assert_eq!(std::fs::read(&victim).unwrap(), b"a user's file", "{what}");
@@ -544,9 +545,15 @@ fn abandoned_staging_folders_are_removed_and_others_kept() {
     let foreign = dir.path().join(".out.ply.lodkit-staging-00000000000000ff");
     std::fs::create_dir(&foreign).unwrap();
     std::fs::write(foreign.join("lock"), b"mine").unwrap();
-    assert_eq!(lodkit_scale::remove_abandoned(&output, &mine), vec![old.clone()]);
+    assert_eq!(
+        lodkit_scale::remove_abandoned(&output, &mine),
+        vec![old.clone()]
+    );
     assert!(!old.exists() && held.exists() && mine.exists() && foreign.exists());
     drop(lock);
-    assert_eq!(lodkit_scale::remove_abandoned(&output, &mine), vec![held.clone()]);
+    assert_eq!(
+        lodkit_scale::remove_abandoned(&output, &mine),
+        vec![held.clone()]
+    );
     assert!(mine.exists() && foreign.join("lock").exists());
 }

@@ -487,7 +487,7 @@ mod tests {
         let long = format!("{}.ply", "é".repeat(121)); // 246 bytes
         let path = dir.path().join(&long);
         save_mesh(&path, &shapes::icosphere(0), WriteOptions::default()).unwrap();
-        assert_eq!(names(dir.path()), [long.clone()]);
+        assert_eq!(names(dir.path()), std::slice::from_ref(&long));
         assert_eq!(load_mesh(&path).unwrap().faces.len(), 20);
         let path = dir.path().join(format!("{}.ply", "a".repeat(247)));
         save_mesh(&path, &shapes::icosphere(0), WriteOptions::default()).unwrap();

@@ -18,7 +18,7 @@ use std::path::Path;
 #[cfg(unix)]
 use std::sync::Mutex;
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 
 /// `(device, inode)` of every input so far; `None` until opted in.
 #[cfg(unix)]
@@ -68,7 +68,7 @@ pub(crate) fn check(path: &Path) -> Result<()> {
         };
         let g = INPUTS.lock().unwrap_or_else(|e| e.into_inner());
         if g.as_ref().is_some_and(|s| s.contains(&(m.dev(), m.ino()))) {
-            return Err(Error::unsupported(
+            return Err(crate::error::Error::unsupported(
                 path,
                 "is an input of this run (the same file, through this path or a link); \
                  lodkit never writes over its input: give another output path",

@@ -206,7 +206,10 @@ fn walk(dir: &Path) -> std::result::Result<BTreeMap<String, u64>, String> {
             if t.is_dir() {
                 go(base, &p, out)?;
             } else if t.is_file() {
-                let len = e.metadata().map_err(|e| format!("{}: {e}", p.display()))?.len();
+                let len = e
+                    .metadata()
+                    .map_err(|e| format!("{}: {e}", p.display()))?
+                    .len();
                 out.insert(rel(&p), len);
             } else {
                 return Err(format!("{} is a link or a special file", rel(&p)));
@@ -353,9 +356,7 @@ fn check_target(target: &Path, input: Option<&Path>) -> Result<()> {
         .canonicalize()
         .with_context(|| format!("{}: cannot resolve", target.display()))?;
     if std::env::current_dir().is_ok_and(|cwd| cwd.starts_with(&t)) {
-        return refuse(
-            "is the current folder or one above it; give a folder of its own".into(),
-        );
+        return refuse("is the current folder or one above it; give a folder of its own".into());
     }
     if let Some(i) = input.and_then(|i| i.canonicalize().ok())
         && i.starts_with(&t)

@@ -329,9 +329,7 @@ impl PlyStream {
                 f(t)?;
             }
         }
-        let end = start
-            .saturating_add(read)
-            .saturating_add(self.tail_bytes);
+        let end = start.saturating_add(read).saturating_add(self.tail_bytes);
         if end > self.file_len {
             return Err(self.truncated("last element's"));
         }

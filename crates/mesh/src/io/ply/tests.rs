@@ -890,7 +890,9 @@ fn tri_file(verts: usize, faces: &[[i32; 3]], declared: (usize, usize), extra: &
 /// the same message; the good file is read alike by both.
 #[test]
 fn in_core_and_streaming_readers_refuse_the_same_files() {
-    let faces: Vec<[i32; 3]> = (0..1_200).map(|i| [i % 8, (i + 1) % 8, (i + 3) % 8]).collect();
+    let faces: Vec<[i32; 3]> = (0..1_200)
+        .map(|i| [i % 8, (i + 1) % 8, (i + 3) % 8])
+        .collect();
     let good = tri_file(8, &faces, (8, 1_200), b"");
     assert_eq!(mesh(&good).faces.len(), 1_200);
     assert_eq!(stream(&good), Ok(1_200));
@@ -926,7 +928,10 @@ fn in_core_and_streaming_readers_refuse_the_same_files() {
         assert!(in_core.contains(needle), "{what}: in core: {in_core}");
         assert!(streamed.contains(needle), "{what}: streamed: {streamed}");
         if !needle.is_empty() {
-            assert!(streamed.ends_with(&in_core), "{what}: {streamed} / {in_core}");
+            assert!(
+                streamed.ends_with(&in_core),
+                "{what}: {streamed} / {in_core}"
+            );
         }
     }
     // A face of two indices: the same words in both.
@@ -943,9 +948,18 @@ fn in_core_and_streaming_readers_refuse_the_same_files() {
 fn malformed_corpus_binary_faces_and_ends() {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tests/malformed");
     for (file, needle) in [
-        ("ply_trailing_bytes_binary.ply", "7 bytes follow the last element"),
-        ("ply_face_count_below_data_binary.ply", "13 bytes follow the last element"),
-        ("ply_repeated_face_index_binary.ply", "face 0: repeats a vertex index (2 2 2)"),
+        (
+            "ply_trailing_bytes_binary.ply",
+            "7 bytes follow the last element",
+        ),
+        (
+            "ply_face_count_below_data_binary.ply",
+            "13 bytes follow the last element",
+        ),
+        (
+            "ply_repeated_face_index_binary.ply",
+            "face 0: repeats a vertex index (2 2 2)",
+        ),
         ("ply_vertex_count_one_high_binary.ply", "face 0: has "),
     ] {
         let bytes = std::fs::read(dir.join(file)).unwrap();
