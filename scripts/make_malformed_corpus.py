@@ -84,6 +84,17 @@ add("ply_face_float_indices.ply",
     + "0 0 0\n1 0 0\n0 1 0\n3 0.5 1.5 2\n")
 add("ply_ascii_not_a_number.ply", ply_header("ascii", 3, 1) + "0 0 0\n1 zero 0\n0 1 0\n3 0 1 2\n")
 add("ply_empty.ply", b"")
+# Binary bodies must end with the last declared element, and faces are
+# checked alike by the in-core and the streaming (out-of-core) reader.
+add("ply_trailing_bytes_binary.ply",
+    ply_header("binary_little_endian", 3, 1).encode() + ply_bin_tri() + b"garbage")
+add("ply_face_count_below_data_binary.ply",
+    ply_header("binary_little_endian", 3, 1).encode() + ply_bin_tri(faces=((0, 1, 2), (2, 1, 0))))
+add("ply_repeated_face_index_binary.ply",
+    ply_header("binary_little_endian", 3, 1).encode() + ply_bin_tri(faces=((2, 2, 2),)))
+add("ply_vertex_count_one_high_binary.ply",
+    ply_header("binary_little_endian", 4, 2).encode()
+    + ply_bin_tri(faces=((0, 1, 2), (2, 1, 0), (0, 2, 1))))
 
 # ------------------------------------------------------------------ OBJ
 

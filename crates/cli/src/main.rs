@@ -151,6 +151,8 @@ fn main() -> ExitCode {
     // Ctrl-C / SIGTERM during a write removes its temp file (the handler
     // starts at the first write, so `serve` keeps its own Ctrl-C).
     lodkit_mesh::io::interrupt::remove_temp_files_on_signal();
+    // No output of a run may replace a file the run read.
+    lodkit_mesh::io::overwrite_guard::refuse_overwriting_inputs();
     let ui = Ui::new(cli.global.quiet, cli.global.verbose);
     let result = match cli.command {
         Command::Info { file, json } => commands::info::run(&ui, &file, json),

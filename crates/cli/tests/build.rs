@@ -193,13 +193,22 @@ fn a_failed_build_leaves_the_folder_as_it_was_and_a_good_one_replaces_it() {
     std::fs::create_dir(&out).unwrap();
     std::fs::write(out.join("report.md"), "an earlier build").unwrap();
     std::fs::write(out.join("stale.ply"), "from an earlier build").unwrap();
+    // An earlier build's manifest: every file it wrote, with its size.
+    std::fs::write(
+        out.join(".lodkit-build.json"),
+        r#"{"lodkit_build": 1, "files": {"report.md": 16, "stale.ply": 21}}"#,
+    )
+    .unwrap();
     let bad = dir.path().join("bad.ply");
     std::fs::write(&bad, "ply\nformat nonsense\n").unwrap();
     for input in [bad.clone(), dir.path().join("missing.ply")] {
         let o = lodkit(&["build", s(&input), "--out", s(&out)]);
         assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
         assert!(stderr(&o).contains(s(&input)), "{}", stderr(&o));
-        assert_eq!(tree(&out), vec!["report.md", "stale.ply"]);
+        assert_eq!(
+            tree(&out),
+            vec![".lodkit-build.json", "report.md", "stale.ply"]
+        );
         no_staging_left(&out);
     }
     let input = dir.path().join("small.ply");
@@ -330,11 +339,24 @@ fn a_killed_build_leaves_no_folder_behind() {
     assert!(!out.exists());
     no_staging_left(&out);
 
-    // A dead process's folder (pids above the kernel's pid_max never run).
+    // A dead process's folder (pids above the kernel's pid_max never run),
+    // lodkit's by its manifest marked as being written, is removed; one
+    // without it is not lodkit's and is kept.
     let stale = dir.path().join(".out.lodkit-tmp-4294967294");
     std::fs::create_dir_all(stale.join("lods")).unwrap();
     std::fs::write(stale.join("lods/x.ply"), b"half").unwrap();
+    std::fs::write(
+        stale.join(".lodkit-build.json"),
+        r#"{"lodkit_build": 1, "writing": true, "files": {}}"#,
+    )
+    .unwrap();
+    let foreign = dir.path().join(".out.lodkit-tmp-4294967293");
+    std::fs::create_dir(&foreign).unwrap();
+    std::fs::write(foreign.join("mine.txt"), b"mine").unwrap();
     build_ok(&small_input(dir.path()), &out);
+    assert!(!stale.exists());
+    assert_eq!(std::fs::read(foreign.join("mine.txt")).unwrap(), b"mine");
+    std::fs::remove_dir_all(&foreign).unwrap();
     no_staging_left(&out);
 }
 

@@ -5,6 +5,10 @@ use std::path::{Path, PathBuf};
 mod common;
 use common::{bunny, lodkit, repo, stderr};
 
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
 /// Every file under `dir`, relative, sorted.
 fn tree(dir: &Path) -> Vec<String> {
     let mut out = Vec::new();
@@ -61,6 +65,7 @@ fn build_without_input_writes_the_bunny_and_its_lod_chain_deterministically() {
         "lods/lods.json".into(),
         "report.md".into(),
         "report.html".into(),
+        ".lodkit-build.json".into(),
         format!("{n}.mco"),
         format!("{n}.pop"),
     ];
@@ -71,7 +76,22 @@ fn build_without_input_writes_the_bunny_and_its_lod_chain_deterministically() {
         let x = std::fs::read(a.join(file)).unwrap();
         let y = std::fs::read(b.join(file)).unwrap();
         assert!(!x.is_empty(), "{file} is empty");
-        if file.ends_with(".html") {
+        if file == ".lodkit-build.json" {
+            // Every file but the manifest, at its size; two sizes vary
+            // (timings), the rest are the same in both runs.
+            let sizes = |m: &[u8]| {
+                let mut v: serde_json::Value = serde_json::from_slice(m).unwrap();
+                let files = v["files"].as_object_mut().unwrap();
+                for varies in ["lods/lods.json", "report.html"] {
+                    assert!(files.remove(varies).is_some(), "{varies} not listed");
+                }
+                v
+            };
+            let listed = sizes(&x);
+            assert_eq!(listed, sizes(&y), "{file} differs between two runs");
+            let n = listed["files"].as_object().unwrap().len();
+            assert_eq!(n + 3, expected.len(), "{listed}");
+        } else if file.ends_with(".html") {
             // The stage timings vary; they sit between these markers.
             let strip = |h: &[u8]| {
                 let h = String::from_utf8_lossy(h).into_owned();
@@ -746,4 +766,131 @@ fn off_a_terminal_long_stages_print_a_line_each_unless_quiet() {
     );
     let o = lodkit(&["-q", "compare", &mesh, &mesh, "--samples", "1000"]);
     assert!(stderr(&o).is_empty(), "{}", stderr(&o));
+}
+
+/// An output never replaces an input: `render in.ply -o in.ply` is
+/// refused by its extension, `-o` a link (symbolic or hard) to the input
+/// as the input itself (exit 2); `convert` and `simplify` onto their
+/// input, through any path or link, are refused before writing (exit 1,
+/// one line naming the path). The input keeps its bytes every time.
+#[test]
+fn an_output_never_replaces_an_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |n: &str| dir.path().join(n).display().to_string();
+    let input = d("in.ply");
+    let o = lodkit(&["generate", "blob", "--triangles", "2000", "-o", &input]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let before = std::fs::read(&input).unwrap();
+    std::os::unix::fs::symlink(&input, d("sym.png")).unwrap();
+    std::fs::hard_link(&input, d("hard.png")).unwrap();
+    std::os::unix::fs::symlink(&input, d("sym.ply")).unwrap();
+    std::fs::hard_link(&input, d("hard.ply")).unwrap();
+    for out in ["in.ply", "sym.png", "hard.png"] {
+        let o = lodkit(&["render", &input, "-o", &d(out), "--size", "32x32"]);
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{out}: {e}");
+        let says = if out == "in.ply" {
+            "is written as .png"
+        } else {
+            "is the input"
+        };
+        assert!(e.contains(says), "{out}: {e}");
+    }
+    let dotted = format!("{}/./in.ply", dir.path().display());
+    for out in [input.as_str(), &dotted, &d("sym.ply"), &d("hard.ply")] {
+        for cmd in [
+            vec!["convert", &input, "-o", out],
+            vec!["simplify", &input, "-o", out, "--ratio", "0.5"],
+        ] {
+            let o = lodkit(&cmd);
+            let e = stderr(&o);
+            assert_eq!(o.status.code(), Some(1), "{cmd:?}: {e}");
+            assert!(
+                e.contains("is an input of this run") && e.trim().lines().count() == 1,
+                "{e}"
+            );
+        }
+    }
+    assert_eq!(std::fs::read(&input).unwrap(), before);
+    // Another output is written as before.
+    let o = lodkit(&["render", &input, "-o", &d("pic.png"), "--size", "32x32"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// `build --out DIR` replaces DIR only when it is provably an earlier
+/// build: a folder of the user's files (a report.md among them) is
+/// refused, and so is an earlier build that holds the input, or whose
+/// files changed (one added, one resized, a link), each with one line
+/// (exit 2), the folder left as it was. An untouched earlier build is
+/// replaced.
+#[test]
+fn build_replaces_only_a_folder_that_is_provably_an_earlier_build() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |n: &str| dir.path().join(n);
+    let input = d("blob.ply");
+    let o = lodkit(&["generate", "blob", "--triangles", "2000", "-o", s(&input)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let build = |input: &Path, out: &Path| {
+        lodkit(&[
+            "-q",
+            "build",
+            s(input),
+            "--out",
+            s(out),
+            "--levels",
+            "1",
+            "--no-measure",
+        ])
+    };
+    let refused = |input: &Path, out: &Path, says: &str| {
+        let before = tree(out);
+        let o = build(input, out);
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{e}");
+        assert!(e.contains(says) && e.trim().lines().count() == 1, "{e}");
+        assert_eq!(tree(out), before, "{e}");
+        for f in std::fs::read_dir(dir.path()).unwrap() {
+            let n = f.unwrap().file_name().to_string_lossy().into_owned();
+            assert!(!n.contains(".lodkit-"), "left behind: {n}");
+        }
+    };
+    // The user's folder: a report.md is no proof.
+    let user = d("thesis");
+    std::fs::create_dir_all(user.join("photos")).unwrap();
+    std::fs::write(user.join("report.md"), "my report").unwrap();
+    std::fs::write(user.join("thesis.tex"), "my thesis").unwrap();
+    std::fs::write(user.join("photos/a.jpg"), "a photo").unwrap();
+    refused(&input, &user, "not a lodkit build");
+
+    let out = d("out");
+    let o = build(&input, &out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let files = tree(&out);
+    assert!(
+        files.contains(&".lodkit-build.json".to_string()),
+        "{files:?}"
+    );
+    // Its own input: a file of the build, listed in its manifest.
+    refused(&out.join("blob.ply"), &out, "holds the input");
+    // Rebuilt over itself: replaced.
+    let o = build(&input, &out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(tree(&out), files);
+    // Changed since: a file added, a file resized, a link, a folder.
+    std::fs::write(out.join("notes.txt"), "mine").unwrap();
+    refused(&input, &out, "notes.txt is not one of its files");
+    std::fs::remove_file(out.join("notes.txt")).unwrap();
+    std::fs::write(out.join("report.md"), "edited").unwrap();
+    refused(&input, &out, "report.md has changed");
+    std::fs::write(out.join("report.md"), "").unwrap();
+    let o = build(&input, &out);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    std::fs::remove_dir_all(&out).unwrap();
+    let o = build(&input, &out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    std::os::unix::fs::symlink(&input, out.join("link.ply")).unwrap();
+    refused(&input, &out, "link.ply is a link");
+    std::fs::remove_file(out.join("link.ply")).unwrap();
+    std::fs::create_dir(out.join("mine")).unwrap();
+    refused(&input, &out, "mine/ is not one of its folders");
 }

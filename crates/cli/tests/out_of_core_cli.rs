@@ -410,3 +410,195 @@ fn a_subdivided_scan_is_generated_and_simplified_out_of_core() {
     let n = mesh_at(&out).faces.len();
     assert!((6200..=6251).contains(&n), "{n}");
 }
+
+/// `blob`'s file with its header's `element NAME N` count changed by
+/// `delta`, or face 0 made `3 7 7 7`, or junk after the last face: files
+/// the in-core reader refuses, which the out-of-core one must refuse too,
+/// with the same words.
+fn damaged(dir: &Path, how: &str) -> String {
+    let src = blob(dir);
+    let bytes = std::fs::read(&src).unwrap();
+    let end = bytes
+        .windows(11)
+        .position(|w| w == b"end_header\n")
+        .unwrap()
+        + 11;
+    let header = String::from_utf8(bytes[..end].to_vec()).unwrap();
+    let count = |name: &str| -> u64 {
+        let l = header
+            .lines()
+            .find(|l| l.starts_with(&format!("element {name} ")))
+            .unwrap();
+        l.rsplit(' ').next().unwrap().parse().unwrap()
+    };
+    let (nv, nf) = (count("vertex"), count("face"));
+    let mut body = bytes[end..].to_vec();
+    let header = match how {
+        "vertex+1" => header.replace(
+            &format!("element vertex {nv}\n"),
+            &format!("element vertex {}\n", nv + 1),
+        ),
+        "faces-1000" => header.replace(
+            &format!("element face {nf}\n"),
+            &format!("element face {}\n", nf - 1000),
+        ),
+        "7 7 7" => {
+            let f = nv as usize * 12;
+            assert_eq!(body[f], 3);
+            for k in 0..3 {
+                body[f + 1 + 4 * k..f + 5 + 4 * k].copy_from_slice(&7u32.to_le_bytes());
+            }
+            header
+        }
+        "junk" => {
+            body.extend_from_slice(b"junk!");
+            header
+        }
+        _ => unreachable!(),
+    };
+    let p = dir.join(format!("blob_{}.ply", how.replace(' ', "")));
+    std::fs::write(&p, [header.as_bytes(), &body].concat()).unwrap();
+    p.display().to_string()
+}
+
+/// The out-of-core reader accepts nothing the in-core one refuses: a
+/// vertex count one too high, a face count below the data, a face
+/// repeating a corner, bytes after the last face; both refuse each file
+/// in one line naming it, with the same words after the name.
+#[test]
+fn the_out_of_core_reader_refuses_what_the_in_core_one_refuses() {
+    let dir = tempfile::tempdir().unwrap();
+    for (how, says) in [
+        ("vertex+1", ""),
+        (
+            "faces-1000",
+            "13000 bytes follow the last element the header declares",
+        ),
+        ("7 7 7", "face 0: repeats a vertex index (7 7 7)"),
+        (
+            "junk",
+            "5 bytes follow the last element the header declares",
+        ),
+    ] {
+        let input = damaged(dir.path(), how);
+        let out = dir.path().join("out.ply");
+        let mut msgs = Vec::new();
+        for memory in ["1M", "2G"] {
+            let o = simplify(&input, &out, &["--ratio", "0.1", "--memory", memory]);
+            let e = stderr(&o);
+            assert_eq!(o.status.code(), Some(1), "{how} at {memory}: {e}");
+            let line = e
+                .lines()
+                .find(|l| l.starts_with("lodkit: error"))
+                .unwrap_or_else(|| panic!("{e}"));
+            assert!(
+                line.contains(&input) && line.contains(says),
+                "{how} at {memory}: {e}"
+            );
+            msgs.push(line.split(&input).nth(1).unwrap().to_string());
+            assert!(!out.exists(), "{how}");
+            assert!(
+                staging_left(dir.path()).is_empty(),
+                "{how}: {:?}",
+                staging_left(dir.path())
+            );
+        }
+        if !says.is_empty() {
+            assert_eq!(msgs[0], msgs[1], "{how}");
+        }
+    }
+}
+
+/// Two runs of the same out-of-core job at once never share the blocks:
+/// each ends with the output of a lone run, or refuses at once in one
+/// line naming the staging folder held by the other.
+#[test]
+fn two_runs_of_the_same_job_at_once_never_share_the_staging_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = blob(dir.path());
+    let args = ["--ratio", "0.1", "--memory", "1M"];
+    let fresh = dir.path().join("fresh.ply");
+    assert!(simplify(&input, &fresh, &args).status.success());
+    let expected = std::fs::read(&fresh).unwrap();
+    let out = dir.path().join("out.ply");
+    for _ in 0..3 {
+        let spawn = || {
+            std::process::Command::new(env!("CARGO_BIN_EXE_lodkit"))
+                .args(["-q", "simplify", &input, "-o", out.to_str().unwrap()])
+                .args(args)
+                .stderr(std::process::Stdio::piped())
+                .spawn()
+                .unwrap()
+        };
+        let (a, b) = (spawn(), spawn());
+        let mut ok = 0;
+        for o in [a.wait_with_output().unwrap(), b.wait_with_output().unwrap()] {
+            let e = stderr(&o);
+            if o.status.success() {
+                ok += 1;
+            } else {
+                assert_eq!(o.status.code(), Some(1), "{e}");
+                assert!(e.contains("another lodkit run is using"), "{e}");
+                assert_eq!(e.trim().lines().count(), 1, "{e}");
+            }
+        }
+        assert!(ok >= 1);
+        assert_eq!(std::fs::read(&out).unwrap(), expected);
+        assert!(
+            staging_left(dir.path()).is_empty(),
+            "{:?}",
+            staging_left(dir.path())
+        );
+        std::fs::remove_file(&out).unwrap();
+    }
+}
+
+/// A legal output name of 249 bytes goes out of core: the staging folder
+/// and the temporary output names are shortened to fit NAME_MAX.
+#[test]
+fn a_long_output_name_is_written_out_of_core() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = blob(dir.path());
+    let out = dir.path().join(format!("{}.ply", "n".repeat(245)));
+    let o = simplify(&input, &out, &["--ratio", "0.1", "--memory", "1M"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(mesh_at(&out).faces.len() > 1000);
+    assert!(staging_left(dir.path()).is_empty());
+}
+
+/// A failed run says where its blocks are kept; a later run for the same
+/// output with other options removes that folder (no run holds it) and
+/// says so; a folder of that name lodkit did not make is left alone.
+#[test]
+fn an_abandoned_staging_folder_is_removed_by_the_next_run_for_that_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = blob(dir.path());
+    let out = dir.path().join("a.ply");
+    std::fs::create_dir(&out).unwrap();
+    let o = simplify(&input, &out, &["--ratio", "0.1", "--memory", "1M"]);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    let left = staging_left(dir.path());
+    assert_eq!(left.len(), 1);
+    assert!(
+        e.contains(&left[0]) && e.contains("finished blocks are kept in"),
+        "{e}"
+    );
+    std::fs::remove_dir(&out).unwrap();
+    // Not lodkit's: no lock file of lodkit's.
+    let foreign = dir.path().join(".a.ply.lodkit-staging-0123456789abcdef");
+    std::fs::create_dir(&foreign).unwrap();
+    std::fs::write(foreign.join("mine.txt"), "mine").unwrap();
+    let o = simplify(&input, &out, &["--ratio", "0.2", "--memory", "1M"]);
+    let e = stderr(&o);
+    assert!(o.status.success(), "{e}");
+    assert!(
+        e.contains(&format!("removed {}", dir.path().join(&left[0]).display())),
+        "{e}"
+    );
+    assert_eq!(
+        staging_left(dir.path()),
+        vec![".a.ply.lodkit-staging-0123456789abcdef"]
+    );
+    assert_eq!(std::fs::read(foreign.join("mine.txt")).unwrap(), b"mine");
+}

@@ -24,6 +24,7 @@
 //! | [`Runner`] | where the blocks run: this process's threads, or Ray tasks (`pylodkit.blocks`) |
 //! | [`write_tasks`], [`read_tasks`], [`run_task`] | a round's blocks as a task file, and one task run from it (what a Ray worker does) |
 //! | [`staging_dir`] | the resumable staging folder for an input, output and options |
+//! | [`StagingLock`], [`remove_staging`], [`remove_abandoned`] | a staging folder held by one run at a time; removed only when no run holds it |
 //! | [`finished_blocks`] | blocks an interrupted run left done in a staging folder |
 //! | [`default_memory`] | the default budget: a third of `MemTotal` |
 
@@ -44,7 +45,10 @@ pub use level_ply::write_soups_ply;
 pub use partition::{Cuts, Grid};
 pub use run::{ChainLevel, Event, Report, ScaleOptions, lod_chain_file, simplify_file};
 pub use runner::Runner;
-pub use staging::{default_memory, finished_blocks, staging_dir};
+pub use staging::{
+    LOCK_TEXT, StagingLock, default_memory, finished_blocks, remove_abandoned, remove_staging,
+    staging_dir,
+};
 pub use tasks::{BlockTask, read_tasks, run_task, write_tasks};
 
 /// Bytes per input face the in-core path needs, about: the file's share

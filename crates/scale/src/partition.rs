@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Vec3, Vec3A};
 
-use crate::soup::{self, Corner, Layout};
+use crate::soup::{self, Corner, Layout, Sum};
 
 /// The grid of one round.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -110,13 +110,16 @@ impl Cuts {
     }
 }
 
-/// Per-block soup writers of one round, opened on first use.
+/// Per-block soup writers of one round, opened on first use (as new
+/// files: one found under a block's name is removed, never written
+/// through), each file's [`Sum`] kept as it is written.
 pub struct Writers {
     dir: PathBuf,
     layout: Layout,
     files: Vec<Option<BufWriter<File>>>,
     /// Faces written per block.
     pub counts: Vec<u64>,
+    sums: Vec<Sum>,
     /// Nine times the largest squared corner-to-centroid distance of the
     /// faces written ([`Cuts::reach`]: `|3a − (a + b + c)|` is three times
     /// corner `a`'s distance to the centroid, without a division).
@@ -141,6 +144,7 @@ impl Writers {
             layout,
             files: (0..blocks).map(|_| None).collect(),
             counts: vec![0; blocks],
+            sums: vec![Sum::NEW; blocks],
             reach2x9: 0.0,
         }
     }
@@ -153,7 +157,7 @@ impl Writers {
     /// Appends face `t` to block `b`.
     pub fn put(&mut self, b: usize, t: &[Corner; 3]) -> std::io::Result<()> {
         if self.files[b].is_none() {
-            let f = File::create(block_input(&self.dir, b))?;
+            let f = soup::create_new(&block_input(&self.dir, b))?;
             self.files[b] = Some(BufWriter::with_capacity(1 << 16, f));
         }
         self.counts[b] += 1;
@@ -165,20 +169,25 @@ impl Writers {
             .max((3.0 * q - sum).length_squared())
             .max((3.0 * s - sum).length_squared());
         self.reach2x9 = self.reach2x9.max(far);
+        let mut bytes = [0u8; soup::MAX_FACE_BYTES];
+        let k = soup::encode(self.layout, t, &mut bytes);
+        self.sums[b].add(&bytes[..k]);
         match self.files[b].as_mut() {
-            Some(w) => soup::put(w, self.layout, t),
+            Some(w) => w.write_all(&bytes[..k]),
             None => unreachable!("opened above"),
         }
     }
 
-    /// Flushes and syncs every file; returns the per-block face counts.
-    pub fn finish(self) -> std::io::Result<Vec<u64>> {
+    /// Flushes and syncs every file; returns the per-block face counts
+    /// and the checksums of the block files ([`Sum::NEW`] for a block
+    /// without faces, which has no file).
+    pub fn finish(self) -> std::io::Result<(Vec<u64>, Vec<Sum>)> {
         for w in self.files.into_iter().flatten() {
             let mut w = w;
             w.flush()?;
             w.into_inner().map_err(|e| e.into_error())?.sync_all()?;
         }
-        Ok(self.counts)
+        Ok((self.counts, self.sums))
     }
 }
 

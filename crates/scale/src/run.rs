@@ -9,7 +9,8 @@ use std::time::Instant;
 use crate::block::Goal;
 use crate::partition::{Cuts, Grid, Writers, block_input, block_output};
 use crate::runner::{BLOCKS_IN_FLIGHT, Runner};
-use crate::soup::{self, Layout, Welder};
+use crate::soup::{self, Layout, Sum, Welder};
+use crate::staging::StagingLock;
 use crate::tasks::BlockTask;
 use glam::Vec3;
 use lodkit_mesh::TriMesh;
@@ -209,13 +210,14 @@ fn finish_partition(
     started: Instant,
 ) -> Result<(Vec3, Vec3), String> {
     let reach = w.reach();
-    let counts = w.finish().map_err(io_err(r0))?;
+    let (counts, sums) = w.finish().map_err(io_err(r0))?;
     rep.input_faces = counts.iter().sum();
     let m = Manifest {
         min: lo,
         max: hi,
         reach,
         counts,
+        sums,
     };
     write_manifest(r0, &m).map_err(io_err(r0))?;
     rep.bytes_written += rep.input_faces * layout.face_bytes();
@@ -271,7 +273,9 @@ pub struct ScaleOptions {
     /// Memory budget in bytes (blocks are sized so the blocks being
     /// simplified at once fit it).
     pub memory: u64,
-    /// The staging folder (created; the caller removes it).
+    /// The staging folder (created and locked for the run, see
+    /// [`StagingLock`](crate::StagingLock); the caller removes it, with
+    /// [`remove_staging`](crate::remove_staging)).
     pub staging: PathBuf,
     /// Where the blocks run; the result is the same either way.
     pub runner: Runner,
@@ -424,7 +428,7 @@ pub fn lod_chain_file(
         // Level i out of core: one block round to `t`.
         let round = p.round;
         let next = o.staging.join(format!("r{}", round + 1));
-        if let Some(m) = read_manifest(&next) {
+        if let Some(m) = read_manifest(&next, p.blocks()) {
             // An earlier run handed this level over and moved on.
             previous = m.counts.iter().sum();
             on_level(i, ChainLevel::Resumed { faces: previous })?;
@@ -499,6 +503,8 @@ pub fn lod_chain_file(
 /// rounds `r1`, `r2`, … each on the grid shifted by half a block from the
 /// one before.
 struct Pipeline<'a> {
+    /// The staging folder, held by this run until it ends.
+    _lock: StagingLock,
     input: &'a Path,
     o: &'a ScaleOptions,
     progress: &'a (dyn Fn(Event) + Sync),
@@ -533,7 +539,7 @@ impl<'a> Pipeline<'a> {
     ) -> Result<Pipeline<'a>, String> {
         let source = Source::open(input)?;
         o.runner.check()?;
-        std::fs::create_dir_all(&o.staging).map_err(io_err(&o.staging))?;
+        let lock = StagingLock::take(&o.staging)?;
         let mut rep = Report::default();
         let (faces, layout) = match &source {
             Source::Ply(s) => {
@@ -550,23 +556,33 @@ impl<'a> Pipeline<'a> {
         let block_faces = (o.memory / (BLOCK_BYTES_PER_FACE * BLOCKS_IN_FLIGHT)).max(256);
         let blocks = faces.div_ceil(block_faces).max(2);
         let g = ((blocks as f64).cbrt().ceil() as u32).clamp(2, MAX_GRID);
+        let blocks = (g as usize).pow(3);
+        check_staging(&o.staging, blocks, layout)?;
         let r0 = o.staging.join("r0");
-        let (min, max) = match read_manifest(&r0) {
+        let (min, max) = match read_manifest(&r0, blocks) {
             Some(m) => {
                 rep.input_faces = m.counts.iter().sum();
                 (m.min, m.max)
             }
             None => {
                 std::fs::create_dir_all(&r0).map_err(io_err(&r0))?;
-                match &source {
-                    Source::Ply(s) => partition_ply(s, &r0, layout, g, o, progress, &mut rep)?,
-                    Source::Stl(s) => partition_stl(s, &r0, g, progress, &mut rep)?,
+                let parted = match &source {
+                    Source::Ply(s) => partition_ply(s, &r0, layout, g, o, progress, &mut rep),
+                    Source::Stl(s) => partition_stl(s, &r0, g, progress, &mut rep),
+                };
+                // A partition cut short (a bad input found late, a full
+                // disk) leaves nothing to resume from (`check_staging`
+                // left no other round): the folder goes, while still held.
+                if parted.is_err() {
+                    let _ = std::fs::remove_dir_all(&o.staging);
                 }
+                parted?
             }
         };
         rep.bytes_read += std::fs::metadata(input).map_or(0, |m| m.len());
         let current_faces = rep.input_faces;
         Ok(Pipeline {
+            _lock: lock,
             input,
             o,
             progress,
@@ -585,6 +601,11 @@ impl<'a> Pipeline<'a> {
         self.o.staging.join(format!("r{round}"))
     }
 
+    /// Blocks in every round's grid.
+    fn blocks(&self) -> usize {
+        (self.g as usize).pow(3)
+    }
+
     /// The grid of `round`: shifted by half a block on odd rounds.
     fn grid(&self, round: u32) -> Grid {
         let shift = if round % 2 == 1 { 0.5 } else { 0.0 };
@@ -600,7 +621,7 @@ impl<'a> Pipeline<'a> {
             return Ok(());
         };
         let next = self.dir(self.round);
-        if read_manifest(&next).is_none() {
+        if read_manifest(&next, self.blocks()).is_none() {
             let t = Instant::now();
             std::fs::create_dir_all(&next).map_err(io_err(&next))?;
             (self.progress)(Event::Phase(
@@ -621,12 +642,13 @@ impl<'a> Pipeline<'a> {
                 .map_err(io_err(&p))?;
             }
             let reach = w.reach();
-            let counts = w.finish().map_err(io_err(&next))?;
+            let (counts, sums) = w.finish().map_err(io_err(&next))?;
             let m = Manifest {
                 min: self.min,
                 max: self.max,
                 reach,
                 counts,
+                sums,
             };
             write_manifest(&next, &m).map_err(io_err(&next))?;
             self.rep.bytes_read += self.current_faces * self.layout.face_bytes();
@@ -647,7 +669,7 @@ impl<'a> Pipeline<'a> {
     /// output files, which become the current mesh.
     fn block_round(&mut self, goal: Goal, label: &str) -> Result<(u64, Vec<PathBuf>), String> {
         let dir = self.dir(self.round);
-        let Manifest { counts, reach, .. } = read_manifest(&dir)
+        let Manifest { counts, reach, .. } = read_manifest(&dir, self.blocks())
             .ok_or_else(|| format!("{}: staging manifest unreadable", dir.display()))?;
         let cuts = Cuts {
             grid: self.grid(self.round),
@@ -711,7 +733,7 @@ impl<'a> Pipeline<'a> {
             if fits && (k > 0 || self.round > 0) {
                 break;
             }
-            if let Some(m) = read_manifest(&self.dir(self.round + 1)) {
+            if let Some(m) = read_manifest(&self.dir(self.round + 1), self.blocks()) {
                 // An earlier run finished this round and re-partitioned
                 // its output (then deleted it): go on from there.
                 self.current = None;
@@ -761,88 +783,245 @@ impl<'a> Pipeline<'a> {
 }
 
 /// A round folder's record that its partition is complete: the bounding
-/// box, the round's [`Cuts::reach`] and the faces per block.
+/// box, the round's [`Cuts::reach`], and per block its faces and the
+/// [`Sum`] of its input file.
 struct Manifest {
     min: Vec3,
     max: Vec3,
     reach: f32,
     counts: Vec<u64>,
+    sums: Vec<Sum>,
 }
 
-/// Writes a round's manifest atomically: its presence means the round's
-/// block inputs are complete.
-fn write_manifest(dir: &Path, m: &Manifest) -> std::io::Result<()> {
+/// The manifest's text: the box and reach as the bits of seven `f32`s,
+/// one `FACES SUM` line per block, and `end SUM`, the checksum of the
+/// lines before it (a manifest cut short or edited is no manifest).
+fn manifest_text(m: &Manifest) -> String {
     let mut s = String::new();
     for c in m.min.to_array().into_iter().chain(m.max.to_array()) {
         s.push_str(&format!("{:08x} ", c.to_bits()));
     }
     s.push_str(&format!("{:08x}\n", m.reach.to_bits()));
-    for c in &m.counts {
-        s.push_str(&format!("{c}\n"));
+    for (c, h) in m.counts.iter().zip(&m.sums) {
+        s.push_str(&format!("{c} {:016x}\n", h.0));
     }
-    let tmp = dir.join("parted.partial");
-    std::fs::write(&tmp, s)?;
-    std::fs::rename(tmp, dir.join("parted"))
+    let mut h = Sum::NEW;
+    h.add(s.as_bytes());
+    s.push_str(&format!("end {:016x}\n", h.0));
+    s
 }
 
-/// The manifest of a round folder; `None` if there is none or it is
-/// unreadable (the round is partitioned again).
-fn read_manifest(dir: &Path) -> Option<Manifest> {
-    let s = std::fs::read_to_string(dir.join("parted")).ok()?;
-    let mut lines = s.lines();
+/// Writes a round's manifest atomically: its presence means the round's
+/// block inputs are complete.
+fn write_manifest(dir: &Path, m: &Manifest) -> std::io::Result<()> {
+    soup::write_small(&dir.join("parted"), manifest_text(m).as_bytes())
+}
+
+/// The manifest of a round folder of `blocks` blocks; `None` if there is
+/// none, or it is not one this lodkit wrote whole: a link, a checksum
+/// that does not hold, a box or reach that is not finite (or a box turned
+/// inside out), another number of blocks. The round is then partitioned
+/// again, or the folder redone ([`check_staging`]).
+fn read_manifest(dir: &Path, blocks: usize) -> Option<Manifest> {
+    let path = dir.join("parted");
+    let meta = std::fs::symlink_metadata(&path).ok()?;
+    // 50 bytes a block at most; anything larger is not a manifest.
+    if !meta.is_file() || meta.len() > 64 * (blocks as u64 + 2) {
+        return None;
+    }
+    let s = std::fs::read_to_string(&path).ok()?;
+    let body_end = s.trim_end_matches('\n').rfind('\n')? + 1;
+    let (body, end) = s.split_at(body_end);
+    let mut h = Sum::NEW;
+    h.add(body.as_bytes());
+    if end != format!("end {:016x}\n", h.0) {
+        return None;
+    }
+    let mut lines = body.lines();
     let bb: Vec<f32> = lines
         .next()?
         .split_whitespace()
         .map(|w| u32::from_str_radix(w, 16).map(f32::from_bits))
         .collect::<Result<_, _>>()
         .ok()?;
-    // Six values: an earlier lodkit's manifest, without the reach; an
-    // infinite reach locks every border vertex, as that lodkit did, so a
-    // run it left is resumed by its rules.
-    let reach = match bb.len() {
-        6 => f32::INFINITY,
-        7 => bb[6],
-        _ => return None,
-    };
-    let counts = lines
-        .map(|l| l.parse().ok())
-        .collect::<Option<Vec<u64>>>()?;
-    Some(Manifest {
-        min: Vec3::new(bb[0], bb[1], bb[2]),
-        max: Vec3::new(bb[3], bb[4], bb[5]),
-        reach,
+    if bb.len() != 7 || !bb.iter().all(|v| v.is_finite()) || bb[6] < 0.0 {
+        return None;
+    }
+    let (min, max) = (
+        Vec3::new(bb[0], bb[1], bb[2]),
+        Vec3::new(bb[3], bb[4], bb[5]),
+    );
+    if !min.cmple(max).all() {
+        return None;
+    }
+    let mut counts = Vec::with_capacity(blocks);
+    let mut sums = Vec::with_capacity(blocks);
+    for l in lines {
+        let (c, h) = l.split_once(' ')?;
+        counts.push(c.parse().ok()?);
+        sums.push(Sum(u64::from_str_radix(h, 16).ok()?));
+    }
+    (counts.len() == blocks).then_some(Manifest {
+        min,
+        max,
+        reach: bb[6],
         counts,
+        sums,
     })
+}
+
+/// Makes what an earlier run left in the staging folder trustworthy
+/// before any of it is used, redoing what is not: the rounds `r0`, `r1`,
+/// … must follow on each other, each with its manifest ([`read_manifest`])
+/// but for the last, whose partition was cut short (it is removed and
+/// made again); in the last complete round, each block is done (its
+/// output intact, [`soup::is_intact`]; an output that is not is removed)
+/// or has its input at the size and checksum the manifest records. Links
+/// and anything else lodkit does not write are refused by starting over.
+/// Anything else wrong (a block neither done nor with its input, a hole
+/// in the rounds) empties the folder but its lock, so the run starts over:
+/// the same bytes come out, never different ones. Cost: one read of the
+/// files of the last round (only when resuming).
+fn check_staging(staging: &Path, blocks: usize, layout: Layout) -> Result<(), String> {
+    let trusted = |staging: &Path| -> Option<()> {
+        let mut rounds = Vec::new();
+        for e in std::fs::read_dir(staging).ok()? {
+            let e = e.ok()?;
+            let name = e.file_name();
+            let name = name.to_str()?;
+            if name == "lock" {
+                continue;
+            }
+            let r: u32 = name.strip_prefix('r')?.parse().ok()?;
+            if !e.file_type().ok()?.is_dir() || name != format!("r{r}") {
+                return None;
+            }
+            rounds.push(r);
+        }
+        rounds.sort_unstable();
+        if rounds.iter().enumerate().any(|(i, &r)| r as usize != i) {
+            return None;
+        }
+        let complete = rounds
+            .iter()
+            .take_while(|&&r| read_manifest(&staging.join(format!("r{r}")), blocks).is_some())
+            .count();
+        match rounds.len() - complete {
+            0 => {}
+            // A partition cut short: made again.
+            1 => std::fs::remove_dir_all(staging.join(format!("r{complete}"))).ok()?,
+            _ => return None,
+        }
+        let Some(last) = complete.checked_sub(1) else {
+            return Some(());
+        };
+        let dir = staging.join(format!("r{last}"));
+        for e in std::fs::read_dir(&dir).ok()? {
+            if !e.ok()?.file_type().ok()?.is_file() {
+                return None;
+            }
+        }
+        let m = read_manifest(&dir, blocks)?;
+        for (b, (&count, &sum)) in m.counts.iter().zip(&m.sums).enumerate() {
+            if count == 0 {
+                continue;
+            }
+            let out = block_output(&dir, b);
+            if soup::is_intact(&out, layout) {
+                continue;
+            }
+            if std::fs::symlink_metadata(&out).is_ok() {
+                std::fs::remove_file(&out).ok()?;
+            }
+            let input = block_input(&dir, b);
+            let ok = std::fs::symlink_metadata(&input)
+                .is_ok_and(|m| m.is_file() && m.len() == count * layout.face_bytes())
+                && Sum::of_file(&input).is_ok_and(|(s, _)| s == sum);
+            if !ok {
+                return None;
+            }
+        }
+        Some(())
+    };
+    if trusted(staging).is_some() {
+        return Ok(());
+    }
+    // Start over: everything but the lock goes (links removed, never
+    // followed).
+    let entries = std::fs::read_dir(staging).map_err(io_err(staging))?;
+    for e in entries {
+        let e = e.map_err(io_err(staging))?;
+        if e.file_name() == "lock" {
+            continue;
+        }
+        let p = e.path();
+        let r = if e.file_type().is_ok_and(|t| t.is_dir()) {
+            std::fs::remove_dir_all(&p)
+        } else {
+            std::fs::remove_file(&p)
+        };
+        r.map_err(io_err(&p))?;
+    }
+    Ok(())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// A manifest reads back as written; an earlier lodkit's (no reach)
-    /// reads with an infinite reach (every border vertex locked, its
-    /// rule); anything else is no manifest.
+    /// A manifest reads back as written; one cut short, edited, with a
+    /// box that is not finite or inside out, or for another grid, is no
+    /// manifest (the round is made again).
     #[test]
-    fn manifests_read_back_and_earlier_ones_lock_every_border() {
+    fn manifests_read_back_and_damaged_ones_are_none() {
         let d = tempfile::tempdir().unwrap();
         let m = Manifest {
             min: Vec3::new(-1.0, 0.5, 2.0),
             max: Vec3::new(3.0, 4.5, 6.25),
             reach: 0.125,
             counts: vec![3, 0, 7],
+            sums: vec![Sum(1), Sum::NEW, Sum(u64::MAX)],
         };
         write_manifest(d.path(), &m).unwrap();
-        let r = read_manifest(d.path()).unwrap();
+        let r = read_manifest(d.path(), 3).unwrap();
         assert_eq!(
-            (r.min, r.max, r.reach, r.counts),
-            (m.min, m.max, m.reach, m.counts)
+            (r.min, r.max, r.reach, &r.counts, &r.sums),
+            (m.min, m.max, m.reach, &m.counts, &m.sums)
         );
-        let old = "bf800000 3f000000 40000000 40400000 40900000 40c80000\n3\n0\n7\n";
-        std::fs::write(d.path().join("parted"), old).unwrap();
-        let r = read_manifest(d.path()).unwrap();
-        assert_eq!(r.reach, f32::INFINITY);
-        assert_eq!(r.counts, vec![3, 0, 7]);
-        std::fs::write(d.path().join("parted"), "bf800000 3f000000\n3\n").unwrap();
-        assert!(read_manifest(d.path()).is_none());
+        assert!(read_manifest(d.path(), 8).is_none());
+        let text = manifest_text(&m);
+        let put = |t: &str| std::fs::write(d.path().join("parted"), t).unwrap();
+        // Cut short, one count edited.
+        put(&text[..text.len() - 30]);
+        assert!(read_manifest(d.path(), 3).is_none());
+        put(&text.replace("\n7 ", "\n8 "));
+        assert!(read_manifest(d.path(), 3).is_none());
+        // NaN or infinite bounds, an inside-out box, a negative reach,
+        // each with a checksum that holds.
+        for (min, max, reach) in [
+            (Vec3::new(f32::NAN, 0.0, 0.0), Vec3::ONE, 0.1),
+            (Vec3::ZERO, Vec3::new(1.0, f32::INFINITY, 1.0), 0.1),
+            (Vec3::ONE, Vec3::ZERO, 0.1),
+            (Vec3::ZERO, Vec3::ONE, -1.0),
+            (Vec3::ZERO, Vec3::ONE, f32::NAN),
+        ] {
+            put(&manifest_text(&Manifest {
+                min,
+                max,
+                reach,
+                ..m_clone(&m)
+            }));
+            assert!(read_manifest(d.path(), 3).is_none(), "{min} {max} {reach}");
+        }
+    }
+
+    fn m_clone(m: &Manifest) -> Manifest {
+        Manifest {
+            min: m.min,
+            max: m.max,
+            reach: m.reach,
+            counts: m.counts.clone(),
+            sums: m.sums.clone(),
+        }
     }
 }

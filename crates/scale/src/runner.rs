@@ -138,7 +138,7 @@ fn run_on_ray(
         .collect();
     write_tasks(&file, opts, layout, &tasks)?;
     let log = dir.join("ray.log");
-    let log_file = std::fs::File::create(&log).map_err(|e| format!("{}: {e}", log.display()))?;
+    let log_file = crate::soup::create_new(&log).map_err(|e| format!("{}: {e}", log.display()))?;
     let mut cmd = Command::new(python);
     cmd.arg("-m")
         .arg("pylodkit.blocks")

@@ -95,27 +95,143 @@ impl Layout {
 
 /// Appends one face to `w`.
 pub fn put(w: &mut impl Write, layout: Layout, t: &[Corner; 3]) -> std::io::Result<()> {
-    let mut b = [0u8; 3 * 36];
+    let mut b = [0u8; MAX_FACE_BYTES];
+    let k = encode(layout, t, &mut b);
+    w.write_all(&b[..k])
+}
+
+/// Bytes of the largest face (every attribute).
+pub(crate) const MAX_FACE_BYTES: usize = 3 * 36;
+
+/// One face's bytes in `layout`, into `b`; returns their length.
+pub(crate) fn encode(layout: Layout, t: &[Corner; 3], b: &mut [u8; MAX_FACE_BYTES]) -> usize {
     let mut k = 0;
-    let mut f32s = |b: &mut [u8], xs: &[f32]| {
+    let mut f32s = |b: &mut [u8; MAX_FACE_BYTES], xs: &[f32]| {
         for x in xs {
             b[k..k + 4].copy_from_slice(&x.to_le_bytes());
             k += 4;
         }
     };
     for c in t {
-        f32s(&mut b, &c.position.to_array());
+        f32s(b, &c.position.to_array());
         if layout.normals {
-            f32s(&mut b, &c.normal.to_array());
+            f32s(b, &c.normal.to_array());
         }
         if layout.colors {
-            f32s(&mut b, &[f32::from_bits(u32::from_le_bytes(c.color))]);
+            f32s(b, &[f32::from_bits(u32::from_le_bytes(c.color))]);
         }
         if layout.uvs {
-            f32s(&mut b, &c.uv.to_array());
+            f32s(b, &c.uv.to_array());
         }
     }
-    w.write_all(&b[..k])
+    k
+}
+
+/// A checksum of a soup file's bytes (FNV-1a over little-endian 32-bit
+/// words; a soup is always whole words): what the staging folder records
+/// of each block file it writes, so that a rerun tells a file it wrote
+/// from a damaged or changed one. Not a defence against a forger, who
+/// can rewrite the record too; against truncation, a zeroed or swapped
+/// file, a stray edit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Sum(pub u64);
+
+impl Sum {
+    /// The checksum of no bytes.
+    pub const NEW: Sum = Sum(0xcbf2_9ce4_8422_2325);
+
+    /// Adds `bytes` (a whole number of words, but for a file's last
+    /// piece, whose missing bytes count as zeros).
+    pub fn add(&mut self, bytes: &[u8]) {
+        for c in bytes.chunks(4) {
+            let mut w = [0u8; 4];
+            w[..c.len()].copy_from_slice(c);
+            self.0 = (self.0 ^ u64::from(u32::from_le_bytes(w))).wrapping_mul(0x100_0000_01b3);
+        }
+    }
+
+    /// The checksum of the file `path` and its length, read through a
+    /// 1 MiB buffer. Errors: I/O.
+    pub fn of_file(path: &Path) -> std::io::Result<(Sum, u64)> {
+        let mut f = File::open(path)?;
+        let mut buf = vec![0u8; 1 << 20];
+        let (mut sum, mut len) = (Sum::NEW, 0u64);
+        loop {
+            // Fill the buffer whole (reads may be short), so words never
+            // straddle two pieces.
+            let mut filled = 0;
+            while filled < buf.len() {
+                match f.read(&mut buf[filled..]) {
+                    Ok(0) => break,
+                    Ok(n) => filled += n,
+                    Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                    Err(e) => return Err(e),
+                }
+            }
+            sum.add(&buf[..filled]);
+            len += filled as u64;
+            if filled < buf.len() {
+                return Ok((sum, len));
+            }
+        }
+    }
+}
+
+/// The record beside a block output (`bNNNNN.sum` for `bNNNNN.out`): its
+/// length and [`Sum`].
+fn sum_path(path: &Path) -> std::path::PathBuf {
+    path.with_extension("sum")
+}
+
+/// Whether `path` is a soup file in `layout` this staging folder wrote
+/// whole: a regular file (not a link) whose length and checksum are those
+/// of the record [`write_mesh`] put beside it. Cost: one read of the file.
+pub fn is_intact(path: &Path, layout: Layout) -> bool {
+    let Ok(meta) = std::fs::symlink_metadata(path) else {
+        return false;
+    };
+    let record = sum_path(path);
+    let recorded = std::fs::symlink_metadata(&record)
+        .ok()
+        .filter(|m| m.is_file() && m.len() < 64)
+        .and_then(|_| std::fs::read_to_string(&record).ok())
+        .and_then(|t| {
+            let (len, sum) = t.trim().split_once(' ')?;
+            Some((len.parse::<u64>().ok()?, u64::from_str_radix(sum, 16).ok()?))
+        });
+    let Some((len, sum)) = recorded else {
+        return false;
+    };
+    meta.is_file()
+        && meta.len() == len
+        && len % layout.face_bytes() == 0
+        && Sum::of_file(path).is_ok_and(|(s, l)| s == Sum(sum) && l == len)
+}
+
+/// Creates `path` for writing, as a new file: a file or link already
+/// there (a killed run's leftover, or planted) is removed first, never
+/// written through.
+pub(crate) fn create_new(path: &Path) -> std::io::Result<File> {
+    match std::fs::remove_file(path) {
+        Ok(()) => {}
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+        Err(e) => return Err(e),
+    }
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(path)
+}
+
+/// Writes `bytes` to `path` atomically (a new temp file, synced, renamed).
+pub(crate) fn write_small(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let mut tmp = path.as_os_str().to_owned();
+    tmp.push(".partial");
+    let tmp = std::path::PathBuf::from(tmp);
+    let mut f = create_new(&tmp)?;
+    f.write_all(bytes)?;
+    f.sync_all()?;
+    std::fs::rename(&tmp, path)
 }
 
 /// Calls `f` with each face of the soup file `path` (in `layout`).
@@ -266,16 +382,26 @@ pub fn corner(mesh: &TriMesh, i: u32) -> Corner {
 }
 
 /// Writes `mesh`'s faces to `path` as a soup in `layout`, atomically
-/// (temp file then rename), so a file under its final name is always
-/// complete: that is what lets a rerun trust it.
+/// (a new temp file, never one found there, then a rename), so a file
+/// under its final name is always complete, and then its length and
+/// [`Sum`] beside it (`.sum`): what lets a rerun trust it ([`is_intact`]).
 pub fn write_mesh(path: &Path, layout: Layout, mesh: &TriMesh) -> std::io::Result<()> {
     let tmp = path.with_extension("partial");
+    let (mut sum, mut len) = (Sum::NEW, 0u64);
     {
-        let mut w = BufWriter::with_capacity(1 << 20, File::create(&tmp)?);
+        let mut w = BufWriter::with_capacity(1 << 20, create_new(&tmp)?);
+        let mut b = [0u8; MAX_FACE_BYTES];
         for f in &mesh.faces {
-            put(&mut w, layout, &f.map(|i| corner(mesh, i)))?;
+            let k = encode(layout, &f.map(|i| corner(mesh, i)), &mut b);
+            sum.add(&b[..k]);
+            len += k as u64;
+            w.write_all(&b[..k])?;
         }
         w.into_inner().map_err(|e| e.into_error())?.sync_all()?;
     }
-    std::fs::rename(&tmp, path)
+    std::fs::rename(&tmp, path)?;
+    write_small(
+        &sum_path(path),
+        format!("{len} {:016x}\n", sum.0).as_bytes(),
+    )
 }

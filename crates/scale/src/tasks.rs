@@ -205,10 +205,7 @@ pub fn write_tasks(
             .collect::<Result<_, String>>()?,
     };
     let json = serde_json::to_vec_pretty(&file).map_err(|e| format!("{}: {e}", path.display()))?;
-    let tmp = path.with_extension("partial");
-    std::fs::write(&tmp, json)
-        .and_then(|()| std::fs::rename(&tmp, path))
-        .map_err(|e| format!("{}: {e}", path.display()))
+    crate::soup::write_small(path, &json).map_err(|e| format!("{}: {e}", path.display()))
 }
 
 /// Reads the task file `path`: the options and the tasks, their paths
@@ -285,7 +282,7 @@ pub fn read_tasks(path: &Path) -> Result<(Options, Layout, Vec<BlockTask>), Stri
 
 /// Runs task `index` of the task file `path` ([`read_tasks`], then
 /// [`simplify_block`]): what a worker does. A task whose output already
-/// exists is not run again (its report reads the output's size). Errors:
+/// exists whole ([`is_intact`](crate::soup::is_intact)) is not run again (its report reads the output's size). Errors:
 /// those of [`read_tasks`] and [`simplify_block`], an index past the
 /// tasks.
 pub fn run_task(path: &Path, index: usize) -> Result<BlockReport, String> {
@@ -297,7 +294,7 @@ pub fn run_task(path: &Path, index: usize) -> Result<BlockReport, String> {
             tasks.len()
         )
     })?;
-    if t.output.exists() {
+    if crate::soup::is_intact(&t.output, layout) {
         let faces_out = crate::soup::faces_in(&t.output, layout)
             .map_err(|e| format!("{}: {e}", t.output.display()))?;
         return Ok(BlockReport {

@@ -411,3 +411,149 @@ fn an_open_scan_keeps_its_rim_as_in_core() {
         within(&ea, &eb, 1.1, 1.2, &format!("ratio {ratio}"));
     }
 }
+
+/// A staging folder one run holds refuses a second run at once, in one
+/// line naming it; free again, the run goes through.
+#[test]
+fn a_held_staging_folder_refuses_a_second_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("blob.ply");
+    lodkit_mesh::shapes::write_blob_ply(&input, 20_000, 2).unwrap();
+    let o = opts(dir.path(), 0.1, 150_000);
+    let held = lodkit_scale::StagingLock::take(&o.staging).unwrap();
+    let e = simplify_file(&input, &o, &quiet).unwrap_err();
+    assert!(
+        e.contains("another lodkit run is using this staging folder")
+            && e.contains(&o.staging.display().to_string())
+            && !e.contains('\n'),
+        "{e}"
+    );
+    assert_eq!(lodkit_scale::remove_staging(&o.staging), Ok(false));
+    drop(held);
+    simplify_file(&input, &o, &quiet).unwrap();
+    assert_eq!(lodkit_scale::remove_staging(&o.staging), Ok(true));
+    assert!(!o.staging.exists());
+}
+
+/// The files of the last round folder, by extension.
+fn round_files(staging: &Path, ext: &str) -> Vec<std::path::PathBuf> {
+    let mut rounds: Vec<_> = std::fs::read_dir(staging)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_dir())
+        .collect();
+    rounds.sort();
+    let last = rounds.last().unwrap();
+    let mut v: Vec<_> = std::fs::read_dir(last)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == ext))
+        .collect();
+    v.sort();
+    v
+}
+
+/// A staging folder damaged or tampered with after a run (a block
+/// output emptied, zeroed or turned into a link to /dev/zero or to a
+/// user's file, a block input of 0 bytes in place of an output, a
+/// manifest cut short or with NaN bounds) is found out and redone: the
+/// rerun gives the same mesh as a clean run, promptly, and writes
+/// through no link.
+#[test]
+fn a_tampered_staging_folder_is_redone_to_the_same_bytes() {
+    use lodkit_scale::soup::Sum;
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("blob.ply");
+    lodkit_mesh::shapes::write_blob_ply(&input, 20_000, 2).unwrap();
+    let victim = dir.path().join("victim.txt");
+    std::fs::write(&victim, b"a user's file").unwrap();
+    let o = opts(dir.path(), 0.1, 150_000);
+    let (clean, _) = simplify_file(&input, &o, &quiet).unwrap();
+    type Tamper = fn(&Path, &Path);
+    let cases: [(&str, Tamper); 7] = [
+        ("an output emptied", |s, _| {
+            std::fs::write(&round_files(s, "out")[0], b"").unwrap()
+        }),
+        ("an output zeroed", |s, _| {
+            let p = &round_files(s, "out")[1];
+            let n = std::fs::metadata(p).unwrap().len() as usize;
+            std::fs::write(p, vec![0u8; n]).unwrap()
+        }),
+        ("an output a link to /dev/zero", |s, _| {
+            let p = &round_files(s, "out")[0];
+            std::fs::remove_file(p).unwrap();
+            std::os::unix::fs::symlink("/dev/zero", p).unwrap()
+        }),
+        ("an output a link to a user's file", |s, v| {
+            let p = &round_files(s, "out")[0];
+            std::fs::remove_file(p).unwrap();
+            std::os::unix::fs::symlink(v, p).unwrap();
+            // And the name the next write of that block uses.
+            std::os::unix::fs::symlink(v, p.with_extension("partial")).unwrap()
+        }),
+        ("an input of 0 bytes instead of an output", |s, _| {
+            let p = &round_files(s, "out")[0];
+            std::fs::remove_file(p).unwrap();
+            std::fs::write(p.with_extension("in"), b"").unwrap()
+        }),
+        ("a manifest cut short", |s, _| {
+            let p = s.join("r0/parted");
+            let t = std::fs::read(&p).unwrap();
+            std::fs::write(&p, &t[..t.len() / 2]).unwrap()
+        }),
+        ("a manifest with NaN bounds", |s, _| {
+            let p = s.join("r0/parted");
+            let t = std::fs::read_to_string(&p).unwrap();
+            let mut lines: Vec<&str> = t.lines().collect();
+            lines.pop();
+            let first = lines[0].replacen(&lines[0][..8], "7fc00000", 1);
+            lines[0] = &first;
+            let body: String = lines.iter().map(|l| format!("{l}\n")).collect();
+            let mut h = Sum::NEW;
+            h.add(body.as_bytes());
+            std::fs::write(&p, format!("{body}end {:016x}\n", h.0)).unwrap()
+        }),
+    ];
+    for (what, tamper) in cases {
+        simplify_file(&input, &o, &quiet).unwrap();
+        tamper(&o.staging, &victim);
+        let t = std::time::Instant::now();
+        let (again, _) =
+            simplify_file(&input, &o, &quiet).unwrap_or_else(|e| panic!("{what}: {e}"));
+        assert!(t.elapsed().as_secs() < 60, "{what}");
+        assert!(again == clean, "{what}: another mesh");
+        assert_eq!(std::fs::read(&victim).unwrap(), b"a user's file", "{what}");
+        std::fs::remove_dir_all(&o.staging).unwrap();
+    }
+}
+
+/// Staging folders an earlier run left beside an output are removed by
+/// `remove_abandoned` when they are lodkit's and no run holds them; the
+/// run's own, a held one and one lodkit did not make are kept.
+#[test]
+fn abandoned_staging_folders_are_removed_and_others_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("blob.ply");
+    lodkit_mesh::shapes::write_blob_ply(&input, 20_000, 2).unwrap();
+    let output = dir.path().join("out.ply");
+    let at = |settings: &str| lodkit_scale::staging_dir(&input, &output, settings);
+    let (old, held, mine) = (at("a"), at("b"), at("c"));
+    for s in [&old, &held, &mine] {
+        drop(lodkit_scale::StagingLock::take(s).unwrap());
+    }
+    let lock = lodkit_scale::StagingLock::take(&held).unwrap();
+    let foreign = dir.path().join(".out.ply.lodkit-staging-00000000000000ff");
+    std::fs::create_dir(&foreign).unwrap();
+    std::fs::write(foreign.join("lock"), b"mine").unwrap();
+    assert_eq!(
+        lodkit_scale::remove_abandoned(&output, &mine),
+        vec![old.clone()]
+    );
+    assert!(!old.exists() && held.exists() && mine.exists() && foreign.exists());
+    drop(lock);
+    assert_eq!(
+        lodkit_scale::remove_abandoned(&output, &mine),
+        vec![held.clone()]
+    );
+    assert!(mine.exists() && foreign.join("lock").exists());
+}

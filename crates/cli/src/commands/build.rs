@@ -10,11 +10,13 @@
 //!
 //! Every option is checked before anything is written, and the whole
 //! folder is written beside `--out` and moved into place at the end
-//! ([`staging`]): a failed or killed build leaves `--out` as it was.
+//! ([`staging`]): a failed or killed build leaves `--out` as it was, and
+//! only a folder an earlier build made (its `.lodkit-build.json` lists
+//! every file) is ever replaced.
 //!
 //! Everything written is byte-identical from run to run, except the
 //! per-level wall times in `lods/lods.json` and the stage timings in
-//! `report.html`.
+//! `report.html` (and so those two files' sizes in `.lodkit-build.json`).
 
 mod continuous;
 mod html;
@@ -110,7 +112,7 @@ pub fn run(ui: &Ui, args: &BuildArgs) -> Result<()> {
             })
         }
     })?;
-    let staging = staging::Staging::new(&args.out)?;
+    let staging = staging::Staging::new(&args.out, args.input.as_deref())?;
     let Written {
         outputs,
         degenerate,

@@ -37,8 +37,16 @@ pub fn run(
     std::fs::create_dir_all(&a.out)
         .map_err(|e| anyhow::anyhow!("{}: cannot create output directory: {e}", a.out.display()))?;
     let settings = format!("lods {targets:?} {opts:?}; memory {}", plan.memory);
-    let staging =
-        lodkit_scale::staging_dir(&a.input, &a.out.join(format!("{stem}_lods")), &settings);
+    let chain = a.out.join(format!("{stem}_lods"));
+    let staging = lodkit_scale::staging_dir(&a.input, &chain, &settings);
+    for old in lodkit_scale::remove_abandoned(&chain, &staging) {
+        if !a.json {
+            ui.status(format!(
+                "removed {}, the staging folder an earlier run for this chain left",
+                old.display()
+            ));
+        }
+    }
     if !a.json {
         ui.status(format!(
             "out of core: {} ({}) needs about {} in core ({} B per face), over --memory {}; \
@@ -147,18 +155,9 @@ pub fn run(
         },
     );
     progress.finish();
-    let rep = result.map_err(|e| {
-        if staging.exists() {
-            anyhow::anyhow!(
-                "{e} (finished blocks are kept in {}: the same command resumes from them)",
-                staging.display()
-            )
-        } else {
-            anyhow::anyhow!("{e}")
-        }
-    })?;
+    let rep = result.map_err(|e| kept(&e, &staging))?;
     let glb = format!("{stem}_lods.glb");
-    write_glb(&a.out.join(&glb), stem, &in_core, a)?;
+    write_glb(&a.out.join(&glb), stem, &in_core, a).map_err(|e| kept(&e, &staging))?;
     let input_vertices = lodkit_mesh::io::ply::stream::PlyStream::open(&a.input)
         .map_or(0, |s| s.vertex_count() as usize);
     let lods = Lods {
@@ -169,13 +168,8 @@ pub fn run(
         levels,
     };
     let json = serde_json::to_string_pretty(&lods)? + "\n";
-    write_atomic(&a.out.join("lods.json"), json.as_bytes())?;
-    if let Err(e) = std::fs::remove_dir_all(&staging) {
-        ui.status(format!(
-            "note: could not remove the staging folder {}: {e}",
-            staging.display()
-        ));
-    }
+    write_atomic(&a.out.join("lods.json"), json.as_bytes()).map_err(|e| kept(&e, &staging))?;
+    remove_staging(ui, &staging);
     if a.json {
         crate::out!("{json}")?;
         return Ok(());
@@ -189,6 +183,37 @@ pub fn run(
         start.elapsed().as_secs_f64(),
     ));
     Ok(())
+}
+
+/// The error `e` of an out-of-core run whose staging folder is `staging`,
+/// saying that the folder stays and what it is for (unless the error
+/// names it already: another run holds it, it is not lodkit's). No
+/// folder: refused before any block was staged (a bad input, `--ray`
+/// without pylodkit), nothing to say.
+pub(super) fn kept(e: &dyn std::fmt::Display, staging: &Path) -> anyhow::Error {
+    let e = e.to_string();
+    if !staging.exists() || e.contains(&staging.display().to_string()) {
+        return anyhow::anyhow!("{e}");
+    }
+    anyhow::anyhow!(
+        "{e} (finished blocks are kept in {}: the same command resumes from them; \
+         another run for this output removes them)",
+        staging.display()
+    )
+}
+
+/// Removes the staging folder once the outputs are in place; one that
+/// cannot be removed (or that another run has taken since) is said, not
+/// an error: the outputs are good.
+pub(super) fn remove_staging(ui: &Ui, staging: &Path) {
+    match lodkit_scale::remove_staging(staging) {
+        Ok(true) => {}
+        Ok(false) => ui.status(format!(
+            "note: the staging folder {} is left to the run that now holds it",
+            staging.display()
+        )),
+        Err(e) => ui.status(format!("note: could not remove the staging folder: {e}")),
+    }
 }
 
 /// The GLB of the in-core levels, an `MSFT_lod` chain from the finest

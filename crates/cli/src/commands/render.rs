@@ -27,8 +27,10 @@ pub struct RenderArgs {
     /// .pts; points are drawn as discs), a continuous-LOD model (.mco) or a
     /// progressive stream (.pop).
     pub input: PathBuf,
-    /// Output PNG of one view (RGBA, opaque: the object over the background).
-    #[arg(short, long, value_name = "FILE", required_unless_present = "ring")]
+    /// Output PNG of one view (RGBA, opaque: the object over the
+    /// background); a .png path that is not the input.
+    #[arg(short, long, value_name = "FILE", required_unless_present = "ring",
+          value_parser = value::output(&["png"], "a picture"))]
     pub output: Option<PathBuf>,
     /// Camera azimuth and elevation in degrees: azimuth about +Y from the
     /// +Z side towards +X, elevation in [-90, 90] towards +Y.
@@ -177,6 +179,39 @@ fn check_kind(a: &RenderArgs) -> Kind {
     k
 }
 
+/// The picture must not replace the input (the same file through any
+/// path or link, which the extension check alone does not rule out for an
+/// input named `.png`); the input is listed so that no write of this run
+/// replaces it (`lodkit_mesh::io::overwrite_guard`), its textures being
+/// listed as they are read. A usage error (exit 2).
+fn check_output(a: &RenderArgs) {
+    lodkit_mesh::io::overwrite_guard::protect(&a.input);
+    if let (Some(out), Ok(i)) = (&a.output, std::fs::metadata(&a.input))
+        && let Ok(o) = std::fs::metadata(out)
+        && same_file(&i, &o)
+    {
+        usage(format!(
+            "-o {}: is the input {}; give another output path",
+            out.display(),
+            a.input.display()
+        ));
+    }
+}
+
+/// Whether two files are one (device and inode; never on non-Unix).
+fn same_file(a: &std::fs::Metadata, b: &std::fs::Metadata) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt as _;
+        a.dev() == b.dev() && a.ino() == b.ino()
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = (a, b);
+        false
+    }
+}
+
 /// What is drawn: a mesh or a point cloud, and a line saying which.
 enum Drawable {
     Mesh(lodkit_mesh::TriMesh),
@@ -322,6 +357,7 @@ struct Report {
 
 pub fn run(ui: &Ui, a: &RenderArgs) -> Result<()> {
     let k = check_kind(a);
+    check_output(a);
     let (drawable, drawn) = load(ui, a, k)?;
     let bbox = drawable.bbox();
     if bbox.is_empty() {

@@ -387,10 +387,12 @@ pub fn out_of_core_plan(
 
 /// `simplify` out of core (`lodkit_scale::simplify_file`): blocks staged
 /// in a folder beside the output, the phases shown as progress, the
-/// result written atomically. The staging folder is removed only after
+/// result written atomically. The staging folder is held by this run
+/// alone (a second run of the same job refuses) and removed only after
 /// the output is in place; a failed or interrupted run leaves it (it is
-/// not listed for removal on a signal), and the same command then resumes
-/// from the blocks it finished.
+/// not listed for removal on a signal), says so in its error, and the same
+/// command then resumes from the blocks it finished; a later run for the
+/// same output with other options or another input removes it.
 fn run_out_of_core(
     ui: &Ui,
     a: &SimplifyArgs,
@@ -424,6 +426,12 @@ fn run_out_of_core(
             human_bytes(quality),
         ));
     }
+    for old in lodkit_scale::remove_abandoned(&a.output, &staging) {
+        ui.status(format!(
+            "removed {}, the staging folder an earlier run for this output left",
+            old.display()
+        ));
+    }
     if staging.exists() {
         ui.status(format!(
             "resuming: {} blocks already done (in {})",
@@ -444,17 +452,7 @@ fn run_out_of_core(
         lodkit_scale::Event::Advance(n) => progress.advance(n),
     });
     progress.finish();
-    let kept = |e: &dyn std::fmt::Display| {
-        if !staging.exists() {
-            // Refused before any block was staged (a bad input, --ray
-            // without pylodkit): nothing to resume from.
-            return anyhow::anyhow!("{e}");
-        }
-        anyhow::anyhow!(
-            "{e} (finished blocks are kept in {}: the same command resumes from them)",
-            staging.display()
-        )
-    };
+    let kept = |e: &dyn std::fmt::Display| super::lods_out_of_core::kept(e, &staging);
     let (mesh, rep) = result.map_err(|e| kept(&e))?;
     let t = start.elapsed();
     // simplify_file's final pass always reports on success.
@@ -465,16 +463,10 @@ fn run_out_of_core(
     let bytes = a
         .out
         .encode(format, &Model::Mesh(mesh), WriteOptions::default())
-        .map_err(|e| anyhow::anyhow!("{}: {e}", a.output.display()))?;
+        .map_err(|e| kept(&format!("{}: {e}", a.output.display())))?;
     write_atomic(&a.output, &bytes).map_err(|e| kept(&e))?;
-    // The output is in place: the blocks are no longer needed. A folder
-    // that cannot be removed is said, not an error (the output is good).
-    if let Err(e) = std::fs::remove_dir_all(&staging) {
-        ui.status(format!(
-            "note: could not remove the staging folder {}: {e}",
-            staging.display()
-        ));
-    }
+    // The output is in place: the blocks are no longer needed.
+    super::lods_out_of_core::remove_staging(ui, &staging);
     if ui.is_verbose() {
         for (name, secs) in &rep.phases {
             ui.status(format!("{name}: {secs:.3} s"));

@@ -28,6 +28,7 @@ pub fn read_file(path: &Path) -> Result<Vec<u8>> {
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     let meta = file.metadata().map_err(|e| Error::io(path, e))?;
     check_regular(path, &meta)?;
+    super::overwrite_guard::note(&meta);
     let cap = super::MAX_FILE_BYTES;
     // `meta.len() <= cap` was checked, so the capacity fits in memory terms
     // the caller accepted; the read is still capped in case the file grows.

@@ -36,6 +36,7 @@ pub mod input;
 pub mod interrupt;
 pub mod mtl;
 pub mod obj;
+pub mod overwrite_guard;
 pub mod ply;
 pub mod scene_io;
 pub mod stl;
@@ -201,7 +202,9 @@ pub(crate) fn open_head(path: &Path, max: u64) -> Result<(std::fs::File, u64, Ve
     use std::io::Read;
     let io = |e| Error::io(path, e);
     let mut f = std::fs::File::open(path).map_err(io)?;
-    let len = f.metadata().map_err(io)?.len();
+    let meta = f.metadata().map_err(io)?;
+    overwrite_guard::note(&meta);
+    let len = meta.len();
     let mut head = Vec::with_capacity(max.min(1 << 16) as usize);
     (&mut f).take(max).read_to_end(&mut head).map_err(io)?;
     Ok((f, len, head))
@@ -382,7 +385,11 @@ pub fn write_atomic_with(
 /// destructor: in a process that called
 /// [`interrupt::remove_temp_files_on_signal`] (the CLI does), SIGINT,
 /// SIGTERM and SIGHUP remove the temp file before the process dies;
-/// otherwise it (`.NAME.XXXXXX.tmp`) stays behind.
+/// otherwise it (`.NAME.XXXXXX.tmp`) stays behind. NAME is shortened
+/// ([`fit_name`]) when the temp name would pass [`NAME_MAX`], so any
+/// legal output name can be written. In a process that called
+/// [`overwrite_guard::refuse_overwriting_inputs`] (the CLI does), a `path`
+/// whose file was read as an input is refused before anything is written.
 #[cfg(not(target_arch = "wasm32"))]
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     write_atomic_with(path, |f| f.write_all(bytes))
@@ -403,11 +410,14 @@ pub fn write_atomic_with(
     let name = path
         .file_name()
         .ok_or_else(|| Error::unsupported(path, "output path has no file name"))?;
+    overwrite_guard::check(path)?;
     let kept = std::fs::symlink_metadata(path)
         .ok()
         .filter(|m| m.is_file())
         .map(|m| m.permissions());
-    let prefix = format!(".{}.", name.to_string_lossy());
+    // `.NAME.XXXXXX.tmp`, NAME shortened when the whole would pass
+    // NAME_MAX (a legal 250-byte output name must still be writable).
+    let prefix = format!(".{}.", fit_name(&name.to_string_lossy(), 12));
     let mut builder = tempfile::Builder::new();
     builder.prefix(&prefix).suffix(".tmp");
     #[cfg(unix)]
@@ -435,10 +445,64 @@ pub fn write_atomic_with(
     result.map_err(|e: std::io::Error| Error::io(path, e))
 }
 
+/// The longest file name most file systems allow, in bytes (Linux's
+/// `NAME_MAX`; also the limit of APFS, NTFS and ext4).
+pub const NAME_MAX: usize = 255;
+
+/// `name`, shortened so that `extra` more bytes still fit in
+/// [`NAME_MAX`]: unchanged when it fits; else cut at a character boundary
+/// and ended with `~` and 16 hex digits of a hash of the whole name, so two
+/// long names that share a beginning still give different results. What
+/// temporary and staging names beside an output are built from. Cost:
+/// linear in the name.
+pub fn fit_name(name: &str, extra: usize) -> String {
+    let room = NAME_MAX.saturating_sub(extra);
+    if name.len() <= room {
+        return name.to_string();
+    }
+    // FNV-1a, 64 bits: stable between runs and builds.
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for &b in name.as_bytes() {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x100_0000_01b3);
+    }
+    let tail = format!("~{h:016x}");
+    let mut cut = room.saturating_sub(tail.len());
+    while !name.is_char_boundary(cut) {
+        cut -= 1;
+    }
+    format!("{}{tail}", &name[..cut])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::shapes;
+
+    /// An output name of 250 bytes (legal) is written: its temp name is
+    /// shortened to fit NAME_MAX; names that fit are kept as they are.
+    #[test]
+    fn a_name_near_name_max_is_written_and_temp_names_fit() {
+        let dir = tempfile::tempdir().unwrap();
+        let long = format!("{}.ply", "é".repeat(121)); // 246 bytes
+        let path = dir.path().join(&long);
+        save_mesh(&path, &shapes::icosphere(0), WriteOptions::default()).unwrap();
+        assert_eq!(names(dir.path()), std::slice::from_ref(&long));
+        assert_eq!(load_mesh(&path).unwrap().faces.len(), 20);
+        let path = dir.path().join(format!("{}.ply", "a".repeat(247)));
+        save_mesh(&path, &shapes::icosphere(0), WriteOptions::default()).unwrap();
+        for n in [long.as_str(), "m.ply", &"b".repeat(255)] {
+            let f = fit_name(n, 12);
+            assert!(f.len() + 12 <= NAME_MAX, "{f}");
+            if n.len() + 12 <= NAME_MAX {
+                assert_eq!(f, n);
+            }
+        }
+        assert_ne!(
+            fit_name(&format!("{}1", "a".repeat(300)), 32),
+            fit_name(&format!("{}2", "a".repeat(300)), 32)
+        );
+    }
 
     fn names(dir: &Path) -> Vec<String> {
         let mut v: Vec<String> = std::fs::read_dir(dir)

@@ -14,7 +14,9 @@
 //! - `face` element: the index list `vertex_indices` (or `vertex_index`,
 //!   or the element's only list), any integer count and index type.
 //!   Polygons are triangulated as a fan from their first corner (`a b c d`
-//!   → `a b c`, `a c d`); lists with fewer than 3 indices add no triangle.
+//!   → `a b c`, `a c d`); a list with fewer than 3 indices, an index past
+//!   the header's vertex count or a triangle repeating a corner is refused
+//!   (one set of face checks for this reader and [`stream`]'s).
 //! - `range_grid` element (Stanford range scans): `obj_info num_cols` and
 //!   `num_rows` give the lattice, each cell lists 0 vertex indices (no
 //!   sample) or 1 (extra indices are ignored); vertex colours follow their
@@ -28,9 +30,10 @@
 //! count before that count, at its smallest record size (binary: the sum of
 //! its scalar sizes and list-count sizes; ASCII: 2 bytes per value), has
 //! been checked to fit in the bytes after the header. Every problem is a
-//! one-line [`ParseError`]. Face indices are range-checked afterwards by
-//! `TriMesh::validate` (which `io::decode` runs); range-grid indices are
-//! checked here.
+//! one-line [`ParseError`]. Face indices are checked as they are read,
+//! range-grid indices once the grid is read. A binary body must end with
+//! the last element the header declares: bytes after it (a face count
+//! below the data, a damaged file) are refused, in both readers.
 //!
 //! # Writing ([`write_mesh`], [`write_points`])
 //! Binary little-endian unless ASCII is asked for; see `write.rs` for the

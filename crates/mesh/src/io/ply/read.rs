@@ -42,7 +42,7 @@ pub fn read(bytes: &[u8]) -> Result<Model, ParseError> {
                 .count();
             let mut src = AsciiSource::new(body, header_lines + 1);
             for (el, role) in header.elements.iter().zip(&plan.roles) {
-                decode_general(&mut src, el, role, &mut data)?;
+                decode_general(&mut src, el, role, plan.vertices, &mut data)?;
             }
             src.finish()?;
         }
@@ -54,8 +54,9 @@ pub fn read(bytes: &[u8]) -> Result<Model, ParseError> {
                 big,
             };
             for (el, role) in header.elements.iter().zip(&plan.roles) {
-                decode_binary(&mut src, el, role, &mut data)?;
+                decode_binary(&mut src, el, role, plan.vertices, &mut data)?;
             }
+            check_end(body.len() as u64 - src.pos as u64)?;
         }
     }
     plan.assemble(data)
@@ -105,6 +106,10 @@ struct Plan {
     roles: Vec<Role>,
     kind: Kind,
     has_vertex: bool,
+    /// The header's vertex count, against which face indices are checked
+    /// ([`checked_fan`]); `None` without a vertex element (refused by
+    /// `assemble`).
+    vertices: Option<u64>,
 }
 
 /// Colour property name sets, tried in order; the fourth is the alpha.
@@ -154,6 +159,7 @@ impl Plan {
             roles,
             kind,
             has_vertex,
+            vertices: header.element("vertex").map(|e| e.count),
         })
     }
 
@@ -399,9 +405,16 @@ pub(super) fn color_channel(v: f64, ty: ScalarType) -> u8 {
     scaled.round().clamp(0.0, 255.0) as u8
 }
 
-/// Turns a polygon into triangles `(p0, pi, pi+1)` (a fan); a polygon with
-/// fewer than 3 corners is an error, as in OBJ.
-fn push_fan(faces: &mut Vec<[u32; 3]>, poly: &[u32]) -> Result<(), String> {
+/// The face checks of both PLY readers (this one and the streaming
+/// [`super::stream`]), so that they accept the same files: a polygon's
+/// triangles `(p0, pi, pi+1)` (a fan), once the polygon has at least 3
+/// corners (as in OBJ), every index is below `vertices` (the header's
+/// count; `None`: not checked here) and no triangle repeats a corner.
+/// Errors are phrases for the caller to prefix with the face's record.
+pub(super) fn checked_fan(
+    poly: &[u32],
+    vertices: Option<u64>,
+) -> Result<impl Iterator<Item = [u32; 3]> + '_, String> {
     let [first, rest @ ..] = poly else {
         return Err("has no vertex indices (a face needs at least 3)".into());
     };
@@ -411,12 +424,44 @@ fn push_fan(faces: &mut Vec<[u32; 3]>, poly: &[u32]) -> Result<(), String> {
             poly.len()
         ));
     }
-    faces.extend(rest.windows(2).map(|w| [*first, w[0], w[1]]));
+    if let Some(n) = vertices
+        && let Some(&v) = poly.iter().find(|&&v| u64::from(v) >= n)
+    {
+        return Err(format!(
+            "has vertex index {v} but the file has {n} vertices"
+        ));
+    }
+    let fan = rest.windows(2).map(|w| [*first, w[0], w[1]]);
+    for t in fan.clone() {
+        check_triangle(t)?;
+    }
+    Ok(fan)
+}
+
+/// A triangle must have three distinct corners.
+pub(super) fn check_triangle([a, b, c]: [u32; 3]) -> Result<(), String> {
+    if a == b || b == c || a == c {
+        return Err(format!("repeats a vertex index ({a} {b} {c})"));
+    }
+    Ok(())
+}
+
+/// The end of a binary body, in both readers: bytes after the last element
+/// the header declares mean a wrong count in the header or a damaged file,
+/// so they are refused rather than ignored. `left`: bytes after the last
+/// record.
+pub(super) fn check_end(left: u64) -> Result<(), ParseError> {
+    if left > 0 {
+        return Err(parse_err!(
+            "{left} bytes follow the last element the header declares (a wrong element \
+             count in the header, or a damaged file)"
+        ));
+    }
     Ok(())
 }
 
 /// Converts a decoded list item to a vertex index.
-fn to_index(v: f64) -> Result<u32, String> {
+pub(super) fn to_index(v: f64) -> Result<u32, String> {
     if v >= 0.0 && v <= u32::MAX as f64 {
         Ok(v as u32)
     } else {
@@ -443,6 +488,7 @@ fn decode_binary(
     src: &mut BinarySource<'_>,
     el: &Element,
     role: &Role,
+    vertices: Option<u64>,
     out: &mut Decoded,
 ) -> Result<(), ParseError> {
     let stride = el.fixed_stride().filter(|&s| s > 0);
@@ -456,14 +502,20 @@ fn decode_binary(
             if let Some(records) = src.peek(el.count.saturating_mul(13))
                 && let Some(faces) = triangles_le(records)
             {
+                for (i, f) in faces.iter().enumerate() {
+                    // A fan of one triangle: the same checks as every face.
+                    checked_fan(f, vertices)
+                        .map(drop)
+                        .map_err(|m| at(el, i as u64, None, m))?;
+                }
                 src.pos += records.len();
                 out.faces = faces;
                 return Ok(());
             }
-            decode_general(src, el, role, out)
+            decode_general(src, el, role, vertices, out)
         }
         (Role::Skip, Some(stride)) => src.take_records(el, stride).map(drop),
-        _ => decode_general(src, el, role, out),
+        _ => decode_general(src, el, role, vertices, out),
     }
 }
 
@@ -567,6 +619,7 @@ fn decode_general<S: Source>(
     src: &mut S,
     el: &Element,
     role: &Role,
+    vertices: Option<u64>,
     out: &mut Decoded,
 ) -> Result<(), ParseError> {
     if el.properties.is_empty() {
@@ -609,7 +662,7 @@ fn decode_general<S: Source>(
             }
             match role {
                 Role::Vertex(plan) => out.push_vertex(plan, &vals),
-                Role::Face(_) => push_fan(&mut out.faces, &poly)?,
+                Role::Face(_) => out.faces.extend(checked_fan(&poly, vertices)?),
                 Role::RangeGrid(_) => out.cells.push(poly.first().copied()),
                 Role::Skip => {}
             }

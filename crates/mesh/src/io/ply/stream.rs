@@ -8,16 +8,20 @@
 //! [`PlyStream::for_each_vertex`] with the attributes, then
 //! [`PlyStream::for_each_face`]). Normals, colours and texture
 //! coordinates are found and converted as the in-core reader does
-//! (its property names, colour scaling). The same checks as the in-core reader:
-//! the declared counts must fit in the file (at their smallest record
-//! size), coordinates must be finite, face indices in range; every problem
-//! is a one-line error naming the file. Supported layout: binary (either
-//! endianness), a `vertex` element whose properties are all scalars with
-//! float or double `x y z`, then a `face` element whose only list holds
-//! the indices (any integer types; polygons are fanned like the in-core
-//! reader); other scalar face properties are skipped, elements after
-//! `face` are ignored. Anything else is refused with a message that says
-//! so (the in-core reader handles every layout).
+//! (its property names, colour scaling). The same checks as the in-core
+//! reader, through the same code: the header's ([`header::parse`], the
+//! declared counts must fit in the file at their smallest record size),
+//! the faces' (`read::checked_fan`: at least 3 indices, each below the
+//! vertex count, no triangle repeating a corner) and the end's (no byte
+//! after the last declared element, `read::check_end`); coordinates must
+//! be finite and within range. Every problem is a one-line error naming
+//! the file. Supported layout: binary (either endianness), a `vertex`
+//! element whose properties are all scalars with float or double `x y z`,
+//! then a `face` element whose only list holds the indices (any integer
+//! types; polygons are fanned like the in-core reader); other scalar face
+//! properties are skipped, elements after `face` must have fixed-size
+//! records (they are skipped). Anything else is refused with a message
+//! that says so (the in-core reader handles every layout).
 
 use std::fs::File;
 use std::io::{BufReader, Read, Seek, SeekFrom};
@@ -26,7 +30,7 @@ use std::path::{Path, PathBuf};
 use glam::{Vec2, Vec3};
 
 use super::header::{self, Encoding, PropertyKind, ScalarType};
-use super::read::{VertexPlan, color_channel, vertex_plan};
+use super::read::{VertexPlan, check_end, checked_fan, color_channel, to_index, vertex_plan};
 use crate::error::{Error, ParseError, Result};
 use crate::parse_err;
 
@@ -74,6 +78,8 @@ pub struct PlyStream {
     /// Per face record: scalar bytes before the list, the list's count and
     /// item types, scalar bytes after it.
     face_layout: (usize, ScalarType, ScalarType, usize),
+    /// Bytes of the (fixed-size) elements after `face`.
+    tail_bytes: u64,
     file_len: u64,
 }
 
@@ -146,6 +152,19 @@ impl PlyStream {
         };
         let before = scalar_bytes(&fe.properties[..li]);
         let after = scalar_bytes(&fe.properties[li + 1..]);
+        // Elements after the faces are skipped, but must end the file
+        // exactly, as the in-core reader requires: fixed-size records only.
+        let mut tail_bytes = 0u64;
+        for e in &h.elements[2..] {
+            let stride = e.fixed_stride().ok_or_else(|| {
+                bad(parse_err!(
+                    "streaming needs fixed-size records after the face element ({} has a list)",
+                    e.name
+                ))
+            })?;
+            // check_counts bounded every count by the file's size.
+            tail_bytes = tail_bytes.saturating_add(e.count.saturating_mul(stride as u64));
+        }
         Ok(PlyStream {
             path: path.to_path_buf(),
             big_endian,
@@ -155,6 +174,7 @@ impl PlyStream {
             plan,
             face_count: fe.count,
             face_layout: (before, count, item, after),
+            tail_bytes,
             file_len,
         })
     }
@@ -270,8 +290,11 @@ impl PlyStream {
     }
 
     /// Calls `f` with each triangle in file order (polygons fanned from
-    /// their first corner). Errors: I/O, a truncated file, an index past
-    /// the vertex count, or whatever `f` returns. Memory: the buffer.
+    /// their first corner), each face checked as the in-core reader checks
+    /// it; then checks that the file ends where the header says. Errors:
+    /// I/O, a truncated file, a face the in-core reader refuses (under 3
+    /// indices, an index past the vertex count, a repeated corner), bytes
+    /// after the last element, or whatever `f` returns. Memory: the buffer.
     pub fn for_each_face(&self, mut f: impl FnMut([u32; 3]) -> Result<()>) -> Result<()> {
         let start = self.body_start + self.vertex_count * self.vertex_stride as u64;
         let mut r = self.reader(start)?;
@@ -279,13 +302,15 @@ impl PlyStream {
         let mut skip = vec![0u8; before.max(after)];
         let mut buf = [0u8; 8];
         let mut poly: Vec<u32> = Vec::new();
+        let mut read = 0u64;
+        let face = |fi: u64, msg: String| self.parse_error(parse_err!("face {fi}: {msg}"));
         for fi in 0..self.face_count {
             if !r.fill(&mut skip[..before]) || !r.fill(&mut buf[..count_t.size()]) {
                 return Err(self.truncated("face"));
             }
             let n = read_scalar(&buf, count_t, self.big_endian);
             if !(0.0..=1e6).contains(&n) {
-                return Err(self.parse_error(parse_err!("face {fi} lists {n} indices")));
+                return Err(face(fi, format!("lists {n} indices")));
             }
             poly.clear();
             for _ in 0..n as usize {
@@ -293,22 +318,22 @@ impl PlyStream {
                     return Err(self.truncated("face"));
                 }
                 let ix = read_scalar(&buf, item_t, self.big_endian);
-                if !(ix >= 0.0 && ix < self.vertex_count as f64) {
-                    return Err(self.parse_error(parse_err!(
-                        "face {fi} has vertex index {ix} but the file has {} vertices",
-                        self.vertex_count
-                    )));
-                }
-                poly.push(ix as u32);
+                poly.push(to_index(ix).map_err(|m| face(fi, m))?);
             }
             if !r.fill(&mut skip[..after]) {
                 return Err(self.truncated("face"));
             }
-            for k in 2..poly.len() {
-                f([poly[0], poly[k - 1], poly[k]])?;
+            read += (before + count_t.size() + poly.len() * item_t.size() + after) as u64;
+            let fan = checked_fan(&poly, Some(self.vertex_count)).map_err(|m| face(fi, m))?;
+            for t in fan {
+                f(t)?;
             }
         }
-        Ok(())
+        let end = start.saturating_add(read).saturating_add(self.tail_bytes);
+        if end > self.file_len {
+            return Err(self.truncated("last element's"));
+        }
+        check_end(self.file_len - end).map_err(|e| self.parse_error(e))
     }
 }
 

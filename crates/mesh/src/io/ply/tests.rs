@@ -664,16 +664,16 @@ fn out_of_range_and_negative_indices() {
     for (tri, needle) in [
         (
             [0i32, 1, 7],
-            "face 0 has index 7 but the mesh has 2 vertices",
+            "face 0: has vertex index 7 but the file has 2 vertices",
         ),
-        ([0, 1, -1], "face 0 has index 4294967295"),
+        ([0, 1, -1], "face 0: has vertex index 4294967295"),
     ] {
         let mut body = verts.clone();
         body.push(3);
         body.extend(tri.iter().flat_map(|i| i.to_le_bytes()));
         fails(&ply(&h, &body), needle);
-        // The reader alone (before validate) must not fail or panic either.
-        assert!(read(&ply(&h, &body)).is_ok());
+        // The reader itself refuses it, as the streaming reader does.
+        assert!(read(&ply(&h, &body)).is_err());
     }
     // Big-endian takes the general path, which rejects negatives itself.
     let mut h = h.clone();
@@ -698,8 +698,9 @@ fn non_finite_coordinates() {
     h.extend(["element face 0", "property list uchar int vertex_indices"]);
     fails(&ply(&h, b"0 0 0\ninf 0 0\n"), "point 1 is not finite");
     h[6] = "element face 1";
+    h[2] = "element vertex 3";
     fails(
-        &ply(&h, b"0 0 0\ninf 0 0\n3 0 1 1\n"),
+        &ply(&h, b"0 0 0\ninf 0 0\n0 1 0\n3 0 1 2\n"),
         "vertex 1 is not finite",
     );
 }
@@ -838,6 +839,134 @@ fn no_panic_on_truncation_or_corruption() {
             g[at] = (r >> 17) as u8;
             let _ = load(&g);
         }
+    }
+}
+
+/// The streaming reader's verdict on `bytes`: the whole file read as the
+/// out-of-core path reads it (header, vertices, faces).
+fn stream(bytes: &[u8]) -> Result<u64, String> {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("s.ply");
+    std::fs::write(&path, bytes).unwrap();
+    let s = super::stream::PlyStream::open(&path).map_err(|e| e.to_string())?;
+    s.for_each_vertex(|_| {}).map_err(|e| e.to_string())?;
+    let mut n = 0;
+    s.for_each_face(|_| {
+        n += 1;
+        Ok(())
+    })
+    .map_err(|e| e.to_string())?;
+    Ok(n)
+}
+
+/// Binary triangle meshes for the readers' agreement: `verts` vertices
+/// declared as `declared.0`, `faces` declared as `declared.1`, then
+/// `extra` bytes.
+fn tri_file(verts: usize, faces: &[[i32; 3]], declared: (usize, usize), extra: &[u8]) -> Vec<u8> {
+    let h = [
+        "ply",
+        "format binary_little_endian 1.0",
+        &format!("element vertex {}", declared.0),
+        "property float x",
+        "property float y",
+        "property float z",
+        &format!("element face {}", declared.1),
+        "property list uchar int vertex_indices",
+    ];
+    let mut body = Vec::new();
+    for i in 0..verts {
+        body.extend(le_f32s(&[i as f32, (i * i) as f32, (i % 3) as f32]));
+    }
+    for f in faces {
+        body.push(3);
+        body.extend(f.iter().flat_map(|i| i.to_le_bytes()));
+    }
+    body.extend_from_slice(extra);
+    ply(&h, &body)
+}
+
+/// One set of header, face and end checks for the in-core reader and the
+/// streaming (out-of-core) one: each file below is refused by both, with
+/// the same message; the good file is read alike by both.
+#[test]
+fn in_core_and_streaming_readers_refuse_the_same_files() {
+    let faces: Vec<[i32; 3]> = (0..1_200)
+        .map(|i| [i % 8, (i + 1) % 8, (i + 3) % 8])
+        .collect();
+    let good = tri_file(8, &faces, (8, 1_200), b"");
+    assert_eq!(mesh(&good).faces.len(), 1_200);
+    assert_eq!(stream(&good), Ok(1_200));
+    for (what, bytes, needle) in [
+        (
+            "a vertex count one too high",
+            tri_file(8, &faces, (9, 1_200), b""),
+            "",
+        ),
+        (
+            "a face count below the data",
+            tri_file(8, &faces, (8, 200), b""),
+            "13000 bytes follow the last element the header declares",
+        ),
+        (
+            "a face repeating a corner",
+            tri_file(8, &[[0, 1, 2], [7, 7, 7]], (8, 2), b""),
+            "face 1: repeats a vertex index (7 7 7)",
+        ),
+        (
+            "an index past the vertices",
+            tri_file(8, &[[0, 1, 8]], (8, 1), b""),
+            "face 0: has vertex index 8 but the file has 8 vertices",
+        ),
+        (
+            "trailing bytes",
+            tri_file(8, &faces, (8, 1_200), b"junk!"),
+            "5 bytes follow the last element the header declares",
+        ),
+    ] {
+        let in_core = load(&bytes).map(|_| ()).unwrap_err();
+        let streamed = stream(&bytes).unwrap_err();
+        assert!(in_core.contains(needle), "{what}: in core: {in_core}");
+        assert!(streamed.contains(needle), "{what}: streamed: {streamed}");
+        if !needle.is_empty() {
+            assert!(
+                streamed.ends_with(&in_core),
+                "{what}: {streamed} / {in_core}"
+            );
+        }
+    }
+    // A face of two indices: the same words in both.
+    let mut two = tri_file(8, &[], (8, 1), b"");
+    two.extend([2, 0, 0, 0, 0, 1, 0, 0, 0]);
+    let needle = "face 0: has 2 vertex indices (a face needs at least 3)";
+    assert!(load(&two).unwrap_err().contains(needle));
+    assert!(stream(&two).unwrap_err().contains(needle));
+}
+
+/// The corpus files of these classes are refused by both readers, each
+/// with its one line.
+#[test]
+fn malformed_corpus_binary_faces_and_ends() {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tests/malformed");
+    for (file, needle) in [
+        (
+            "ply_trailing_bytes_binary.ply",
+            "7 bytes follow the last element",
+        ),
+        (
+            "ply_face_count_below_data_binary.ply",
+            "13 bytes follow the last element",
+        ),
+        (
+            "ply_repeated_face_index_binary.ply",
+            "face 0: repeats a vertex index (2 2 2)",
+        ),
+        ("ply_vertex_count_one_high_binary.ply", "face 0: has "),
+    ] {
+        let bytes = std::fs::read(dir.join(file)).unwrap();
+        let in_core = load(&bytes).map(|_| ()).unwrap_err();
+        assert!(in_core.contains(needle), "{file}: {in_core}");
+        let streamed = stream(&bytes).unwrap_err();
+        assert!(streamed.contains(needle), "{file}: {streamed}");
     }
 }
 
