@@ -78,7 +78,10 @@ fn a_scene_chain_is_level_0_with_msft_lod_over_the_other_levels() {
         &[0.5, 0.7, 0.0],
         &[s.face_count(), a.face_count(), b.face_count()],
     );
-    assert_eq!(base["extras"]["MSFT_screencoverage"], serde_json::json!(want));
+    assert_eq!(
+        base["extras"]["MSFT_screencoverage"],
+        serde_json::json!(want)
+    );
     assert!(want[0] <= 0.5 && want[0] > want[1] && want[1] > want[2] && want[2] == 0.0);
     assert_eq!(base["extras"]["triangles"], s.face_count());
     assert!(

@@ -195,7 +195,8 @@ pub fn combined_report(reports: &[LevelReport]) -> Option<LevelReport> {
         if acc.stop == crate::StopReason::Reached {
             acc.stop = r.stop;
         }
-        if matches!(acc.chain_end, None | Some(crate::StopReason::Reached)) && r.chain_end.is_some() {
+        if matches!(acc.chain_end, None | Some(crate::StopReason::Reached)) && r.chain_end.is_some()
+        {
             acc.chain_end = r.chain_end;
         }
     }

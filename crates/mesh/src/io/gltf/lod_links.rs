@@ -97,6 +97,9 @@ fn floor_4_digits(x: f64) -> f64 {
         return x.max(0.0);
     }
     let s = digits_scale(x);
+    if !s.is_finite() {
+        return x; // below about 1e-300: nothing to round
+    }
     (x * s * (1.0 + 1e-9)).floor() / s
 }
 
@@ -104,6 +107,9 @@ fn floor_4_digits(x: f64) -> f64 {
 /// value with 4 digits, in `(0, 1]`).
 fn below_4_digits(x: f64) -> f64 {
     let s = digits_scale(x);
+    if !s.is_finite() {
+        return 0.0;
+    }
     ((x * s).round() - 1.0) / s
 }
 
