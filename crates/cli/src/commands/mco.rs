@@ -376,7 +376,9 @@ struct Info {
     levels: Vec<LevelRow>,
 }
 
-fn info(_ui: &Ui, path: &Path, json: bool) -> Result<()> {
+/// `lodkit mco info FILE` (also what `lodkit info FILE.mco` prints): the
+/// file's format, chunks, lattice, sizes and levels, as text or JSON.
+pub fn info(_ui: &Ui, path: &Path, json: bool) -> Result<()> {
     let m = McoModel::load(path)?.info();
     let bytes = std::fs::read(path).with_context(|| path.display().to_string())?;
     let version = McoModel::file_version(&bytes).unwrap_or(0);
