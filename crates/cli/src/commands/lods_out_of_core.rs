@@ -157,6 +157,9 @@ pub fn run(
             anyhow::anyhow!("{e}")
         }
     })?;
+    if let Some(line) = super::lods::stopped_early(&levels, targets.len()) {
+        ui.status(line);
+    }
     let glb = format!("{stem}_lods.glb");
     write_glb(&a.out.join(&glb), stem, &in_core, a)?;
     let input_vertices = lodkit_mesh::io::ply::stream::PlyStream::open(&a.input)
