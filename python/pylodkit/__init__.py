@@ -10,7 +10,7 @@ an unrelated project). Install from a checkout with ``pip install ./python``.
 - :func:`compare`: Metro distances, as ``lodkit compare --json``.
 - :mod:`pylodkit.mco`: continuous LOD (marching cube octree).
 - :mod:`pylodkit.pop`: progressive particle streams.
-- :mod:`pylodkit.batch`: LODs for a folder of assets on Ray.
+- :mod:`pylodkit.batch`: LODs for a folder of assets (on Ray when it is installed).
 - :func:`from_trimesh` / :func:`to_trimesh`, :func:`from_open3d` / :func:`to_open3d`.
 
 Every call releases the GIL while it computes; errors are

@@ -9,7 +9,7 @@ import numpy as np
 
 from . import _check
 from . import _lodkit as _native
-from .errors import OptionError
+from .errors import InputError, OptionError
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -23,6 +23,41 @@ MAX_LEVELS: int = 32
 
 def _opt_array(a):
     return None if a is None else np.asarray(a)
+
+
+_FLOATS = (np.float32, np.float64)
+_INDICES = (np.int32, np.int64, np.uint32, np.uint64)
+
+
+def _describe(a: np.ndarray) -> str:
+    return "an array of dtype %s and shape %s" % (a.dtype, a.shape)
+
+
+def _check_array(name: str, a: np.ndarray, cols: Tuple[int, ...], dtypes: Tuple[Any, ...],
+                 what: str, rows: Optional[Tuple[int, str]] = None, n: str = "n") -> None:
+    """``InputError`` unless ``a`` is one of ``dtypes``, 2-D with ``cols``
+    columns and (when given) ``rows[0]`` rows (``rows[1]`` names what they
+    count), worded as the native readers word it; O(1), nothing is read."""
+    shape = "(%s, %s)" % (n, " or ".join(str(c) for c in cols))
+    if not any(a.dtype == d for d in dtypes):
+        raise InputError("%s: expected %s of shape %s, got %s" % (name, what, shape, _describe(a)))
+    if a.ndim != 2 or a.shape[1] not in cols:
+        got = "(%d, %d)" % a.shape if a.ndim == 2 else "shape %s" % (a.shape,)
+        raise InputError("%s: expected shape %s, got %s" % (name, shape, got))
+    if rows is not None and a.shape[0] != rows[0]:
+        raise InputError("%s: has %d rows but %s (one per vertex is needed)"
+                         % (name, a.shape[0], rows[1]))
+
+
+def _check_attributes(n: int, of: str, normals, colors, uvs=None) -> None:
+    rows = (n, of)
+    if normals is not None:
+        _check_array("normals", normals, (3,), _FLOATS, "a float32 or float64 array", rows)
+    if colors is not None:
+        _check_array("colors", colors, (3, 4), (np.uint8,) + _FLOATS,
+                     "a uint8 array (0..255) or a float array (0..1)", rows)
+    if uvs is not None:
+        _check_array("uvs", uvs, (2,), _FLOATS, "a float32 or float64 array", rows)
 
 
 @dataclass(eq=False)
@@ -39,7 +74,10 @@ class Mesh:
 
     Arrays are kept as given (``np.asarray``: no copy for an ndarray) and
     read in place by every call. Meshes lodkit returns have float32
-    vertices and uint32 faces that numpy owns (no copy was made).
+    vertices and uint32 faces that numpy owns (no copy was made). Shapes
+    and dtypes are checked here (:class:`~pylodkit.InputError`, a
+    ``ValueError``, naming the array); face indices are checked by the
+    call that reads them.
 
     Example::
 
@@ -62,6 +100,13 @@ class Mesh:
         self.normals = _opt_array(self.normals)
         self.colors = _opt_array(self.colors)
         self.uvs = _opt_array(self.uvs)
+        _check_array("vertices", self.vertices, (3,), _FLOATS, "a float32 or float64 array")
+        if self.faces.size == 0 and self.faces.ndim < 2:
+            self.faces = np.zeros((0, 3), np.uint32)  # [] or np.array([]): no faces
+        _check_array("faces", self.faces, (3,), _INDICES,
+                     "an int32, int64, uint32 or uint64 array", n="m")
+        _check_attributes(self.n_vertices, "the mesh has %d vertices" % self.n_vertices,
+                          self.normals, self.colors, self.uvs)
 
     @property
     def n_vertices(self) -> int:
@@ -90,6 +135,8 @@ class PointCloud:
     - ``normals``: optional (n, 3) float.
     - ``colors``: optional (n, 4) or (n, 3) uint8 or float in [0, 1].
 
+    Shapes and dtypes are checked here (:class:`~pylodkit.InputError`).
+
     Example::
 
         >>> import numpy as np, pylodkit as lk
@@ -105,6 +152,9 @@ class PointCloud:
         self.points = np.asarray(self.points)
         self.normals = _opt_array(self.normals)
         self.colors = _opt_array(self.colors)
+        _check_array("points", self.points, (3,), _FLOATS, "a float32 or float64 array")
+        _check_attributes(len(self), "the cloud has %d points" % len(self), self.normals,
+                          self.colors)
 
     def __len__(self) -> int:
         return int(self.points.shape[0])
@@ -115,6 +165,18 @@ class PointCloud:
 
 
 Geometry = Union[Mesh, PointCloud]
+
+
+def _as_input(obj: Any) -> Any:
+    """What every call reads: a ``trimesh.Trimesh`` or an open3d geometry
+    through :func:`from_trimesh` / :func:`from_open3d` (so their vertex
+    colours and UVs come along), anything else as it is."""
+    module = type(obj).__module__ or ""
+    if module.startswith("trimesh") and hasattr(obj, "faces") and hasattr(obj, "visual"):
+        return from_trimesh(obj)
+    if module.startswith("open3d") and (hasattr(obj, "triangles") or hasattr(obj, "points")):
+        return from_open3d(obj)
+    return obj
 
 
 def _wrap(kind: str, d: Dict[str, Any]) -> Geometry:
@@ -153,7 +215,7 @@ def save(obj: Union[Geometry, Any], path: PathLike, *, ascii: bool = False) -> N
 
         >>> lk.save(lk.bunny(), "bunny.glb")
     """
-    _native.save(obj, os.fspath(path), ascii)
+    _native.save(_as_input(obj), os.fspath(path), ascii)
 
 
 def bunny() -> Mesh:
@@ -225,7 +287,10 @@ def simplify(
 ) -> Tuple[Mesh, Dict[str, Any]]:
     """Simplifies a mesh to a budget with lodkit's HQMS simplifier (``lodkit simplify``).
 
-    Give ``target`` (triangles), ``ratio`` (fraction of the input's
+    ``mesh`` is a :class:`Mesh`, a ``trimesh.Trimesh`` or an open3d
+    ``TriangleMesh`` (converted as :func:`from_trimesh` / :func:`from_open3d`
+    convert them, colours and UVs kept), or any object with ``vertices``
+    and ``faces`` arrays. Give ``target`` (triangles), ``ratio`` (fraction of the input's
     triangles, in [0, 1]) or ``max_error`` (stop before a collapse whose
     estimated error, in input units, would exceed it), or an error with a
     budget. The other options and their defaults are the CLI's:
@@ -255,8 +320,17 @@ def simplify(
     r = _check.real("ratio", ratio, 0.0, 1.0)
     opts = _simplify_options(max_error, lock_border, fill_holes, heap_size, normal_weight,
                              color_weight, uv_weight, prune)
-    d, report = _native.simplify(mesh, t, r, **opts)
+    d, report = _native.simplify(_as_input(mesh), t, r, **opts)
     return Mesh(**d), report
+
+
+def check_ratios_fall(name: str, ratios: Sequence[float]) -> None:
+    """``OptionError`` unless each ratio is smaller than the one before
+    (a level as large as the one before would repeat it)."""
+    for a, b in zip(ratios, ratios[1:]):
+        if not b < a:
+            raise OptionError("%s=%r: each level must be smaller than the one before, "
+                              "but %r is followed by %r" % (name, list(ratios), a, b))
 
 
 def lod_chain(
@@ -278,7 +352,12 @@ def lod_chain(
     """A discrete LOD chain, each level simplified from the previous one (``lodkit lods``).
 
     ``levels`` (1..=32, default 6) halves the triangles per level (1/2,
-    1/4, ...); ``ratios`` gives each level's fraction of the input instead.
+    1/4, ...); ``ratios`` gives each level's fraction of the input instead,
+    each smaller than the one before (else :class:`~pylodkit.OptionError`).
+    Every level has fewer triangles than the one before: a chain that
+    stalls (no valid collapse left, ``max_error``) ends at its last new
+    level, so fewer levels than asked may come back; the last report's
+    ``chain_end`` then says why (it is ``None`` otherwise).
     With ``measure`` (the default, as ``lods.json``), each level's
     symmetric Metro distance to the input is measured: ``samples`` per
     kind, by default 4 per face of the level within 50,000..=1,000,000.
@@ -304,10 +383,11 @@ def lod_chain(
         rs = [_check.real("ratios", r, 0.0, 1.0) for r in ratios]
         if not rs:
             raise OptionError("ratios: give at least one fraction in [0, 1]")
+        check_ratios_fall("ratios", rs)
     s = _check.integer("samples", samples, 1, MAX_SAMPLES)
     opts = _simplify_options(max_error, lock_border, fill_holes, heap_size, normal_weight,
                              color_weight, uv_weight, prune)
-    out = _native.lod_chain(mesh, rs, measure=bool(measure), samples=s, **opts)
+    out = _native.lod_chain(_as_input(mesh), rs, measure=bool(measure), samples=s, **opts)
     return [(Mesh(**d), r) for d, r in out]
 
 
@@ -343,8 +423,8 @@ def compare(
     """
     n = _check.integer("samples", samples, 1, MAX_SAMPLES)
     _check.integer("seed", seed, 0, 2**64 - 1)
-    return _native.compare(a, b, n, seed, bool(vertex_samples), bool(edge_samples),
-                           bool(face_samples))
+    return _native.compare(_as_input(a), _as_input(b), n, seed, bool(vertex_samples),
+                           bool(edge_samples), bool(face_samples))
 
 
 # -- trimesh and open3d -------------------------------------------------------

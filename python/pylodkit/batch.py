@@ -1,4 +1,4 @@
-"""LODs for a folder of assets on Ray: one Ray task per asset.
+"""LODs for a folder of assets: one task per asset, on Ray or, without it, here.
 
 Command line::
 
@@ -6,25 +6,36 @@ Command line::
         [--pop] [--mco] [--address ADDR] [--workers N]
 
 Every mesh file under ``IN_DIR`` (.ply .obj .stl .gltf .glb, searched
-recursively) is one asset and one Ray task. Its outputs go to
-``OUT_DIR/<asset>/``: ``<stem>_lod<i>.ply`` per level (each measured
-against the input), ``<stem>.pop`` with ``--pop``, ``<stem>.mco`` with
-``--mco``, then ``manifest.json``, written last. Every file is written
+recursively) is one asset and one task. Its outputs go to
+``OUT_DIR/<asset>/``, as ``lodkit lods`` writes a chain:
+``<stem>_lod<i>.ply`` per level (each measured against the input) and
+``<stem>_lods.glb`` (the input as level 0 and every level, an
+``MSFT_lod`` chain with screen coverages and each level's error in its
+extras); ``<stem>.pop`` with ``--pop``, ``<stem>.mco`` with ``--mco``;
+then ``manifest.json``, written last. Every output is read back before
+the asset is reported ``ok`` (each PLY level's triangles, the GLB's
+chain, the stream decoded, the octree cut at full resolution): an output
+that does not read back fails the asset. Every file is written
 atomically (temporary file, fsync, rename), so an asset whose manifest
 exists — with the same options and every listed file present at its
 recorded size — is complete, and a rerun skips it (resume). A failing
-asset (a malformed file, a point cloud where a mesh is needed) is reported
-with its one-line message and does not stop the batch. At the end
-``OUT_DIR/summary.md``, ``summary.csv`` and ``summary.json`` list per asset:
-status, input and output triangles, the coarsest level's measured mean
-error, time, and the error message; the table is printed too. The exit
-status is 1 when an asset failed, else 0.
+asset (a malformed file, a point cloud where a mesh is needed, an output
+that does not read back) is reported with its one-line message, leaves
+no file and no folder of its own behind, and does not stop the batch. A
+chain that stalls ends at its last new level, as ``lodkit lods`` does.
+At the end ``OUT_DIR/summary.md``, ``summary.csv`` and ``summary.json``
+list per asset: status, input and output triangles, the coarsest level's
+measured mean error, time, and the error message; the table is printed
+too. The exit status is 1 when an asset failed, else 0.
 
-Without ``--address``, ``ray.init`` starts a local cluster of ``--workers``
-CPUs (default: all); with ``--address`` (``auto`` or ``HOST:PORT``) the
-batch runs on that cluster, keeping at most ``--workers`` tasks in flight.
-Each task is one core: lodkit's own threads (rayon, used by the
-measurement) are limited to ``--threads-per-task`` (default 1).
+With Ray installed: without ``--address``, ``ray.init`` starts a local
+cluster of ``--workers`` CPUs (default: all); with ``--address`` (``auto``
+or ``HOST:PORT``) the batch runs on that cluster, keeping at most
+``--workers`` tasks in flight. Each task is one core: lodkit's own
+threads (rayon, used by the measurement) are limited to
+``--threads-per-task`` (default 1). Without Ray, the assets are made
+here, one after the other (one line says so; ``--address`` then is an
+error).
 
 From Python::
 
@@ -40,15 +51,16 @@ import csv
 import hashlib
 import io
 import json
+import math
 import os
 import sys
 import time
 from pathlib import Path
-from typing import Any, Dict, List, Optional, Sequence
+from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 MESH_EXTENSIONS = (".ply", ".obj", ".stl", ".gltf", ".glb")
 MANIFEST = "manifest.json"
-MANIFEST_VERSION = 1
+MANIFEST_VERSION = 2
 
 
 def find_assets(in_dir: os.PathLike) -> List[Dict[str, str]]:
@@ -115,8 +127,86 @@ def read_complete(asset_dir: Path, opts: Dict[str, Any]) -> Optional[Dict[str, A
     return m
 
 
+def _significant(x: Optional[float]) -> Optional[float]:
+    """``x`` to 4 significant digits (``None`` for none or not finite)."""
+    if x is None or not math.isfinite(x):
+        return None
+    return float("%.3e" % x) if x != 0 else 0.0
+
+
+def _level_extras(lod: int, measured: Optional[Tuple[float, float]], estimated: float,
+                  diagonal: float) -> Dict[str, Any]:
+    """A chain GLB node's extras, as ``lodkit lods`` writes them (docs/gltf.md)."""
+    pct = (lambda x: x / diagonal * 100.0) if diagonal > 0 else (lambda x: 0.0)
+    error: Dict[str, Any] = {"measured": measured is not None}
+    if measured is not None:
+        mean, mx = measured
+        error.update(mean=_significant(mean), max=_significant(mx),
+                     mean_percent_of_diagonal=_significant(pct(mean)),
+                     max_percent_of_diagonal=_significant(pct(mx)))
+    error.update(estimated=_significant(estimated),
+                 estimated_percent_of_diagonal=_significant(pct(estimated)))
+    return {"lod": lod, "error": error}
+
+
+def _glb_chain_ids(path: Path) -> List[int]:
+    """The ``MSFT_lod`` ids on the scene's root node of a chain GLB."""
+    b = path.read_bytes()
+    if b[:4] != b"glTF" or len(b) < 20:
+        raise ValueError("%s: not a GLB" % path)
+    n = int.from_bytes(b[12:16], "little")
+    j = json.loads(b[20:20 + n])
+    base = j["nodes"][j["scenes"][j.get("scene", 0)]["nodes"][0]]
+    return list(base.get("extensions", {}).get("MSFT_lod", {}).get("ids", []))
+
+
+def _read_back(asset_dir: Path, checks: List[Tuple[str, str, Any]]) -> None:
+    """Reads every output back; raises ``InputError`` naming the first one
+    that does not read back as it was written. ``checks``: (file, kind,
+    expected): ``ply`` (its triangles), ``glb`` ((level 0's triangles,
+    levels behind MSFT_lod)), ``pop`` (None), ``mco`` (None)."""
+    import pylodkit as lk
+
+    for file, kind, want in checks:
+        p = asset_dir / file
+        if kind == "ply":
+            m = lk.load(p)
+            got = m.n_faces if isinstance(m, lk.Mesh) else None
+            if got != want:
+                raise lk.InputError("%s: reads back with %s triangles, %d were written" % (p, got, want))
+        elif kind == "glb":
+            m = lk.load(p)
+            ids = _glb_chain_ids(p)
+            got = (m.n_faces if isinstance(m, lk.Mesh) else None, len(ids))
+            if got != tuple(want):
+                raise lk.InputError("%s: reads back as level 0 of %s triangles with %d levels behind it, "
+                                    "%d and %d were written" % (p, got[0], got[1], want[0], want[1]))
+        elif kind == "pop":
+            _, info = lk.pop.decode_with_info(p.read_bytes(), strict=True)
+            if info["finest_level"] != info["depth"]:
+                raise lk.InputError("%s: decodes to level %d of %d" % (p, info["finest_level"], info["depth"]))
+        elif kind == "mco":
+            model = lk.mco.load(p)
+            cut = model.extract(lod=model.max_lod)
+            if cut.n_faces != model.full_triangles:
+                raise lk.InputError("%s: its full cut has %d triangles, the file says %d"
+                                    % (p, cut.n_faces, model.full_triangles))
+
+
+def _missing_dirs(asset_dir: Path, out_dir: Path) -> List[Path]:
+    """The folders from ``asset_dir`` up to (not including) ``out_dir``
+    that do not exist yet, deepest first: what ``mkdir(parents=True)``
+    makes, and what a failure removes again when they are empty."""
+    out = []
+    d = asset_dir
+    while d != out_dir and d != d.parent and not d.exists():
+        out.append(d)
+        d = d.parent
+    return out
+
+
 def process_asset(name: str, path: str, out_dir: str, opts: Dict[str, Any]) -> Dict[str, Any]:
-    """Makes one asset's outputs (the body of each Ray task); never raises.
+    """Makes one asset's outputs (the body of each task); never raises.
 
     ``opts``: ``ratios`` (list of fractions), ``measure`` (bool),
     ``samples`` (int or None), ``pop`` (bool), ``mco`` (bool),
@@ -124,7 +214,9 @@ def process_asset(name: str, path: str, out_dir: str, opts: Dict[str, Any]) -> D
     ``status`` (``ok``, ``skipped`` or ``failed``), ``input_triangles``,
     ``triangles`` (per level), ``mean_error_pct`` (the coarsest level's
     measured mean distance, % of the input's diagonal), ``seconds`` and
-    ``error`` (the one-line message of a failure).
+    ``error`` (the one-line message of a failure). ``ok`` only once every
+    output has been read back; a failure removes what this call wrote
+    (files and the folders it made).
 
     Example::
 
@@ -135,6 +227,7 @@ def process_asset(name: str, path: str, out_dir: str, opts: Dict[str, Any]) -> D
     import numpy as np
 
     import pylodkit as lk
+    from . import _lodkit
 
     t0 = time.perf_counter()
     asset_dir = Path(out_dir) / name
@@ -147,14 +240,23 @@ def process_asset(name: str, path: str, out_dir: str, opts: Dict[str, Any]) -> D
         row.update({k: done[k] for k in ("input_triangles", "triangles", "mean_error_pct")})
         row.update(status="skipped", seconds=0.0, made_seconds=done.get("seconds"))
         return row
+    made_dirs = _missing_dirs(asset_dir, Path(out_dir))
+    written: List[Path] = []
     try:
+        geometry = lk.load(path)
         asset_dir.mkdir(parents=True, exist_ok=True)
         # An old manifest must not vouch for outputs being rewritten now.
         (asset_dir / MANIFEST).unlink(missing_ok=True)
-        geometry = lk.load(path)
         stem = Path(path).stem
         outputs: List[str] = []
+        checks: List[Tuple[str, str, Any]] = []
         levels: List[Dict[str, Any]] = []
+
+        def wrote(file: str, kind: str, want: Any) -> None:
+            written.append(asset_dir / file)
+            outputs.append(file)
+            checks.append((file, kind, want))
+
         if opts["ratios"]:
             if not isinstance(geometry, lk.Mesh):
                 raise lk.InputError("%s: holds a point cloud with no faces, a mesh is needed" % path)
@@ -163,11 +265,24 @@ def process_asset(name: str, path: str, out_dir: str, opts: Dict[str, Any]) -> D
                                  samples=opts["samples"])
             v = geometry.vertices
             diagonal = float(np.linalg.norm(v.max(axis=0) - v.min(axis=0))) if len(v) else 0.0
+            glb_levels = [(geometry, "%s_LOD0" % stem,
+                           json.dumps(_level_extras(0, (0.0, 0.0), 0.0, diagonal)), 0.0)]
             for i, (mesh, report) in enumerate(chain, start=1):
                 file = "%s_lod%d.ply" % (stem, i)
                 lk.save(mesh, asset_dir / file)
-                outputs.append(file)
+                wrote(file, "ply", mesh.n_faces)
                 levels.append(dict(report, file=file))
+                if mesh.n_faces == 0:
+                    continue
+                mean, mx = report["measured_mean_error"], report["measured_max_error"]
+                measured = (mean, mx) if mean is not None and mx is not None else None
+                est = float(report["estimated_error"])
+                error = mx if measured is not None else est
+                glb_levels.append((mesh, "%s_LOD%d" % (stem, i),
+                                   json.dumps(_level_extras(i, measured, est, diagonal)), error))
+            glb = "%s_lods.glb" % stem
+            _lodkit.write_lod_glb(str(asset_dir / glb), glb_levels)
+            wrote(glb, "glb", (geometry.n_faces, len(glb_levels) - 1))
             row["triangles"] = [lv["triangles"] for lv in levels]
             mean = levels[-1]["measured_mean_error"] if levels else None
             if mean is not None and diagonal > 0:
@@ -175,15 +290,14 @@ def process_asset(name: str, path: str, out_dir: str, opts: Dict[str, Any]) -> D
         elif isinstance(geometry, lk.Mesh):
             row["input_triangles"] = geometry.n_faces
         if opts["pop"]:
-            from . import _lodkit
-
             file = stem + ".pop"
             _lodkit.write_atomic(str(asset_dir / file), lk.pop.encode(geometry))
-            outputs.append(file)
+            wrote(file, "pop", None)
         if opts["mco"]:
             file = stem + ".mco"
             lk.mco.build(geometry, resolution=opts["resolution"]).save(asset_dir / file)
-            outputs.append(file)
+            wrote(file, "mco", None)
+        _read_back(asset_dir, checks)
         seconds = time.perf_counter() - t0
         manifest = {
             "version": MANIFEST_VERSION,
@@ -201,6 +315,18 @@ def process_asset(name: str, path: str, out_dir: str, opts: Dict[str, Any]) -> D
         _write_json(asset_dir / MANIFEST, manifest)
         row.update(status="ok", seconds=seconds)
     except Exception as e:  # every failure becomes this asset's row
+        # Nothing half-made stays: the files this call wrote, then the
+        # folders it made, when they are empty.
+        for p in written:
+            try:
+                p.unlink()
+            except OSError:
+                pass
+        for d in made_dirs:
+            try:
+                d.rmdir()
+            except OSError:
+                break
         row.update(status="failed", seconds=time.perf_counter() - t0,
                    error=str(e).replace("\n", " ") or type(e).__name__)
     return row
@@ -251,11 +377,14 @@ def run_batch(
     """Runs the batch (see the module docs) and returns its summary.
 
     ``ratios`` or ``levels`` choose the LOD chain (default: 1/2, 1/4, 1/8;
-    ``ratios=[]`` makes none); ``pop`` / ``mco`` add a ``.pop`` stream /
-    ``.mco`` model per asset. The summary dict has ``assets`` (one row per
-    asset, as :func:`process_asset` returns), ``ok``, ``skipped``,
-    ``failed``, ``workers``, ``ray_init_seconds`` and ``wall_seconds`` (from
-    the first task submitted to the last result).
+    ``ratios=[]`` makes none; ratios must fall, else ``OptionError``);
+    ``pop`` / ``mco`` add a ``.pop`` stream / ``.mco`` model per asset. The
+    summary dict has ``assets`` (one row per asset, as
+    :func:`process_asset` returns), ``ok``, ``skipped``, ``failed``,
+    ``runner`` (``"ray"``, or ``"local"`` without Ray: the assets one after
+    the other here), ``workers``, ``ray_init_seconds`` and ``wall_seconds``
+    (from the first task submitted to the last result). Without Ray,
+    ``address`` raises :class:`RayMissing`.
 
     Example::
 
@@ -263,9 +392,8 @@ def run_batch(
         >>> s["failed"]
         0
     """
-    import ray
-
     from . import _check
+    from ._core import check_ratios_fall
 
     if ratios is not None and levels is not None:
         raise ValueError("--lods and --levels conflict: give one of them")
@@ -273,13 +401,35 @@ def run_batch(
         n = _check.integer("levels", 3 if levels is None else levels, 1, 32)
         ratios = [0.5 ** (i + 1) for i in range(n)]
     ratios = [_check.real("lods", r, 0.0, 1.0) for r in ratios]
+    check_ratios_fall("lods", ratios)
     _check.integer("workers", workers, 1, 4096)
     _check.integer("threads_per_task", threads_per_task, 1, 4096)
     opts = {"ratios": list(ratios), "measure": bool(measure), "samples": samples,
             "pop": bool(pop), "mco": bool(mco), "resolution": resolution}
+    try:
+        import ray
+    except ImportError:
+        ray = None
+        if address:
+            raise RayMissing("--address %s needs Ray, which is not installed here "
+                             "(pip install ray)" % address)
     assets = find_assets(in_dir)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    if ray is None:
+        if not quiet:
+            print("Ray is not installed: making the %d assets here, one after the other "
+                  "(pip install ray to spread them over cores or machines)" % len(assets),
+                  file=sys.stderr, flush=True)
+        t0 = time.perf_counter()
+        rows: Dict[str, Dict[str, Any]] = {}
+        for a in assets:
+            row = process_asset(a["name"], a["path"], str(out), opts)
+            rows[a["name"]] = row
+            if not quiet:
+                _print_row(row)
+        return _finish(in_dir, out_dir, out, opts, assets, rows, "local", 1, 0.0,
+                       time.perf_counter() - t0, quiet)
 
     env = {"RAYON_NUM_THREADS": str(threads_per_task)}
     t_init = time.perf_counter()
@@ -327,18 +477,34 @@ def run_batch(
                            "seconds": 0.0, "error": str(e).strip().splitlines()[-1] if str(e).strip() else type(e).__name__}
                 rows[a["name"]] = row
                 if not quiet:
-                    print("%-8s %s%s" % (row["status"], row["asset"],
-                                         (": " + row["error"]) if row["error"] else ""),
-                          file=sys.stderr, flush=True)
+                    _print_row(row)
     finally:
         if started_here:
             ray.shutdown()
-    wall = time.perf_counter() - t0
+    return _finish(in_dir, out_dir, out, opts, assets, rows, "ray", workers, ray_init_seconds,
+                   time.perf_counter() - t0, quiet)
+
+
+class RayMissing(ImportError):
+    """``address`` given where Ray is not installed."""
+
+
+def _print_row(row: Dict[str, Any]) -> None:
+    print("%-8s %s%s" % (row["status"], row["asset"], (": " + row["error"]) if row["error"] else ""),
+          file=sys.stderr, flush=True)
+
+
+def _finish(in_dir: os.PathLike, out_dir: os.PathLike, out: Path, opts: Dict[str, Any],
+            assets: List[Dict[str, str]], rows: Dict[str, Dict[str, Any]], runner: str,
+            workers: int, ray_init_seconds: float, wall: float, quiet: bool) -> Dict[str, Any]:
+    """The summary of a run: written to ``summary.{md,csv,json}``, printed
+    unless ``quiet``, returned."""
     ordered = [rows[a["name"]] for a in assets]
     summary = {
         "in_dir": str(in_dir),
         "out_dir": str(out_dir),
         "options": opts,
+        "runner": runner,
         "workers": workers,
         "ray_init_seconds": ray_init_seconds,
         "wall_seconds": wall,
@@ -371,8 +537,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     """The command line (``python -m pylodkit.batch --help``)."""
     p = argparse.ArgumentParser(
         prog="python -m pylodkit.batch",
-        description="LODs for every mesh file under IN_DIR, one Ray task per asset; "
-                    "reruns skip complete assets.")
+        description="LODs for every mesh file under IN_DIR, one task per asset (on Ray when it "
+                    "is installed, else here, one after the other); reruns skip complete assets.")
     p.add_argument("in_dir", metavar="IN_DIR")
     p.add_argument("out_dir", metavar="OUT_DIR")
     g = p.add_mutually_exclusive_group()
@@ -400,7 +566,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     except (OptionError, ValueError) as e:
         print("error: %s" % e, file=sys.stderr)
         return 2
-    except OSError as e:
+    except (OSError, RayMissing) as e:
         print("error: %s" % e, file=sys.stderr)
         return 1
     return 1 if s["failed"] else 0

@@ -16,7 +16,7 @@ from typing import Any, Dict, Optional, Sequence, Tuple, Union
 
 from . import _check
 from . import _lodkit as _native
-from ._core import Mesh
+from ._core import Mesh, _as_input
 from .errors import OptionError
 
 #: Largest ``resolution`` of a build (the CLI's bound).
@@ -182,7 +182,9 @@ def build(inputs: Any, *more: Any, resolution: Optional[int] = None) -> Model:
     """Builds a model from meshes, point clouds and files (``lodkit mco build``).
 
     ``inputs`` is one input or a list; each is a :class:`~pylodkit.Mesh`, a
-    :class:`~pylodkit.PointCloud`, an (n, 3) array of points, anything with
+    :class:`~pylodkit.PointCloud`, an (n, 3) array of points, a
+    ``trimesh.Trimesh`` or open3d geometry (as :func:`~pylodkit.from_trimesh`
+    / :func:`~pylodkit.from_open3d` convert them), anything with
     ``vertices``/``faces`` arrays, or a path (a ``.conf`` adds each posed
     scan it lists). All go on one lattice of ``resolution`` leaf cubes
     along the longest axis (2..=512; default: a cube of twice the sample
@@ -196,7 +198,7 @@ def build(inputs: Any, *more: Any, resolution: Optional[int] = None) -> Model:
     items.extend(more)
     if not items:
         raise OptionError("give at least one input")
-    items = [os.fspath(i) if isinstance(i, os.PathLike) else i for i in items]
+    items = [os.fspath(i) if isinstance(i, os.PathLike) else _as_input(i) for i in items]
     r = _check.integer("resolution", resolution, 2, MAX_RESOLUTION)
     return Model(_native.mco_build(items, r))
 

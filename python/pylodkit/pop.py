@@ -14,7 +14,7 @@ from typing import Any, Dict, Optional, Tuple, Union
 
 from . import _check
 from . import _lodkit as _native
-from ._core import Mesh, PointCloud, _wrap
+from ._core import Mesh, PointCloud, _as_input, _wrap
 from .errors import OptionError
 
 #: Largest octree depth ``encode`` takes (the CLI's bound).
@@ -65,7 +65,7 @@ def encode_with_report(
         if not outer_thinning:
             raise OptionError("relax_below applies with outer_thinning=True")
         relax = _check.integer("relax_below", relax_below, 1, 16)
-    return _native.pop_encode(obj, d, p, mode, placement, bool(outer_thinning), relax,
+    return _native.pop_encode(_as_input(obj), d, p, mode, placement, bool(outer_thinning), relax,
                               bool(normals), bool(colours))
 
 

@@ -96,6 +96,57 @@ fn write_atomic(py: Python<'_>, path: PathBuf, data: &[u8]) -> PyResult<()> {
         .map_err(errors::mesh)
 }
 
+/// `write_lod_glb(path, levels)`: an LOD chain as one GLB, as `lodkit lods`
+/// writes `NAME_lods.glb` (`lodkit_mesh::io::gltf::write_lod_glb`), written
+/// atomically. `levels`: `(mesh, name, extras_json, error)` per level,
+/// level 0 (the input) first; `extras_json` is the node's extras (a JSON
+/// object), `error` the level's error against level 0 in object units
+/// (its measured maximum, else the estimate). Level k is shown down to the
+/// coverage at which level k + 1's error is one pixel
+/// (`gltf::error_coverage` on level 0's diagonal), the last down to 0, and
+/// the writer makes the values strictly decrease. Meshes without normals
+/// get smooth ones, as the CLI's GLBs do.
+#[pyfunction]
+fn write_lod_glb(
+    py: Python<'_>,
+    path: PathBuf,
+    levels: Vec<(Bound<'_, PyAny>, String, String, f64)>,
+) -> PyResult<()> {
+    use lodkit_mesh::io::gltf;
+    let mut meshes = Vec::with_capacity(levels.len());
+    let mut rest = Vec::with_capacity(levels.len());
+    for (mesh, name, extras, error) in &levels {
+        meshes.push(mesh_from_py(mesh)?);
+        let extras: serde_json::Map<String, serde_json::Value> = serde_json::from_str(extras)
+            .map_err(|e| input(format!("level {name}: extras: {e}")))?;
+        rest.push((name.clone(), extras, *error));
+    }
+    py.detach(|| -> Result<(), lodkit_mesh::Error> {
+        let diagonal = meshes.first().map_or(0.0, |m| m.bbox().diagonal() as f64);
+        let with_normals: Vec<_> = meshes
+            .iter()
+            .map(|m| lodkit_mesh::normals::NormalsMode::default_for(m).apply(m))
+            .collect();
+        let glb_levels: Vec<gltf::LodLevel> = rest
+            .iter()
+            .zip(&with_normals)
+            .enumerate()
+            .map(|(k, ((name, extras, _), m))| gltf::LodLevel {
+                name: name.clone(),
+                mesh: m,
+                extras: extras.clone(),
+                coverage: rest
+                    .get(k + 1)
+                    .map_or(0.0, |next| gltf::error_coverage(next.2, diagonal)),
+            })
+            .collect();
+        let bytes = gltf::write_lod_glb(&glb_levels, &gltf::GlbOptions::default())
+            .map_err(|e| lodkit_mesh::Error::parse(&path, e))?;
+        lodkit_mesh::io::write_atomic(&path, &bytes)
+    })
+    .map_err(errors::mesh)
+}
+
 /// The simplifier options, from the Python keywords (CLI defaults).
 #[allow(clippy::too_many_arguments)]
 fn options(
@@ -159,6 +210,7 @@ fn report_dict<'py>(
     d.set_item("passes", r.passes)?;
     d.set_item("collapses", r.collapses)?;
     d.set_item("stop", r.stop.to_string())?;
+    d.set_item("chain_end", r.chain_end.map(|s| s.to_string()))?;
     d.set_item("seconds", r.seconds)?;
     Ok(d)
 }
@@ -334,6 +386,7 @@ fn _lodkit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(blob, m)?)?;
     m.add_function(wrap_pyfunction!(icosphere, m)?)?;
     m.add_function(wrap_pyfunction!(write_atomic, m)?)?;
+    m.add_function(wrap_pyfunction!(write_lod_glb, m)?)?;
     m.add_function(wrap_pyfunction!(simplify, m)?)?;
     m.add_function(wrap_pyfunction!(lod_chain, m)?)?;
     m.add_function(wrap_pyfunction!(compare, m)?)?;

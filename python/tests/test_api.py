@@ -67,6 +67,48 @@ def test_lod_chain_levels_and_measure(sphere):
     assert fast[0][1]["measured_mean_error"] is None
 
 
+def test_lod_chain_refuses_ratios_that_do_not_fall(sphere):
+    for ratios in ([0.2, 0.5], [0.5, 0.5], [0.5, 0.25, 0.3]):
+        with pytest.raises(lk.OptionError, match="smaller than the one before"):
+            lk.lod_chain(sphere, ratios=ratios)
+
+
+def test_a_chain_that_stalls_ends_at_its_last_new_level():
+    # 80 faces halved ten times: the smallest closed mesh comes first.
+    chain = lk.lod_chain(lk.icosphere(1), levels=10, measure=False)
+    faces = [r["triangles"] for _, r in chain]
+    assert 1 <= len(chain) < 10 and all(b < a for a, b in zip(faces, faces[1:])), faces
+    assert [r["chain_end"] for _, r in chain[:-1]] == [None] * (len(chain) - 1)
+    assert chain[-1][1]["chain_end"].startswith("stopped short"), chain[-1][1]
+
+
+def test_mesh_and_point_cloud_check_their_arrays_when_made():
+    v = np.zeros((4, 3), np.float32)
+    f = np.array([[0, 1, 2], [0, 2, 3]])
+    cases = [
+        (lambda: lk.Mesh(v, f.astype(np.float64)), "faces: expected an int32, int64, uint32 or uint64"),
+        (lambda: lk.Mesh(v[:, :2], f), r"vertices: expected shape \(n, 3\), got \(4, 2\)"),
+        (lambda: lk.Mesh(v[0], f), r"vertices: expected shape \(n, 3\), got shape \(3,\)"),
+        (lambda: lk.Mesh(v.astype(np.int64), f), "vertices: expected a float32 or float64 array"),
+        (lambda: lk.Mesh(v, f[:, :2]), "faces: "),
+        (lambda: lk.Mesh(v, f, colors=np.zeros((3, 4), np.uint8)), "colors: has 3 rows but the mesh has 4 vertices"),
+        (lambda: lk.Mesh(v, f, colors=np.zeros((4, 4), np.int32)), "colors: expected a uint8 array"),
+        (lambda: lk.Mesh(v, f, normals=np.zeros((4, 2))), "normals: "),
+        (lambda: lk.Mesh(v, f, uvs=np.zeros((4, 3))), "uvs: "),
+        (lambda: lk.PointCloud(np.zeros((5, 2))), "points: "),
+        (lambda: lk.PointCloud(np.zeros((5, 3)), colors=np.zeros((4, 3))), "colors: has 4 rows but the cloud has 5 points"),
+    ]
+    for make, msg in cases:
+        with pytest.raises(lk.InputError, match=msg):
+            make()
+        with pytest.raises(ValueError):
+            make()
+    # What is right is kept as given; no faces may be an empty list.
+    m = lk.Mesh(v, f, colors=np.zeros((4, 3)), uvs=np.zeros((4, 2), np.float32))
+    assert m.faces is f or np.shares_memory(m.faces, f)
+    assert lk.Mesh(v, []).n_faces == 0
+
+
 def test_compare_has_the_cli_json_keys(sphere):
     coarse, _ = lk.simplify(sphere, ratio=0.1)
     r = lk.compare(sphere, coarse, samples=20_000)

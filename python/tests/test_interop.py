@@ -22,11 +22,17 @@ def test_trimesh_round_trip(sphere):
     assert np.array_equal(back.faces, sphere.faces.astype(np.int64))
     assert np.allclose(back.vertices, sphere.vertices)
     assert back.colors is not None and np.array_equal(back.colors, sphere.colors)
-    # A Trimesh is a mesh as it is (vertices and faces).
+    # A Trimesh passed straight in is read as from_trimesh reads it: its
+    # vertex colours come along (and give the same result).
     lod, _ = lk.simplify(tm, ratio=0.25)
+    via, _ = lk.simplify(lk.from_trimesh(tm), ratio=0.25)
     lod2, _ = lk.simplify(sphere, ratio=0.25)
     assert lod.n_faces == lod2.n_faces
+    assert lod.colors is not None and np.array_equal(lod.colors, via.colors)
+    assert np.array_equal(lod.faces, via.faces)
     assert lk.to_trimesh(lod).is_watertight
+    chain = lk.lod_chain(tm, ratios=[0.5], measure=False)
+    assert chain[0][0].colors is not None
 
 
 def test_trimesh_uvs():

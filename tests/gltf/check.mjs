@@ -6,7 +6,8 @@
 //   node check.mjs chain FILE.glb LEVELS     Babylon.js (NullEngine) loads the
 //                                            MSFT_lod chain: LEVELS levels, coarsest
 //                                            first, names NAME_LODk, all at level
-//                                            0's place; three.js GLTFLoader (no
+//                                            0's place; MSFT_screencoverage strictly
+//                                            decreasing; three.js GLTFLoader (no
 //                                            MSFT_lod) shows level 0 alone
 //   node check.mjs scenechain FILE.glb LEVELS  the same for a scene chain (one
 //                                            root node NAME_LODk per level over
@@ -150,7 +151,33 @@ async function babylonChain(file) {
   return { meshes, lodsLoaded, enabled, lineage };
 }
 
+// The JSON chunk of a GLB.
+function glbJson(file) {
+  const b = readFileSync(file);
+  const len = b.readUInt32LE(12);
+  return JSON.parse(b.subarray(20, 20 + len).toString("utf8"));
+}
+
+// MSFT_screencoverage on level 0's node: one value per level, in [0, 1],
+// strictly decreasing, so that a switch by coverage reaches every level.
+function coverages(file, levels) {
+  const j = glbJson(file);
+  const base = j.nodes[j.scenes[j.scene ?? 0].nodes[0]];
+  const c = base?.extras?.MSFT_screencoverage;
+  if (!Array.isArray(c) || c.length !== levels) {
+    fail(`${file}: MSFT_screencoverage ${JSON.stringify(c)}: expected ${levels} values`);
+    return;
+  }
+  const bad = c.findIndex((x, k) => !(x >= 0 && x <= 1) || (k > 0 && !(x < c[k - 1])));
+  if (bad >= 0) {
+    fail(`${file}: MSFT_screencoverage ${JSON.stringify(c)}: value ${bad} is not in [0, 1] below the one before, so a switch by coverage never shows level ${bad}`);
+  } else {
+    console.log(`ok ${file}: MSFT_screencoverage strictly decreasing: ${c.join(", ")}`);
+  }
+}
+
 async function chain(file, levels) {
+  coverages(file, levels);
   // Babylon: MSFT_lod levels arrive coarsest first, each replacing the last.
   try {
     const { meshes, lodsLoaded, enabled } = await babylonChain(file);
@@ -183,6 +210,7 @@ async function chain(file, levels) {
 }
 
 async function sceneChain(file, levels) {
+  coverages(file, levels);
   const under0 = (names) => names.some((n) => n.endsWith("_LOD0"));
   try {
     const { meshes, lodsLoaded, enabled, lineage } = await babylonChain(file);

@@ -85,6 +85,11 @@ async function openModel(url, shot) {
   return { p, state, cov };
 }
 
+// The HUD's lines as shown.
+async function hudText(p) {
+  return (await p.evaluate(() => document.getElementById('hud').textContent)).split('\n');
+}
+
 const pop = `/models/${ref.files.pop}`;
 const mco = `/models/${ref.files.mco}`;
 const chain = `/models/${ref.files.chain}`;
@@ -95,6 +100,9 @@ await check('pop: streamed levels, finest level equals lodkit pop decode', async
   assert(state.level === ref.pop.level, `finest level ${state.level}, expected ${ref.pop.level}`);
   assert(state.triangles === ref.pop.triangles, `HUD ${state.triangles} triangles, CLI ${ref.pop.triangles}`);
   assert(state.digest === ref.pop.digest, `wasm digest ${state.digest}, native ${ref.pop.digest}`);
+  // The HUD's one level convention: "k in 0–N", N the highest level.
+  const line = (await hudText(p)).find((l) => l.startsWith('level'));
+  assert(line && line.includes(` ${ref.pop.level} in 0–${ref.pop.level} `), `HUD says ${JSON.stringify(line)}`);
   await p.close();
   return { triangles: state.triangles, digest: state.digest, coverage: +cov.toFixed(3) };
 });
@@ -159,6 +167,10 @@ await check('chain glb: levels switch by screen-space error', async () => {
   const want = ref.chain.find((l) => l.level === state.level);
   assert(want, `active level ${state.level} is not in lods.json`);
   assert(state.triangles === want.triangles, `HUD ${state.triangles} triangles, lods.json ${want.triangles}`);
+  // The same convention as a stream's: "k in 0–N", N the highest LOD number.
+  const last = Math.max(...ref.chain.map((l) => l.level));
+  const line = (await hudText(p)).find((l) => l.startsWith('level'));
+  assert(line && line.includes(` ${state.level} in 0–${last} `), `HUD says ${JSON.stringify(line)}`);
   const far = await p.evaluate(() => {
     const v = window.lodkitViewer;
     const t = v.controls.target;

@@ -36,8 +36,9 @@ const state = {
   url: '',
   loaded: 0,
   total: 0,
-  level: -1, // .pop level, chain level (1 = finest), .mco LOD number
-  levels: 0,
+  level: -1, // .pop level, chain level (LODk: 0 = the input, finest), .mco LOD number
+  levels: 0, // .pop: levels decoded so far (0 .. levels - 1); chain: levels in the GLB
+  lastLevel: -1, // the highest level number the file holds (the HUD's "in 0–N"; .pop: its depth)
   precision: -1,
   triangles: 0,
   decodeMs: 0,
@@ -124,19 +125,28 @@ function fmtBytes(n) {
   return `${n} B`;
 }
 
+// One convention for every numbered level: "k in 0–N", k the number the
+// file gives the level shown and N the highest number the file holds (so
+// both ends count from 0). A .pop level and an .mco LOD number count up
+// from the coarsest (0); a chain's LODk counts up from the finest (LOD0,
+// the input), as its node names do; the note after it says which.
+function levelLine(label, k, last, note) {
+  return `${label.padEnd(9)} ${k} in 0–${last >= 0 ? last : '?'}  (${note})`;
+}
+
 function hud() {
   const lines = [
     `${state.kind || '-'}  ${state.url.split('/').pop()}`,
     `bytes     ${fmtBytes(state.loaded)} / ${fmtBytes(state.total)}`,
   ];
-  if (state.kind === 'pop') lines.push(`level     ${state.level} of ${state.levels ? state.levels - 1 : '?'}  (${state.precision} bits)`);
+  if (state.kind === 'pop') lines.push(levelLine('level', state.level, state.lastLevel, `0 coarsest, ${state.precision} bits`));
   if (state.kind === 'mco') {
     // Before the first cut (or when the file cannot be read) there is none.
-    if (state.level >= 0) lines.push(`LOD       ${state.level}`);
+    if (state.level >= 0) lines.push(levelLine('LOD', state.level, state.maxLod, '0 coarsest'));
     else if (state.expanded >= 0) lines.push(`view cut  ${state.expanded} nodes refined`);
     else lines.push('cut       -');
   }
-  if (state.kind === 'chain') lines.push(`level     ${state.level} of ${state.levels} (lod${state.level})`);
+  if (state.kind === 'chain') lines.push(levelLine('level', state.level, state.lastLevel, `lod${state.level}, 0 finest`));
   lines.push(`triangles ${state.triangles.toLocaleString('en')}`);
   lines.push(`decode    ${state.decodeMs.toFixed(1)} ms`);
   lines.push(`frame     ${state.frameMs.toFixed(1)} ms`);
@@ -202,7 +212,7 @@ async function openPop(url) {
     const s = mesh.userData.pop;
     mesh.addEventListener('level', () => {
       if (viewer.model !== mesh) return; // a stream the page has moved on from
-      Object.assign(state, { level: s.level, levels: s.levels, precision: s.precision, triangles: s.triangles, decodeMs: s.decodeMs + s.triangulateMs });
+      Object.assign(state, { level: s.level, levels: s.levels, lastLevel: s.depth >= 0 ? s.depth : s.levels - 1, precision: s.precision, triangles: s.triangles, decodeMs: s.decodeMs + s.triangulateMs });
       setWireframe(mesh, state.wireframe);
       pending = s.history[s.history.length - 1];
       if (!framed) {
@@ -362,6 +372,7 @@ async function openGlb(url) {
       .sort((x, y) => y.tris - x.tris);
     viewer.chain = levels;
     state.levels = levels.length;
+    state.lastLevel = Math.max(...levels.map((l) => l.number));
     onFrame = () => {
       const d = Math.max(camera.position.distanceTo(sphere.center) - sphere.radius, sphere.radius * 0.05);
       const pxPerUnit = renderer.domElement.height / (2 * d * Math.tan((camera.fov * Math.PI) / 360) / (camera.zoom || 1));
@@ -425,6 +436,7 @@ async function open(url, kind) {
     total: 0,
     level: -1,
     levels: 0,
+    lastLevel: -1,
     precision: -1,
     triangles: 0,
     firstDrawLoaded: -1,

@@ -69,10 +69,12 @@ enum Command {
         after_help = "Examples:\n  lodkit bench simplify\n  lodkit bench simplify scan.ply --json"
     )]
     Bench(commands::bench::BenchArgs),
-    /// Describe a mesh, point cloud or range image: counts, bbox, topology, defects.
-    #[command(after_help = "Examples:\n  lodkit info bunny.ply\n  lodkit info scan.glb --json")]
+    /// Describe a mesh, point cloud or range image (counts, bbox, topology, defects), a .mco octree or a .pop stream.
+    #[command(
+        after_help = "Examples:\n  lodkit info bunny.ply\n  lodkit info scan.glb --json\n  lodkit info out/bunny.mco   # as `lodkit mco info`\n  lodkit info out/bunny.pop   # as `lodkit pop stats`"
+    )]
     Info {
-        /// Input file (.ply, .obj, .stl, .gltf, .glb, .xyz, .pts).
+        /// Input file (.ply, .obj, .stl, .gltf, .glb, .xyz, .pts, .mco, .pop).
         file: PathBuf,
         /// Print the report as JSON.
         #[arg(long)]

@@ -172,6 +172,82 @@ fn info_reports_the_bunny_topology_as_json() {
     assert_eq!(v["unreferenced_vertices"], 1113);
 }
 
+/// A report with its wall times taken out: JSON keys ending in
+/// `_seconds`, and in text the numbers printed with 3 decimals (the time
+/// columns; the other figures have 2).
+fn without_timings(out: &[u8], json: bool) -> String {
+    fn strip(v: &mut serde_json::Value) {
+        match v {
+            serde_json::Value::Object(m) => {
+                m.retain(|k, _| !k.ends_with("_seconds"));
+                m.values_mut().for_each(strip);
+            }
+            serde_json::Value::Array(a) => a.iter_mut().for_each(strip),
+            _ => {}
+        }
+    }
+    if json {
+        let mut v: serde_json::Value = serde_json::from_slice(out).unwrap();
+        strip(&mut v);
+        return v.to_string();
+    }
+    let timed = |t: &str| {
+        t.split_once('.').is_some_and(|(a, b)| {
+            !a.is_empty()
+                && a.bytes().all(|c| c.is_ascii_digit())
+                && b.len() == 3
+                && b.bytes().all(|c| c.is_ascii_digit())
+        })
+    };
+    String::from_utf8_lossy(out)
+        .lines()
+        .map(|l| {
+            l.split_whitespace()
+                .map(|t| if timed(t) { "#" } else { t })
+                .collect::<Vec<_>>()
+                .join(" ")
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+#[test]
+fn info_describes_mco_and_pop_files_as_their_own_commands_do() {
+    let dir = tempfile::tempdir().unwrap();
+    let mco = dir.path().join("Bunny.MCO").display().to_string();
+    let pop = dir.path().join("bunny.pop").display().to_string();
+    let b = bunny();
+    let made = lodkit(&["-q", "mco", "build", &b, "-o", &mco, "--resolution", "16"]);
+    assert!(made.status.success(), "{}", stderr(&made));
+    let made = lodkit(&["-q", "pop", "encode", &b, "-o", &pop, "--depth", "5"]);
+    assert!(made.status.success(), "{}", stderr(&made));
+    for (file, own) in [(&mco, ["mco", "info"]), (&pop, ["pop", "stats"])] {
+        for json in [false, true] {
+            let flag: &[&str] = if json { &["--json"] } else { &[] };
+            let a = lodkit(&[&["info", file.as_str()], flag].concat());
+            assert!(a.status.success(), "{file}: {}", stderr(&a));
+            let b = lodkit(&[&own[..], &[file.as_str()], flag].concat());
+            assert!(b.status.success(), "{file}: {}", stderr(&b));
+            assert_eq!(
+                without_timings(&a.stdout, json),
+                without_timings(&b.stdout, json),
+                "{file} --json {json}"
+            );
+            assert!(!a.stdout.is_empty());
+        }
+    }
+    // A file that is not what its extension says: one line naming it, exit 1.
+    for name in ["broken.mco", "broken.pop"] {
+        let f = dir.path().join(name);
+        std::fs::write(&f, b"not a model").unwrap();
+        let o = lodkit(&["-q", "info", f.to_str().unwrap()]);
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{name}: {e}");
+        assert_eq!(e.trim_end().lines().count(), 1, "{name}: {e}");
+        assert!(e.contains(name) && !e.contains("panicked"), "{name}: {e}");
+    }
+}
+
 #[test]
 fn usage_errors_exit_2_and_bad_input_exits_1() {
     assert_eq!(lodkit(&["info"]).status.code(), Some(2));

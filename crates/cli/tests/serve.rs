@@ -426,6 +426,42 @@ fn text_is_compressed_as_asked_and_models_never_are() {
 }
 
 #[test]
+fn the_viewers_wasm_is_compressed_as_asked() {
+    let f = fixture();
+    let s = Server::start(&[&f.root]);
+    let plain = s.get("/lodkit/lodkit.wasm", &[]);
+    if plain.status == 404 {
+        eprintln!("skipped: this binary was built without the viewer (LODKIT_VIEWER=skip)");
+        return;
+    }
+    assert_eq!(plain.status, 200);
+    assert_eq!(plain.header("content-type"), Some("application/wasm"));
+    assert_eq!(plain.header("content-encoding"), None);
+    assert!(plain.body.starts_with(b"\0asm"));
+    let gz = s.get("/lodkit/lodkit.wasm", &[("Accept-Encoding", "gzip")]);
+    assert_eq!(gz.status, 200);
+    assert_eq!(gz.header("content-encoding"), Some("gzip"));
+    assert_eq!(gz.header("content-type"), Some("application/wasm"));
+    assert!(
+        gz.body.len() < plain.body.len() * 3 / 4,
+        "{} gzipped bytes of {}",
+        gz.body.len(),
+        plain.body.len()
+    );
+    let mut back = Vec::new();
+    flate2::read::GzDecoder::new(&gz.body[..])
+        .read_to_end(&mut back)
+        .unwrap();
+    assert!(
+        back == plain.body,
+        "the gzipped wasm inflates to other bytes"
+    );
+    let br = s.get("/lodkit/lodkit.wasm", &[("Accept-Encoding", "br")]);
+    assert_eq!(br.header("content-encoding"), Some("br"));
+    assert!(br.body.len() < plain.body.len() * 3 / 4);
+}
+
+#[test]
 fn no_escape_attempt_reads_a_byte_from_outside_the_root() {
     let f = fixture();
     let s = Server::start(&[&f.root]);

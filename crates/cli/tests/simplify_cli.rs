@@ -123,6 +123,95 @@ fn lods_writes_every_level_a_glb_and_lods_json() {
     assert!(!glb.faces.is_empty());
 }
 
+/// The JSON chunk of a GLB.
+fn glb_json(path: &Path) -> serde_json::Value {
+    let b = std::fs::read(path).unwrap();
+    let len = u32::from_le_bytes(b[12..16].try_into().unwrap()) as usize;
+    serde_json::from_slice(&b[20..20 + len]).unwrap()
+}
+
+#[test]
+fn lods_stops_a_stalled_chain_at_its_last_new_level_and_says_why() {
+    let dir = tempfile::tempdir().unwrap();
+    // 80 faces: halving ten times stalls at the smallest closed mesh.
+    let input = dir.path().join("ico.ply");
+    save_mesh(
+        &input,
+        &lodkit_mesh::shapes::icosphere(1),
+        WriteOptions::default(),
+    )
+    .unwrap();
+    let out = dir.path().join("lods");
+    let o = lodkit(&[
+        "lods",
+        input.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--levels",
+        "10",
+        "--samples",
+        "2000",
+    ]);
+    let e = stderr(&o);
+    assert!(o.status.success(), "{e}");
+    let j: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("lods.json")).unwrap()).unwrap();
+    let levels = j["levels"].as_array().unwrap();
+    let n = levels.len();
+    assert!((1..10).contains(&n), "{j}");
+    let last = &levels[n - 1];
+    let said: Vec<&str> = e
+        .lines()
+        .filter(|l| l.contains("stopped at level"))
+        .collect();
+    assert_eq!(said.len(), 1, "{e}");
+    assert!(
+        said[0].contains(&format!("stopped at level {n} of 10"))
+            && said[0].contains(&format!("level {n}'s {}", last["triangles"])),
+        "{e}"
+    );
+    // Every level written once, each smaller than the one before, in the
+    // PLY files and in the GLB.
+    let mut prev = 80;
+    for l in levels {
+        let t = l["triangles"].as_u64().unwrap() as usize;
+        assert!(t < prev, "{j}");
+        prev = t;
+        assert_eq!(
+            mesh_at(&out.join(l["file"].as_str().unwrap())).faces.len(),
+            t
+        );
+    }
+    assert!(!out.join(format!("ico_lod{}.ply", n + 1)).exists());
+    let g = glb_json(&out.join("ico_lods.glb"));
+    let base = &g["nodes"][g["scenes"][0]["nodes"][0].as_u64().unwrap() as usize];
+    assert_eq!(
+        base["extensions"]["MSFT_lod"]["ids"]
+            .as_array()
+            .unwrap()
+            .len(),
+        n
+    );
+    // Ratios that do not fall are refused before any work: exit 2.
+    for r in ["0.2,0.5", "0.5,0.5"] {
+        let o = lodkit(&[
+            "lods",
+            input.to_str().unwrap(),
+            "--out",
+            dir.path().join("no").to_str().unwrap(),
+            "--ratios",
+            r,
+        ]);
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{r}: {e}");
+        assert!(
+            e.contains("--ratios") && e.trim_end().lines().count() == 1,
+            "{e}"
+        );
+        assert!(!dir.path().join("no").exists());
+    }
+}
+
 #[test]
 fn bench_simplify_prints_both_sides() {
     let dir = tempfile::tempdir().unwrap();

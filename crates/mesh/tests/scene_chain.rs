@@ -72,11 +72,17 @@ fn a_scene_chain_is_level_0_with_msft_lod_over_the_other_levels() {
         .map(|i| nodes[i.as_u64().unwrap() as usize]["name"].clone())
         .collect();
     assert_eq!(names, ["parts_LOD1", "parts_LOD2"]);
-    // Made non-increasing; used, not required.
+    // Made strictly decreasing by the levels' sizes; used, not required.
+    let (a, b) = (coarser(&s), coarser(&coarser(&s)));
+    let want = gltf::screen_coverages(
+        &[0.5, 0.7, 0.0],
+        &[s.face_count(), a.face_count(), b.face_count()],
+    );
     assert_eq!(
         base["extras"]["MSFT_screencoverage"],
-        serde_json::json!([0.5, 0.5, 0.0])
+        serde_json::json!(want)
     );
+    assert!(want[0] <= 0.5 && want[0] > want[1] && want[1] > want[2] && want[2] == 0.0);
     assert_eq!(base["extras"]["triangles"], s.face_count());
     assert!(
         j["extensionsUsed"]

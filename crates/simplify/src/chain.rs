@@ -17,12 +17,20 @@ use crate::{Error, Options, Simplified, Target};
 impl Simplifier {
     /// An LOD chain: one level per target, in order, each simplified from
     /// the previous one, so the per-vertex error estimate accumulates over
-    /// the chain. A target that asks for more faces than the previous level
-    /// repeats it. `opts.target` is ignored; `max_error` applies to every
+    /// the chain. `opts.target` is ignored; `max_error` applies to every
     /// level. Each level meets the single-call contract of the crate docs;
     /// the whole chain costs about as much as its first level (each level
     /// starts from a smaller mesh). Errors: as [`simplify`](crate::simplify),
     /// before any level is made.
+    ///
+    /// **Every level has fewer triangles than the one before**, so no
+    /// level is ever returned twice: the chain ends at the first target
+    /// that cannot remove a triangle from the previous level (the mesh has
+    /// no valid collapse left, every collapse would exceed `max_error`, the
+    /// pass limit, or a target no smaller than the previous level). Then
+    /// fewer levels than targets come back, and the last one's
+    /// [`LevelReport::chain_end`](crate::LevelReport::chain_end) says why.
+    /// The first level is always returned (with no targets, none is).
     pub fn lod_chain(
         &mut self,
         mesh: &TriMesh,
@@ -58,10 +66,17 @@ impl Simplifier {
     ) -> Result<Vec<(Simplified, Vec<u32>)>, Error> {
         let mut t0 = std::time::Instant::now();
         self.start(mesh, opts, groups, None)?;
-        let mut out = Vec::with_capacity(targets.len());
+        let mut out: Vec<(Simplified, Vec<u32>)> = Vec::with_capacity(targets.len());
         for &t in targets {
             let goal = t.faces(self.input_faces);
             let stop = self.run_to(goal, opts);
+            if let Some((last, _)) = out.last_mut()
+                && self.m.faces.len() >= last.mesh.faces.len()
+            {
+                // Stalled: this level would repeat the previous one.
+                last.report.chain_end = Some(stop);
+                break;
+            }
             let level = export(&self.m);
             let estimated_error = self.m.max_error();
             let level_done = std::time::Instant::now();

@@ -194,6 +194,12 @@ pub struct LevelReport {
     pub collapses: usize,
     /// Why the level stopped where it did.
     pub stop: StopReason,
+    /// Set on the last level of an LOD chain that ended before its targets
+    /// did ([`lod_chain`]): why the next target could not remove a single
+    /// triangle from this level (`Reached` when that target asked for no
+    /// fewer triangles than this level has). `None` on every other level
+    /// and from [`simplify`].
+    pub chain_end: Option<StopReason>,
     /// Wall time of this level: the whole call for `simplify`; for a chain
     /// level, from the previous level's end (the first level includes
     /// loading the input into the workspace).

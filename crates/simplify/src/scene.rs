@@ -106,6 +106,14 @@ pub fn simplify_scene(scene: &Scene, opts: &Options) -> Result<(Scene, Vec<Level
 /// An LOD chain of `scene`: one scene per target, each mesh's levels made
 /// by [`Simplifier::lod_chain_grouped`] (see the module docs). Returns the
 /// levels and, per level, one report per mesh.
+///
+/// As [`Simplifier::lod_chain`], every level has fewer triangles (summed
+/// over the meshes) than the one before, so no level repeats: a mesh whose
+/// own chain ends early keeps its last level in the later scene levels
+/// (its report repeated, time zero), and the scene's chain ends at the
+/// first target that removes no triangle from the whole scene; the last
+/// level's reports then carry each stalled mesh's
+/// [`LevelReport::chain_end`] ([`combined_report`] keeps the first).
 pub fn scene_lod_chain(
     scene: &Scene,
     opts: &Options,
@@ -117,6 +125,8 @@ pub fn scene_lod_chain(
         .iter()
         .map(|_| (scene.clone_tables(), Vec::new()))
         .collect();
+    // Per mesh: why its own chain ended, if it did.
+    let mut ends: Vec<Option<crate::StopReason>> = Vec::with_capacity(scene.meshes.len());
     for sm in &scene.meshes {
         let (mesh, groups) = split_by_material(sm);
         let ts: Vec<Target> = targets
@@ -124,13 +134,44 @@ pub fn scene_lod_chain(
             .map(|&t| share(t, sm.mesh.faces.len(), total))
             .collect();
         let chain = s.lod_chain_grouped(&mesh, &groups, opts, &ts)?;
-        for ((r, g), (level, reports)) in chain.into_iter().zip(levels.iter_mut()) {
-            level.meshes.push(SceneMesh {
-                name: sm.name.clone(),
-                face_materials: face_groups(&r.mesh, &g),
-                mesh: r.mesh,
-            });
-            reports.push(r.report);
+        ends.push(chain.last().and_then(|(r, _)| r.report.chain_end));
+        let mut last: Option<SceneMesh> = None;
+        let mut last_report: Option<LevelReport> = None;
+        let mut chain = chain.into_iter();
+        for (level, reports) in levels.iter_mut() {
+            let (m, mut r) = match chain.next() {
+                Some((r, g)) => {
+                    let m = SceneMesh {
+                        name: sm.name.clone(),
+                        face_materials: face_groups(&r.mesh, &g),
+                        mesh: r.mesh,
+                    };
+                    (m, r.report)
+                }
+                // This mesh's chain ended: it stays as it last was.
+                None => match (&last, last_report) {
+                    (Some(m), Some(mut r)) => {
+                        r.seconds = 0.0;
+                        (m.clone(), r)
+                    }
+                    _ => break,
+                },
+            };
+            r.chain_end = None;
+            level.meshes.push(m.clone());
+            reports.push(r);
+            last = Some(m);
+            last_report = Some(r);
+        }
+    }
+    // The scene's chain ends where its face count stops falling.
+    let faces: Vec<usize> = levels.iter().map(|(l, _)| l.face_count()).collect();
+    if let Some(k) = (1..faces.len()).find(|&k| faces[k] >= faces[k - 1]) {
+        levels.truncate(k);
+        if let Some((_, reports)) = levels.last_mut() {
+            for (r, end) in reports.iter_mut().zip(&ends) {
+                r.chain_end = Some(end.unwrap_or(crate::StopReason::Reached));
+            }
         }
     }
     Ok(levels)
@@ -138,7 +179,8 @@ pub fn scene_lod_chain(
 
 /// The scene-level sums of per-mesh reports: total triangles and
 /// vertices, the largest estimated error, and the first mesh's stop
-/// reason that is not [`crate::StopReason::Reached`] (or `Reached`).
+/// reason that is not [`crate::StopReason::Reached`] (or `Reached`); the
+/// same for [`LevelReport::chain_end`].
 pub fn combined_report(reports: &[LevelReport]) -> Option<LevelReport> {
     let mut it = reports.iter();
     let mut acc = *it.next()?;
@@ -152,6 +194,10 @@ pub fn combined_report(reports: &[LevelReport]) -> Option<LevelReport> {
         acc.seconds += r.seconds;
         if acc.stop == crate::StopReason::Reached {
             acc.stop = r.stop;
+        }
+        if matches!(acc.chain_end, None | Some(crate::StopReason::Reached)) && r.chain_end.is_some()
+        {
+            acc.chain_end = r.chain_end;
         }
     }
     Some(acc)

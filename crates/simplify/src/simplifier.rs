@@ -267,6 +267,7 @@ impl Simplifier {
             passes: self.passes,
             collapses: self.collapses,
             stop,
+            chain_end: None,
             seconds,
         }
     }

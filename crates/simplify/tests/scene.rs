@@ -104,6 +104,43 @@ fn material_borders_do_not_crack_at_any_level() {
 }
 
 #[test]
+fn a_scene_chain_never_repeats_a_level_and_small_parts_wait_for_big_ones() {
+    // A big sphere and a tetrahedron (which no collapse can shrink).
+    let mut s = banded_sphere(false);
+    let tetra = TriMesh::new(
+        vec![
+            Vec3::new(3.0, 0.0, 0.0),
+            Vec3::new(4.0, 0.0, 0.0),
+            Vec3::new(3.0, 1.0, 0.0),
+            Vec3::new(3.0, 0.0, 1.0),
+        ],
+        vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+    );
+    s.meshes.push(SceneMesh {
+        name: Some("tetra".into()),
+        face_materials: vec![0; 4],
+        mesh: tetra.clone(),
+    });
+    let targets: Vec<Target> = (1..=12).map(|i| Target::Ratio(0.5f32.powi(i))).collect();
+    let levels = scene_lod_chain(&s, &Options::DEFAULT, &targets).unwrap();
+    let faces: Vec<usize> = levels.iter().map(|(l, _)| l.face_count()).collect();
+    assert!(levels.len() < targets.len(), "{faces:?}");
+    assert!(faces.windows(2).all(|w| w[1] < w[0]), "{faces:?}");
+    for (level, reports) in &levels {
+        assert_eq!(level.meshes.len(), 2);
+        assert_eq!(reports.len(), 2);
+        assert_eq!(level.meshes[1].mesh.faces.len(), 4);
+    }
+    let (_, last) = levels.last().unwrap();
+    assert!(last.iter().all(|r| r.chain_end.is_some()), "{last:?}");
+    let combined = lodkit_simplify::scene::combined_report(last).unwrap();
+    assert!(combined.chain_end.is_some());
+    for (_, reports) in &levels[..levels.len() - 1] {
+        assert!(reports.iter().all(|r| r.chain_end.is_none()));
+    }
+}
+
+#[test]
 fn groups_without_borders_change_nothing() {
     let m = shapes::icosphere(3);
     let plain = simplify(&m, &Options::ratio(0.2)).unwrap();

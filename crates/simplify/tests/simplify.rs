@@ -444,14 +444,48 @@ fn lod_chain_levels_shrink_and_errors_accumulate() {
         prev_faces = l.mesh.faces.len();
         prev_err = l.report.estimated_error;
     }
-    // A target above the previous level repeats it.
+    assert!(levels.iter().all(|l| l.report.chain_end.is_none()));
+    // A target above the previous level would repeat it: the chain ends.
     let rep = lod_chain(
         &m,
         &Options::DEFAULT,
         &[Target::Ratio(0.25), Target::Ratio(0.5)],
     )
     .unwrap();
-    assert_eq!(rep[0].mesh, rep[1].mesh);
+    assert_eq!(rep.len(), 1);
+    assert_eq!(rep[0].report.chain_end, Some(StopReason::Reached));
+}
+
+#[test]
+fn a_chain_that_stalls_ends_at_the_last_level_that_changed() {
+    // 80 faces halved ten times: the octahedron-like floor of a closed
+    // genus-0 mesh is reached long before 80 / 1024.
+    let m = icosphere(1);
+    let levels = lod_chain(&m, &Options::DEFAULT, &halving_targets(10)).unwrap();
+    let faces: Vec<usize> = levels.iter().map(|l| l.mesh.faces.len()).collect();
+    assert!(levels.len() < 10, "{faces:?}");
+    assert!(faces.windows(2).all(|w| w[1] < w[0]), "{faces:?}");
+    let (last, before) = levels.split_last().unwrap();
+    assert!(before.iter().all(|l| l.report.chain_end.is_none()));
+    assert!(
+        matches!(last.report.chain_end, Some(StopReason::Blocked { .. })),
+        "{:?}",
+        last.report
+    );
+    // The same through a reused workspace, and the levels are the first
+    // levels of the full request.
+    let again = Simplifier::new()
+        .lod_chain(&m, &Options::DEFAULT, &halving_targets(10))
+        .unwrap();
+    assert_eq!(again.len(), levels.len());
+    // An error bound that stops every collapse: one level, which says why.
+    let mut o = Options::DEFAULT;
+    o.max_error = Some(0.0);
+    let capped = lod_chain(&m, &o, &halving_targets(4)).unwrap();
+    assert_eq!(capped.len(), 1);
+    assert_eq!(capped[0].report.chain_end, Some(StopReason::MaxError));
+    // No targets, no levels.
+    assert!(lod_chain(&m, &Options::DEFAULT, &[]).unwrap().is_empty());
 }
 
 #[test]

@@ -1,6 +1,8 @@
-//! `lodkit info FILE`: a model's figures, or, for a calibration
-//! (`transforms.json`, COLMAP `cameras.txt` / `images.txt`), the image set:
-//! cameras, image sizes and each view's silhouette coverage.
+//! `lodkit info FILE`: a model's figures; for a `.mco` octree or a `.pop`
+//! stream, what `lodkit mco info` / `lodkit pop stats` print (the same
+//! code); for a calibration (`transforms.json`, COLMAP `cameras.txt` /
+//! `images.txt`), the image set: cameras, image sizes and each view's
+//! silhouette coverage.
 use std::path::Path;
 
 use anyhow::Result;
@@ -13,6 +15,15 @@ use crate::ui::Ui;
 pub fn run(ui: &Ui, file: &Path, json: bool) -> Result<()> {
     if calibration::is_calibration(file) {
         return image_set(ui, file, json);
+    }
+    let ext = file
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("mco") => return super::mco::info(ui, file, false, json),
+        Some("pop") => return super::pop::run_stats(ui, file, json),
+        _ => {}
     }
     let model = super::load(ui, file)?;
     let info = model_info(&model);

@@ -1,7 +1,9 @@
 //! `lodkit lods IN --out DIR`: a discrete LOD chain — each level simplified
 //! from the previous one — written as one PLY per level, one GLB with the
 //! input and every level as an `MSFT_lod` chain, and `lods.json` (per level: triangles, vertices,
-//! estimated and measured error, time).
+//! estimated and measured error, time). Each level has fewer triangles
+//! than the one before: a chain that stalls ends there, with one line
+//! saying so, rather than write a level twice.
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -23,7 +25,8 @@ pub struct LodsArgs {
     /// Output directory (created if missing).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
-    /// Comma-separated fractions of the input's triangles, one level each.
+    /// Comma-separated fractions of the input's triangles, one level each,
+    /// each smaller than the one before.
     #[arg(
         long,
         value_delimiter = ',',
@@ -84,6 +87,14 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
             "--ratios: give at least one fraction in [0, 1]",
         ));
     }
+    if let Some(r) = &a.ratios
+        && let Some(w) = r.windows(2).find(|w| w[1] >= w[0])
+    {
+        return Err(crate::ui::usage(format!(
+            "--ratios: each level must be smaller than the one before, but {} is followed by {}",
+            w[0], w[1]
+        )));
+    }
     let opts = a.opts.options(Target::Ratio(1.0))?;
     let stem = a
         .input
@@ -140,6 +151,9 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
         &mut on_level,
     )?;
     let report = chain.lods;
+    if let Some(line) = stopped_early(&report.levels, targets.len()) {
+        ui.status(line);
+    }
     let total = start.elapsed().as_secs_f64();
     let json = serde_json::to_string_pretty(&report)? + "\n";
     if a.json {
@@ -157,4 +171,28 @@ pub fn run(ui: &Ui, a: &LodsArgs) -> Result<()> {
         a.out.display(),
     ));
     Ok(())
+}
+
+/// The line saying why a chain has fewer levels than asked: the chain
+/// ends at the first level that would remove no triangle from the one
+/// before ([`lodkit_simplify::lod_chain`]), rather than write it twice.
+/// `None` when every level was made.
+pub fn stopped_early(levels: &[Level], asked: usize) -> Option<String> {
+    let last = levels.last()?;
+    if levels.len() >= asked {
+        return None;
+    }
+    let why = if last.stop == lodkit_simplify::StopReason::Reached.to_string() {
+        String::new()
+    } else {
+        format!(" (level {}: {})", last.level, last.stop)
+    };
+    Some(format!(
+        "note: stopped at level {} of {}: level {} would remove no triangle from level {}'s {}{why}",
+        last.level,
+        asked,
+        last.level + 1,
+        last.level,
+        last.triangles
+    ))
 }

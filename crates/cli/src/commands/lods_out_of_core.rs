@@ -156,6 +156,9 @@ pub fn run(
     );
     progress.finish();
     let rep = result.map_err(|e| kept(&e, &staging))?;
+    if let Some(line) = super::lods::stopped_early(&levels, targets.len()) {
+        ui.status(line);
+    }
     let glb = format!("{stem}_lods.glb");
     write_glb(&a.out.join(&glb), stem, &in_core, a).map_err(|e| kept(&e, &staging))?;
     let input_vertices = lodkit_mesh::io::ply::stream::PlyStream::open(&a.input)

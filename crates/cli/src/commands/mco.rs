@@ -481,7 +481,11 @@ struct Info {
     levels: Vec<LevelRow>,
 }
 
-fn info(ui: &Ui, path: &Path, strict: bool, json: bool) -> Result<()> {
+/// `lodkit mco info FILE` (also what `lodkit info FILE.mco` prints): the
+/// file's format, chunks, lattice, sizes and levels, as text or JSON; a
+/// cut-short file is read up to its last complete chunk (refused with
+/// `strict`).
+pub fn info(ui: &Ui, path: &Path, strict: bool, json: bool) -> Result<()> {
     let (model, cut, bytes) = load_model(ui, path, strict)?;
     let m = model.info();
     let version = McoModel::file_version(&bytes).unwrap_or(0);

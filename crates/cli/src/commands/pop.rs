@@ -514,7 +514,9 @@ fn run_decode(ui: &Ui, a: &DecodeArgs) -> Result<()> {
     Ok(())
 }
 
-fn run_stats(ui: &Ui, file: &Path, json: bool) -> Result<()> {
+/// `lodkit pop stats FILE` (also what `lodkit info FILE.pop` prints): each
+/// level's particles and triangles, as text or JSON.
+pub fn run_stats(ui: &Ui, file: &Path, json: bool) -> Result<()> {
     let bytes = read_pop(file)?;
     let step = ui.stage("decoding and triangulating every level");
     let s = stream_stats(&bytes, &TriangulateOptions::DEFAULT)

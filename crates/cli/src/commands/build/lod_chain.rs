@@ -24,31 +24,16 @@ use super::measure::{Measured, Sampling};
 use crate::commands::lods::{Level, Lods};
 use crate::ui::{OutputArgs, Ui};
 
-/// The viewport height (pixels) and error (pixels) the screen coverages
-/// are set for: a level is shown from the coverage at which its error
-/// projects to one pixel on a 1080-line screen.
-pub const COVERAGE_LINES: f64 = 1080.0;
-pub const COVERAGE_PIXELS: f64 = 1.0;
-
-/// The screen coverage (projected area ÷ viewport area) below which an
-/// error of `error` object units on an object of diagonal `diagonal`
-/// projects to at most [`COVERAGE_PIXELS`] on a [`COVERAGE_LINES`] screen:
-/// the object spans `h` lines when its diagonal does, its error is
-/// `error × h / diagonal` pixels, so `h ≤ px × diagonal / error`, and the
-/// coverage is `(h / lines)²`, at most 1. Zero error: 1.
-pub fn coverage(error: f64, diagonal: f64) -> f64 {
-    // A zero, negative or NaN error or diagonal: full coverage.
-    if error.is_nan() || diagonal.is_nan() || error <= 0.0 || diagonal <= 0.0 {
-        return 1.0;
-    }
-    let h = COVERAGE_PIXELS * diagonal / error / COVERAGE_LINES;
-    (h * h).min(1.0)
-}
+/// The screen coverage below which an error projects to at most a pixel
+/// on a 1080-line screen (the one rule, shared with pylodkit's chains).
+pub use lodkit_mesh::io::gltf::error_coverage as coverage;
 
 /// The screen coverage each level of a chain is shown down to, from each
 /// level's error (object units, level 0 first): level k is shown down to
 /// the coverage at which level k + 1 becomes good enough ([`coverage`],
-/// [`significant`]); the coarsest stays down to 0.
+/// [`significant`]); the coarsest stays down to 0. The GLB writer then
+/// makes them strictly decrease by the levels' sizes
+/// (`lodkit_mesh::io::gltf::screen_coverages`).
 pub fn level_coverages(errors: &[f64], diagonal: f64) -> Vec<f64> {
     (0..errors.len())
         .map(|k| {

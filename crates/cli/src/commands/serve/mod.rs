@@ -70,8 +70,8 @@ several roots each is published under its base name (/models/bunny.pop,
 /models/out/lods/...). Nothing outside the roots is ever served, symlinks
 included. Single byte ranges answer 206; several ranges answer 200 with the
 whole file; a malformed or unsatisfiable bytes range answers 416. Text
-(HTML, JS, CSS, JSON, SVG, Markdown) is compressed as Accept-Encoding asks;
-model bytes never are.
+(HTML, JS, CSS, JSON, SVG, Markdown) and the viewer's WebAssembly are
+compressed as Accept-Encoding asks; model bytes never are.
 
 Examples:
   lodkit build --out out/ && lodkit serve out/
@@ -130,7 +130,7 @@ fn app(shared: Arc<respond::Shared>) -> Router {
         .layer(CompressionLayer::new().compress_when(compress_when))
 }
 
-/// Compress whole text bodies only: never a 206 (its `Content-Range`
+/// Compress whole text and wasm bodies only: never a 206 (its `Content-Range`
 /// addresses the identity bytes) and never a model format.
 fn compress_when(
     status: StatusCode,

@@ -251,14 +251,15 @@ fn status(code: StatusCode, msg: &'static str) -> Response {
     r
 }
 
-/// Whether responses of this content type are worth compressing: text.
+/// Whether responses of this content type are worth compressing: text,
+/// and WebAssembly (the viewer's decoders, which gzip to about a third).
 /// Model formats are sent as they are so that ranges address their bytes.
 pub fn compressible(mime: &str) -> bool {
     let essence = mime.split(';').next().unwrap_or("").trim();
     essence.starts_with("text/")
         || matches!(
             essence,
-            "application/json" | "application/javascript" | "image/svg+xml"
+            "application/json" | "application/javascript" | "application/wasm" | "image/svg+xml"
         )
 }
 
@@ -341,5 +342,7 @@ mod tests {
         for m in ["lods.json", "report.md", "lod_error.svg", "index.html"] {
             assert!(compressible(model_mime(Path::new(m))), "{m}");
         }
+        // The viewer's decoders (served from the built-in assets).
+        assert!(compressible("application/wasm"));
     }
 }

@@ -189,8 +189,9 @@ pub struct SceneLodLevel<'a> {
     /// The root node's `extras` (an object; the writer adds `triangles`
     /// and `vertices`, summed over the level's meshes).
     pub extras: serde_json::Map<String, serde_json::Value>,
-    /// The smallest screen coverage at which this level is still shown
-    /// (`MSFT_screencoverage`, in `[0, 1]`).
+    /// The smallest screen coverage at which this level is to be shown
+    /// (`MSFT_screencoverage`, in `[0, 1]`; lowered where needed as
+    /// [`LodLevel::coverage`](super::LodLevel::coverage) is).
     pub coverage: f64,
 }
 
@@ -501,8 +502,9 @@ pub fn write_scene_glb_with(scene: &Scene, opts: &GlbOptions) -> Result<Vec<u8>,
 /// and transforms as [`write_scene_glb_with`] writes them; the tables
 /// written once). Level 0's root node is the scene's only root and
 /// carries `MSFT_lod` over the other levels' root nodes (finest first)
-/// and `extras.MSFT_screencoverage` (the levels' coverages, made
-/// non-increasing); the other levels are outside the scene, so a loader
+/// and `extras.MSFT_screencoverage` (the levels' coverages, made strictly
+/// decreasing by their triangle counts:
+/// [`screen_coverages`](super::screen_coverages)); the other levels are outside the scene, so a loader
 /// without `MSFT_lod` shows level 0 alone. Root node extras are
 /// [`SceneLodLevel::extras`] plus `triangles` and `vertices`.
 ///
@@ -545,6 +547,7 @@ pub fn write_scene_lod_glb(
         }));
     }
     let coverage: Vec<f64> = levels.iter().map(|l| l.coverage).collect();
-    let ext = link_lods(&mut b, &wrappers, &coverage)?;
+    let triangles: Vec<usize> = levels.iter().map(|l| l.scene.face_count()).collect();
+    let ext = link_lods(&mut b, &wrappers, &coverage, &triangles)?;
     b.finish(vec![wrappers[0]], ext)
 }

@@ -78,7 +78,9 @@
 //!
 //! **LOD chains** ([`write_lod_glb`]): level 0 is the only root node and
 //! carries `MSFT_lod` (the other levels' node ids) with
-//! `extras.MSFT_screencoverage`; the other levels' nodes are reachable
+//! `extras.MSFT_screencoverage`, strictly decreasing so that every level
+//! is reached ([`screen_coverages`]; [`error_coverage`] gives a level's
+//! coverage from its error); the other levels' nodes are reachable
 //! only through it, so a loader without `MSFT_lod` shows level 0 alone.
 //! **Point clouds** ([`write_points_glb`]): one `POINTS` primitive.
 //!
@@ -116,6 +118,7 @@ mod tests;
 #[cfg(test)]
 mod tests_engines;
 
+pub use lod_links::{COVERAGE_LINES, COVERAGE_PIXELS, error_coverage, screen_coverages};
 pub use materials_write::{
     SceneLodLevel, write_scene_glb, write_scene_glb_with, write_scene_lod_glb,
 };

@@ -24,7 +24,7 @@ fn level<'a>(name: &str, mesh: &'a TriMesh, coverage: f64) -> LodLevel<'a> {
 fn an_lod_chain_has_one_root_and_msft_lod_over_the_rest() {
     let fine = crate::shapes::icosphere(3);
     let coarse = crate::shapes::icosphere(1);
-    // A coverage that rises is made non-increasing.
+    // A coverage that rises is made to fall, by the triangle ratio.
     let glb = write_lod_glb(
         &[level("s_LOD0", &fine, 0.5), level("s_LOD1", &coarse, 0.7)],
         &GlbOptions::default(),
@@ -38,7 +38,7 @@ fn an_lod_chain_has_one_root_and_msft_lod_over_the_rest() {
     );
     assert_eq!(
         j["nodes"][0]["extras"]["MSFT_screencoverage"],
-        serde_json::json!([0.5, 0.5])
+        serde_json::json!([0.0625, 0.003906])
     );
     assert_eq!(j["nodes"][1]["name"], "s_LOD1");
     // Read back: level 0 only (the others are outside the scene).
@@ -48,6 +48,37 @@ fn an_lod_chain_has_one_root_and_msft_lod_over_the_rest() {
     assert_eq!(m.faces.len(), fine.faces.len());
     // Bad coverage is refused.
     assert!(write_lod_glb(&[level("x", &fine, 1.5)], &GlbOptions::default()).is_err());
+}
+
+#[test]
+fn screen_coverages_strictly_fall_so_a_switch_reaches_every_level() {
+    use super::{error_coverage, screen_coverages};
+    let strict = |c: &[f64]| c.windows(2).all(|w| w[1] < w[0]);
+    // Fine levels whose errors are under a pixel all ask for 1: each gets
+    // its share by size (a halving chain: halves of the coverage).
+    let tris = [69_451, 34_725, 17_361, 8_680, 4_340, 2_170];
+    let c = screen_coverages(&[1.0, 1.0, 1.0, 0.99, 0.02, 0.0], &tris);
+    assert!(strict(&c), "{c:?}");
+    assert_eq!(c, [0.4999, 0.2499, 0.1249, 0.06245, 0.02, 0.0]);
+    // What a level asks below the size rule is kept (to 4 digits).
+    assert_eq!(
+        screen_coverages(&[0.01, 0.001_234_56, 0.0], &[100, 90, 80]),
+        [0.01, 0.001234, 0.0]
+    );
+    // Levels of equal size, and values that would tie after rounding,
+    // still fall.
+    let c = screen_coverages(&[1.0, 1.0, 1.0, 0.0], &[10_000, 10_000, 9_999, 9_998]);
+    assert!(strict(&c), "{c:?}");
+    let c = screen_coverages(&[0.5, 0.5, 0.5, 0.5, 0.0], &[5, 5, 5, 5, 5]);
+    assert!(strict(&c), "{c:?}");
+    // One level: as asked.
+    assert_eq!(screen_coverages(&[0.3], &[10]), [0.3]);
+    // The error rule: under a pixel is full coverage; ten times the error
+    // is a hundredth of the coverage.
+    assert_eq!(error_coverage(0.0, 1.0), 1.0);
+    assert_eq!(error_coverage(1e-4, 1.0), 1.0);
+    let (a, b) = (error_coverage(1e-2, 1.0), error_coverage(1e-1, 1.0));
+    assert!((a / b - 100.0).abs() < 1e-9, "{a} {b}");
 }
 
 #[test]

@@ -45,7 +45,9 @@ pub struct LodLevel<'a> {
     /// `vertices`).
     pub extras: serde_json::Map<String, serde_json::Value>,
     /// The smallest screen coverage (projected area ÷ viewport area, in
-    /// `[0, 1]`) at which this level is still shown: `MSFT_screencoverage`.
+    /// `[0, 1]`) at which this level is to be shown: `MSFT_screencoverage`,
+    /// lowered where needed so the chain's values strictly decrease
+    /// ([`screen_coverages`](super::screen_coverages)).
     pub coverage: f64,
 }
 
@@ -708,7 +710,8 @@ pub fn write_glb_with(
 /// Writes an LOD chain as one GLB that engines read as one object: level 0
 /// is the scene's only root node and carries `MSFT_lod` (`ids`: the other
 /// levels' nodes, finest first) and `extras.MSFT_screencoverage` (each
-/// level's [`LodLevel::coverage`], made non-increasing); the other levels'
+/// level's [`LodLevel::coverage`], made strictly decreasing by the levels'
+/// triangle counts: [`screen_coverages`](super::screen_coverages)); the other levels'
 /// nodes are outside the scene, so a loader without `MSFT_lod` shows level
 /// 0 alone. `MSFT_lod` is used, not required. Each node and mesh is named
 /// [`LodLevel::name`]; node extras are [`LodLevel::extras`] plus
@@ -730,7 +733,8 @@ pub fn write_lod_glb(levels: &[LodLevel<'_>], opts: &GlbOptions) -> Result<Vec<u
         nodes.push(b.node(&l.name, prim, extras)?);
     }
     let coverage: Vec<f64> = levels.iter().map(|l| l.coverage).collect();
-    let node_extensions = link_lods(&mut b, &nodes, &coverage)?;
+    let triangles: Vec<usize> = levels.iter().map(|l| l.mesh.faces.len()).collect();
+    let node_extensions = link_lods(&mut b, &nodes, &coverage, &triangles)?;
     b.finish(vec![nodes[0]], node_extensions)
 }
 
