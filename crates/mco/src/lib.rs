@@ -133,7 +133,7 @@ pub use model_file_v2::{ChunkInfo, Header as McoHeader, McoStream, PartialModel}
 pub use pipeline::{
     AddReport, IncrementalBuilder, MAX_BUILD_BYTES, Options, all_closed_meshes, build_from_conf,
     build_from_mesh, build_from_models, build_from_points, build_from_range_images, densify_meshes,
-    estimate_build_bytes, grid_for, samples_of,
+    estimate_build_bytes, grid_for, mesh_resolution, samples_of,
 };
 pub use scanner::{ScanOptions, scan_mesh, write_scans};
 #[doc(hidden)]

@@ -604,6 +604,56 @@ const CUBES_PER_POINT_SAMPLE: u64 = 8;
 /// default resolution of the inputs lodkit ships needs well under 1 GiB).
 pub const MAX_BUILD_BYTES: u64 = 8 << 30;
 
+/// Full-cut triangles per lattice cube of surface area: a surface crosses
+/// about 1.5 leaf cubes per cube² of its area (`|nx| + |ny| + |nz|`
+/// averaged over orientations) and marching cubes puts about 2 triangles
+/// in each. With it, [`mesh_resolution`] picks the cube whose full cut has
+/// about the input's triangle count.
+const CUT_TRIANGLES_PER_AREA: f64 = 3.0;
+
+/// The lattice resolution (cubes along the longest axis) that keeps a
+/// mesh's detail in its octree: a cube edge of `sqrt(3 · area /
+/// triangles)`, so the full-resolution cut has about the input's triangle
+/// count, clamped to `8..=`[`MAX_RESOLUTION`](crate::MAX_RESOLUTION) and
+/// lowered by quarters while [`estimate_build_bytes`] is above
+/// `max_bytes`. `None` when the mesh has no area (the default resolution
+/// then decides). `lodkit build` and `lodkit mco build` of one mesh use
+/// it; the paper's default (twice the sample spacing, [`Options`]) suits
+/// scans, whose samples carry noise, not a mesh's own triangles.
+/// Errors as [`estimate_build_bytes`]. Cost: one pass over the faces, plus
+/// one estimate (`O(input)`) per try.
+pub fn mesh_resolution(mesh: &TriMesh, max_bytes: u64) -> Result<Option<u32>> {
+    let area: f64 = mesh
+        .faces
+        .iter()
+        .filter(|f| f.iter().all(|&i| (i as usize) < mesh.positions.len()))
+        .map(|f| {
+            let [a, b, c] = f.map(|i| mesh.positions[i as usize].as_dvec3());
+            0.5 * (b - a).cross(c - a).length()
+        })
+        .filter(|x| x.is_finite())
+        .sum();
+    let longest = f64::from(mesh.bbox().size().max_element());
+    if !(area > 0.0 && longest > 0.0) || mesh.faces.is_empty() {
+        return Ok(None);
+    }
+    let cube = (CUT_TRIANGLES_PER_AREA * area / mesh.faces.len() as f64).sqrt();
+    let mut r = (longest / cube)
+        .ceil()
+        .clamp(8.0, f64::from(crate::MAX_RESOLUTION)) as u32;
+    let model = [Model::Mesh(mesh.clone())];
+    while r > 8 {
+        let opts = Options {
+            resolution: Some(r),
+        };
+        if estimate_build_bytes(&model, &opts)? <= max_bytes {
+            break;
+        }
+        r = (r * 3 / 4).max(8);
+    }
+    Ok(Some(r))
+}
+
 /// An upper estimate of the memory (bytes) a build of `models` with `opts`
 /// needs at its peak, from the counts that drive it, computed without
 /// making any of them: the input samples (vertices, range pixels, points),

@@ -263,6 +263,16 @@ fn build(
         bail!("{}: no usable samples", names.join(", "));
     }
     let plain: Vec<Model> = models.iter().map(|(_, m)| m.clone()).collect();
+    // One mesh keeps its detail: a lattice whose full cut has about its
+    // triangle count, as `lodkit build` makes it (scans take the paper's
+    // default, twice their sample spacing).
+    let resolution = match (resolution, plain.as_slice()) {
+        (None, [Model::Mesh(mesh)]) => {
+            lodkit_mco::mesh_resolution(mesh, lodkit_mco::MAX_BUILD_BYTES / 4)
+                .with_context(|| models[0].0.clone())?
+        }
+        (r, _) => r,
+    };
     if let Some(r) = resolution {
         // A resolution the user chose that needs more memory than a build
         // may take is a bad option value (exit 2), not bad input.

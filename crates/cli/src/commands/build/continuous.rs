@@ -5,7 +5,7 @@
 //! A mesh input is built into the octree from the mesh itself (as `lodkit
 //! mco build MESH` does, [`lodkit_mco::build_from_mesh`]) on a lattice
 //! fine enough that the full-resolution cut has about as many triangles
-//! as the input ([`mesh_resolution`]); a non-mesh input's own
+//! as the input ([`lodkit_mco::mesh_resolution`]); a non-mesh input's own
 //! reconstruction (see [`super::input`]) is the model.
 
 use std::fmt::Write as _;
@@ -14,18 +14,11 @@ use std::path::Path;
 use anyhow::Result;
 use lodkit_mco::McoModel;
 use lodkit_mesh::metrics::Reference;
-use lodkit_mesh::{Model, TriMesh};
+use lodkit_mesh::TriMesh;
 use lodkit_simplify::{Options, Target};
 
 use super::measure::{Measured, Sampling, cell};
 use crate::ui::Ui;
-
-/// Full-cut triangles per lattice cube of surface area: a surface crosses
-/// about 1.5 leaf cubes per cube² of its area (`|nx| + |ny| + |nz|`
-/// averaged over orientations) and marching cubes puts about 2 triangles
-/// in each. With it, [`mesh_resolution`] picks the cube whose full cut has
-/// about the input's triangle count.
-const CUT_TRIANGLES_PER_AREA: f64 = 3.0;
 
 /// Largest memory (bytes) the octree of a mesh input may plan for: a
 /// quarter of [`lodkit_mco::MAX_BUILD_BYTES`], so `build` stays well inside
@@ -33,44 +26,10 @@ const CUT_TRIANGLES_PER_AREA: f64 = 3.0;
 /// coarsened until its estimate fits.
 const MESH_BUILD_BYTES: u64 = lodkit_mco::MAX_BUILD_BYTES / 4;
 
-/// The lattice resolution (cubes along the longest axis) for the octree
-/// of `mesh`: a cube edge of `sqrt(CUT_TRIANGLES_PER_AREA · area /
-/// triangles)`, so the full cut keeps about the input's triangle count
-/// (its detail), clamped to `8..=`[`lodkit_mco::MAX_RESOLUTION`] and
-/// lowered by quarters while [`lodkit_mco::estimate_build_bytes`] is above
-/// [`MESH_BUILD_BYTES`]. `None` when the mesh has no area (the library's
-/// default then decides). Cost: one pass over the faces, plus one
-/// estimate (`O(input)`) per try.
+/// The lattice resolution for the octree of `mesh`
+/// ([`lodkit_mco::mesh_resolution`] within [`MESH_BUILD_BYTES`]).
 pub fn mesh_resolution(mesh: &TriMesh) -> Result<Option<u32>> {
-    let area: f64 = mesh
-        .faces
-        .iter()
-        .filter(|f| f.iter().all(|&i| (i as usize) < mesh.positions.len()))
-        .map(|f| {
-            let [a, b, c] = f.map(|i| mesh.positions[i as usize].as_dvec3());
-            0.5 * (b - a).cross(c - a).length()
-        })
-        .filter(|x| x.is_finite())
-        .sum();
-    let longest = f64::from(mesh.bbox().size().max_element());
-    if !(area > 0.0 && longest > 0.0) || mesh.faces.is_empty() {
-        return Ok(None);
-    }
-    let cube = (CUT_TRIANGLES_PER_AREA * area / mesh.faces.len() as f64).sqrt();
-    let mut r = (longest / cube)
-        .ceil()
-        .clamp(8.0, f64::from(lodkit_mco::MAX_RESOLUTION)) as u32;
-    let model = [Model::Mesh(mesh.clone())];
-    while r > 8 {
-        let opts = lodkit_mco::Options {
-            resolution: Some(r),
-        };
-        if lodkit_mco::estimate_build_bytes(&model, &opts)? <= MESH_BUILD_BYTES {
-            break;
-        }
-        r = (r * 3 / 4).max(8);
-    }
-    Ok(Some(r))
+    Ok(lodkit_mco::mesh_resolution(mesh, MESH_BUILD_BYTES)?)
 }
 
 /// Fractions of the full triangle count the report cuts, per cent (the
