@@ -164,6 +164,22 @@ fn image_ext(mime: &str) -> &'static str {
     }
 }
 
+/// `name` when its extension is an image's (`png`, `jpg`, `jpeg`, `webp`,
+/// `ktx2`, any case), else `name.ext`: a texture copy never takes the
+/// name of a mesh, material or manifest file.
+fn with_image_ext(name: &str, ext: &str) -> String {
+    let is_image = name.rsplit_once('.').is_some_and(|(_, e)| {
+        ["png", "jpg", "jpeg", "webp", "ktx2"]
+            .iter()
+            .any(|k| e.eq_ignore_ascii_case(k))
+    });
+    if is_image {
+        name.to_owned()
+    } else {
+        format!("{name}.{ext}")
+    }
+}
+
 /// A file name with no folder part and nothing a path rule would refuse.
 fn plain_file_name(name: &str) -> Option<&str> {
     let ok = !name.is_empty()
@@ -273,17 +289,24 @@ fn save_obj(path: &Path, scene: &Scene) -> Result<()> {
         .collect();
     let used = super::mtl::used_images(scene);
     let mut files: Vec<Option<String>> = vec![None; scene.images.len()];
-    let mut taken: Vec<String> = Vec::new();
+    let mtl_name = format!("{stem_safe}.mtl");
+    // The files this run writes are never a texture's name.
+    let mut taken: Vec<String> = vec![mtl_name.clone()];
+    taken.extend(
+        path.file_name()
+            .map(|n| n.to_string_lossy().into_owned()),
+    );
     for (i, im) in scene.images.iter().enumerate() {
         if !used[i] {
             continue;
         }
         let fallback = format!("{stem_safe}_{i}.{}", image_ext(&im.mime_type));
+        let ext = image_ext(&im.mime_type);
         let wanted = im
             .file_name
             .as_deref()
             .and_then(plain_file_name)
-            .map(str::to_owned)
+            .map(|n| with_image_ext(n, ext))
             .unwrap_or(fallback);
         let (name, write) = place_image(&dir, &wanted, &im.bytes, &taken);
         if write {
@@ -292,7 +315,6 @@ fn save_obj(path: &Path, scene: &Scene) -> Result<()> {
         taken.push(name.clone());
         files[i] = Some(name);
     }
-    let mtl_name = format!("{stem_safe}.mtl");
     let (obj, mtl) =
         super::mtl::write_scene(scene, &mtl_name, &files).map_err(|e| Error::io(path, e))?;
     if let Some(mtl) = mtl {
