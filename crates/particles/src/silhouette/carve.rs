@@ -202,12 +202,33 @@ impl Carved {
     }
 }
 
-/// Carves the cube of `frame` to level `depth`.
-pub fn carve(c: &Carver<'_>, frame: &Frame, depth: u8) -> Carved {
+/// Most tests one carving may make: a cube against a view counts one, a
+/// leaf's 64 refinement points against a view count [`LEAF_TEST_COST`].
+/// Some seconds of work; a finer carving (a depth far beyond what the
+/// images resolve, thousands of views) is refused before it starts each
+/// level, so the work and the memory of the frontier stay bounded.
+pub const MAX_CARVE_TESTS: u64 = 1 << 28;
+/// What the refinement of one leaf against one view costs, in cube tests.
+pub const LEAF_TEST_COST: u64 = 16;
+
+/// Carves the cube of `frame` to level `depth`. Errors: the tests it
+/// would make, once they would pass [`MAX_CARVE_TESTS`] (checked before
+/// each level is allocated), with the level it had reached.
+pub fn carve(c: &Carver<'_>, frame: &Frame, depth: u8) -> Result<Carved, (u64, u8)> {
     let mut decided: Vec<MortonMap<Label>> = vec![MortonMap::default(); depth as usize + 1];
     let mut tested = Vec::with_capacity(depth as usize + 1);
     let mut frontier: Vec<u64> = vec![0];
     let mut partial: Vec<u64> = Vec::new();
+    let views = c.views.len() as u64;
+    let mut work = 0u64;
+    let mut spend = |tests: u64, r: u8| {
+        work = work.saturating_add(tests);
+        if work > MAX_CARVE_TESTS {
+            Err((work, r))
+        } else {
+            Ok(())
+        }
+    };
     for r in 0..=depth {
         tested.push(frontier.len());
         let classes: Vec<Class> = frontier
@@ -231,12 +252,17 @@ pub fn carve(c: &Carver<'_>, frame: &Frame, depth: u8) -> Carved {
             }
         }
         if r < depth {
+            spend((partial.len() as u64 * 8).saturating_mul(views), r + 1)?;
             frontier = partial
                 .iter()
                 .flat_map(|&p| (0..8).map(move |k| (p << 3) | k))
                 .collect();
         }
     }
+    spend(
+        (partial.len() as u64).saturating_mul(views * LEAF_TEST_COST),
+        depth,
+    )?;
     // Leaf refinement (see the module docs). Only the views whose own
     // footprint test left the leaf unresolved are asked about its points:
     // a view that holds the whole rectangle holds every point's window.
@@ -277,13 +303,13 @@ pub fn carve(c: &Carver<'_>, frame: &Frame, depth: u8) -> Carved {
             kept.push(b);
         }
     }
-    Carved {
+    Ok(Carved {
         depth,
         leaves,
         inside: kept,
         decided,
         tested,
-    }
+    })
 }
 
 /// The box of the cubes not carved at level `level` of `frame`, one cube
