@@ -337,7 +337,8 @@ fn write_all(
     let materials = input
         .scene
         .as_ref()
-        .map(|s| super::scene::render_materials(ui, name, s, s.merged().face_materials));
+        .map(|s| super::scene::render_materials(ui, name, s, s.merged().face_materials))
+        .transpose()?;
     let html = html::report(&html::Inputs {
         name,
         intro: vec![
