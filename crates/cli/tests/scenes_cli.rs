@@ -259,7 +259,9 @@ fn every_malformed_scene_fails_with_its_one_line() {
             if r.status.code() != Some(1) || lines.len() != 1 {
                 failures.push(format!("{shown}: exit {:?}: {err}", r.status.code()));
             } else if !lines[0].contains(&name) || !lines[0].contains(&says) {
-                failures.push(format!("{shown}: does not name {name} and say '{says}': {err}"));
+                failures.push(format!(
+                    "{shown}: does not name {name} and say '{says}': {err}"
+                ));
             }
         }
         let written: Vec<_> = std::fs::read_dir(out.path()).unwrap().collect();
@@ -286,7 +288,10 @@ fn png_claiming(w: u32, h: u32) -> Vec<u8> {
     let mut out = b"\x89PNG\r\n\x1a\n".to_vec();
     out.extend(chunk(b"IHDR", &ihdr));
     // A zlib stream of a few zero bytes: the rows run out at once.
-    out.extend(chunk(b"IDAT", &[0x78, 0x9c, 0x63, 0x00, 0x00, 0x00, 0x01, 0x00, 0x01]));
+    out.extend(chunk(
+        b"IDAT",
+        &[0x78, 0x9c, 0x63, 0x00, 0x00, 0x00, 0x01, 0x00, 0x01],
+    ));
     out.extend(chunk(b"IEND", &[]));
     out
 }
@@ -296,7 +301,11 @@ fn crc32(bytes: &[u8]) -> u32 {
     for &b in bytes {
         c ^= u32::from(b);
         for _ in 0..8 {
-            c = if c & 1 != 0 { 0xEDB8_8320 ^ (c >> 1) } else { c >> 1 };
+            c = if c & 1 != 0 {
+                0xEDB8_8320 ^ (c >> 1)
+            } else {
+                c >> 1
+            };
         }
     }
     !c

@@ -7,9 +7,9 @@
 
 use std::path::Path;
 
+use lodkit_mesh::TriMesh;
 use lodkit_mesh::io::{WriteOptions, load, load_scene, save_scene};
 use lodkit_mesh::scene::{Image, Material, Scene, Texture, TextureRef};
-use lodkit_mesh::TriMesh;
 use serde_json::json;
 
 fn corpus(name: &str) -> std::path::PathBuf {
@@ -40,11 +40,11 @@ fn obj_with_textures(dir: &Path, names: &[&str]) {
 /// A GLB of `json` (padded) and `bin`.
 fn glb(json: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
     let mut js = serde_json::to_vec(json).unwrap();
-    while js.len() % 4 != 0 {
+    while !js.len().is_multiple_of(4) {
         js.push(b' ');
     }
     let mut b = bin.to_vec();
-    while b.len() % 4 != 0 {
+    while !b.len().is_multiple_of(4) {
         b.push(0);
     }
     let total = 12 + 8 + js.len() + 8 + b.len();
@@ -84,7 +84,12 @@ fn a_texture_symlinked_out_of_the_folder_is_refused_file_or_folder() {
 
     obj_with_textures(&dir, &["tex.png", "sub/s.png", "alias.png"]);
     let s = load_scene(&dir.join("m.obj")).unwrap();
-    assert_eq!(s.images.len(), 1, "only the texture inside: {:?}", s.warnings);
+    assert_eq!(
+        s.images.len(),
+        1,
+        "only the texture inside: {:?}",
+        s.warnings
+    );
     assert!(s.materials[0].base_color_texture.is_none());
     assert!(s.materials[1].base_color_texture.is_none());
     assert!(s.materials[2].base_color_texture.is_some());
@@ -160,7 +165,13 @@ fn one_texture_named_many_ways_is_read_once() {
     std::fs::write(dir.path().join("big.png"), checker()).unwrap();
     obj_with_textures(
         dir.path(),
-        &["big.png", "./big.png", "././big.png", "t/../big.png", "big.png"],
+        &[
+            "big.png",
+            "./big.png",
+            "././big.png",
+            "t/../big.png",
+            "big.png",
+        ],
     );
     let s = load_scene(&dir.path().join("m.obj")).unwrap();
     // `t/../big.png` is refused (no `..`); the other four are one image.
@@ -312,11 +323,7 @@ fn quantised_accessors_aliasing_one_view_are_bounded() {
 fn an_image_named_like_an_output_never_overwrites_it() {
     let dir = tempfile::tempdir().unwrap();
     let mut s = Scene::from_mesh(TriMesh {
-        positions: vec![
-            glam::Vec3::ZERO,
-            glam::Vec3::X,
-            glam::Vec3::Y,
-        ],
+        positions: vec![glam::Vec3::ZERO, glam::Vec3::X, glam::Vec3::Y],
         uvs: Some(vec![glam::Vec2::ZERO, glam::Vec2::X, glam::Vec2::Y]),
         faces: vec![[0, 1, 2]],
         ..Default::default()
@@ -397,9 +404,18 @@ fn the_new_corpus_classes_say_what_is_wrong() {
             "glb_image_view_without_mime_type.glb",
             "image 0 is stored in a bufferView but has no mimeType",
         ),
-        ("gltf_material_factor_1e39.gltf", "material 0: baseColorFactor"),
-        ("gltf_material_factor_1e300.gltf", "material 0: metallicFactor"),
-        ("gltf_material_emissive_negative.gltf", "material 0: emissiveFactor"),
+        (
+            "gltf_material_factor_1e39.gltf",
+            "material 0: baseColorFactor",
+        ),
+        (
+            "gltf_material_factor_1e300.gltf",
+            "material 0: metallicFactor",
+        ),
+        (
+            "gltf_material_emissive_negative.gltf",
+            "material 0: emissiveFactor",
+        ),
         (
             "gltf_texture_transform_scale_1e999.gltf",
             "number out of range",

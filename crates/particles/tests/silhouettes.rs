@@ -426,10 +426,15 @@ fn a_depth_finer_than_the_images_resolve_is_refused_at_once() {
         )
     };
     let start = std::time::Instant::now();
-    let e = carve(12).err().expect("depth 12 on 32-pixel views").to_string();
+    let e = carve(12)
+        .err()
+        .expect("depth 12 on 32-pixel views")
+        .to_string();
     assert!(start.elapsed() < std::time::Duration::from_secs(5));
     assert!(
-        e.contains("transforms.json") && e.contains("depth 12 is finer") && e.contains("or less fits"),
+        e.contains("transforms.json")
+            && e.contains("depth 12 is finer")
+            && e.contains("or less fits"),
         "{e}"
     );
     let fits: u8 = e

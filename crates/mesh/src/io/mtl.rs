@@ -187,8 +187,7 @@ fn material(
             ambient: finite(m, "Ka", m.ambient.as_ref())?,
             specular: finite(m, "Ks", m.specular.as_ref())?,
             shininess: finite(m, "Ns", m.shininess.map(|x| [x]).as_ref())?.map(|[x]| x),
-            optical_density: finite(m, "Ni", m.optical_density.map(|x| [x]).as_ref())?
-                .map(|[x]| x),
+            optical_density: finite(m, "Ni", m.optical_density.map(|x| [x]).as_ref())?.map(|[x]| x),
             illum: m.illumination_model,
             specular_texture: tex.get(m.specular_texture.as_deref(), scene),
             shininess_texture: tex.get(m.shininess_texture.as_deref(), scene),

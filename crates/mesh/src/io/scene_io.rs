@@ -292,10 +292,7 @@ fn save_obj(path: &Path, scene: &Scene) -> Result<()> {
     let mtl_name = format!("{stem_safe}.mtl");
     // The files this run writes are never a texture's name.
     let mut taken: Vec<String> = vec![mtl_name.clone()];
-    taken.extend(
-        path.file_name()
-            .map(|n| n.to_string_lossy().into_owned()),
-    );
+    taken.extend(path.file_name().map(|n| n.to_string_lossy().into_owned()));
     for (i, im) in scene.images.iter().enumerate() {
         if !used[i] {
             continue;

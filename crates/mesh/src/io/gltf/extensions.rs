@@ -126,9 +126,7 @@ pub(super) fn expand(
             Some(d)
         });
     }
-    let budget = source
-        .saturating_mul(MAX_EXPANSION)
-        .saturating_add(1 << 20);
+    let budget = source.saturating_mul(MAX_EXPANSION).saturating_add(1 << 20);
 
     // Every buffer once into one new BIN…
     let mut out: Vec<u8> = Vec::new();

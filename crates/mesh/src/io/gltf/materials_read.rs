@@ -232,7 +232,8 @@ fn read_image<'a>(
     buffers: &mut [Option<Cow<'a, [u8]>>],
 ) -> Result<(Image, bool), ParseError> {
     let i = img.index();
-    let external = matches!(img.source(), gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:"));
+    let external =
+        matches!(img.source(), gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:"));
     let (bytes, declared, name) = match img.source() {
         gltf::image::Source::View { view, mime_type } => {
             let b = view.buffer().index();
