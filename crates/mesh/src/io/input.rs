@@ -93,10 +93,10 @@ pub fn strip_bom(bytes: &[u8]) -> &[u8] {
 /// that leads out of the folder is refused, as `lodkit serve` does for its
 /// roots.
 ///
-/// Returns the real path when the name exists (so two spellings of one
-/// file, `a.png` and `./x/../a.png` through a link, give the same path and
-/// can be read once), else `dir` joined with `name` (nothing is there: the
-/// read that follows reports the missing file). Cost: linear in the name,
+/// Returns `dir` joined with `name` (as the user would write it, for
+/// messages); when nothing is there, the read that follows reports the
+/// missing file. Two spellings of one file (`a.png`, `./a.png`, a link
+/// inside the folder) have one [`real_path`]. Cost: linear in the name,
 /// plus two `realpath` calls.
 pub fn resolve_inside(dir: &Path, name: &str) -> std::result::Result<PathBuf, String> {
     let joined = lexically_inside(dir, name)?;
@@ -108,10 +108,17 @@ pub fn resolve_inside(dir: &Path, name: &str) -> std::result::Result<PathBuf, St
     let real_dir = std::fs::canonicalize(dir)
         .map_err(|e| refusal(name, &format!("has no readable folder ({e})")))?;
     if real != real_dir && real.starts_with(&real_dir) {
-        Ok(real)
+        Ok(joined)
     } else {
         Err(refusal(name, "leads out of its folder through a symlink"))
     }
+}
+
+/// `path` with every symlink resolved, or `path` itself when it cannot be
+/// (it does not exist): the key under which a file named several ways is
+/// read once.
+pub fn real_path(path: &Path) -> PathBuf {
+    std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf())
 }
 
 fn refusal(name: &str, why: &str) -> String {
@@ -232,7 +239,9 @@ mod tests {
             "./sub/own.png",
             "loop/sub/own.png",
         ] {
-            assert_eq!(resolve_inside(&dir, good).unwrap(), own, "{good}");
+            let p = resolve_inside(&dir, good).unwrap();
+            assert_eq!(p, dir.join(good));
+            assert_eq!(real_path(&p), own, "{good}");
         }
         // Nothing there: the lexical path, for the read to report.
         assert_eq!(

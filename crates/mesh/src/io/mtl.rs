@@ -88,7 +88,8 @@ impl Textures<'_> {
                 return None;
             }
         };
-        if let Some(&t) = self.by_path.get(&path) {
+        let real = crate::io::input::real_path(&path);
+        if let Some(&t) = self.by_path.get(&real) {
             return Some(t);
         }
         let bytes = match crate::io::input::read_file(&path) {
@@ -115,7 +116,7 @@ impl Textures<'_> {
             image: scene.images.len() - 1,
             sampler: None,
         });
-        self.by_path.insert(path, scene.textures.len() - 1);
+        self.by_path.insert(real, scene.textures.len() - 1);
         Some(scene.textures.len() - 1)
     }
 }

@@ -181,7 +181,7 @@ impl Images {
                 let rel = percent_decode(uri)?;
                 base_dir
                     .and_then(|d| crate::io::input::resolve_inside(d, &rel).ok())
-                    .map(ImageSource::File)
+                    .map(|p| ImageSource::File(crate::io::input::real_path(&p)))
             }
             gltf::image::Source::Uri { .. } => None,
         };
