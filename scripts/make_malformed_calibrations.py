@@ -174,7 +174,7 @@ def main():
          expect_camera="frame 1", says="bottom row")
     # Every pixel of a run is budgeted from the calibration, before decoding.
     nerf("nerf_pixels_over_budget", lambda t: t.update(w=16384, h=16384), expect_camera="frame 0",
-         says="pixels this run may still decode")
+         says="left of the run's budget")
     # images.txt without its POINTS2D lines: every second image would be
     # skipped as one.
     colmap("colmap_no_points2d_lines", images=RING.replace("\n\n", "\n"), expect_camera="line 2",

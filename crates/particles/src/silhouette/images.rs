@@ -84,8 +84,8 @@ impl PixelBudget {
         let px = u64::from(width) * u64::from(height);
         if px > self.left {
             return Err(format!(
-                "image of {width}x{height} pixels is over the {} pixels this run may still decode \
-                 (all images of a run together: {MAX_RUN_PIXELS})",
+                "an image of {width}x{height} pixels does not fit in the {} pixels left of the \
+                 run's budget of {MAX_RUN_PIXELS} (all its images together)",
                 self.left
             ));
         }
