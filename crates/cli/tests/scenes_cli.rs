@@ -340,6 +340,21 @@ fn a_texture_whose_header_claims_gigapixels_is_refused_before_decoding() {
     );
     assert!(start.elapsed() < std::time::Duration::from_secs(10));
     assert!(!png.exists());
+    // build draws the textures in its report: refused before its folder
+    // is made.
+    let out = dir.path().join("b");
+    let o = lodkit(&[
+        "build",
+        s(&dir.path().join("m.obj")),
+        "--out",
+        s(&out),
+        "--no-measure",
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("m.obj") && err.contains("big.png"), "{err}");
+    assert!(!out.exists());
 }
 
 #[cfg(unix)]

@@ -109,6 +109,11 @@ pub fn run(ui: &Ui, args: &BuildArgs) -> Result<()> {
             })
         }
     })?;
+    if let (Some(scene), Some(path)) = (&input.scene, &args.input) {
+        // The report draws the textures: their pixels are checked now,
+        // before the output folder is touched.
+        super::scene::texture_budget(&path.display().to_string(), scene)?;
+    }
     let staging = staging::Staging::new(&args.out)?;
     let outputs = write_all(ui, args, &input, sampling, staging.dir(), &mut timings)?;
     staging.commit()?;
