@@ -319,8 +319,16 @@ pub fn carve(c: &Carver<'_>, frame: &Frame, depth: u8) -> Result<Carved, (u64, u
 /// wider on every side, or `None` when every cube was carved. Also says
 /// whether that box touches the cube's boundary (the common view is not
 /// bounded inside it).
-pub fn hull_box(c: &Carver<'_>, frame: &Frame, level: u8) -> Option<((Vec3, Vec3), bool)> {
-    let carved = carve_coarse(c, frame, level);
+///
+/// Errors: the cube tests, once they would pass [`MAX_CARVE_TESTS`], with
+/// the level reached (as [`carve`]).
+#[allow(clippy::type_complexity)]
+pub fn hull_box(
+    c: &Carver<'_>,
+    frame: &Frame,
+    level: u8,
+) -> Result<Option<((Vec3, Vec3), bool)>, (u64, u8)> {
+    let carved = carve_coarse(c, frame, level)?;
     let side = 1u32 << level;
     let mut lo = [u32::MAX; 3];
     let mut hi = [0u32; 3];
@@ -332,7 +340,7 @@ pub fn hull_box(c: &Carver<'_>, frame: &Frame, level: u8) -> Option<((Vec3, Vec3
         }
     }
     if lo[0] == u32::MAX {
-        return None;
+        return Ok(None);
     }
     let touches = (0..3).any(|a| lo[a] == 0 || hi[a] == side - 1);
     let s = frame.size / side as f32;
@@ -340,15 +348,21 @@ pub fn hull_box(c: &Carver<'_>, frame: &Frame, level: u8) -> Option<((Vec3, Vec3
     let max = frame.origin
         + Vec3::new(hi[0] as f32 + 1.0, hi[1] as f32 + 1.0, hi[2] as f32 + 1.0) * s
         + s;
-    Some(((min, max), touches))
+    Ok(Some(((min, max), touches)))
 }
 
 /// Cubes at `level` that are not OUT (IN cubes of coarser levels are
 /// expanded), without leaf refinement.
-fn carve_coarse(c: &Carver<'_>, frame: &Frame, level: u8) -> Vec<u64> {
+fn carve_coarse(c: &Carver<'_>, frame: &Frame, level: u8) -> Result<Vec<u64>, (u64, u8)> {
     let mut keep = Vec::new();
     let mut frontier: Vec<u64> = vec![0];
+    let views = c.views.len() as u64;
+    let mut work = 0u64;
     for r in 0..=level {
+        work = work.saturating_add((frontier.len() as u64).saturating_mul(views));
+        if work > MAX_CARVE_TESTS {
+            return Err((work, r));
+        }
         let classes: Vec<Class> = frontier
             .par_iter()
             .map(|&m| {
@@ -374,5 +388,5 @@ fn carve_coarse(c: &Carver<'_>, frame: &Frame, level: u8) -> Vec<u64> {
         }
         frontier = next;
     }
-    keep
+    Ok(keep)
 }

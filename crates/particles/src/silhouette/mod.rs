@@ -288,7 +288,15 @@ fn carve_box(set: &ImageSet, opts: &SilhouetteOptions) -> Result<(Vec3, Vec3)> {
     for pass in 0..2 {
         let near = f64::from(frame.size) * 1e-6;
         let c = set.carver(margin, near);
-        match carve::hull_box(&c, &frame, BOX_LEVEL) {
+        let found_box = carve::hull_box(&c, &frame, BOX_LEVEL).or_else(|(tests, r)| {
+            set.err(format!(
+                "finding the common view takes over {} cube tests against the {} views \
+                 (reached {tests} at level {r}); give --bbox or fewer views",
+                carve::MAX_CARVE_TESTS,
+                views.len()
+            ))
+        })?;
+        match found_box {
             None => {
                 return set.err(
                     "the silhouettes have no common view: every part of the space is outside some view's silhouette",
