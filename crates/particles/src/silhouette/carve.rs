@@ -202,16 +202,18 @@ impl Carved {
     }
 }
 
-/// Most tests one carving may make: a cube against a view counts one, a
-/// leaf's 64 refinement points against a view count [`LEAF_TEST_COST`]
-/// (every view counted, an upper bound). About 60 ns a test on one core:
-/// a few seconds of work (8 views of 128² carve to depth 7 in about 3 s,
-/// depth 8 took 13 s and is refused); a finer carving (a depth at the
-/// images' resolution limit, thousands of views) is refused before each
-/// level is allocated, so the work and the memory of the frontier stay
-/// bounded.
-pub const MAX_CARVE_TESTS: u64 = 1 << 26;
-/// What the refinement of one leaf against one view costs, in cube tests.
+/// Most work one carving may do, in units of about 40 ns on one core (a
+/// few seconds): a cube tested against a view costs [`CUBE_TEST_COST`], a
+/// leaf's 64 refinement points against a view [`LEAF_TEST_COST`] (every
+/// view counted, an upper bound). 8 views of 128² carve to depth 7 in
+/// about 3 s; depth 8 (13 s of carving) is refused, as is finding the
+/// common view of 10,000 views. The work is counted before each level is
+/// allocated, so the time and the memory of the frontier stay bounded.
+pub const MAX_CARVE_TESTS: u64 = 1 << 27;
+/// What testing one cube against one view costs (its 8 corners
+/// projected, the lens's distortion bound, four table reads).
+pub const CUBE_TEST_COST: u64 = 4;
+/// What the refinement of one leaf against one view costs (64 points).
 pub const LEAF_TEST_COST: u64 = 16;
 
 /// Carves the cube of `frame` to level `depth`. Errors: the tests it
@@ -255,7 +257,10 @@ pub fn carve(c: &Carver<'_>, frame: &Frame, depth: u8) -> Result<Carved, (u64, u
             }
         }
         if r < depth {
-            spend((partial.len() as u64 * 8).saturating_mul(views), r + 1)?;
+            spend(
+                (partial.len() as u64 * 8).saturating_mul(views * CUBE_TEST_COST),
+                r + 1,
+            )?;
             frontier = partial
                 .iter()
                 .flat_map(|&p| (0..8).map(move |k| (p << 3) | k))
@@ -359,7 +364,7 @@ fn carve_coarse(c: &Carver<'_>, frame: &Frame, level: u8) -> Result<Vec<u64>, (u
     let views = c.views.len() as u64;
     let mut work = 0u64;
     for r in 0..=level {
-        work = work.saturating_add((frontier.len() as u64).saturating_mul(views));
+        work = work.saturating_add((frontier.len() as u64).saturating_mul(views * CUBE_TEST_COST));
         if work > MAX_CARVE_TESTS {
             return Err((work, r));
         }

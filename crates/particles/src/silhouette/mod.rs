@@ -290,7 +290,7 @@ fn carve_box(set: &ImageSet, opts: &SilhouetteOptions) -> Result<(Vec3, Vec3)> {
         let c = set.carver(margin, near);
         let found_box = carve::hull_box(&c, &frame, BOX_LEVEL).or_else(|(tests, r)| {
             set.err(format!(
-                "finding the common view takes over {} cube tests against the {} views \
+                "finding the common view takes over {} units of work against the {} views \
                  (reached {tests} at level {r}); give --bbox or fewer views",
                 carve::MAX_CARVE_TESTS,
                 views.len()
@@ -403,8 +403,8 @@ pub fn carve_octree(
     let c = set.carver(f64::from(sil.margin), near);
     let carved = carve::carve(&c, &frame, depth).or_else(|(tests, r)| {
         set.err(format!(
-            "carving to depth {depth} takes over {} cube tests against the {} views (reached \
-             {tests} at level {r}); give a smaller --depth or fewer views",
+            "carving to depth {depth} takes over {} units of work against the {} views \
+             (reached {tests} at level {r}); give a smaller --depth or fewer views",
             carve::MAX_CARVE_TESTS,
             set.calibration.views.len()
         ))
