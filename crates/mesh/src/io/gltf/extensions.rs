@@ -191,7 +191,8 @@ pub(super) fn expand(
     let mut dequantised = vec![false; accessors.len()];
     // One float copy per distinct source (view, offset, layout): accessors
     // that alias one another share it, with its bounds.
-    let mut copies: Vec<(String, usize, Value, Value)> = Vec::new();
+    let mut copies: std::collections::BTreeMap<String, (usize, Value, Value)> =
+        std::collections::BTreeMap::new();
     let meshes = doc["meshes"].as_array().cloned().unwrap_or_default();
     for mesh in &meshes {
         for prim in mesh["primitives"].as_array().into_iter().flatten() {
@@ -221,8 +222,8 @@ pub(super) fn expand(
                 ]
                 .map(|k| acc.get(k).map_or("-".to_string(), Value::to_string))
                 .join(" ");
-                let (view, lo, hi) = match copies.iter().find(|c| c.0 == key) {
-                    Some((_, view, lo, hi)) => (*view, lo.clone(), hi.clone()),
+                let (view, lo, hi) = match copies.get(&key) {
+                    Some((view, lo, hi)) => (*view, lo.clone(), hi.clone()),
                     None => {
                         let floats = dequantise(ai, acc, &new_views, &out)?;
                         used = used.saturating_add(floats.len() as u64 * 4);
@@ -254,7 +255,7 @@ pub(super) fn expand(
                             "target": 34962,
                         }));
                         let (lo, hi) = (json!(lo), json!(hi));
-                        copies.push((key, new_views.len() - 1, lo.clone(), hi.clone()));
+                        copies.insert(key, (new_views.len() - 1, lo.clone(), hi.clone()));
                         (new_views.len() - 1, lo, hi)
                     }
                 };
@@ -415,7 +416,8 @@ fn texture_transforms(doc: &mut Value, x: &mut Expanded) -> Result<(), ParseErro
         .enumerate()
         .map(|(i, m)| material_transforms(i, m))
         .collect::<Result<Vec<_>, _>>()?;
-    let mut copies: Vec<((usize, [u32; 5]), usize)> = Vec::new();
+    let mut copies: std::collections::BTreeMap<(usize, [u32; 5]), usize> =
+        std::collections::BTreeMap::new();
     // `get_mut` throughout: indexing a JSON value mutably inserts missing
     // keys and panics on non-objects, and this is a hostile file's JSON.
     let mut meshes = doc.get_mut("meshes").map(Value::take);
@@ -439,8 +441,8 @@ fn texture_transforms(doc: &mut Value, x: &mut Expanded) -> Result<(), ParseErro
                 continue;
             };
             let key = (ai, t.bits());
-            let copy = match copies.iter().find(|(k, _)| *k == key) {
-                Some(&(_, c)) => c,
+            let copy = match copies.get(&key) {
+                Some(&c) => c,
                 None => {
                     let acc = x
                         .accessors
@@ -482,7 +484,7 @@ fn texture_transforms(doc: &mut Value, x: &mut Expanded) -> Result<(), ParseErro
                         "count": uv.len() / 2,
                         "type": "VEC2",
                     }));
-                    copies.push((key, x.accessors.len() - 1));
+                    copies.insert(key, x.accessors.len() - 1);
                     x.accessors.len() - 1
                 }
             };

@@ -40,7 +40,7 @@ pub(super) fn read_tables(
     }
     let mut buffers: Vec<Option<Cow<[u8]>>> = vec![None; doc.buffers().len()];
     let mut images = Images {
-        by_source: Vec::new(),
+        by_source: std::collections::BTreeMap::new(),
         of_doc: Vec::with_capacity(doc.images().len()),
         bytes: 0,
         source,
@@ -139,7 +139,7 @@ fn file_name(uri: &str) -> Option<String> {
 }
 
 /// Where an image's bytes came from, to keep each source once.
-#[derive(PartialEq, Eq)]
+#[derive(PartialEq, Eq, PartialOrd, Ord)]
 enum ImageSource {
     /// Buffer, start, end.
     Range(usize, usize, usize),
@@ -150,7 +150,7 @@ enum ImageSource {
 /// The images read so far.
 struct Images {
     /// Each kept image's source and its index in the scene.
-    by_source: Vec<(ImageSource, usize)>,
+    by_source: std::collections::BTreeMap<ImageSource, usize>,
     /// The scene image of each document image.
     of_doc: Vec<usize>,
     /// Bytes of the kept images.
@@ -185,9 +185,7 @@ impl Images {
             }
             gltf::image::Source::Uri { .. } => None,
         };
-        if let Some(k) = &key
-            && let Some((_, at)) = self.by_source.iter().find(|(s, _)| s == k)
-        {
+        if let Some(at) = key.as_ref().and_then(|k| self.by_source.get(k)) {
             self.of_doc.push(*at);
             return Ok(());
         }
@@ -217,7 +215,7 @@ impl Images {
         scene.images.push(image);
         let at = scene.images.len() - 1;
         if let Some(k) = key {
-            self.by_source.push((k, at));
+            self.by_source.insert(k, at);
         }
         self.of_doc.push(at);
         Ok(())
