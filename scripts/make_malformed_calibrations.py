@@ -65,7 +65,7 @@ def look_at_gl(eye, target=(0.0, 0.0, 0.0)):
 EYES = [(0.0, 0.0, 4.0), (4.0, 0.0, 0.0), (0.0, 0.0, -4.0), (-4.0, 0.0, 0.0)]
 
 
-def nerf(name, edit=None, raw=None, images=4, alpha=True, expect_camera="", carving=False):
+def nerf(name, edit=None, raw=None, images=4, alpha=True, expect_camera="", carving=False, says=None):
     d = os.path.join(ROOT, name)
     os.makedirs(os.path.join(d, "images"))
     for i in range(images):
@@ -85,10 +85,11 @@ def nerf(name, edit=None, raw=None, images=4, alpha=True, expect_camera="", carv
     with open(os.path.join(d, "transforms.json"), "w") as f:
         f.write(text)
     with open(os.path.join(d, "expect.txt"), "w") as f:
-        f.write(f"transforms.json\n{expect_camera}\n" + ("carving\n" if carving else ""))
+        f.write(f"transforms.json\n{expect_camera}\n" + ("carving\n" if carving else "")
+                + (f"says: {says}\n" if says else ""))
 
 
-def colmap(name, cameras=None, images=None, files=4, expect_camera="", carving=False):
+def colmap(name, cameras=None, images=None, files=4, expect_camera="", carving=False, says=None):
     d = os.path.join(ROOT, name)
     os.makedirs(os.path.join(d, "images"))
     os.makedirs(os.path.join(d, "sparse", "0"))
@@ -104,7 +105,8 @@ def colmap(name, cameras=None, images=None, files=4, expect_camera="", carving=F
     with open(os.path.join(d, "sparse", "0", "images.txt"), "w") as f:
         f.write(images)
     with open(os.path.join(d, "expect.txt"), "w") as f:
-        f.write(f"sparse/0/cameras.txt\n{expect_camera}\n" + ("carving\n" if carving else ""))
+        f.write(f"sparse/0/cameras.txt\n{expect_camera}\n" + ("carving\n" if carving else "")
+                + (f"says: {says}\n" if says else ""))
 
 
 # World-to-camera poses (OpenCV axes) of four cameras 4 units from the
@@ -162,6 +164,21 @@ def main():
         carving=True,
     )
     colmap("colmap_no_cameras", cameras="# nothing\n")
+    # A name that is the folder itself: with `.png` added it would be the
+    # folder's sibling `<folder>.png`.
+    nerf("nerf_file_path_dot", lambda t: t["frames"][0].update(file_path="."), expect_camera="frame 0",
+         says="names the folder itself")
+    nerf("nerf_file_path_dot_slash", lambda t: t["frames"][2].update(file_path="././"), expect_camera="frame 2",
+         says="names the folder itself")
+    nerf("nerf_matrix_bottom_row", lambda t: t["frames"][1]["transform_matrix"].__setitem__(3, [0, 0, 1, 1]),
+         expect_camera="frame 1", says="bottom row")
+    # Every pixel of a run is budgeted from the calibration, before decoding.
+    nerf("nerf_pixels_over_budget", lambda t: t.update(w=16384, h=16384), expect_camera="frame 0",
+         says="left of the run's budget")
+    # images.txt without its POINTS2D lines: every second image would be
+    # skipped as one.
+    colmap("colmap_no_points2d_lines", images=RING.replace("\n\n", "\n"), expect_camera="line 2",
+           says="POINTS2D")
 
 
 if __name__ == "__main__":

@@ -15,6 +15,7 @@ Usage: python3 scripts/make_malformed_corpus.py [OUTPUT_DIR]
 import base64
 import json
 import os
+import shutil
 import struct
 import sys
 
@@ -300,16 +301,110 @@ add("conf_translation_beyond_range.conf", CONF_OK + "bmesh b.ply 5e18 0 0 0 0 0 
 add("conf_missing_numbers.conf", CONF_OK + "bmesh b.ply 0 0 0 0 0 1\n")
 
 
+# ------------------------------------------------- materials, images, buffers
+def gltf_edit(edit, uri=None, bin_bytes=QUAD):
+    """gltf_doc's triangle with `edit(doc)` applied to its JSON."""
+    doc = json.loads(gltf_doc(uri=uri, bin_bytes=bin_bytes))
+    edit(doc)
+    return json.dumps(doc, sort_keys=True)
+
+
+def with_material(material):
+    def edit(doc):
+        doc["materials"] = [material]
+        doc["meshes"][0]["primitives"][0]["material"] = 0
+    return edit
+
+
+def with_image(image):
+    def edit(doc):
+        doc["images"] = [image]
+        doc["textures"] = [{"source": 0}]
+        doc["materials"] = [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]
+        doc["meshes"][0]["primitives"][0]["material"] = 0
+    return edit
+
+
+# The gltf crate unwraps an image's source: checked before it is asked.
+add("gltf_image_without_uri_or_view.gltf", gltf_edit(with_image({"name": "nothing"})))
+add("glb_image_view_without_mime_type.glb",
+    glb(gltf_edit(with_image({"bufferView": 0}), uri=False)))
+# Factors beyond f32 read as infinity, which JSON cannot hold on writing.
+add("gltf_material_factor_1e39.gltf",
+    gltf_edit(with_material({"pbrMetallicRoughness": {"baseColorFactor": [1e39, 1, 1, 1]}})))
+add("gltf_material_factor_1e300.gltf",
+    gltf_edit(with_material({"pbrMetallicRoughness": {"metallicFactor": 1e300}})))
+add("gltf_material_emissive_negative.gltf", gltf_edit(with_material({"emissiveFactor": [-1, 0, 0]})))
+# A number JSON cannot hold in an extension the gltf crate skips.
+add("gltf_texture_transform_scale_1e999.gltf",
+    gltf_edit(lambda d: (with_material({"pbrMetallicRoughness": {"baseColorTexture": {
+        "index": 0, "extensions": {"KHR_texture_transform": {"scale": [12345, 1]}}}}})(d),
+        d.update(textures=[{"source": 0}], images=[{"uri": "t.png"}],
+                 extensionsUsed=["KHR_texture_transform"]))).replace("12345", "1e999"))
+# Only buffer 0 may stand for the BIN chunk.
+add("glb_second_buffer_without_uri.glb",
+    glb(gltf_edit(lambda d: (d["buffers"].append({"byteLength": len(QUAD)}),
+                             [v.update(buffer=1) for v in d["bufferViews"]]), uri=False)))
+
+
+# A quantised accessor's offset must be a whole number >= 0, never read as 0.
+def quantised(edit_accessor):
+    pos = struct.pack("<9H", 0, 0, 0, 1, 0, 0, 0, 1, 0) + b"\0\0" + struct.pack("<3H", 0, 1, 2) + b"\0\0"
+
+    def edit(d):
+        d["extensionsUsed"] = ["KHR_mesh_quantization"]
+        d["extensionsRequired"] = ["KHR_mesh_quantization"]
+        d["bufferViews"] = [{"buffer": 0, "byteOffset": 0, "byteLength": 20},
+                            {"buffer": 0, "byteOffset": 20, "byteLength": 6}]
+        d["accessors"][0].update(componentType=5123, min=[0, 0, 0], max=[1, 1, 0])
+        edit_accessor(d["accessors"][0])
+    return gltf_edit(edit, bin_bytes=pos)
+
+
+add("gltf_quantized_negative_byte_offset.gltf", quantised(lambda a: a.update(byteOffset=-4)))
+add("gltf_quantized_fractional_count.gltf", quantised(lambda a: a.update(count=2.5)))
+
+
+# ------------------------------------------------- scenes: a file and what it names
+# tests/malformed/scenes/CASE/ holds an input and the files it names, and
+# expect.txt: the input (first line) and the text its one-line error must
+# hold (`says: TEXT`); crates/cli/tests/scenes_cli.rs runs them.
+SCENES = {}
+TRI_OBJ = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n"
+
+
+def scene(name, files, says, input_name="m.obj"):
+    assert name not in SCENES, name
+    SCENES[name] = ({k: v.encode() if isinstance(v, str) else v for k, v in files.items()},
+                    f"{input_name}\nsays: {says}\n")
+
+
+scene("mtl_kd_infinite", {"m.obj": TRI_OBJ, "m.mtl": "newmtl a\nKd inf -inf inf\n"}, "Kd")
+scene("mtl_ke_beyond_f32", {"m.obj": TRI_OBJ, "m.mtl": "newmtl a\nKd 1 1 1\nKe 1e39 0 0\n"}, "Ke")
+scene("mtl_ns_nan", {"m.obj": TRI_OBJ, "m.mtl": "newmtl a\nNs nan\n"}, "Ns")
+
+
 def main():
     os.makedirs(OUT, exist_ok=True)
     # Remove corpus files this script no longer makes (keep the README).
     for name in os.listdir(OUT):
-        if name != "README.md" and name not in FILES:
-            os.remove(os.path.join(OUT, name))
+        path = os.path.join(OUT, name)
+        if name != "README.md" and name not in FILES and os.path.isfile(path):
+            os.remove(path)
     for name, data in sorted(FILES.items()):
         with open(os.path.join(OUT, name), "wb") as f:
             f.write(data)
-    print(f"wrote {len(FILES)} files to {OUT}")
+    scenes = os.path.join(OUT, "scenes")
+    if os.path.isdir(scenes):
+        shutil.rmtree(scenes)
+    for name, (files, expect) in sorted(SCENES.items()):
+        os.makedirs(os.path.join(scenes, name))
+        for file, data in sorted(files.items()):
+            with open(os.path.join(scenes, name, file), "wb") as f:
+                f.write(data)
+        with open(os.path.join(scenes, name, "expect.txt"), "w") as f:
+            f.write(expect)
+    print(f"wrote {len(FILES)} files and {len(SCENES)} scene folders to {OUT}")
 
 
 if __name__ == "__main__":

@@ -2,8 +2,9 @@
 //! `scripts/make_malformed_calibrations.py`) through every command that
 //! reads one: `lodkit info`, `lodkit pop encode --silhouettes` and
 //! `lodkit build` each exit 1 with one line on stderr naming the
-//! calibration file and, where one camera is at fault, that camera; and
-//! write nothing.
+//! calibration file and, where one camera is at fault, that camera (and,
+//! where `expect.txt` has a `says:` line, that message); and write
+//! nothing.
 
 mod common;
 
@@ -25,8 +26,14 @@ fn every_malformed_image_set_fails_with_one_line_naming_the_file_and_the_camera(
         let mut lines = expect.lines();
         let file = case.join(lines.next().unwrap());
         let camera = lines.next().unwrap_or("").trim().to_string();
-        // `carving`: the set reads, only carving finds the fault.
-        let carving_only = lines.next().is_some_and(|l| l.trim() == "carving");
+        // `carving`: the set reads, only carving finds the fault;
+        // `says: TEXT`: the text the one line must hold (its message).
+        let rest: Vec<&str> = lines.collect();
+        let carving_only = rest.iter().any(|l| l.trim() == "carving");
+        let says = rest
+            .iter()
+            .find_map(|l| l.strip_prefix("says: "))
+            .map(str::trim);
         let file_name = file.file_name().unwrap().to_string_lossy().into_owned();
         // A COLMAP model's errors name the file of the faulty line.
         let names_file = |l: &str| {
@@ -78,6 +85,10 @@ fn every_malformed_image_set_fails_with_one_line_naming_the_file_and_the_camera(
                 failures.push(format!(
                     "{shown}: does not name {file_name} and '{camera}': {err}"
                 ));
+            } else if let Some(text) = says
+                && !lines[0].contains(text)
+            {
+                failures.push(format!("{shown}: does not say '{text}': {err}"));
             }
             let written: Vec<_> = std::fs::read_dir(out.path()).unwrap().collect();
             if !written.is_empty() {

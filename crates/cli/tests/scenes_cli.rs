@@ -212,3 +212,186 @@ fn build_keeps_the_materials_of_a_multi_part_textured_input() {
     assert!(sc.materials.is_empty() && sc.images.is_empty());
     assert!(merged.join("lods/parts_lod1.ply").is_file());
 }
+
+/// Every scene folder of the malformed corpus (`tests/malformed/scenes/`,
+/// made by `scripts/make_malformed_corpus.py`): `convert` to GLB and to
+/// OBJ and `render` each exit 1 with one line naming the input and saying
+/// what `expect.txt` says, and write nothing.
+#[test]
+fn every_malformed_scene_fails_with_its_one_line() {
+    let root = common::repo().join("tests/malformed/scenes");
+    let mut cases: Vec<PathBuf> = std::fs::read_dir(&root)
+        .expect("tests/malformed/scenes exists")
+        .map(|e| e.unwrap().path())
+        .collect();
+    cases.sort();
+    assert!(cases.len() >= 3, "only {} cases", cases.len());
+    let mut failures = Vec::new();
+    for case in &cases {
+        let expect = std::fs::read_to_string(case.join("expect.txt")).unwrap();
+        let mut lines = expect.lines();
+        let input = case.join(lines.next().unwrap());
+        let says = lines
+            .find_map(|l| l.strip_prefix("says: "))
+            .unwrap()
+            .trim()
+            .to_string();
+        let name = input.file_name().unwrap().to_string_lossy().into_owned();
+        let out = tempfile::tempdir().unwrap();
+        let o = |f: &str| out.path().join(f).display().to_string();
+        for args in [
+            vec!["convert".to_string(), s(&input).into(), o("c.glb")],
+            vec!["convert".to_string(), s(&input).into(), o("c.obj")],
+            vec![
+                "render".to_string(),
+                s(&input).into(),
+                "-o".into(),
+                o("r.png"),
+                "--size".into(),
+                "64x64".into(),
+            ],
+        ] {
+            let a: Vec<&str> = args.iter().map(String::as_str).collect();
+            let r = lodkit(&a);
+            let err = stderr(&r);
+            let lines: Vec<&str> = err.lines().filter(|l| !l.trim().is_empty()).collect();
+            let shown = format!("{} lodkit {}", case.display(), args[0]);
+            if r.status.code() != Some(1) || lines.len() != 1 {
+                failures.push(format!("{shown}: exit {:?}: {err}", r.status.code()));
+            } else if !lines[0].contains(&name) || !lines[0].contains(&says) {
+                failures.push(format!(
+                    "{shown}: does not name {name} and say '{says}': {err}"
+                ));
+            }
+        }
+        let written: Vec<_> = std::fs::read_dir(out.path()).unwrap().collect();
+        if !written.is_empty() {
+            failures.push(format!("{}: wrote {written:?}", case.display()));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// A PNG whose header says `w × h` pixels, with next to no data.
+fn png_claiming(w: u32, h: u32) -> Vec<u8> {
+    let chunk = |kind: &[u8], data: &[u8]| {
+        let mut c = (data.len() as u32).to_be_bytes().to_vec();
+        let mut body = kind.to_vec();
+        body.extend_from_slice(data);
+        c.extend_from_slice(&body);
+        c.extend_from_slice(&crc32(&body).to_be_bytes());
+        c
+    };
+    let mut ihdr = w.to_be_bytes().to_vec();
+    ihdr.extend_from_slice(&h.to_be_bytes());
+    ihdr.extend_from_slice(&[8, 6, 0, 0, 0]);
+    let mut out = b"\x89PNG\r\n\x1a\n".to_vec();
+    out.extend(chunk(b"IHDR", &ihdr));
+    // A zlib stream of a few zero bytes: the rows run out at once.
+    out.extend(chunk(
+        b"IDAT",
+        &[0x78, 0x9c, 0x63, 0x00, 0x00, 0x00, 0x01, 0x00, 0x01],
+    ));
+    out.extend(chunk(b"IEND", &[]));
+    out
+}
+
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut c = 0xFFFF_FFFFu32;
+    for &b in bytes {
+        c ^= u32::from(b);
+        for _ in 0..8 {
+            c = if c & 1 != 0 {
+                0xEDB8_8320 ^ (c >> 1)
+            } else {
+                c >> 1
+            };
+        }
+    }
+    !c
+}
+
+#[test]
+fn a_texture_whose_header_claims_gigapixels_is_refused_before_decoding() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("big.png"), png_claiming(16384, 16384)).unwrap();
+    std::fs::write(dir.path().join("m.mtl"), "newmtl a\nmap_Kd big.png\n").unwrap();
+    std::fs::write(
+        dir.path().join("m.obj"),
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl a\nf 1/1 2/2 3/3\n",
+    )
+    .unwrap();
+    let png = dir.path().join("r.png");
+    let o = lodkit(&[
+        "render",
+        s(&dir.path().join("m.obj")),
+        "-o",
+        s(&png),
+        "--size",
+        "64x64",
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("m.obj") && err.contains("big.png") && err.contains("16384x16384"),
+        "{err}"
+    );
+    assert!(!png.exists());
+    // build draws the textures in its report: refused before its folder
+    // is made.
+    let out = dir.path().join("b");
+    let o = lodkit(&[
+        "build",
+        s(&dir.path().join("m.obj")),
+        "--out",
+        s(&out),
+        "--no-measure",
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("m.obj") && err.contains("big.png"), "{err}");
+    assert!(!out.exists());
+}
+
+#[cfg(unix)]
+#[test]
+fn a_texture_symlinked_out_of_the_folder_is_neither_embedded_nor_copied() {
+    use std::os::unix::fs::symlink;
+    let root = tempfile::tempdir().unwrap();
+    let secret = root.path().join("secret");
+    std::fs::create_dir(&secret).unwrap();
+    let png = std::fs::read(data("checker.png")).unwrap();
+    std::fs::write(secret.join("s.png"), &png).unwrap();
+    let dir = root.path().join("model");
+    std::fs::create_dir(&dir).unwrap();
+    symlink(secret.join("s.png"), dir.join("tex.png")).unwrap();
+    symlink(&secret, dir.join("sub")).unwrap();
+    std::fs::write(
+        dir.join("m.mtl"),
+        "newmtl a\nmap_Kd tex.png\nnewmtl b\nmap_Kd sub/s.png\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("m.obj"),
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n\
+         usemtl a\nf 1/1 2/2 3/3\nusemtl b\nf 2/2 4/1 3/3\n",
+    )
+    .unwrap();
+    let out = root.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    for target in ["c.glb", "c.obj"] {
+        let o = lodkit(&["convert", s(&dir.join("m.obj")), s(&out.join(target))]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(stderr(&o).contains("symlink"), "{}", stderr(&o));
+    }
+    let glb = std::fs::read(out.join("c.glb")).unwrap();
+    assert!(!glb.windows(png.len()).any(|w| w == png.as_slice()));
+    let mut names: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["c.glb", "c.mtl", "c.obj"]);
+}

@@ -473,6 +473,26 @@ impl Scene {
         }
         let nt = self.textures.len();
         for (i, m) in self.materials.iter().enumerate() {
+            // Every factor finite: JSON has no infinity (a writer would put
+            // `null`) and MTL's `inf` reads back as nothing.
+            let mut numbers: Vec<f32> = m.base_color.to_vec();
+            numbers.extend(m.emissive);
+            numbers.extend([
+                m.metallic,
+                m.roughness,
+                m.normal_scale,
+                m.occlusion_strength,
+            ]);
+            numbers.extend(m.alpha_cutoff);
+            numbers.extend(m.mtl.ambient.into_iter().flatten());
+            numbers.extend(m.mtl.specular.into_iter().flatten());
+            numbers.extend(m.mtl.shininess);
+            numbers.extend(m.mtl.optical_density);
+            if let Some(x) = numbers.iter().find(|x| !x.is_finite()) {
+                return Err(parse_err!(
+                    "material {i} has a factor of {x}, which is not a finite number"
+                ));
+            }
             let extra = [
                 m.mtl.specular_texture,
                 m.mtl.shininess_texture,

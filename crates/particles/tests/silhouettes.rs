@@ -406,3 +406,110 @@ fn the_readers_survive_every_prefix_of_the_malformed_corpus() {
         assert_eq!(images::decode_for_fuzzing(&png).unwrap(), (8, 8));
     }
 }
+
+/// The carving's work is bounded by its inputs: a depth whose leaves are
+/// far under a pixel is refused at once with the depth that fits, and a
+/// depth that fits runs.
+#[test]
+fn a_depth_finer_than_the_images_resolve_is_refused_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    write_ring(&sphere(), dir.path(), 8, &[20.0], 32);
+    let set = ImageSet::load(&dir.path().join("transforms.json"), SilhouetteSource::Auto).unwrap();
+    let carve = |depth: u8| {
+        carve_octree(
+            &set,
+            &SilhouetteOptions::DEFAULT,
+            &EncodeOptions {
+                depth: Some(depth),
+                ..EncodeOptions::DEFAULT
+            },
+        )
+    };
+    let e = carve(12)
+        .err()
+        .expect("depth 12 on 32-pixel views")
+        .to_string();
+    assert!(
+        e.contains("transforms.json")
+            && e.contains("depth 12 is finer")
+            && e.contains("or less fits"),
+        "{e}"
+    );
+    let fits: u8 = e
+        .split("depth ")
+        .nth(2)
+        .and_then(|t| t.split(' ').next())
+        .and_then(|t| t.parse().ok())
+        .unwrap();
+    assert!((6..12).contains(&fits), "{e}");
+    assert!(carve(fits).is_ok());
+}
+
+/// A photograph named through a symlink that leads out of the folder —
+/// the file or a folder on its way — is refused, in both layouts.
+#[cfg(unix)]
+#[test]
+fn images_symlinked_out_of_the_folder_are_refused() {
+    use std::os::unix::fs::symlink;
+    let root = tempfile::tempdir().unwrap();
+    let outside = root.path().join("outside");
+    std::fs::create_dir(&outside).unwrap();
+    let dir = root.path().join("ring");
+    write_ring(&sphere(), &dir, 4, &[20.0], 32);
+    let images = dir.join(ring::IMAGES_DIR);
+    let first = std::fs::read_dir(&images)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .min()
+        .unwrap();
+    std::fs::rename(&first, outside.join("x.png")).unwrap();
+    symlink(outside.join("x.png"), &first).unwrap();
+    for calibration in [
+        dir.join("transforms.json"),
+        dir.join(ring::COLMAP_DIR).join("images.txt"),
+    ] {
+        let e = ImageSet::load(&calibration, SilhouetteSource::Auto)
+            .err()
+            .expect("a symlink out of the folder")
+            .to_string();
+        assert!(e.contains("symlink"), "{e}");
+        assert_eq!(e.lines().count(), 1);
+    }
+    // The same through a folder symlink.
+    std::fs::remove_file(&first).unwrap();
+    std::fs::rename(outside.join("x.png"), &first).unwrap();
+    let moved = root.path().join("images_elsewhere");
+    std::fs::rename(&images, &moved).unwrap();
+    symlink(&moved, &images).unwrap();
+    for calibration in [
+        dir.join("transforms.json"),
+        dir.join(ring::COLMAP_DIR).join("images.txt"),
+    ] {
+        let e = ImageSet::load(&calibration, SilhouetteSource::Auto)
+            .err()
+            .expect("a folder symlink out of the folder")
+            .to_string();
+        assert!(e.contains("symlink"), "{e}");
+    }
+}
+
+/// Thousands of views: finding their common view is bounded by the
+/// carving's work limit, refused in one line rather than run for minutes.
+#[test]
+fn ten_thousand_views_are_refused_by_the_work_bound() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = edited_ring(dir.path(), |v| {
+        let frames = v["frames"].as_array().unwrap().clone();
+        v["frames"] = serde_json::Value::Array(
+            (0..10_000)
+                .map(|i| frames[i % frames.len()].clone())
+                .collect(),
+        );
+    });
+    let e = carve_error(&json);
+    assert!(
+        e.contains("transforms.json") && e.contains("units of work") && e.contains("10000 views"),
+        "{e}"
+    );
+    assert_eq!(e.lines().count(), 1);
+}

@@ -112,6 +112,11 @@ pub fn run(ui: &Ui, args: &BuildArgs) -> Result<()> {
             })
         }
     })?;
+    if let (Some(scene), Some(path)) = (&input.scene, &args.input) {
+        // The report draws the textures: their pixels are checked now,
+        // before the output folder is touched.
+        super::scene::texture_budget(&path.display().to_string(), scene)?;
+    }
     let staging = staging::Staging::new(&args.out, args.input.as_deref())?;
     let Written {
         outputs,
@@ -387,7 +392,8 @@ fn write_all(
     let materials = input
         .scene
         .as_ref()
-        .map(|s| super::scene::render_materials(ui, name, s, s.merged().face_materials));
+        .map(|s| super::scene::render_materials(ui, name, s, s.merged().face_materials))
+        .transpose()?;
     let html = html::report(&html::Inputs {
         name,
         intro: vec![

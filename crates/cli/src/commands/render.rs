@@ -274,7 +274,7 @@ fn load(ui: &Ui, a: &RenderArgs, k: Kind) -> Result<(Drawable, String)> {
             super::scene::Input::Scene(scene) => {
                 let merged = scene.merged();
                 let materials =
-                    super::scene::render_materials(ui, &name, &scene, merged.face_materials);
+                    super::scene::render_materials(ui, &name, &scene, merged.face_materials)?;
                 let mesh = merged.mesh;
                 let n = |k: usize, w: &str| format!("{k} {w}{}", if k == 1 { "" } else { "s" });
                 let what = format!(

@@ -227,19 +227,57 @@ pub fn write_scene_chain(
     })
 }
 
+/// Checks that the base-colour textures `render_materials` would decode
+/// fit in one run's pixel budget
+/// ([`lodkit_particles::silhouette::images::MAX_RUN_PIXELS`]), from their
+/// headers alone (nothing is decoded). Errors: one line naming `name` and
+/// the texture image that does not fit. Cost: one header parse a texture.
+pub fn texture_budget(name: &str, scene: &Scene) -> anyhow::Result<()> {
+    use lodkit_particles::silhouette::images;
+    let mut budget = images::PixelBudget::run();
+    let mut charged = vec![false; scene.images.len()];
+    for m in &scene.materials {
+        let Some(image) = m
+            .base_color_texture
+            .and_then(|r| scene.textures.get(r.texture))
+            .map(|t| t.image)
+            .filter(|&i| i < scene.images.len())
+        else {
+            continue;
+        };
+        if std::mem::replace(&mut charged[image], true) {
+            continue;
+        }
+        let im = &scene.images[image];
+        if let Ok((w, h)) = images::image_size(&im.bytes) {
+            budget.charge(w, h).map_err(|e| {
+                let what = im.file_name.as_deref().unwrap_or("an embedded image");
+                anyhow::anyhow!(
+                    "{name}: texture image {image} ({}): {e}",
+                    lodkit_mesh::error::escape(what)
+                )
+            })?;
+        }
+    }
+    Ok(())
+}
+
 /// What `lodkit_render` needs to draw `scene`'s faces with their materials:
 /// each material's base colour factor and base colour texture, decoded
 /// (PNG or JPEG, by the one decoder, size-bounded before allocating), for
 /// a merged mesh whose faces have `face_materials`. A texture that does not
 /// decode is said in a warning naming `name` and left out (its faces show
-/// the factor alone).
+/// the factor alone). Errors: the textures' pixels together over the
+/// run's budget ([`texture_budget`], from their headers, before any is
+/// decoded), naming `name` and the texture.
 pub fn render_materials(
     ui: &Ui,
     name: &str,
     scene: &Scene,
     face_materials: Vec<u32>,
-) -> lodkit_render::Materials {
+) -> anyhow::Result<lodkit_render::Materials> {
     use lodkit_render::{Look, TextureImage, Wrap};
+    texture_budget(name, scene)?;
     let mut textures = Vec::new();
     // Scene texture index -> renderer texture index (decoded once).
     let mut decoded: Vec<Option<Option<usize>>> = vec![None; scene.textures.len()];
@@ -284,9 +322,9 @@ pub fn render_materials(
             }
         })
         .collect();
-    lodkit_render::Materials {
+    Ok(lodkit_render::Materials {
         face_looks: face_materials,
         looks,
         textures,
-    }
+    })
 }

@@ -75,26 +75,64 @@ pub fn strip_bom(bytes: &[u8]) -> &[u8] {
     bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes)
 }
 
-/// Resolves `name`, a path written inside a file (a glTF buffer URI after
-/// percent-decoding, a `.conf` scan name), against `dir`, the folder of
-/// the file that names it.
+/// Resolves `name`, a path written inside a file (a glTF buffer or image
+/// URI after percent-decoding, an `mtllib` or texture name, PLY's
+/// `TextureFile`, a `.conf` scan name, a NeRF `file_path`, a COLMAP image
+/// name), against `dir`, the folder of the file that names it. Every such
+/// path in lodkit goes through this one function.
 ///
-/// The rule: `name` must be a relative path that stays inside `dir`, made
-/// only of normal components and `.`; refused (with the reason, for the
-/// caller to put in its one-line error) are an empty name, an absolute
-/// path (`/…`, `\…`, a Windows drive or UNC prefix), any `..` component,
-/// a URI scheme (`file:`, `http:`, any `word:` — so also a name with a
-/// colon in its first component), a backslash (a Windows separator that
-/// would mean something else there) and a NUL byte. The check is lexical:
-/// symlinks inside `dir` are followed like any other file. Cost: linear in
-/// the name.
+/// The rule: `name` must be a relative path that stays inside `dir`, and
+/// must name something *in* it. Refused (with the reason, for the caller
+/// to put in its one-line error) are an empty name, a name that is only
+/// `.` components (the folder itself), an absolute path (`/…`, `\…`, a
+/// Windows drive or UNC prefix), any `..` component, a URI scheme (`file:`,
+/// `http:`, any `word:` — so also a name with a colon in its first
+/// component), a backslash (a Windows separator that would mean something
+/// else there) and a NUL byte. Then, when the path exists, its real path
+/// (every symlink resolved, [`std::fs::canonicalize`]) must lie inside the
+/// real path of `dir`: a symlink — to a file or to a folder on the way —
+/// that leads out of the folder is refused, as `lodkit serve` does for its
+/// roots.
+///
+/// Returns `dir` joined with `name` (as the user would write it, for
+/// messages); when nothing is there, the read that follows reports the
+/// missing file. Two spellings of one file (`a.png`, `./a.png`, a link
+/// inside the folder) have one [`real_path`]. Cost: linear in the name,
+/// plus two `realpath` calls.
 pub fn resolve_inside(dir: &Path, name: &str) -> std::result::Result<PathBuf, String> {
-    let refuse = |why: &str| {
-        Err(format!(
-            "'{}' {why} (only relative paths inside the file's own folder are read)",
-            crate::error::clip(name, 64)
-        ))
+    let joined = lexically_inside(dir, name)?;
+    let real = match std::fs::canonicalize(&joined) {
+        Ok(p) => p,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(joined),
+        Err(e) => return Err(refusal(name, &format!("cannot be resolved ({e})"))),
     };
+    let real_dir = std::fs::canonicalize(dir)
+        .map_err(|e| refusal(name, &format!("has no readable folder ({e})")))?;
+    if real != real_dir && real.starts_with(&real_dir) {
+        Ok(joined)
+    } else {
+        Err(refusal(name, "leads out of its folder through a symlink"))
+    }
+}
+
+/// `path` with every symlink resolved, or `path` itself when it cannot be
+/// (it does not exist): the key under which a file named several ways is
+/// read once.
+pub fn real_path(path: &Path) -> PathBuf {
+    std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf())
+}
+
+fn refusal(name: &str, why: &str) -> String {
+    format!(
+        "'{}' {why} (only relative paths inside the file's own folder are read)",
+        crate::error::clip(name, 64)
+    )
+}
+
+/// The lexical half of [`resolve_inside`]: `dir` joined with `name` when
+/// `name` passes the name rules, without touching the file system.
+pub fn lexically_inside(dir: &Path, name: &str) -> std::result::Result<PathBuf, String> {
+    let refuse = |why: &str| Err(refusal(name, why));
     if name.is_empty() {
         return refuse("is empty");
     }
@@ -109,12 +147,17 @@ pub fn resolve_inside(dir: &Path, name: &str) -> std::result::Result<PathBuf, St
         return refuse("is a URI or a drive path");
     }
     let rel = Path::new(name);
+    let mut normal = 0usize;
     for c in rel.components() {
         match c {
-            Component::Normal(_) | Component::CurDir => {}
+            Component::Normal(_) => normal += 1,
+            Component::CurDir => {}
             Component::ParentDir => return refuse("leaves its folder with '..'"),
             Component::RootDir | Component::Prefix(_) => return refuse("is an absolute path"),
         }
+    }
+    if normal == 0 {
+        return refuse("names the folder itself, not a file in it");
     }
     Ok(dir.join(rel))
 }
@@ -150,6 +193,64 @@ mod tests {
         ] {
             assert!(resolve_inside(d, bad).is_err(), "{bad:?} was accepted");
         }
+    }
+
+    #[test]
+    fn a_name_must_name_something_in_the_folder() {
+        let d = Path::new("/data/scans");
+        for bad in [".", "./", "././", "./."] {
+            let e = resolve_inside(d, bad).unwrap_err();
+            assert!(e.contains("names the folder itself"), "{bad:?}: {e}");
+        }
+        // `.png` added to `.` is a file named `..png` in the folder.
+        assert_eq!(
+            resolve_inside(d, "..png").unwrap(),
+            Path::new("/data/scans/..png")
+        );
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn symlinks_out_of_the_folder_are_refused_and_those_inside_followed() {
+        use std::os::unix::fs::symlink;
+        let root = tempfile::tempdir().unwrap();
+        let outside = root.path().join("outside");
+        let dir = root.path().join("dir");
+        std::fs::create_dir_all(outside.join("deep")).unwrap();
+        std::fs::create_dir_all(dir.join("sub")).unwrap();
+        std::fs::write(outside.join("secret.png"), b"s").unwrap();
+        std::fs::write(dir.join("sub/own.png"), b"o").unwrap();
+        symlink(outside.join("secret.png"), dir.join("file_link.png")).unwrap();
+        symlink(&outside, dir.join("dir_link")).unwrap();
+        symlink(dir.join("sub/own.png"), dir.join("inner_link.png")).unwrap();
+        symlink("sub", dir.join("sub_link")).unwrap();
+        symlink(&dir, dir.join("loop")).unwrap();
+        for bad in [
+            "file_link.png",
+            "dir_link/secret.png",
+            "./dir_link/deep/../secret.png",
+        ] {
+            let e = resolve_inside(&dir, bad).unwrap_err();
+            assert!(e.contains("symlink") || e.contains(".."), "{bad}: {e}");
+        }
+        let own = std::fs::canonicalize(dir.join("sub/own.png")).unwrap();
+        for good in [
+            "inner_link.png",
+            "sub_link/own.png",
+            "./sub/own.png",
+            "loop/sub/own.png",
+        ] {
+            let p = resolve_inside(&dir, good).unwrap();
+            assert_eq!(p, dir.join(good));
+            assert_eq!(real_path(&p), own, "{good}");
+        }
+        // Nothing there: the lexical path, for the read to report.
+        assert_eq!(
+            resolve_inside(&dir, "missing.png").unwrap(),
+            dir.join("missing.png")
+        );
+        // A symlink to the folder itself names no file in it.
+        assert!(resolve_inside(&dir, "loop").is_err());
     }
 
     #[test]

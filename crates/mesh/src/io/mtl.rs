@@ -53,10 +53,13 @@ fn map_file(value: &str) -> &str {
     }
 }
 
-/// Reads texture files once each and hands out texture indices.
+/// Reads texture files once each and hands out texture indices: a file
+/// named several ways (`a.png`, `./a.png`, through a link) is one image,
+/// keyed by its real path.
 struct Textures<'a> {
     dir: Option<&'a Path>,
     by_name: BTreeMap<String, Option<usize>>,
+    by_path: BTreeMap<std::path::PathBuf, usize>,
 }
 
 impl Textures<'_> {
@@ -85,6 +88,10 @@ impl Textures<'_> {
                 return None;
             }
         };
+        let real = crate::io::input::real_path(&path);
+        if let Some(&t) = self.by_path.get(&real) {
+            return Some(t);
+        }
         let bytes = match crate::io::input::read_file(&path) {
             Ok(b) => b,
             Err(e) => {
@@ -109,29 +116,51 @@ impl Textures<'_> {
             image: scene.images.len() - 1,
             sampler: None,
         });
+        self.by_path.insert(real, scene.textures.len() - 1);
         Some(scene.textures.len() - 1)
     }
 }
 
-fn float(s: Option<&String>) -> Option<f32> {
-    s?.split_whitespace()
-        .next()?
-        .parse::<f32>()
-        .ok()
-        .filter(|x| x.is_finite())
+/// The first number of an MTL value (`None` when absent or not a number);
+/// an infinite or NaN number is an error (`1e39` in an `f32` is infinite).
+fn float(m: &tobj::Material, key: &str) -> Result<Option<f32>, ParseError> {
+    let x = m
+        .unknown_param
+        .get(key)
+        .and_then(|s| s.split_whitespace().next()?.parse::<f32>().ok());
+    finite(m, key, x.map(|x| [x]).as_ref()).map(|_| x)
 }
 
-fn finite3(v: Option<[f32; 3]>) -> Option<[f32; 3]> {
-    v.filter(|c| c.iter().all(|x| x.is_finite()))
+/// `v` unchanged when every value is finite, else an error naming the
+/// material and the statement.
+fn finite<const N: usize>(
+    m: &tobj::Material,
+    key: &str,
+    v: Option<&[f32; N]>,
+) -> Result<Option<[f32; N]>, ParseError> {
+    match v {
+        Some(c) if !c.iter().all(|x| x.is_finite()) => Err(parse_err!(
+            "MTL material '{}': {key} {c:?} is not a finite number",
+            clip(&m.name, 64)
+        )),
+        v => Ok(v.copied()),
+    }
 }
 
-fn material(m: &tobj::Material, tex: &mut Textures, scene: &mut Scene) -> Material {
+fn material(
+    m: &tobj::Material,
+    tex: &mut Textures,
+    scene: &mut Scene,
+) -> Result<Material, ParseError> {
     let p = &m.unknown_param;
-    let kd = finite3(m.diffuse).unwrap_or([1.0; 3]);
-    let alpha = m
-        .dissolve
-        .filter(|d| d.is_finite())
-        .or_else(|| float(p.get("Tr")).map(|t| 1.0 - t))
+    // A colour factor outside [0, 1] means nothing in glTF's PBR model and
+    // is refused by its readers: clamped here, as MTL has no range rule.
+    let kd = finite(m, "Kd", m.diffuse.as_ref())?
+        .unwrap_or([1.0; 3])
+        .map(|x| x.clamp(0.0, 1.0));
+    let d = finite(m, "d", m.dissolve.map(|d| [d]).as_ref())?.map(|[d]| d);
+    let alpha = d
+        .or(float(m, "Tr")?.map(|t| 1.0 - t))
         .unwrap_or(1.0)
         .clamp(0.0, 1.0);
     let tref = |t: Option<usize>| t.map(TextureRef::new);
@@ -139,14 +168,14 @@ fn material(m: &tobj::Material, tex: &mut Textures, scene: &mut Scene) -> Materi
         .normal_texture
         .as_deref()
         .or(p.get("norm").map(String::as_str));
-    Material {
+    Ok(Material {
         name: Some(m.name.clone()),
         base_color: [kd[0], kd[1], kd[2], alpha],
         base_color_texture: tref(tex.get(m.diffuse_texture.as_deref(), scene)),
-        metallic: float(p.get("Pm")).unwrap_or(0.0).clamp(0.0, 1.0),
-        roughness: float(p.get("Pr")).unwrap_or(1.0).clamp(0.0, 1.0),
+        metallic: float(m, "Pm")?.unwrap_or(0.0).clamp(0.0, 1.0),
+        roughness: float(m, "Pr")?.unwrap_or(1.0).clamp(0.0, 1.0),
         normal_texture: tref(tex.get(normal, scene)),
-        emissive: finite3(m.emissive)
+        emissive: finite(m, "Ke", m.emissive.as_ref())?
             .unwrap_or([0.0; 3])
             .map(|x| x.clamp(0.0, 1.0)),
         emissive_texture: tref(tex.get(p.get("map_Ke").map(String::as_str), scene)),
@@ -156,17 +185,17 @@ fn material(m: &tobj::Material, tex: &mut Textures, scene: &mut Scene) -> Materi
             AlphaMode::Opaque
         },
         mtl: MtlExtras {
-            ambient: finite3(m.ambient),
-            specular: finite3(m.specular),
-            shininess: m.shininess.filter(|x| x.is_finite()),
-            optical_density: m.optical_density.filter(|x| x.is_finite()),
+            ambient: finite(m, "Ka", m.ambient.as_ref())?,
+            specular: finite(m, "Ks", m.specular.as_ref())?,
+            shininess: finite(m, "Ns", m.shininess.map(|x| [x]).as_ref())?.map(|[x]| x),
+            optical_density: finite(m, "Ni", m.optical_density.map(|x| [x]).as_ref())?.map(|[x]| x),
             illum: m.illumination_model,
             specular_texture: tex.get(m.specular_texture.as_deref(), scene),
             shininess_texture: tex.get(m.shininess_texture.as_deref(), scene),
             dissolve_texture: tex.get(m.dissolve_texture.as_deref(), scene),
         },
         ..Default::default()
-    }
+    })
 }
 
 /// Reads an OBJ and its MTL files as a scene (see the module docs).
@@ -174,6 +203,27 @@ fn material(m: &tobj::Material, tex: &mut Textures, scene: &mut Scene) -> Materi
 /// `None` reads the geometry with no materials. Errors: as
 /// [`super::obj::read`].
 pub fn read_scene(bytes: &[u8], base_dir: Option<&Path>) -> Result<Scene, ParseError> {
+    read_scene_with(bytes, base_dir, &|name| {
+        let dir = base_dir.ok_or("no folder to resolve it against")?;
+        let path = crate::io::input::resolve_inside(dir, name)?;
+        crate::io::input::read_file(&path).map_err(|e| e.to_string())
+    })
+}
+
+/// [`read_scene`] of an OBJ whose every `mtllib` reads as `mtl`, with no
+/// folder (so no texture file is read): the fuzz target's entry.
+#[doc(hidden)]
+pub fn read_scene_for_fuzzing(obj: &[u8], mtl: &[u8]) -> Result<Scene, ParseError> {
+    read_scene_with(obj, None, &|_| Ok(mtl.to_vec()))
+}
+
+/// [`read_scene`] with `library` giving the bytes of an `mtllib` name
+/// (or why it cannot).
+fn read_scene_with(
+    bytes: &[u8],
+    base_dir: Option<&Path>,
+    library: &dyn Fn(&str) -> Result<Vec<u8>, String>,
+) -> Result<Scene, ParseError> {
     let bytes = crate::io::input::strip_bom(bytes);
     let text = std::str::from_utf8(bytes)
         .map_err(|e| parse_err!("not a text file: invalid UTF-8 at byte {}", e.valid_up_to()))?;
@@ -195,16 +245,9 @@ pub fn read_scene(bytes: &[u8], base_dir: Option<&Path>) -> Result<Scene, ParseE
                 .push(format!("material library '{shown}' skipped: {why}"));
             Err(tobj::LoadError::OpenFileFailed)
         };
-        let Some(dir) = base_dir else {
-            return fail("no folder to resolve it against".into());
-        };
-        let path = match crate::io::input::resolve_inside(dir, &name) {
-            Ok(p) => p,
-            Err(why) => return fail(why),
-        };
-        match crate::io::input::read_file(&path) {
+        match library(&name) {
             Ok(b) => tobj::load_mtl_buf(&mut b.as_slice()).or_else(|e| fail(e.to_string())),
-            Err(e) => fail(e.to_string()),
+            Err(why) => fail(why),
         }
     })
     .map_err(|e| parse_err!("OBJ: {e}"))?;
@@ -215,9 +258,10 @@ pub fn read_scene(bytes: &[u8], base_dir: Option<&Path>) -> Result<Scene, ParseE
     let mut tex = Textures {
         dir: base_dir,
         by_name: BTreeMap::new(),
+        by_path: BTreeMap::new(),
     };
     for m in materials.unwrap_or_default() {
-        let mat = material(&m, &mut tex, &mut scene);
+        let mat = material(&m, &mut tex, &mut scene)?;
         scene.materials.push(mat);
     }
     // Objects by name, in order of first appearance.

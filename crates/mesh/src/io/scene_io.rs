@@ -164,6 +164,22 @@ fn image_ext(mime: &str) -> &'static str {
     }
 }
 
+/// `name` when its extension is an image's (`png`, `jpg`, `jpeg`, `webp`,
+/// `ktx2`, any case), else `name.ext`: a texture copy never takes the
+/// name of a mesh, material or manifest file.
+fn with_image_ext(name: &str, ext: &str) -> String {
+    let is_image = name.rsplit_once('.').is_some_and(|(_, e)| {
+        ["png", "jpg", "jpeg", "webp", "ktx2"]
+            .iter()
+            .any(|k| e.eq_ignore_ascii_case(k))
+    });
+    if is_image {
+        name.to_owned()
+    } else {
+        format!("{name}.{ext}")
+    }
+}
+
 /// A file name with no folder part and nothing a path rule would refuse.
 fn plain_file_name(name: &str) -> Option<&str> {
     let ok = !name.is_empty()
@@ -177,13 +193,21 @@ fn plain_file_name(name: &str) -> Option<&str> {
 /// Where image `bytes` go beside `dir`: `wanted` if it is free or already
 /// holds these bytes, else `stem_1.ext`, `stem_2.ext`… — never a file
 /// that holds other bytes (an input, another texture), never a name
-/// `taken` by this run. Returns the name and whether it must be written.
-fn place_image(dir: &Path, wanted: &str, bytes: &[u8], taken: &[String]) -> (String, bool) {
+/// `taken` by this run. `first` is the first suffix to try (the names
+/// before it were tried for this `wanted` already). Returns the name,
+/// whether it must be written, and its suffix.
+fn place_image(
+    dir: &Path,
+    wanted: &str,
+    bytes: &[u8],
+    taken: &std::collections::BTreeSet<String>,
+    first: u32,
+) -> (String, bool, u32) {
     let (stem, ext) = match wanted.rsplit_once('.') {
         Some((s, e)) => (s.to_owned(), format!(".{e}")),
         None => (wanted.to_owned(), String::new()),
     };
-    for k in 0u32.. {
+    for k in first.. {
         let name = if k == 0 {
             wanted.to_owned()
         } else {
@@ -194,9 +218,9 @@ fn place_image(dir: &Path, wanted: &str, bytes: &[u8], taken: &[String]) -> (Str
         }
         let p = dir.join(&name);
         match std::fs::symlink_metadata(&p) {
-            Err(_) => return (name, true),
+            Err(_) => return (name, true, k),
             Ok(md) if md.is_file() && std::fs::read(&p).is_ok_and(|b| b == bytes) => {
-                return (name, false);
+                return (name, false, k);
             }
             Ok(_) => continue,
         }
@@ -273,26 +297,34 @@ fn save_obj(path: &Path, scene: &Scene) -> Result<()> {
         .collect();
     let used = super::mtl::used_images(scene);
     let mut files: Vec<Option<String>> = vec![None; scene.images.len()];
-    let mut taken: Vec<String> = Vec::new();
+    let mtl_name = format!("{stem_safe}.mtl");
+    // The files this run writes are never a texture's name.
+    let mut taken = std::collections::BTreeSet::from([mtl_name.clone()]);
+    taken.extend(path.file_name().map(|n| n.to_string_lossy().into_owned()));
+    // Per wanted name, the next suffix to try: many images wanting one
+    // name cost one probe each, not one per earlier image.
+    let mut next: std::collections::BTreeMap<String, u32> = std::collections::BTreeMap::new();
     for (i, im) in scene.images.iter().enumerate() {
         if !used[i] {
             continue;
         }
         let fallback = format!("{stem_safe}_{i}.{}", image_ext(&im.mime_type));
+        let ext = image_ext(&im.mime_type);
         let wanted = im
             .file_name
             .as_deref()
             .and_then(plain_file_name)
-            .map(str::to_owned)
+            .map(|n| with_image_ext(n, ext))
             .unwrap_or(fallback);
-        let (name, write) = place_image(&dir, &wanted, &im.bytes, &taken);
+        let first = next.get(&wanted).copied().unwrap_or(0);
+        let (name, write, k) = place_image(&dir, &wanted, &im.bytes, &taken, first);
+        next.insert(wanted, k);
         if write {
             super::write_atomic(&dir.join(&name), &im.bytes)?;
         }
-        taken.push(name.clone());
+        taken.insert(name.clone());
         files[i] = Some(name);
     }
-    let mtl_name = format!("{stem_safe}.mtl");
     let (obj, mtl) =
         super::mtl::write_scene(scene, &mtl_name, &files).map_err(|e| Error::io(path, e))?;
     if let Some(mtl) = mtl {

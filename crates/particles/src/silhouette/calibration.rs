@@ -15,7 +15,7 @@
 use std::path::{Path, PathBuf};
 
 use glam::{DMat3, DQuat, DVec3};
-use lodkit_mesh::io::input::{read_file, resolve_inside, strip_bom};
+use lodkit_mesh::io::input::{lexically_inside, read_file, resolve_inside, strip_bom};
 
 use crate::error::{Error, Result};
 use crate::silhouette::images;
@@ -255,27 +255,29 @@ fn check_lens(file: &Path, who: &str, l: &Lens) -> Result<()> {
 
 // ---------------------------------------------------------------- COLMAP
 
-/// The image folder of a COLMAP model in `model_dir`: `P/images` for a
-/// model in `P/sparse/N` or `P/sparse` (COLMAP's project layout), else
-/// `model_dir/images` when it exists, else `model_dir`.
-fn colmap_image_dir(model_dir: &Path) -> PathBuf {
+/// The image folder of a COLMAP model in `model_dir`, as the folder the
+/// names are kept inside and the prefix of every name: `P` and `images/`
+/// for a model in `P/sparse/N` or `P/sparse` (COLMAP's project layout),
+/// else `model_dir` and `images/` when `model_dir/images` exists, else
+/// `model_dir` and no prefix. So `images/` itself is inside the folder
+/// checked: an image folder that is a symlink out of it is refused.
+fn colmap_image_dir(model_dir: &Path) -> (PathBuf, &'static str) {
     let mut p = model_dir.to_path_buf();
     for _ in 0..2 {
         if p.file_name().is_some_and(|n| n == "sparse")
             && let Some(project) = p.parent()
         {
-            return project.join("images");
+            return (project.to_path_buf(), "images/");
         }
         match p.parent() {
             Some(q) => p = q.to_path_buf(),
             None => break,
         }
     }
-    let own = model_dir.join("images");
-    if own.is_dir() {
-        own
+    if model_dir.join("images").is_dir() {
+        (model_dir.to_path_buf(), "images/")
     } else {
-        model_dir.to_path_buf()
+        (model_dir.to_path_buf(), "")
     }
 }
 
@@ -390,8 +392,13 @@ fn parse_colmap(cameras: &Path, ctext: &str, images: &Path, itext: &str) -> Resu
         return err(cameras, "lists no camera");
     }
     let model_dir = images.parent().unwrap_or(Path::new("."));
-    let image_dir = colmap_image_dir(model_dir);
-    let mask_dir = image_dir.with_file_name("masks");
+    let (base, prefix) = colmap_image_dir(model_dir);
+    // Masks sit in `masks/` beside `images/`.
+    let (mask_base, mask_prefix) = if prefix.is_empty() {
+        (base.with_file_name("masks"), "")
+    } else {
+        (base.clone(), "masks/")
+    };
     let mut views = Vec::new();
     // images.txt alternates a pose line and a line of 2-D points (which
     // may be empty); comments are skipped, blank lines count.
@@ -403,6 +410,19 @@ fn parse_colmap(cameras: &Path, ctext: &str, images: &Path, itext: &str) -> Resu
         }
         if !pose_line {
             pose_line = true;
+            // X Y POINT3D_ID triples (or nothing): a file without these
+            // lines would otherwise read every second image as one.
+            let t: Vec<&str> = trimmed.split_whitespace().collect();
+            if !t.len().is_multiple_of(3) || t.iter().any(|s| s.parse::<f64>().is_err()) {
+                return err(
+                    images,
+                    format!(
+                        "line {}: expected the POINTS2D line (X Y POINT3D_ID triples, or an empty \
+                         line) after the pose line above; images.txt has two lines per image",
+                        no + 1
+                    ),
+                );
+            }
             continue;
         }
         if trimmed.is_empty() {
@@ -447,11 +467,24 @@ fn parse_colmap(cameras: &Path, ctext: &str, images: &Path, itext: &str) -> Resu
                 format!("{who}: camera {cam} is not in {}", cameras.display()),
             );
         };
-        let image = resolve_inside(&image_dir, &name)
+        // The name alone must pass the rule (no `..`, not absolute), then
+        // with its folder prefix, inside the project folder.
+        let image = lexically_inside(&base, &name)
+            .and_then(|_| resolve_inside(&base, &format!("{prefix}{name}")))
             .or_else(|why| err(images, format!("{who}: image name {why}")))?;
-        let mask = [mask_dir.join(&name), mask_dir.join(format!("{name}.png"))]
-            .into_iter()
-            .find(|p| p.is_file());
+        // A mask beside it in `masks/`, by the same name or with `.png`
+        // added; through the same path rule (a symlink out is refused).
+        let mut mask = None;
+        for m in [name.clone(), format!("{name}.png")] {
+            match resolve_inside(&mask_base, &format!("{mask_prefix}{m}")) {
+                Ok(p) if p.is_file() => {
+                    mask = Some(p);
+                    break;
+                }
+                Ok(_) => {}
+                Err(why) => return err(images, format!("{who}: mask {why}")),
+            }
+        }
         if views.len() >= MAX_VIEWS {
             return err(images, format!("lists more than {MAX_VIEWS} images"));
         }
@@ -577,18 +610,25 @@ fn parse_transforms(path: &Path, text: &str) -> Result<Calibration> {
         let Some(file_path) = file_path else {
             return err(path, format!("{who}: has no file_path string"));
         };
-        let resolve = |p: &str, what: &str| -> Result<PathBuf> {
-            let p = percent_decode(p).or_else(|why| err(path, format!("{who}: {what} {why}")))?;
+        let resolve = |p: &str, what: &str, png: bool| -> Result<PathBuf> {
+            let mut p =
+                percent_decode(p).or_else(|why| err(path, format!("{who}: {what} {why}")))?;
+            // The original NeRF scenes name `./train/r_0` for
+            // `train/r_0.png`: the extension is added to the name, and the
+            // name with it passes the one path rule.
+            if png {
+                let lexical = lexically_inside(dir, &p)
+                    .or_else(|why| err(path, format!("{who}: {what} {why}")))?;
+                if lexical.extension().is_none() && !lexical.is_file() {
+                    p.push_str(".png");
+                }
+            }
             resolve_inside(dir, &p).or_else(|why| err(path, format!("{who}: {what} {why}")))
         };
-        let mut image = resolve(file_path, "file_path")?;
-        // The original NeRF scenes name `./train/r_0` for `train/r_0.png`.
-        if image.extension().is_none() && !image.is_file() {
-            image.set_extension("png");
-        }
+        let image = resolve(file_path, "file_path", true)?;
         let mask = match f.get("mask_path") {
             None | Some(Json::Null) => None,
-            Some(Json::String(m)) => Some(resolve(m, "mask_path")?),
+            Some(Json::String(m)) => Some(resolve(m, "mask_path", false)?),
             Some(_) => return err(path, format!("{who}: mask_path is not a string")),
         };
         // Per-frame intrinsics override the shared ones (nerfstudio).
@@ -653,6 +693,15 @@ fn parse_transforms(path: &Path, text: &str) -> Result<Calibration> {
                 format!("{who}: transform_matrix is not a 4×4 array of finite numbers"),
             )
         })?;
+        if m[3] != [0.0, 0.0, 0.0, 1.0] {
+            return err(
+                path,
+                format!(
+                    "{who}: transform_matrix's bottom row is {:?}, not [0, 0, 0, 1] (not a rigid camera pose)",
+                    m[3]
+                ),
+            );
+        }
         // Camera-to-world, OpenGL axes: columns right, up, back; the
         // OpenCV frame flips up and back.
         let right = DVec3::new(m[0][0], m[1][0], m[2][0]);

@@ -2,8 +2,10 @@
 //! RGB, and each view's silhouette from a mask image, the alpha channel or
 //! a background colour key.
 //!
-//! Sizes are read from the header and bounded ([`MAX_SIDE`] a side)
-//! before any pixel buffer is allocated; a size that disagrees with the
+//! Sizes are read from the header and bounded ([`MAX_SIDE`] a side, and
+//! [`MAX_RUN_PIXELS`] for all the images of one run, [`PixelBudget`])
+//! before any pixel buffer is allocated, so a small file whose header
+//! claims 16384² pixels costs nothing; a size that disagrees with the
 //! calibration's intrinsics is an error naming the camera.
 use std::path::Path;
 
@@ -47,6 +49,51 @@ pub struct ViewImage {
     pub silhouette: Vec<bool>,
 }
 
+/// Most pixels the images of one run may hold together (64 Mi: 64 views
+/// of 1024², or one 8192² texture). Each decoded pixel costs 4 to 12 bytes
+/// while decoding and some 8 kept (colour, silhouette, summed-area table),
+/// so this keeps a run's images under about 700 MB.
+pub const MAX_RUN_PIXELS: u64 = 1 << 26;
+
+/// The pixels one run may still decode; every decode charges its header
+/// size before allocating.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PixelBudget {
+    left: u64,
+}
+
+impl PixelBudget {
+    /// A budget of `pixels`.
+    pub const fn new(pixels: u64) -> PixelBudget {
+        PixelBudget { left: pixels }
+    }
+
+    /// A run's budget, [`MAX_RUN_PIXELS`].
+    pub const fn run() -> PixelBudget {
+        PixelBudget::new(MAX_RUN_PIXELS)
+    }
+
+    /// Pixels still allowed.
+    pub fn left(&self) -> u64 {
+        self.left
+    }
+
+    /// Takes `width × height` pixels from the budget. Errors (one phrase):
+    /// the image does not fit in what is left.
+    pub fn charge(&mut self, width: u32, height: u32) -> std::result::Result<(), String> {
+        let px = u64::from(width) * u64::from(height);
+        if px > self.left {
+            return Err(format!(
+                "an image of {width}x{height} pixels does not fit in the {} pixels left of the \
+                 run's budget of {MAX_RUN_PIXELS} (all its images together)",
+                self.left
+            ));
+        }
+        self.left -= px;
+        Ok(())
+    }
+}
+
 /// A PNG or JPEG decoded to RGBA8 ([`decode_rgba`]).
 #[derive(Debug, Clone)]
 pub struct Decoded {
@@ -66,15 +113,37 @@ pub struct Decoded {
 /// photographs here and for textures by `lodkit render`.
 ///
 /// Sizes are read from the header and bounded (`1..=MAX_SIDE` a side,
-/// [`crate::silhouette::calibration::MAX_SIDE`]) before any pixel buffer is
-/// allocated. Errors: one phrase saying what is wrong with the bytes
-/// (the caller names the file). Cost: `O(width × height)`.
+/// [`crate::silhouette::calibration::MAX_SIDE`], at most
+/// [`MAX_RUN_PIXELS`]) before any pixel buffer is allocated. Errors: one
+/// phrase saying what is wrong with the bytes (the caller names the
+/// file). Cost: `O(width × height)`; memory about 12 bytes a pixel at
+/// the peak.
 pub fn decode_rgba(bytes: &[u8]) -> std::result::Result<Decoded, String> {
     decode(bytes)
 }
 
+fn check_size(w: u32, h: u32) -> std::result::Result<(), String> {
+    if w == 0 || h == 0 || w > MAX_SIDE || h > MAX_SIDE {
+        return Err(format!(
+            "image size {w}x{h} is outside 1..={MAX_SIDE} a side"
+        ));
+    }
+    if u64::from(w) * u64::from(h) > MAX_RUN_PIXELS {
+        return Err(format!(
+            "image size {w}x{h} is over the {MAX_RUN_PIXELS} pixels one run may decode"
+        ));
+    }
+    Ok(())
+}
+
 fn is_jpeg(bytes: &[u8]) -> bool {
     bytes.starts_with(&[0xFF, 0xD8, 0xFF])
+}
+
+/// Width and height of PNG or JPEG bytes, from the header only (nothing
+/// is decoded). Errors: one phrase, as [`decode_rgba`].
+pub fn image_size(bytes: &[u8]) -> std::result::Result<(u32, u32), String> {
+    size_of(bytes)
 }
 
 /// Width and height of a PNG or JPEG from its header only.
@@ -102,11 +171,7 @@ fn size_of(bytes: &[u8]) -> std::result::Result<(u32, u32), String> {
 
 fn decode(bytes: &[u8]) -> std::result::Result<Decoded, String> {
     let (w, h) = size_of(bytes)?;
-    if w == 0 || h == 0 || w > MAX_SIDE || h > MAX_SIDE {
-        return Err(format!(
-            "image size {w}x{h} is outside 1..={MAX_SIDE} a side"
-        ));
-    }
+    check_size(w, h)?;
     let px = w as usize * h as usize;
     if is_jpeg(bytes) {
         let opts = zune_jpeg::zune_core::options::DecoderOptions::default()
@@ -161,19 +226,13 @@ fn decode(bytes: &[u8]) -> std::result::Result<Decoded, String> {
     if line < w as usize * ch || buf.len() < line * h as usize {
         return Err("PNG rows shorter than its size says".into());
     }
-    let mut rgba = Vec::with_capacity(px * 4);
-    for y in 0..h as usize {
-        let row = &buf[y * line..y * line + w as usize * ch];
-        for p in row.chunks_exact(ch) {
-            let v = match ch {
-                1 => [p[0], p[0], p[0], 255],
-                2 => [p[0], p[0], p[0], p[1]],
-                3 => [p[0], p[1], p[2], 255],
-                _ => [p[0], p[1], p[2], p[3]],
-            };
-            rgba.extend_from_slice(&v);
-        }
-    }
+    let rgba = if ch == 4 && line == w as usize * 4 {
+        // Already RGBA8, rows packed: the decode buffer is the image.
+        buf.truncate(px * 4);
+        buf
+    } else {
+        to_rgba(&buf, line, w as usize, h as usize, ch)
+    };
     // An alpha channel that is opaque everywhere says nothing about the
     // object (a photograph saved as RGBA): treated as no alpha.
     let has_alpha = (ch == 2 || ch == 4) && rgba.chunks_exact(4).any(|p| p[3] < 255);
@@ -185,7 +244,35 @@ fn decode(bytes: &[u8]) -> std::result::Result<Decoded, String> {
     })
 }
 
-fn read_image(file: &Path, who: &str, path: &Path, what: &str) -> Result<Decoded> {
+/// Rows of `ch` channels (grey, grey + alpha, RGB, RGBA), `line` bytes
+/// apart, as packed RGBA8.
+fn to_rgba(buf: &[u8], line: usize, w: usize, h: usize, ch: usize) -> Vec<u8> {
+    let mut rgba = Vec::with_capacity(w * h * 4);
+    for y in 0..h {
+        let row = &buf[y * line..y * line + w * ch];
+        for p in row.chunks_exact(ch) {
+            let v = match ch {
+                1 => [p[0], p[0], p[0], 255],
+                2 => [p[0], p[0], p[0], p[1]],
+                3 => [p[0], p[1], p[2], 255],
+                _ => [p[0], p[1], p[2], p[3]],
+            };
+            rgba.extend_from_slice(&v);
+        }
+    }
+    rgba
+}
+
+/// Reads and decodes `path` when its header says `size` (checked before
+/// any pixel is decoded); `mismatch` words the error when it does not.
+fn read_image(
+    file: &Path,
+    who: &str,
+    path: &Path,
+    what: &str,
+    size: (u32, u32),
+    mismatch: &dyn Fn(u32, u32) -> String,
+) -> Result<Decoded> {
     if !path.is_file() {
         return Err(Error::Input(format!(
             "{}: {who}: {what} {} is missing",
@@ -195,6 +282,21 @@ fn read_image(file: &Path, who: &str, path: &Path, what: &str) -> Result<Decoded
     }
     let bytes =
         read_file(path).map_err(|e| Error::Input(format!("{}: {who}: {e}", file.display())))?;
+    let bad = |e: String| {
+        Error::Input(format!(
+            "{}: {who}: {what} {}: {e}",
+            file.display(),
+            path.display()
+        ))
+    };
+    let (w, h) = size_of(&bytes).map_err(bad)?;
+    if (w, h) != size {
+        return Err(Error::Input(format!(
+            "{}: {who}: {}",
+            file.display(),
+            mismatch(w, h)
+        )));
+    }
     decode(&bytes).map_err(|e| {
         Error::Input(format!(
             "{}: {who}: {what} {}: {e}",
@@ -209,17 +311,13 @@ fn read_image(file: &Path, who: &str, path: &Path, what: &str) -> Result<Decoded
 /// not the intrinsics' `width × height`, no silhouette source.
 pub fn load(file: &Path, view: &View, source: SilhouetteSource) -> Result<ViewImage> {
     let who = &view.label;
-    let img = read_image(file, who, &view.image, "image")?;
     let (w, h) = (view.lens.width, view.lens.height);
-    if (img.width, img.height) != (w, h) {
-        return Err(Error::Input(format!(
-            "{}: {who}: image {} is {}x{}, the intrinsics say {w}x{h}",
-            file.display(),
-            view.image.display(),
-            img.width,
-            img.height
-        )));
-    }
+    let img = read_image(file, who, &view.image, "image", (w, h), &|iw, ih| {
+        format!(
+            "image {} is {iw}x{ih}, the intrinsics say {w}x{h}",
+            view.image.display()
+        )
+    })?;
     let source = match source {
         SilhouetteSource::Auto if view.mask.is_some() => SilhouetteSource::Masks,
         SilhouetteSource::Auto if img.has_alpha => SilhouetteSource::Alpha,
@@ -250,16 +348,9 @@ pub fn load(file: &Path, view: &View, source: SilhouetteSource) -> Result<ViewIm
                     file.display()
                 )));
             };
-            let m = read_image(file, who, mp, "mask")?;
-            if (m.width, m.height) != (w, h) {
-                return Err(Error::Input(format!(
-                    "{}: {who}: mask {} is {}x{}, the image is {w}x{h}",
-                    file.display(),
-                    mp.display(),
-                    m.width,
-                    m.height
-                )));
-            }
+            let m = read_image(file, who, mp, "mask", (w, h), &|mw, mh| {
+                format!("mask {} is {mw}x{mh}, the image is {w}x{h}", mp.display())
+            })?;
             m.rgba.chunks_exact(4).map(|p| p[0] >= 128).collect()
         }
         SilhouetteSource::Key { colour, tolerance } => img

@@ -44,6 +44,9 @@ use sat::Sat;
 const BOX_LEVEL: u8 = 6;
 /// Deepest automatic depth.
 const MAX_AUTO_DEPTH: u8 = 10;
+/// Views are decoded in parallel batches of about this many pixels, so
+/// the decoders' working memory (some 16 bytes a pixel) stays bounded.
+pub const DECODE_BATCH_PIXELS: u64 = 1 << 23;
 
 /// A calibration with its decoded images and silhouette tables.
 pub struct ImageSet {
@@ -60,19 +63,50 @@ impl ImageSet {
     ///
     /// Errors: one line naming the calibration file and the camera — a
     /// malformed line or key, an image missing, unreadable or not of the
-    /// intrinsics' size, no silhouette source, an empty silhouette.
-    /// Memory: 8 bytes a pixel of every view.
+    /// intrinsics' size (checked from its header, before decoding), no
+    /// silhouette source, an empty silhouette; the views' pixels together
+    /// over [`images::MAX_RUN_PIXELS`] (checked from the calibration,
+    /// before any image is read). Memory: 8 bytes a pixel of every view,
+    /// plus some 16 bytes a pixel of the views being decoded (at most
+    /// [`DECODE_BATCH_PIXELS`] at once).
     pub fn load(path: &Path, source: SilhouetteSource) -> Result<ImageSet> {
         let calibration = calibration::read(path)?;
         let file = calibration.file.clone();
-        // Decoded in parallel; the first failing view in file order is
-        // reported, whatever the thread count.
-        let loaded: Vec<Result<ViewImage>> = calibration
-            .views
-            .par_iter()
-            .map(|v| images::load(&file, v, source))
-            .collect();
-        let images: Vec<ViewImage> = loaded.into_iter().collect::<Result<_>>()?;
+        let mut budget = images::PixelBudget::run();
+        for v in &calibration.views {
+            budget.charge(v.lens.width, v.lens.height).map_err(|e| {
+                Error::Input(format!(
+                    "{}: {}: {e}; {} views of {}x{} in all",
+                    file.display(),
+                    v.label,
+                    calibration.views.len(),
+                    v.lens.width,
+                    v.lens.height
+                ))
+            })?;
+        }
+        // Decoded in parallel, in batches of bounded pixels; the first
+        // failing view in file order is reported, whatever the thread
+        // count.
+        let mut images: Vec<ViewImage> = Vec::with_capacity(calibration.views.len());
+        let mut start = 0;
+        while start < calibration.views.len() {
+            let mut end = start;
+            let mut px = 0u64;
+            while end < calibration.views.len() && (end == start || px < DECODE_BATCH_PIXELS) {
+                let l = &calibration.views[end].lens;
+                px += u64::from(l.width) * u64::from(l.height);
+                end += 1;
+            }
+            let loaded: Vec<Result<ViewImage>> = calibration.views[start..end]
+                .par_iter()
+                .map(|v| images::load(&file, v, source))
+                .collect();
+            for r in loaded {
+                images.push(r?);
+            }
+            start = end;
+        }
         let mut sats = Vec::with_capacity(images.len());
         for (v, img) in calibration.views.iter().zip(&images) {
             let s = Sat::new(img.width, img.height, &img.silhouette);
@@ -254,7 +288,15 @@ fn carve_box(set: &ImageSet, opts: &SilhouetteOptions) -> Result<(Vec3, Vec3)> {
     for pass in 0..2 {
         let near = f64::from(frame.size) * 1e-6;
         let c = set.carver(margin, near);
-        match carve::hull_box(&c, &frame, BOX_LEVEL) {
+        let found_box = carve::hull_box(&c, &frame, BOX_LEVEL).or_else(|(tests, r)| {
+            set.err(format!(
+                "finding the common view takes over {} units of work against the {} views \
+                 (reached {tests} at level {r}); give --bbox or fewer views",
+                carve::MAX_CARVE_TESTS,
+                views.len()
+            ))
+        })?;
+        match found_box {
             None => {
                 return set.err(
                     "the silhouettes have no common view: every part of the space is outside some view's silhouette",
@@ -292,11 +334,31 @@ fn auto_depth(set: &ImageSet, frame: &Frame) -> u8 {
     (median.max(1.0).log2().round() as u8).clamp(4, MAX_AUTO_DEPTH)
 }
 
+/// The deepest level whose leaves still project to half a pixel or more
+/// in some view: `1 + ⌈log2⌉` of the box's largest projected width (at
+/// least [`BOX_LEVEL`]). A finer carving only multiplies the work.
+fn finest_depth(set: &ImageSet, frame: &Frame) -> u8 {
+    let centre = (frame.origin + Vec3::splat(frame.size * 0.5)).as_dvec3();
+    let px = set
+        .calibration
+        .views
+        .iter()
+        .map(|v| {
+            let z = v.to_camera(centre).z.max(1e-12);
+            v.lens.fx.max(v.lens.fy) * f64::from(frame.size) / z
+        })
+        .fold(1.0f64, f64::max);
+    let d = px.min(f64::from(1u32 << 30)).log2().ceil() as u8 + 1;
+    d.clamp(BOX_LEVEL, MAX_DEPTH)
+}
+
 /// Carves the image set's octree to `opts.depth` (`None`: leaves of about
 /// a pixel, [`auto_depth`]), thins it with `opts.thinning` and computes
 /// the particle attributes (see [`attributes`]).
 ///
-/// Errors: a depth outside `1..=16`, a camera the object lies behind, an
+/// Errors: a depth outside `1..=16` or finer than the images resolve
+/// (leaves under half a pixel in every view), a carving past
+/// [`carve::MAX_CARVE_TESTS`], a camera the object lies behind, an
 /// empty or unbounded common view, or a carving that leaves no surface.
 /// Cost: the cubes classified (about the surface's leaves times 8, each
 /// `O(views)`), 64 point tests per surface leaf, and a few rays a particle
@@ -330,9 +392,23 @@ pub fn carve_octree(
         }
         None => auto_depth(set, &frame),
     };
+    let finest = finest_depth(set, &frame);
+    if depth > finest {
+        return set.err(format!(
+            "depth {depth} is finer than the images resolve (its leaves would be under half a \
+             pixel in every view); depth {finest} or less fits"
+        ));
+    }
     let near = f64::from(frame.size) * 1e-6;
     let c = set.carver(f64::from(sil.margin), near);
-    let carved = carve::carve(&c, &frame, depth);
+    let carved = carve::carve(&c, &frame, depth).or_else(|(tests, r)| {
+        set.err(format!(
+            "carving to depth {depth} takes over {} units of work against the {} views \
+             (reached {tests} at level {r}); give a smaller --depth or fewer views",
+            carve::MAX_CARVE_TESTS,
+            set.calibration.views.len()
+        ))
+    })?;
     if carved.leaves.is_empty() {
         return set
             .err("carving left no surface: the silhouettes have no common view inside the box");

@@ -51,6 +51,13 @@ pub(super) fn load_buffer<'a>(
     let i = buffer.index();
     let uri = match buffer.source() {
         gltf::buffer::Source::Bin => {
+            // Only the first buffer may stand for the BIN chunk (glTF 2.0
+            // §4.4.3.3): another buffer without a uri has no bytes.
+            if i != 0 {
+                return Err(parse_err!(
+                    "buffer {i} has no uri: only buffer 0 may be the GLB BIN chunk"
+                ));
+            }
             return bin
                 .map(Cow::Borrowed)
                 .ok_or_else(|| parse_err!("buffer {i} has no uri and there is no GLB BIN chunk"));

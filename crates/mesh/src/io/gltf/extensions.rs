@@ -7,16 +7,22 @@
 //! and `KHR_texture_transform` (gltfpack's UV dequantisation among others)
 //! baked into the UVs it applies to (see [`texture_transforms`]).
 //!
-//! The output has one buffer (the GLB BIN chunk) holding every view the
-//! input has, decoded, then the float copies of the quantised accessors; the
-//! three extensions are removed from `extensionsUsed` / `extensionsRequired`.
-//! Anything else in the document is kept as it is and read as usual.
+//! The output has one buffer (the GLB BIN chunk) holding every input
+//! buffer once (plain views keep pointing into it, so views that alias one
+//! range are not copied apart), the decoded compressed views, then the
+//! float copies of the quantised accessors (one copy per distinct
+//! view, offset and layout); the extensions are removed from
+//! `extensionsUsed` / `extensionsRequired`. Anything else in the document
+//! is kept as it is and read as usual.
 //!
 //! **Bounds**: decoded views and float copies together may not exceed
 //! [`MAX_EXPANSION`] times the input's bytes (plus 1 MiB), checked from the
 //! declared sizes before decoding; every view and accessor extent is
-//! checked in 64-bit arithmetic; a decoder error or a view whose declared
-//! size disagrees with `count × byteStride` is a one-line error.
+//! checked in 64-bit arithmetic; an offset, length, stride or count that
+//! is not a whole number ≥ 0 (`byteOffset: -4`), a decoder error or a view
+//! whose declared size disagrees with `count × byteStride` is a one-line
+//! error, as is a JSON that names one of these extensions but does not
+//! parse (a number out of range, `1e999`).
 
 use std::borrow::Cow;
 use std::path::Path;
@@ -30,8 +36,9 @@ use crate::parse_err;
 
 /// Decoded views and dequantised copies may be at most this many times the
 /// file's size (plus 1 MiB): meshoptimizer's codecs stay well inside it on
-/// real data, and a hostile file cannot ask for unbounded memory.
-pub const MAX_EXPANSION: u64 = 256;
+/// real data (a few times for vertices, about 10 for indices), and a
+/// hostile file cannot ask for more than this much memory.
+pub const MAX_EXPANSION: u64 = 64;
 
 const DRACO: &str = "KHR_draco_mesh_compression";
 const QUANTIZATION: &str = "KHR_mesh_quantization";
@@ -46,10 +53,13 @@ const TEXTURE_SLOTS: [&[&str]; 5] = [
     &["emissiveTexture"],
 ];
 
-/// The file as a plain GLB when it uses one of the extensions above, `None`
-/// when it uses none of them (or its JSON does not parse: the reader then
-/// reports that).
-pub(super) fn expand(bytes: &[u8], base_dir: Option<&Path>) -> Result<Option<Vec<u8>>, ParseError> {
+/// The file as a plain GLB when it uses one of the extensions above, with
+/// the bytes of input it was made from (the file and its external
+/// buffers); `None` when it uses none of them.
+pub(super) fn expand(
+    bytes: &[u8],
+    base_dir: Option<&Path>,
+) -> Result<Option<(Vec<u8>, u64)>, ParseError> {
     let unbom = crate::io::input::strip_bom(bytes);
     let (json_bytes, bin) = if bytes.starts_with(GLB_MAGIC) {
         split_glb(bytes)?
@@ -64,8 +74,15 @@ pub(super) fn expand(bytes: &[u8], base_dir: Option<&Path>) -> Result<Option<Vec
     {
         return Ok(None);
     }
-    let Ok(mut doc) = serde_json::from_slice::<Value>(json_bytes) else {
-        return Ok(None);
+    // A JSON that names an extension must parse here: the `gltf` crate
+    // skips unknown extensions without reading their numbers, so a value
+    // out of range (`1e999`) there would be silently dropped.
+    let mut doc = match serde_json::from_slice::<Value>(json_bytes) {
+        Ok(d) => d,
+        Err(e) if serde_json::from_slice::<serde::de::IgnoredAny>(json_bytes).is_ok() => {
+            return Err(parse_err!("glTF JSON: {e}"));
+        }
+        Err(_) => return Ok(None),
     };
     let listed: Vec<String> = ["extensionsUsed", "extensionsRequired"]
         .iter()
@@ -91,13 +108,10 @@ pub(super) fn expand(bytes: &[u8], base_dir: Option<&Path>) -> Result<Option<Vec
     if meshopt.is_empty() && !has(QUANTIZATION) && !has(TRANSFORM) {
         return Ok(None);
     }
-    let budget = (bytes.len() as u64)
-        .saturating_mul(MAX_EXPANSION)
-        .saturating_add(1 << 20);
-
     // Every buffer's bytes (fallback buffers have none).
     let buffers = doc["buffers"].as_array().cloned().unwrap_or_default();
     let mut data: Vec<Option<Cow<[u8]>>> = Vec::with_capacity(buffers.len());
+    let mut source = bytes.len() as u64;
     for (i, b) in buffers.iter().enumerate() {
         let fallback = MESHOPT
             .iter()
@@ -105,42 +119,69 @@ pub(super) fn expand(bytes: &[u8], base_dir: Option<&Path>) -> Result<Option<Vec
         data.push(if fallback {
             None
         } else {
-            Some(buffer_bytes(i, b, bin, base_dir)?)
+            let d = buffer_bytes(i, b, bin, base_dir)?;
+            if let Cow::Owned(d) = &d {
+                source = source.saturating_add(d.len() as u64);
+            }
+            Some(d)
         });
     }
+    let budget = source.saturating_mul(MAX_EXPANSION).saturating_add(1 << 20);
 
-    // Every view, decoded, into one new BIN.
+    // Every buffer once into one new BIN…
     let mut out: Vec<u8> = Vec::new();
+    let mut base: Vec<Option<u64>> = Vec::with_capacity(data.len());
+    for d in &data {
+        base.push(d.as_ref().map(|d| {
+            while !out.len().is_multiple_of(4) {
+                out.push(0);
+            }
+            let at = out.len() as u64;
+            out.extend_from_slice(d);
+            at
+        }));
+    }
+    // …then every compressed view, decoded; plain views point into their
+    // buffer's copy.
     let mut used = 0u64;
     let views = doc["bufferViews"].as_array().cloned().unwrap_or_default();
     let mut new_views = Vec::with_capacity(views.len());
     for (i, v) in views.iter().enumerate() {
+        let what = format!("buffer view {i}");
         let ext = MESHOPT.iter().find_map(|e| v["extensions"].get(*e));
-        let bytes: Cow<[u8]> = match ext {
+        let (offset, length) = match ext {
             Some(x) => {
-                let length = v["byteLength"].as_u64().unwrap_or(0);
+                let length = uint(&what, v, "byteLength", None)?;
                 used = used.saturating_add(length);
                 if used > budget {
                     return Err(parse_err!(
                         "buffer view {i}: decoded views exceed {budget} bytes ({MAX_EXPANSION}x the file)"
                     ));
                 }
-                Cow::Owned(decode_view(i, x, length, &data)?)
+                let decoded = decode_view(i, x, length, &data)?;
+                while !out.len().is_multiple_of(4) {
+                    out.push(0);
+                }
+                let at = out.len() as u64;
+                out.extend_from_slice(&decoded);
+                (at, decoded.len() as u64)
             }
-            None => Cow::Borrowed(slice(i, v, &data)?),
+            None => {
+                let len = slice(i, v, &data)?.len() as u64;
+                let b = uint(&what, v, "buffer", None)? as usize;
+                let start = uint(&what, v, "byteOffset", Some(0))?;
+                let at = base.get(b).copied().flatten().unwrap_or(0);
+                (at + start, len)
+            }
         };
-        while !out.len().is_multiple_of(4) {
-            out.push(0);
-        }
         let mut nv = v.clone();
         let o = nv
             .as_object_mut()
             .ok_or_else(|| parse_err!("buffer view {i} is not an object"))?;
         o.insert("buffer".into(), json!(0));
-        o.insert("byteOffset".into(), json!(out.len()));
-        o.insert("byteLength".into(), json!(bytes.len()));
+        o.insert("byteOffset".into(), json!(offset));
+        o.insert("byteLength".into(), json!(length));
         strip(o, &MESHOPT);
-        out.extend_from_slice(&bytes);
         new_views.push(nv);
     }
 
@@ -148,6 +189,10 @@ pub(super) fn expand(bytes: &[u8], base_dir: Option<&Path>) -> Result<Option<Vec
     let accessors = doc["accessors"].as_array().cloned().unwrap_or_default();
     let mut new_accessors = accessors.clone();
     let mut dequantised = vec![false; accessors.len()];
+    // One float copy per distinct source (view, offset, layout): accessors
+    // that alias one another share it, with its bounds.
+    let mut copies: std::collections::BTreeMap<String, (usize, Value, Value)> =
+        std::collections::BTreeMap::new();
     let meshes = doc["meshes"].as_array().cloned().unwrap_or_default();
     for mesh in &meshes {
         for prim in mesh["primitives"].as_array().into_iter().flatten() {
@@ -167,45 +212,63 @@ pub(super) fn expand(bytes: &[u8], base_dir: Option<&Path>) -> Result<Option<Vec
                     continue;
                 }
                 dequantised[ai] = true;
-                let floats = dequantise(ai, acc, &new_views, &out)?;
-                used = used.saturating_add(floats.len() as u64 * 4);
-                if used > budget {
-                    return Err(parse_err!(
-                        "accessor {ai}: dequantised data exceeds {budget} bytes ({MAX_EXPANSION}x the file)"
-                    ));
-                }
-                while !out.len().is_multiple_of(4) {
-                    out.push(0);
-                }
-                let offset = out.len();
-                for f in &floats {
-                    out.extend_from_slice(&f.to_le_bytes());
-                }
-                let comps = components(acc)?;
-                new_views.push(json!({
-                    "buffer": 0,
-                    "byteOffset": offset,
-                    "byteLength": floats.len() * 4,
-                    "target": 34962,
-                }));
+                let key = [
+                    "bufferView",
+                    "byteOffset",
+                    "componentType",
+                    "normalized",
+                    "count",
+                    "type",
+                ]
+                .map(|k| acc.get(k).map_or("-".to_string(), Value::to_string))
+                .join(" ");
+                let (view, lo, hi) = match copies.get(&key) {
+                    Some((view, lo, hi)) => (*view, lo.clone(), hi.clone()),
+                    None => {
+                        let floats = dequantise(ai, acc, &new_views, &out)?;
+                        used = used.saturating_add(floats.len() as u64 * 4);
+                        if used > budget {
+                            return Err(parse_err!(
+                                "accessor {ai}: dequantised data exceeds {budget} bytes ({MAX_EXPANSION}x the file)"
+                            ));
+                        }
+                        let comps = components(acc)?;
+                        let mut lo = vec![f32::INFINITY; comps];
+                        let mut hi = vec![f32::NEG_INFINITY; comps];
+                        for e in floats.chunks_exact(comps) {
+                            for k in 0..comps {
+                                lo[k] = lo[k].min(e[k]);
+                                hi[k] = hi[k].max(e[k]);
+                            }
+                        }
+                        while !out.len().is_multiple_of(4) {
+                            out.push(0);
+                        }
+                        let offset = out.len();
+                        for f in &floats {
+                            out.extend_from_slice(&f.to_le_bytes());
+                        }
+                        new_views.push(json!({
+                            "buffer": 0,
+                            "byteOffset": offset,
+                            "byteLength": floats.len() * 4,
+                            "target": 34962,
+                        }));
+                        let (lo, hi) = (json!(lo), json!(hi));
+                        copies.insert(key, (new_views.len() - 1, lo.clone(), hi.clone()));
+                        (new_views.len() - 1, lo, hi)
+                    }
+                };
                 let na = new_accessors[ai]
                     .as_object_mut()
                     .ok_or_else(|| parse_err!("accessor {ai} is not an object"))?;
-                na.insert("bufferView".into(), json!(new_views.len() - 1));
+                na.insert("bufferView".into(), json!(view));
                 na.insert("byteOffset".into(), json!(0));
                 na.insert("componentType".into(), json!(5126));
                 na.insert("normalized".into(), json!(false));
                 if name == "POSITION" {
-                    let mut lo = vec![f32::INFINITY; comps];
-                    let mut hi = vec![f32::NEG_INFINITY; comps];
-                    for e in floats.chunks_exact(comps) {
-                        for k in 0..comps {
-                            lo[k] = lo[k].min(e[k]);
-                            hi[k] = hi[k].max(e[k]);
-                        }
-                    }
-                    na.insert("min".into(), json!(lo));
-                    na.insert("max".into(), json!(hi));
+                    na.insert("min".into(), lo);
+                    na.insert("max".into(), hi);
                 } else {
                     na.remove("min");
                     na.remove("max");
@@ -239,7 +302,7 @@ pub(super) fn expand(bytes: &[u8], base_dir: Option<&Path>) -> Result<Option<Vec
         }
     }
     let js = serde_json::to_vec(&doc).map_err(|e| parse_err!("glTF JSON: {e}"))?;
-    join_glb(js, &out).map(Some)
+    join_glb(js, &out).map(|glb| Some((glb, source)))
 }
 
 /// The plain file being made: views, accessors and the one BIN, with the
@@ -309,7 +372,12 @@ fn material_transforms(i: usize, m: &Value) -> Result<Vec<(u64, UvTransform)>, P
             .as_u64()
             .or_else(|| info["texCoord"].as_u64())
             .unwrap_or(0);
-        let num = |v: &Value, d: f32| v.as_f64().map_or(d, |f| f as f32);
+        // A value that is not a number, or that is beyond f32 (`1e39`), is
+        // an error rather than the default.
+        let num = |v: &Value, d: f32| match v {
+            Value::Null => d,
+            v => v.as_f64().map_or(f32::NAN, |f| f as f32),
+        };
         let t = UvTransform {
             offset: [num(&x["offset"][0], 0.0), num(&x["offset"][1], 0.0)],
             rotation: num(&x["rotation"], 0.0),
@@ -348,7 +416,8 @@ fn texture_transforms(doc: &mut Value, x: &mut Expanded) -> Result<(), ParseErro
         .enumerate()
         .map(|(i, m)| material_transforms(i, m))
         .collect::<Result<Vec<_>, _>>()?;
-    let mut copies: Vec<((usize, [u32; 5]), usize)> = Vec::new();
+    let mut copies: std::collections::BTreeMap<(usize, [u32; 5]), usize> =
+        std::collections::BTreeMap::new();
     // `get_mut` throughout: indexing a JSON value mutably inserts missing
     // keys and panics on non-objects, and this is a hostile file's JSON.
     let mut meshes = doc.get_mut("meshes").map(Value::take);
@@ -372,8 +441,8 @@ fn texture_transforms(doc: &mut Value, x: &mut Expanded) -> Result<(), ParseErro
                 continue;
             };
             let key = (ai, t.bits());
-            let copy = match copies.iter().find(|(k, _)| *k == key) {
-                Some(&(_, c)) => c,
+            let copy = match copies.get(&key) {
+                Some(&c) => c,
                 None => {
                     let acc = x
                         .accessors
@@ -415,7 +484,7 @@ fn texture_transforms(doc: &mut Value, x: &mut Expanded) -> Result<(), ParseErro
                         "count": uv.len() / 2,
                         "type": "VEC2",
                     }));
-                    copies.push((key, x.accessors.len() - 1));
+                    copies.insert(key, x.accessors.len() - 1);
                     x.accessors.len() - 1
                 }
             };
@@ -466,6 +535,11 @@ fn buffer_bytes<'a>(
     base_dir: Option<&Path>,
 ) -> Result<Cow<'a, [u8]>, ParseError> {
     let Some(uri) = b["uri"].as_str() else {
+        if i != 0 {
+            return Err(parse_err!(
+                "buffer {i} has no uri: only buffer 0 may be the GLB BIN chunk"
+            ));
+        }
         return bin
             .map(Cow::Borrowed)
             .ok_or_else(|| parse_err!("buffer {i} has no uri and there is no GLB BIN chunk"));
@@ -481,11 +555,28 @@ fn buffer_bytes<'a>(
     let dir = base_dir.ok_or_else(|| {
         parse_err!("buffer {i}: external file but no directory to resolve it against")
     })?;
-    let path = crate::io::input::resolve_inside(dir, uri)
+    let rel = super::buffers::percent_decode(uri)?;
+    let path = crate::io::input::resolve_inside(dir, &rel)
         .map_err(|why| parse_err!("buffer {i}: URI {why}"))?;
     crate::io::input::read_file(&path)
         .map(Cow::Owned)
         .map_err(|e| parse_err!("buffer {i}: {e}"))
+}
+
+/// `obj[key]` as a whole number ≥ 0; `default` when absent (an error
+/// naming `what` and the key when there is no default), an error when it
+/// is anything else (`-4`, `1.5`, a string): never read as 0.
+fn uint(what: &str, obj: &Value, key: &str, default: Option<u64>) -> Result<u64, ParseError> {
+    match obj.get(key) {
+        None => default.ok_or_else(|| parse_err!("{what} has no {key}")),
+        Some(v) => v
+            .as_u64()
+            .ok_or_else(|| parse_err!("{what}: {key} {} is not a whole number >= 0", clip_json(v))),
+    }
+}
+
+fn clip_json(v: &Value) -> String {
+    crate::error::clip(&v.to_string(), 32).to_string()
 }
 
 /// `byteOffset .. + byteLength` of buffer `buffer` in `data`, checked.
@@ -494,11 +585,10 @@ fn range<'a>(
     obj: &Value,
     data: &'a [Option<Cow<'_, [u8]>>],
 ) -> Result<&'a [u8], ParseError> {
-    let b = obj["buffer"].as_u64().unwrap_or(u64::MAX) as usize;
-    let start = obj["byteOffset"].as_u64().unwrap_or(0);
-    let len = obj["byteLength"]
-        .as_u64()
-        .ok_or_else(|| parse_err!("{what} has no byteLength"))?;
+    let b = uint(what, obj, "buffer", None)?;
+    let b = usize::try_from(b).unwrap_or(usize::MAX);
+    let start = uint(what, obj, "byteOffset", Some(0))?;
+    let len = uint(what, obj, "byteLength", None)?;
     let src = data
         .get(b)
         .and_then(|d| d.as_deref())
@@ -529,8 +619,9 @@ fn decode_view(
     data: &[Option<Cow<'_, [u8]>>],
 ) -> Result<Vec<u8>, ParseError> {
     let src = range(&format!("buffer view {i}'s compressed data"), x, data)?;
-    let count = x["count"].as_u64().unwrap_or(0);
-    let stride = x["byteStride"].as_u64().unwrap_or(0);
+    let what = format!("buffer view {i}'s meshopt extension");
+    let count = uint(&what, x, "count", None)?;
+    let stride = uint(&what, x, "byteStride", None)?;
     if count.checked_mul(stride) != Some(length) || count == 0 {
         return Err(parse_err!(
             "buffer view {i}: meshopt count {count} x byteStride {stride} is not its byteLength {length}"
@@ -675,7 +766,8 @@ fn components(acc: &Value) -> Result<usize, ParseError> {
 /// plain integers and floats as they are).
 fn dequantise(ai: usize, acc: &Value, views: &[Value], bin: &[u8]) -> Result<Vec<f32>, ParseError> {
     let comps = components(acc)?;
-    let ct = acc["componentType"].as_u64().unwrap_or(0);
+    let what = format!("accessor {ai}");
+    let ct = uint(&what, acc, "componentType", None)?;
     let size = match ct {
         5120 | 5121 => 1,
         5122 | 5123 => 2,
@@ -687,27 +779,28 @@ fn dequantise(ai: usize, acc: &Value, views: &[Value], bin: &[u8]) -> Result<Vec
         }
     };
     let normalized = acc["normalized"].as_bool().unwrap_or(false);
-    let count = acc["count"].as_u64().unwrap_or(0);
-    let vi = acc["bufferView"]
-        .as_u64()
-        .ok_or_else(|| parse_err!("accessor {ai} has no bufferView"))? as usize;
+    let count = uint(&what, acc, "count", None)?;
+    let vi = usize::try_from(uint(&what, acc, "bufferView", None)?).unwrap_or(usize::MAX);
     let view = views
         .get(vi)
         .ok_or_else(|| parse_err!("accessor {ai}: buffer view {vi} does not exist"))?;
     let elem = (comps * size) as u64;
-    let stride = view["byteStride"].as_u64().unwrap_or(elem);
+    let vwhat = format!("buffer view {vi}");
+    let stride = uint(&vwhat, view, "byteStride", Some(elem))?;
     if stride < elem || count == 0 {
         return Err(parse_err!(
             "accessor {ai}: stride {stride} or count {count} is invalid for its {elem}-byte elements"
         ));
     }
-    let base = view["byteOffset"].as_u64().unwrap_or(0) + acc["byteOffset"].as_u64().unwrap_or(0);
-    let vlen = view["byteLength"].as_u64().unwrap_or(0);
+    let acc_offset = uint(&what, acc, "byteOffset", Some(0))?;
+    let view_offset = uint(&vwhat, view, "byteOffset", Some(0))?;
+    let vlen = uint(&vwhat, view, "byteLength", None)?;
+    let base = view_offset.saturating_add(acc_offset);
     let end = (count - 1)
         .checked_mul(stride)
         .and_then(|x| x.checked_add(elem))
-        .and_then(|x| x.checked_add(acc["byteOffset"].as_u64().unwrap_or(0)));
-    if end.is_none_or(|e| e > vlen) || base.saturating_add(vlen) > bin.len() as u64 {
+        .and_then(|x| x.checked_add(acc_offset));
+    if end.is_none_or(|e| e > vlen) || view_offset.saturating_add(vlen) > bin.len() as u64 {
         return Err(parse_err!(
             "accessor {ai}: {count} elements do not fit in buffer view {vi}"
         ));

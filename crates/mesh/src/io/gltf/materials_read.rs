@@ -6,7 +6,10 @@
 //! [`crate::io::input::resolve_inside`] (relative, no `..`, no scheme), and
 //! is read through [`crate::io::input::read_file`]. Their bytes are kept as
 //! stored; the MIME type comes from the bytes' signature, else from the
-//! file's `mimeType`.
+//! file's `mimeType`. Images that share their bytes — one byte range of a
+//! buffer, one file named several ways — are kept once (textures are
+//! pointed at the one copy), and the images' bytes together may not exceed
+//! the input's bytes: aliased images cannot multiply memory.
 
 use std::borrow::Cow;
 use std::path::Path;
@@ -24,6 +27,7 @@ pub(super) fn read_tables(
     doc: &gltf::Document,
     bin: Option<&[u8]>,
     base_dir: Option<&Path>,
+    source: u64,
     scene: &mut Scene,
 ) -> Result<(), ParseError> {
     for s in doc.samplers() {
@@ -35,15 +39,19 @@ pub(super) fn read_tables(
         });
     }
     let mut buffers: Vec<Option<Cow<[u8]>>> = vec![None; doc.buffers().len()];
+    let mut images = Images {
+        by_source: std::collections::BTreeMap::new(),
+        of_doc: Vec::with_capacity(doc.images().len()),
+        bytes: 0,
+        source,
+    };
     for img in doc.images() {
-        scene
-            .images
-            .push(read_image(&img, bin, base_dir, &mut buffers)?);
+        images.read(&img, bin, base_dir, &mut buffers, scene)?;
     }
     for t in doc.textures() {
         scene.textures.push(Texture {
             name: t.name().map(str::to_owned),
-            image: t.source().index(),
+            image: images.of_doc[t.source().index()],
             sampler: t.sampler().index(),
         });
     }
@@ -130,13 +138,100 @@ fn file_name(uri: &str) -> Option<String> {
     (!name.is_empty()).then(|| name.to_owned())
 }
 
+/// Where an image's bytes came from, to keep each source once.
+#[derive(PartialEq, Eq, PartialOrd, Ord)]
+enum ImageSource {
+    /// Buffer, start, end.
+    Range(usize, usize, usize),
+    /// A file's real path.
+    File(std::path::PathBuf),
+}
+
+/// The images read so far.
+struct Images {
+    /// Each kept image's source and its index in the scene.
+    by_source: std::collections::BTreeMap<ImageSource, usize>,
+    /// The scene image of each document image.
+    of_doc: Vec<usize>,
+    /// Bytes of the kept images.
+    bytes: u64,
+    /// Bytes of input (the file, external buffers and image files).
+    source: u64,
+}
+
+impl Images {
+    /// Reads document image `img` into `scene.images`, or points it at the
+    /// image already read from the same bytes.
+    fn read<'a>(
+        &mut self,
+        img: &gltf::Image<'_>,
+        bin: Option<&'a [u8]>,
+        base_dir: Option<&Path>,
+        buffers: &mut [Option<Cow<'a, [u8]>>],
+        scene: &mut Scene,
+    ) -> Result<(), ParseError> {
+        let i = img.index();
+        let key = match img.source() {
+            gltf::image::Source::View { view, .. } => Some(ImageSource::Range(
+                view.buffer().index(),
+                view.offset(),
+                view.offset().saturating_add(view.length()),
+            )),
+            gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => {
+                let rel = percent_decode(uri)?;
+                base_dir
+                    .and_then(|d| crate::io::input::resolve_inside(d, &rel).ok())
+                    .map(|p| ImageSource::File(crate::io::input::real_path(&p)))
+            }
+            gltf::image::Source::Uri { .. } => None,
+        };
+        if let Some(at) = key.as_ref().and_then(|k| self.by_source.get(k)) {
+            self.of_doc.push(*at);
+            return Ok(());
+        }
+        if let gltf::image::Source::View { view, .. } = img.source() {
+            let b = view.buffer().index();
+            if buffers[b].is_none() {
+                let data = load_buffer(view.buffer(), bin, base_dir)?;
+                if let Cow::Owned(d) = &data {
+                    self.source = self.source.saturating_add(d.len() as u64);
+                }
+                buffers[b] = Some(data);
+            }
+        }
+        let (image, external) = read_image(img, bin, base_dir, buffers)?;
+        if external {
+            self.source = self.source.saturating_add(image.bytes.len() as u64);
+        }
+        self.bytes = self.bytes.saturating_add(image.bytes.len() as u64);
+        if self.bytes > self.source {
+            return Err(parse_err!(
+                "image {i}: the images hold {} bytes, more than the {} bytes of the input \
+                 (images that overlap in one buffer)",
+                self.bytes,
+                self.source
+            ));
+        }
+        scene.images.push(image);
+        let at = scene.images.len() - 1;
+        if let Some(k) = key {
+            self.by_source.insert(k, at);
+        }
+        self.of_doc.push(at);
+        Ok(())
+    }
+}
+
+/// Document image `img`, and whether its bytes came from a file of its own.
 fn read_image<'a>(
     img: &gltf::Image<'_>,
     bin: Option<&'a [u8]>,
     base_dir: Option<&Path>,
     buffers: &mut [Option<Cow<'a, [u8]>>],
-) -> Result<Image, ParseError> {
+) -> Result<(Image, bool), ParseError> {
     let i = img.index();
+    let external =
+        matches!(img.source(), gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:"));
     let (bytes, declared, name) = match img.source() {
         gltf::image::Source::View { view, mime_type } => {
             let b = view.buffer().index();
@@ -195,10 +290,13 @@ fn read_image<'a>(
             parse_err!("image {i}: neither PNG nor JPEG, and no mimeType is given")
         })?,
     };
-    Ok(Image {
-        name: img.name().map(str::to_owned),
-        file_name: name,
-        mime_type,
-        bytes,
-    })
+    Ok((
+        Image {
+            name: img.name().map(str::to_owned),
+            file_name: name,
+            mime_type,
+            bytes,
+        },
+        external,
+    ))
 }

@@ -11,7 +11,7 @@ use gltf::mesh::Mode;
 
 use super::buffers::load_buffer;
 use super::color::{linear_to_srgb8, unit8};
-use super::read::{check_accessor, instances, parse_document, read};
+use super::read::{check_accessor, instances, parse_document, read_from};
 use crate::error::ParseError;
 use crate::mesh::{Model, PointCloud};
 use crate::parse_err;
@@ -24,20 +24,25 @@ use crate::parse_err;
 /// a one-line error naming the extension.
 pub fn read_model(bytes: &[u8], base_dir: Option<&Path>) -> Result<Model, ParseError> {
     let expanded = super::extensions::expand(bytes, base_dir)?;
-    let bytes = expanded.as_deref().unwrap_or(bytes);
+    let (bytes, source) = match &expanded {
+        Some((b, source)) => (b.as_slice(), *source),
+        None => (bytes, bytes.len() as u64),
+    };
     let (doc, _) = parse_document(bytes)?;
     let mode_in_scene =
         |want: &dyn Fn(Mode) -> bool| doc.meshes().any(|m| m.primitives().any(|p| want(p.mode())));
     let triangles =
         mode_in_scene(&|m| matches!(m, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan));
     if !triangles && mode_in_scene(&|m| m == Mode::Points) {
-        return read_points(bytes, base_dir).map(Model::Points);
+        return read_points(bytes, base_dir, source).map(Model::Points);
     }
-    read(bytes, base_dir).map(Model::Mesh)
+    read_from(bytes, base_dir, source).map(Model::Mesh)
 }
 
 /// Points may be instanced up to this many times what the file stores (or
-/// [`super::INSTANCING_FLOOR`] points), as meshes.
+/// [`super::INSTANCING_FLOOR`] points), as meshes; `stored` is capped by
+/// the input's bytes (12 a point) by the caller, so aliased accessors do
+/// not count twice.
 fn points_cap(stored: u64) -> u64 {
     stored
         .saturating_mul(super::MAX_INSTANCING_GROWTH)
@@ -46,7 +51,11 @@ fn points_cap(stored: u64) -> u64 {
 
 /// Every `POINTS` primitive of the scene, world transforms applied; an
 /// attribute is kept only if every primitive has it.
-fn read_points(bytes: &[u8], base_dir: Option<&Path>) -> Result<PointCloud, ParseError> {
+fn read_points(
+    bytes: &[u8],
+    base_dir: Option<&Path>,
+    mut source: u64,
+) -> Result<PointCloud, ParseError> {
     let (doc, bin) = parse_document(bytes)?;
     let mut parts = Vec::new();
     for inst in instances(&doc)? {
@@ -71,7 +80,11 @@ fn read_points(bytes: &[u8], base_dir: Option<&Path>) -> Result<PointCloud, Pars
                 let b = v.buffer();
                 let bi = b.index();
                 if buffers[bi].is_none() {
-                    buffers[bi] = Some(load_buffer(b, bin, base_dir)?);
+                    let data = load_buffer(b, bin, base_dir)?;
+                    if let Cow::Owned(d) = &data {
+                        source = source.saturating_add(d.len() as u64);
+                    }
+                    buffers[bi] = Some(data);
                 }
             }
         }
@@ -116,6 +129,7 @@ fn read_points(bytes: &[u8], base_dir: Option<&Path>) -> Result<PointCloud, Pars
         }
         total += n as u64;
     }
+    let stored = stored.min(source / 12);
     if total > points_cap(stored) {
         return Err(parse_err!(
             "{} POINTS instances expand {stored} stored points to {total}, over the limit of {}",

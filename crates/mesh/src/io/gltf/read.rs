@@ -19,8 +19,75 @@ use crate::mesh::TriMesh;
 use crate::parse_err;
 use crate::scene::{NO_MATERIAL, Node, Scene, SceneMesh, Transform};
 
-/// Checks what gltf-json's validation indexes without checking.
+/// Checks what gltf-json's validation indexes without checking, what the
+/// `gltf` crate unwraps (an image's source), and the material factors,
+/// which must be finite and inside glTF's ranges (a factor of `1e39` reads
+/// as infinity and could not be written back as JSON).
 fn precheck(root: &json::Root) -> Result<(), ParseError> {
+    for (i, img) in root.images.iter().enumerate() {
+        match (&img.buffer_view, &img.uri) {
+            (None, None) => {
+                return Err(parse_err!("image {i} has neither a uri nor a bufferView"));
+            }
+            (Some(_), Some(_)) => {
+                return Err(parse_err!("image {i} has both a uri and a bufferView"));
+            }
+            (Some(v), None) => {
+                if v.value() >= root.buffer_views.len() {
+                    return Err(parse_err!(
+                        "image {i} uses buffer view {} but there are {} buffer views",
+                        v.value(),
+                        root.buffer_views.len()
+                    ));
+                }
+                if img.mime_type.is_none() {
+                    return Err(parse_err!(
+                        "image {i} is stored in a bufferView but has no mimeType"
+                    ));
+                }
+            }
+            (None, Some(_)) => {}
+        }
+    }
+    for (i, m) in root.materials.iter().enumerate() {
+        let pbr = &m.pbr_metallic_roughness;
+        let unit = |x: f32| x.is_finite() && (0.0..=1.0).contains(&x);
+        let bad = |what: &str, v: &[f32], range: &str| {
+            Err(parse_err!(
+                "material {i}: {what} {v:?} is not a finite number {range}"
+            ))
+        };
+        if !pbr.base_color_factor.0.iter().all(|&x| unit(x)) {
+            return bad("baseColorFactor", &pbr.base_color_factor.0, "in [0, 1]");
+        }
+        for (what, v) in [
+            ("metallicFactor", pbr.metallic_factor.0),
+            ("roughnessFactor", pbr.roughness_factor.0),
+        ]
+        .into_iter()
+        .chain(
+            m.occlusion_texture
+                .as_ref()
+                .map(|o| ("occlusionTexture strength", o.strength.0)),
+        ) {
+            if !unit(v) {
+                return bad(what, &[v], "in [0, 1]");
+            }
+        }
+        if !m.emissive_factor.0.iter().all(|&x| unit(x)) {
+            return bad("emissiveFactor", &m.emissive_factor.0, "in [0, 1]");
+        }
+        if let Some(n) = &m.normal_texture
+            && !(n.scale.is_finite() && n.scale.abs() <= 1e6)
+        {
+            return bad("normalTexture scale", &[n.scale], "of at most 1e6");
+        }
+        if let Some(c) = &m.alpha_cutoff
+            && !(c.0.is_finite() && c.0 >= 0.0 && c.0 <= 1e6)
+        {
+            return bad("alphaCutoff", &[c.0], "in [0, 1e6]");
+        }
+    }
     let n = root.accessors.len();
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, prim) in mesh.primitives.iter().enumerate() {
@@ -216,6 +283,47 @@ pub const MAX_INSTANCING_GROWTH: u64 = 16;
 /// file is refused before anything is allocated.
 pub const INSTANCING_FLOOR: u64 = 1 << 22;
 
+/// What one read has decoded so far, against the bytes it was given.
+///
+/// "Stored" counts each accessor once (however many nodes or meshes use
+/// it) and is capped by the input's bytes (`source`: the file and the
+/// external buffers it names) — at least 12 bytes a stored vertex (an
+/// `f32` VEC3 position) and 1 byte a stored index — so accessors that
+/// alias one buffer view cannot inflate it. The totals are summed over
+/// every primitive read in this run (every mesh of a scene), and checked
+/// before each allocation.
+pub(super) struct Budget {
+    source: u64,
+    seen_pos: Vec<bool>,
+    seen_ix: Vec<bool>,
+    stored_vertices: u64,
+    stored_indices: u64,
+    vertices: u64,
+    indices: u64,
+}
+
+impl Budget {
+    /// A budget for a document of `n_accessors` accessors read from
+    /// `source` bytes (the file, and any external buffers read while
+    /// expanding it).
+    pub(super) fn new(source: u64, n_accessors: usize) -> Budget {
+        Budget {
+            source,
+            seen_pos: vec![false; n_accessors],
+            seen_ix: vec![false; n_accessors],
+            stored_vertices: 0,
+            stored_indices: 0,
+            vertices: 0,
+            indices: 0,
+        }
+    }
+
+    /// Counts an external buffer's bytes as input.
+    pub(super) fn add_source(&mut self, bytes: usize) {
+        self.source = self.source.saturating_add(bytes as u64);
+    }
+}
+
 /// Refuses a scene whose instancing expands the stored vertices or indices
 /// past `max(MAX_INSTANCING_GROWTH × stored, INSTANCING_FLOOR)`, or past
 /// what 32-bit indices address.
@@ -257,6 +365,17 @@ struct Part<'a> {
 
 /// Reads a glTF or GLB file into one mesh (see the module docs).
 pub fn read(bytes: &[u8], base_dir: Option<&Path>) -> Result<TriMesh, ParseError> {
+    read_from(bytes, base_dir, bytes.len() as u64)
+}
+
+/// [`read`] of `bytes` that came from `source` bytes of input (more than
+/// `bytes.len()` when an expanded file's external buffers were read, less
+/// when compressed views were decoded): the budget of [`Budget`].
+pub(super) fn read_from(
+    bytes: &[u8],
+    base_dir: Option<&Path>,
+    source: u64,
+) -> Result<TriMesh, ParseError> {
     let (doc, bin) = parse_document(bytes)?;
     let mut parts = Vec::new();
     for inst in instances(&doc)? {
@@ -278,25 +397,19 @@ pub fn read(bytes: &[u8], base_dir: Option<&Path>) -> Result<TriMesh, ParseError
             "no triangles: the scene has no triangle primitives",
         ));
     }
-    read_parts(
-        &parts,
-        bin,
-        base_dir,
-        doc.buffers().len(),
-        doc.accessors().len(),
-    )
-    .map(|(mesh, _)| mesh)
+    let mut budget = Budget::new(source, doc.accessors().len());
+    read_parts(&parts, bin, base_dir, doc.buffers().len(), &mut budget).map(|(mesh, _)| mesh)
 }
 
 /// Reads `parts` (each with its world transform) into one mesh; also
-/// returns each part's face count, in order. `n_buffers` and
-/// `n_accessors` are the document's counts.
+/// returns each part's face count, in order. `n_buffers` is the
+/// document's count; `budget` what this run has read so far.
 fn read_parts(
     parts: &[Part<'_>],
     bin: Option<&[u8]>,
     base_dir: Option<&Path>,
     n_buffers: usize,
-    n_accessors: usize,
+    budget: &mut Budget,
 ) -> Result<(TriMesh, Vec<usize>), ParseError> {
     let all = |s: &Semantic| parts.iter().all(|p| p.prim.get(s).is_some());
     let has_n = all(&Semantic::Normals);
@@ -329,7 +442,11 @@ fn read_parts(
                 let b = v.buffer();
                 let bi = b.index();
                 if buffers[bi].is_none() {
-                    buffers[bi] = Some(load_buffer(b, bin, base_dir)?);
+                    let data = load_buffer(b, bin, base_dir)?;
+                    if let Cow::Owned(d) = &data {
+                        budget.add_source(d.len());
+                    }
+                    buffers[bi] = Some(data);
                 }
             }
         }
@@ -340,10 +457,6 @@ fn read_parts(
     // Check every accessor and count the output before allocating it.
     let mut total = 0u64;
     let mut total_indices = 0u64;
-    // Each accessor counted once, however many nodes use it.
-    let mut seen_pos = vec![false; n_accessors];
-    let mut seen_ix = vec![false; n_accessors];
-    let (mut stored_vertices, mut stored_indices) = (0u64, 0u64);
     for (k, p) in parts.iter().enumerate() {
         let ctx = |w: &str| format!("mesh {} primitive {k}: {w}", p.mesh);
         let pos = p
@@ -389,25 +502,33 @@ fn read_parts(
                     &[(U8, Scalar), (U16, Scalar), (U32, Scalar)],
                     &buffers,
                 )?;
-                if !std::mem::replace(&mut seen_ix[ix.index()], true) {
-                    stored_indices += c as u64;
+                if !std::mem::replace(&mut budget.seen_ix[ix.index()], true) {
+                    budget.stored_indices += c as u64;
                 }
                 c
             }
             None => {
-                if !std::mem::replace(&mut seen_ix[pos.index()], true) {
-                    stored_indices += n as u64;
+                if !std::mem::replace(&mut budget.seen_ix[pos.index()], true) {
+                    budget.stored_indices += n as u64;
                 }
                 n
             }
         };
-        if !std::mem::replace(&mut seen_pos[pos.index()], true) {
-            stored_vertices += n as u64;
+        if !std::mem::replace(&mut budget.seen_pos[pos.index()], true) {
+            budget.stored_vertices += n as u64;
         }
         total += n as u64;
         total_indices += indices as u64;
     }
-    check_instancing(parts, total, stored_vertices, total_indices, stored_indices)?;
+    budget.vertices += total;
+    budget.indices += total_indices;
+    check_instancing(
+        parts,
+        budget.vertices,
+        budget.stored_vertices.min(budget.source / 12),
+        budget.indices,
+        budget.stored_indices.min(budget.source),
+    )?;
 
     let mut out = TriMesh {
         positions: Vec::with_capacity(total as usize),
@@ -571,8 +692,12 @@ fn read_parts(
 /// instances are not expanded (a node refers to its mesh).
 pub fn read_scene(bytes: &[u8], base_dir: Option<&Path>) -> Result<Scene, ParseError> {
     let expanded = super::extensions::expand(bytes, base_dir)?;
-    let bytes = expanded.as_deref().unwrap_or(bytes);
+    let (bytes, source) = match &expanded {
+        Some((b, source)) => (b.as_slice(), *source),
+        None => (bytes, bytes.len() as u64),
+    };
     let (doc, bin) = parse_document(bytes)?;
+    let mut budget = Budget::new(source, doc.accessors().len());
     // Checks the node graph (no cycle, one parent per node).
     instances(&doc)?;
     // Only the meshes the default scene's nodes place (an MSFT_lod chain's
@@ -605,13 +730,7 @@ pub fn read_scene(bytes: &[u8], base_dir: Option<&Path>) -> Result<Scene, ParseE
         if parts.is_empty() {
             continue;
         }
-        let (tm, counts) = read_parts(
-            &parts,
-            bin,
-            base_dir,
-            doc.buffers().len(),
-            doc.accessors().len(),
-        )?;
+        let (tm, counts) = read_parts(&parts, bin, base_dir, doc.buffers().len(), &mut budget)?;
         let mut face_materials = Vec::with_capacity(tm.faces.len());
         for (p, c) in parts.iter().zip(counts) {
             let id = p.prim.material().index().map_or(NO_MATERIAL, |i| i as u32);
@@ -671,7 +790,7 @@ pub fn read_scene(bytes: &[u8], base_dir: Option<&Path>) -> Result<Scene, ParseE
         }
         scene.roots = roots.iter().map(|r| new_id[r.index()]).collect();
     }
-    super::materials_read::read_tables(&doc, bin, base_dir, &mut scene)?;
+    super::materials_read::read_tables(&doc, bin, base_dir, budget.source, &mut scene)?;
     scene.validate()?;
     Ok(scene)
 }
