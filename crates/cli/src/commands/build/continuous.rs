@@ -13,8 +13,8 @@ use std::path::Path;
 
 use anyhow::Result;
 use lodkit_mco::McoModel;
-use lodkit_mesh::metrics::Reference;
 use lodkit_mesh::TriMesh;
+use lodkit_mesh::metrics::Reference;
 use lodkit_simplify::{Options, Target};
 
 use super::measure::{Measured, Sampling, cell};
