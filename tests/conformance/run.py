@@ -487,15 +487,19 @@ class Suite:
 
 
 def open_loops(ply: Path, diagonal: float) -> tuple[int, int]:
-    """Boundary loops of a mesh file: (holes, seams). A hole is a loop
-    whose vector area exceeds 1e-8 × diagonal²; a seam is a loop of no
-    area, as crack patching's T-junctions leave (the surface is closed
-    there, its triangles only do not share the edge's vertices)."""
+    """Boundary loops of a mesh file: (holes, seams). A seam is what crack
+    patching's T-junctions leave (the surface is closed there, its
+    triangles only do not share the edge's vertices): a loop of no vector
+    area, or a pair of loops whose vector areas cancel (a thin part
+    crossing a cube face, its outline once on each side). A hole is any
+    other loop of vector area over 1e-8 × diagonal²."""
     import numpy as np
 
     if pylodkit is None:
         return (0, 0)
     m = pylodkit.load(str(ply))
+    if not hasattr(m, "faces"):  # a cut of no triangle reads as points
+        return (0, 0)
     f = np.asarray(m.faces, dtype=np.int64)
     v = np.asarray(m.vertices, dtype=np.float64)
     if len(f) == 0:
@@ -508,8 +512,8 @@ def open_loops(ply: Path, diagonal: float) -> tuple[int, int]:
     for (a, b), k in zip(e.tolist(), key.tolist()):
         if k in once:
             nxt.setdefault(a, []).append(b)
-    holes = seams = 0
     limit = 1e-8 * diagonal * diagonal
+    areas = []
     while nxt:
         start = next(iter(nxt))
         area = np.zeros(3)
@@ -525,10 +529,20 @@ def open_loops(ply: Path, diagonal: float) -> tuple[int, int]:
             a = b
             if a == start:
                 break
-        if np.linalg.norm(area) / 2 > limit:
+        areas.append(area / 2)
+    # A seam leaves a loop of no area, or (where a thin part crosses a
+    # cube face whole) two loops, one each side, whose vector areas cancel.
+    open_ = [a for a in areas if np.linalg.norm(a) > limit]
+    seams = len(areas) - len(open_)
+    holes = 0
+    while open_:
+        a = open_.pop()
+        j = next((k for k, b in enumerate(open_) if np.linalg.norm(a + b) <= limit), None)
+        if j is None:
             holes += 1
         else:
-            seams += 1
+            open_.pop(j)
+            seams += 2
     return holes, seams
 
 

@@ -124,7 +124,17 @@ fn install() {
                 for p in list.iter() {
                     // A listed folder is a staged output (`TempGuard`).
                     if std::fs::symlink_metadata(p).is_ok_and(|m| m.is_dir()) {
-                        let _ = std::fs::remove_dir_all(p);
+                        // The command's other threads may still be adding
+                        // files to it (a removal then fails on a folder no
+                        // longer empty, or the folder comes back with a
+                        // subfolder): try until it is gone, a bounded while.
+                        for _ in 0..200 {
+                            let _ = std::fs::remove_dir_all(p);
+                            if std::fs::symlink_metadata(p).is_err() {
+                                break;
+                            }
+                            std::thread::sleep(std::time::Duration::from_millis(2));
+                        }
                     } else {
                         let _ = std::fs::remove_file(p);
                     }
