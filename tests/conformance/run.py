@@ -490,9 +490,10 @@ def open_loops(ply: Path, diagonal: float) -> tuple[int, int]:
     """Boundary loops of a mesh file: (holes, seams). A seam is what crack
     patching's T-junctions leave (the surface is closed there, its
     triangles only do not share the edge's vertices): a loop of no vector
-    area, or a pair of loops whose vector areas cancel (a thin part
-    crossing a cube face, its outline once on each side). A hole is any
-    other loop of vector area over 1e-8 × diagonal²."""
+    area, or overlapping loops whose vector areas cancel (a thin part
+    crossing cube faces whole, its outline once on each side). A hole is a
+    group of overlapping loops whose summed vector area is over 1e-8 ×
+    diagonal²."""
     import numpy as np
 
     if pylodkit is None:
@@ -513,10 +514,10 @@ def open_loops(ply: Path, diagonal: float) -> tuple[int, int]:
         if k in once:
             nxt.setdefault(a, []).append(b)
     limit = 1e-8 * diagonal * diagonal
-    areas = []
+    areas, boxes = [], []
     while nxt:
         start = next(iter(nxt))
-        area = np.zeros(3)
+        loop = [start]
         a = start
         while True:
             outs = nxt.get(a)
@@ -525,25 +526,39 @@ def open_loops(ply: Path, diagonal: float) -> tuple[int, int]:
             b = outs.pop()
             if not outs:
                 del nxt[a]
-            area += np.cross(v[a], v[b])
             a = b
             if a == start:
                 break
-        areas.append(area / 2)
-    # A seam leaves a loop of no area, or (where a thin part crosses a
-    # cube face whole) two loops, one each side, whose vector areas cancel.
-    open_ = [a for a in areas if np.linalg.norm(a) > limit]
-    seams = len(areas) - len(open_)
-    holes = 0
-    while open_:
-        a = open_.pop()
-        j = next((k for k, b in enumerate(open_) if np.linalg.norm(a + b) <= limit), None)
-        if j is None:
-            holes += 1
-        else:
-            open_.pop(j)
-            seams += 2
-    return holes, seams
+            loop.append(a)
+        p = v[loop]
+        areas.append(np.cross(p, np.roll(p, -1, axis=0)).sum(axis=0) / 2)
+        boxes.append((p.min(axis=0), p.max(axis=0)))
+    if not areas:
+        return (0, 0)
+    # A seam's outlines (the coarse side's and the finer sides', where a
+    # part crosses cube faces whole) overlap and their vector areas cancel:
+    # loops are grouped by overlapping bounds, and a group is a hole when
+    # its summed vector area is not nil.
+    lo = np.array([bx[0] for bx in boxes]) - 1e-6 * diagonal
+    hi = np.array([bx[1] for bx in boxes]) + 1e-6 * diagonal
+    parent = list(range(len(areas)))
+
+    def find(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for i in range(len(areas)):
+        touch = np.nonzero(np.all(lo[i] <= hi, axis=1) & np.all(lo <= hi[i], axis=1))[0]
+        for j in touch[touch > i]:
+            parent[find(int(j))] = find(i)
+    groups: dict[int, np.ndarray] = {}
+    for i, area in enumerate(areas):
+        r = find(i)
+        groups[r] = groups.get(r, np.zeros(3)) + area
+    holes = sum(1 for g in groups.values() if np.linalg.norm(g) > limit)
+    return holes, len(areas) - holes
 
 
 def shown_fraction(im) -> float:
