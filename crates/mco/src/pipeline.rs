@@ -623,16 +623,7 @@ const CUT_TRIANGLES_PER_AREA: f64 = 3.0;
 /// Errors as [`estimate_build_bytes`]. Cost: one pass over the faces, plus
 /// one estimate (`O(input)`) per try.
 pub fn mesh_resolution(mesh: &TriMesh, max_bytes: u64) -> Result<Option<u32>> {
-    let area: f64 = mesh
-        .faces
-        .iter()
-        .filter(|f| f.iter().all(|&i| (i as usize) < mesh.positions.len()))
-        .map(|f| {
-            let [a, b, c] = f.map(|i| mesh.positions[i as usize].as_dvec3());
-            0.5 * (b - a).cross(c - a).length()
-        })
-        .filter(|x| x.is_finite())
-        .sum();
+    let area = mesh.area_f64();
     let longest = f64::from(mesh.bbox().size().max_element());
     if !(area > 0.0 && longest > 0.0) || mesh.faces.is_empty() {
         return Ok(None);

@@ -116,6 +116,21 @@ impl TriMesh {
             self.positions[c as usize],
         ]
     }
+    /// Total surface area in double precision, for sizing decisions (a
+    /// lattice, an octree depth): each triangle's area computed in `f64`,
+    /// faces with an index out of range and non-finite areas skipped, so
+    /// it never panics on unchecked input. Cost: one pass over the faces.
+    pub fn area_f64(&self) -> f64 {
+        self.faces
+            .iter()
+            .filter(|f| f.iter().all(|&i| (i as usize) < self.positions.len()))
+            .map(|f| {
+                let [a, b, c] = f.map(|i| self.positions[i as usize].as_dvec3());
+                0.5 * (b - a).cross(c - a).length()
+            })
+            .filter(|x| x.is_finite())
+            .sum()
+    }
     /// Total surface area.
     pub fn area(&self) -> f64 {
         (0..self.faces.len())

@@ -136,16 +136,7 @@ const DEEPEST: u8 = 12;
 /// `1..=`[`DEEPEST`]. `None` without area or samples. Cost: one pass over
 /// the faces.
 pub fn surface_depth(surface: &TriMesh, samples: usize) -> Option<u8> {
-    let area: f64 = surface
-        .faces
-        .iter()
-        .filter(|f| f.iter().all(|&i| (i as usize) < surface.positions.len()))
-        .map(|f| {
-            let [a, b, c] = f.map(|i| surface.positions[i as usize].as_dvec3());
-            0.5 * (b - a).cross(c - a).length()
-        })
-        .filter(|x| x.is_finite())
-        .sum();
+    let area = surface.area_f64();
     let size = f64::from(surface.bbox().size().max_element()) * (1.0 + 1.0 / 1024.0);
     if !(area > 0.0 && size > 0.0) || samples == 0 {
         return None;
