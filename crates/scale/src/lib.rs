@@ -34,6 +34,7 @@
 mod block;
 mod level_ply;
 mod partition;
+mod round_manifest;
 mod run;
 mod runner;
 pub mod soup;

@@ -5,7 +5,7 @@
 //! on that file ([`StagingLock`]): a second run of the same job refuses at
 //! once instead of sharing the blocks, and only a folder no run holds is
 //! removed ([`remove_staging`], [`remove_abandoned`]). What the folder
-//! holds is checked before a run trusts it (`run.rs`: sizes and checksums
+//! holds is checked before a run trusts it (`round_manifest.rs`: sizes and checksums
 //! in the round manifests and beside each block output, no links).
 
 use std::fs::File;
