@@ -316,19 +316,20 @@ fn carve_box(set: &ImageSet, opts: &SilhouetteOptions) -> Result<(Vec3, Vec3)> {
     Ok((lo, hi))
 }
 
+/// The carving box's width in pixels as each view sees it (at the box's
+/// centre, the larger focal length).
+fn projected_widths<'a>(set: &'a ImageSet, frame: &'a Frame) -> impl Iterator<Item = f64> + 'a {
+    let centre = (frame.origin + Vec3::splat(frame.size * 0.5)).as_dvec3();
+    set.calibration.views.iter().map(move |v| {
+        let z = v.to_camera(centre).z.max(1e-12);
+        v.lens.fx.max(v.lens.fy) * f64::from(frame.size) / z
+    })
+}
+
 /// The depth whose leaves project to about one pixel in the median view:
 /// `log2` of the box's projected width, in `4..=10`.
 fn auto_depth(set: &ImageSet, frame: &Frame) -> u8 {
-    let centre = (frame.origin + Vec3::splat(frame.size * 0.5)).as_dvec3();
-    let mut px: Vec<f64> = set
-        .calibration
-        .views
-        .iter()
-        .map(|v| {
-            let z = v.to_camera(centre).z.max(1e-12);
-            v.lens.fx.max(v.lens.fy) * f64::from(frame.size) / z
-        })
-        .collect();
+    let mut px: Vec<f64> = projected_widths(set, frame).collect();
     px.sort_by(f64::total_cmp);
     let median = px[px.len() / 2];
     (median.max(1.0).log2().round() as u8).clamp(4, MAX_AUTO_DEPTH)
@@ -338,16 +339,7 @@ fn auto_depth(set: &ImageSet, frame: &Frame) -> u8 {
 /// in some view: `1 + ⌈log2⌉` of the box's largest projected width (at
 /// least [`BOX_LEVEL`]). A finer carving only multiplies the work.
 fn finest_depth(set: &ImageSet, frame: &Frame) -> u8 {
-    let centre = (frame.origin + Vec3::splat(frame.size * 0.5)).as_dvec3();
-    let px = set
-        .calibration
-        .views
-        .iter()
-        .map(|v| {
-            let z = v.to_camera(centre).z.max(1e-12);
-            v.lens.fx.max(v.lens.fy) * f64::from(frame.size) / z
-        })
-        .fold(1.0f64, f64::max);
+    let px = projected_widths(set, frame).fold(1.0f64, f64::max);
     let d = px.min(f64::from(1u32 << 30)).log2().ceil() as u8 + 1;
     d.clamp(BOX_LEVEL, MAX_DEPTH)
 }
