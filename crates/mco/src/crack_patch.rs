@@ -9,9 +9,18 @@
 //! extra crossings on the inner half-edges. Because parent edges reference
 //! the vertex of the child half-edge ([`crate::octree_build`]), the polyline
 //! and the segment already share their end points; only the extra fine
-//! vertices `P3` stick out. Each is moved to its compensation point `R`,
-//! the foot of the perpendicular from `P3` to the coarse segment `P1P2`
-//! (Fig. 5.6; clamped to the segment). When the face has two coarse
+//! vertices `P3` stick out. The thesis moves each to its compensation
+//! point `R`, the foot of the perpendicular from `P3` to the coarse segment
+//! `P1P2` (Fig. 5.6). That closes the gap in space but leaves a T-junction:
+//! the coarse side draws the edge `P1P2`, the fine side `P1R` and `RP2`, so
+//! no edge is shared, a rasteriser leaves pinholes along the seam, and the
+//! cut has boundary edges the full-resolution surface lacks. Here `P3` is
+//! moved to the end of `P1P2` nearer its foot `R` instead: the fine
+//! polyline collapses onto the coarse segment itself (the fine triangle on
+//! the collapsed edge gets two equal indices and no area; the others keep
+//! their orientation), both sides draw the same edge `P1P2`, and the cut is
+//! watertight in its indices. The move is at most half a fine cube's edge,
+//! well inside the coarse side's own error. When the face has two coarse
 //! segments, `P3` goes onto the one joining the ends of its own fine
 //! polyline, not the nearer one: the fine polylines across the parent's
 //! face are chained, and each polyline's ends are one coarse segment's
@@ -19,19 +28,11 @@
 //! segment can be nearer, and a point moved there leaves the gap between
 //! its polyline and its segment open.
 //!
-//! Every compensation point is stored once in the shared vertex buffer
-//! (keyed by the fine vertex and `q`), and node `n` gets a patch record
-//! "while `q` is not expanded, draw these vertices as those": extraction
-//! only swaps indices.
-//!
-//! **Normals (§5.4.4).** The thesis's formula is garbled in the text; what
-//! survives is a sum of the normals of the moved fine triangles `A`, `B` and
-//! twice the coarse triangle `C` that the compensation point lies on, over
-//! 4. Reconstructed as `n(R) = normalize(mean(n̂_fine) + n̂_C)`: the fine
-//! triangles around `R` (with `R` in place of `P3`) and the coarse triangle
-//! weigh half each, which is the thesis's `(n_A + n_B + 2 n_C) / 4` when two
-//! fine triangles meet at `R`. Without a coarse triangle (none holds both
-//! segment ends) the fine mean is used.
+//! No vertex is added: node `n` gets a patch record "while `q` is not
+//! expanded, draw these vertices as those", and extraction only swaps
+//! indices. Triangles that a patch makes degenerate stay in the index
+//! buffers (a cut keeps its precomputed triangle count; a GPU draws
+//! nothing for them) and [`McoModel::mesh_from_indices`] leaves them out.
 //!
 //! Not patchable this way: a face the coarse side crosses nowhere while the
 //! fine side does, an ambiguous coarse face whose four crossings the fine
@@ -44,8 +45,8 @@
 
 use glam::Vec3;
 
-use crate::lattice::{KEY_BITS, KeyMap, pack, unpack};
-use crate::marching_cubes::{CubeEdges, NO_VERTEX, corner_key, edge_key, node_triangles};
+use crate::lattice::{KEY_BITS, pack, unpack};
+use crate::marching_cubes::{CubeEdges, NO_VERTEX, corner_key, edge_key};
 use crate::marching_cubes_cases::{EDGES, FACES, Face, face_edges, face_segments_fixed};
 use crate::model::{McoModel, Patch};
 use crate::neighbours::{FaceNeighbours, NO_NODE};
@@ -58,10 +59,6 @@ fn closest_on_segment(p: Vec3, a: Vec3, b: Vec3) -> Vec3 {
         return a;
     }
     a + ab * ((p - a).dot(ab) / len2).clamp(0.0, 1.0)
-}
-
-fn unit_normal(p: [Vec3; 3]) -> Vec3 {
-    (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero()
 }
 
 /// Whether the face `f` shared by the level-`l` nodes at `pc` and `mc`
@@ -418,28 +415,20 @@ pub fn expand_together(tree: &Tree) -> Vec<(u32, u32)> {
     out
 }
 
-/// Computes every node's crack patches and appends the compensation points
-/// to the tree's vertex buffer. Call after [`crate::octree_build::assemble`].
-pub fn patch(tree: &mut Tree, model: &mut McoModel) {
+/// Computes every node's crack patches (vertex substitutions into the
+/// tree's vertex buffer, which stays as it is). Call after
+/// [`crate::octree_build::assemble`].
+pub fn patch(tree: &Tree, model: &mut McoModel) {
     let depth = tree.levels.len() - 1;
     let levels = &tree.levels;
     let node_id = &tree.node_id;
-    let vertices = &mut tree.vertices;
-    // (fine vertex, coarse node) → compensation point: per fine vertex, its
-    // first coarse node and point in two arrays (read in vertex order, no
-    // hashing), the rare further ones in a map.
-    let mut first_coarse = vec![NO_NODE; vertices.len()];
-    let mut first_point = vec![0u32; vertices.len()];
-    let mut point_of: KeyMap<u32> = KeyMap::default();
-    // Per compensation point: (sum of fine unit normals, count, coarse normal).
-    let mut normal_acc: Vec<(Vec3, u32, Vec3)> = Vec::new();
+    let vertices = &tree.vertices;
     let mut unpatched = 0u64;
     // Each node is visited once and its patches pushed together: per node,
     // the start and count of its run in `found`.
     let mut runs: Vec<(u32, u8)> = vec![(0, 0); model.nodes.len()];
     let mut found: Vec<Patch> = Vec::new();
     let mut subs: Vec<[u32; 2]> = Vec::new();
-    let (mut own_tris, mut coarse_tris) = (Vec::new(), Vec::new());
     for l in 0..depth {
         let (lv, up) = (&levels[l], &levels[l + 1]);
         let (parent, up_nbr) = (&tree.parent[l], &tree.face_neighbours[l + 1]);
@@ -452,9 +441,6 @@ pub fn patch(tree: &mut Tree, model: &mut McoModel) {
             let cube = unpack(lv.keys[i]);
             let ne = &lv.node_edges[i];
             let run_start = found.len();
-            // This node's triangles (as `assemble` made them), built when a
-            // patch first needs them.
-            own_tris.clear();
             for f in FACES {
                 let a = f.axis as usize;
                 if cube[a] & 1 != f.side as u32 {
@@ -521,7 +507,7 @@ pub fn patch(tree: &mut Tree, model: &mut McoModel) {
                     let px = vertices.positions[x as usize];
                     let own = chain_ends(on_face, x)
                         .and_then(|e| segs.iter().find(|s| [s[0].min(s[1]), s[0].max(s[1])] == e));
-                    let (seg, r) = segs
+                    let (_, end) = segs
                         .iter()
                         .filter(|s| own.is_none_or(|o| o == *s))
                         .map(|s| {
@@ -529,67 +515,18 @@ pub fn patch(tree: &mut Tree, model: &mut McoModel) {
                                 vertices.positions[s[0] as usize],
                                 vertices.positions[s[1] as usize],
                             );
-                            (*s, closest_on_segment(px, a, b))
+                            let r = closest_on_segment(px, a, b);
+                            // The end of the segment nearer the foot `r`.
+                            let end = if r.distance_squared(a) <= r.distance_squared(b) {
+                                s[0]
+                            } else {
+                                s[1]
+                            };
+                            (r.distance_squared(px), end)
                         })
-                        .min_by(|a, b| {
-                            a.1.distance_squared(px)
-                                .total_cmp(&b.1.distance_squared(px))
-                        })
+                        .min_by(|a, b| a.0.total_cmp(&b.0))
                         .expect("segments is not empty");
-                    // The point of `(x, q)`: in the per-vertex slot when
-                    // `x`'s first coarse neighbour is `q`, else in the map.
-                    let mut make = || {
-                        let n = vertices.normals[x as usize];
-                        let c = vertices.colors[x as usize];
-                        // `q`'s triangles, from its level entry (already
-                        // read) rather than the model's node arrays.
-                        coarse_tris.clear();
-                        node_triangles(up.configs[qi], qne, &mut coarse_tris);
-                        let coarse = coarse_tris
-                            .chunks_exact(3)
-                            .find(|t| t.contains(&seg[0]) && t.contains(&seg[1]))
-                            .map(|t| {
-                                unit_normal([0, 1, 2].map(|k| vertices.positions[t[k] as usize]))
-                            })
-                            .unwrap_or(Vec3::ZERO);
-                        normal_acc.push((Vec3::ZERO, 0, coarse));
-                        vertices.push(r, n, c)
-                    };
-                    let xi = x as usize;
-                    let new = if first_coarse[xi] == q {
-                        first_point[xi]
-                    } else if first_coarse[xi] == NO_NODE {
-                        let new = make();
-                        first_coarse[xi] = q;
-                        first_point[xi] = new;
-                        new
-                    } else {
-                        *point_of
-                            .entry((x as u64) << 32 | q as u64)
-                            .or_insert_with(make)
-                    };
-                    // Fine triangles of this node around the moved vertex.
-                    let slot = new as usize - (vertices.len() - normal_acc.len());
-                    if own_tris.is_empty() {
-                        node_triangles(cfg, ne, &mut own_tris);
-                    }
-                    for t in own_tris.chunks_exact(3) {
-                        if t.contains(&x) {
-                            let pts = [0, 1, 2].map(|k| {
-                                if t[k] == x {
-                                    r
-                                } else {
-                                    vertices.positions[t[k] as usize]
-                                }
-                            });
-                            let un = unit_normal(pts);
-                            if un != Vec3::ZERO {
-                                normal_acc[slot].0 += un;
-                                normal_acc[slot].1 += 1;
-                            }
-                        }
-                    }
-                    subs.push([x, new]);
+                    subs.push([x, end]);
                 }
                 found.push(Patch {
                     coarse: q,
@@ -598,19 +535,6 @@ pub fn patch(tree: &mut Tree, model: &mut McoModel) {
                 });
             }
             runs[id as usize] = (run_start as u32, (found.len() - run_start) as u8);
-        }
-    }
-    // §5.4.4: recompute the compensation points' normals.
-    let base = vertices.len() - normal_acc.len();
-    for (k, (sum, count, coarse)) in normal_acc.iter().enumerate() {
-        let fine = if *count > 0 {
-            (*sum / *count as f32).normalize_or_zero()
-        } else {
-            Vec3::ZERO
-        };
-        let n = (fine + *coarse).normalize_or_zero();
-        if n != Vec3::ZERO {
-            vertices.normals[base + k] = n;
         }
     }
     model.subs = subs;

@@ -744,15 +744,18 @@ impl McoModel {
 
     /// A standalone mesh of a cut's index buffer: only the vertices it
     /// references, numbered in order of first use, with their normals and
-    /// (when [`McoModel::has_colors`]) colours. `indices` must come from
-    /// this model's cuts (every index below `positions().len()`; panics
-    /// otherwise); a trailing partial triangle is ignored. `O(vertices +
-    /// indices)`, one allocation per attribute.
+    /// (when [`McoModel::has_colors`]) colours. Triangles with two equal
+    /// indices (where crack patching moved a fine vertex onto a coarse
+    /// segment's end: no area, drawn as nothing) are left out. `indices`
+    /// must come from this model's cuts (every index below
+    /// `positions().len()`; panics otherwise); a trailing partial triangle
+    /// is ignored. `O(vertices + indices)`, one allocation per attribute.
     pub fn mesh_from_indices(&self, indices: &[u32]) -> TriMesh {
         let mut map = vec![u32::MAX; self.vertices.len()];
         let mut used: Vec<u32> = Vec::new();
         let faces = indices
             .chunks_exact(3)
+            .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
             .map(|t| {
                 std::array::from_fn(|k| {
                     let v = t[k] as usize;

@@ -520,15 +520,15 @@ impl IncrementalBuilder {
         let mut tree = crate::octree_build::build_levels_with(field, signs, &leaves)?;
         let mut model = crate::octree_build::assemble(&mut tree);
         // Every marching-cubes vertex on the position grid a `.mco` file
-        // stores (at most 1/1024 of a leaf cube away), before crack patching
-        // puts its compensation points on the segments between them: the
-        // file then holds the model exactly at little cost.
+        // stores (at most 1/1024 of a leaf cube away): the file then holds
+        // the model exactly at little cost, and a loaded model cuts as the
+        // built one.
         for p in &mut tree.vertices.positions {
             *p = crate::model_file_v2::snapped_position(&field.grid, *p);
         }
         let together = crate::crack_patch::expand_together(&tree);
         crate::priority_numbering::number(&mut model, &together);
-        crate::crack_patch::patch(&mut tree, &mut model);
+        crate::crack_patch::patch(&tree, &mut model);
         model.vertices = tree.vertices;
         model.prepare_extraction();
         model.has_colors = self.has_colors.unwrap_or(false);

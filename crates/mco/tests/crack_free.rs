@@ -1,13 +1,15 @@
-//! Every cut of a watertight input is watertight, apart from the T-junction
-//! seams that crack patching closes (issue 14, item 15).
+//! Every cut of a watertight input is watertight: no boundary edge the
+//! full-resolution cut lacks, and no hole.
 //!
 //! A cut's boundary edges (used by one triangle, vertices welded by exact
-//! position) are chained into loops. Crack patching leaves loops of zero
-//! area: a fine polyline `P1 R… P2` whose compensation points `R` lie on the
-//! coarse segment `P1P2`, drawn once by each side. A real crack is a loop
-//! that encloses area. Each loop's area is the norm of its vector area
-//! `½ Σ (p_i − p_0) × (p_{i+1} − p_0)`, in f64; every cut must have no loop
-//! above `1e-8 × diagonal²`.
+//! position, triangles with two equal vertices skipped) are counted, and
+//! chained into loops. Crack patching moves a fine vertex onto an end of
+//! the coarse segment it faces, so both sides draw the same edge and a cut
+//! has no more boundary edges than the full-resolution one (zero on a
+//! closed input). The loops are also measured, so that a failure says how
+//! large the hole is: each loop's area is the norm of its vector area
+//! `½ Σ (p_i − p_0) × (p_{i+1} − p_0)`, in f64, and no loop may exceed
+//! `1e-8 × diagonal²`.
 //!
 //! Every model is cut as users cut it: written to a `.mco` file and loaded
 //! back (`lodkit mco build`, then `mco extract`). Cuts checked on each
@@ -164,7 +166,23 @@ fn failing_cuts(name: &str, m: &McoModel) -> Vec<String> {
     let (lo, hi) = m.bounds();
     let diag2 = (hi - lo).as_dvec3().length_squared();
     let mut failures = Vec::new();
+    let edges = |idx: &[u32]| -> usize {
+        boundary_loops(m.positions(), idx)
+            .iter()
+            .map(|l| l.len)
+            .sum()
+    };
+    let full_edges = edges(&idx);
     let mut check = |what: String, idx: &[u32]| {
+        // No boundary edge the full-resolution cut lacks: crack patching
+        // moves fine vertices onto the coarse segment's ends, so the two
+        // sides share the segment's edge (no T-junction).
+        let open = edges(idx);
+        if open > full_edges {
+            failures.push(format!(
+                "{name} {what}: {open} boundary edges, the full cut has {full_edges}"
+            ));
+        }
         let c = cracks(m, idx, diag2);
         if let Some(worst) = c.iter().max_by(|a, b| a.area.total_cmp(&b.area)) {
             failures.push(format!(

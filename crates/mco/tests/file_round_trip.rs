@@ -140,8 +140,9 @@ fn build(c: &Case) -> McoModel {
 type Key = [u32; 7];
 
 /// The cut `idx` of `m`: each triangle as its vertices' bits (rotated to
-/// start at the smallest, so orientation is kept) beside its indices,
-/// sorted by the bits.
+/// to the smallest rotation, so orientation is kept) beside its indices,
+/// sorted by the bits. Triangles with two equal indices (crack patching's
+/// collapsed edges: no area, drawn as nothing) are left out.
 fn canonical(m: &McoModel, idx: &[u32]) -> Vec<([Key; 3], [u32; 3])> {
     let key = |v: u32| -> Key {
         let (p, n) = (m.positions()[v as usize], m.normals()[v as usize]);
@@ -162,9 +163,14 @@ fn canonical(m: &McoModel, idx: &[u32]) -> Vec<([Key; 3], [u32; 3])> {
     };
     let mut out: Vec<([Key; 3], [u32; 3])> = idx
         .chunks_exact(3)
+        .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
         .map(|t| {
             let k = [key(t[0]), key(t[1]), key(t[2])];
-            let s = (0..3).min_by_key(|&j| k[j]).unwrap();
+            // The smallest rotation as a whole: a triangle that crack
+            // patching made degenerate has two equal vertices.
+            let s = (0..3)
+                .min_by_key(|&j| [k[j], k[(j + 1) % 3], k[(j + 2) % 3]])
+                .unwrap();
             let r = [s, (s + 1) % 3, (s + 2) % 3];
             (r.map(|j| k[j]), r.map(|j| t[j]))
         })
