@@ -527,7 +527,8 @@ impl IncrementalBuilder {
             *p = crate::model_file_v2::snapped_position(&field.grid, *p);
         }
         let together = crate::crack_patch::expand_together(&tree);
-        crate::priority_numbering::number(&mut model, &together);
+        let rank = crate::octree_build::expansion_rank(&model, &tree.vertices.positions);
+        crate::priority_numbering::number(&mut model, &together, &rank);
         crate::crack_patch::patch(&tree, &mut model);
         model.vertices = tree.vertices;
         model.prepare_extraction();

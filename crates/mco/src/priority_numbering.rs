@@ -1,9 +1,14 @@
 //! Node priority numbering, the LOD array and the accumulation table
 //! (thesis §5.2, §5.4.3, §6.1).
 //!
-//! Starting from the root, the expandable node with the largest LOD metric
-//! (the area difference between a node's triangles and its children's) is
-//! expanded next and appended to the LOD array. A node is expandable only
+//! Starting from the root, the expandable node ranked highest is expanded
+//! next and appended to the LOD array. The thesis ranks by its LOD metric,
+//! the area difference between a node's triangles and its children's;
+//! here the rank is the node's geometric error times its area
+//! (`octree_build::expansion_rank`), which keeps thin parts from being cut
+//! off until late. A blocked node lends its rank to the node it waits on
+//! (its parent or a balance dependency), so the few expansions that a
+//! node with much error needs come with it. A node is expandable only
 //! when every same-level neighbour is already *marked* (its parent has been
 //! expanded), so neighbouring drawn nodes never differ by two levels or
 //! more. The thesis also allows a neighbour that "is none"; here a missing
@@ -15,10 +20,10 @@
 //!
 //! The thesis scans a sorted list for the first expandable node. Here a
 //! binary heap holds the candidates; a candidate found blocked waits on the
-//! first unexpanded node it depends on and re-enters the heap when that node
-//! is expanded. That picks the same node as the scan (the largest-metric
-//! expandable one) in `O(n log n)` overall. Ties break on the node number,
-//! so numbering is deterministic.
+//! first unexpanded node it depends on, which enters the heap with the
+//! larger of the two ranks, and re-enters the heap when that node is
+//! expanded. `O(n log n)` overall. Ties break on the node number, so
+//! numbering is deterministic.
 //!
 //! **Expanding together.** Three interfaces cannot be patched by moving
 //! fine vertices onto coarse segments (Fig. 5.6): a face whose fine
@@ -51,7 +56,7 @@ use crate::model::McoModel;
 /// Fills `model.lod`, `model.groups`, `model.prio` and `model.acc` from
 /// the nodes, metrics and balance dependencies. `together` lists node
 /// pairs that must expand in the same LOD step (see the module docs).
-pub fn number(model: &mut McoModel, together: &[(u32, u32)]) {
+pub fn number(model: &mut McoModel, together: &[(u32, u32)], rank: &[f32]) {
     let n = model.nodes.len();
     // Union-find over `together` (each class's root is its smallest
     // member); each class lists its members in order.
@@ -78,14 +83,17 @@ pub fn number(model: &mut McoModel, together: &[(u32, u32)]) {
         let metric = if crate::octree_build::is_null(nd.config) {
             f32::INFINITY
         } else {
-            m.metric[i as usize].max(0.0)
+            rank.get(i as usize)
+                .copied()
+                .unwrap_or(m.metric[i as usize])
+                .max(0.0)
         };
         (metric.to_bits(), Reverse(i))
     };
     if n > 0 && model.nodes[0].child_count > 0 {
         heap.push(key(model, 0));
     }
-    while let Some((_, Reverse(i))) = heap.pop() {
+    while let Some((bits, Reverse(i))) = heap.pop() {
         if expanded[i as usize] {
             continue;
         }
@@ -108,6 +116,11 @@ pub fn number(model: &mut McoModel, together: &[(u32, u32)]) {
         });
         if let Some(b) = blocker {
             waiting[b as usize].push(i);
+            // The blocker inherits the waiting node's metric, so a node
+            // with much error pulls the few nodes it waits on in with it
+            // rather than waiting for their own small metrics.
+            let (own, _) = key(model, b);
+            heap.push((own.max(bits), Reverse(b)));
             continue;
         }
         let number = groups.len() as u32;

@@ -5,9 +5,10 @@
 //! A node is *wanted* expanded when it has children, its cube intersects
 //! the view frustum and its geometric error, projected to the screen,
 //! exceeds the pixel tolerance. The geometric error of a node is `sqrt(M)`,
-//! the square root of the thesis's LOD metric (the area difference to its
-//! children, §5.2): a length that is zero on flat regions, so flat areas
-//! stay coarse exactly as in the LOD-array ordering. The projected size of
+//! the square root of its LOD metric: the largest distance between its
+//! triangles and its children's, saturated up the tree (object units; see
+//! `octree_build::lod_metric`), zero on flat regions, so flat areas stay
+//! coarse. The projected size of
 //! a length `e` at distance `d` (from the eye to the nearest point of the
 //! cube) with vertical field of view `fov` on a viewport `h` pixels high is
 //! `e · h / (2 d tan(fov/2))`.
