@@ -15,6 +15,7 @@
 //   LODKIT_CESIUM     CesiumJS's Build/Cesium folder (default: web/tests/tiles/node_modules/cesium/Build/Cesium)
 //   LODKIT_WEB_BASE   a running server (lodkit serve) to test the viewer on
 //                     instead of the built-in one; MODELS_DIR under /models/
+//   LODKIT_TILES_CLIENTS  which clients: `viewer,cesium` (default), `viewer`, `cesium`
 
 import fs from 'node:fs';
 import path from 'node:path';
@@ -99,12 +100,13 @@ async function setErrorTarget(p, px) {
   return settle(p);
 }
 
+const clients = (process.env.LODKIT_TILES_CLIENTS || 'viewer,cesium').split(',');
 const slug = (rel) => rel.replace(/\/?tileset\.json$/, '').replace(/[^A-Za-z0-9]+/g, '_') || 'root';
 
 for (const rel of tilesets) {
   const url = `/models/${rel.split('/').map(encodeURIComponent).join('/')}`;
 
-  await check(`3DTilesRendererJS viewer: ${rel}`, async () => {
+  if (clients.includes('viewer')) await check(`3DTilesRendererJS viewer: ${rel}`, async () => {
     const { p, errors } = await page();
     await p.goto(`${viewerBase}/?model=${encodeURIComponent(url)}`);
     await p.waitForFunction(() => window.lodkitViewer && (window.lodkitViewer.state.complete || window.lodkitViewer.state.error), null, { timeout: TIMEOUT });
@@ -121,15 +123,17 @@ for (const rel of tilesets) {
     assert(fine.tilesetBytes > 0, 'no bytes counted');
     assert(covFine > MIN_COVERAGE, `only ${(covFine * 100).toFixed(2)} % of the canvas shows the model (error target 0.25 px)`);
     assert(covCoarse > MIN_COVERAGE, `only ${(covCoarse * 100).toFixed(2)} % of the canvas shows the model (error target 32 px)`);
-    assert(coarse.triangles < fine.triangles, `${coarse.triangles} triangles at 32 px, ${fine.triangles} at 0.25 px`);
+    // Triangles, or points for a point cloud's tiles.
+    const drawn = (st) => st.triangles + st.points;
+    assert(drawn(coarse) < drawn(fine), `${drawn(coarse)} triangles and points at 32 px, ${drawn(fine)} at 0.25 px`);
     assert(/tiles\s+\d+ loaded, \d+ drawn/.test(fine.hud) && /triangles/.test(fine.hud) && /downloaded/.test(fine.hud), `HUD: ${fine.hud}`);
     return {
-      fine: { tilesLoaded: fine.tilesLoaded, tilesDrawn: fine.tilesVisible, triangles: fine.triangles, bytes: fine.tilesetBytes, coverage: +covFine.toFixed(3) },
-      coarse: { tilesDrawn: coarse.tilesVisible, triangles: coarse.triangles, coverage: +covCoarse.toFixed(3) },
+      fine: { tilesLoaded: fine.tilesLoaded, tilesDrawn: fine.tilesVisible, triangles: fine.triangles, points: fine.points, bytes: fine.tilesetBytes, coverage: +covFine.toFixed(3) },
+      coarse: { tilesDrawn: coarse.tilesVisible, triangles: coarse.triangles, points: coarse.points, coverage: +covCoarse.toFixed(3) },
     };
   });
 
-  await check(`CesiumJS: ${rel}`, async () => {
+  if (clients.includes('cesium')) await check(`CesiumJS: ${rel}`, async () => {
     const { p, errors } = await page();
     await p.goto(`${server.url}/cesium-test/cesium.html?tileset=${encodeURIComponent(url)}&sse=1`);
     await p.waitForFunction(() => window.cesiumTest && (window.cesiumTest.error || (window.cesiumTest.allLoaded && window.cesiumTest.tilesLoaded > 0)), null, { timeout: TIMEOUT });

@@ -67,6 +67,7 @@ const state = {
   tilesFailed: 0,
   tilesetBytes: 0,
   settledFrames: 0,
+  points: 0, // a tileset: points drawn this frame (POINTS tiles)
 };
 const viewer = {
   state,
@@ -161,6 +162,7 @@ function hud() {
   if (state.kind === 'tileset') {
     lines.push(`tiles     ${state.tilesLoaded} loaded, ${state.tilesVisible} drawn${state.tilesFailed ? `, ${state.tilesFailed} failed` : ''}`);
     lines.push(`error     ${state.tolerance} px target`);
+    if (state.points) lines.push(`points    ${state.points.toLocaleString('en')}`);
   }
   lines.push(`triangles ${state.triangles.toLocaleString('en')}`);
   lines.push(`decode    ${state.decodeMs.toFixed(1)} ms`);
@@ -472,6 +474,7 @@ async function openTileset(url) {
     state.tilesVisible = s.visible;
     state.tilesFailed = s.failed;
     state.triangles = renderer.info.render.triangles;
+    state.points = renderer.info.render.points;
     // Settled: nothing queued, downloading or parsing and something drawn
     // (`settledFrames` counts such frames in a row).
     const settled = s.queued + s.downloading + s.parsing === 0 && s.visible > 0;
@@ -547,6 +550,7 @@ async function open(url, kind) {
     tilesFailed: 0,
     tilesetBytes: 0,
     settledFrames: 0,
+    points: 0,
   });
   const t0 = performance.now();
   if (state.kind !== 'tileset')
