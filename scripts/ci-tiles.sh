@@ -73,7 +73,7 @@ else
   echo "== tilesets: the fixture (lodkit has no tiles command)"
   sets_dir=$work/sets
   node web/tests/make_fixture_tileset.mjs "$lodkit" "$sets_dir" web/tests/tiles/node_modules/gltfpack/cli.js
-  sets=(plain/tileset.json meshopt/tileset.json)
+  sets=(plain/tileset.json meshopt/tileset.json points/tileset.json)
 fi
 
 status=0

@@ -8,6 +8,10 @@
 // OUT_DIR/meshopt/tileset.json   the same tiles through gltfpack -cc
 //                                (KHR_mesh_quantization + EXT_meshopt_compression),
 //                                written when GLTFPACK_CLI (gltfpack's cli.js) is given
+// OUT_DIR/points/tileset.json    a point cloud (40,000 points on a bumpy unit
+//                                sphere, normals and colours): glTF POINTS tiles,
+//                                ADD refinement (a root of every 8th point, then
+//                                the rest by octant), `lodkit convert` of each
 //
 // The hierarchy (REPLACE refinement throughout):
 //   root           the whole bunny simplified to 2 % (`lodkit simplify`)
@@ -192,6 +196,47 @@ const tileset = {
 fs.writeFileSync(path.join(tiles, 'tileset.json'), JSON.stringify(tileset, null, 1) + '\n');
 fs.renameSync(tiles, path.join(tmp, 'plain'));
 
+// --- a point cloud: POINTS tiles, ADD refinement ---
+{
+  const n = 40000;
+  const pts = [];
+  for (let i = 0; i < n; i++) {
+    const z = 1 - (2 * (i + 0.5)) / n;
+    const r = Math.sqrt(1 - z * z);
+    const a = i * 2.399963229728653;
+    const x = r * Math.cos(a);
+    const y = r * Math.sin(a);
+    const s = 1 + 0.08 * Math.sin(5 * x) * Math.sin(4 * y) * Math.sin(3 * z);
+    pts.push({ p: [x * s, y * s, z * s], n: [x, y, z], c: [x, y, z].map((v) => Math.round(40 + (200 * (v + 1)) / 2)) });
+  }
+  const dir = path.join(tmp, 'points');
+  fs.mkdirSync(dir);
+  const cloudTile = (name, list) => {
+    const ply = path.join(work, `${name}.ply`);
+    const lines = list.map((q) => `${q.p.map((v) => v.toFixed(6)).join(' ')} ${q.n.map((v) => v.toFixed(6)).join(' ')} ${q.c.join(' ')}`);
+    fs.writeFileSync(ply, `ply\nformat ascii 1.0\nelement vertex ${list.length}\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n${lines.join('\n')}\n`);
+    run('convert', ply, path.join(dir, `${name}.glb`));
+    const lo = [0, 1, 2].map((c) => Math.min(...list.map((q) => q.p[c])));
+    const hi = [0, 1, 2].map((c) => Math.max(...list.map((q) => q.p[c])));
+    return { boundingVolume: box({ lo, hi }), content: { uri: `${name}.glb` } };
+  };
+  const rootTile = cloudTile('root', pts.filter((_, i) => i % 8 === 0));
+  const rest = pts.filter((_, i) => i % 8 !== 0);
+  const kids = [];
+  for (let o = 0; o < 8; o++) {
+    const part = rest.filter((q) => [0, 1, 2].every((c) => (q.p[c] >= 0) === Boolean(o & (1 << c))));
+    if (part.length) kids.push({ ...cloudTile(`octant${o}`, part), geometricError: 0 });
+  }
+  // The root's points are about 8x sparser: its error is their spacing.
+  const spacing = r6(Math.sqrt((4 * Math.PI) / (n / 8)));
+  const cloud = {
+    asset: { version: '1.1', generator: 'lodkit web/tests/make_fixture_tileset.mjs', tilesetVersion: 'fixture' },
+    geometricError: 2,
+    root: { ...rootTile, geometricError: spacing, refine: 'ADD', children: kids },
+  };
+  fs.writeFileSync(path.join(dir, 'tileset.json'), JSON.stringify(cloud, null, 1) + '\n');
+}
+
 // --- the compressed variant: every GLB through gltfpack, the JSON as it is ---
 if (gltfpack) {
   const plain = path.join(tmp, 'plain');
@@ -210,7 +255,7 @@ fs.rmSync(work, { recursive: true, force: true });
 fs.rmSync(out, { recursive: true, force: true });
 fs.renameSync(tmp, out);
 const count = walk(path.join(out, 'plain')).filter((f) => f.endsWith('.glb')).length;
-console.log(`fixture tileset: ${count} tiles, root error ${rootError}, in ${out}/plain${gltfpack ? ` and ${out}/meshopt` : ''}`);
+console.log(`fixture tileset: ${count} tiles, root error ${rootError}, in ${out}/plain${gltfpack ? `, ${out}/meshopt` : ''} and ${out}/points`);
 
 function walk(dir, rel = '') {
   const outList = [];

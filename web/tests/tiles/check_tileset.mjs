@@ -147,7 +147,6 @@ async function checkContent(file, name, stats) {
     if (!KNOWN_GLTF_REQUIRED.has(ext)) fail(`${name}: requires ${ext}, which the clients do not decode`);
   }
   stats.triangles += info.totalTriangleCount || 0;
-  stats.points += info.totalPointCount || 0;
   // NORMAL on triangle primitives, from the GLB's JSON chunk.
   const dv = new DataView(bytes.buffer, bytes.byteOffset, bytes.byteLength);
   if (bytes.length < 20 || dv.getUint32(0, true) !== 0x46546c67) return; // the validator has said why
@@ -162,6 +161,8 @@ async function checkContent(file, name, stats) {
     (m.primitives || []).forEach((p, j) => {
       const mode = p.mode === undefined ? 4 : p.mode;
       if (mode >= 4 && !(p.attributes && p.attributes.NORMAL !== undefined)) fail(`${name}: meshes[${i}].primitives[${j}] has triangles and no NORMAL`);
+      const position = p.attributes && json.accessors && json.accessors[p.attributes.POSITION];
+      if (mode === 0 && position) stats.points += position.count || 0;
     }),
   );
 }
