@@ -358,11 +358,8 @@ mod tests {
             std::fs::write(&p, b"{}").unwrap();
         }
         let roots = Roots::new(&[d.to_path_buf()]).unwrap();
-        let kinds: Vec<(String, &str)> = roots
-            .list()
-            .into_iter()
-            .map(|e| (e.name, e.kind))
-            .collect();
+        let kinds: Vec<(String, &str)> =
+            roots.list().into_iter().map(|e| (e.name, e.kind)).collect();
         let kind = |n: &str| kinds.iter().find(|(m, _)| m == n).map(|(_, k)| *k);
         assert_eq!(kind("city/tileset.json"), Some("tileset"));
         assert_eq!(kind("other/tileset.json"), Some("tileset"));
