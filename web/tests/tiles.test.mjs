@@ -5,6 +5,7 @@
 //   - CesiumJS (`Cesium3DTileset.fromUrl`, no ion, no globe; maximum
 //     screen-space error 1 px, so it refines past the root): loads with no
 //     console error, tiles load, the model is on screen.
+// Both pages must request nothing but the loopback servers.
 // Screenshots and results.json go to LODKIT_WEB_OUT.
 //
 //   node web/tests/tiles.test.mjs MODELS_DIR REL/tileset.json [REL2/tileset.json ...]
@@ -59,10 +60,16 @@ async function check(name, fn) {
   }
 }
 
-// Console errors but the viewer's listing probe (404 on a static server).
+// Console errors but the viewer's listing probe (404 on a static server),
+// and any request that leaves the loopback servers (CesiumJS must fetch
+// nothing from the internet: no ion, imagery or terrain).
 async function page() {
   const { page: p } = await openPage(browser.context);
   const errors = [];
+  p.on('request', (r) => {
+    const u = new URL(r.url());
+    if (!['data:', 'blob:'].includes(u.protocol) && u.hostname !== '127.0.0.1') errors.push(`request outside loopback: ${r.url()}`);
+  });
   p.on('console', (m) => {
     if (m.type() !== 'error') return;
     const url = m.location().url || '';
@@ -165,6 +172,17 @@ for (const rel of tilesets) {
     return { tilesLoaded: s.tilesLoaded, coverage: +cov.toFixed(3) };
   });
 }
+
+await check('viewer: a missing tileset is one error line naming it', async () => {
+  const { p } = await page();
+  const url = '/models/no-such-folder/tileset.json';
+  await p.goto(`${viewerBase}/?model=${encodeURIComponent(url)}`);
+  await p.waitForFunction(() => window.lodkitViewer && window.lodkitViewer.state.error, null, { timeout: TIMEOUT });
+  const shown = await p.evaluate(() => document.getElementById('error').textContent);
+  await p.close();
+  assert(shown.includes('no-such-folder/tileset.json') && !shown.includes('\n'), `error line: ${JSON.stringify(shown)}`);
+  return { error: shown };
+});
 
 await browser.close();
 await server.close();

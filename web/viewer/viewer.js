@@ -493,7 +493,9 @@ async function openTileset(url) {
       resolve();
     });
     tiles.addEventListener('load-error', ({ tile, error, url: u }) => {
-      if (!tile) reject(new Error(`${u}: ${error && error.message ? error.message : error}`));
+      if (tile) return; // a tile: 3DTilesRendererJS logs it and counts it in stats.failed
+      const msg = String(error && error.message ? error.message : error);
+      reject(new Error(msg.includes(u) ? msg : `${u}: ${msg}`));
     });
     requestRender();
   });
