@@ -124,6 +124,17 @@ function box({ lo, hi }) {
   return { box: [c[0], -c[2], c[1], h[0], 0, 0, 0, h[2], 0, 0, 0, h[1]].map(r6) };
 }
 
+// The union of two boxes: a tile's volume holds its own content (a
+// simplified level's vertices can move past the input's box) and its
+// children's.
+function union(a, b) {
+  return { lo: a.lo.map((v, i) => Math.min(v, b.lo[i])), hi: a.hi.map((v, i) => Math.max(v, b.hi[i])) };
+}
+const glbBounds = (file) => {
+  const m = readGlb(file);
+  return bounds(m, Array.from({ length: m.idx.length / 3 }, (_, t) => t));
+};
+
 function centroid(mesh, t, c) {
   let s = 0;
   for (let k = 0; k < 3; k++) s += mesh.pos[3 * mesh.idx[3 * t + k] + c];
@@ -183,15 +194,15 @@ for (const p of pieces) {
   const ext = {
     asset: { version: '1.1', generator: 'lodkit web/tests/make_fixture_tileset.mjs' },
     geometricError: extError,
-    root: { boundingVolume: box(b), geometricError: extError, refine: 'REPLACE', content: { uri: `${name}_quarter.glb` }, children: extChildren },
+    root: { boundingVolume: box(union(b, glbBounds(coarse))), geometricError: extError, refine: 'REPLACE', content: { uri: `${name}_quarter.glb` }, children: extChildren },
   };
   fs.writeFileSync(path.join(tiles, 'ext', 'tileset.json'), JSON.stringify(ext, null, 1) + '\n');
-  children.push({ boundingVolume: box(b), geometricError: extError, content: { uri: 'ext/tileset.json' } });
+  children.push({ boundingVolume: box(union(b, glbBounds(coarse))), geometricError: extError, content: { uri: 'ext/tileset.json' } });
 }
 const tileset = {
   asset: { version: '1.1', generator: 'lodkit web/tests/make_fixture_tileset.mjs', tilesetVersion: 'fixture' },
   geometricError: r6(Math.hypot(...[0, 1, 2].map((i) => whole.hi[i] - whole.lo[i]))),
-  root: { boundingVolume: box(whole), geometricError: rootError, refine: 'REPLACE', content: { uri: 'root.glb' }, children },
+  root: { boundingVolume: box(union(whole, glbBounds(path.join(tiles, 'root.glb')))), geometricError: rootError, refine: 'REPLACE', content: { uri: 'root.glb' }, children },
 };
 fs.writeFileSync(path.join(tiles, 'tileset.json'), JSON.stringify(tileset, null, 1) + '\n');
 fs.renameSync(tiles, path.join(tmp, 'plain'));

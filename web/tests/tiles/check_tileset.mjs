@@ -9,7 +9,9 @@
 //   - every GLB content with the Khronos glTF-Validator: 0 errors, 0
 //     warnings; its extensionsRequired within what both clients decode
 //     (CesiumJS refuses others); NORMAL on every triangle primitive
-//     (CesiumJS draws a primitive without normals unlit).
+//     (CesiumJS draws a primitive without normals unlit); its positions
+//     (node transforms applied, y-up turned to the tileset's z-up) inside
+//     its tile's bounding box or sphere.
 // Prints one line per tileset (tiles, contents, bytes) and one per failure;
 // exit 1 on any failure.
 
@@ -32,8 +34,6 @@ const fail = (msg) => {
   console.error(`FAIL ${msg}`);
 };
 
-for (const file of files) await checkTileset(path.resolve(file));
-process.exit(failures ? 1 : 0);
 
 async function checkTileset(top) {
   const rootDir = fs.realpathSync(path.dirname(top));
@@ -99,7 +99,7 @@ async function checkTileset(top) {
           pending.push({ file: target, parentError: tile.geometricError, where: name });
         } else {
           const realContent = inside(rootDir, target, `${at} content ${uri}`);
-          if (realContent) await checkContent(realContent, name, stats);
+          if (realContent) await checkContent(realContent, name, stats, bv);
         }
       }
       (tile.children || []).forEach((child, i) => stack.push({ tile: child, ptr: `${ptr}.children[${i}]`, parentError: tile.geometricError }));
@@ -124,7 +124,7 @@ function inside(rootDir, file, where) {
   return real;
 }
 
-async function checkContent(file, name, stats) {
+async function checkContent(file, name, stats, bv) {
   const bytes = new Uint8Array(fs.readFileSync(file));
   stats.contents++;
   stats.bytes += bytes.length;
@@ -165,4 +165,86 @@ async function checkContent(file, name, stats) {
       if (mode === 0 && position) stats.points += position.count || 0;
     }),
   );
+  const outside = contentOutside(json, bv);
+  if (outside) fail(`${name}: content reaches past its tile's bounding volume: ${outside}`);
 }
+
+// --- content against its tile's bounding volume ---
+// Both are in the tile's frame: the glTF scene (its node transforms
+// applied to each POSITION accessor's min/max box) turned from y-up to
+// z-up, (x, y, z) -> (x, -z, y). Both clients cull a tile by its volume,
+// so content outside it vanishes or pops; a content in the wrong frame
+// (left y-up, say) is caught here. Returns a description, or null.
+const EPS = 1e-4; // of the volume's size
+
+function mat(node) {
+  if (Array.isArray(node.matrix) && node.matrix.length === 16) return node.matrix.slice();
+  const [tx, ty, tz] = node.translation || [0, 0, 0];
+  const [qx, qy, qz, qw] = node.rotation || [0, 0, 0, 1];
+  const [sx, sy, sz] = node.scale || [1, 1, 1];
+  // Column-major T * R * S.
+  return [
+    (1 - 2 * (qy * qy + qz * qz)) * sx, 2 * (qx * qy + qz * qw) * sx, 2 * (qx * qz - qy * qw) * sx, 0,
+    2 * (qx * qy - qz * qw) * sy, (1 - 2 * (qx * qx + qz * qz)) * sy, 2 * (qy * qz + qx * qw) * sy, 0,
+    2 * (qx * qz + qy * qw) * sz, 2 * (qy * qz - qx * qw) * sz, (1 - 2 * (qx * qx + qy * qy)) * sz, 0,
+    tx, ty, tz, 1,
+  ];
+}
+function mul(a, b) {
+  const o = new Array(16).fill(0);
+  for (let c = 0; c < 4; c++) for (let r = 0; r < 4; r++) for (let k = 0; k < 4; k++) o[c * 4 + r] += a[k * 4 + r] * b[c * 4 + k];
+  return o;
+}
+const apply = (m, [x, y, z]) => [0, 1, 2].map((r) => m[r] * x + m[4 + r] * y + m[8 + r] * z + m[12 + r]);
+// The largest value of a normalized integer component type.
+const NORM = { 5120: 127, 5121: 255, 5122: 32767, 5123: 65535 };
+
+function contentOutside(json, bv) {
+  const corners = [];
+  const visit = (i, parent, depth) => {
+    const node = (json.nodes || [])[i];
+    if (!node || depth > 64) return;
+    const m = mul(parent, mat(node));
+    const mesh = node.mesh !== undefined && (json.meshes || [])[node.mesh];
+    for (const p of (mesh && mesh.primitives) || []) {
+      const a = json.accessors && json.accessors[p.attributes && p.attributes.POSITION];
+      if (!a || !a.min || !a.max) continue;
+      const k = a.normalized ? NORM[a.componentType] || 1 : 1;
+      const lo = a.min.map((v) => v / k);
+      const hi = a.max.map((v) => v / k);
+      for (let c = 0; c < 8; c++) corners.push(apply(m, [c & 1 ? hi[0] : lo[0], c & 2 ? hi[1] : lo[1], c & 4 ? hi[2] : lo[2]]));
+    }
+    for (const c of node.children || []) visit(c, m, depth + 1);
+  };
+  const identity = [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1];
+  const scene = (json.scenes || [])[json.scene || 0];
+  for (const n of (scene && scene.nodes) || []) visit(n, identity, 0);
+  if (corners.length === 0) return null;
+  const zUp = corners.map(([x, y, z]) => [x, -z, y]);
+  if (Array.isArray(bv.box) && bv.box.length === 12) {
+    const c = bv.box.slice(0, 3);
+    const axes = [bv.box.slice(3, 6), bv.box.slice(6, 9), bv.box.slice(9, 12)];
+    for (const p of zUp) {
+      const d = p.map((v, i) => v - c[i]);
+      for (const [i, ax] of axes.entries()) {
+        const len2 = ax[0] * ax[0] + ax[1] * ax[1] + ax[2] * ax[2];
+        // The point's coordinate along this half-axis, in half-axis lengths.
+        const t = len2 > 0 ? (d[0] * ax[0] + d[1] * ax[1] + d[2] * ax[2]) / len2 : 0;
+        const size = Math.sqrt(len2) + Math.hypot(...axes.map((a) => Math.hypot(...a)));
+        if (Math.abs(t) * Math.sqrt(len2) > Math.sqrt(len2) + EPS * size) return `point ${p.map((v) => v.toPrecision(6)).join(', ')} (z-up) is ${(Math.abs(t)).toFixed(4)} half-axes from the box centre along axis ${i}`;
+      }
+    }
+  } else if (Array.isArray(bv.sphere) && bv.sphere.length === 4) {
+    const [cx, cy, cz, r] = bv.sphere;
+    for (const p of zUp) {
+      const dist = Math.hypot(p[0] - cx, p[1] - cy, p[2] - cz);
+      if (dist > r * (1 + EPS) + EPS) return `point ${p.map((v) => v.toPrecision(6)).join(', ')} (z-up) is ${dist} from the sphere's centre, radius ${r}`;
+    }
+  }
+  // A region is in geographic coordinates: the tile's transform would be
+  // needed to compare; not checked.
+  return null;
+}
+
+for (const file of files) await checkTileset(path.resolve(file));
+process.exit(failures ? 1 : 0);
