@@ -72,7 +72,7 @@ elif "$lodkit" tiles --help >/dev/null 2>&1; then
 else
   echo "== tilesets: the fixture (lodkit has no tiles command)"
   sets_dir=$work/sets
-  node web/tests/make_fixture_tileset.mjs "$lodkit" "$sets_dir" web/tests/tiles/node_modules/gltfpack/cli.js
+  node web/tests/make_fixture_tileset.mjs "$lodkit" "$sets_dir"
   sets=(plain/tileset.json meshopt/tileset.json points/tileset.json)
 fi
 

@@ -2,12 +2,14 @@
 // from GLBs that lodkit writes, for the client tests until `lodkit tiles`
 // makes them (scripts/ci-tiles.sh uses `lodkit tiles` when it has it).
 //
-//   node web/tests/make_fixture_tileset.mjs LODKIT OUT_DIR [GLTFPACK_CLI]
+//   node web/tests/make_fixture_tileset.mjs LODKIT OUT_DIR
 //
 // OUT_DIR/plain/tileset.json     plain GLBs (float positions, normals)
-// OUT_DIR/meshopt/tileset.json   the same tiles through gltfpack -cc
-//                                (KHR_mesh_quantization + EXT_meshopt_compression),
-//                                written when GLTFPACK_CLI (gltfpack's cli.js) is given
+// OUT_DIR/meshopt/tileset.json   the same tiles with KHR_mesh_quantization +
+//                                EXT_meshopt_compression, positions on one grid
+//                                shared by every tile (meshoptimizer's encoder,
+//                                from web/tests/tiles/node_modules; left out
+//                                when that is not installed)
 // OUT_DIR/points/tileset.json    a point cloud (40,000 points on a bumpy unit
 //                                sphere, normals and colours): glTF POINTS tiles,
 //                                ADD refinement (a root of every 8th point, then
@@ -31,14 +33,17 @@
 import fs from 'node:fs';
 import path from 'node:path';
 import { execFileSync } from 'node:child_process';
-import { fileURLToPath } from 'node:url';
+import { fileURLToPath, pathToFileURL } from 'node:url';
 
-const [lodkit, outArg, gltfpack] = process.argv.slice(2);
+const [lodkit, outArg] = process.argv.slice(2);
 if (!lodkit || !outArg) {
-  console.error('usage: make_fixture_tileset.mjs LODKIT OUT_DIR [GLTFPACK_CLI]');
+  console.error('usage: make_fixture_tileset.mjs LODKIT OUT_DIR');
   process.exit(2);
 }
-const root = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
+const here = path.dirname(fileURLToPath(import.meta.url));
+const root = path.resolve(here, '../..');
+const meshoptFile = path.join(here, 'tiles/node_modules/meshoptimizer/index.js');
+const meshopt = fs.existsSync(meshoptFile) ? pathToFileURL(meshoptFile).href : null;
 const bunny = path.join(root, 'data/models/stanford_bunny.ply');
 const out = path.resolve(outArg);
 const tmp = `${out}.tmp`;
@@ -134,6 +139,78 @@ const glbBounds = (file) => {
   const m = readGlb(file);
   return bounds(m, Array.from({ length: m.idx.length / 3 }, (_, t) => t));
 };
+
+// One tile as a GLB with KHR_mesh_quantization + EXT_meshopt_compression:
+// positions (x, y, z, pad) uint16 on the shared grid `origin + q * step`,
+// normals octahedral int8, indices uint32.
+function packGlb(enc, mesh, origin, step) {
+  const n = mesh.pos.length / 3;
+  const m = mesh.idx.length;
+  const q = new Uint16Array(n * 4);
+  const lo = [65535, 65535, 65535];
+  const hi = [0, 0, 0];
+  for (let v = 0; v < n; v++) {
+    for (let c = 0; c < 3; c++) {
+      const x = Math.min(65535, Math.max(0, Math.round((mesh.pos[3 * v + c] - origin[c]) / step)));
+      q[4 * v + c] = x;
+      lo[c] = Math.min(lo[c], x);
+      hi[c] = Math.max(hi[c], x);
+    }
+  }
+  const nrm = new Float32Array(n * 4);
+  for (let v = 0; v < n; v++) for (let c = 0; c < 3; c++) nrm[4 * v + c] = mesh.nrm[3 * v + c];
+  const views = [
+    { raw: new Uint8Array(q.buffer), count: n, stride: 8, mode: 'ATTRIBUTES', target: 34962 },
+    { raw: enc.encodeFilterOct(nrm, n, 4, 8), count: n, stride: 4, mode: 'ATTRIBUTES', target: 34962, filter: 'OCTAHEDRAL' },
+    { raw: new Uint8Array(Uint32Array.from(mesh.idx).buffer), count: m, stride: 4, mode: 'TRIANGLES', target: 34963 },
+  ];
+  const pad4 = (x) => (x + 3) & ~3;
+  let binLen = 0;
+  let fallbackLen = 0;
+  const chunks = [];
+  const bufferViews = views.map((v) => {
+    const data = enc.encodeGltfBuffer(v.raw, v.count, v.stride, v.mode, 0);
+    const ext = { buffer: 0, byteOffset: binLen, byteLength: data.length, byteStride: v.stride, count: v.count, mode: v.mode };
+    if (v.filter) ext.filter = v.filter;
+    chunks.push({ at: binLen, data });
+    binLen = pad4(binLen + data.length);
+    const bv = { buffer: 1, byteOffset: fallbackLen, byteLength: v.raw.length, target: v.target, extensions: { EXT_meshopt_compression: ext } };
+    if (v.mode === 'ATTRIBUTES') bv.byteStride = v.stride;
+    fallbackLen = pad4(fallbackLen + v.raw.length);
+    return bv;
+  });
+  const json = {
+    asset: { version: '2.0', generator: 'lodkit web/tests/make_fixture_tileset.mjs' },
+    extensionsUsed: ['KHR_mesh_quantization', 'EXT_meshopt_compression'],
+    extensionsRequired: ['KHR_mesh_quantization', 'EXT_meshopt_compression'],
+    buffers: [{ byteLength: binLen }, { byteLength: fallbackLen, extensions: { EXT_meshopt_compression: { fallback: true } } }],
+    bufferViews,
+    accessors: [
+      { bufferView: 0, componentType: 5123, count: n, type: 'VEC3', min: lo, max: hi },
+      { bufferView: 1, componentType: 5120, normalized: true, count: n, type: 'VEC3' },
+      { bufferView: 2, componentType: 5125, count: m, type: 'SCALAR' },
+    ],
+    meshes: [{ primitives: [{ attributes: { POSITION: 0, NORMAL: 1 }, indices: 2 }] }],
+    nodes: [{ mesh: 0, translation: origin, scale: [step, step, step] }],
+    scenes: [{ nodes: [0] }],
+    scene: 0,
+  };
+  let jsonBytes = Buffer.from(JSON.stringify(json));
+  jsonBytes = Buffer.concat([jsonBytes, Buffer.alloc(pad4(jsonBytes.length) - jsonBytes.length, 0x20)]);
+  const bin = Buffer.alloc(binLen);
+  for (const c of chunks) bin.set(c.data, c.at);
+  const header = Buffer.alloc(12);
+  header.writeUInt32LE(0x46546c67, 0);
+  header.writeUInt32LE(2, 4);
+  header.writeUInt32LE(12 + 8 + jsonBytes.length + 8 + bin.length, 8);
+  const chunk = (type, body) => {
+    const h = Buffer.alloc(8);
+    h.writeUInt32LE(body.length, 0);
+    h.writeUInt32LE(type, 4);
+    return Buffer.concat([h, body]);
+  };
+  return Buffer.concat([header, chunk(0x4e4f534a, jsonBytes), chunk(0x004e4942, bin)]);
+}
 
 function centroid(mesh, t, c) {
   let s = 0;
@@ -248,25 +325,40 @@ fs.renameSync(tiles, path.join(tmp, 'plain'));
   fs.writeFileSync(path.join(dir, 'tileset.json'), JSON.stringify(cloud, null, 1) + '\n');
 }
 
-// --- the compressed variant: every GLB through gltfpack, the JSON as it is ---
-if (gltfpack) {
+// --- the compressed variant: the same tiles quantised on ONE grid ---
+// Positions as uint16 on a grid shared by every tile of the tileset (a node
+// transform maps them back to metres), so that vertices on a border
+// between tiles stay equal; quantising each tile on its own grid (as
+// gltfpack -cc does per file) opens pinholes along tile borders in both
+// clients. Normals octahedral (int8, meshopt's OCTAHEDRAL filter); every
+// buffer view EXT_meshopt_compression (codec version 0), with a fallback
+// buffer of the decoded size and no bytes.
+if (meshopt) {
+  const { MeshoptEncoder } = await import(meshopt);
+  await MeshoptEncoder.ready;
   const plain = path.join(tmp, 'plain');
   const packed = path.join(tmp, 'meshopt');
-  for (const rel of walk(plain)) {
+  const files = walk(plain);
+  const glbs = files.filter((f) => f.endsWith('.glb'));
+  let grid = null;
+  for (const rel of glbs) {
+    const b = glbBounds(path.join(plain, rel));
+    grid = grid ? union(grid, b) : b;
+  }
+  const origin = grid.lo;
+  const step = Math.max(...[0, 1, 2].map((i) => grid.hi[i] - grid.lo[i])) / 65535;
+  for (const rel of files) {
     const to = path.join(packed, rel);
     fs.mkdirSync(path.dirname(to), { recursive: true });
-    if (rel.endsWith('.glb')) {
-      execFileSync(process.execPath, [gltfpack, '-i', path.join(plain, rel), '-o', to, '-cc', '-ce', 'ext'], { stdio: ['ignore', 'ignore', 'inherit'] });
-    } else {
-      fs.copyFileSync(path.join(plain, rel), to);
-    }
+    if (rel.endsWith('.glb')) fs.writeFileSync(to, packGlb(MeshoptEncoder, readGlb(path.join(plain, rel)), origin, step));
+    else fs.copyFileSync(path.join(plain, rel), to);
   }
 }
 fs.rmSync(work, { recursive: true, force: true });
 fs.rmSync(out, { recursive: true, force: true });
 fs.renameSync(tmp, out);
 const count = walk(path.join(out, 'plain')).filter((f) => f.endsWith('.glb')).length;
-console.log(`fixture tileset: ${count} tiles, root error ${rootError}, in ${out}/plain${gltfpack ? `, ${out}/meshopt` : ''} and ${out}/points`);
+console.log(`fixture tileset: ${count} tiles, root error ${rootError}, in ${out}/plain${meshopt ? `, ${out}/meshopt` : ''} and ${out}/points`);
 
 function walk(dir, rel = '') {
   const outList = [];
