@@ -101,7 +101,7 @@ fetch(base + "/api/models").then((r) => r.json()).then((list) => {
 });
 ' "http://127.0.0.1:$port" "${sets[@]}" || status=1
 LODKIT_TILES_CLIENTS=viewer LODKIT_WEB_BASE=http://127.0.0.1:$port LODKIT_WEB_SITE=$work/site LODKIT_WEB_OUT=$work/serve \
-  node web/tests/tiles.test.mjs "$sets_dir" "${sets[0]}" || status=1
+  node web/tests/tiles.test.mjs "$sets_dir" "${sets[@]}" || status=1
 kill $serve_pid 2>/dev/null || true
 wait $serve_pid 2>/dev/null || true
 

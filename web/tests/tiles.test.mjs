@@ -173,6 +173,24 @@ for (const rel of tilesets) {
   });
 }
 
+// Through a server with a listing (lodkit serve): the viewer's menu offers
+// each tileset once and none of the files inside it.
+if (process.env.LODKIT_WEB_BASE) {
+  await check('viewer menu: tilesets listed, their tiles not', async () => {
+    const { p } = await page();
+    await p.goto(`${viewerBase}/?idle`);
+    await p.waitForFunction(() => window.lodkitViewer && window.lodkitViewer.ready);
+    await p.evaluate(() => window.lodkitViewer.ready);
+    const options = await p.evaluate(() => [...document.querySelectorAll('#models option')].map((o) => o.value));
+    await p.close();
+    for (const rel of tilesets) assert(options.includes(`/models/${rel}`), `no menu entry for ${rel}: ${JSON.stringify(options)}`);
+    const folders = tilesets.map((rel) => `/models/${rel.replace(/[^/]*$/, '')}`);
+    const inside = options.filter((o) => folders.some((f) => o.startsWith(f)) && !o.endsWith('/tileset.json'));
+    assert(inside.length === 0, `tile files in the menu: ${JSON.stringify(inside.slice(0, 5))}`);
+    return { entries: options.length };
+  });
+}
+
 await check('viewer: a missing tileset is one error line naming it', async () => {
   const { p } = await page();
   const url = '/models/no-such-folder/tileset.json';
