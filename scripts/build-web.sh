@@ -3,6 +3,7 @@
 #   index.html viewer.js                    the page (web/viewer/)
 #   lodkit/*.js lodkit/lodkit.wasm          the loaders, the worker, the decoders
 #   three/build/… three/examples/jsm/…      the three.js files the page imports
+#   3d-tiles-renderer/build/…               3DTilesRendererJS (tilesets), its three.js entry
 # Usage: scripts/build-web.sh [OUT_DIR]   (default web/dist)
 # Installs what it needs: the wasm32-unknown-unknown target (rustup) and the
 # npm packages of web/package-lock.json (npm ci). crates/cli/build.rs runs it
@@ -45,7 +46,8 @@ three=$web/node_modules/three
 tmp=$(mktemp -d "${out%/}.tmp.XXXXXX")
 trap 'rm -rf "$tmp"' EXIT
 mkdir -p "$tmp/lodkit" "$tmp/three/build" "$tmp/three/examples/jsm/controls" \
-  "$tmp/three/examples/jsm/loaders" "$tmp/three/examples/jsm/utils"
+  "$tmp/three/examples/jsm/loaders" "$tmp/three/examples/jsm/utils" "$tmp/three/examples/jsm/libs" \
+  "$tmp/3d-tiles-renderer/build"
 cp "$web/viewer/index.html" "$web/viewer/viewer.js" "$tmp/"
 cp "$web"/src/*.js "$tmp/lodkit/"
 cp "$wasm" "$tmp/lodkit/lodkit.wasm"
@@ -54,6 +56,21 @@ cp "$three/build/three.module.js" "$three/build/three.core.js" "$tmp/three/build
 cp "$three/examples/jsm/controls/OrbitControls.js" "$tmp/three/examples/jsm/controls/"
 cp "$three/examples/jsm/loaders/GLTFLoader.js" "$three/examples/jsm/loaders/PLYLoader.js" "$tmp/three/examples/jsm/loaders/"
 cp "$three/examples/jsm/utils/BufferGeometryUtils.js" "$three/examples/jsm/utils/SkeletonUtils.js" "$tmp/three/examples/jsm/utils/"
+cp "$three/examples/jsm/libs/meshopt_decoder.module.js" "$tmp/three/examples/jsm/libs/"
+# 3DTilesRendererJS: its three.js entry and the chunks it imports (by
+# relative path; their names carry a content hash, so they are followed
+# from the entry rather than listed here).
+tiles=$web/node_modules/3d-tiles-renderer
+cp "$tiles/LICENSE" "$tmp/3d-tiles-renderer/LICENSE"
+pending=(index.three.js)
+while [ ${#pending[@]} -gt 0 ]; do
+  f=${pending[0]}
+  pending=("${pending[@]:1}")
+  [ -f "$tmp/3d-tiles-renderer/build/$f" ] && continue
+  cp "$tiles/build/$f" "$tmp/3d-tiles-renderer/build/$f"
+  mapfile -t deps < <(grep -o 'from "\./[^"]*\.js"' "$tiles/build/$f" | sed 's/^from "\.\///; s/"$//')
+  pending+=("${deps[@]}")
+done
 rm -rf "$out"
 chmod 755 "$tmp"
 mv "$tmp" "$out"

@@ -19,21 +19,29 @@ export const MIME = {
   '.ply': 'application/octet-stream',
   '.pop': 'application/octet-stream',
   '.mco': 'application/octet-stream',
+  '.css': 'text/css; charset=utf-8',
+  '.png': 'image/png',
+  '.jpg': 'image/jpeg',
+  '.svg': 'image/svg+xml',
+  '.xml': 'application/xml',
 };
 
 /**
  * Serves `site` (the built viewer) at `/` and `models` at `/models/` on
- * 127.0.0.1 with an ephemeral port. No listing API: the viewer must work
- * without one. Returns {url, close()}.
+ * 127.0.0.1 with an ephemeral port; `mounts` maps more URL prefixes
+ * (`/cesium/`) to folders. No listing API: the viewer must work without
+ * one. Returns {url, close()}.
  */
-export async function staticServer(site, models) {
+export async function staticServer(site, models, mounts = {}) {
+  const prefixes = Object.entries({ ...mounts, '/models/': models });
   const server = http.createServer((req, res) => {
     const u = new URL(req.url, 'http://x');
     let rel = decodeURIComponent(u.pathname);
     let base = site;
-    if (rel.startsWith('/models/')) {
-      base = models;
-      rel = rel.slice('/models'.length);
+    const mount = prefixes.find(([p]) => rel.startsWith(p));
+    if (mount) {
+      base = mount[1];
+      rel = rel.slice(mount[0].length - 1);
     }
     if (rel.endsWith('/')) rel += 'index.html';
     const file = path.join(base, path.normalize(rel));

@@ -1,5 +1,7 @@
-// The lodkit viewer: one page for the three LOD forms and plain meshes.
-//   ?model=URL            the model to open (kind from its extension, or &kind=)
+// The lodkit viewer: one page for the three LOD forms, 3D Tiles tilesets
+// and plain meshes.
+//   ?model=URL            the model to open (kind from its extension, or &kind=;
+//                         a `.json` is a 3D Tiles tileset)
 //   GET /api/models       the server's listing (lodkit serve), if there is one
 // The HUD's figures are on window.lodkitViewer.state (the browser tests read
 // them there).
@@ -8,6 +10,8 @@ import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { PLYLoader } from 'three/addons/loaders/PLYLoader.js';
+import { MeshoptDecoder } from 'three/addons/libs/meshopt_decoder.module.js';
+import { TilesRenderer } from '3d-tiles-renderer';
 import { PopLoader, McoModel, wasmModule } from './lodkit/index.js';
 
 // The LOD-chain switch uses a level's mean edge length as its error; an
@@ -56,6 +60,14 @@ const state = {
   digest: '',
   complete: false,
   error: '',
+  // A tileset: tiles with content loaded (in the cache), drawn this frame,
+  // failed; bytes fetched so far (tileset JSON and tile contents).
+  tilesLoaded: 0,
+  tilesVisible: 0,
+  tilesFailed: 0,
+  tilesetBytes: 0,
+  settledFrames: 0,
+  points: 0, // a tileset: points drawn this frame (POINTS tiles)
 };
 const viewer = {
   state,
@@ -137,7 +149,7 @@ function levelLine(label, k, last, note) {
 function hud() {
   const lines = [
     `${state.kind || '-'}  ${state.url.split('/').pop()}`,
-    `bytes     ${fmtBytes(state.loaded)} / ${fmtBytes(state.total)}`,
+    state.kind === 'tileset' ? `bytes     ${fmtBytes(state.loaded)} downloaded` : `bytes     ${fmtBytes(state.loaded)} / ${fmtBytes(state.total)}`,
   ];
   if (state.kind === 'pop') lines.push(levelLine('level', state.level, state.lastLevel, `0 coarsest, ${state.precision} bits`));
   if (state.kind === 'mco') {
@@ -147,6 +159,11 @@ function hud() {
     else lines.push('cut       -');
   }
   if (state.kind === 'chain') lines.push(levelLine('level', state.level, state.lastLevel, `lod${state.level}, 0 finest`));
+  if (state.kind === 'tileset') {
+    lines.push(`tiles     ${state.tilesLoaded} loaded, ${state.tilesVisible} drawn${state.tilesFailed ? `, ${state.tilesFailed} failed` : ''}`);
+    lines.push(`error     ${state.tolerance} px target`);
+    if (state.points) lines.push(`points    ${state.points.toLocaleString('en')}`);
+  }
   lines.push(`triangles ${state.triangles.toLocaleString('en')}`);
   lines.push(`decode    ${state.decodeMs.toFixed(1)} ms`);
   lines.push(`frame     ${state.frameMs.toFixed(1)} ms`);
@@ -175,7 +192,7 @@ function setWireframe(obj, on) {
 function kindOf(url, given) {
   if (given) return given;
   const ext = url.split('?')[0].split('.').pop().toLowerCase();
-  return { pop: 'pop', mco: 'mco', glb: 'glb', gltf: 'glb', ply: 'ply' }[ext] || ext;
+  return { pop: 'pop', mco: 'mco', glb: 'glb', gltf: 'glb', ply: 'ply', json: 'tileset' }[ext] || ext;
 }
 
 // Total size from a HEAD request, for the HUD while a whole-file loader runs.
@@ -411,12 +428,93 @@ async function openPly(url) {
   state.complete = true;
 }
 
+// A 3D Tiles tileset (tileset.json, external tilesets, GLB contents plain
+// or with EXT_meshopt_compression + KHR_mesh_quantization) streamed by
+// 3DTilesRendererJS: tiles are fetched and swapped as the camera moves,
+// until each drawn tile's screen-space error is within the slider's target
+// (`errorTarget`, pixels). The tileset's frame is z-up; the scene is y-up,
+// so the tiles' group turns by -90° about x.
+async function openTileset(url) {
+  const tiles = new TilesRenderer(url);
+  const gltf = new GLTFLoader(tiles.manager);
+  gltf.setMeshoptDecoder(MeshoptDecoder);
+  tiles.manager.addHandler(/\.(gltf|glb)$/i, gltf);
+  // Counts the bytes of every fetch (JSON and contents) for the HUD.
+  tiles.registerPlugin({
+    name: 'LODKIT_BYTE_COUNT',
+    fetchData: async (u, options) => {
+      const r = await fetch(u, options);
+      if (!r.ok) return r;
+      const body = await r.arrayBuffer();
+      state.tilesetBytes += body.byteLength;
+      state.loaded = state.tilesetBytes;
+      return new Response(body, { status: r.status, statusText: r.statusText, headers: r.headers });
+    },
+  });
+  tiles.group.rotation.x = -Math.PI / 2;
+  tiles.errorTarget = state.tolerance;
+  tiles.setCamera(camera);
+  tiles.setResolutionFromRenderer(camera, renderer);
+  viewer.tiles = tiles;
+  viewer.model = tiles.group;
+  viewer.model.isTileset = true;
+  scene.add(tiles.group);
+  const update = () => requestRender();
+  for (const ev of ['needs-update', 'needs-render', 'load-model', 'tiles-load-end']) tiles.addEventListener(ev, update);
+  tiles.addEventListener('load-model', ({ scene: s }) => setWireframe(s, state.wireframe));
+  onFrame = () => {
+    tiles.errorTarget = state.tolerance;
+    camera.updateMatrixWorld();
+    tiles.setResolutionFromRenderer(camera, renderer);
+    tiles.update();
+  };
+  afterFrame = () => {
+    const s = tiles.stats;
+    state.tilesLoaded = s.loaded;
+    state.tilesVisible = s.visible;
+    state.tilesFailed = s.failed;
+    state.triangles = renderer.info.render.triangles;
+    state.points = renderer.info.render.points;
+    // Settled: nothing queued, downloading or parsing and something drawn
+    // (`settledFrames` counts such frames in a row).
+    const settled = s.queued + s.downloading + s.parsing === 0 && s.visible > 0;
+    state.settledFrames = settled ? state.settledFrames + 1 : 0;
+    if (settled) state.complete = true;
+    else requestRender();
+  };
+  await new Promise((resolve, reject) => {
+    tiles.addEventListener('load-root-tileset', () => {
+      tiles.group.updateMatrixWorld(true);
+      const sphere = new THREE.Sphere();
+      tiles.getBoundingSphere(sphere);
+      sphere.applyMatrix4(tiles.group.matrixWorld);
+      viewer.bounds = sphere;
+      frameSphere(sphere);
+      resolve();
+    });
+    tiles.addEventListener('load-error', ({ tile, error, url: u }) => {
+      if (tile) return; // a tile: 3DTilesRendererJS logs it and counts it in stats.failed
+      const msg = String(error && error.message ? error.message : error);
+      reject(new Error(msg.includes(u) ? msg : `${u}: ${msg}`));
+    });
+    requestRender();
+  });
+  // The first tiles: resolved once something is drawn and nothing is in flight.
+  await new Promise((resolve) => {
+    const poll = () => (state.complete || state.error ? resolve() : setTimeout(poll, 50));
+    poll();
+  });
+}
+
 // Takes the open model off the scene (its worker and buffers freed).
 function close() {
   const m = viewer.model;
   if (!m) return;
   scene.remove(m);
-  if (m.isMcoModel) m.dispose();
+  if (m.isTileset) {
+    viewer.tiles.dispose();
+    viewer.tiles = null;
+  } else if (m.isMcoModel) m.dispose();
   else
     m.traverse((o) => {
       if (o.geometry) o.geometry.dispose();
@@ -449,12 +547,19 @@ async function open(url, kind) {
     digest: '',
     complete: false,
     error: '',
+    tilesLoaded: 0,
+    tilesVisible: 0,
+    tilesFailed: 0,
+    tilesetBytes: 0,
+    settledFrames: 0,
+    points: 0,
   });
   const t0 = performance.now();
-  headSize(url).then((n) => {
-    if (!state.total) state.total = n;
-  });
-  const openers = { pop: openPop, mco: openMco, glb: openGlb, ply: openPly };
+  if (state.kind !== 'tileset')
+    headSize(url).then((n) => {
+      if (!state.total) state.total = n;
+    });
+  const openers = { pop: openPop, mco: openMco, glb: openGlb, ply: openPly, tileset: openTileset };
   const opener = openers[state.kind];
   if (!opener) throw new Error(`${url}: cannot show a .${state.kind} file`);
   await opener(url);
@@ -471,7 +576,11 @@ async function listModels() {
     const r = await fetch('/api/models');
     if (!r.ok || !(r.headers.get('content-type') || '').includes('json')) return [];
     const list = await r.json();
-    return Array.isArray(list) ? list : [];
+    if (!Array.isArray(list)) return [];
+    // A tileset is one entry: the files in its folder (tiles, external
+    // tilesets) are opened through it, not one by one.
+    const folders = list.filter((m) => m.kind === 'tileset').map((m) => m.name.replace(/[^/]*$/, ''));
+    return list.filter((m) => m.kind === 'tileset' || !folders.some((f) => m.name.startsWith(f)));
   } catch {
     return [];
   }
@@ -538,7 +647,7 @@ async function main() {
   // ?idle: open nothing (a test opens its model itself).
   if (params.has('idle')) return;
   if (!url) {
-    $('error').textContent = 'No model: open ?model=URL (a .pop, .mco, .glb or .ply).';
+    $('error').textContent = 'No model: open ?model=URL (a .pop, .mco, .glb, .ply or a 3D Tiles tileset.json).';
     return;
   }
   await open(url, params.get('kind'));

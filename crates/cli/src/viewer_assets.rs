@@ -76,5 +76,8 @@ mod tests {
         assert_eq!(m, "application/wasm");
         assert!(wasm.starts_with(b"\0asm"));
         assert!(get("three/build/three.module.js").is_some());
+        // Tilesets: 3DTilesRendererJS and the meshopt decoder it is given.
+        assert!(get("3d-tiles-renderer/build/index.three.js").is_some());
+        assert!(get("three/examples/jsm/libs/meshopt_decoder.module.js").is_some());
     }
 }

@@ -62,6 +62,8 @@ pub const AFTER_HELP: &str = "\
 URLs:
   /                  the viewer
   /api/models        the models as JSON: [{name, url, kind, bytes}] sorted by name
+                     (a folder with a tileset.json is a 3D Tiles tileset: kind
+                     \"tileset\", opened by the viewer through 3DTilesRendererJS)
   /models/           the same list as an HTML page
   /models/NAME       a model's bytes (NAME as listed; ranges, ETag, If-None-Match)
 

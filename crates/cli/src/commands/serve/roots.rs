@@ -48,7 +48,8 @@ pub struct Entry {
     pub name: String,
     /// Absolute URL path to fetch it (`/models/lods/bunny_lod1.ply`).
     pub url: String,
-    /// `pop|mco|glb|gltf|ply|obj|stl|xyz|other`, from the extension.
+    /// `pop|mco|glb|gltf|ply|obj|stl|xyz|tileset|other`, from the name:
+    /// `tileset` is a 3D Tiles `tileset.json` (see [`Roots::list`]).
     pub kind: &'static str,
     pub bytes: u64,
 }
@@ -144,6 +145,10 @@ impl Roots {
     /// Every servable file of every root, sorted by name. Symlinked files
     /// are listed when they resolve inside their root; symlinked directories
     /// are not walked (no loops, nothing outside).
+    ///
+    /// A folder holding a `tileset.json` is a 3D Tiles tileset: that file is
+    /// listed with kind `tileset` (the viewer opens it), and a `tileset.json`
+    /// below it (an external tileset, a part of the same tileset) as `other`.
     pub fn list(&self) -> Vec<Entry> {
         let mut out = Vec::new();
         for m in &self.mounts {
@@ -155,6 +160,7 @@ impl Roots {
         }
         out.sort_by(|a, b| a.name.cmp(&b.name));
         out.truncate(MAX_ENTRIES);
+        mark_external_tilesets(&mut out);
         out
     }
 }
@@ -216,8 +222,36 @@ fn entry(name: String, bytes: u64) -> Entry {
     }
 }
 
-/// The listing's `kind` of a file name, from its extension.
+/// Turns `tileset` entries inside another tileset's folder into `other`:
+/// they are external tilesets of that one. Cost: tilesets², over the
+/// tileset entries only.
+fn mark_external_tilesets(entries: &mut [Entry]) {
+    let folders: Vec<String> = entries
+        .iter()
+        .filter(|e| e.kind == "tileset")
+        .map(|e| e.name[..e.name.len() - TILESET_FILE.len()].to_string())
+        .collect();
+    for e in entries.iter_mut().filter(|e| e.kind == "tileset") {
+        let folder = &e.name[..e.name.len() - TILESET_FILE.len()];
+        if folders
+            .iter()
+            .any(|f| f.len() < folder.len() && folder.starts_with(f.as_str()))
+        {
+            e.kind = "other";
+        }
+    }
+}
+
+/// The file that makes a folder a 3D Tiles tileset.
+const TILESET_FILE: &str = "tileset.json";
+
+/// The listing's `kind` of a file name (`/`-separated path): `tileset` for
+/// a `tileset.json`, otherwise from its extension.
 pub fn kind_of(name: &str) -> &'static str {
+    let base = name.rsplit('/').next().unwrap_or(name);
+    if base == TILESET_FILE {
+        return "tileset";
+    }
     let ext = name.rsplit_once('.').map(|(_, e)| e.to_ascii_lowercase());
     match ext.as_deref() {
         Some("pop") => "pop",
@@ -301,5 +335,36 @@ mod tests {
         assert_eq!(kind_of("x.mco"), "mco");
         assert_eq!(kind_of("report.md"), "other");
         assert_eq!(kind_of("noext"), "other");
+        assert_eq!(kind_of("city/tileset.json"), "tileset");
+        assert_eq!(kind_of("tileset.json"), "tileset");
+        assert_eq!(kind_of("lods/lods.json"), "other");
+        assert_eq!(kind_of("my_tileset.json"), "other");
+    }
+
+    #[test]
+    fn a_tileset_is_listed_once_its_external_tilesets_as_other() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        for f in [
+            "bunny.pop",
+            "city/tileset.json",
+            "city/0.glb",
+            "city/a/tileset.json",
+            "city/a/1.glb",
+            "other/tileset.json",
+        ] {
+            let p = d.join(f);
+            std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+            std::fs::write(&p, b"{}").unwrap();
+        }
+        let roots = Roots::new(&[d.to_path_buf()]).unwrap();
+        let kinds: Vec<(String, &str)> =
+            roots.list().into_iter().map(|e| (e.name, e.kind)).collect();
+        let kind = |n: &str| kinds.iter().find(|(m, _)| m == n).map(|(_, k)| *k);
+        assert_eq!(kind("city/tileset.json"), Some("tileset"));
+        assert_eq!(kind("other/tileset.json"), Some("tileset"));
+        assert_eq!(kind("city/a/tileset.json"), Some("other"));
+        assert_eq!(kind("city/0.glb"), Some("glb"));
+        assert_eq!(kind("bunny.pop"), Some("pop"));
     }
 }
