@@ -41,14 +41,18 @@
 //! levels that meet their *own* neighbours, but in a tree any two levels
 //! may meet. So: tiles of one level are cut from one mesh and share
 //! their borders bit for bit; where levels differ, each tile's cut edges
-//! carry a skirt hung inwards along the normals by the larger of its own
-//! and its parent's `geometricError` (the farthest its border and a
-//! neighbour's can be apart, for neighbours up to one level coarser; a
-//! coarser one's own skirt is deeper). Skirts add two triangles per cut
-//! edge at the tile's own resolution, so they scale with the tile, not
-//! with the input. They are not part of the measured error (they lie
-//! within it of the surface). Tested by rendering random cuts of a
-//! closed mesh (`tests/cracks.rs`).
+//! carry a skirt hung inwards along the normals by twice the larger of its
+//! own and its parent's `geometricError` (about the farthest its border
+//! and a neighbour's are apart; a coarser neighbour's own skirt is
+//! deeper). Skirts add two triangles per cut edge at the tile's own
+//! resolution, so they scale with the tile, not with the input. They are
+//! not part of the measured error (they hang below the surface). Measured
+//! by casting rays at random cuts of a closed mesh (`tests/cracks.rs`):
+//! skirts stop about 98.5 % of the rays that pass through slivers without
+//! them (616 → 9 over five cuts); the rest does not shrink with deeper
+//! skirts and is a known gap (not yet located: corners where three tiles
+//! meet are the suspects). Skirts hang inwards, so a part thinner than a
+//! skirt's depth may show the skirt's tip on its far side.
 //!
 //! # Contract
 //! Same input and options → the same bytes in every file. Cost (in
@@ -72,6 +76,13 @@ use lodkit_mesh::{Aabb, TriMesh};
 pub use octree_partition::{CellKey, MAX_DEPTH};
 pub use out_folder::MANIFEST;
 pub use tile_content::encode_tile;
+
+/// How deep a skirt hangs, in units of the larger of its tile's and its
+/// parent's `geometricError`. Measured (`tests/cracks.rs`, three random
+/// cuts of a 40k-face blob, 1k-face leaves): rays through slivers fell
+/// from 399 without skirts to 17 at 1×, 6 at 1.5×, 4 at 2× and 4 at 3×;
+/// what remains does not shrink with depth (see the crate docs).
+const SKIRT_DEPTH: f64 = 2.0;
 
 /// Errors of a tileset build; each displays as one line.
 #[derive(Debug, thiserror::Error)]
@@ -273,7 +284,7 @@ pub fn tileset_from_mesh(
             let depth = if i == 0 || !opts.skirts {
                 0.0
             } else {
-                error[i].max(error[parent[i]])
+                SKIRT_DEPTH * error[i].max(error[parent[i]])
             };
             let m = skirts::with_skirts(&t.mesh, &t.cuts, depth as f32);
             skirt_triangles += m.faces.len() - t.mesh.faces.len();
