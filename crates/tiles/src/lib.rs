@@ -356,15 +356,13 @@ pub fn write_tileset(
     })?;
     let mut bytes = 0u64;
     let total = tileset.report.tiles;
-    let mut done = 0;
-    for (name, _, _, mesh) in tileset.tiles() {
+    for (i, (name, _, _, mesh)) in tileset.tiles().enumerate() {
         let glb = encode_tile(&name, mesh, opts.compress)?;
         lodkit_mesh::io::write_atomic(&tiles_dir.join(format!("{name}.glb")), &glb)?;
         bytes += glb.len() as u64;
-        done += 1;
         progress(Event::Progress {
             phase: Phase::Write,
-            done,
+            done: i + 1,
             total,
         });
     }

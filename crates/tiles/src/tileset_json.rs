@@ -98,7 +98,7 @@ fn tile(
     let mut children = Vec::new();
     for &c in &node.children {
         let ck = tree.nodes[c].key;
-        if ck.depth % SUBTREE_LEVELS == 0 {
+        if ck.depth.is_multiple_of(SUBTREE_LEVELS) {
             pending.push(c);
             children.push(json!({
                 "boundingVolume": { "box": zup_box(&info[c].bbox, pad) },
