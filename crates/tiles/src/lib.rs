@@ -44,15 +44,16 @@
 //! carry a skirt hung inwards along the normals by twice the larger of its
 //! own and its parent's `geometricError` (about the farthest its border
 //! and a neighbour's are apart; a coarser neighbour's own skirt is
-//! deeper). Skirts add two triangles per cut edge at the tile's own
-//! resolution, so they scale with the tile, not with the input. They are
-//! not part of the measured error (they hang below the surface). Measured
-//! by casting rays at random cuts of a closed mesh (`tests/cracks.rs`):
-//! skirts stop about 98.5 % of the rays that pass through slivers without
-//! them (616 → 9 over five cuts); the rest does not shrink with deeper
-//! skirts and is a known gap (not yet located: corners where three tiles
-//! meet are the suspects). Skirts hang inwards, so a part thinner than a
-//! skirt's depth may show the skirt's tip on its far side.
+//! deeper), wound both ways (clients cull back faces, and where the
+//! surface curves the strip leans over the neighbour). Skirts add four
+//! triangles per cut edge at the tile's own resolution, so they scale
+//! with the tile, not with the input (about 8 % of the triangles with
+//! 32k-triangle tiles). They are not part of the measured error (they
+//! hang below the surface). Measured by casting rays at random cuts of
+//! closed meshes (`tests/cracks.rs`): of the rays that pass through
+//! slivers without skirts, 2 of 616 still do on a blob (five cuts) and 0
+//! of 204 on the closed bunny (two cuts). Skirts hang inwards, so a part
+//! thinner than a skirt's depth may show the skirt's tip on its far side.
 //!
 //! # Contract
 //! Same input and options → the same bytes in every file. Cost (in
@@ -78,10 +79,11 @@ pub use out_folder::MANIFEST;
 pub use tile_content::encode_tile;
 
 /// How deep a skirt hangs, in units of the larger of its tile's and its
-/// parent's `geometricError`. Measured (`tests/cracks.rs`, three random
-/// cuts of a 40k-face blob, 1k-face leaves): rays through slivers fell
-/// from 399 without skirts to 17 at 1×, 6 at 1.5×, 4 at 2× and 4 at 3×;
-/// what remains does not shrink with depth (see the crate docs).
+/// parent's `geometricError`. Measured (`tests/cracks.rs`, random cuts of
+/// a 40k-face blob with 1k-face leaves, one-sided strips then): rays
+/// through slivers fell from 399 without skirts to 17 at 1×, 6 at 1.5×,
+/// 4 at 2× and 4 at 3×; two-sided strips at 2× leave 2 of 616 (blob) and
+/// 0 of 204 (closed bunny).
 const SKIRT_DEPTH: f64 = 2.0;
 
 /// Errors of a tileset build; each displays as one line.

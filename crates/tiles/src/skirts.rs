@@ -5,16 +5,18 @@
 //! orientation).
 //!
 //! Each cut edge `a → b` (the tile's face on its left, seen from outside)
-//! gets two triangles `(b, a, a′)` and `(b, a′, b′)`, where
-//! `v′ = v − depth × n(v)`: they face away from the tile, towards the
-//! neighbour, which is the side a ray through the sliver meets. Skirt
-//! vertices copy their edge's attributes. Borders of the input itself (a
+//! gets the quad `a b b′ a′`, `v′ = v − depth × n(v)`, as four triangles:
+//! both windings, because clients cull back faces and a ray through a
+//! sliver may meet the strip from either side (the normals lean it over
+//! the neighbour where the surface curves: one-sided strips left more
+//! holes than none on the closed bunny). Skirt vertices copy their edge's
+//! attributes. Borders of the input itself (a
 //! scan's rim) are not cuts and get none.
 
 use lodkit_mesh::TriMesh;
 
 /// `mesh` with a skirt of `depth` (object units, > 0) on each of `cuts`.
-/// Adds two vertices and two triangles per cut; `mesh` must have normals
+/// Adds two vertices and four triangles per cut; `mesh` must have normals
 /// (a vertex without one hangs its skirt nowhere: zero-length normal).
 pub fn with_skirts(mesh: &TriMesh, cuts: &[[u32; 2]], depth: f32) -> TriMesh {
     let mut out = mesh.clone();
@@ -47,6 +49,9 @@ pub fn with_skirts(mesh: &TriMesh, cuts: &[[u32; 2]], depth: f32) -> TriMesh {
         let lb = lowered(b, &mut out);
         out.faces.push([b, a, la]);
         out.faces.push([b, la, lb]);
+        // The same strip wound the other way: seen from either side.
+        out.faces.push([a, b, la]);
+        out.faces.push([la, b, lb]);
     }
     out
 }
