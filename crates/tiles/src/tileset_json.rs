@@ -11,7 +11,7 @@
 //! subtree to the next such depth), referenced from its parent's file by
 //! a content-less tile of the same box and error; so the first file a
 //! client reads lists at most `8^SUBTREE_LEVELS` tiles (about
-//! `4^SUBTREE_LEVELS` on a surface).
+//! `4^SUBTREE_LEVELS` on a surface), written without indentation.
 
 use lodkit_mesh::Aabb;
 use serde_json::{Value, json};
@@ -63,7 +63,7 @@ pub fn tileset_files(
         };
         let root = tile(tree, info, top, prefix, pad, &mut pending);
         let doc = json!({ "asset": asset(), "geometricError": error, "root": root });
-        let mut bytes = serde_json::to_vec_pretty(&doc).unwrap_or_default();
+        let mut bytes = serde_json::to_vec(&doc).unwrap_or_default();
         bytes.push(b'\n');
         files.push((path, bytes));
     }
