@@ -58,6 +58,9 @@ enum Command {
         after_help = "Examples:\n  lodkit lods bunny.ply --out lods/\n  lodkit lods scan.ply --out lods/ --ratios 0.5,0.2,0.05,0.01"
     )]
     Lods(commands::lods::LodsArgs),
+    /// A 3D Tiles 1.1 tileset: an octree of levels, measured errors.
+    #[command(after_help = "Examples:\n  lodkit tiles scan.ply --out scan_tiles/")]
+    Tiles(commands::tiles::TilesArgs),
     /// Synthetic test meshes of any size, streamed to disk.
     #[command(
         subcommand,
@@ -181,6 +184,7 @@ fn main() -> ExitCode {
         Command::Compare(args) => commands::compare::run(&ui, &args),
         Command::Simplify(args) => commands::simplify::run(&ui, &args),
         Command::Lods(args) => commands::lods::run(&ui, &args),
+        Command::Tiles(args) => commands::tiles::run(&ui, &args),
         Command::Generate(cmd) => commands::generate::run(&ui, &cmd),
         Command::Bench(args) => commands::bench::run(&ui, &args),
         Command::Build(args) => commands::build::run(&ui, &args),

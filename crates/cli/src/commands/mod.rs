@@ -15,6 +15,7 @@ pub mod scan;
 pub mod scene;
 pub mod serve;
 pub mod simplify;
+pub mod tiles;
 
 use std::path::Path;
 

@@ -1,0 +1,194 @@
+//! The levels: one HQMS chain over the whole object, finest first, each
+//! level cut into the tiles of its octree depth, each tile measured
+//! against the input it stands for.
+//!
+//! Level `D` (the octree's depth) is the input. Level `k < D` is the
+//! simplification of level `k + 1` (the whole mesh, as `lodkit simplify`
+//! would do it: one global error order, borders and holes as in core) to
+//! `ρₖ ×` its faces, where `ρₖ` is what the depth-`k` tiles ask for:
+//! each internal node `N` wants `t(N) = min(leaf budget, ⌈c(N) / 2⌉)`
+//! triangles, `c(N)` the faces of level `k + 1` in its cell, and
+//! `ρₖ = Σ t(N) / Σ c(N)`. So a parent holds about half of what its
+//! children hold, never more than one leaf's budget (on a surface about
+//! four of eight children are occupied, so a parent of full children gets
+//! about a quarter of them). Leaves are the input's own faces in their
+//! cell, at full resolution, whatever their depth.
+//!
+//! Tiles of one level are cut from one mesh, so neighbours of the same
+//! level share their border vertices exactly; where a client shows
+//! neighbours of different levels the skirts cover the sliver (see
+//! `skirts.rs` and the crate docs for why not locked borders). A level's
+//! triangles do not spread evenly over the cells (the error order puts
+//! them where the shape needs them): a tile over its budget is simplified
+//! again on its own to the budget with its border locked, so it still
+//! meets its same-level neighbours.
+
+use lodkit_mesh::TriMesh;
+use lodkit_mesh::metrics::Reference;
+use lodkit_simplify::{Options, Simplifier, Target};
+
+use crate::octree_partition::{Octree, centroid};
+use crate::tile_split::{TileMesh, border_edges, edge_bits, split};
+use crate::{Error, Event, Phase, Result};
+
+/// Every node's tile (`None`: no content, a cell the level left empty)
+/// and measured error (max of both directions against its input region,
+/// object units; 0 for leaves), before the monotone pass.
+pub struct Levels {
+    /// Per node (indexed as [`Octree::nodes`]).
+    pub tiles: Vec<Option<TileMesh>>,
+    /// Per node: measured two-sided maximum distance.
+    pub measured: Vec<f64>,
+    /// Faces of each level's whole mesh, from the root's level (0) to the input's.
+    pub level_faces: Vec<usize>,
+    /// Tiles simplified again to their budget (border locked).
+    pub refitted: usize,
+    /// Seconds in simplification and in measurement.
+    pub seconds: (f64, f64),
+}
+
+/// Builds every level of `tree` over `input` (which must have normals).
+pub fn build_levels(
+    input: &TriMesh,
+    tree: &Octree,
+    leaf_budget: usize,
+    progress: &mut dyn FnMut(Event),
+) -> Result<Levels> {
+    let n = tree.nodes.len();
+    let mut tiles: Vec<Option<TileMesh>> = vec![None; n];
+    let mut measured = vec![0.0; n];
+    let mut level_faces = vec![0; tree.depth as usize + 1];
+    level_faces[tree.depth as usize] = input.faces.len();
+    let (mut t_simplify, mut t_measure) = (0.0, 0.0);
+    let mut refitted = 0;
+
+    // Leaves: the input's faces, by leaf.
+    let leaves: Vec<usize> = (0..n)
+        .filter(|&i| tree.nodes[i].children.is_empty())
+        .collect();
+    let mut slot = vec![usize::MAX; n];
+    for (s, &l) in leaves.iter().enumerate() {
+        slot[l] = s;
+    }
+    for (s, t) in split(input, leaves.len(), |f| {
+        Some(slot[tree.leaf_of_face[f] as usize])
+    })
+    .into_iter()
+    .enumerate()
+    {
+        tiles[leaves[s]] = Some(t);
+    }
+
+    let total_internal = n - leaves.len();
+    let mut done = 0;
+    let mut simplifier = Simplifier::new();
+    let mut finer: Option<TriMesh> = None;
+    for depth in (0..tree.depth).rev() {
+        let internal: Vec<usize> = (0..n)
+            .filter(|&i| tree.nodes[i].key.depth == depth && !tree.nodes[i].children.is_empty())
+            .collect();
+        let source = finer.as_ref().unwrap_or(input);
+        let index: std::collections::HashMap<_, usize> = internal
+            .iter()
+            .enumerate()
+            .map(|(s, &i)| (tree.nodes[i].key, s))
+            .collect();
+        let cell_slot = |m: &TriMesh, f: usize| {
+            index
+                .get(&tree.grid.cell_of(centroid(m, f), depth))
+                .copied()
+        };
+        // What the depth's tiles ask of this level.
+        let mut have = vec![0usize; internal.len()];
+        for f in 0..source.faces.len() {
+            if let Some(s) = cell_slot(source, f) {
+                have[s] += 1;
+            }
+        }
+        let want: usize = have.iter().map(|&c| leaf_budget.min(c.div_ceil(2))).sum();
+        let asked: usize = have.iter().sum();
+        let ratio = if asked == 0 {
+            0.5
+        } else {
+            want as f64 / asked as f64
+        };
+        let goal = ((source.faces.len() as f64 * ratio).ceil() as usize).max(1);
+        let t0 = std::time::Instant::now();
+        let level = if goal < source.faces.len() {
+            simplifier
+                .simplify(source, &Options::faces(goal))
+                .map_err(|e| Error::Simplify(e.to_string()))?
+                .mesh
+        } else {
+            source.clone()
+        };
+        level_faces[depth as usize] = level.faces.len();
+        let mut parts = split(&level, internal.len(), |f| cell_slot(&level, f));
+        for part in parts.iter_mut() {
+            if part.mesh.faces.len() > leaf_budget {
+                refit(&mut simplifier, part, leaf_budget)?;
+                refitted += 1;
+            }
+        }
+        t_simplify += t0.elapsed().as_secs_f64();
+
+        // Measure each tile against the input faces of its cell.
+        let t1 = std::time::Instant::now();
+        let regions = split(input, internal.len(), |f| cell_slot(input, f));
+        for (s, (part, region)) in parts.into_iter().zip(regions).enumerate() {
+            let node = internal[s];
+            if !part.mesh.faces.is_empty() && !region.mesh.faces.is_empty() {
+                let reference = Reference::new(&region.mesh)?;
+                let report = reference.compare_level(&part.mesh, None)?;
+                measured[node] = report.symmetric.max;
+            }
+            if !part.mesh.faces.is_empty() {
+                tiles[node] = Some(part);
+            }
+            done += 1;
+            progress(Event::Progress {
+                phase: Phase::Levels,
+                done,
+                total: total_internal,
+            });
+        }
+        t_measure += t1.elapsed().as_secs_f64();
+        finer = Some(level);
+    }
+    Ok(Levels {
+        tiles,
+        measured,
+        level_faces,
+        refitted,
+        seconds: (t_simplify, t_measure),
+    })
+}
+
+/// Simplifies one tile to `budget` triangles with its border vertices
+/// locked (so it still meets its same-level neighbours), keeping its cut
+/// edges by their positions.
+fn refit(simplifier: &mut Simplifier, part: &mut TileMesh, budget: usize) -> Result<()> {
+    let m = &part.mesh;
+    let mut locked = vec![false; m.positions.len()];
+    for [a, b] in border_edges(m) {
+        locked[a as usize] = true;
+        locked[b as usize] = true;
+    }
+    let cut_bits: std::collections::HashSet<_> =
+        part.cuts.iter().map(|&c| edge_bits(m, c)).collect();
+    let opts = Options {
+        target: Target::Faces(budget),
+        fill_holes: false,
+        ..Options::DEFAULT
+    };
+    let out = simplifier
+        .simplify_locked(m, &locked, &opts)
+        .map_err(|e| Error::Simplify(e.to_string()))?
+        .mesh;
+    let cuts = border_edges(&out)
+        .into_iter()
+        .filter(|&e| cut_bits.contains(&edge_bits(&out, e)))
+        .collect();
+    *part = TileMesh { mesh: out, cuts };
+    Ok(())
+}

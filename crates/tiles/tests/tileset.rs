@@ -1,0 +1,160 @@
+//! A tileset of a generated closed mesh, read back as a client reads it.
+
+mod common;
+
+use common::{all_files, read_tileset, region};
+use lodkit_mesh::metrics::{CompareOptions, compare};
+use lodkit_mesh::shapes::blob;
+use lodkit_tiles::{Error, MANIFEST, TilesOptions, tileset_from_mesh, write_tileset};
+
+const LEAF: usize = 1_000;
+
+fn opts() -> TilesOptions {
+    TilesOptions {
+        leaf_triangles: LEAF,
+        ..TilesOptions::DEFAULT
+    }
+}
+
+fn build(dir: &std::path::Path, mesh: &lodkit_mesh::TriMesh) -> lodkit_tiles::TilesReport {
+    let ts = tileset_from_mesh(mesh, &opts(), &mut |_| {}).unwrap();
+    write_tileset(&ts, dir, None, &opts(), &mut |_| {}).unwrap()
+}
+
+#[test]
+fn tileset_reads_back_with_monotone_measured_errors() {
+    let input = blob(40_000);
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("tiles-out");
+    let report = build(&out, &input);
+    assert!(
+        report.depth >= 3,
+        "deep enough for an external tileset: {report:?}"
+    );
+    assert!(report.max_tile_triangles <= LEAF, "{report:?}");
+    let ts = read_tileset(&out);
+    assert!(ts.json_files > 1, "external tilesets below depth 3");
+    assert_eq!(
+        ts.tiles.iter().filter(|t| t.mesh.is_some()).count(),
+        report.tiles
+    );
+    let root = &ts.tiles[0];
+    assert!(root.mesh.is_some(), "the root holds the whole object");
+    assert!(ts.tileset_error >= root.error && root.error > 0.0);
+    let diag = input.bbox().diagonal() as f64;
+    for t in &ts.tiles {
+        for &c in &t.children {
+            let ch = &ts.tiles[c];
+            assert!(
+                ch.error <= t.error,
+                "{} {} > {} {}",
+                ch.name,
+                ch.error,
+                t.name,
+                t.error
+            );
+            // The child's box lies in the parent's.
+            let lo = (ch.centre - ch.half) - (t.centre - t.half);
+            let hi = (t.centre + t.half) - (ch.centre + ch.half);
+            assert!(lo.min_element() >= -1e-6 * diag && hi.min_element() >= -1e-6 * diag);
+        }
+        let Some(mesh) = &t.mesh else { continue };
+        // Honest errors: the input of the tile's cell lies within the
+        // tile's geometricError of it (measured again with another seed).
+        let reg = region(&input, t.depth, t.xyz);
+        let r = compare(
+            &reg,
+            mesh,
+            &CompareOptions {
+                seed: 7,
+                samples: Some(20_000),
+                ..CompareOptions::default()
+            },
+        )
+        .unwrap();
+        if t.children.is_empty() {
+            assert_eq!(t.error, 0.0);
+            assert!(
+                r.a_to_b.max <= 1e-6 * diag,
+                "{}: leaf off the input by {}",
+                t.name,
+                r.a_to_b.max
+            );
+        } else {
+            assert!(
+                r.a_to_b.max <= t.error * 1.1 + 1e-6 * diag,
+                "{}: input {} from the tile, geometricError {}",
+                t.name,
+                r.a_to_b.max,
+                t.error
+            );
+        }
+    }
+    // Bounding boxes are z-up: the input's y extent is the box's z.
+    let b = input.bbox();
+    assert!((root.half.z * 2.0 - (b.max.y - b.min.y) as f64).abs() <= 1e-3 * diag);
+}
+
+#[test]
+fn same_input_same_bytes_and_the_folder_is_replaced_whole() {
+    let input = blob(12_000);
+    let tmp = tempfile::tempdir().unwrap();
+    let (a, b) = (tmp.path().join("a"), tmp.path().join("b"));
+    build(&a, &input);
+    build(&b, &input);
+    let (fa, fb) = (all_files(&a), all_files(&b));
+    assert!(fa.iter().any(|(p, _)| p == MANIFEST));
+    assert_eq!(fa, fb);
+    // Writing again over lodkit's own folder replaces it.
+    build(&a, &input);
+    assert_eq!(all_files(&a), fb);
+}
+
+#[test]
+fn a_folder_with_a_users_file_is_refused_and_kept() {
+    let input = blob(2_000);
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("mine");
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join("notes.txt"), b"mine").unwrap();
+    let ts = tileset_from_mesh(&input, &opts(), &mut |_| {}).unwrap();
+    let err = write_tileset(&ts, &out, None, &opts(), &mut |_| {}).unwrap_err();
+    assert!(matches!(err, Error::Usage(_)), "{err}");
+    assert!(err.to_string().contains("not a lodkit build"), "{err}");
+    assert_eq!(std::fs::read(out.join("notes.txt")).unwrap(), b"mine");
+    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 1);
+    assert_eq!(
+        std::fs::read_dir(tmp.path()).unwrap().count(),
+        1,
+        "no temporary folder left"
+    );
+}
+
+#[test]
+fn bad_inputs_are_errors_not_panics() {
+    let empty = lodkit_mesh::TriMesh::default();
+    assert!(matches!(
+        tileset_from_mesh(&empty, &opts(), &mut |_| {}),
+        Err(Error::Input(_))
+    ));
+    let small = TilesOptions {
+        leaf_triangles: 1,
+        ..opts()
+    };
+    assert!(matches!(
+        tileset_from_mesh(&blob(100), &small, &mut |_| {}),
+        Err(Error::Usage(_))
+    ));
+}
+
+#[test]
+fn a_small_mesh_is_one_root_tile() {
+    let input = blob(500);
+    let tmp = tempfile::tempdir().unwrap();
+    let report = build(&tmp.path().join("o"), &input);
+    assert_eq!((report.tiles, report.depth), (1, 0));
+    let ts = read_tileset(&tmp.path().join("o"));
+    assert_eq!(ts.tiles.len(), 1);
+    assert_eq!(ts.tiles[0].error, 0.0);
+    assert!(ts.tileset_error > 0.0);
+}
