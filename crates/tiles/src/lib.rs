@@ -65,6 +65,7 @@
 mod level_chain;
 mod octree_partition;
 mod out_folder;
+mod point_tiles;
 mod skirts;
 mod tile_content;
 mod tile_split;
@@ -76,6 +77,9 @@ use lodkit_mesh::{Aabb, TriMesh};
 
 pub use octree_partition::{CellKey, MAX_DEPTH};
 pub use out_folder::MANIFEST;
+pub use point_tiles::{
+    PointTilesOptions, PointTilesReport, PointTileset, tileset_from_points, write_point_tileset,
+};
 pub use tile_content::encode_tile;
 
 /// How deep a skirt hangs, in units of the larger of its tile's and its

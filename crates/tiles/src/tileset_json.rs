@@ -43,13 +43,47 @@ fn asset() -> Value {
     json!({ "version": "1.1", "generator": concat!("lodkit-tiles ", env!("CARGO_PKG_VERSION")) })
 }
 
+/// How a tile's children refine it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Refine {
+    /// Children replace the tile (meshes: each level is the whole surface).
+    Replace,
+    /// Children are drawn with the tile (points: each point stored once).
+    Add,
+}
+
+impl Refine {
+    fn name(self) -> &'static str {
+        match self {
+            Refine::Replace => "REPLACE",
+            Refine::Add => "ADD",
+        }
+    }
+}
+
 /// Every tileset file: `(path relative to the output folder, JSON bytes)`,
 /// `tileset.json` first. `tileset_error` is the top-level
-/// `geometricError` (the error of showing nothing).
+/// `geometricError` (the error of showing nothing). `REPLACE` refinement,
+/// no root transform.
 pub fn tileset_files(
     tree: &Octree,
     info: &[NodeInfo],
     tileset_error: f64,
+) -> Vec<(String, Vec<u8>)> {
+    tileset_files_with(tree, info, tileset_error, Refine::Replace, None)
+}
+
+/// [`tileset_files`] with a refinement and, when `origin` is given, a root
+/// `transform` translating the content (coordinates relative to `origin`)
+/// to `origin` in the tileset's z-up frame: large coordinates (a LAS
+/// file's projected metres or feet) stay exact in `f64` while the tiles
+/// hold small `f32` offsets.
+pub fn tileset_files_with(
+    tree: &Octree,
+    info: &[NodeInfo],
+    tileset_error: f64,
+    refine: Refine,
+    origin: Option<[f64; 3]>,
 ) -> Vec<(String, Vec<u8>)> {
     let pad = tree.grid.size * 1e-6;
     let mut files = Vec::new();
@@ -61,7 +95,13 @@ pub fn tileset_files(
         } else {
             (format!("tiles/{}.json", key.name()), "", info[top].error)
         };
-        let root = tile(tree, info, top, prefix, pad, &mut pending);
+        let mut root = tile(tree, info, top, prefix, pad, refine, &mut pending);
+        if let (0, Some([x, y, z]), Value::Object(t)) = (top, origin, &mut root) {
+            let m = [
+                1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, x, y, z, 1.0,
+            ];
+            t.insert("transform".into(), json!(m));
+        }
         let doc = json!({ "asset": asset(), "geometricError": error, "root": root });
         let mut bytes = serde_json::to_vec(&doc).unwrap_or_default();
         bytes.push(b'\n');
@@ -79,6 +119,7 @@ fn tile(
     n: usize,
     prefix: &str,
     pad: f64,
+    refine: Refine,
     pending: &mut Vec<usize>,
 ) -> Value {
     let node = &tree.nodes[n];
@@ -88,7 +129,7 @@ fn tile(
         json!({ "box": zup_box(&info[n].bbox, pad) }),
     );
     t.insert("geometricError".into(), json!(info[n].error));
-    t.insert("refine".into(), json!("REPLACE"));
+    t.insert("refine".into(), json!(refine.name()));
     if info[n].content {
         t.insert(
             "content".into(),
@@ -106,7 +147,7 @@ fn tile(
                 "content": { "uri": format!("{prefix}{}.json", ck.name()) },
             }));
         } else {
-            children.push(tile(tree, info, c, prefix, pad, pending));
+            children.push(tile(tree, info, c, prefix, pad, refine, pending));
         }
     }
     if !children.is_empty() {

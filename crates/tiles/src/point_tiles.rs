@@ -1,0 +1,427 @@
+//! Point-cloud tilesets: an octree whose every node keeps an even
+//! subsample of the points that reach it, refined by adding its children
+//! (3D Tiles `ADD`), so every point is stored once.
+//!
+//! A node at depth `d` lays a grid of [`PointTilesOptions::CELLS`]³ cells
+//! over its cube (cell edge `h = size / (2^d · CELLS)`) and keeps, in each
+//! occupied cell, the point nearest the cell's centre (ties: the lower
+//! input index). The other points go on to the child octant that holds
+//! them; a node with at most [`PointTilesOptions::leaf_points`] points (or
+//! at [`MAX_DEPTH`]) keeps them all. Every point a node passes on lies in
+//! a cell that holds a kept point, so drawing the node without its
+//! subtree leaves no point farther than the cell's diagonal `h·√3` from a
+//! drawn one: that is the node's `geometricError` (a bound, in object
+//! units), halving at each depth; leaves have 0.
+//!
+//! Colours and normals go with their points. Contents are glTF `POINTS`
+//! (y-up, as the mesh tiles). Cost: `O(N × depth)` time; the points'
+//! indices once in all (8 bytes a point) plus one hash slot per occupied
+//! cell of the node being split.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use glam::DVec3;
+use lodkit_mesh::io::gltf::{GlbOptions, write_points_glb};
+use lodkit_mesh::{Aabb, PointCloud};
+
+use crate::octree_partition::{CellKey, Grid, MAX_DEPTH, Node, Octree};
+use crate::tileset_json::{NodeInfo, Refine};
+use crate::{Error, Event, Phase, Result, out_folder};
+
+/// Options of a point tileset.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PointTilesOptions {
+    /// Most points a leaf holds. Range [`PointTilesOptions::LEAF_POINTS`].
+    pub leaf_points: usize,
+    /// Quantised, meshopt-compressed tiles (needs the `meshopt` feature).
+    pub compress: bool,
+}
+
+impl PointTilesOptions {
+    /// Allowed `leaf_points`.
+    pub const LEAF_POINTS: std::ops::RangeInclusive<usize> = 256..=4_000_000;
+    /// 64k points: about 1 MB a tile with colours, one request each.
+    pub const DEFAULT_LEAF_POINTS: usize = 65_536;
+    /// Subsampling cells per axis of a node's cube: on a surface, about
+    /// `CELLS²` points a node (16k at 128).
+    pub const CELLS: u32 = 128;
+    /// Defaults: 64k-point leaves, no compression.
+    pub const DEFAULT: PointTilesOptions = PointTilesOptions {
+        leaf_points: Self::DEFAULT_LEAF_POINTS,
+        compress: false,
+    };
+}
+
+impl Default for PointTilesOptions {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// What a point tileset build made.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PointTilesReport {
+    /// Input points.
+    pub input_points: usize,
+    /// Tiles (every node holds points).
+    pub tiles: usize,
+    /// Octree depth.
+    pub depth: u8,
+    /// Most points in one tile.
+    pub max_tile_points: usize,
+    /// The root tile's `geometricError` (object units).
+    pub root_error: f64,
+    /// Seconds: subsampling, writing (0 until written).
+    pub seconds: [f64; 2],
+    /// Bytes written (0 until written).
+    pub bytes: u64,
+}
+
+/// A point tileset in memory.
+pub struct PointTileset {
+    tree: Octree,
+    tiles: Vec<PointCloud>,
+    info: Vec<NodeInfo>,
+    report: PointTilesReport,
+}
+
+impl PointTileset {
+    /// The build's report.
+    pub fn report(&self) -> &PointTilesReport {
+        &self.report
+    }
+
+    /// Every tile: `(name "D-X-Y-Z", depth, geometricError, points)`, in
+    /// breadth-first order.
+    pub fn tiles(&self) -> impl Iterator<Item = (String, u8, f64, &PointCloud)> {
+        self.tree
+            .nodes
+            .iter()
+            .zip(&self.tiles)
+            .zip(&self.info)
+            .map(|((n, t), i)| (n.key.name(), n.key.depth, i.error, t))
+    }
+}
+
+/// The points of `cloud` at `idx`, with their colours and normals.
+fn gather(cloud: &PointCloud, idx: &[u32]) -> PointCloud {
+    PointCloud {
+        positions: idx.iter().map(|&i| cloud.positions[i as usize]).collect(),
+        normals: cloud
+            .normals
+            .as_ref()
+            .map(|n| idx.iter().map(|&i| n[i as usize]).collect()),
+        colors: cloud
+            .colors
+            .as_ref()
+            .map(|c| idx.iter().map(|&i| c[i as usize]).collect()),
+    }
+}
+
+/// Splits `idx` (the points reaching the node `key`) into the points the
+/// node keeps and the rest: one per occupied cell of its
+/// [`PointTilesOptions::CELLS`]³ grid, the nearest the cell's centre.
+fn subsample(cloud: &PointCloud, grid: &Grid, key: CellKey, idx: Vec<u32>) -> (Vec<u32>, Vec<u32>) {
+    let cells = PointTilesOptions::CELLS;
+    let n = f64::from(1u32 << key.depth) * f64::from(cells);
+    let h = grid.size / n;
+    let base = DVec3::new(
+        f64::from(key.xyz[0]),
+        f64::from(key.xyz[1]),
+        f64::from(key.xyz[2]),
+    ) * f64::from(cells);
+    let mut best: HashMap<u32, (f64, u32)> = HashMap::new();
+    for &i in &idx {
+        let rel = (cloud.positions[i as usize].as_dvec3() - grid.origin) / h - base;
+        let c = rel
+            .floor()
+            .clamp(DVec3::ZERO, DVec3::splat(f64::from(cells - 1)));
+        let d = (rel - c - DVec3::splat(0.5)).length_squared();
+        let cell = (c.z as u32 * cells + c.y as u32) * cells + c.x as u32;
+        let e = best.entry(cell).or_insert((d, i));
+        if d < e.0 || (d == e.0 && i < e.1) {
+            *e = (d, i);
+        }
+    }
+    let mut kept: Vec<u32> = best.values().map(|&(_, i)| i).collect();
+    kept.sort_unstable();
+    let mut rest = Vec::with_capacity(idx.len() - kept.len());
+    let mut k = 0;
+    for i in idx {
+        if k < kept.len() && kept[k] == i {
+            k += 1;
+        } else {
+            rest.push(i);
+        }
+    }
+    (kept, rest)
+}
+
+/// Builds the point tileset of `cloud` (y-up, object units) in memory:
+/// see the module docs.
+///
+/// Errors: an empty or invalid cloud ([`Error::Input`]), `leaf_points`
+/// outside its range ([`Error::Usage`]). Cost: see the module docs.
+pub fn tileset_from_points(
+    cloud: &PointCloud,
+    opts: &PointTilesOptions,
+    progress: &mut dyn FnMut(Event),
+) -> Result<PointTileset> {
+    if !PointTilesOptions::LEAF_POINTS.contains(&opts.leaf_points) {
+        return Err(Error::Usage(format!(
+            "leaf points {}: must be in {}..={}",
+            opts.leaf_points,
+            PointTilesOptions::LEAF_POINTS.start(),
+            PointTilesOptions::LEAF_POINTS.end()
+        )));
+    }
+    cloud.validate().map_err(|e| Error::Input(e.to_string()))?;
+    if cloud.positions.is_empty() {
+        return Err(Error::Input("the cloud has no points to tile".into()));
+    }
+    if cloud.positions.len() > u32::MAX as usize {
+        return Err(Error::Input(format!(
+            "{} points: at most {} in one tileset",
+            cloud.positions.len(),
+            u32::MAX
+        )));
+    }
+    let t0 = std::time::Instant::now();
+    let grid = Grid::around(&cloud.bbox());
+    let mut nodes = vec![Node {
+        key: CellKey::ROOT,
+        children: Vec::new(),
+        input_faces: cloud.positions.len(),
+    }];
+    let mut tiles: Vec<PointCloud> = vec![PointCloud::default()];
+    let mut errors = vec![0f64];
+    let mut queue = std::collections::VecDeque::new();
+    queue.push_back((
+        0usize,
+        (0..cloud.positions.len() as u32).collect::<Vec<u32>>(),
+    ));
+    let (mut depth, mut placed) = (0u8, 0usize);
+    while let Some((n, idx)) = queue.pop_front() {
+        let key = nodes[n].key;
+        depth = depth.max(key.depth);
+        if idx.len() <= opts.leaf_points || key.depth >= MAX_DEPTH {
+            placed += idx.len();
+            tiles[n] = gather(cloud, &idx);
+        } else {
+            let (kept, rest) = subsample(cloud, &grid, key, idx);
+            placed += kept.len();
+            tiles[n] = gather(cloud, &kept);
+            let h =
+                grid.size / (f64::from(1u32 << key.depth) * f64::from(PointTilesOptions::CELLS));
+            // Nothing passed on (every point in a cell of its own): a leaf.
+            errors[n] = if rest.is_empty() { 0.0 } else { h * 3f64.sqrt() };
+            let mut parts: [Vec<u32>; 8] = Default::default();
+            for i in rest {
+                let c = grid.cell_of(cloud.positions[i as usize], key.depth + 1);
+                let o = (c.xyz[0] & 1) | ((c.xyz[1] & 1) << 1) | ((c.xyz[2] & 1) << 2);
+                parts[o as usize].push(i);
+            }
+            for (o, part) in parts.into_iter().enumerate() {
+                if part.is_empty() {
+                    continue;
+                }
+                let id = nodes.len();
+                nodes.push(Node {
+                    key: key.child(o),
+                    children: Vec::new(),
+                    input_faces: part.len(),
+                });
+                nodes[n].children.push(id);
+                tiles.push(PointCloud::default());
+                errors.push(0.0);
+                queue.push_back((id, part));
+            }
+        }
+        progress(Event::Progress {
+            phase: Phase::Levels,
+            done: placed,
+            total: cloud.positions.len(),
+        });
+    }
+    let mut info: Vec<NodeInfo> = tiles
+        .iter()
+        .zip(&errors)
+        .map(|(t, &error)| NodeInfo {
+            bbox: if t.positions.is_empty() {
+                Aabb::EMPTY
+            } else {
+                t.bbox()
+            },
+            error,
+            content: !t.positions.is_empty(),
+        })
+        .collect();
+    for i in (0..nodes.len()).rev() {
+        for c in nodes[i].children.clone() {
+            info[i].bbox = info[i].bbox.union(&info[c].bbox);
+        }
+    }
+    let report = PointTilesReport {
+        input_points: cloud.positions.len(),
+        tiles: tiles.iter().filter(|t| !t.positions.is_empty()).count(),
+        depth,
+        max_tile_points: tiles.iter().map(|t| t.positions.len()).max().unwrap_or(0),
+        root_error: info[0].error,
+        seconds: [t0.elapsed().as_secs_f64(), 0.0],
+        bytes: 0,
+    };
+    let leaf_of_face = Vec::new();
+    Ok(PointTileset {
+        tree: Octree {
+            grid,
+            nodes,
+            leaf_of_face,
+            depth,
+        },
+        tiles,
+        info,
+        report,
+    })
+}
+
+/// Writes `tileset` into the folder `out`, atomically and never over a
+/// user's files, as [`crate::write_tileset`] does (same layout, `ADD`
+/// refinement). `origin`: where the cloud's coordinates are relative to
+/// (in the tileset's z-up frame, e.g. a LAS file's offset), written as
+/// the root `transform` so clients see the file's coordinates exactly.
+///
+/// Errors as [`crate::write_tileset`].
+pub fn write_point_tileset(
+    tileset: &PointTileset,
+    out: &Path,
+    input: Option<&Path>,
+    opts: &PointTilesOptions,
+    origin: Option<[f64; 3]>,
+    progress: &mut dyn FnMut(Event),
+) -> Result<PointTilesReport> {
+    let t0 = std::time::Instant::now();
+    let staging = out_folder::Staging::new(out, input)?;
+    let dir = staging.dir().to_path_buf();
+    let tiles_dir = dir.join("tiles");
+    std::fs::create_dir(&tiles_dir).map_err(|source| Error::Io {
+        path: tiles_dir.clone(),
+        source,
+    })?;
+    let mut bytes = 0u64;
+    let total = tileset.report.tiles;
+    let mut done = 0;
+    for (name, _, _, cloud) in tileset.tiles() {
+        if cloud.positions.is_empty() {
+            continue;
+        }
+        let glb = write_points_glb(
+            &name,
+            cloud,
+            &GlbOptions {
+                compress: opts.compress,
+            },
+        )
+        .map_err(|e| Error::Encode(format!("tile {name}: {e}")))?;
+        lodkit_mesh::io::write_atomic(&tiles_dir.join(format!("{name}.glb")), &glb)?;
+        bytes += glb.len() as u64;
+        done += 1;
+        progress(Event::Progress {
+            phase: Phase::Write,
+            done,
+            total,
+        });
+    }
+    let top = (tileset.tree.grid.size * 3f64.sqrt()).max(tileset.info[0].error);
+    for (path, json) in crate::tileset_json::tileset_files_with(
+        &tileset.tree,
+        &tileset.info,
+        top,
+        Refine::Add,
+        origin,
+    ) {
+        lodkit_mesh::io::write_atomic(&dir.join(&path), &json)?;
+        bytes += json.len() as u64;
+    }
+    staging.commit()?;
+    let mut report = tileset.report.clone();
+    report.bytes = bytes;
+    report.seconds[1] = t0.elapsed().as_secs_f64();
+    Ok(report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    fn cloud(n: usize) -> PointCloud {
+        // A wavy sheet with colours: deterministic, no randomness.
+        let side = (n as f64).sqrt() as usize;
+        let mut positions = Vec::new();
+        let mut colors = Vec::new();
+        for i in 0..n {
+            let (u, v) = (
+                (i % side) as f32 / side as f32,
+                (i / side) as f32 / side as f32,
+            );
+            positions.push(Vec3::new(u, 0.1 * (6.0 * u).sin() * (4.0 * v).cos(), v));
+            colors.push([(u * 255.0) as u8, (v * 255.0) as u8, 128, 255]);
+        }
+        PointCloud {
+            positions,
+            normals: None,
+            colors: Some(colors),
+        }
+    }
+
+    #[test]
+    fn every_point_is_stored_once_and_errors_bound_the_gaps() {
+        let c = cloud(200_000);
+        let opts = PointTilesOptions {
+            leaf_points: 5_000,
+            ..PointTilesOptions::DEFAULT
+        };
+        let t = tileset_from_points(&c, &opts, &mut |_| {}).unwrap();
+        let mut all: Vec<[u32; 3]> = t
+            .tiles()
+            .flat_map(|(_, _, _, p)| p.positions.iter().map(|v| v.to_array().map(f32::to_bits)))
+            .collect();
+        all.sort_unstable();
+        let mut want: Vec<[u32; 3]> = c
+            .positions
+            .iter()
+            .map(|v| v.to_array().map(f32::to_bits))
+            .collect();
+        want.sort_unstable();
+        assert_eq!(all, want, "every point exactly once");
+        assert!(t.report().depth >= 1);
+        // A node's error bounds the distance from each point of its
+        // subtree to the nearest point it keeps.
+        for (i, node) in t.tree.nodes.iter().enumerate() {
+            if node.children.is_empty() {
+                assert_eq!(t.info[i].error, 0.0);
+                continue;
+            }
+            let own = &t.tiles[i].positions;
+            let mut stack = node.children.clone();
+            while let Some(s) = stack.pop() {
+                for p in t.tiles[s].positions.iter().step_by(97) {
+                    let d = own
+                        .iter()
+                        .map(|q| q.distance(*p) as f64)
+                        .fold(f64::INFINITY, f64::min);
+                    assert!(
+                        d <= t.info[i].error * (1.0 + 1e-6),
+                        "node {i}: {d} > {}",
+                        t.info[i].error
+                    );
+                }
+                stack.extend(t.tree.nodes[s].children.iter().copied());
+            }
+            for &ch in &node.children {
+                assert!(t.info[ch].error <= t.info[i].error);
+            }
+        }
+    }
+}
