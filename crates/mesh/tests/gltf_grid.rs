@@ -228,3 +228,24 @@ fn a_grid_that_does_not_fit_is_a_one_line_error() {
         .0;
     assert!(e.contains("2^24"), "{e}");
 }
+
+/// The shipped bunny as one tile (vertex normals, on a 16-bit grid over
+/// its box): read back whole. With `LODKIT_GLB_OUT`, also its plain GLB,
+/// for a size comparison with `gltfpack -cc` (docs/gltf.md).
+#[test]
+fn the_bunny_as_a_tile_reads_back() {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/models/stanford_bunny.ply");
+    let mut m = lodkit_mesh::io::load_mesh(&path).unwrap();
+    m.normals = Some(lodkit_mesh::normals::vertex_normals(&m));
+    let grid = QuantGrid::covering(m.bbox(), 16);
+    for opts in compress_options() {
+        let bytes = gltf::write_glb_on_grid(&[("bunny", &m)], &opts, &grid).unwrap();
+        keep(&format!("grid_bunny_c{}.glb", opts.compress as u8), &bytes);
+        let Model::Mesh(back) = gltf::read_model(&bytes, None).unwrap() else {
+            panic!("a mesh")
+        };
+        assert_eq!(back.faces.len(), m.faces.len());
+    }
+    keep("bunny_plain.glb", &gltf::write_glb(&[("bunny", &m)]).unwrap());
+}
