@@ -60,9 +60,9 @@ fn las_positions_plus_origin_are_the_stored_values() {
         }
     }
     // The origin lies on the file's grid, at the box's centre.
-    for k in 0..3 {
-        let i = origin[k] / 0.01;
-        assert!((i - i.round()).abs() < 1e-6, "{}", origin[k]);
+    for o in origin {
+        let i = o / 0.01;
+        assert!((i - i.round()).abs() < 1e-6, "{o}");
     }
     // Plain decode gives the same (relative) cloud.
     assert_eq!(io::decode(Format::Las, &bytes, None).unwrap(), l.model);
