@@ -234,8 +234,8 @@ fn a_grid_that_does_not_fit_is_a_one_line_error() {
 /// for a size comparison with `gltfpack -cc` (docs/gltf.md).
 #[test]
 fn the_bunny_as_a_tile_reads_back() {
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data/models/stanford_bunny.ply");
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../data/models/stanford_bunny.ply");
     let mut m = lodkit_mesh::io::load_mesh(&path).unwrap();
     m.normals = Some(lodkit_mesh::normals::vertex_normals(&m));
     let grid = QuantGrid::covering(m.bbox(), 16);
@@ -247,5 +247,8 @@ fn the_bunny_as_a_tile_reads_back() {
         };
         assert_eq!(back.faces.len(), m.faces.len());
     }
-    keep("bunny_plain.glb", &gltf::write_glb(&[("bunny", &m)]).unwrap());
+    keep(
+        "bunny_plain.glb",
+        &gltf::write_glb(&[("bunny", &m)]).unwrap(),
+    );
 }
