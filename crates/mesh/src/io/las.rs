@@ -34,13 +34,20 @@
 //! are decoded in batches of [`BATCH`], so memory follows the points
 //! actually decoded. Cost: one pass over the points; memory: a copy of the
 //! file's bytes (the decoder needs an owned stream) plus the cloud.
+//!
+//! Not in the `wasm32` build (the browser reads `.mco`/`.pop`, and the
+//! `las` crate's date type brings wasm-bindgen imports): there [`read`]
+//! is a one-line error.
 
+#[cfg(not(target_arch = "wasm32"))]
 use std::io::Cursor;
 
+#[cfg(not(target_arch = "wasm32"))]
 use glam::Vec3;
 
 use crate::error::ParseError;
 use crate::mesh::PointCloud;
+#[cfg(not(target_arch = "wasm32"))]
 use crate::parse_err;
 
 /// The most points a LAZ file may claim per byte of compressed point data.
@@ -72,11 +79,19 @@ pub fn is_las(bytes: &[u8]) -> bool {
 
 /// Decodes a LAS or LAZ file (see the module docs for what is kept and
 /// how counts are bounded).
+#[cfg(not(target_arch = "wasm32"))]
 pub fn read(bytes: &[u8]) -> Result<LasCloud, ParseError> {
     precheck(bytes)?;
     quietly_caught(|| decode(bytes))
 }
 
+/// On `wasm32` LAS/LAZ is not read: a one-line error.
+#[cfg(target_arch = "wasm32")]
+pub fn read(_bytes: &[u8]) -> Result<LasCloud, ParseError> {
+    Err(ParseError::new("LAS/LAZ is not read in the wasm32 build"))
+}
+
+#[cfg(not(target_arch = "wasm32"))]
 thread_local! {
     static QUIET: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
 }
@@ -86,6 +101,7 @@ thread_local! {
 /// panic is caught here, and a process-wide hook (installed once, which
 /// hands every other panic to the hook that was there before) keeps it
 /// from printing while this thread decodes.
+#[cfg(not(target_arch = "wasm32"))]
 fn quietly_caught<T>(f: impl FnOnce() -> Result<T, ParseError>) -> Result<T, ParseError> {
     static HOOK: std::sync::Once = std::sync::Once::new();
     HOOK.call_once(|| {
@@ -112,6 +128,7 @@ fn quietly_caught<T>(f: impl FnOnce() -> Result<T, ParseError>) -> Result<T, Par
     })
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 fn decode(bytes: &[u8]) -> Result<LasCloud, ParseError> {
     let mut reader = las::Reader::new(Cursor::new(bytes.to_vec()))
         .map_err(|e| parse_err!("bad LAS header: {e}"))?;
@@ -221,6 +238,7 @@ fn decode(bytes: &[u8]) -> Result<LasCloud, ParseError> {
 /// The header's CRS as text: WKT when present, else `EPSG:n` from the
 /// projected (or geodetic) GeoTIFF key; `None` when neither is there or
 /// they do not parse.
+#[cfg(not(target_arch = "wasm32"))]
 fn crs_of(header: &las::Header) -> Option<String> {
     if let Some(wkt) = header.get_wkt_crs_bytes() {
         let text = String::from_utf8_lossy(wkt);
@@ -236,16 +254,19 @@ fn crs_of(header: &las::Header) -> Option<String> {
         .map(|code| format!("EPSG:{code}"))
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 fn u16_at(b: &[u8], at: usize) -> u16 {
     b.get(at..at + 2)
         .map_or(0, |s| u16::from_le_bytes([s[0], s[1]]))
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 fn u32_at(b: &[u8], at: usize) -> u32 {
     b.get(at..at + 4)
         .map_or(0, |s| u32::from_le_bytes(s.try_into().unwrap_or([0; 4])))
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 fn u64_at(b: &[u8], at: u64) -> Option<u64> {
     let at = usize::try_from(at).ok()?;
     b.get(at..at.checked_add(8)?)
@@ -255,6 +276,7 @@ fn u64_at(b: &[u8], at: u64) -> Option<u64> {
 /// Checks, on the raw bytes, the counts the `las`/`laz` decoders would
 /// otherwise allocate from unchecked: the extended VLR's length and the
 /// LAZ chunk count.
+#[cfg(not(target_arch = "wasm32"))]
 fn precheck(bytes: &[u8]) -> Result<(), ParseError> {
     if !is_las(bytes) {
         return Err(parse_err!("not a LAS/LAZ file (no 'LASF' signature)"));
