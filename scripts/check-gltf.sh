@@ -91,6 +91,11 @@ run convert "$tex/parts.gltf" "$work/parts_c.glb" --compress
 run simplify "$tex/mug_scan.ply" -o "$work/mug_10_c.glb" --ratio 0.1 --compress
 # build keeps a scene's materials in its GLB and its HQMS chain.
 run build "$tex/parts.gltf" --out "$work/build_parts" --levels 2 --no-measure
+# Tile contents on one quantisation grid shared by several files
+# (io::gltf::write_*_on_grid: two neighbouring mesh tiles and a POINTS
+# tile, plain and compressed), written by the mesh crate's test.
+LODKIT_GLB_OUT="$work/grid" cargo test -q -p lodkit-mesh --features meshopt --test gltf_grid >/dev/null
+for f in "$work"/grid/*.glb; do "$bin" -q info "$f" >/dev/null; done
 # lodkit reads back what it wrote (compressed and points included).
 for f in convert_c simplify_c points_xyz points_c parts_c mug_10_c lods_parts_c/parts_lods; do
   "$bin" -q info "$work/$f.glb" >/dev/null

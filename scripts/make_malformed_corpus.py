@@ -2,7 +2,7 @@
 """Writes lodkit's malformed-input corpus into tests/malformed/.
 
 Every file is a small, deliberately broken PLY, OBJ, STL, glTF/GLB, XYZ,
-PTS or .conf file whose name says what is wrong with it. `lodkit_mesh::io::load` must
+PTS, LAS/LAZ or .conf file whose name says what is wrong with it. `lodkit_mesh::io::load` must
 return an error for each one, without panicking and without allocating from
 an unchecked count; crates/mesh/tests/malformed.rs checks exactly that.
 
@@ -288,6 +288,46 @@ add("gltf_coordinate_beyond_range.gltf",
     gltf_doc(bin_bytes=struct.pack("<9f", 0, 0, 0, BIG, 0, 0, 0, 1, 0) + QUAD[36:]))
 # A node transform can carry finite positions past the bound.
 add("gltf_node_scale_beyond_range.gltf", gltf_doc(nodes=[{"mesh": 0, "scale": [1e20, 1, 1]}]))
+
+# LAS/LAZ: hand-made LAS 1.2 headers (227 bytes, point format 0 of 20
+# bytes), each with one field that lies; LAS 1.4 (375 bytes) for EVLRs.
+def las_header(points=3, fmt=0, record=20, scale=0.01, version=(1, 2), data_offset=None,
+               evlr=None):
+    size = 375 if version >= (1, 4) else 227
+    offset = size if data_offset is None else data_offset
+    h = b"LASF" + struct.pack("<HH", 0, 0) + bytes(16) + bytes(version)
+    h += b"lodkit".ljust(32, b"\0") + b"lodkit malformed".ljust(32, b"\0")
+    h += struct.pack("<HHHIIBHI", 1, 2024, size, offset, 0, fmt, record, min(points, 2**32 - 1))
+    h += struct.pack("<5I", min(points, 2**32 - 1), 0, 0, 0, 0)
+    h += struct.pack("<3d", scale, scale, scale) + struct.pack("<3d", 0, 0, 0)
+    h += struct.pack("<6d", 1, 0, 1, 0, 1, 0)
+    if version >= (1, 4):
+        start, count = evlr if evlr else (0, 0)
+        h += struct.pack("<QQI", 0, start, count) + struct.pack("<Q", points) + bytes(120)
+    assert len(h) == size, len(h)
+    return h
+
+
+def las_points(n):
+    return b"".join(struct.pack("<3iHBBbBH", i, 2 * i, 3 * i, 0, 0x11, 0, 0, 0, 0)
+                    for i in range(n))
+
+
+add("las_point_count_huge.las", las_header(points=4000000000) + las_points(3))
+add("las_truncated_points.las", las_header(points=3) + las_points(3)[:50])
+add("las_zero_scale.las", las_header(scale=0.0) + las_points(3))
+add("las_header_cut.las", las_header()[:120])
+add("las_no_points.las", las_header(points=0))
+# An extended VLR whose u64 length is far past the end of the file.
+add("las_evlr_length_huge.las",
+    las_header(version=(1, 4), evlr=(375 + 60, 1)) + las_points(3)
+    + struct.pack("<H16sHQ32s", 0, b"x", 1, 2**62, b""))
+# LAZ (format bit 7): a chunk table claiming four billion chunks.
+add("laz_chunk_count_huge.laz",
+    las_header(fmt=0x80) + struct.pack("<q", 227 + 8 + 24) + bytes(24)
+    + struct.pack("<II", 0, 2**32 - 1))
+add("laz_no_laszip_vlr.laz", las_header(fmt=0x80) + struct.pack("<q", -1) + bytes(40))
+
 
 # .conf: a quaternion that cannot be normalised (its length overflows f32,
 # or it is zero or not finite) and far translations are refused by line.

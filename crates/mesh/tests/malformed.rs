@@ -62,7 +62,9 @@ fn corpus_covers_every_format() {
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
-    for ext in ["ply", "obj", "stl", "gltf", "glb", "xyz", "pts", "conf"] {
+    for ext in [
+        "ply", "obj", "stl", "gltf", "glb", "xyz", "pts", "las", "conf",
+    ] {
         let n = names
             .iter()
             .filter(|n| n.ends_with(&format!(".{ext}")))

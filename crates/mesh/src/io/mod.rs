@@ -26,14 +26,19 @@
 //!   [`write_atomic`] (temp file, `fsync`, rename): on error the old file
 //!   is untouched and no temp file stays. [`encode`] gives the bytes.
 //!   Deterministic: the same model and options give the same bytes.
+//! - [`load_located`] / [`decode_located`]: the same, plus where the
+//!   positions' zero lies in the file's own coordinates ([`Located`]):
+//!   LAS/LAZ positions are stored relative to an `f64` origin so that
+//!   `f32` keeps them exact; every other format's origin is `None`.
 //! - One module per format ([`ply`], [`obj`], [`stl`], [`gltf`], [`xyz`],
-//!   [`conf`]), each documenting what it reads, what it writes and its
+//!   [`conf`], [`las`]), each documenting what it reads, what it writes and its
 //!   conventions (units are never converted; UV origin and colour space are).
 
 pub mod conf;
 pub mod gltf;
 pub mod input;
 pub mod interrupt;
+pub mod las;
 pub mod mtl;
 pub mod obj;
 pub mod overwrite_guard;
@@ -69,6 +74,8 @@ pub enum Format {
     Xyz,
     /// Leica-style `.pts`: optional count line, then `x y z [intensity] [r g b]`.
     Pts,
+    /// ASPRS LAS (`.las`) or LAZ (`.laz`): point clouds, read only.
+    Las,
 }
 
 impl Format {
@@ -84,6 +91,7 @@ impl Format {
             "glb" => Format::Glb,
             "xyz" | "txt" => Format::Xyz,
             "pts" => Format::Pts,
+            "las" | "laz" => Format::Las,
             _ => return None,
         })
     }
@@ -97,6 +105,7 @@ impl Format {
             Format::Glb => "GLB",
             Format::Xyz => "XYZ",
             Format::Pts => "PTS",
+            Format::Las => "LAS",
         }
     }
 }
@@ -118,15 +127,68 @@ pub fn load(path: &Path) -> Result<Model> {
     let format = Format::from_path(path).ok_or_else(|| {
         Error::unsupported(
             path,
-            "unknown file extension (expected .ply, .obj, .stl, .gltf, .glb, .xyz or .pts)",
+            "unknown file extension (expected .ply, .obj, .stl, .gltf, .glb, .xyz, .pts, .las or .laz)",
         )
     })?;
     let bytes = input::read_file(path)?;
     decode(format, &bytes, path.parent()).map_err(|e| Error::parse(path, e))
 }
 
+/// A decoded model and where its zero lies in the file's own coordinates.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Located {
+    /// The model; its positions are relative to `origin` when that is set.
+    pub model: Model,
+    /// The `f64` point, in the file's coordinates and units, that the
+    /// model's positions are relative to: set by the LAS/LAZ reader
+    /// ([`las`]), `None` for every format whose positions are the file's
+    /// own.
+    pub origin: Option<[f64; 3]>,
+    /// The coordinate reference system the file names (LAS/LAZ: WKT or
+    /// `EPSG:n`), when it names one.
+    pub crs: Option<String>,
+}
+
+/// [`load`], keeping the origin and CRS a file gives ([`Located`]).
+/// Errors and cost as [`load`].
+pub fn load_located(path: &Path) -> Result<Located> {
+    let format = Format::from_path(path).ok_or_else(|| {
+        Error::unsupported(
+            path,
+            "unknown file extension (expected .ply, .obj, .stl, .gltf, .glb, .xyz, .pts, .las or .laz)",
+        )
+    })?;
+    let bytes = input::read_file(path)?;
+    decode_located(format, &bytes, path.parent()).map_err(|e| Error::parse(path, e))
+}
+
+/// [`decode`], keeping the origin and CRS a file gives ([`Located`]).
+/// Guarantees as [`decode`].
+pub fn decode_located(
+    format: Format,
+    bytes: &[u8],
+    base_dir: Option<&Path>,
+) -> Result<Located, ParseError> {
+    if format == Format::Las {
+        let l = las::read(bytes)?;
+        let model = Model::Points(l.cloud);
+        check_decoded(&model)?;
+        return Ok(Located {
+            model,
+            origin: Some(l.origin),
+            crs: l.crs,
+        });
+    }
+    Ok(Located {
+        model: decode(format, bytes, base_dir)?,
+        origin: None,
+        crs: None,
+    })
+}
+
 /// Decodes bytes of a known format. `base_dir` resolves external glTF
-/// buffers; `None` refuses them.
+/// buffers; `None` refuses them. A LAS/LAZ cloud comes back relative to
+/// its origin, which this drops ([`decode_located`] keeps it).
 pub fn decode(format: Format, bytes: &[u8], base_dir: Option<&Path>) -> Result<Model, ParseError> {
     let model = match format {
         Format::Ply => ply::read(bytes)?,
@@ -135,14 +197,21 @@ pub fn decode(format: Format, bytes: &[u8], base_dir: Option<&Path>) -> Result<M
         Format::Gltf | Format::Glb => gltf::read_model(bytes, base_dir)?,
         Format::Xyz => Model::Points(xyz::read_xyz(bytes)?),
         Format::Pts => Model::Points(xyz::read_pts(bytes)?),
+        Format::Las => Model::Points(las::read(bytes)?.cloud),
     };
-    match &model {
+    check_decoded(&model)?;
+    Ok(model)
+}
+
+/// What every decoded model passes: its `validate()` and
+/// [`check_coordinates`].
+fn check_decoded(model: &Model) -> Result<(), ParseError> {
+    match model {
         Model::Mesh(m) => m.validate()?,
         Model::Points(p) => p.validate()?,
         Model::Range(r) => r.validate()?,
     }
-    check_coordinates(&model)?;
-    Ok(model)
+    check_coordinates(model)
 }
 
 /// The largest coordinate magnitude lodkit reads or writes: `1e18`.
@@ -254,6 +323,11 @@ pub fn encode(format: Format, model: &Model, opts: WriteOptions) -> Result<Vec<u
         (Format::Gltf, _) => {
             return Err(ParseError::new(
                 "writing .gltf is not supported; write .glb",
+            ));
+        }
+        (Format::Las, _) => {
+            return Err(ParseError::new(
+                "writing LAS/LAZ is not supported; write .ply, .xyz, .pts or .glb",
             ));
         }
         (f, m) => {

@@ -29,7 +29,7 @@ pub fn load_scene(path: &Path) -> Result<Scene> {
     let format = Format::from_path(path).ok_or_else(|| {
         Error::unsupported(
             path,
-            "unknown file extension (expected .ply, .obj, .stl, .gltf, .glb, .xyz or .pts)",
+            "unknown file extension (expected .ply, .obj, .stl, .gltf, .glb, .xyz, .pts, .las or .laz)",
         )
     })?;
     let bytes = super::input::read_file(path)?;

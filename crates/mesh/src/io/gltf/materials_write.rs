@@ -33,7 +33,7 @@ use gltf::json;
 use json::validation::Checked::Valid;
 
 use super::lod_links::{check_coverage, link_lods};
-use super::write::{Builder, GlbOptions, union_box};
+use super::write::{Builder, GlbOptions, Quantise, union_box};
 use crate::error::ParseError;
 use crate::mesh::TriMesh;
 use crate::parse_err;
@@ -202,7 +202,11 @@ struct Tables {
 
 /// A builder over the levels' common grid with the tables the levels use
 /// written: samplers, images, textures, materials (in that order).
-fn start(scenes: &[&Scene], opts: &GlbOptions) -> Result<(Builder, Tables), ParseError> {
+fn start(
+    scenes: &[&Scene],
+    opts: &GlbOptions,
+    grid: Option<Quantise>,
+) -> Result<(Builder, Tables), ParseError> {
     let first = scenes[0];
     for s in scenes {
         s.validate()?;
@@ -222,6 +226,9 @@ fn start(scenes: &[&Scene], opts: &GlbOptions) -> Result<(Builder, Tables), Pars
             .flat_map(|s| s.meshes.iter().map(|m| m.mesh.positions.as_slice())),
     );
     let mut b = Builder::new(opts, Some(bbox))?;
+    if grid.is_some() {
+        b.quantise = grid;
+    }
     // What is used: materials by faces of meshes with UVs or not; textures
     // only by materials on meshes with UVs.
     let mut mat_used = vec![false; first.materials.len()];
@@ -491,7 +498,18 @@ pub fn write_scene_glb(scene: &Scene) -> Result<Vec<u8>, ParseError> {
 /// the geometry plus a copy of each image (compressing: plus
 /// meshoptimizer's reordering and codecs, linear).
 pub fn write_scene_glb_with(scene: &Scene, opts: &GlbOptions) -> Result<Vec<u8>, ParseError> {
-    let (mut b, tables) = start(&[scene], opts)?;
+    write_scene_with_quantise(scene, opts, None)
+}
+
+/// [`write_scene_glb_with`] with positions quantised as `grid` says (a
+/// shared grid resolved for this file: `super::grid`), or as the options
+/// say when `None`.
+pub(super) fn write_scene_with_quantise(
+    scene: &Scene,
+    opts: &GlbOptions,
+    grid: Option<Quantise>,
+) -> Result<Vec<u8>, ParseError> {
+    let (mut b, tables) = start(&[scene], opts, grid)?;
     let roots = add_scene(&mut b, &tables, scene)?;
     b.finish(roots, Vec::new())
 }
@@ -521,7 +539,7 @@ pub fn write_scene_lod_glb(
         check_coverage(&l.name, l.coverage)?;
     }
     let scenes: Vec<&Scene> = levels.iter().map(|l| l.scene).collect();
-    let (mut b, tables) = start(&scenes, opts)?;
+    let (mut b, tables) = start(&scenes, opts, None)?;
     let mut wrappers = Vec::with_capacity(levels.len());
     for l in levels {
         let roots = add_scene(&mut b, &tables, l.scene)?;

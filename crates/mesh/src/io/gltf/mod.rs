@@ -106,6 +106,7 @@ mod buffers;
 mod color;
 mod extensions;
 mod glb;
+mod grid;
 mod lod_links;
 mod materials_read;
 mod materials_write;
@@ -118,6 +119,9 @@ mod tests;
 #[cfg(test)]
 mod tests_engines;
 
+pub use grid::{
+    MAX_GRID_INDEX, QuantGrid, write_glb_on_grid, write_points_glb_on_grid, write_scene_glb_on_grid,
+};
 pub use lod_links::{COVERAGE_LINES, COVERAGE_PIXELS, error_coverage, screen_coverages};
 pub use materials_write::{
     SceneLodLevel, write_scene_glb, write_scene_glb_with, write_scene_lod_glb,

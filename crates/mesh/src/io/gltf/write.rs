@@ -60,6 +60,10 @@ pub struct LodLevel<'a> {
 pub(super) struct Quantise {
     pub(super) origin: Vec3,
     pub(super) step: f32,
+    /// On a grid shared between files ([`super::QuantGrid`]): `origin`
+    /// and `step` are exact on it, integers are computed in `f64` and
+    /// span the whole `u16` range.
+    pub(super) shared: bool,
 }
 
 const POSITION_BITS: u32 = 14;
@@ -76,10 +80,20 @@ impl Quantise {
         Quantise {
             origin: bbox.min,
             step,
+            shared: false,
         }
     }
 
     fn q(&self, p: Vec3) -> [u16; 3] {
+        if self.shared {
+            // Exact: origin and step are on the grid, the difference of
+            // two f32 is exact in f64 and the step is a power of two.
+            return std::array::from_fn(|k| {
+                ((p[k] as f64 - self.origin[k] as f64) / self.step as f64)
+                    .round()
+                    .clamp(0.0, u16::MAX as f64) as u16
+            });
+        }
         let max = ((1u32 << POSITION_BITS) - 1) as f32;
         ((p - self.origin) / self.step)
             .round()
@@ -304,7 +318,15 @@ impl Builder {
             self.view_extensions.push((view.value(), ext));
             view
         } else {
-            self.plain_view(bytes, Some(target))
+            let view = self.plain_view(bytes, Some(target));
+            // Quantised positions are padded to 8 bytes: say the stride.
+            if let Codec::Attributes(stride) = codec
+                && stride != ty.multiplicity() * component.size()
+            {
+                self.root.buffer_views[view.value()].byte_stride =
+                    Some(json::buffer::Stride(stride));
+            }
+            view
         };
         let (min, max) = match min_max {
             Some((a, b)) => (Some(a), Some(b)),
@@ -511,7 +533,7 @@ impl Builder {
     }
 
     /// One `POINTS` primitive for `cloud`.
-    fn points_primitive(
+    pub(super) fn points_primitive(
         &mut self,
         cloud: &PointCloud,
     ) -> Result<json::mesh::Primitive, ParseError> {
@@ -541,7 +563,7 @@ impl Builder {
     /// A mesh of one primitive and the node that places it: named `name`,
     /// with `extras`, and the dequantisation transform when positions are
     /// quantised.
-    fn node(
+    pub(super) fn node(
         &mut self,
         name: &str,
         primitive: json::mesh::Primitive,
