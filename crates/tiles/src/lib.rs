@@ -20,7 +20,9 @@
 //!    faces of its cell, `lodkit_mesh::metrics::Reference::compare_level`,
 //!    the symmetric maximum (both directions, object units). A tile's
 //!    `geometricError` is the largest of its own and its descendants'
-//!    (monotone); leaves 0; the tileset's is the root cube's diagonal.
+//!    (monotone), and at least what its depth's quantisation grid rounds
+//!    (`tile_content::add_rounding`; a leaf's whole error); the tileset's
+//!    is the root cube's diagonal.
 //! 4. `skirts.rs`: a strip under every cut edge of a tile.
 //! 5. `tile_content.rs` (GLB bytes), `tileset_json.rs` (`tileset.json`,
 //!    external tilesets every [`tileset_json::SUBTREE_LEVELS`] depths,
@@ -80,7 +82,7 @@ pub use out_folder::MANIFEST;
 pub use point_tiles::{
     PointTilesOptions, PointTilesReport, PointTileset, tileset_from_points, write_point_tileset,
 };
-pub use tile_content::encode_tile;
+pub use tile_content::{depth_grid, encode_point_tile, encode_tile};
 
 /// How deep a skirt hangs, in units of the larger of its tile's and its
 /// parent's `geometricError`. Measured (`tests/cracks.rs`, random cuts of
@@ -315,6 +317,7 @@ pub fn tileset_from_mesh(
             info[i].bbox = info[i].bbox.union(&info[c].bbox);
         }
     }
+    tile_content::add_rounding(&mut info, |i| tree.nodes[i].key.depth);
     let report = TilesReport {
         input_triangles: mesh.faces.len(),
         tiles: count,
@@ -362,8 +365,10 @@ pub fn write_tileset(
     })?;
     let mut bytes = 0u64;
     let total = tileset.report.tiles;
-    for (i, (name, _, _, mesh)) in tileset.tiles().enumerate() {
-        let glb = encode_tile(&name, mesh, opts.compress)?;
+    let bounds = tileset.info[0].bbox;
+    for (i, (name, depth, _, mesh)) in tileset.tiles().enumerate() {
+        let grid = tile_content::depth_grid(&bounds, depth);
+        let glb = encode_tile(&name, mesh, opts.compress, &grid)?;
         lodkit_mesh::io::write_atomic(&tiles_dir.join(format!("{name}.glb")), &glb)?;
         bytes += glb.len() as u64;
         progress(Event::Progress {

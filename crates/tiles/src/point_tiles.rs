@@ -11,7 +11,8 @@
 //! a cell that holds a kept point, so drawing the node without its
 //! subtree leaves no point farther than the cell's diagonal `h·√3` from a
 //! drawn one: that is the node's `geometricError` (a bound, in object
-//! units), halving at each depth; leaves have 0.
+//! units), halving at each depth; leaves have only their quantisation
+//! grid's rounding.
 //!
 //! Colours and normals go with their points. Contents are glTF `POINTS`
 //! (y-up, as the mesh tiles). Cost: `O(N × depth)` time; the points'
@@ -22,7 +23,6 @@ use std::collections::HashMap;
 use std::path::Path;
 
 use glam::DVec3;
-use lodkit_mesh::io::gltf::{GlbOptions, write_points_glb};
 use lodkit_mesh::{Aabb, PointCloud};
 
 use crate::octree_partition::{CellKey, Grid, MAX_DEPTH, Node, Octree};
@@ -215,7 +215,11 @@ pub fn tileset_from_points(
             let h =
                 grid.size / (f64::from(1u32 << key.depth) * f64::from(PointTilesOptions::CELLS));
             // Nothing passed on (every point in a cell of its own): a leaf.
-            errors[n] = if rest.is_empty() { 0.0 } else { h * 3f64.sqrt() };
+            errors[n] = if rest.is_empty() {
+                0.0
+            } else {
+                h * 3f64.sqrt()
+            };
             let mut parts: [Vec<u32>; 8] = Default::default();
             for i in rest {
                 let c = grid.cell_of(cloud.positions[i as usize], key.depth + 1);
@@ -262,6 +266,7 @@ pub fn tileset_from_points(
             info[i].bbox = info[i].bbox.union(&info[c].bbox);
         }
     }
+    crate::tile_content::add_rounding(&mut info, |i| nodes[i].key.depth);
     let report = PointTilesReport {
         input_points: cloud.positions.len(),
         tiles: tiles.iter().filter(|t| !t.positions.is_empty()).count(),
@@ -311,18 +316,13 @@ pub fn write_point_tileset(
     let mut bytes = 0u64;
     let total = tileset.report.tiles;
     let mut done = 0;
-    for (name, _, _, cloud) in tileset.tiles() {
+    let bounds = tileset.info[0].bbox;
+    for (name, depth, _, cloud) in tileset.tiles() {
         if cloud.positions.is_empty() {
             continue;
         }
-        let glb = write_points_glb(
-            &name,
-            cloud,
-            &GlbOptions {
-                compress: opts.compress,
-            },
-        )
-        .map_err(|e| Error::Encode(format!("tile {name}: {e}")))?;
+        let grid = crate::tile_content::depth_grid(&bounds, depth);
+        let glb = crate::tile_content::encode_point_tile(&name, cloud, opts.compress, &grid)?;
         lodkit_mesh::io::write_atomic(&tiles_dir.join(format!("{name}.glb")), &glb)?;
         bytes += glb.len() as u64;
         done += 1;
@@ -400,7 +400,7 @@ mod tests {
         // subtree to the nearest point it keeps.
         for (i, node) in t.tree.nodes.iter().enumerate() {
             if node.children.is_empty() {
-                assert_eq!(t.info[i].error, 0.0);
+                assert!(t.info[i].error > 0.0 && t.info[i].error < 1e-4);
                 continue;
             }
             let own = &t.tiles[i].positions;

@@ -92,7 +92,11 @@ fn walk(
             assert!(!u.contains("..") && !u.starts_with('/'));
             let path = base.join(u);
             let bytes = std::fs::read(&path).unwrap();
-            let m = lodkit_mesh::io::gltf::read(&bytes, None).expect("a readable tile");
+            let m = match lodkit_mesh::io::gltf::read_model(&bytes, None).expect("a readable tile")
+            {
+                lodkit_mesh::Model::Mesh(m) => m,
+                _ => panic!("{u}: a mesh tile"),
+            };
             assert!(m.normals.is_some(), "{u}: every tile has normals");
             assert!(!m.faces.is_empty());
             let (n, d, xyz) = parse_name(u);
