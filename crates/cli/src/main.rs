@@ -6,7 +6,7 @@
 
 #![forbid(unsafe_code)]
 
-mod chart;
+mod args;
 mod commands;
 mod ui;
 mod viewer_assets;
@@ -176,7 +176,7 @@ fn main() -> ExitCode {
                 merge,
                 json,
             };
-            commands::convert::run(&ui, &input, &output, &opts, &out)
+            commands::convert::run(&ui, &input, &output, &opts, &out.options())
         }
         Command::Compare(args) => commands::compare::run(&ui, &args),
         Command::Simplify(args) => commands::simplify::run(&ui, &args),

@@ -32,7 +32,7 @@ pub enum BenchWhat {
         #[arg(long, default_value_t = 3, value_parser = value::int(1usize, 100))]
         runs: usize,
         /// Samples per kind for the error measurement, in 1..=10000000.
-        #[arg(long, default_value_t = 1_000_000, value_parser = value::int(1usize, value::MAX_SAMPLES))]
+        #[arg(long, default_value_t = 1_000_000, value_parser = value::range(lodkit::limits::SAMPLES))]
         samples: usize,
         /// Triangles of the synthetic blob when no mesh is given, in
         /// 1000..=10000000.

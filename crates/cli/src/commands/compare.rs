@@ -17,7 +17,7 @@ pub struct CompareArgs {
     /// Samples of each kind (vertex, edge, face) per mesh, MeshLab's
     /// `SampleNum`, in 1..=10000000 (default: max(10 × faces of the larger
     /// mesh, 1M), at most 10000000).
-    #[arg(long, value_parser = value::int(1usize, value::MAX_SAMPLES))]
+    #[arg(long, value_parser = value::range(lodkit::limits::SAMPLES))]
     pub samples: Option<usize>,
     /// Seed of the sample positions (same seed → identical numbers).
     #[arg(long, default_value_t = lodkit_mesh::metrics::DEFAULT_SEED)]
@@ -51,19 +51,19 @@ pub fn run(ui: &Ui, args: &CompareArgs) -> Result<()> {
         face_samples: !args.no_face_samples,
     };
     let n = opts.resolved_samples(a.faces.len(), b.faces.len());
-    if n > value::MAX_SAMPLES {
+    if n > lodkit::limits::MAX_SAMPLES {
         ui.status(format!(
             "sampling {} per kind rather than the default {n} (10 per face): the most --samples allows",
-            value::MAX_SAMPLES
+            lodkit::limits::MAX_SAMPLES
         ));
     }
     // The default grows with the meshes; the memory it sizes is bounded
     // like an explicit `--samples`.
     let opts = CompareOptions {
-        samples: Some(n.min(value::MAX_SAMPLES)),
+        samples: Some(n.min(lodkit::limits::MAX_SAMPLES)),
         ..opts
     };
-    let n = n.min(value::MAX_SAMPLES);
+    let n = n.min(lodkit::limits::MAX_SAMPLES);
     let step = ui.stage(&format!("measuring ({n} samples of each kind per mesh)"));
     // The library names the meshes "A" and "B"; the user knows their paths.
     let report = compare(&a, &b, &opts).map_err(|e| {

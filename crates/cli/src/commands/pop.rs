@@ -7,7 +7,7 @@ use clap::{Args, Subcommand, ValueEnum};
 use lodkit_mesh::Model;
 use lodkit_mesh::io::WriteOptions;
 use lodkit_particles::silhouette::{
-    CarvedOctree, ImageSet, SilhouetteOptions, SilhouetteSource, carve_octree, encode_carved,
+    CarvedOctree, SilhouetteOptions, SilhouetteSource, encode_carved,
 };
 use lodkit_particles::{
     DecodeOptions, EncodeOptions, Mode, Placement, ThinningOptions, TriangulateOptions, decode,
@@ -199,16 +199,9 @@ pub fn carve_image_set(
     carve: &CarveArgs,
     opts: &EncodeOptions,
 ) -> Result<CarvedOctree> {
-    let step = ui.spinner(&format!("reading the images of {}", path.display()));
-    let set = ImageSet::load(path, carve.source())?;
-    step.finish();
-    let step = ui.spinner(&format!(
-        "carving {} views from their silhouettes",
-        set.calibration.views.len()
-    ));
-    let c = carve_octree(&set, &carve.options(), opts)?;
-    step.finish();
-    Ok(c)
+    ui.run(|events| {
+        lodkit::input::carve_image_set(events, path, carve.source(), &carve.options(), opts)
+    })
 }
 
 #[derive(Args)]

@@ -270,11 +270,10 @@ fn load(ui: &Ui, a: &RenderArgs, k: Kind) -> Result<(Drawable, String)> {
             );
             Ok((Drawable::Mesh(t.mesh), what))
         }
-        Kind::Geometry => match super::scene::load_input(ui, &a.input, true)? {
-            super::scene::Input::Scene(scene) => {
+        Kind::Geometry => match super::load_input(ui, &a.input, true)? {
+            super::Input::Scene(scene) => {
                 let merged = scene.merged();
-                let materials =
-                    super::scene::render_materials(ui, &name, &scene, merged.face_materials)?;
+                let materials = super::render_materials(ui, &name, &scene, merged.face_materials)?;
                 let mesh = merged.mesh;
                 let n = |k: usize, w: &str| format!("{k} {w}{}", if k == 1 { "" } else { "s" });
                 let what = format!(
@@ -285,7 +284,7 @@ fn load(ui: &Ui, a: &RenderArgs, k: Kind) -> Result<(Drawable, String)> {
                 );
                 Ok((Drawable::Textured(mesh, materials), what))
             }
-            super::scene::Input::Model(model) => geometry(model),
+            super::Input::Model(model) => geometry(model),
         },
     }
 }

@@ -20,9 +20,10 @@ use lodkit_mesh::{Model, TriMesh};
 use lodkit_simplify::{Options, Simplifier, Target};
 use serde_json::{Map, Value, json};
 
-use super::measure::{Measured, Sampling};
-use crate::commands::lods::{Level, Lods};
-use crate::ui::{OutputArgs, Ui};
+use crate::lod_chain::{Level, Lods};
+use crate::measure::{Measured, Sampling};
+use crate::output::OutputOptions;
+use crate::progress::Progress;
 
 /// The screen coverage below which an error projects to at most a pixel
 /// on a 1080-line screen (the one rule, shared with pylodkit's chains).
@@ -110,12 +111,12 @@ pub struct Chain {
 }
 
 /// The chain of `lodkit lods` and `build`: of `scene` with its materials
-/// when given ([`crate::commands::scene::write_scene_chain`]: scene GLBs),
+/// when given ([`super::scene::write_scene_chain`]: scene GLBs),
 /// else of the reference's mesh ([`write_mesh_chain`]: PLY levels); the
 /// arguments are theirs.
 #[allow(clippy::too_many_arguments)]
 pub fn write_chain(
-    ui: &Ui,
+    events: &Progress,
     reference: &Reference,
     input: &str,
     stem: &str,
@@ -124,15 +125,15 @@ pub fn write_chain(
     targets: &[Target],
     opts: &Options,
     sampling: Sampling,
-    output: &OutputArgs,
+    output: &OutputOptions,
     on_level: &mut dyn FnMut(&Level),
 ) -> Result<Chain> {
     match scene {
-        Some(s) => crate::commands::scene::write_scene_chain(
-            ui, reference, input, stem, out, s, targets, opts, sampling, output, on_level,
+        Some(s) => super::scene::write_scene_chain(
+            events, reference, input, stem, out, s, targets, opts, sampling, output, on_level,
         ),
         None => write_mesh_chain(
-            ui, reference, input, stem, out, targets, opts, sampling, output, on_level,
+            events, reference, input, stem, out, targets, opts, sampling, output, on_level,
         ),
     }
 }
@@ -148,7 +149,7 @@ pub fn write_chain(
 /// `--compress` (the GLB).
 #[allow(clippy::too_many_arguments)]
 fn write_mesh_chain(
-    ui: &Ui,
+    events: &Progress,
     reference: &Reference,
     input: &str,
     stem: &str,
@@ -156,13 +157,13 @@ fn write_mesh_chain(
     targets: &[Target],
     opts: &Options,
     sampling: Sampling,
-    output: &OutputArgs,
+    output: &OutputOptions,
     on_level: &mut dyn FnMut(&Level),
 ) -> Result<Chain> {
     let mesh = reference.mesh();
     std::fs::create_dir_all(out)
         .with_context(|| format!("{}: cannot create output directory", out.display()))?;
-    let step = ui.spinner("simplifying");
+    let step = events.spinner("simplifying");
     let chain = Simplifier::new()
         .lod_chain(mesh, opts, targets)
         .map_err(|e| anyhow::anyhow!("{input}: {e}"))?;
@@ -172,7 +173,7 @@ fn write_mesh_chain(
     let mut measured = Vec::with_capacity(chain.len());
     for (i, l) in chain.into_iter().enumerate() {
         let file = format!("{stem}_lod{}.ply", i + 1);
-        let step = ui.spinner(&format!("measuring level {}", i + 1));
+        let step = events.spinner(&format!("measuring level {}", i + 1));
         let m = sampling.measure(reference, &l.mesh)?;
         step.finish();
         let bytes = output
