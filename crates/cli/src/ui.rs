@@ -46,8 +46,12 @@ impl Ui {
         match e {
             Event::Note(line) => self.status(line),
             Event::Warning(line) => eprintln!("{line}"),
-            Event::StageStarted { name } => {
-                let step = self.spinner(name);
+            Event::StageStarted { name, long } => {
+                let step = if *long {
+                    self.stage(name)
+                } else {
+                    self.spinner(name)
+                };
                 self.steps.lock().unwrap_or_else(|e| e.into_inner()).push(step);
             }
             Event::StageFinished { .. } => {
@@ -474,13 +478,14 @@ mod tests {
 
     #[test]
     fn sizes_parse_with_binary_units_and_refuse_out_of_range() {
-        let p = bytes(1 << 20, 1 << 50);
+        let memory = lodkit::limits::MEMORY;
+        let p = bytes(*memory.start(), *memory.end());
         assert_eq!(p("8G"), Ok(8 << 30));
         assert_eq!(p("512m"), Ok(512 << 20));
         assert_eq!(p("512MiB"), Ok(512 << 20));
         assert_eq!(p("1.5GB"), Ok(3 << 29));
         assert_eq!(p("1048576"), Ok(1 << 20));
-        assert_eq!(p("1P"), Ok(1 << 50));
+        assert_eq!(p("1P"), Ok(*memory.end()));
         for bad in [
             "0", "", "G", "8x", "8iB", "-1G", "nanG", "infG", "1023K", "2P", "1e30G",
         ] {

@@ -33,12 +33,16 @@
 //!   scan sets, image sets) and the built-in bunny;
 //! - [`limits`]: every range and default of every option;
 //! - [`plan`]: in core or out of core;
-//! - jobs: [`simplify`], [`lod_chain`], [`build_all`];
+//! - jobs: [`simplify`], [`lod_chain`], [`build_all`], [`compare`], [`info`],
+//!   [`render`];
+//! - [`report`]: the serde types front-ends print (one definition each);
 //! - [`output`], [`materials`], [`measure`]: what the jobs share.
 
 #![forbid(unsafe_code)]
 
 pub mod build_all;
+pub mod compare;
+pub mod info;
 pub mod input;
 pub mod limits;
 pub mod lod_chain;
@@ -47,6 +51,8 @@ pub mod measure;
 pub mod output;
 pub mod plan;
 pub mod progress;
+pub mod render;
+pub mod report;
 pub mod simplify;
 pub mod usage;
 

@@ -41,6 +41,25 @@ pub const PRUNE: Real = Real::closed_open(0.0, 1.0);
 /// budget above the machine's memory only means the in-core path is taken).
 pub const MEMORY: RangeInclusive<u64> = 1 << 20..=1 << 50;
 
+/// The octree resolution of a model built from a mesh (`mco build
+/// --resolution`, `lodkit-bench mco --resolution`): the engine takes up to
+/// [`lodkit_mco::MAX_RESOLUTION`], but memory grows with its square on a
+/// surface that fills the lattice (an octahedron at 512 took 250 MB on a
+/// 2-core machine; 2000 on a small sphere took 6.8 GB).
+pub const MCO_RESOLUTION: RangeInclusive<u32> = 2..=512;
+
+/// The octree resolution R of `pop encode --depth`: each level quadruples
+/// the cells of a surface, and at 12 a closed surface that fills the cube
+/// has about 10^8 of them. The format allows up to 16; legal depths too big
+/// for the input are refused by the encoder before it samples.
+pub const POP_DEPTH: RangeInclusive<u8> = 1..=12;
+/// A `.pop` stream's vertex precision in bits (`--precision`), and its
+/// highest level: the format's 16-bit coordinates.
+pub const POP_BITS: RangeInclusive<u8> = 1..=16;
+/// `pop decode --decimate`: cubes joined by edges shorter than this
+/// fraction of the cube size are merged.
+pub const POP_DECIMATE: Real = Real::closed(0.0, 1.0);
+
 /// A welding distance (`convert --weld`), object units.
 pub const WELD: Real = Real::NON_NEGATIVE;
 
@@ -101,6 +120,13 @@ impl Real {
     /// Any finite value.
     pub const FINITE: Real = Real::open(f64::NEG_INFINITY, f64::INFINITY);
 
+    /// `(lo, lo_open, hi, hi_open)`, for a front-end that checks values
+    /// itself (pylodkit); an absent end is infinite.
+    pub const fn bounds(&self) -> (f64, bool, f64, bool) {
+        (self.lo, self.lo_open, self.hi, self.hi_open)
+    }
+
+    /// Whether `v` is finite and within the range.
     pub fn contains(&self, v: f64) -> bool {
         v.is_finite()
             && if self.lo_open {

@@ -18,9 +18,10 @@ pub enum Event<'a> {
     /// A line that must reach the user even when they asked for quiet (a
     /// degenerate product of `build`).
     Warning(&'a str),
-    /// A stage of unknown length starts. Every start is followed by its
-    /// [`Event::StageFinished`].
-    StageStarted { name: &'a str },
+    /// A stage of unknown length starts; `long` when it may take seconds
+    /// or more (a front-end off a terminal then names it as it starts).
+    /// Every start is followed by its [`Event::StageFinished`].
+    StageStarted { name: &'a str, long: bool },
     /// The stage last started is done, after `seconds` of wall time.
     StageFinished { name: &'a str, seconds: f64 },
     /// A phase of known size starts (`len` units: faces or vertices).
@@ -64,9 +65,18 @@ impl<'a> Progress<'a> {
         self.emit(&Event::Note(msg.as_ref()));
     }
 
-    /// A stage of unknown length: finished by [`Step::finish`].
+    /// A short stage of unknown length: finished by [`Step::finish`].
     pub(crate) fn spinner(&self, name: &str) -> Step<'a> {
-        self.emit(&Event::StageStarted { name });
+        self.start(name, false)
+    }
+
+    /// A long stage (seconds or more).
+    pub(crate) fn stage(&self, name: &str) -> Step<'a> {
+        self.start(name, true)
+    }
+
+    fn start(&self, name: &str, long: bool) -> Step<'a> {
+        self.emit(&Event::StageStarted { name, long });
         Step {
             progress: *self,
             name: name.to_string(),

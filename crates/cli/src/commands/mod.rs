@@ -1,7 +1,5 @@
 //! One file per subcommand, each a front-end over the `lodkit` library
 //! (or an engine crate); no command file imports another.
-pub mod bench;
-pub mod bench_mco;
 pub mod build;
 pub mod compare;
 pub mod convert;
@@ -22,7 +20,7 @@ use lodkit_mesh::Model;
 
 use crate::ui::Ui;
 
-pub use lodkit::input::{Input, builtin_bunny, describe, holds_scenes};
+pub use lodkit::input::{Input, describe, holds_scenes};
 pub use lodkit::output::{mesh_output, written_as};
 
 /// Loads any supported file ([`lodkit::input::load`]), its reading drawn
@@ -39,16 +37,6 @@ pub fn load_mesh(ui: &Ui, path: &Path) -> Result<lodkit_mesh::TriMesh> {
 /// Loads a mesh or a scene ([`lodkit::input::load_input`]).
 pub fn load_input(ui: &Ui, path: &Path, keeps: bool) -> Result<Input> {
     ui.run(|events| lodkit::input::load_input(events, path, keeps))
-}
-
-/// A scene's materials for the renderer ([`lodkit::materials::render_materials`]).
-pub fn render_materials(
-    ui: &Ui,
-    name: &str,
-    scene: &lodkit_mesh::Scene,
-    face_materials: Vec<u32>,
-) -> Result<lodkit_render::Materials> {
-    ui.run(|events| lodkit::materials::render_materials(events, name, scene, face_materials))
 }
 
 /// Pretty JSON on stdout.
