@@ -90,3 +90,29 @@ fn a_huge_blob_is_refused_naming_the_range() {
     assert_eq!(o.status.code(), Some(2), "{e}");
     assert!(e.contains("--blob") && e.contains("1000..=10000000"), "{e}");
 }
+
+/// `mco` builds a mesh's model and prints its rows as JSON.
+#[test]
+fn mco_prints_json() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = dir.path().join("sphere.ply");
+    lodkit_mesh::io::save_mesh(
+        &mesh,
+        &lodkit_mesh::shapes::icosphere(2),
+        lodkit_mesh::io::WriteOptions::default(),
+    )
+    .unwrap();
+    let o = bench(&[
+        "mco",
+        mesh.to_str().unwrap(),
+        "--resolution",
+        "12",
+        "--budget",
+        "0.01",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(!v.as_array().unwrap().is_empty(), "{v}");
+    assert!(v[0]["extract_us"].as_f64().is_some(), "{v}");
+}

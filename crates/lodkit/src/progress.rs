@@ -5,7 +5,7 @@
 
 use std::time::{Duration, Instant};
 
-use crate::lod_chain::Level;
+use crate::report::Level;
 
 /// One thing a job reports while it runs. Events arrive in order from the
 /// calling thread, except [`Event::Advance`], which an out-of-core phase

@@ -1,6 +1,6 @@
 //! The serde types that front-ends print or return as a job's figures,
-//! one definition each (`lodkit mco info --json`, pylodkit's
-//! `McoModel.info()`). The build's own `report.md` and `report.html` are
+//! one definition each (`lods.json`, `lodkit mco info --json`,
+//! pylodkit's `McoModel.info()`). The build's own `report.md` and `report.html` are
 //! written by [`crate::build_all`].
 
 use serde::Serialize;
@@ -57,4 +57,30 @@ impl McoModelInfo {
                 .collect(),
         }
     }
+}
+
+/// One level of a chain, as `lods.json` lists it (errors in object
+/// units; NaN, written as null, where not measured).
+#[derive(Debug, Serialize)]
+pub struct Level {
+    pub level: usize,
+    pub file: String,
+    pub target_triangles: usize,
+    pub triangles: usize,
+    pub vertices: usize,
+    pub estimated_error: f32,
+    pub measured_mean_error: f64,
+    pub measured_max_error: f64,
+    pub seconds: f64,
+    pub stop: String,
+}
+
+/// `lods.json`: the input and every level.
+#[derive(Debug, Serialize)]
+pub struct Lods {
+    pub input: String,
+    pub input_triangles: usize,
+    pub input_vertices: usize,
+    pub glb: String,
+    pub levels: Vec<Level>,
 }

@@ -229,7 +229,7 @@ fn write_all(
             ..lodkit_simplify::Options::DEFAULT
         };
         let (out, targets) = (dir.join("lods"), halving_targets(args.levels));
-        crate::lod_chain::write::write_chain(
+        crate::lod_chain::write_chain(
             events,
             &reference,
             name,

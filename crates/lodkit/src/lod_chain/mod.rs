@@ -1,86 +1,31 @@
-//! The LOD chain job (`lodkit lods IN --out DIR`): a discrete LOD chain — each level simplified
-//! from the previous one — written as one PLY per level, one GLB with the
-//! input and every level as an `MSFT_lod` chain, and `lods.json` (per level: triangles, vertices,
-//! estimated and measured error, time). Each level has fewer triangles
+//! The LOD chain job (`lodkit lods IN --out DIR`): a discrete LOD chain —
+//! each level simplified from the previous one — written as one PLY per
+//! level, one GLB with the input and every level as an `MSFT_lod` chain,
+//! and `lods.json` (per level: triangles, vertices, estimated and measured
+//! error, time). Each level has fewer triangles
 //! than the one before: a chain that stalls ends there, with one line
 //! saying so, rather than write a level twice.
-use std::path::PathBuf;
+use std::path::Path;
 use std::time::Instant;
 
 use anyhow::Result;
 use lodkit_mesh::TriMesh;
+use lodkit_mesh::metrics::Reference;
 use lodkit_simplify::{Options, Target};
 
 use crate::measure::Sampling;
 use crate::output::OutputOptions;
-use crate::plan::{OutOfCore, out_of_core_plan};
+use crate::plan::out_of_core_plan;
 use crate::progress::{Event, Progress};
-use write::write_chain;
+use write::Chain;
 
+mod job;
 mod out_of_core;
 mod scene;
 pub(crate) mod write;
 
-/// One LOD chain: what [`run`] reads, writes and how.
-#[derive(Debug, Clone)]
-pub struct LodChainJob {
-    /// Input mesh or scene (any format `lodkit_mesh::io::load` reads).
-    pub input: PathBuf,
-    /// Output directory (created if missing).
-    pub out: PathBuf,
-    /// One target a level, each smaller than the one before
-    /// ([`lodkit_simplify::halving_targets`] for a halving chain).
-    pub targets: Vec<Target>,
-    /// The simplifier's options (their target is not used).
-    pub options: Options,
-    /// Merge a scene into one mesh, dropping materials.
-    pub merge: bool,
-    /// The memory budget and where out-of-core blocks run.
-    pub scale: OutOfCore,
-    /// Samples per kind for the measured error; `None`: 4 per face of
-    /// each level, within 50 000..=1 000 000.
-    pub samples: Option<usize>,
-    /// Normals and compression of what is written.
-    pub output: OutputOptions,
-    /// Send the out-of-core run's notes and each level as events (off when
-    /// the caller prints `lods.json` itself and wants nothing else).
-    pub notes: bool,
-}
-
-/// One level of a chain, as `lods.json` lists it (errors in object
-/// units; NaN, written as null, where not measured).
-#[derive(Debug, serde::Serialize)]
-pub struct Level {
-    pub level: usize,
-    pub file: String,
-    pub target_triangles: usize,
-    pub triangles: usize,
-    pub vertices: usize,
-    pub estimated_error: f32,
-    pub measured_mean_error: f64,
-    pub measured_max_error: f64,
-    pub seconds: f64,
-    pub stop: String,
-}
-
-/// `lods.json`: the input and every level.
-#[derive(Debug, serde::Serialize)]
-pub struct Lods {
-    pub input: String,
-    pub input_triangles: usize,
-    pub input_vertices: usize,
-    pub glb: String,
-    pub levels: Vec<Level>,
-}
-
-/// What [`run`] did: `lods.json`'s contents (also written to the
-/// output folder) and the one-line summary.
-pub struct LodChainReport {
-    /// `lods.json` as written.
-    pub json: String,
-    /// The `wrote …` line.
-    pub summary: String,
-}
+pub use crate::report::{Level, Lods};
+pub use job::{LodChainJob, LodChainReport};
 
 /// The targets of `--ratios R,R,…` (`None`: `levels` halvings, default
 /// [`crate::limits::DEFAULT_LEVELS`]). Errors ([`crate::usage::Usage`]):
@@ -172,7 +117,7 @@ pub fn run(a: &LodChainJob, events: &Progress) -> Result<LodChainReport> {
         &mut on_level,
     )?;
     let report = chain.lods;
-    if let Some(line) = stopped_early(&report.levels, targets.len()) {
+    if let Some(line) = write::stopped_early(&report.levels, targets.len()) {
         events.status(line);
     }
     let total = start.elapsed().as_secs_f64();
@@ -190,26 +135,30 @@ pub fn run(a: &LodChainJob, events: &Progress) -> Result<LodChainReport> {
     Ok(LodChainReport { json, summary })
 }
 
-/// The line saying why a chain has fewer levels than asked: the chain
-/// ends at the first level that would remove no triangle from the one
-/// before ([`lodkit_simplify::lod_chain`]), rather than write it twice.
-/// `None` when every level was made.
-pub fn stopped_early(levels: &[Level], asked: usize) -> Option<String> {
-    let last = levels.last()?;
-    if levels.len() >= asked {
-        return None;
+/// The chain of `lodkit lods` and `build`: of `scene` with its materials
+/// when given ([`super::scene::write_scene_chain`]: scene GLBs),
+/// else of the reference's mesh ([`write::write_mesh_chain`]: PLY levels); the
+/// arguments are theirs.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn write_chain(
+    events: &Progress,
+    reference: &Reference,
+    input: &str,
+    stem: &str,
+    out: &Path,
+    scene: Option<&lodkit_mesh::Scene>,
+    targets: &[Target],
+    opts: &Options,
+    sampling: Sampling,
+    output: &OutputOptions,
+    on_level: &mut dyn FnMut(&Level),
+) -> Result<Chain> {
+    match scene {
+        Some(s) => scene::write_scene_chain(
+            events, reference, input, stem, out, s, targets, opts, sampling, output, on_level,
+        ),
+        None => write::write_mesh_chain(
+            events, reference, input, stem, out, targets, opts, sampling, output, on_level,
+        ),
     }
-    let why = if last.stop == lodkit_simplify::StopReason::Reached.to_string() {
-        String::new()
-    } else {
-        format!(" (level {}: {})", last.level, last.stop)
-    };
-    Some(format!(
-        "note: stopped at level {} of {}: level {} would remove no triangle from level {}'s {}{why}",
-        last.level,
-        asked,
-        last.level + 1,
-        last.level,
-        last.triangles
-    ))
 }

@@ -17,10 +17,11 @@ use lodkit_mesh::{Model, TriMesh};
 use lodkit_scale::{ChainLevel, ScaleOptions, lod_chain_file, write_soups_ply};
 use lodkit_simplify::{Options, Target};
 
+use super::job::{LodChainJob, LodChainReport};
 use super::write::{level_coverages, level_extras};
-use super::{Level, LodChainJob, LodChainReport, Lods};
 use crate::plan::{Plan, kept, remove_staging};
 use crate::progress::{Event, Progress, human_bytes};
+use crate::report::{Level, Lods};
 
 /// Runs the chain of `a` with `targets` and `opts` out of core (`plan`
 /// says why and with which budget). The staging folder sits in the
@@ -158,7 +159,7 @@ pub fn run(
     );
     events.emit(&Event::PhasesFinished);
     let rep = result.map_err(|e| kept(&e, &staging))?;
-    if let Some(line) = super::stopped_early(&levels, targets.len()) {
+    if let Some(line) = super::write::stopped_early(&levels, targets.len()) {
         events.status(line);
     }
     let glb = format!("{stem}_lods.glb");

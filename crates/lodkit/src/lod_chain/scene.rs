@@ -35,7 +35,7 @@ pub fn write_scene_chain(
     opts: &Options,
     sampling: Sampling,
     output: &OutputOptions,
-    on_level: &mut dyn FnMut(&super::Level),
+    on_level: &mut dyn FnMut(&crate::report::Level),
 ) -> Result<super::write::Chain> {
     use super::write::{level_coverages, level_extras};
     use anyhow::Context as _;
@@ -88,7 +88,7 @@ pub fn write_scene_chain(
                 error,
             ));
         }
-        levels.push(super::Level {
+        levels.push(crate::report::Level {
             level: i + 1,
             file,
             target_triangles: r.target_faces,
@@ -120,7 +120,7 @@ pub fn write_scene_chain(
     let bytes = lodkit_mesh::io::gltf::write_scene_lod_glb(&glb_levels, &output.glb())
         .map_err(|e| anyhow::anyhow!("{}: {e}", glb_path.display()))?;
     write_atomic(&glb_path, &bytes)?;
-    let lods = super::Lods {
+    let lods = crate::report::Lods {
         input: input.to_string(),
         input_triangles: merged.faces.len(),
         input_vertices: merged.positions.len(),

@@ -20,10 +20,10 @@ use lodkit_mesh::{Model, TriMesh};
 use lodkit_simplify::{Options, Simplifier, Target};
 use serde_json::{Map, Value, json};
 
-use crate::lod_chain::{Level, Lods};
 use crate::measure::{Measured, Sampling};
 use crate::output::OutputOptions;
 use crate::progress::Progress;
+use crate::report::{Level, Lods};
 
 /// The screen coverage below which an error projects to at most a pixel
 /// on a 1080-line screen (the one rule, shared with pylodkit's chains).
@@ -110,34 +110,6 @@ pub struct Chain {
     pub face_materials: Option<Vec<Vec<u32>>>,
 }
 
-/// The chain of `lodkit lods` and `build`: of `scene` with its materials
-/// when given ([`super::scene::write_scene_chain`]: scene GLBs),
-/// else of the reference's mesh ([`write_mesh_chain`]: PLY levels); the
-/// arguments are theirs.
-#[allow(clippy::too_many_arguments)]
-pub fn write_chain(
-    events: &Progress,
-    reference: &Reference,
-    input: &str,
-    stem: &str,
-    out: &Path,
-    scene: Option<&lodkit_mesh::Scene>,
-    targets: &[Target],
-    opts: &Options,
-    sampling: Sampling,
-    output: &OutputOptions,
-    on_level: &mut dyn FnMut(&Level),
-) -> Result<Chain> {
-    match scene {
-        Some(s) => super::scene::write_scene_chain(
-            events, reference, input, stem, out, s, targets, opts, sampling, output, on_level,
-        ),
-        None => write_mesh_chain(
-            events, reference, input, stem, out, targets, opts, sampling, output, on_level,
-        ),
-    }
-}
-
 /// Simplifies the reference's mesh into one level per target (each from
 /// the previous level, with `opts`), measures each with `sampling`, and
 /// writes `<stem>_lodN.ply`, `<stem>_lods.glb` and `lods.json` into `out`
@@ -148,7 +120,7 @@ pub fn write_chain(
 /// carries `--normals` (applied to what is written, after measuring) and
 /// `--compress` (the GLB).
 #[allow(clippy::too_many_arguments)]
-fn write_mesh_chain(
+pub(super) fn write_mesh_chain(
     events: &Progress,
     reference: &Reference,
     input: &str,
@@ -258,6 +230,30 @@ fn write_mesh_chain(
         measured,
         face_materials: None,
     })
+}
+
+/// The line saying why a chain has fewer levels than asked: the chain
+/// ends at the first level that would remove no triangle from the one
+/// before ([`lodkit_simplify::lod_chain`]), rather than write it twice.
+/// `None` when every level was made.
+pub fn stopped_early(levels: &[Level], asked: usize) -> Option<String> {
+    let last = levels.last()?;
+    if levels.len() >= asked {
+        return None;
+    }
+    let why = if last.stop == lodkit_simplify::StopReason::Reached.to_string() {
+        String::new()
+    } else {
+        format!(" (level {}: {})", last.level, last.stop)
+    };
+    Some(format!(
+        "note: stopped at level {} of {}: level {} would remove no triangle from level {}'s {}{why}",
+        last.level,
+        asked,
+        last.level + 1,
+        last.level,
+        last.triangles
+    ))
 }
 
 #[cfg(test)]

@@ -18,7 +18,7 @@ pub struct BenchMcoArgs {
     /// built-in bunny and a 1M-triangle synthetic blob.
     pub inputs: Vec<PathBuf>,
     /// Resolution for meshes built here, in 2..=512 (default: from the sampling).
-    #[arg(long, value_parser = value::range(limits::MCO_RESOLUTION))]
+    #[arg(long, value_parser = value::range_u32(limits::MCO_RESOLUTION))]
     pub resolution: Option<u32>,
     /// Seconds spent per measured size (roughly), in (0, 60].
     #[arg(long, default_value_t = 0.5, value_parser = Real::open_closed(0.0, 60.0).f64())]

@@ -19,14 +19,14 @@ pub struct SimplifyArgs {
     /// Meshes to run (default: the bunny and a 1M-triangle blob).
     pub meshes: Vec<PathBuf>,
     /// Timed runs per side (the best is kept), in 1..=100.
-    #[arg(long, default_value_t = 3, value_parser = value::int(1usize, 100))]
+    #[arg(long, default_value_t = 3, value_parser = value::range(1..=100))]
     pub runs: usize,
     /// Samples per kind for the error measurement, in 1..=10000000.
     #[arg(long, default_value_t = 1_000_000, value_parser = value::range(lodkit::limits::SAMPLES))]
     pub samples: usize,
     /// Triangles of the synthetic blob when no mesh is given, in
     /// 1000..=10000000.
-    #[arg(long, default_value_t = 1_000_000, value_parser = value::int(1000usize, MAX_BLOB), conflicts_with = "meshes")]
+    #[arg(long, default_value_t = 1_000_000, value_parser = value::range(1000..=MAX_BLOB), conflicts_with = "meshes")]
     pub blob: usize,
     /// Print the rows as JSON.
     #[arg(long)]

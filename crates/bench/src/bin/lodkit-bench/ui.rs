@@ -69,33 +69,18 @@ macro_rules! outln {
     }};
 }
 
-/// Option parsers over [`lodkit::limits`]' ranges: a value out of range is
-/// a usage error (exit 2) naming the range.
+/// Option parsers: an integer within a range (clap's own check, whose
+/// message names the range), e.g. one of [`lodkit::limits`]' ranges.
 pub mod value {
-    use std::fmt::Display;
-    use std::str::FromStr;
+    use clap::builder::RangedU64ValueParser;
 
-    /// An integer in `lo..=hi`.
-    pub fn int<T>(
-        lo: T,
-        hi: T,
-    ) -> impl Fn(&str) -> Result<T, String> + Clone + Send + Sync + 'static
-    where
-        T: FromStr + PartialOrd + Display + Copy + Send + Sync + 'static,
-    {
-        move |s: &str| match s.trim().parse::<T>() {
-            Ok(v) if v >= lo && v <= hi => Ok(v),
-            _ => Err(format!("expected an integer in {lo}..={hi}")),
-        }
+    /// A `u32` in `r`.
+    pub fn range_u32(r: std::ops::RangeInclusive<u32>) -> RangedU64ValueParser<u32> {
+        RangedU64ValueParser::new().range(u64::from(*r.start())..=u64::from(*r.end()))
     }
 
-    /// An integer in one of [`lodkit::limits`]' ranges.
-    pub fn range<T>(
-        r: std::ops::RangeInclusive<T>,
-    ) -> impl Fn(&str) -> Result<T, String> + Clone + Send + Sync + 'static
-    where
-        T: FromStr + PartialOrd + Display + Copy + Send + Sync + 'static,
-    {
-        int(*r.start(), *r.end())
+    /// A `usize` in `r`.
+    pub fn range(r: std::ops::RangeInclusive<usize>) -> RangedU64ValueParser<usize> {
+        RangedU64ValueParser::new().range(*r.start() as u64..=*r.end() as u64)
     }
 }
