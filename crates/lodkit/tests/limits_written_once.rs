@@ -90,7 +90,9 @@ fn holds(line: &str, lit: &str) -> bool {
         let after = line[i + lit.len()..].chars().next();
         let first = lit.chars().next();
         let last = lit.chars().next_back();
-        !(glued(before) && glued(first)) && !(glued(after) && glued(last))
+        let glued_before = glued(before) && glued(first);
+        let glued_after = glued(after) && glued(last);
+        !glued_before && !glued_after
     })
 }
 
