@@ -1,16 +1,16 @@
 //! The build job (`lodkit build [INPUT] --out DIR`), the main one.
 //!
 //! Stages, one file each in this folder: the input of any kind
-//! ([`input`]: meshes as they are, point clouds, range images and scan
+//! (`input.rs`: meshes as they are, point clouds, range images and scan
 //! sets reconstructed first), the discrete LOD chain ([`crate::lod_chain`],
-//! HQMS), the continuous model ([`continuous`], marching cube octree), the
-//! progressive stream ([`progressive`], octree particles), each measured
+//! HQMS), the continuous model (`continuous.rs`, marching cube octree), the
+//! progressive stream (`progressive.rs`, octree particles), each measured
 //! against the input through one shared distance index ([`crate::measure`]), then
-//! `report.md` and `report.html` ([`html`], [`html_page`]).
+//! `report.md` and `report.html` (`html.rs`, `html_page.rs`).
 //!
 //! Every option is checked before anything is written, and the whole
 //! folder is written beside `--out` and moved into place at the end
-//! ([`staging`]): a failed or killed build leaves `--out` as it was, and
+//! (`staging.rs`): a failed or killed build leaves `--out` as it was, and
 //! only a folder an earlier build made (its `.lodkit-build.json` lists
 //! every file) is ever replaced.
 //!

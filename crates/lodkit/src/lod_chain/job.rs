@@ -6,7 +6,7 @@ use lodkit_simplify::{Options, Target};
 use crate::output::OutputOptions;
 use crate::plan::OutOfCore;
 
-/// One LOD chain: what [`run`] reads, writes and how.
+/// One LOD chain: what [`super::run`] reads, writes and how.
 #[derive(Debug, Clone)]
 pub struct LodChainJob {
     /// Input mesh or scene (any format `lodkit_mesh::io::load` reads).
@@ -32,7 +32,7 @@ pub struct LodChainJob {
     pub notes: bool,
 }
 
-/// What [`run`] did: `lods.json`'s contents (also written to the
+/// What [`super::run`] did: `lods.json`'s contents (also written to the
 /// output folder) and the one-line summary.
 pub struct LodChainReport {
     /// `lods.json` as written.
