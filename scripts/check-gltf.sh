@@ -15,7 +15,7 @@ cd "$(dirname "$0")/.."
 if [ $# -ge 1 ]; then
   bin=$1
 else
-  LODKIT_VIEWER=${LODKIT_VIEWER:-skip} cargo build --release -q -p lodkit --features compress
+  LODKIT_VIEWER=${LODKIT_VIEWER:-skip} cargo build --release -q -p lodkit-cli --features compress
   bin=target/release/lodkit
 fi
 bin=$(realpath "$bin")

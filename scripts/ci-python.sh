@@ -37,7 +37,7 @@ rm -rf "$wheels"
 
 # The CLI, for the `lodkit simplify --ray` test (already built by the
 # browser checks in .ci/run; a no-op then).
-nice -n 10 cargo build --release --quiet -p lodkit
+nice -n 10 cargo build --release --quiet -p lodkit-cli
 export LODKIT_BIN="$root/target/release/lodkit"
 
 # Run from outside the source tree so `import pylodkit` is the installed wheel.

@@ -29,7 +29,7 @@ fi
 nginx_bin=$(command -v nginx || echo /usr/sbin/nginx)
 
 echo "== release binary and the viewer"
-cargo build --release --quiet -p lodkit
+cargo build --release --quiet -p lodkit-cli
 cargo build --release --quiet -p lodkit-wasm --example native
 lodkit=$root/target/release/lodkit
 native=$root/target/release/examples/native

@@ -16,7 +16,7 @@ root=$(pwd)
 start=$(date +%s)
 
 echo "== release binary, native example, wasm decoders"
-nice -n 10 cargo build --release --quiet -p lodkit
+nice -n 10 cargo build --release --quiet -p lodkit-cli
 nice -n 10 cargo build --release --quiet -p lodkit-wasm --example native
 wasm=$root/target/web-wasm/wasm32-unknown-unknown/release/lodkit_wasm.wasm
 CARGO_PROFILE_RELEASE_DEBUG=false CARGO_PROFILE_RELEASE_STRIP=true \

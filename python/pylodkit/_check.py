@@ -1,10 +1,16 @@
-"""Option ranges, worded as the CLI's range parsers word them."""
+"""Option checks against the ranges of the ``lodkit`` library (``LIMITS``),
+worded as the CLI's range parsers word them."""
 from __future__ import annotations
 
 import math
 from typing import Optional
 
+from . import _lodkit as _native
 from .errors import OptionError
+
+#: Every option range of ``lodkit::limits`` by name: ``(lo, hi)`` for an
+#: integer, ``(lo, hi, lo_open, hi_open)`` for a real.
+LIMITS = _native.LIMITS
 
 
 def _fmt(x: float) -> str:
@@ -44,3 +50,12 @@ def integer(name: str, value, lo: int, hi: int) -> Optional[int]:
     if not lo <= v <= hi:
         raise OptionError("%s=%r: expected an integer in %d..=%d" % (name, value, lo, hi))
     return v
+
+
+def within(name: str, value, limit: str):
+    """``value`` checked against ``LIMITS[limit]`` (an integer or a real range)."""
+    r = LIMITS[limit]
+    if len(r) == 2:
+        return integer(name, value, r[0], r[1])
+    lo, hi, lo_open, hi_open = r
+    return real(name, value, lo, hi, lo_open=lo_open, hi_open=hi_open)

@@ -14,11 +14,11 @@ from .errors import InputError, OptionError
 PathLike = Union[str, "os.PathLike[str]"]
 
 #: Most samples per kind a measurement may take (the CLI's ``--samples`` bound).
-MAX_SAMPLES: int = _native.MAX_SAMPLES
-#: Largest ``heap_size`` (2**24 records).
-MAX_HEAP_SIZE: int = _native.MAX_HEAP_SIZE
+MAX_SAMPLES: int = _check.LIMITS["samples"][1]
+#: Largest ``heap_size``.
+MAX_HEAP_SIZE: int = _check.LIMITS["heap_size"][1]
 #: Most levels of a halving chain.
-MAX_LEVELS: int = 32
+MAX_LEVELS: int = _check.LIMITS["levels"][1]
 
 
 def _opt_array(a):
@@ -258,16 +258,15 @@ def icosphere(level: int) -> Mesh:
 
 def _simplify_options(max_error, lock_border, fill_holes, heap_size, normal_weight,
                       color_weight, uv_weight, prune) -> Dict[str, Any]:
-    w = dict(lo=0.0, hi=1e6)
     return dict(
-        max_error=_check.real("max_error", max_error, 0.0),
+        max_error=_check.within("max_error", max_error, "max_error"),
         lock_border=bool(lock_border),
         fill_holes=bool(fill_holes),
-        heap_size=_check.integer("heap_size", heap_size, 1, MAX_HEAP_SIZE),
-        normal_weight=_check.real("normal_weight", normal_weight, **w),
-        color_weight=_check.real("color_weight", color_weight, **w),
-        uv_weight=_check.real("uv_weight", uv_weight, **w),
-        prune=_check.real("prune", prune, 0.0, 1.0, hi_open=True),
+        heap_size=_check.within("heap_size", heap_size, "heap_size"),
+        normal_weight=_check.within("normal_weight", normal_weight, "weight"),
+        color_weight=_check.within("color_weight", color_weight, "weight"),
+        uv_weight=_check.within("uv_weight", uv_weight, "weight"),
+        prune=_check.within("prune", prune, "prune"),
     )
 
 
@@ -316,8 +315,8 @@ def simplify(
         raise OptionError("target and ratio conflict: give one of them")
     if target is None and ratio is None and max_error is None:
         raise OptionError("give target=FACES, ratio=R or max_error=E")
-    t = _check.integer("target", target, 0, 2**32 - 1)
-    r = _check.real("ratio", ratio, 0.0, 1.0)
+    t = _check.within("target", target, "target")
+    r = _check.within("ratio", ratio, "ratio")
     opts = _simplify_options(max_error, lock_border, fill_holes, heap_size, normal_weight,
                              color_weight, uv_weight, prune)
     d, report = _native.simplify(_as_input(mesh), t, r, **opts)
@@ -377,14 +376,14 @@ def lod_chain(
     if levels is not None and ratios is not None:
         raise OptionError("levels and ratios conflict: give one of them")
     if ratios is None:
-        n = _check.integer("levels", 6 if levels is None else levels, 1, MAX_LEVELS)
+        n = _check.within("levels", _native.DEFAULT_LEVELS if levels is None else levels, "levels")
         rs = [0.5 ** (i + 1) for i in range(n)]
     else:
-        rs = [_check.real("ratios", r, 0.0, 1.0) for r in ratios]
+        rs = [_check.within("ratios", r, "ratio") for r in ratios]
         if not rs:
             raise OptionError("ratios: give at least one fraction in [0, 1]")
         check_ratios_fall("ratios", rs)
-    s = _check.integer("samples", samples, 1, MAX_SAMPLES)
+    s = _check.within("samples", samples, "samples")
     opts = _simplify_options(max_error, lock_border, fill_holes, heap_size, normal_weight,
                              color_weight, uv_weight, prune)
     out = _native.lod_chain(_as_input(mesh), rs, measure=bool(measure), samples=s, **opts)
@@ -421,7 +420,7 @@ def compare(
         >>> round(r["symmetric"]["mean_pct"], 4)
         0.0185
     """
-    n = _check.integer("samples", samples, 1, MAX_SAMPLES)
+    n = _check.within("samples", samples, "samples")
     _check.integer("seed", seed, 0, 2**64 - 1)
     return _native.compare(_as_input(a), _as_input(b), n, seed, bool(vertex_samples),
                            bool(edge_samples), bool(face_samples))

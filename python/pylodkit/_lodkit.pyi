@@ -18,9 +18,9 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 import numpy as np
 
 MeshDict = Dict[str, Optional[np.ndarray]]
-MAX_SAMPLES: int
-MAX_HEAP_SIZE: int
-MCO_MAX_RESOLUTION: int
+#: Every option range of ``lodkit::limits``: ``(lo, hi)`` or ``(lo, hi, lo_open, hi_open)``.
+LIMITS: Dict[str, Tuple[Any, ...]]
+DEFAULT_LEVELS: int
 
 def load(path: str) -> Tuple[str, Dict[str, Optional[np.ndarray]]]:
     """``(kind, dict)`` of a file; kind is ``"mesh"`` or ``"points"``.

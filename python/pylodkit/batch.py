@@ -398,9 +398,9 @@ def run_batch(
     if ratios is not None and levels is not None:
         raise ValueError("--lods and --levels conflict: give one of them")
     if ratios is None:
-        n = _check.integer("levels", 3 if levels is None else levels, 1, 32)
+        n = _check.within("levels", 3 if levels is None else levels, "levels")
         ratios = [0.5 ** (i + 1) for i in range(n)]
-    ratios = [_check.real("lods", r, 0.0, 1.0) for r in ratios]
+    ratios = [_check.within("lods", r, "ratio") for r in ratios]
     check_ratios_fall("lods", ratios)
     _check.integer("workers", workers, 1, 4096)
     _check.integer("threads_per_task", threads_per_task, 1, 4096)
@@ -535,6 +535,8 @@ def _ratios(s: str) -> List[float]:
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
     """The command line (``python -m pylodkit.batch --help``)."""
+    from . import _check
+
     p = argparse.ArgumentParser(
         prog="python -m pylodkit.batch",
         description="LODs for every mesh file under IN_DIR, one task per asset (on Ray when it "
@@ -544,10 +546,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     g = p.add_mutually_exclusive_group()
     g.add_argument("--lods", type=_ratios, metavar="R,R,...",
                    help="fractions of the input's triangles, one level each (default: 0.5,0.25,0.125)")
-    g.add_argument("--levels", type=int, metavar="N", help="halving levels, 1..=32 (default 3)")
+    g.add_argument("--levels", type=int, metavar="N", help="halving levels, %d..=%d (default 3)" % _check.LIMITS["levels"])
     p.add_argument("--pop", action="store_true", help="also write a .pop progressive stream")
     p.add_argument("--mco", action="store_true", help="also write a .mco continuous-LOD model")
-    p.add_argument("--resolution", type=int, help="--mco lattice resolution, 2..=512")
+    p.add_argument("--resolution", type=int, help="--mco lattice resolution, %d..=%d" % _check.LIMITS["resolution"])
     p.add_argument("--no-measure", action="store_true", help="skip the Metro error of each level")
     p.add_argument("--samples", type=int, help="samples per kind for the measured error")
     p.add_argument("--address", help="an existing Ray cluster (auto or HOST:PORT); default: a local one")

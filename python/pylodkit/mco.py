@@ -20,7 +20,7 @@ from ._core import Mesh, _as_input
 from .errors import OptionError
 
 #: Largest ``resolution`` of a build (the CLI's bound).
-MAX_RESOLUTION: int = _native.MCO_MAX_RESOLUTION
+MAX_RESOLUTION: int = _check.LIMITS["resolution"][1]
 
 
 class Model:
@@ -199,7 +199,7 @@ def build(inputs: Any, *more: Any, resolution: Optional[int] = None) -> Model:
     if not items:
         raise OptionError("give at least one input")
     items = [os.fspath(i) if isinstance(i, os.PathLike) else _as_input(i) for i in items]
-    r = _check.integer("resolution", resolution, 2, MAX_RESOLUTION)
+    r = _check.within("resolution", resolution, "resolution")
     return Model(_native.mco_build(items, r))
 
 

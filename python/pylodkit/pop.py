@@ -18,9 +18,9 @@ from ._core import Mesh, PointCloud, _as_input, _wrap
 from .errors import OptionError
 
 #: Largest octree depth ``encode`` takes (the CLI's bound).
-MAX_DEPTH: int = 12
+MAX_DEPTH: int = _check.LIMITS["pop_depth"][1]
 #: Highest level and precision a stream holds.
-MAX_BITS: int = 16
+MAX_BITS: int = _check.LIMITS["pop_bits"][1]
 
 
 def encode_with_report(
@@ -48,8 +48,8 @@ def encode_with_report(
         >>> report["total_bytes"] == len(data)
         True
     """
-    d = _check.integer("depth", depth, 1, MAX_DEPTH)
-    p = _check.integer("precision", precision, 1, MAX_BITS)
+    d = _check.within("depth", depth, "pop_depth")
+    p = _check.within("precision", precision, "pop_bits")
     if d is not None and p is not None and p < d:
         raise OptionError("precision=%d is below depth=%d: the precision N must be in %d..=16"
                           % (p, d, d))
@@ -64,7 +64,7 @@ def encode_with_report(
     else:
         if not outer_thinning:
             raise OptionError("relax_below applies with outer_thinning=True")
-        relax = _check.integer("relax_below", relax_below, 1, 16)
+        relax = _check.within("relax_below", relax_below, "pop_bits")
     return _native.pop_encode(_as_input(obj), d, p, mode, placement, bool(outer_thinning), relax,
                               bool(normals), bool(colours))
 
@@ -113,8 +113,8 @@ def decode_with_info(
         True
     """
     lv = _check.integer("level", level, 0, MAX_BITS)
-    p = _check.integer("precision", precision, 1, MAX_BITS)
-    dec = _check.real("decimate", decimate, 0.0, 1.0)
+    p = _check.within("precision", precision, "pop_bits")
+    dec = _check.within("decimate", decimate, "pop_decimate")
     if points and dec is not None:
         raise OptionError("decimate applies to a triangulated level, not to points=True")
     kind, d, info = _native.pop_decode(bytes(data), lv, p, bool(points), dec, bool(strict))

@@ -16,8 +16,7 @@
 
 use std::path::PathBuf;
 
-use lodkit_mesh::Model;
-use lodkit_mesh::io::{Format, WriteOptions};
+use lodkit_mesh::io::WriteOptions;
 use lodkit_mesh::metrics::{CompareOptions, Reference};
 use lodkit_simplify::{AttributeWeights, LevelReport, Options, Simplifier, Target};
 use pyo3::prelude::*;
@@ -32,12 +31,7 @@ mod scale;
 use convert::{json_to_py, mesh_from_py, mesh_to_py, model_from_py, model_to_py};
 use errors::input;
 
-/// Most samples per kind a measurement may take: the CLI's `--samples`
-/// bound (about 1 GB of work memory at the limit).
-const MAX_SAMPLES: usize = 10_000_000;
-
-/// The Stanford bunny, as `lodkit build` has it built in.
-const BUNNY: &[u8] = include_bytes!("../../data/models/stanford_bunny.ply");
+use lodkit::limits::{self, MAX_SAMPLES};
 
 /// `load(path) -> (kind, dict)`: any file lodkit reads (format by
 /// extension); kind is `"mesh"` or `"points"`.
@@ -63,13 +57,10 @@ fn save(py: Python<'_>, obj: &Bound<'_, PyAny>, path: PathBuf, ascii: bool) -> P
 /// `bunny() -> dict`: the Stanford bunny (35,947 vertices, 69,451 faces).
 #[pyfunction]
 fn bunny(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
-    let model = py
-        .detach(|| lodkit_mesh::io::decode(Format::Ply, BUNNY, None))
-        .map_err(|e| input(format!("built-in bunny: {e}")))?;
-    match model {
-        Model::Mesh(m) => mesh_to_py(py, m),
-        _ => Err(input("built-in bunny: not a mesh")),
-    }
+    let m = py
+        .detach(lodkit::input::builtin_bunny)
+        .map_err(|e| input(e.to_string()))?;
+    mesh_to_py(py, m)
 }
 
 /// `blob(triangles, seed) -> dict`: lodkit's noise-displaced sphere of
@@ -378,6 +369,38 @@ fn compare<'py>(
     json_to_py(py, &report)
 }
 
+/// `LIMITS`: every option range of `lodkit::limits` by name: an integer
+/// range as `(lo, hi)`, a real one as `(lo, hi, lo_open, hi_open)` (an
+/// absent end infinite). pylodkit checks its keywords against these.
+fn limits_dict(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let d = PyDict::new(py);
+    let int = |r: &std::ops::RangeInclusive<usize>| (*r.start(), *r.end());
+    let real = |r: limits::Real| {
+        let (lo, lo_open, hi, hi_open) = r.bounds();
+        (lo, hi, lo_open, hi_open)
+    };
+    d.set_item("samples", int(&limits::SAMPLES))?;
+    d.set_item("levels", int(&limits::LEVELS))?;
+    d.set_item("target", int(&limits::TARGET_FACES))?;
+    d.set_item("heap_size", int(&limits::HEAP_SIZE))?;
+    d.set_item(
+        "resolution",
+        (
+            *limits::MCO_RESOLUTION.start(),
+            *limits::MCO_RESOLUTION.end(),
+        ),
+    )?;
+    let int8 = |r: &std::ops::RangeInclusive<u8>| (*r.start(), *r.end());
+    d.set_item("pop_depth", int8(&limits::POP_DEPTH))?;
+    d.set_item("pop_bits", int8(&limits::POP_BITS))?;
+    d.set_item("pop_decimate", real(limits::POP_DECIMATE))?;
+    d.set_item("ratio", real(limits::RATIO))?;
+    d.set_item("max_error", real(limits::MAX_ERROR))?;
+    d.set_item("weight", real(limits::WEIGHT))?;
+    d.set_item("prune", real(limits::PRUNE))?;
+    Ok(d)
+}
+
 #[pymodule]
 fn _lodkit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(load, m)?)?;
@@ -394,8 +417,7 @@ fn _lodkit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(scale::run_block_task, m)?)?;
     mco::register(m)?;
     pop::register(m)?;
-    m.add("MAX_SAMPLES", MAX_SAMPLES)?;
-    m.add("MAX_HEAP_SIZE", 1usize << 24)?;
-    m.add("MCO_MAX_RESOLUTION", mco::MAX_RESOLUTION)?;
+    m.add("LIMITS", limits_dict(m.py())?)?;
+    m.add("DEFAULT_LEVELS", limits::DEFAULT_LEVELS)?;
     Ok(())
 }

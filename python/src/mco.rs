@@ -14,10 +14,6 @@ use pyo3::types::{PyBytes, PyDict};
 use crate::convert::{json_to_py, mesh_to_py, model_from_py};
 use crate::errors::{self, Kind, input, raise};
 
-/// Largest `resolution` of a build: the CLI's `--resolution` bound (memory
-/// grows with its square on a surface that fills the lattice).
-pub const MAX_RESOLUTION: u32 = 512;
-
 /// A built marching cube octree: one vertex buffer, cut at any triangle
 /// budget, LOD number or camera. Immutable, so cuts from several Python
 /// threads run at once (each releases the GIL).
@@ -114,28 +110,13 @@ fn mco_from_bytes(py: Python<'_>, data: &[u8]) -> PyResult<PyMco> {
     Ok(PyMco { inner })
 }
 
-#[derive(serde::Serialize)]
-struct LevelRow {
-    level: usize,
-    nodes: usize,
-    triangles: usize,
-}
-
-/// `lodkit mco info --json`'s model fields (no file fields).
+/// `lodkit mco info --json`'s model fields (no file fields), and whether
+/// the model has colours.
 #[derive(serde::Serialize)]
 struct Info {
-    resolution: u32,
-    cube: f32,
-    depth: u32,
-    vertices: usize,
-    nodes: usize,
-    lod_array: usize,
-    lod_numbers: usize,
-    full_triangles: usize,
-    crack_patches: usize,
-    input_samples: u64,
+    #[serde(flatten)]
+    model: lodkit::report::McoModelInfo,
     has_colors: bool,
-    levels: Vec<LevelRow>,
 }
 
 #[pymethods]
@@ -246,27 +227,8 @@ impl PyMco {
     fn info<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let m = self.inner.info();
         let info = Info {
-            resolution: m.grid.resolution(),
-            cube: m.grid.cube(),
-            depth: m.grid.depth(),
-            vertices: m.vertices,
-            nodes: m.nodes,
-            lod_array: m.lod_array,
-            lod_numbers: m.lod_numbers,
-            full_triangles: m.full_triangles,
-            crack_patches: m.crack_patches,
-            input_samples: m.input_samples,
+            model: lodkit::report::McoModelInfo::of(&self.inner),
             has_colors: m.has_colors,
-            levels: m
-                .levels
-                .iter()
-                .enumerate()
-                .map(|(level, l)| LevelRow {
-                    level,
-                    nodes: l.nodes,
-                    triangles: l.triangles,
-                })
-                .collect(),
         };
         json_to_py(py, &info)
     }

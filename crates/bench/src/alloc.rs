@@ -1,5 +1,5 @@
 //! A global allocator that counts live bytes and their peak, for the
-//! memory columns of `lodkit bench simplify`.
+//! memory columns of `lodkit-bench simplify`.
 //!
 //! Install it in a binary with
 //! `#[global_allocator] static A: CountingAlloc = CountingAlloc;`; then

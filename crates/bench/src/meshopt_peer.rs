@@ -1,4 +1,4 @@
-//! meshoptimizer, the peer of `lodkit bench simplify`, behind the `peers`
+//! meshoptimizer, the peer of `lodkit-bench simplify`, behind the `peers`
 //! feature (it compiles meshoptimizer's C++). Without the feature this
 //! module is absent and [`crate::PEERS`] is false.
 

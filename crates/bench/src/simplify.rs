@@ -126,7 +126,7 @@ pub fn run_case(
 }
 
 /// Why [`run_case`] fails in a build without the `peers` feature.
-pub const NO_PEERS: &str = "built without meshoptimizer (the `peers` feature): rebuild with `cargo build --release -p lodkit --features peers`";
+pub const NO_PEERS: &str = "built without meshoptimizer (the `peers` feature): rebuild with `cargo build --release -p lodkit-bench --features peers`";
 
 /// Runs one mesh at one target. Errors: lodkit's simplifier refused the
 /// mesh, or `compare` failed.

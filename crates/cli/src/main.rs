@@ -1,12 +1,12 @@
 //! `lodkit` — every level of detail from dense 3D scans.
 //!
 //! Exit codes: 0 success, 1 bad input or failure (one line on stderr naming
-//! the file and the problem), 2 usage error (from clap, or a command this
-//! build lacks: `lodkit bench simplify` without the `peers` feature).
+//! the file and the problem), 2 usage error (from clap, or a request these
+//! options or this build cannot serve: `--compress` without its feature).
 
 #![forbid(unsafe_code)]
 
-mod chart;
+mod args;
 mod commands;
 mod ui;
 mod viewer_assets;
@@ -17,10 +17,6 @@ use std::process::ExitCode;
 use clap::{Args, Parser, Subcommand};
 
 use crate::ui::Ui;
-
-/// Counts live bytes for `lodkit bench`'s memory columns.
-#[global_allocator]
-static ALLOC: lodkit_bench::alloc::CountingAlloc = lodkit_bench::alloc::CountingAlloc;
 
 #[derive(Parser)]
 #[command(
@@ -67,11 +63,6 @@ enum Command {
         after_help = "Examples:\n  lodkit generate blob --triangles 100000000 -o big.ply\n  lodkit generate subdivided bunny.ply --triangles 100000000 -o big_bunny.ply"
     )]
     Generate(commands::generate::GenerateCmd),
-    /// In-process comparisons with peer libraries (simplify: meshoptimizer, with `--features peers`).
-    #[command(
-        after_help = "Examples:\n  lodkit bench simplify\n  lodkit bench simplify scan.ply --json"
-    )]
-    Bench(commands::bench::BenchArgs),
     /// Describe a mesh, point cloud or range image (counts, bbox, topology, defects), a .mco octree or a .pop stream.
     #[command(
         after_help = "Examples:\n  lodkit info bunny.ply\n  lodkit info scan.glb --json\n  lodkit info out/bunny.mco   # as `lodkit mco info`\n  lodkit info out/bunny.pop   # as `lodkit pop stats`"
@@ -179,14 +170,13 @@ fn main() -> ExitCode {
                 merge,
                 json,
             };
-            commands::convert::run(&ui, &input, &output, &opts, &out)
+            commands::convert::run(&ui, &input, &output, &opts, &out.options())
         }
         Command::Compare(args) => commands::compare::run(&ui, &args),
         Command::Simplify(args) => commands::simplify::run(&ui, &args),
         Command::Lods(args) => commands::lods::run(&ui, &args),
         Command::Tiles(args) => commands::tiles::run(&ui, &args),
         Command::Generate(cmd) => commands::generate::run(&ui, &cmd),
-        Command::Bench(args) => commands::bench::run(&ui, &args),
         Command::Build(args) => commands::build::run(&ui, &args),
         Command::Scan(args) => commands::scan::run(&ui, &args),
         Command::Mco(cmd) => commands::mco::run(&ui, &cmd),

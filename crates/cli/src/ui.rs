@@ -5,19 +5,79 @@ use std::io::IsTerminal;
 use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use lodkit::{Event, Progress};
 
 pub struct Ui {
     quiet: bool,
     verbose: bool,
     tty: bool,
+    /// The library's stages now running, innermost last.
+    steps: std::sync::Mutex<Vec<Step>>,
+    /// The library's phases.
+    phases: Phases,
 }
 
 impl Ui {
     pub fn new(quiet: bool, verbose: bool) -> Self {
+        let tty = std::io::stderr().is_terminal();
         Ui {
             quiet,
             verbose,
-            tty: std::io::stderr().is_terminal(),
+            tty,
+            steps: std::sync::Mutex::new(Vec::new()),
+            phases: Phases {
+                bar: std::sync::Mutex::new(None),
+                tty: tty && !quiet,
+                lines: !tty && !quiet,
+            },
+        }
+    }
+
+    /// Runs `f` with a [`Progress`] that draws the library's events here.
+    pub fn run<R>(&self, f: impl FnOnce(&Progress) -> R) -> R {
+        let sink = |e: &Event<'_>| self.draw(e);
+        f(&Progress::new(&sink))
+    }
+
+    /// One library event on the terminal: notes as status lines, stages
+    /// as spinners, phases as bars, warnings even under `-q`, timings and
+    /// each stage's time with `-v`.
+    pub fn draw(&self, e: &Event<'_>) {
+        match e {
+            Event::Note(line) => self.status(line),
+            Event::Warning(line) => eprintln!("{line}"),
+            Event::StageStarted { name, long } => {
+                let step = if *long {
+                    self.stage(name)
+                } else {
+                    self.spinner(name)
+                };
+                self.steps.lock().unwrap_or_else(|e| e.into_inner()).push(step);
+            }
+            Event::StageFinished { .. } => {
+                let step = self.steps.lock().unwrap_or_else(|e| e.into_inner()).pop();
+                if let Some(step) = step {
+                    step.finish();
+                }
+            }
+            Event::Phase { name, len } => self.phases.phase(name, *len),
+            Event::Advance(n) => self.phases.advance(*n),
+            Event::PhasesFinished => self.phases.finish(),
+            Event::Timing { name, seconds } => {
+                if self.is_verbose() {
+                    self.status(format!("{name}: {seconds:.3} s"));
+                }
+            }
+            Event::Level(l) => self.status(format!(
+                "level {}: {} triangles, {} vertices, error est. {:.3e} / measured mean {:.3e} max {:.3e}: {}",
+                l.level,
+                l.triangles,
+                l.vertices,
+                l.estimated_error,
+                l.measured_mean_error,
+                l.measured_max_error,
+                l.stop
+            )),
         }
     }
 
@@ -86,22 +146,10 @@ impl Ui {
     }
 }
 
-impl Ui {
-    /// Progress of a job in phases of known size (the out-of-core
-    /// simplifier's `Event`s): on a terminal a bar per phase with its
-    /// ETA; off a terminal one line per phase as it starts, like
-    /// [`Ui::stage`]; `-q` hides both. Shareable across threads (the
-    /// phases advance from rayon's workers).
-    pub fn phases(&self) -> Phases {
-        Phases {
-            bar: std::sync::Mutex::new(None),
-            tty: self.tty && !self.quiet,
-            lines: !self.tty && !self.quiet,
-        }
-    }
-}
-
-/// See [`Ui::phases`].
+/// Progress of a job in phases of known size (the out-of-core
+/// simplifier's): on a terminal a bar per phase with its ETA; off a
+/// terminal one line per phase as it starts; `-q` hides both.
+/// Shareable across threads (the phases advance from rayon's workers).
 pub struct Phases {
     /// The current phase's bar (a hidden one off a terminal); `None`
     /// before the first phase.
@@ -157,26 +205,7 @@ impl Phases {
     }
 }
 
-/// A byte count in words, in the largest binary unit that keeps it at
-/// least 1 (`64.0 MiB`, `2.9 GiB`, `512 B`).
-pub fn human_bytes(n: u64) -> String {
-    const UNITS: [&str; 5] = ["KiB", "MiB", "GiB", "TiB", "PiB"];
-    if n < 1024 {
-        return format!("{n} B");
-    }
-    let mut v = n as f64 / 1024.0;
-    let mut u = 0;
-    while v >= 1024.0 && u + 1 < UNITS.len() {
-        v /= 1024.0;
-        u += 1;
-    }
-    format!("{v:.1} {}", UNITS[u])
-}
-
-/// A usage error (exit 2) as an `anyhow::Error`.
-pub fn usage(msg: impl Into<String>) -> anyhow::Error {
-    Usage(msg.into()).into()
-}
+pub use lodkit::usage::{Usage, usage};
 
 /// One timed stage of work; prints its time with `-v` when finished.
 pub struct Step {
@@ -217,19 +246,6 @@ macro_rules! out {
     }};
 }
 
-/// A request this build or these options cannot serve (exit 2, like
-/// clap's usage errors), as opposed to bad input (exit 1).
-#[derive(Debug)]
-pub struct Usage(pub String);
-
-impl std::fmt::Display for Usage {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl std::error::Error for Usage {}
-
 /// Whether an error is stdout being closed by the reader (`| head`).
 pub fn is_broken_pipe(e: &anyhow::Error) -> bool {
     e.chain().any(|c| {
@@ -247,6 +263,18 @@ pub mod value {
     use std::path::PathBuf;
     use std::str::FromStr;
 
+    pub use lodkit::limits::Real;
+
+    /// An integer in one of [`lodkit::limits`]' ranges.
+    pub fn range<T>(
+        r: std::ops::RangeInclusive<T>,
+    ) -> impl Fn(&str) -> Result<T, String> + Clone + Send + Sync + 'static
+    where
+        T: FromStr + PartialOrd + Display + Copy + Send + Sync + 'static,
+    {
+        int(*r.start(), *r.end())
+    }
+
     /// An integer in `lo..=hi`.
     pub fn int<T>(
         lo: T,
@@ -258,146 +286,6 @@ pub mod value {
         move |s: &str| match s.trim().parse::<T>() {
             Ok(v) if v >= lo && v <= hi => Ok(v),
             _ => Err(format!("expected an integer in {lo}..={hi}")),
-        }
-    }
-
-    /// A finite real in an interval; each end closed or open, the upper
-    /// end possibly absent (`hi = inf`: any finite value above `lo`).
-    #[derive(Clone, Copy, Debug)]
-    pub struct Real {
-        lo: f64,
-        lo_open: bool,
-        hi: f64,
-        hi_open: bool,
-    }
-
-    impl Real {
-        /// `[lo, hi]`.
-        pub const fn closed(lo: f64, hi: f64) -> Real {
-            Real {
-                lo,
-                lo_open: false,
-                hi,
-                hi_open: false,
-            }
-        }
-        /// `[lo, hi)`.
-        pub const fn closed_open(lo: f64, hi: f64) -> Real {
-            Real {
-                lo,
-                lo_open: false,
-                hi,
-                hi_open: true,
-            }
-        }
-        /// `(lo, hi]`.
-        pub const fn open_closed(lo: f64, hi: f64) -> Real {
-            Real {
-                lo,
-                lo_open: true,
-                hi,
-                hi_open: false,
-            }
-        }
-        /// `(lo, hi)`.
-        pub const fn open(lo: f64, hi: f64) -> Real {
-            Real {
-                lo,
-                lo_open: true,
-                hi,
-                hi_open: true,
-            }
-        }
-        /// Any finite value `≥ 0`.
-        pub const NON_NEGATIVE: Real = Real::closed(0.0, f64::INFINITY);
-        /// Any finite value `> 0`.
-        pub const POSITIVE: Real = Real::open(0.0, f64::INFINITY);
-        /// Any finite value.
-        pub const FINITE: Real = Real::open(f64::NEG_INFINITY, f64::INFINITY);
-
-        pub fn contains(&self, v: f64) -> bool {
-            v.is_finite()
-                && if self.lo_open {
-                    v > self.lo
-                } else {
-                    v >= self.lo
-                }
-                && if self.hi_open {
-                    v < self.hi
-                } else {
-                    v <= self.hi
-                }
-        }
-
-        /// The range in words: `[0, 1]`, `(0, 180)`, `> 0`, `≥ 0`.
-        pub fn describe(&self) -> String {
-            match (self.lo.is_finite(), self.hi.is_finite()) {
-                (false, false) => "a finite number".into(),
-                (true, false) => {
-                    format!(
-                        "a finite number {} {}",
-                        if self.lo_open { ">" } else { ">=" },
-                        self.lo
-                    )
-                }
-                (false, true) => {
-                    format!(
-                        "a finite number {} {}",
-                        if self.hi_open { "<" } else { "<=" },
-                        self.hi
-                    )
-                }
-                (true, true) => format!(
-                    "a number in {}{}, {}{}",
-                    if self.lo_open { '(' } else { '[' },
-                    self.lo,
-                    self.hi,
-                    if self.hi_open { ')' } else { ']' }
-                ),
-            }
-        }
-
-        fn check(&self, s: &str) -> Result<f64, String> {
-            match s.trim().parse::<f64>() {
-                Ok(v) if self.contains(v) => Ok(v),
-                _ => Err(format!("expected {}", self.describe())),
-            }
-        }
-
-        /// The parser of an `f32` option (also refusing values that
-        /// overflow `f32`).
-        pub fn f32(self) -> impl Fn(&str) -> Result<f32, String> + Clone + Send + Sync + 'static {
-            move |s: &str| {
-                let v = self.check(s)? as f32;
-                if v.is_finite() && self.contains(v as f64) {
-                    Ok(v)
-                } else {
-                    Err(format!("expected {}", self.describe()))
-                }
-            }
-        }
-
-        /// The parser of an `f64` option.
-        pub fn f64(self) -> impl Fn(&str) -> Result<f64, String> + Clone + Send + Sync + 'static {
-            move |s: &str| self.check(s)
-        }
-
-        /// The parser of `X,Y,Z`: three values, each in this range.
-        pub fn vec3(
-            self,
-        ) -> impl Fn(&str) -> Result<[f32; 3], String> + Clone + Send + Sync + 'static {
-            move |s: &str| {
-                let bad = || format!("expected X,Y,Z: three numbers, each {}", self.describe());
-                let v: Vec<f32> = s
-                    .split(',')
-                    .map(|x| self.f32()(x))
-                    .collect::<Result<_, _>>()
-                    .map_err(|_| bad())?;
-                match v.as_slice() {
-                    &[x, y, z] => Ok([x, y, z]),
-                    _ => Err(bad()),
-                }
-            }
         }
     }
 
@@ -528,15 +416,6 @@ pub mod value {
         }
     }
 
-    /// Most samples per kind a measurement may ask for (`--samples` of
-    /// `compare`, `lods`, `bench`): each costs about 100 bytes over the
-    /// sample kinds and both meshes, so 1 GB at the limit.
-    pub const MAX_SAMPLES: usize = 10_000_000;
-
-    /// Most levels of a halving LOD chain (`--levels`): past 32 halvings
-    /// a 4-billion-triangle mesh has no triangle left.
-    pub const MAX_LEVELS: usize = 32;
-
     /// Output extensions that hold a triangle mesh.
     pub const MESH_OUT: &[&str] = &["ply", "obj", "stl", "glb"];
 
@@ -559,7 +438,7 @@ pub mod value {
                 "auto" => Ok(NormalsMode::Auto(DEFAULT_CREASE_DEGREES)),
                 t => {
                     let d = t.strip_prefix("auto=").ok_or_else(bad)?;
-                    let deg = Real::closed(0.0, 180.0).f32()(d).map_err(|_| bad())?;
+                    let deg = lodkit::limits::CREASE_DEGREES.f32()(d).map_err(|_| bad())?;
                     Ok(NormalsMode::Auto(deg))
                 }
             }
@@ -584,84 +463,12 @@ pub struct OutputArgs {
 }
 
 impl OutputArgs {
-    /// The normals mode for `mesh` written as `format` (see `--normals`).
-    pub fn normals_for(
-        &self,
-        mesh: &lodkit_mesh::TriMesh,
-        format: lodkit_mesh::io::Format,
-    ) -> lodkit_mesh::normals::NormalsMode {
-        use lodkit_mesh::normals::NormalsMode;
-        match (self.normals, format) {
-            (Some(m), _) => m,
-            (None, lodkit_mesh::io::Format::Glb) => NormalsMode::default_for(mesh),
-            (None, _) => NormalsMode::Keep,
-        }
-    }
-
-    /// `scene` as `--normals` asks, each mesh on its own (as
-    /// [`OutputArgs::normals_for`] decides for one mesh; face order and
-    /// face materials unchanged). `--compress` for an output that is not
-    /// .glb is refused (exit 2).
-    pub fn scene(
-        &self,
-        mut scene: lodkit_mesh::Scene,
-        output: &std::path::Path,
-    ) -> anyhow::Result<lodkit_mesh::Scene> {
-        let format =
-            lodkit_mesh::io::Format::from_path(output).unwrap_or(lodkit_mesh::io::Format::Glb);
-        self.check(Some(format), &output.display().to_string())?;
-        for m in &mut scene.meshes {
-            if let std::borrow::Cow::Owned(x) = self.normals_for(&m.mesh, format).apply(&m.mesh) {
-                m.mesh = x;
-            }
-        }
-        Ok(scene)
-    }
-
-    /// Refuses `--compress` for an output that is not .glb (exit 2).
-    pub fn check(&self, format: Option<lodkit_mesh::io::Format>, what: &str) -> anyhow::Result<()> {
-        if self.compress && format != Some(lodkit_mesh::io::Format::Glb) {
-            return Err(usage(format!(
-                "--compress applies to .glb outputs, not to {what}"
-            )));
-        }
-        Ok(())
-    }
-
-    /// The GLB writer's options.
-    pub fn glb(&self) -> lodkit_mesh::io::gltf::GlbOptions {
-        lodkit_mesh::io::gltf::GlbOptions {
+    /// The library's output options these flags give.
+    pub fn options(&self) -> lodkit::output::OutputOptions {
+        lodkit::output::OutputOptions {
+            normals: self.normals,
             compress: self.compress,
         }
-    }
-
-    /// `model` as `format` bytes with these options: normals first (a
-    /// mesh only), then the GLB writer with `compress`, or
-    /// [`lodkit_mesh::io::encode`] for every other format.
-    pub fn encode(
-        &self,
-        format: lodkit_mesh::io::Format,
-        model: &lodkit_mesh::Model,
-        opts: lodkit_mesh::io::WriteOptions,
-    ) -> Result<Vec<u8>, lodkit_mesh::ParseError> {
-        use lodkit_mesh::Model;
-        use lodkit_mesh::io::Format;
-        let changed;
-        let model = match model {
-            Model::Mesh(m) => match self.normals_for(m, format).apply(m) {
-                std::borrow::Cow::Borrowed(_) => model,
-                std::borrow::Cow::Owned(x) => {
-                    changed = Model::Mesh(x);
-                    &changed
-                }
-            },
-            _ => model,
-        };
-        if format == Format::Glb && self.compress {
-            lodkit_mesh::io::check_readable(format, model)?;
-            return lodkit_mesh::io::gltf::write_model_glb(model, &self.glb());
-        }
-        lodkit_mesh::io::encode(format, model, opts)
     }
 }
 
@@ -671,13 +478,14 @@ mod tests {
 
     #[test]
     fn sizes_parse_with_binary_units_and_refuse_out_of_range() {
-        let p = bytes(1 << 20, 1 << 50);
+        let memory = lodkit::limits::MEMORY;
+        let p = bytes(*memory.start(), *memory.end());
         assert_eq!(p("8G"), Ok(8 << 30));
         assert_eq!(p("512m"), Ok(512 << 20));
         assert_eq!(p("512MiB"), Ok(512 << 20));
         assert_eq!(p("1.5GB"), Ok(3 << 29));
         assert_eq!(p("1048576"), Ok(1 << 20));
-        assert_eq!(p("1P"), Ok(1 << 50));
+        assert_eq!(p("1P"), Ok(*memory.end()));
         for bad in [
             "0", "", "G", "8x", "8iB", "-1G", "nanG", "infG", "1023K", "2P", "1e30G",
         ] {

@@ -321,43 +321,6 @@ fn convert_keeps_the_mesh_across_formats() {
     assert!(stderr(&o).contains("x.stl"), "{}", stderr(&o));
 }
 
-/// `lodkit bench simplify` runs against meshoptimizer when the build links
-/// it (feature `peers`, on in workspace-wide builds through the bench
-/// crate's default) and otherwise says how to get it, exit 2.
-#[test]
-fn bench_simplify_runs_with_the_peers_feature_and_explains_itself_without() {
-    let mesh = repo().join("data/reference/stanford_bunny_simplified.ply");
-    let args = [
-        "bench",
-        "simplify",
-        mesh.to_str().unwrap(),
-        "--runs",
-        "1",
-        "--samples",
-        "20000",
-    ];
-    let o = lodkit(&args);
-    if lodkit_bench::PEERS {
-        assert!(o.status.success(), "{}", stderr(&o));
-        let table = String::from_utf8_lossy(&o.stdout);
-        assert!(table.contains("mo tris"), "{table}");
-        assert_eq!(
-            table
-                .lines()
-                .filter(|l| l.contains("bunny_simplified"))
-                .count(),
-            4
-        );
-    } else {
-        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-        let e = stderr(&o);
-        assert!(
-            e.contains("--features peers") && e.lines().count() == 1,
-            "{e}"
-        );
-    }
-}
-
 /// A small closed mesh (an octahedron, 2 units across) written as OBJ.
 fn octahedron(dir: &Path) -> String {
     let p = dir.join("octahedron.obj");
@@ -582,11 +545,6 @@ mod refused_at_parse_time {
             "4096x4096"
         ],
         ["--views", "33554432"]
-    );
-    refused!(
-        huge_bench_blob,
-        ["bench", "simplify", "--blob", "1000000000"],
-        ["--blob", "1000..=10000000"]
     );
 
     // Issue 14 item 9: non-finite and out-of-domain values.

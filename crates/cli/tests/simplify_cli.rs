@@ -1,5 +1,4 @@
-//! End-to-end tests of `lodkit simplify`, `lodkit lods` and
-//! `lodkit bench simplify`.
+//! End-to-end tests of `lodkit simplify` and `lodkit lods`.
 
 use std::path::Path;
 
@@ -209,31 +208,5 @@ fn lods_stops_a_stalled_chain_at_its_last_new_level_and_says_why() {
             "{e}"
         );
         assert!(!dir.path().join("no").exists());
-    }
-}
-
-#[test]
-fn bench_simplify_prints_both_sides() {
-    let dir = tempfile::tempdir().unwrap();
-    let input = blob_file(dir.path(), 10_000);
-    let o = lodkit(&[
-        "bench",
-        "simplify",
-        &input,
-        "--runs",
-        "1",
-        "--samples",
-        "20000",
-        "--json",
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let rows: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    let rows = rows.as_array().unwrap();
-    assert_eq!(rows.len(), 4);
-    for r in rows {
-        assert!(r["lodkit_ms"].as_f64().unwrap() > 0.0 && r["meshopt_ms"].as_f64().unwrap() > 0.0);
-        // The counting allocator is installed in the binary.
-        assert!(r["lodkit_bytes_per_vertex"].as_f64().unwrap() > 0.0);
-        assert!(r["lodkit_triangles"].as_u64() <= r["target_triangles"].as_u64());
     }
 }

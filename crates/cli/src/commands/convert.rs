@@ -5,8 +5,8 @@ use anyhow::Result;
 use lodkit_mesh::Model;
 use lodkit_mesh::io::{Format, WriteOptions, write_atomic};
 
-use super::scene::Input;
-use crate::ui::{OutputArgs, Ui};
+use super::Input;
+use crate::ui::Ui;
 
 /// The options of `convert` besides its paths and the output-format flags.
 pub struct ConvertOptions {
@@ -41,7 +41,7 @@ pub fn run(
     input: &Path,
     output: &Path,
     opts: &ConvertOptions,
-    out: &OutputArgs,
+    out: &lodkit::output::OutputOptions,
 ) -> Result<()> {
     let ConvertOptions {
         ascii,
@@ -50,8 +50,8 @@ pub fn run(
         json,
     } = *opts;
     // Welding works on one mesh: --weld merges a scene's parts.
-    let keeps = !merge && weld.is_none() && super::scene::holds_scenes(output);
-    let mut model = match super::scene::load_input(ui, input, keeps)? {
+    let keeps = !merge && weld.is_none() && super::holds_scenes(output);
+    let mut model = match super::load_input(ui, input, keeps)? {
         Input::Model(m) => m,
         Input::Scene(scene) => {
             let scene = out.scene(scene, output)?;
@@ -70,7 +70,7 @@ pub fn run(
             ui.status(format!(
                 "wrote {} ({})",
                 output.display(),
-                super::scene::describe(&scene)
+                super::describe(&scene)
             ));
             return Ok(());
         }

@@ -4,10 +4,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Subcommand};
-use lodkit_mco::{
-    Camera, IncrementalBuilder, McoHeader, McoModel, McoStream, Options, densify_meshes, grid_for,
-    samples_of,
-};
+use lodkit_mco::{Camera, IncrementalBuilder, Options, densify_meshes, grid_for, samples_of};
 use lodkit_mesh::glam::Vec3;
 use lodkit_mesh::io::{WriteOptions, save_mesh};
 use lodkit_mesh::{Model, RangeImage};
@@ -31,7 +28,7 @@ pub enum McoCommand {
         output: PathBuf,
         /// Leaf cubes along the longest axis, in 2..=512 (default: cube =
         /// twice the sample spacing).
-        #[arg(long, value_parser = value::int(2u32, MAX_RESOLUTION))]
+        #[arg(long, value_parser = value::range(lodkit::limits::MCO_RESOLUTION))]
         resolution: Option<u32>,
         /// Print what was built as JSON.
         #[arg(long)]
@@ -99,12 +96,6 @@ pub struct ExtractArgs {
     pub json: bool,
 }
 
-/// Largest `--resolution` of `mco build` (and `bench mco`): the library
-/// takes up to [`lodkit_mco::MAX_RESOLUTION`], but memory grows with its
-/// square on a surface that fills the lattice (an octahedron at 512 took
-/// 250 MB on the 2-core build machine; 2000 on a small sphere took 6.8 GB).
-pub const MAX_RESOLUTION: u32 = 512;
-
 pub fn run(ui: &Ui, cmd: &McoCommand) -> Result<()> {
     match cmd {
         McoCommand::Build {
@@ -118,89 +109,14 @@ pub fn run(ui: &Ui, cmd: &McoCommand) -> Result<()> {
             model,
             strict,
             json,
-        } => info(ui, model, *strict, *json),
-    }
-}
-
-/// Largest `.mco` file read (as `McoModel::load`).
-const MAX_FILE_BYTES: u64 = 16 << 30;
-
-/// Where a `.mco` file cut short stopped: what its complete chunks hold.
-#[derive(Serialize, Clone, Copy)]
-struct Cut {
-    /// Bytes present.
-    bytes: u64,
-    /// Bytes the header announces.
-    file_bytes: u64,
-    /// Complete chunks read, of `total_chunks`.
-    chunks: usize,
-    total_chunks: u32,
-    /// The highest LOD number served, of the whole file's `total_max_lod`.
-    max_lod: usize,
-    total_max_lod: u32,
-}
-
-/// Reads a `.mco` file. A version-2 file cut short (a partial download or
-/// copy) gives the model of its complete chunks, which serve every LOD
-/// number they cover as the whole file would, and one line on stderr says
-/// where it stopped; `strict` refuses it. Errors name the file. Returns
-/// the model, what was cut, and the file's bytes.
-fn load_model(ui: &Ui, path: &Path, strict: bool) -> Result<(McoModel, Option<Cut>, Vec<u8>)> {
-    let name = path.display().to_string();
-    let len = std::fs::metadata(path).with_context(|| name.clone())?.len();
-    if len > MAX_FILE_BYTES {
-        bail!("{name}: {len} bytes is larger than the {MAX_FILE_BYTES}-byte limit");
-    }
-    let bytes = std::fs::read(path).with_context(|| name.clone())?;
-    // A version-2 header that announces more bytes than the file holds: a
-    // prefix. Anything else is read whole (and refused as the reader says).
-    let mut probe = McoStream::new();
-    let head = &bytes[..bytes.len().min(McoHeader::BYTES)];
-    let header = match probe.push(head) {
-        Ok(_) => probe.header().copied(),
-        Err(_) => None,
-    };
-    let h = match header {
-        Some(h) if len < h.file_bytes => h,
-        _ => {
-            let m = McoModel::from_bytes(&bytes).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
-            return Ok((m, None, bytes));
+        } => {
+            let info = ui.run(|events| lodkit::info::mco_file(events, model, *strict))?;
+            if *json {
+                return super::print_json(&info);
+            }
+            Ok(crate::out!("{info}")?)
         }
-    };
-    if strict {
-        bail!(
-            "{name}: cut short: {len} bytes, the header says {} (--strict refuses a file cut short)",
-            h.file_bytes
-        );
     }
-    let mut s = McoStream::new();
-    s.push(&bytes).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
-    if s.chunks().is_empty() {
-        bail!(
-            "{name}: cut short at byte {len} of {}, before chunk 0 (LOD number 0) is complete",
-            h.file_bytes
-        );
-    }
-    let p = McoModel::from_prefix(&bytes).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
-    let cut = Cut {
-        bytes: len,
-        file_bytes: h.file_bytes,
-        chunks: p.chunks,
-        total_chunks: h.chunks,
-        max_lod: p.max_lod,
-        total_max_lod: h.max_lod,
-    };
-    ui.status(format!(
-        "{name}: stopped at byte {} of {}, where chunk {} is incomplete; read the {} complete chunks of {} (LOD numbers 0..={} of 0..={}; --strict refuses a file cut short)",
-        s.bytes_read(),
-        h.file_bytes,
-        p.chunks,
-        p.chunks,
-        h.chunks,
-        p.max_lod,
-        h.max_lod
-    ));
-    Ok((p.model, Some(cut), bytes))
 }
 
 /// Loads an input: a `.conf` expands to its posed scans.
@@ -361,7 +277,7 @@ struct Extracted {
     triangles: usize,
     vertices: usize,
     /// Where a file cut short stopped (`None`: the whole file was read).
-    cut_short: Option<Cut>,
+    cut_short: Option<lodkit::info::McoCut>,
 }
 
 fn extract(ui: &Ui, a: &ExtractArgs) -> Result<()> {
@@ -387,7 +303,7 @@ fn extract(ui: &Ui, a: &ExtractArgs) -> Result<()> {
         a.viewport.unwrap_or(1080.0),
         a.tolerance.unwrap_or(1.0),
     );
-    let (model, cut, _) = load_model(ui, &a.model, a.strict)?;
+    let (model, cut, _) = ui.run(|events| lodkit::info::load_mco(events, &a.model, a.strict))?;
     let mut idx = Vec::new();
     let step = ui.spinner("extracting");
     let (what, lod) = if let Some(k) = a.lod {
@@ -445,168 +361,5 @@ fn extract(ui: &Ui, a: &ExtractArgs) -> Result<()> {
         mesh.faces.len(),
         mesh.positions.len()
     ));
-    Ok(())
-}
-
-#[derive(Serialize)]
-struct LevelRow {
-    level: usize,
-    nodes: usize,
-    triangles: usize,
-}
-
-#[derive(Serialize)]
-struct ChunkRow {
-    offset: u64,
-    bytes: u64,
-    first_lod: u32,
-    last_lod: u32,
-    nodes: u32,
-    vertices: u32,
-    triangles: u32,
-}
-
-#[derive(Serialize)]
-struct Info {
-    file: String,
-    /// `.mco` format version (1: flat arrays, 2: LOD-ordered chunks).
-    version: u32,
-    file_bytes: u64,
-    /// Where a file cut short stopped (`None`: the whole file was read);
-    /// the rest describes its complete chunks.
-    cut_short: Option<Cut>,
-    /// Version 2: the chunks in file order (a prefix through chunk `c`
-    /// serves LOD numbers up to its `last_lod`).
-    chunks: Vec<ChunkRow>,
-    resolution: u32,
-    cube: f32,
-    depth: u32,
-    vertices: usize,
-    nodes: usize,
-    lod_array: usize,
-    lod_numbers: usize,
-    full_triangles: usize,
-    crack_patches: usize,
-    input_samples: u64,
-    levels: Vec<LevelRow>,
-}
-
-/// `lodkit mco info FILE` (also what `lodkit info FILE.mco` prints): the
-/// file's format, chunks, lattice, sizes and levels, as text or JSON; a
-/// cut-short file is read up to its last complete chunk (refused with
-/// `strict`).
-pub fn info(ui: &Ui, path: &Path, strict: bool, json: bool) -> Result<()> {
-    let (model, cut, bytes) = load_model(ui, path, strict)?;
-    let m = model.info();
-    let version = McoModel::file_version(&bytes).unwrap_or(0);
-    let chunks = if version == 1 {
-        Vec::new()
-    } else {
-        McoModel::chunk_table(&bytes)
-            .with_context(|| path.display().to_string())?
-            .into_iter()
-            .map(|c| ChunkRow {
-                offset: c.offset,
-                bytes: c.bytes,
-                first_lod: c.first_lod,
-                last_lod: c.last_lod,
-                nodes: c.nodes,
-                vertices: c.vertices,
-                triangles: c.triangle_indices / 3,
-            })
-            .collect()
-    };
-    let info = Info {
-        file: path.display().to_string(),
-        version,
-        file_bytes: bytes.len() as u64,
-        cut_short: cut,
-        chunks,
-        resolution: m.grid.resolution(),
-        cube: m.grid.cube(),
-        depth: m.grid.depth(),
-        vertices: m.vertices,
-        nodes: m.nodes,
-        lod_array: m.lod_array,
-        lod_numbers: m.lod_numbers,
-        full_triangles: m.full_triangles,
-        crack_patches: m.crack_patches,
-        input_samples: m.input_samples,
-        levels: m
-            .levels
-            .iter()
-            .enumerate()
-            .map(|(level, l)| LevelRow {
-                level,
-                nodes: l.nodes,
-                triangles: l.triangles,
-            })
-            .collect(),
-    };
-    if json {
-        return super::print_json(&info);
-    }
-    crate::outln!("file: {}", info.file)?;
-    match &info.cut_short {
-        Some(c) => crate::outln!(
-            "format: version {}, cut short: {} of {} bytes, {} of {} chunks complete (LOD numbers 0..={} of 0..={}); below, what they hold",
-            info.version,
-            c.bytes,
-            c.file_bytes,
-            c.chunks,
-            c.total_chunks,
-            c.max_lod,
-            c.total_max_lod
-        )?,
-        None => crate::outln!(
-            "format: version {}, {} bytes{}",
-            info.version,
-            info.file_bytes,
-            if info.chunks.is_empty() {
-                String::new()
-            } else {
-                format!(" in {} chunks", info.chunks.len())
-            }
-        )?,
-    }
-    crate::outln!(
-        "lattice: resolution {}, cube {:.6}, octree depth {}",
-        info.resolution,
-        info.cube,
-        info.depth
-    )?;
-    crate::outln!(
-        "vertices: {} (every level, {} crack-patch substitutions)",
-        info.vertices,
-        info.crack_patches
-    )?;
-    crate::outln!(
-        "nodes: {}; LOD array: {} nodes in {} LOD numbers",
-        info.nodes,
-        info.lod_array,
-        info.lod_numbers
-    )?;
-    crate::outln!("triangles at full resolution: {}", info.full_triangles)?;
-    crate::outln!("built from {} samples", info.input_samples)?;
-    crate::outln!("level  nodes  triangles (0 = leaf cubes)")?;
-    for r in &info.levels {
-        crate::outln!("{:>5}  {:>5}  {:>9}", r.level, r.nodes, r.triangles)?;
-    }
-    if !info.chunks.is_empty() {
-        crate::outln!("chunk     offset     bytes  LOD numbers      nodes  vertices  triangles")?;
-        for (i, c) in info.chunks.iter().enumerate() {
-            crate::outln!(
-                "{:>5} {:>10} {:>9}  {:>5}..={:<5} {:>8} {:>9} {:>10}",
-                i,
-                c.offset,
-                c.bytes,
-                c.first_lod,
-                c.last_lod,
-                c.nodes,
-                c.vertices,
-                c.triangles
-            )?;
-        }
-    }
     Ok(())
 }

@@ -7,26 +7,16 @@ use clap::{Args, Subcommand, ValueEnum};
 use lodkit_mesh::Model;
 use lodkit_mesh::io::WriteOptions;
 use lodkit_particles::silhouette::{
-    CarvedOctree, ImageSet, SilhouetteOptions, SilhouetteSource, carve_octree, encode_carved,
+    CarvedOctree, SilhouetteOptions, SilhouetteSource, encode_carved,
 };
 use lodkit_particles::{
     DecodeOptions, EncodeOptions, Mode, Placement, ThinningOptions, TriangulateOptions, decode,
-    decode_prefix, encode, stream_stats, triangulate,
+    decode_prefix, encode, triangulate,
 };
 use serde::Serialize;
 
 use crate::ui::Ui;
 use crate::ui::value::{self, Real};
-
-/// Largest `--depth` (octree resolution R) `pop encode` takes: each level
-/// quadruples the cells of a surface, and at 12 a closed surface that
-/// fills the cube has about 10^8 of them. The library's format allows up
-/// to 16; legal depths too big for the input are refused by the encoder
-/// before it samples (`lodkit_particles`' sampling budget).
-const MAX_DEPTH: u8 = 12;
-/// Highest level and precision a stream can hold (the format's 16-bit
-/// coordinates).
-const MAX_BITS: u8 = 16;
 
 #[derive(Subcommand)]
 pub enum PopCommand {
@@ -84,11 +74,11 @@ pub struct EncodeArgs {
     #[arg(short, long, value_parser = value::output(&["pop"], "a progressive stream"))]
     pub output: PathBuf,
     /// Octree resolution R, in 1..=12 (default: from the sampling density).
-    #[arg(long, value_parser = value::int(1u8, MAX_DEPTH))]
+    #[arg(long, value_parser = value::range(lodkit::limits::POP_DEPTH))]
     pub depth: Option<u8>,
     /// Vertex precision N in bits, in 1..=16 and at least R (default 12,
     /// raised to R when R is larger).
-    #[arg(long, value_parser = value::int(1u8, MAX_BITS))]
+    #[arg(long, value_parser = value::range(lodkit::limits::POP_BITS))]
     pub precision: Option<u8>,
     #[arg(long, value_enum, default_value_t = ModeArg::Entropy)]
     pub mode: ModeArg,
@@ -199,16 +189,9 @@ pub fn carve_image_set(
     carve: &CarveArgs,
     opts: &EncodeOptions,
 ) -> Result<CarvedOctree> {
-    let step = ui.spinner(&format!("reading the images of {}", path.display()));
-    let set = ImageSet::load(path, carve.source())?;
-    step.finish();
-    let step = ui.spinner(&format!(
-        "carving {} views from their silhouettes",
-        set.calibration.views.len()
-    ));
-    let c = carve_octree(&set, &carve.options(), opts)?;
-    step.finish();
-    Ok(c)
+    ui.run(|events| {
+        lodkit::input::carve_image_set(events, path, carve.source(), &carve.options(), opts)
+    })
 }
 
 #[derive(Args)]
@@ -217,10 +200,10 @@ pub struct DecodeArgs {
     pub input: PathBuf,
     /// Level r to decode, in 0..=16 (default: the finest the file holds,
     /// which for a prefix is the finest of its complete chunks).
-    #[arg(long, value_parser = value::int(0u8, MAX_BITS))]
+    #[arg(long, value_parser = value::int(0u8, *lodkit::limits::POP_BITS.end()))]
     pub level: Option<u8>,
     /// Vertex precision to decode, in 1..=16 (default: all present).
-    #[arg(long, value_parser = value::int(1u8, MAX_BITS))]
+    #[arg(long, value_parser = value::range(lodkit::limits::POP_BITS))]
     pub precision: Option<u8>,
     /// Output file (.ply, .obj, .stl, .glb; with --points also .xyz, .pts).
     #[arg(short, long, value_parser = value::output(&["ply", "obj", "stl", "glb", "xyz", "pts"], "the decoded level"))]
@@ -230,7 +213,7 @@ pub struct DecodeArgs {
     pub points: bool,
     /// Decimate during triangulation (§6.3): merge cubes joined by edges
     /// shorter than this fraction of the cube size, in [0, 1].
-    #[arg(long, value_name = "FRACTION", value_parser = Real::closed(0.0, 1.0).f32(), conflicts_with = "points")]
+    #[arg(long, value_name = "FRACTION", value_parser = lodkit::limits::POP_DECIMATE.f32(), conflicts_with = "points")]
     pub decimate: Option<f32>,
     /// Refuse a file whose last chunk is cut short (default: decode every
     /// complete chunk before the cut and say where it stopped).
@@ -366,9 +349,11 @@ fn parse_relax(v: &str) -> std::result::Result<u8, String> {
         return Ok(ThinningOptions::AUTO_RELAX);
     }
     match v.parse::<u8>() {
-        Ok(l @ 1..=16) => Ok(l),
+        Ok(l) if lodkit::limits::POP_BITS.contains(&l) => Ok(l),
         _ => Err(format!(
-            "expected `auto` or a level from 1 to 16, got `{v}`"
+            "expected `auto` or a level from {} to {}, got `{v}`",
+            lodkit::limits::POP_BITS.start(),
+            lodkit::limits::POP_BITS.end()
         )),
     }
 }
@@ -516,12 +501,8 @@ fn run_decode(ui: &Ui, a: &DecodeArgs) -> Result<()> {
 
 /// `lodkit pop stats FILE` (also what `lodkit info FILE.pop` prints): each
 /// level's particles and triangles, as text or JSON.
-pub fn run_stats(ui: &Ui, file: &Path, json: bool) -> Result<()> {
-    let bytes = read_pop(file)?;
-    let step = ui.stage("decoding and triangulating every level");
-    let s = stream_stats(&bytes, &TriangulateOptions::DEFAULT)
-        .with_context(|| file.display().to_string())?;
-    step.finish();
+fn run_stats(ui: &Ui, file: &Path, json: bool) -> Result<()> {
+    let s = ui.run(|events| lodkit::info::pop_stats(events, file))?;
     if json {
         return super::print_json(&s);
     }

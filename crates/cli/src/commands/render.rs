@@ -1,17 +1,12 @@
 //! `lodkit render`: a picture of a mesh, point cloud, `.mco` cut or `.pop`
-//! level, or a calibrated ring of views (images, masks, `transforms.json`
-//! and a COLMAP text model) for shape from silhouette.
+//! level, or a calibrated ring of views ([`lodkit::render`]).
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
+use anyhow::Result;
 use clap::Args;
 use clap::error::ErrorKind;
-use lodkit_mesh::Model;
-use lodkit_mesh::io::write_atomic;
-use lodkit_render::{
-    Camera, CameraRing, Image, MAX_SIZE, Normals, RenderOptions, render, render_points, ring,
-};
-use serde::Serialize;
+use lodkit::render::{RenderJob, Select, Views};
+use lodkit_render::{MAX_SIZE, Normals, RenderOptions};
 
 use crate::ui::Ui;
 use crate::ui::value::{self, Real};
@@ -212,221 +207,49 @@ fn same_file(a: &std::fs::Metadata, b: &std::fs::Metadata) -> bool {
     }
 }
 
-/// What is drawn: a mesh or a point cloud, and a line saying which.
-enum Drawable {
-    Mesh(lodkit_mesh::TriMesh),
-    /// A scene merged into one mesh, drawn with its materials.
-    Textured(lodkit_mesh::TriMesh, lodkit_render::Materials),
-    Points(lodkit_mesh::PointCloud),
-}
-
-fn load(ui: &Ui, a: &RenderArgs, k: Kind) -> Result<(Drawable, String)> {
-    let name = a.input.display().to_string();
-    match k {
-        Kind::Mco => {
-            let model = lodkit_mco::McoModel::load(&a.input)?;
-            let mut idx = Vec::new();
-            let what = if let Some(n) = a.triangles {
-                let lod = model.extract_triangles(n, &mut idx);
-                format!("LOD {lod} for a budget of {n} triangles")
-            } else {
-                let lod = a.lod.unwrap_or(model.max_lod());
-                if lod > model.max_lod() {
-                    usage(format!(
-                        "--lod {lod} is outside 0..={} for {name}",
-                        model.max_lod()
-                    ));
-                }
-                model.extract_lod(lod, &mut idx);
-                format!("LOD {lod}")
-            };
-            let mesh = model.mesh_from_indices(&idx);
-            let what = format!("{what}, {} triangles", mesh.faces.len());
-            Ok((Drawable::Mesh(mesh), what))
-        }
-        Kind::Pop => {
-            let bytes = std::fs::read(&a.input).with_context(|| format!("{name}: cannot read"))?;
-            let opts = lodkit_particles::DecodeOptions {
-                max_level: a.level,
-                max_precision: None,
-            };
-            // A prefix shows the finest level of its complete chunks.
-            let d = lodkit_particles::decode_prefix(&bytes, &opts).with_context(|| name.clone())?;
-            if d.levels.is_empty() {
-                bail!("{name}: the stream holds no complete level");
-            }
-            let finest = d.levels.len() - 1;
-            let r = a.level.map_or(finest, usize::from);
-            if r > finest {
-                usage(format!("--level {r} is outside 0..={finest} for {name}"));
-            }
-            let s = d.surface(r as u8).with_context(|| name.clone())?;
-            let t =
-                lodkit_particles::triangulate(&s, &lodkit_particles::TriangulateOptions::DEFAULT);
-            let what = format!(
-                "level {r}: {} particles, {} triangles",
-                s.cells.len(),
-                t.mesh.faces.len()
-            );
-            Ok((Drawable::Mesh(t.mesh), what))
-        }
-        Kind::Geometry => match super::scene::load_input(ui, &a.input, true)? {
-            super::scene::Input::Scene(scene) => {
-                let merged = scene.merged();
-                let materials =
-                    super::scene::render_materials(ui, &name, &scene, merged.face_materials)?;
-                let mesh = merged.mesh;
-                let n = |k: usize, w: &str| format!("{k} {w}{}", if k == 1 { "" } else { "s" });
-                let what = format!(
-                    "{}, {}, {}",
-                    n(mesh.faces.len(), "triangle"),
-                    n(materials.looks.len(), "material"),
-                    n(materials.textures.len(), "texture")
-                );
-                Ok((Drawable::Textured(mesh, materials), what))
-            }
-            super::scene::Input::Model(model) => geometry(model),
-        },
-    }
-}
-
-/// A model as it is drawn: a mesh, or points as discs.
-fn geometry(model: Model) -> Result<(Drawable, String)> {
-    match model {
-        Model::Mesh(m) => {
-            let what = format!("{} triangles", m.faces.len());
-            Ok((Drawable::Mesh(m), what))
-        }
-        Model::Points(p) => {
-            let what = format!("{} points as discs", p.len());
-            Ok((Drawable::Points(p), what))
-        }
-        Model::Range(r) => {
-            let p = r.to_point_cloud();
-            let what = format!("range image, {} points as discs", p.len());
-            Ok((Drawable::Points(p), what))
-        }
-    }
-}
-
-impl Drawable {
-    /// The points that frame the picture: a mesh's referenced vertices
-    /// (a scan's stray unreferenced vertices are not drawn).
-    fn points(&self) -> Vec<lodkit_mesh::glam::Vec3> {
-        match self {
-            Drawable::Mesh(m) | Drawable::Textured(m, _) => {
-                let mut used = vec![false; m.positions.len()];
-                for f in &m.faces {
-                    for &v in f {
-                        used[v as usize] = true;
-                    }
-                }
-                m.positions
-                    .iter()
-                    .zip(&used)
-                    .filter_map(|(p, &u)| u.then_some(*p))
-                    .collect()
-            }
-            Drawable::Points(p) => p.positions.clone(),
-        }
-    }
-    fn bbox(&self) -> lodkit_mesh::Aabb {
-        lodkit_mesh::Aabb::from_points(&self.points())
-    }
-    fn draw(&self, cam: &Camera, opts: &RenderOptions) -> Result<Image> {
-        Ok(match self {
-            Drawable::Mesh(m) => render(m, cam, opts)?,
-            Drawable::Textured(m, t) => lodkit_render::render_textured(m, t, cam, opts)?,
-            Drawable::Points(p) => render_points(p, cam, opts)?,
-        })
-    }
-}
-
-#[derive(Serialize)]
-struct Report {
-    input: String,
-    drawn: String,
-    width: u32,
-    height: u32,
-    /// One view: the output file; a ring: the folder.
-    output: String,
-    views: usize,
-    /// Mean fraction of the image the object covers.
-    coverage: f64,
-}
-
 pub fn run(ui: &Ui, a: &RenderArgs) -> Result<()> {
-    let k = check_kind(a);
-    check_output(a);
-    let (drawable, drawn) = load(ui, a, k)?;
-    let bbox = drawable.bbox();
-    if bbox.is_empty() {
-        bail!("{}: nothing to draw (no vertices)", a.input.display());
-    }
-    let opts = RenderOptions {
-        width: a.size.0,
-        height: a.size.1,
-        background: a.background.0,
-        normals: if a.smooth {
-            Normals::Smooth
-        } else {
-            Normals::Auto
+    let select = match check_kind(a) {
+        Kind::Mco => Select::Mco {
+            triangles: a.triangles,
+            lod: a.lod,
         },
-        ..RenderOptions::DEFAULT
+        Kind::Pop => Select::Pop { level: a.level },
+        Kind::Geometry => Select::Geometry,
     };
-    let (w, h) = (opts.width, opts.height);
-    let report = if let (Some(n), Some(dir)) = (a.ring, &a.out) {
-        let ring = CameraRing::new(&bbox, n, &a.elevations.0, a.fov, w, h)?;
-        for sub in [ring::IMAGES_DIR, ring::MASKS_DIR, ring::COLMAP_DIR] {
-            std::fs::create_dir_all(dir.join(sub))
-                .with_context(|| format!("{}: cannot create", dir.join(sub).display()))?;
-        }
-        let step = ui.stage(&format!("rendering {} views", ring.views.len()));
-        let mut coverage = 0.0;
-        for (i, v) in ring.views.iter().enumerate() {
-            let img = drawable.draw(&v.camera, &opts)?;
-            let mask = img.mask();
-            coverage += mask.coverage();
-            let name = ring.file_name(i);
-            write_atomic(&dir.join(ring::IMAGES_DIR).join(&name), &img.to_png()?)?;
-            write_atomic(&dir.join(ring::MASKS_DIR).join(&name), &mask.to_png()?)?;
-        }
-        for (path, text) in ring.calibration_files() {
-            write_atomic(&dir.join(path), text.as_bytes())?;
-        }
-        step.finish();
-        Report {
-            input: a.input.display().to_string(),
-            drawn,
-            width: w,
-            height: h,
-            output: dir.display().to_string(),
-            views: ring.views.len(),
-            coverage: coverage / ring.views.len() as f64,
-        }
-    } else {
-        let out = a.output.as_ref().expect("clap requires -o without --ring");
-        let cam = Camera::frame(
-            &drawable.points(),
-            a.view.azimuth,
-            a.view.elevation,
-            a.fov,
-            w as f32 / h as f32,
-        )?;
-        let step = ui.spinner("rendering");
-        let img = drawable.draw(&cam, &opts)?;
-        let coverage = img.mask().coverage();
-        write_atomic(out, &img.over(opts.background).to_png()?)?;
-        step.finish();
-        Report {
-            input: a.input.display().to_string(),
-            drawn,
-            width: w,
-            height: h,
-            output: out.display().to_string(),
-            views: 1,
-            coverage,
-        }
+    check_output(a);
+    let views = match (a.ring, &a.out) {
+        (Some(n), Some(dir)) => Views::Ring {
+            per_elevation: n,
+            dir: dir.clone(),
+            elevations: a.elevations.0.clone(),
+        },
+        _ => Views::One {
+            output: a.output.clone().expect("clap requires -o without --ring"),
+            azimuth: a.view.azimuth,
+            elevation: a.view.elevation,
+        },
+    };
+    let job = RenderJob {
+        input: a.input.clone(),
+        select,
+        views,
+        fov: a.fov,
+        options: RenderOptions {
+            width: a.size.0,
+            height: a.size.1,
+            background: a.background.0,
+            normals: if a.smooth {
+                Normals::Smooth
+            } else {
+                Normals::Auto
+            },
+            ..RenderOptions::DEFAULT
+        },
+    };
+    let report = match ui.run(|events| lodkit::render::run(&job, events)) {
+        // A cut or level outside the input's range: in clap's manner.
+        Err(e) if e.downcast_ref::<lodkit::usage::Usage>().is_some() => usage(e.to_string()),
+        r => r?,
     };
     if a.json {
         return super::print_json(&report);
@@ -438,8 +261,8 @@ pub fn run(ui: &Ui, a: &RenderArgs) -> Result<()> {
         if report.views == 1 { "" } else { "s" },
         report.input,
         report.drawn,
-        w,
-        h,
+        report.width,
+        report.height,
         report.coverage * 100.0,
         if report.views == 1 { "" } else { " on average" }
     ));

@@ -1,4 +1,4 @@
-//! How `build` measures each level against its input: Metro distances
+//! How the jobs measure each level against its input: Metro distances
 //! through one [`Reference`] (the input's index built once), with a sample
 //! count per level ([`lodkit_mesh::metrics::level_samples`] unless
 //! `--samples` fixes it), or not at all (`--no-measure`).

@@ -1,5 +1,5 @@
-//! `lodkit bench mco`: extraction time (birth/death tables and the §6.1
-//! traversal) next to a memcpy of the same index buffer, in one run (meant to hang under `lodkit bench mco`).
+//! `lodkit-bench mco [MODEL...]`: extraction time (birth/death tables and
+//! the §6.1 traversal) next to a memcpy of the same index buffer.
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
@@ -7,17 +7,18 @@ use clap::Args;
 use lodkit_bench::mco::{default_targets, time_extraction};
 use lodkit_mco::{McoModel, Options, build_from_mesh};
 
-use crate::ui::Ui;
-use crate::ui::value::{self, Real};
+use crate::ui::{Ui, value};
+use lodkit::limits::{self, Real};
 use serde::Serialize;
 
+/// Marching-cube-octree extraction time next to memcpy of the same index buffer.
 #[derive(Args, Debug)]
 pub struct BenchMcoArgs {
     /// Models to measure (.mco, or a mesh to build first); default: the
     /// built-in bunny and a 1M-triangle synthetic blob.
     pub inputs: Vec<PathBuf>,
     /// Resolution for meshes built here, in 2..=512 (default: from the sampling).
-    #[arg(long, value_parser = value::int(2u32, super::mco::MAX_RESOLUTION))]
+    #[arg(long, value_parser = value::range_u32(limits::MCO_RESOLUTION))]
     pub resolution: Option<u32>,
     /// Seconds spent per measured size (roughly), in (0, 60].
     #[arg(long, default_value_t = 0.5, value_parser = Real::open_closed(0.0, 60.0).f64())]
@@ -114,7 +115,7 @@ pub fn run(ui: &Ui, args: &BenchMcoArgs) -> Result<()> {
     let mut rows: Option<Vec<Row>> = args.json.then(Vec::new);
     if args.inputs.is_empty() {
         let step = ui.stage("building the bunny model");
-        let bunny = super::builtin_bunny()?;
+        let bunny = lodkit::input::builtin_bunny()?;
         let m = timed_build(&bunny, &opts)?;
         step.finish();
         table(ui, "bunny", &m, args.budget, rows.as_mut())?;
@@ -134,7 +135,7 @@ pub fn run(ui: &Ui, args: &BenchMcoArgs) -> Result<()> {
             let m = if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("mco")) {
                 (McoModel::load(p)?, None)
             } else {
-                let mesh = super::load_mesh(ui, p)?;
+                let mesh = crate::ui::load_mesh(p)?;
                 let step = ui.stage(&format!("building the model of {name}"));
                 let m = timed_build(&mesh, &opts).with_context(|| name.clone())?;
                 step.finish();
@@ -144,7 +145,7 @@ pub fn run(ui: &Ui, args: &BenchMcoArgs) -> Result<()> {
         }
     }
     match rows {
-        Some(rows) => super::print_json(&rows),
+        Some(rows) => crate::ui::print_json(&rows),
         None => Ok(()),
     }
 }

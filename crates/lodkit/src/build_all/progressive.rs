@@ -33,8 +33,8 @@ use lodkit_particles::{
 };
 
 use super::input::{BuildInput, InputPath};
-use super::measure::{Measured, Sampling, cell};
-use crate::ui::Ui;
+use crate::measure::{Measured, Sampling, cell};
+use crate::progress::Progress;
 
 /// One decodable level of the stream.
 pub struct StreamLevel {
@@ -148,7 +148,7 @@ pub fn surface_depth(surface: &TriMesh, samples: usize) -> Option<u8> {
 /// Encodes `input`'s stream source as [`plan`] says, writes it, measures every level, and appends the
 /// section to `report`.
 pub fn section(
-    ui: &Ui,
+    events: &Progress,
     reference: &Reference,
     input: &BuildInput,
     out: &Path,
@@ -156,7 +156,7 @@ pub fn section(
     report: &mut String,
 ) -> Result<Progressive> {
     let (source, plan, name) = (&input.stream_source, plan(input), input.name.as_str());
-    let step = ui.spinner("encoding the progressive particle stream");
+    let step = events.spinner("encoding the progressive particle stream");
     let opts = EncodeOptions {
         depth: plan.depth,
         thinning: ThinningOptions {
@@ -179,7 +179,7 @@ pub fn section(
     let file = format!("{name}.pop");
     write_atomic(&out.join(&file), &enc.bytes)?;
     step.finish();
-    let step = ui.spinner("decoding and measuring every level");
+    let step = events.spinner("decoding and measuring every level");
     let decoded = progressive_levels(&enc.bytes, &TriangulateOptions::DEFAULT)
         .map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
     let from = if matches!(input.path, InputPath::Reconstructed(_)) {

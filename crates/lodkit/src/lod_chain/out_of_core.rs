@@ -1,4 +1,4 @@
-//! `lodkit lods` on a binary PLY over `--memory`: the chain made by
+//! The LOD chain of a binary PLY over the memory budget: the chain made by
 //! [`lodkit_scale::lod_chain_file`]. Levels too big for the budget come
 //! out of one block round each and are streamed to PLY from their blocks;
 //! the first level that fits is made as `simplify` makes an out-of-core
@@ -17,38 +17,39 @@ use lodkit_mesh::{Model, TriMesh};
 use lodkit_scale::{ChainLevel, ScaleOptions, lod_chain_file, write_soups_ply};
 use lodkit_simplify::{Options, Target};
 
-use super::build::lod_chain::{level_coverages, level_extras};
-use super::lods::{Level, Lods, LodsArgs};
-use super::simplify::Plan;
-use crate::ui::{Ui, human_bytes};
+use super::job::{LodChainJob, LodChainReport};
+use super::write::{level_coverages, level_extras};
+use crate::plan::{Plan, kept, remove_staging};
+use crate::progress::{Event, Progress, human_bytes};
+use crate::report::{Level, Lods};
 
 /// Runs the chain of `a` with `targets` and `opts` out of core (`plan`
 /// says why and with which budget). The staging folder sits in the
 /// output folder and is removed once `lods.json` is written; a failed or
 /// interrupted run keeps it, and the same command resumes from it.
 pub fn run(
-    ui: &Ui,
-    a: &LodsArgs,
+    events: &Progress,
+    a: &LodChainJob,
     stem: &str,
     targets: &[Target],
     opts: &Options,
     plan: &Plan,
-) -> Result<()> {
+) -> Result<LodChainReport> {
     std::fs::create_dir_all(&a.out)
         .map_err(|e| anyhow::anyhow!("{}: cannot create output directory: {e}", a.out.display()))?;
     let settings = format!("lods {targets:?} {opts:?}; memory {}", plan.memory);
     let chain = a.out.join(format!("{stem}_lods"));
     let staging = lodkit_scale::staging_dir(&a.input, &chain, &settings);
     for old in lodkit_scale::remove_abandoned(&chain, &staging) {
-        if !a.json {
-            ui.status(format!(
+        if a.notes {
+            events.status(format!(
                 "removed {}, the staging folder an earlier run for this chain left",
                 old.display()
             ));
         }
     }
-    if !a.json {
-        ui.status(format!(
+    if a.notes {
+        events.status(format!(
             "out of core: {} ({}) needs about {} in core ({} B per face), over --memory {}; \
              making the chain in blocks (levels are not measured)",
             a.input.display(),
@@ -58,7 +59,7 @@ pub fn run(
             human_bytes(plan.memory),
         ));
         if staging.exists() {
-            ui.status(format!(
+            events.status(format!(
                 "resuming: {} blocks already done (in {})",
                 lodkit_scale::finished_blocks(&staging),
                 staging.display()
@@ -72,7 +73,6 @@ pub fn run(
         runner: a.scale.runner(),
     };
     let n = plan.faces as usize;
-    let progress = ui.phases();
     let start = Instant::now();
     let mut levels: Vec<Level> = Vec::with_capacity(targets.len());
     // The in-core levels, for the GLB: (level, mesh, estimated error).
@@ -83,8 +83,8 @@ pub fn run(
         targets,
         &so,
         &|e| match e {
-            lodkit_scale::Event::Phase(name, len) => progress.phase(name, len),
-            lodkit_scale::Event::Advance(k) => progress.advance(k),
+            lodkit_scale::Event::Phase(name, len) => events.emit(&Event::Phase { name, len }),
+            lodkit_scale::Event::Advance(k) => events.emit(&Event::Advance(k)),
         },
         &mut |i, l| {
             let file = format!("{stem}_lod{}.ply", i + 1);
@@ -95,9 +95,12 @@ pub fn run(
                     layout,
                     files,
                 } => {
-                    progress.phase(&format!("writing {file}"), faces);
+                    events.emit(&Event::Phase {
+                        name: &format!("writing {file}"),
+                        len: faces,
+                    });
                     let (f, v) = write_soups_ply(files, layout, &path)?;
-                    progress.advance(faces);
+                    events.emit(&Event::Advance(faces));
                     (f, v, f32::NAN, "out of core: one block round".to_string())
                 }
                 ChainLevel::Resumed { faces } => {
@@ -143,9 +146,9 @@ pub fn run(
                 stop,
             };
             t_level = Instant::now();
-            if !a.json {
-                progress.finish();
-                ui.status(format!(
+            if a.notes {
+                events.emit(&Event::PhasesFinished);
+                events.status(format!(
                     "level {}: {} triangles, {} vertices: {}",
                     level.level, level.triangles, level.vertices, level.stop
                 ));
@@ -154,10 +157,10 @@ pub fn run(
             Ok(())
         },
     );
-    progress.finish();
+    events.emit(&Event::PhasesFinished);
     let rep = result.map_err(|e| kept(&e, &staging))?;
-    if let Some(line) = super::lods::stopped_early(&levels, targets.len()) {
-        ui.status(line);
+    if let Some(line) = super::write::stopped_early(&levels, targets.len()) {
+        events.status(line);
     }
     let glb = format!("{stem}_lods.glb");
     write_glb(&a.out.join(&glb), stem, &in_core, a).map_err(|e| kept(&e, &staging))?;
@@ -172,51 +175,16 @@ pub fn run(
     };
     let json = serde_json::to_string_pretty(&lods)? + "\n";
     write_atomic(&a.out.join("lods.json"), json.as_bytes()).map_err(|e| kept(&e, &staging))?;
-    remove_staging(ui, &staging);
-    if a.json {
-        crate::out!("{json}")?;
-        return Ok(());
-    }
-    ui.status(format!(
+    remove_staging(events, &staging);
+    let summary = format!(
         "wrote {} levels ({} out of core), {glb} ({} in-core levels) and lods.json to {} ({:.3} s)",
         lods.levels.len(),
         lods.levels.len() - in_core.len(),
         in_core.len(),
         a.out.display(),
         start.elapsed().as_secs_f64(),
-    ));
-    Ok(())
-}
-
-/// The error `e` of an out-of-core run whose staging folder is `staging`,
-/// saying that the folder stays and what it is for (unless the error
-/// names it already: another run holds it, it is not lodkit's). No
-/// folder: refused before any block was staged (a bad input, `--ray`
-/// without pylodkit), nothing to say.
-pub(super) fn kept(e: &dyn std::fmt::Display, staging: &Path) -> anyhow::Error {
-    let e = e.to_string();
-    if !staging.exists() || e.contains(&staging.display().to_string()) {
-        return anyhow::anyhow!("{e}");
-    }
-    anyhow::anyhow!(
-        "{e} (finished blocks are kept in {}: the same command resumes from them; \
-         another run for this output removes them)",
-        staging.display()
-    )
-}
-
-/// Removes the staging folder once the outputs are in place; one that
-/// cannot be removed (or that another run has taken since) is said, not
-/// an error: the outputs are good.
-pub(super) fn remove_staging(ui: &Ui, staging: &Path) {
-    match lodkit_scale::remove_staging(staging) {
-        Ok(true) => {}
-        Ok(false) => ui.status(format!(
-            "note: the staging folder {} is left to the run that now holds it",
-            staging.display()
-        )),
-        Err(e) => ui.status(format!("note: could not remove the staging folder: {e}")),
-    }
+    );
+    Ok(LodChainReport { json, summary })
 }
 
 /// The GLB of the in-core levels, an `MSFT_lod` chain from the finest
@@ -226,7 +194,7 @@ fn write_glb(
     path: &Path,
     stem: &str,
     in_core: &[(usize, TriMesh, f32)],
-    a: &LodsArgs,
+    a: &LodChainJob,
 ) -> Result<()> {
     let kept: Vec<&(usize, TriMesh, f32)> =
         in_core.iter().filter(|l| !l.1.faces.is_empty()).collect();

@@ -33,7 +33,7 @@ use anyhow::{Context, Result};
 use lodkit_mesh::io::interrupt::TempGuard;
 use serde::{Deserialize, Serialize};
 
-use crate::ui::Usage;
+use crate::usage::Usage;
 
 /// The manifest every build folder holds: the files lodkit wrote there.
 pub const MANIFEST: &str = ".lodkit-build.json";

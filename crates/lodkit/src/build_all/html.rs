@@ -10,12 +10,12 @@ use lodkit_mesh::metrics::Reference;
 use lodkit_render::{Camera, RenderOptions, colour_scale, render};
 use plotters::style::{BLUE, GREEN, RED, RGBColor};
 
+use super::chart::{Series, error_chart, log_chart};
 use super::continuous::Continuous;
 use super::html_page::{Block, Picture, Table, colour_bar, page};
-use super::lod_chain::Chain;
-use super::measure::{Measured, Sampling};
 use super::progressive::Progressive;
-use crate::chart::{Series, error_chart, log_chart};
+use crate::lod_chain::write::Chain;
+use crate::measure::{Measured, Sampling};
 
 /// Side of every render, pixels: small, so the build stays fast and the
 /// page light.

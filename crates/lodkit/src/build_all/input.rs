@@ -22,7 +22,7 @@ use anyhow::{Context, Result, bail};
 use lodkit_mco::McoModel;
 use lodkit_mesh::{Model, TriMesh};
 
-use crate::ui::Ui;
+use crate::progress::Progress;
 
 /// How the input reached the surface the chain starts from.
 pub enum InputPath {
@@ -63,19 +63,19 @@ pub struct BuildInput {
 /// Loads `path` (any kind; see the module docs) and reconstructs it when
 /// it is not a mesh; a mesh with materials, textures or parts is kept as a
 /// scene unless `merge`. Errors name the file.
-pub fn load(ui: &Ui, path: &Path, merge: bool) -> Result<BuildInput> {
+pub fn load(events: &Progress, path: &Path, merge: bool) -> Result<BuildInput> {
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .filter(|s| !s.is_empty())
         .unwrap_or_else(|| "model".into());
     if lodkit_particles::silhouette::calibration::is_calibration(path) {
-        return carve(ui, path, name);
+        return carve(events, path, name);
     }
     let (what, models) = if path.is_dir() {
-        scan_folder(ui, path)?
+        scan_folder(events, path)?
     } else if is_conf(path) {
-        let step = ui.spinner(&format!("reading {}", path.display()));
+        let step = events.spinner(&format!("reading {}", path.display()));
         let scans = lodkit_mesh::io::conf::load_scans(path)?;
         step.finish();
         let n = scans.len();
@@ -84,8 +84,8 @@ pub fn load(ui: &Ui, path: &Path, merge: bool) -> Result<BuildInput> {
             scans.into_iter().map(|(_, r)| Model::Range(r)).collect(),
         )
     } else {
-        let model = match super::super::scene::load_input(ui, path, !merge)? {
-            super::super::scene::Input::Scene(scene) => {
+        let model = match crate::input::load_input(events, path, !merge)? {
+            crate::input::Input::Scene(scene) => {
                 let surface = scene.merged().mesh;
                 if surface.faces.is_empty() {
                     bail!("{}: the mesh has no faces", path.display());
@@ -100,7 +100,7 @@ pub fn load(ui: &Ui, path: &Path, merge: bool) -> Result<BuildInput> {
                     scene: Some(scene),
                 });
             }
-            super::super::scene::Input::Model(model) => model,
+            crate::input::Input::Model(model) => model,
         };
         match model {
             Model::Mesh(m) => {
@@ -120,7 +120,7 @@ pub fn load(ui: &Ui, path: &Path, merge: bool) -> Result<BuildInput> {
             other => (other.kind().to_string(), vec![other]),
         }
     };
-    reconstruct(ui, path, name, what, &models)
+    reconstruct(events, path, name, what, &models)
 }
 
 fn is_conf(path: &Path) -> bool {
@@ -130,7 +130,7 @@ fn is_conf(path: &Path) -> bool {
 
 /// A folder of range images: the `.conf` in it when there is exactly one,
 /// else every `.ply` in it (name order), each as its file poses it.
-fn scan_folder(ui: &Ui, dir: &Path) -> Result<(String, Vec<Model>)> {
+fn scan_folder(events: &Progress, dir: &Path) -> Result<(String, Vec<Model>)> {
     let mut confs = Vec::new();
     let mut plys: Vec<PathBuf> = Vec::new();
     for e in
@@ -147,7 +147,7 @@ fn scan_folder(ui: &Ui, dir: &Path) -> Result<(String, Vec<Model>)> {
     }
     match confs.len() {
         1 => {
-            let step = ui.spinner(&format!("reading {}", confs[0].display()));
+            let step = events.spinner(&format!("reading {}", confs[0].display()));
             let scans = lodkit_mesh::io::conf::load_scans(&confs[0])?;
             step.finish();
             let n = scans.len();
@@ -171,7 +171,7 @@ fn scan_folder(ui: &Ui, dir: &Path) -> Result<(String, Vec<Model>)> {
     }
     let mut models = Vec::with_capacity(plys.len());
     for p in &plys {
-        match super::super::load(ui, p)? {
+        match crate::input::load(events, p)? {
             m @ Model::Range(_) => models.push(m),
             other => bail!(
                 "{}: holds a {}, not a range image (a scan folder holds range-grid PLYs)",
@@ -186,13 +186,13 @@ fn scan_folder(ui: &Ui, dir: &Path) -> Result<(String, Vec<Model>)> {
 /// Reconstructs `models` as a marching cube octree; its full cut is the
 /// surface, and the stream's source.
 fn reconstruct(
-    ui: &Ui,
+    events: &Progress,
     path: &Path,
     name: String,
     what: String,
     models: &[Model],
 ) -> Result<BuildInput> {
-    let step = ui.spinner(&format!("reconstructing the {what}"));
+    let step = events.spinner(&format!("reconstructing the {what}"));
     let model = lodkit_mco::build_from_models(models, &lodkit_mco::Options::default())
         .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     let surface = model.mesh_at_lod(model.max_lod());
@@ -202,7 +202,7 @@ fn reconstruct(
     }
     let samples = models
         .iter()
-        .map(|m| super::measure::sample_count(m).0)
+        .map(|m| crate::measure::sample_count(m).0)
         .sum();
     let unit = match models {
         [Model::Points(_)] => "points",
@@ -221,7 +221,7 @@ fn reconstruct(
 
 /// A calibrated image set: carved (default depth and silhouette source),
 /// its finest level triangulated.
-fn carve(ui: &Ui, path: &Path, name: String) -> Result<BuildInput> {
+fn carve(events: &Progress, path: &Path, name: String) -> Result<BuildInput> {
     // `ring/transforms.json`, `ring/sparse/0/cameras.txt`: named `ring`.
     let name = path
         .ancestors()
@@ -231,13 +231,13 @@ fn carve(ui: &Ui, path: &Path, name: String) -> Result<BuildInput> {
         .find(|n| n != "sparse" && n.parse::<u32>().is_err())
         .unwrap_or(name);
     let opts = lodkit_particles::EncodeOptions::DEFAULT;
-    let c = super::super::pop::carve_image_set(
-        ui,
+    let c = crate::input::carve_image_set(
+        events,
         path,
-        &super::super::pop::CarveArgs {
+        lodkit_particles::silhouette::SilhouetteSource::Auto,
+        &lodkit_particles::silhouette::SilhouetteOptions {
+            bbox: None,
             margin: 1.0,
-            key_tolerance: 24,
-            ..Default::default()
         },
         &opts,
     )?;

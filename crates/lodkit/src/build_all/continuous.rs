@@ -17,8 +17,8 @@ use lodkit_mesh::TriMesh;
 use lodkit_mesh::metrics::Reference;
 use lodkit_simplify::{Options, Target};
 
-use super::measure::{Measured, Sampling, cell};
-use crate::ui::Ui;
+use crate::measure::{Measured, Sampling, cell};
+use crate::progress::Progress;
 
 /// Largest memory (bytes) the octree of a mesh input may plan for: a
 /// quarter of [`lodkit_mco::MAX_BUILD_BYTES`], so `build` stays well inside
@@ -70,7 +70,7 @@ pub struct Continuous {
 /// Builds (or takes) the model, writes it, measures its cuts, and appends
 /// the section to `report`.
 pub fn section(
-    ui: &Ui,
+    events: &Progress,
     reference: &Reference,
     reconstruction: Option<&McoModel>,
     name: &str,
@@ -84,7 +84,7 @@ pub fn section(
     let model = match reconstruction {
         Some(m) => m,
         None => {
-            let step = ui.spinner("building the marching cube octree from the mesh");
+            let step = events.spinner("building the marching cube octree from the mesh");
             let opts = lodkit_mco::Options {
                 resolution: mesh_resolution(mesh).map_err(|e| anyhow::anyhow!("{name}: {e}"))?,
             };
@@ -97,7 +97,7 @@ pub fn section(
     let mco_file = format!("{name}.mco");
     model.save(&out.join(&mco_file))?;
     files.push(mco_file.clone());
-    let step = ui.spinner("measuring extractions");
+    let step = events.spinner("measuring extractions");
     let full = model.full_triangles();
     let mut cuts = Vec::with_capacity(PERCENTS.len());
     let mut idx = Vec::new();

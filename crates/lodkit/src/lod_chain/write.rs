@@ -20,9 +20,10 @@ use lodkit_mesh::{Model, TriMesh};
 use lodkit_simplify::{Options, Simplifier, Target};
 use serde_json::{Map, Value, json};
 
-use super::measure::{Measured, Sampling};
-use crate::commands::lods::{Level, Lods};
-use crate::ui::{OutputArgs, Ui};
+use crate::measure::{Measured, Sampling};
+use crate::output::OutputOptions;
+use crate::progress::Progress;
+use crate::report::{Level, Lods};
 
 /// The screen coverage below which an error projects to at most a pixel
 /// on a 1080-line screen (the one rule, shared with pylodkit's chains).
@@ -109,34 +110,6 @@ pub struct Chain {
     pub face_materials: Option<Vec<Vec<u32>>>,
 }
 
-/// The chain of `lodkit lods` and `build`: of `scene` with its materials
-/// when given ([`crate::commands::scene::write_scene_chain`]: scene GLBs),
-/// else of the reference's mesh ([`write_mesh_chain`]: PLY levels); the
-/// arguments are theirs.
-#[allow(clippy::too_many_arguments)]
-pub fn write_chain(
-    ui: &Ui,
-    reference: &Reference,
-    input: &str,
-    stem: &str,
-    out: &Path,
-    scene: Option<&lodkit_mesh::Scene>,
-    targets: &[Target],
-    opts: &Options,
-    sampling: Sampling,
-    output: &OutputArgs,
-    on_level: &mut dyn FnMut(&Level),
-) -> Result<Chain> {
-    match scene {
-        Some(s) => crate::commands::scene::write_scene_chain(
-            ui, reference, input, stem, out, s, targets, opts, sampling, output, on_level,
-        ),
-        None => write_mesh_chain(
-            ui, reference, input, stem, out, targets, opts, sampling, output, on_level,
-        ),
-    }
-}
-
 /// Simplifies the reference's mesh into one level per target (each from
 /// the previous level, with `opts`), measures each with `sampling`, and
 /// writes `<stem>_lodN.ply`, `<stem>_lods.glb` and `lods.json` into `out`
@@ -147,8 +120,8 @@ pub fn write_chain(
 /// carries `--normals` (applied to what is written, after measuring) and
 /// `--compress` (the GLB).
 #[allow(clippy::too_many_arguments)]
-fn write_mesh_chain(
-    ui: &Ui,
+pub(super) fn write_mesh_chain(
+    events: &Progress,
     reference: &Reference,
     input: &str,
     stem: &str,
@@ -156,13 +129,13 @@ fn write_mesh_chain(
     targets: &[Target],
     opts: &Options,
     sampling: Sampling,
-    output: &OutputArgs,
+    output: &OutputOptions,
     on_level: &mut dyn FnMut(&Level),
 ) -> Result<Chain> {
     let mesh = reference.mesh();
     std::fs::create_dir_all(out)
         .with_context(|| format!("{}: cannot create output directory", out.display()))?;
-    let step = ui.spinner("simplifying");
+    let step = events.spinner("simplifying");
     let chain = Simplifier::new()
         .lod_chain(mesh, opts, targets)
         .map_err(|e| anyhow::anyhow!("{input}: {e}"))?;
@@ -172,7 +145,7 @@ fn write_mesh_chain(
     let mut measured = Vec::with_capacity(chain.len());
     for (i, l) in chain.into_iter().enumerate() {
         let file = format!("{stem}_lod{}.ply", i + 1);
-        let step = ui.spinner(&format!("measuring level {}", i + 1));
+        let step = events.spinner(&format!("measuring level {}", i + 1));
         let m = sampling.measure(reference, &l.mesh)?;
         step.finish();
         let bytes = output
@@ -257,6 +230,30 @@ fn write_mesh_chain(
         measured,
         face_materials: None,
     })
+}
+
+/// The line saying why a chain has fewer levels than asked: the chain
+/// ends at the first level that would remove no triangle from the one
+/// before ([`lodkit_simplify::lod_chain`]), rather than write it twice.
+/// `None` when every level was made.
+pub fn stopped_early(levels: &[Level], asked: usize) -> Option<String> {
+    let last = levels.last()?;
+    if levels.len() >= asked {
+        return None;
+    }
+    let why = if last.stop == lodkit_simplify::StopReason::Reached.to_string() {
+        String::new()
+    } else {
+        format!(" (level {}: {})", last.level, last.stop)
+    };
+    Some(format!(
+        "note: stopped at level {} of {}: level {} would remove no triangle from level {}'s {}{why}",
+        last.level,
+        asked,
+        last.level + 1,
+        last.level,
+        last.triangles
+    ))
 }
 
 #[cfg(test)]

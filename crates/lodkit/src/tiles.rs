@@ -1,0 +1,150 @@
+//! The `tiles` job: a 3D Tiles 1.1 tileset of any mesh or point cloud
+//! lodkit reads, through `lodkit-tiles`.
+//!
+//! A mesh gives a `REPLACE`-refined tileset: leaves hold the input at full
+//! resolution, each level above the whole object simplified (HQMS) and cut
+//! by an octree, every tile's `geometricError` measured. A point cloud or
+//! range image gives an `ADD`-refined point tileset (an even subsample per
+//! node). A LAS/LAZ cloud is z-up with positions relative to an `f64`
+//! origin: it is turned into the y-up frame tile contents use (the
+//! clients turn it back) and its origin becomes the root `transform`, so a
+//! client sees the file's own coordinates.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Result;
+use lodkit_mesh::glam::Vec3;
+use lodkit_mesh::{Model, PointCloud};
+use lodkit_tiles::{Event as TilesEvent, Phase, PointTilesOptions, TilesOptions};
+
+use crate::progress::{Event, Progress};
+use crate::usage::usage;
+
+/// What to tile and how.
+#[derive(Clone, Debug)]
+pub struct TilesJob {
+    /// The input file (any format lodkit reads, LAS/LAZ included).
+    pub input: PathBuf,
+    /// The output folder: absent, empty, or one lodkit wrote (replaced
+    /// whole); never one holding a user's files.
+    pub out: PathBuf,
+    /// Options of a mesh's tileset.
+    pub mesh: TilesOptions,
+    /// Options of a point cloud's tileset.
+    pub points: PointTilesOptions,
+}
+
+/// What a tiles job wrote.
+#[derive(Clone, Debug)]
+pub enum TilesReport {
+    /// A mesh's tileset.
+    Mesh(lodkit_tiles::TilesReport),
+    /// A point cloud's tileset, and the origin its root transform holds.
+    Points(lodkit_tiles::PointTilesReport, Option<[f64; 3]>),
+}
+
+/// Runs the job: reads the input, builds the tileset in memory, writes it
+/// into `out` atomically.
+///
+/// Errors: an unreadable input or one with nothing to tile (one line
+/// naming the file); an output folder that is not lodkit's, or an option
+/// out of range ([`crate::usage::Usage`]). Cost: see `lodkit-tiles` (about
+/// one `simplify` of a mesh plus one distance measurement per tile; a
+/// cloud in `O(points × depth)`).
+pub fn run(job: &TilesJob, events: &Progress) -> Result<TilesReport> {
+    let step = events.spinner(&format!("reading {}", job.input.display()));
+    let located = lodkit_mesh::io::load_located(&job.input)?;
+    step.finish();
+    match located.model {
+        Model::Mesh(mesh) => {
+            let mut draw = phases(events, "levels: simplify, cut and measure");
+            let tileset = lodkit_tiles::tileset_from_mesh(&mesh, &job.mesh, &mut draw)
+                .map_err(|e| error(e, &job.input))?;
+            let report = lodkit_tiles::write_tileset(
+                &tileset,
+                &job.out,
+                Some(&job.input),
+                &job.mesh,
+                &mut draw,
+            )
+            .map_err(|e| error(e, &job.out))?;
+            events.emit(&Event::PhasesFinished);
+            Ok(TilesReport::Mesh(report))
+        }
+        Model::Points(p) => points(job, events, p, located.origin),
+        Model::Range(r) => points(job, events, r.to_point_cloud(), located.origin),
+    }
+}
+
+fn points(
+    job: &TilesJob,
+    events: &Progress,
+    cloud: PointCloud,
+    origin: Option<[f64; 3]>,
+) -> Result<TilesReport> {
+    let cloud = if origin.is_some() {
+        z_up_to_y_up(cloud)
+    } else {
+        cloud
+    };
+    let mut draw = phases(events, "subsampling points");
+    let tileset = lodkit_tiles::tileset_from_points(&cloud, &job.points, &mut draw)
+        .map_err(|e| error(e, &job.input))?;
+    let report = lodkit_tiles::write_point_tileset(
+        &tileset,
+        &job.out,
+        Some(&job.input),
+        &job.points,
+        origin,
+        &mut draw,
+    )
+    .map_err(|e| error(e, &job.out))?;
+    events.emit(&Event::PhasesFinished);
+    Ok(TilesReport::Points(report, origin))
+}
+
+/// A LAS/LAZ cloud (z-up) in the y-up frame tile contents are written in:
+/// `(x, y, z) ↦ (x, z, −y)`, which the clients' y-up → z-up turn undoes.
+fn z_up_to_y_up(mut c: PointCloud) -> PointCloud {
+    let turn = |v: &mut Vec3| *v = Vec3::new(v.x, v.z, -v.y);
+    c.positions.iter_mut().for_each(turn);
+    if let Some(n) = &mut c.normals {
+        n.iter_mut().for_each(turn);
+    }
+    c
+}
+
+/// The tiler's progress as library events: a phase per tiler phase
+/// (`levels` named `first`), advanced as it counts.
+fn phases<'a>(events: &'a Progress<'a>, first: &'a str) -> impl FnMut(TilesEvent) + 'a {
+    let (mut last, mut shown) = (None, 0usize);
+    move |e: TilesEvent| {
+        let TilesEvent::Progress { phase, done, total } = e;
+        if last != Some(phase) {
+            last = Some(phase);
+            shown = 0;
+            let name = match phase {
+                Phase::Levels => first,
+                Phase::Write => "writing tiles",
+            };
+            events.emit(&Event::Phase {
+                name,
+                len: total as u64,
+            });
+        }
+        events.emit(&Event::Advance(done.saturating_sub(shown) as u64));
+        shown = shown.max(done);
+    }
+}
+
+/// A tiler error as the job's: usage errors stay usage errors; the rest
+/// name `path` unless they already name a file.
+fn error(e: lodkit_tiles::Error, path: &Path) -> anyhow::Error {
+    match e {
+        lodkit_tiles::Error::Usage(m) => usage(m),
+        e @ (lodkit_tiles::Error::Io { .. } | lodkit_tiles::Error::Mesh(_)) => {
+            anyhow::anyhow!("{e}")
+        }
+        e => anyhow::anyhow!("{}: {e}", path.display()),
+    }
+}
