@@ -170,12 +170,16 @@ function hud() {
   $('hud').textContent = lines.join('\n');
 }
 
-// Frames the camera on a bounding sphere (once per model).
-function frameSphere(sphere) {
+// Frames the camera on a bounding sphere (once per model); `elevation`
+// (radians) looks down on it, as a tileset's terrain or room scan wants.
+function frameSphere(sphere, elevation) {
   const r = sphere.radius || 1;
   const dist = r / Math.sin((camera.fov * Math.PI) / 360) * 1.1;
   controls.target.copy(sphere.center);
-  camera.position.copy(sphere.center).add(new THREE.Vector3(0, r * 0.15, dist));
+  const offset = elevation === undefined
+    ? new THREE.Vector3(0, r * 0.15, dist)
+    : new THREE.Vector3(0, dist * Math.sin(elevation), dist * Math.cos(elevation));
+  camera.position.copy(sphere.center).add(offset);
   camera.near = dist / 100;
   camera.far = dist * 100;
   camera.updateProjectionMatrix();
@@ -489,7 +493,7 @@ async function openTileset(url) {
       tiles.getBoundingSphere(sphere);
       sphere.applyMatrix4(tiles.group.matrixWorld);
       viewer.bounds = sphere;
-      frameSphere(sphere);
+      frameSphere(sphere, Math.PI / 5);
       resolve();
     });
     tiles.addEventListener('load-error', ({ tile, error, url: u }) => {

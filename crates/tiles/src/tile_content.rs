@@ -9,6 +9,7 @@
 //! dequantises to the same `f32` in every tile that holds it.
 
 use lodkit_mesh::io::gltf::{GlbOptions, QuantGrid, write_glb_on_grid, write_points_glb_on_grid};
+use lodkit_mesh::glam::Vec3;
 use lodkit_mesh::{Aabb, PointCloud, TriMesh};
 
 use crate::{Error, Result};
@@ -29,14 +30,24 @@ pub fn rounding(grid: &QuantGrid) -> f64 {
     2f64.powi(grid.step_log2) * 3f64.sqrt() / 2.0
 }
 
-/// Adds each tile's rounding to its `geometricError`: a tile is at least
-/// that far from what it stands for, full-resolution leaves included.
-/// `info[0].bbox` must already hold every tile's content; `depth` gives a
-/// node's depth. Errors stay monotone (a coarser depth rounds more).
+/// Adds each tile's rounding to its `geometricError` (a tile is at least
+/// that far from what it stands for, full-resolution leaves included) and
+/// to its bounding box (half a step each way: a rounded vertex may leave
+/// the box of the unrounded ones). `info[0].bbox` must already hold every
+/// tile's content; `depth` gives a node's depth. Errors and boxes stay
+/// nested (a coarser depth rounds more).
 pub fn add_rounding(info: &mut [crate::tileset_json::NodeInfo], depth: impl Fn(usize) -> u8) {
     let bounds = info.first().map_or(Aabb::EMPTY, |i| i.bbox);
     for (i, node) in info.iter_mut().enumerate() {
-        node.error = node.error.max(rounding(&depth_grid(&bounds, depth(i))));
+        let grid = depth_grid(&bounds, depth(i));
+        node.error = node.error.max(rounding(&grid));
+        if node.bbox.min.x <= node.bbox.max.x {
+            let half = Vec3::splat(2f32.powi(grid.step_log2 - 1));
+            node.bbox = Aabb {
+                min: node.bbox.min - half,
+                max: node.bbox.max + half,
+            };
+        }
     }
 }
 
