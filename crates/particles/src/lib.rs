@@ -71,6 +71,7 @@ pub(crate) mod decode;
 pub(crate) mod decode_stream;
 pub(crate) mod encode;
 pub(crate) mod error;
+pub(crate) mod level_surface;
 pub(crate) mod octree;
 pub(crate) mod ordering;
 pub(crate) mod orientation;
@@ -87,7 +88,8 @@ pub use container::{
     CHUNK_HEADER_LEN, Chunk, ChunkKind, ChunkReader, HEADER_LEN, Header, MAGIC, Mode, VERSION,
     read_header,
 };
-pub use decode::{Cut, DecodeOptions, Decoded, LevelSurface, decode, decode_prefix};
+pub use decode::{Cut, DecodeOptions, Decoded, decode, decode_prefix};
+pub use level_surface::LevelSurface;
 pub use decode_stream::PrefixDecoder;
 pub use encode::{
     DEFAULT_PRECISION, EncodeOptions, EncodeReport, Encoded, LevelReport, Placement, encode,

@@ -254,10 +254,10 @@ fn every_prefix_serves_the_lod_numbers_it_claims() {
 fn errors_are_one_line_and_version_1_still_reads() {
     let m = small();
     let v1 = crate::mco_file::v1::encode(&m);
-    assert_eq!(crate::mco_file::v1::decode(&v1).unwrap(), m);
+    assert_eq!(crate::mco_file::decode(&v1).unwrap(), m);
     let bytes = encode(&m);
     assert_eq!(
-        crate::mco_file::v1::decode(&bytes).unwrap(),
+        crate::mco_file::decode(&bytes).unwrap(),
         decode(&bytes).unwrap()
     );
     assert_eq!(file_version(&bytes), Some(2));
@@ -271,7 +271,7 @@ fn errors_are_one_line_and_version_1_still_reads() {
         bytes.len() / 2,
         bytes.len() - 1,
     ] {
-        let e = crate::mco_file::v1::decode(&bytes[..cut]).unwrap_err();
+        let e = crate::mco_file::decode(&bytes[..cut]).unwrap_err();
         assert!(!e.contains('\n'));
         assert!(
             e.contains("shorter") || e.contains("size mismatch"),
@@ -280,7 +280,7 @@ fn errors_are_one_line_and_version_1_still_reads() {
     }
     let mut v3 = bytes.clone();
     v3[8] = 3;
-    let e = crate::mco_file::v1::decode(&v3).unwrap_err();
+    let e = crate::mco_file::decode(&v3).unwrap_err();
     assert!(e.contains("version 3"), "{e}");
     assert!(
         McoStream::new()
@@ -289,7 +289,7 @@ fn errors_are_one_line_and_version_1_still_reads() {
             .to_string()
             .contains("version 3")
     );
-    let e = crate::mco_file::v1::decode(&v3[..20]).unwrap_err();
+    let e = crate::mco_file::decode(&v3[..20]).unwrap_err();
     assert!(e.contains("version 3"), "{e}");
     let mut flipped = bytes.clone();
     flipped[HEADER_BYTES + 20] ^= 0x10;
