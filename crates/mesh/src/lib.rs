@@ -45,6 +45,8 @@
 /// marching-cubes and particle triangulation tables.
 pub mod cube_symmetry;
 pub mod error;
+#[cfg(feature = "images")]
+pub mod image;
 pub mod info;
 pub mod io;
 pub mod mesh;

@@ -7,7 +7,6 @@
 //! adds one bit to every vertex coordinate (§7.2). A reader may stop after
 //! any chunk ([`DecodeOptions`]); a damaged or cut chunk is an error that
 //! says which.
-use lodkit_mesh::TriMesh;
 
 use crate::attributes::{self, Channel};
 use crate::coding::bit_coder::BitCoder;

@@ -89,12 +89,12 @@ pub use container::{
     read_header,
 };
 pub use decode::{Cut, DecodeOptions, Decoded, decode, decode_prefix};
-pub use level_surface::LevelSurface;
 pub use decode_stream::PrefixDecoder;
 pub use encode::{
     DEFAULT_PRECISION, EncodeOptions, EncodeReport, Encoded, LevelReport, Placement, encode,
 };
 pub use error::{Error, Result};
+pub use level_surface::LevelSurface;
 pub use octree::{Frame, Sidedness};
 pub use ordering::HLevel;
 pub use orientation::orient;

@@ -18,12 +18,11 @@ use glam::{DMat3, DQuat, DVec3};
 use lodkit_mesh::io::input::{lexically_inside, read_file, resolve_inside, strip_bom};
 
 use crate::error::{Error, Result};
-use crate::silhouette::images;
 
 /// Most views one calibration may list.
 pub const MAX_VIEWS: usize = 10_000;
-/// Largest image side accepted, in pixels.
-pub const MAX_SIDE: u32 = 16_384;
+/// Largest image side accepted, in pixels (the image decoder's).
+pub use lodkit_mesh::image::MAX_SIDE;
 
 /// Pinhole intrinsics with OpenCV's radial (`k1`, `k2`) and tangential
 /// (`p1`, `p2`) distortion, in pixels (COLMAP's convention).
@@ -641,7 +640,7 @@ fn parse_transforms(path: &Path, text: &str) -> Result<Calibration> {
         let (w, h) = match (key("w")?, key("h")?) {
             (Some(w), Some(h)) => (w, h),
             _ => {
-                let (w, h) = images::header_size(&image)
+                let (w, h) = lodkit_mesh::image::header_size(&image)
                     .or_else(|e| err(path, format!("{who}: no w, h given, and {e}")))?;
                 (f64::from(w), f64::from(h))
             }
