@@ -99,8 +99,8 @@ pub use octree::{Frame, Sidedness};
 pub use ordering::HLevel;
 pub use orientation::orient;
 pub use stats::{
-    LevelStats, ProgressiveLevel, StreamStats, non_manifold_flags, non_manifold_triangles,
-    progressive_levels, stream_stats,
+    LevelStats, ProgressiveLevel, StreamStats, non_manifold_triangles, progressive_levels,
+    stream_stats,
 };
 pub use thinning::ThinningOptions;
 pub use triangulate::{
