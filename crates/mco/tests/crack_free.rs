@@ -1,5 +1,5 @@
 //! Every cut of a watertight input is watertight, apart from the T-junction
-//! seams that crack patching closes (issue 14, item 15).
+//! seams that crack patching closes.
 //!
 //! A cut's boundary edges (used by one triangle, vertices welded by exact
 //! position) are chained into loops. Crack patching leaves loops of zero
