@@ -37,7 +37,7 @@ use crate::signed_distance::SignedDistanceField;
 use crate::{Error, Result};
 
 /// Build options.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Options {
     /// Leaf cubes along the longest axis of the inputs' bounding box,
     /// `2..=`[`crate::MAX_RESOLUTION`]; `None` (the default) = a cube
@@ -45,6 +45,17 @@ pub struct Options {
     /// the module docs). Memory and time grow with the surface's area in
     /// cubes, about the square of the resolution.
     pub resolution: Option<u32>,
+}
+
+impl Options {
+    /// The defaults: the resolution from the inputs' sample spacing.
+    pub const DEFAULT: Options = Options { resolution: None };
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options::DEFAULT
+    }
 }
 
 /// Oriented samples of any model: positions with unit outward normals

@@ -22,12 +22,26 @@ use crate::ordering::HLevel;
 use crate::triangulate::{TriangulateOptions, Triangulation};
 
 /// Where to stop reading.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct DecodeOptions {
     /// Last octree level to decode (`None`: all present).
     pub max_level: Option<u8>,
     /// Highest vertex precision to decode (`None`: all present).
     pub max_precision: Option<u8>,
+}
+
+impl DecodeOptions {
+    /// The defaults: every level and precision present.
+    pub const DEFAULT: DecodeOptions = DecodeOptions {
+        max_level: None,
+        max_precision: None,
+    };
+}
+
+impl Default for DecodeOptions {
+    fn default() -> Self {
+        DecodeOptions::DEFAULT
+    }
 }
 
 /// What a prefix of a stream holds.
