@@ -36,7 +36,7 @@
 //! coding (`coding/`: `levels.rs` and `precision_layers.rs` over the
 //! symbol interface `bit_coder.rs`, with `raw_bits.rs` or `range_coder.rs`
 //! and the entropy mode's `contexts.rs` and `links.rs`) → container
-//! (`container.rs`); and back: `decode.rs` → `triangulate/` (the 256
+//! (`container.rs`); and back: `decode.rs` → `level_surface.rs` (one level's particles) → `triangulate/` (the 256
 //! cases in `triangulation_table.rs`, then `orientation.rs`) → `stats.rs`.
 //!
 //! ## What to expect
