@@ -7,24 +7,21 @@
 // frees the worker and the models it still holds.
 
 import * as THREE from 'three';
-import { startWorker } from './wasm.js';
+import { DecoderWorker } from './wasm.js';
 import { McoModel } from './McoModel.js';
 
 export class McoLoader extends THREE.Loader {
   constructor(manager) {
     super(manager);
-    this.wasmUrl = undefined; // default: lodkit.wasm beside wasm.js
+    this.decoder = new DecoderWorker();
     this.tolerance = 1; // pixels of projected error a cut leaves
     this.initialTriangles = 20000; // the cut shown before the first update
-    this.worker = null;
-    this.workerReady = null;
-    this.handlers = new Map();
     this.models = new Set();
   }
 
   /** Where lodkit.wasm is (default: beside this module). */
   setWasmPath(url) {
-    this.wasmUrl = url;
+    this.decoder.wasmUrl = url;
     return this;
   }
 
@@ -32,17 +29,6 @@ export class McoLoader extends THREE.Loader {
   setTolerance(px) {
     this.tolerance = px;
     return this;
-  }
-
-  _worker() {
-    if (!this.workerReady) {
-      this.workerReady = startWorker(this.wasmUrl, (m) => {
-        const h = this.handlers.get(m.id);
-        if (h) h(m);
-        else if (m.type === 'error') console.error(`lodkit worker: ${m.message}`);
-      }).then((w) => (this.worker = w));
-    }
-    return this.workerReady;
   }
 
   /**
@@ -56,11 +42,7 @@ export class McoLoader extends THREE.Loader {
     const model = new McoModel({
       tolerance: this.tolerance,
       initialTriangles: this.initialTriangles,
-      channel: {
-        ready: this._worker(),
-        on: (id, handler) => this.handlers.set(id, handler),
-        off: (id) => this.handlers.delete(id),
-      },
+      decoder: this.decoder,
     });
     this.models.add(model);
     model.addEventListener('dispose', () => this.models.delete(model));
@@ -91,7 +73,7 @@ export class McoLoader extends THREE.Loader {
    * model's first cut is not kept waiting for them.
    */
   preload() {
-    this._worker();
+    this.decoder.ready();
     return this;
   }
 
@@ -99,10 +81,7 @@ export class McoLoader extends THREE.Loader {
   dispose() {
     for (const m of [...this.models]) m.dispose();
     this.models.clear();
-    if (this.worker) this.worker.terminate();
-    this.worker = null;
-    this.workerReady = null;
-    this.handlers.clear();
+    this.decoder.terminate();
     return this;
   }
 }

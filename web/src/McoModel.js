@@ -47,10 +47,9 @@ export class McoModel extends THREE.Mesh {
     this.isMcoModel = true;
     this.tolerance = options.tolerance ?? 1;
     this.wasmUrl = options.wasmUrl;
-    // A worker shared with other models (`McoLoader`'s): {ready: a promise
-    // of the worker, on(id, handler), off(id)}; none: the model starts
-    // its own and ends it in `dispose`.
-    this.channel = options.channel || null;
+    // A DecoderWorker shared with other models (`McoLoader`'s); none: the
+    // model starts its own worker and ends it in `dispose`.
+    this.decoder = options.decoder || null;
     this.initialTriangles = options.initialTriangles ?? 20000;
     this.workerId = newId();
     this.worker = null;
@@ -69,9 +68,9 @@ export class McoModel extends THREE.Mesh {
 
   // The worker, with this model's messages routed to `_message`.
   _connect() {
-    if (this.channel) {
-      this.channel.on(this.workerId, (m) => this._message(m));
-      return this.channel.ready;
+    if (this.decoder) {
+      this.decoder.on(this.workerId, (m) => this._message(m));
+      return this.decoder.ready();
     }
     return startWorker(this.wasmUrl, (m) => this._message(m));
   }
@@ -253,7 +252,7 @@ export class McoModel extends THREE.Mesh {
   dispose() {
     if (this.worker) {
       this.worker.postMessage({ type: 'close', id: this.workerId });
-      if (this.channel) this.channel.off(this.workerId);
+      if (this.decoder) this.decoder.off(this.workerId);
       else this.worker.terminate();
     }
     this.worker = null;
