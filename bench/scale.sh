@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Out-of-core growth benchmark (issue #19): for each size, a blob streamed
+# Out-of-core growth benchmark: for each size, a blob streamed
 # to binary PLY (`lodkit generate blob`), then `lodkit simplify --ratio R`
 # under /usr/bin/time, with the phases, bytes and rounds of its --json
 # report; one table row per size, with time per input triangle and the

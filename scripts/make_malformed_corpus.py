@@ -223,7 +223,7 @@ add("pts_nan.pts", "2\n0 0 0 10 1 2 3\nNaN 1 1 10 1 2 3\n")
 add("pts_non_numeric.pts", "1\n0 0 zero\n")
 add("pts_count_only.pts", "3\n")
 
-# ------------------------------------------------- issue 14's probe classes
+# ------------------------------------------- the reliability probe classes
 # ASCII PLY is line-structured: values never run across lines.
 add("ply_ascii_values_across_lines.ply",
     ply_header("ascii", 3, 1) + "0 0 0 1\n0 0 0 1\n0 3 0 1 2\n")

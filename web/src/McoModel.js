@@ -26,7 +26,8 @@ export class McoModel extends THREE.Mesh {
    * model.done` waits for the whole file). A version-1 file is shown once
    * whole. Options: `tolerance` (pixels, default 1), `wasmUrl`,
    * `onProgress({loaded, total})`, `initialTriangles` (the cut shown before
-   * the first `update`, default 20000).
+   * the first `update`, default 20000). `McoLoader` makes models that
+   * share its one worker.
    */
   static async load(url, options = {}) {
     const m = new McoModel(options);
@@ -46,6 +47,9 @@ export class McoModel extends THREE.Mesh {
     this.isMcoModel = true;
     this.tolerance = options.tolerance ?? 1;
     this.wasmUrl = options.wasmUrl;
+    // A DecoderWorker shared with other models (`McoLoader`'s); none: the
+    // model starts its own worker and ends it in `dispose`.
+    this.decoder = options.decoder || null;
     this.initialTriangles = options.initialTriangles ?? 20000;
     this.workerId = newId();
     this.worker = null;
@@ -62,7 +66,16 @@ export class McoModel extends THREE.Mesh {
     this.done.catch(() => {});
   }
 
-  async _stream(url, onProgress) {
+  // The worker, with this model's messages routed to `_message`.
+  _connect() {
+    if (this.decoder) {
+      this.decoder.on(this.workerId, (m) => this._message(m));
+      return this.decoder.ready();
+    }
+    return startWorker(this.wasmUrl, (m) => this._message(m));
+  }
+
+  async _stream(url, onProgress, init = {}) {
     let first;
     const opened = new Promise((res, rej) => (first = { res, rej }));
     const fail = (e) => {
@@ -73,13 +86,13 @@ export class McoModel extends THREE.Mesh {
     this._ready = first;
     this._fail = fail;
     // The worker starts while the first bytes are on their way.
-    const workerReady = startWorker(this.wasmUrl, (m) => this._message(m)).then((w) => {
+    const workerReady = this._connect().then((w) => {
       this.worker = w;
       w.postMessage({ type: 'mco-stream', id: this.workerId });
       return w;
     });
     (async () => {
-      const res = await fetch(url);
+      const res = await fetch(url, init);
       if (!res.ok) throw new Error(`HTTP ${res.status}`);
       const total = Number(res.headers.get('content-length')) || 0;
       const reader = res.body.getReader();
@@ -108,7 +121,7 @@ export class McoModel extends THREE.Mesh {
       first.rej(new Error(`${url}: ${e.message}`));
       this._done.rej(e);
     };
-    this.worker = await startWorker(this.wasmUrl, (m) => this._message(m));
+    this.worker = await this._connect();
     this.worker.postMessage({ type: 'mco-open', id: this.workerId, bytes: buffer }, [buffer]);
     await opened;
   }
@@ -235,14 +248,16 @@ export class McoModel extends THREE.Mesh {
     return this._send(msg);
   }
 
-  /** Frees the worker and the GPU buffers. */
+  /** Frees the model's decoder state, its own worker and the GPU buffers. */
   dispose() {
     if (this.worker) {
       this.worker.postMessage({ type: 'close', id: this.workerId });
-      this.worker.terminate();
+      if (this.decoder) this.decoder.off(this.workerId);
+      else this.worker.terminate();
     }
     this.worker = null;
     this.geometry.dispose();
     this.material.dispose();
+    this.dispatchEvent({ type: 'dispose' });
   }
 }

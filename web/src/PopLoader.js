@@ -8,7 +8,7 @@
 // mesh; `mesh.userData.pop` holds the current figures.
 
 import * as THREE from 'three';
-import { startWorker, newId } from './wasm.js';
+import { DecoderWorker, newId } from './wasm.js';
 
 /** Builds a BufferGeometry from a worker mesh ({positions, normals?, colors?, indices?}). */
 export function geometryFromMesh(m) {
@@ -26,27 +26,13 @@ export function geometryFromMesh(m) {
 export class PopLoader extends THREE.Loader {
   constructor(manager) {
     super(manager);
-    this.wasmUrl = undefined; // default: lodkit.wasm beside wasm.js
-    this.worker = null;
-    this.workerReady = null;
-    this.handlers = new Map();
+    this.decoder = new DecoderWorker();
   }
 
   /** Where lodkit.wasm is (default: beside this module). */
   setWasmPath(url) {
-    this.wasmUrl = url;
+    this.decoder.wasmUrl = url;
     return this;
-  }
-
-  _worker() {
-    if (!this.workerReady) {
-      this.workerReady = startWorker(this.wasmUrl, (m) => {
-        const h = this.handlers.get(m.id);
-        if (h) h(m);
-        else if (m.type === 'error') console.error(`lodkit worker: ${m.message}`);
-      }).then((w) => (this.worker = w));
-    }
-    return this.workerReady;
   }
 
   /**
@@ -93,7 +79,7 @@ export class PopLoader extends THREE.Loader {
     const fail = (err) => {
       if (failed) return;
       failed = true;
-      this.handlers.delete(id);
+      this.decoder.off(id);
       rejectDone(err);
       if (onError) onError(err);
       else console.error(err);
@@ -101,7 +87,7 @@ export class PopLoader extends THREE.Loader {
       this.manager.itemEnd(fullUrl);
     };
     this.manager.itemStart(fullUrl);
-    this.handlers.set(id, (m) => {
+    this.decoder.on(id, (m) => {
       if (m.type === 'error') return fail(new Error(`${fullUrl}: ${m.message}`));
       if (m.type === 'pop-level') {
         const old = mesh.geometry;
@@ -148,7 +134,7 @@ export class PopLoader extends THREE.Loader {
         mesh.dispatchEvent({ type: 'digest', digest: m.digest });
       } else if (m.type === 'pop-done') {
         state.complete = true;
-        this.handlers.delete(id);
+        this.decoder.off(id);
         if (first) return fail(new Error(`${fullUrl}: the stream holds no complete level`));
         resolveDone(mesh);
         this.manager.itemEnd(fullUrl);
@@ -157,7 +143,7 @@ export class PopLoader extends THREE.Loader {
     (async () => {
       // The stream starts while the worker starts: reads made before it is
       // ready are queued and sent in order.
-      const workerReady = this._worker().then((w) => {
+      const workerReady = this.decoder.ready().then((w) => {
         w.postMessage({ type: 'pop-open', id });
         return w;
       });
@@ -199,16 +185,13 @@ export class PopLoader extends THREE.Loader {
    * stream's first level is not kept waiting for them.
    */
   preload() {
-    this._worker();
+    this.decoder.ready();
     return this;
   }
 
   /** Frees the worker (meshes already made stay usable). */
   dispose() {
-    if (this.worker) this.worker.terminate();
-    this.worker = null;
-    this.workerReady = null;
-    this.handlers.clear();
+    this.decoder.terminate();
     return this;
   }
 }

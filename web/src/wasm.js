@@ -42,6 +42,47 @@ export async function startWorker(wasmUrl, onMessage) {
   return worker;
 }
 
+/**
+ * One decoder worker shared by a loader's streams or models (PopLoader's,
+ * McoLoader's): `ready()` starts it on first use (a promise of the
+ * worker), `on(id, handler)` / `off(id)` route its messages by stream or
+ * model id, `terminate()` ends it (a later `ready()` starts a new one).
+ */
+export class DecoderWorker {
+  constructor() {
+    this.wasmUrl = undefined; // default: lodkit.wasm beside this module
+    this.worker = null;
+    this.started = null;
+    this.handlers = new Map();
+  }
+
+  ready() {
+    if (!this.started) {
+      this.started = startWorker(this.wasmUrl, (m) => {
+        const h = this.handlers.get(m.id);
+        if (h) h(m);
+        else if (m.type === 'error') console.error(`lodkit worker: ${m.message}`);
+      }).then((w) => (this.worker = w));
+    }
+    return this.started;
+  }
+
+  on(id, handler) {
+    this.handlers.set(id, handler);
+  }
+
+  off(id) {
+    this.handlers.delete(id);
+  }
+
+  terminate() {
+    if (this.worker) this.worker.terminate();
+    this.worker = null;
+    this.started = null;
+    this.handlers.clear();
+  }
+}
+
 /** A fresh id for a stream or model inside a worker. */
 export function newId() {
   return nextId++;

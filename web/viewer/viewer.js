@@ -12,7 +12,7 @@ import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { PLYLoader } from 'three/addons/loaders/PLYLoader.js';
 import { MeshoptDecoder } from 'three/addons/libs/meshopt_decoder.module.js';
 import { TilesRenderer } from '3d-tiles-renderer';
-import { PopLoader, McoModel, wasmModule } from './lodkit/index.js';
+import { PopLoader, McoLoader, wasmModule } from './lodkit/index.js';
 
 // The LOD-chain switch uses a level's mean edge length as its error; an
 // edge this many times the pixel tolerance on screen is still accepted
@@ -211,6 +211,7 @@ async function headSize(url) {
 
 // One loader (one worker) for the page, started with the page.
 const popLoader = new PopLoader();
+const mcoLoader = new McoLoader();
 
 async function openPop(url) {
   const loader = popLoader.preload();
@@ -291,13 +292,10 @@ async function openPop(url) {
 async function openMco(url) {
   // Resolves at the file's first chunk: the coarse cut shows while the rest
   // streams in, and each chunk re-cuts it with finer LOD numbers.
-  const model = await McoModel.load(url, {
-    tolerance: state.tolerance,
-    onProgress: (p) => {
-      state.loaded = p.loaded;
-      state.total = p.total;
-      hud();
-    },
+  const model = await mcoLoader.setTolerance(state.tolerance).loadAsync(url, (p) => {
+    state.loaded = p.loaded;
+    state.total = p.total;
+    hud();
   });
   viewer.model = model;
   scene.add(model);

@@ -113,7 +113,7 @@ fn main() {
         let (tr, classes) = triangulate_traced(&s, &t);
         let nm = non_manifold_triangles(&tr.mesh);
         let mut hist = [0usize; 256];
-        for (i, bad) in lodkit_particles::non_manifold_flags(&tr.mesh)
+        for (i, bad) in lodkit_mesh::topology::non_manifold_faces(&tr.mesh)
             .iter()
             .enumerate()
         {

@@ -215,7 +215,6 @@ pub fn time_view_cuts(
     let mut kept = vec![f64::INFINITY; n];
     let mut fresh = vec![f64::INFINITY; n];
     let mut nodes = vec![f64::INFINITY; n];
-    let bounds = lodkit_mco::view_subtree_bounds(model);
     let mut by_nodes = ViewCut::new();
     let mut out_nodes = Vec::new();
     let mut tris = vec![0usize; n];
@@ -223,6 +222,7 @@ pub fn time_view_cuts(
     let mut cut = ViewCut::new();
     let mut out = Vec::new();
     cut.update(model, &cameras[0], tolerance_px); // builds the subtree bounds
+    by_nodes.update_by_nodes(model, &cameras[0], tolerance_px, &mut out_nodes); // and its own
     for round in 0..rounds.max(1) {
         for (i, cam) in cameras.iter().enumerate() {
             let t = Instant::now();
@@ -234,7 +234,6 @@ pub fn time_view_cuts(
             let t = Instant::now();
             black_box(by_nodes.update_by_nodes(
                 model,
-                &bounds,
                 black_box(cam),
                 tolerance_px,
                 &mut out_nodes,

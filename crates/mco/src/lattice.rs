@@ -179,6 +179,30 @@ pub fn brick_key(x: u32, y: u32, z: u32) -> u64 {
     pack(x >> BRICK_BITS, y >> BRICK_BITS, z >> BRICK_BITS)
 }
 
+/// Leaf cubes of at least this and at most [`MAX_PLAIN_CUBE`] (object
+/// units) are built as they are; outside, the build runs in a frame
+/// scaled by a power of two (see [`normalising_scale`]).
+const MIN_PLAIN_CUBE: f32 = 1.0 / (1u32 << 24) as f32;
+/// See [`MIN_PLAIN_CUBE`].
+const MAX_PLAIN_CUBE: f32 = (1u32 << 16) as f32;
+
+/// The power of two `2^k` that brings a leaf cube of `cube` object units to
+/// about `2^-8` (a unit box at resolution 256), or 1 when `cube` lies in
+/// `MIN_PLAIN_CUBE..=MAX_PLAIN_CUBE`. The build's squared distances, areas
+/// and tolerances overflow `f32` for cubes around 1e18 and lose their
+/// meaning (subnormal) around 1e-12; scaled, every input builds in the same
+/// frame and gives the same model at any scale within float precision.
+/// Multiplying by a power of two is exact (no rounding), and the model is
+/// mapped back exactly, so lattices of ordinary size build bit for bit as
+/// they always did.
+pub(crate) fn normalising_scale(cube: f32) -> f32 {
+    if !(cube.is_finite() && cube > 0.0) || (MIN_PLAIN_CUBE..=MAX_PLAIN_CUBE).contains(&cube) {
+        return 1.0;
+    }
+    let k = -8 - cube.log2().round() as i32;
+    2f32.powi(k.clamp(-126, 126))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

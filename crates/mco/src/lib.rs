@@ -69,8 +69,8 @@
 //! | extraction by referencing: §6.1 traversal, birth/death tables | `extraction_by_referencing.rs` | §6.1, §6.2.1 |
 //! | view-dependent cut | `view_dependent_cut.rs` | §8.2 (future work) |
 //! | the model's arrays, its info | `model.rs` | Fig. 6.1 |
-//! | `.mco` files | `model_file.rs` | — (`docs/formats/mco.md`) |
-//! | `.mco` version 2: LOD-ordered chunks, prefix reader | `model_file_v2.rs` | — (`docs/formats/mco.md`) |
+//! | `.mco` files: load, save, shared limits, checks | `mco_file.rs`, `mco_file/{format,validate}.rs` | — (`docs/formats/mco.md`) |
+//! | `.mco` version 1 (flat arrays, read) / version 2 (LOD-ordered chunks, prefix reader) | `mco_file/v1.rs` / `mco_file/v2.rs` | — (`docs/formats/mco.md`) |
 //! | entry points, incremental builder | `pipeline.rs` | §4.4 |
 //! | virtual range scanner | `scanner.rs` | §4.4 (the experiment) |
 //!
@@ -111,9 +111,8 @@ mod marching_cubes;
 // here rather than gated there.
 #[cfg_attr(not(test), allow(dead_code))]
 mod marching_cubes_cases;
+mod mco_file;
 mod model;
-mod model_file;
-mod model_file_v2;
 mod neighbours;
 mod normals_estimation;
 mod octree_build;
@@ -127,17 +126,14 @@ mod view_dependent_cut;
 mod tests;
 
 pub use lattice::{Grid, MAX_RESOLUTION};
+pub use mco_file::{ChunkInfo, FORMAT_VERSION, Header as McoHeader, McoStream, PartialModel};
 pub use model::{LevelInfo, McoModel, ModelInfo};
-pub use model_file::FORMAT_VERSION;
-pub use model_file_v2::{ChunkInfo, Header as McoHeader, McoStream, PartialModel};
 pub use pipeline::{
     AddReport, IncrementalBuilder, MAX_BUILD_BYTES, Options, all_closed_meshes, build_from_conf,
     build_from_mesh, build_from_models, build_from_points, build_from_range_images, densify_meshes,
     estimate_build_bytes, grid_for, mesh_resolution, samples_of,
 };
 pub use scanner::{ScanOptions, scan_mesh, write_scans};
-#[doc(hidden)]
-pub use view_dependent_cut::view_subtree_bounds;
 pub use view_dependent_cut::{Camera, ViewCut};
 
 /// Errors of the continuous-LOD crate; `Display` is one line.

@@ -98,7 +98,7 @@ pub struct McoModel {
     pub(crate) acc_max: Vec<u32>,
     /// Per node, the largest error in its subtree (derived, built on the
     /// first view-dependent cut; see [`crate::view_dependent_cut`]).
-    pub(crate) view_bounds: crate::view_dependent_cut::LazyViewBounds,
+    pub(crate) view_bounds: crate::view_dependent_cut::view_data::LazyViewBounds,
 }
 
 /// The traversal's arrays once built. Derived from the other fields, so

@@ -97,7 +97,7 @@ pub fn mesh_samples(m: &TriMesh) -> PointCloud {
 /// `lodkit_mesh::normals::vertex_normals` does.
 pub(crate) fn vertex_normals(m: &TriMesh) -> Vec<Vec3> {
     let extent = m.bbox().size().max_element();
-    let s = crate::pipeline::normalising_scale(extent / 256.0);
+    let s = crate::lattice::normalising_scale(extent / 256.0);
     if s == 1.0 {
         return lodkit_mesh::normals::vertex_normals(m);
     }

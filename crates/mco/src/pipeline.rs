@@ -29,7 +29,7 @@ use std::path::Path;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use lodkit_mesh::{Aabb, Model, PointCloud, RangeImage, TriMesh};
 
-use crate::lattice::{BRICK, BRICK_BITS, BRICK_VOLUME, Grid, local_index, pack};
+use crate::lattice::{BRICK, BRICK_BITS, BRICK_VOLUME, Grid, local_index, normalising_scale, pack};
 use crate::marching_cubes::{BandSigns, BrickMasks, brick_configs, leaf_config_in};
 use crate::model::McoModel;
 use crate::normals_estimation::{mesh_samples, point_cloud_samples, range_image_samples};
@@ -37,7 +37,7 @@ use crate::signed_distance::SignedDistanceField;
 use crate::{Error, Result};
 
 /// Build options.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Options {
     /// Leaf cubes along the longest axis of the inputs' bounding box,
     /// `2..=`[`crate::MAX_RESOLUTION`]; `None` (the default) = a cube
@@ -45,6 +45,17 @@ pub struct Options {
     /// the module docs). Memory and time grow with the surface's area in
     /// cubes, about the square of the resolution.
     pub resolution: Option<u32>,
+}
+
+impl Options {
+    /// The defaults: the resolution from the inputs' sample spacing.
+    pub const DEFAULT: Options = Options { resolution: None };
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options::DEFAULT
+    }
 }
 
 /// Oriented samples of any model: positions with unit outward normals
@@ -257,30 +268,6 @@ pub struct IncrementalBuilder {
     scale: f32,
     /// Whether [`IncrementalBuilder::build`] prunes band-edge sheets.
     prune_band_edges: bool,
-}
-
-/// Leaf cubes of at least this and at most [`MAX_PLAIN_CUBE`] (object
-/// units) are built as they are; outside, the build runs in a frame
-/// scaled by a power of two (see [`normalising_scale`]).
-const MIN_PLAIN_CUBE: f32 = 1.0 / (1u32 << 24) as f32;
-/// See [`MIN_PLAIN_CUBE`].
-const MAX_PLAIN_CUBE: f32 = (1u32 << 16) as f32;
-
-/// The power of two `2^k` that brings a leaf cube of `cube` object units to
-/// about `2^-8` (a unit box at resolution 256), or 1 when `cube` lies in
-/// `MIN_PLAIN_CUBE..=MAX_PLAIN_CUBE`. The build's squared distances, areas
-/// and tolerances overflow `f32` for cubes around 1e18 and lose their
-/// meaning (subnormal) around 1e-12; scaled, every input builds in the same
-/// frame and gives the same model at any scale within float precision.
-/// Multiplying by a power of two is exact (no rounding), and the model is
-/// mapped back exactly, so lattices of ordinary size build bit for bit as
-/// they always did.
-pub(crate) fn normalising_scale(cube: f32) -> f32 {
-    if !(cube.is_finite() && cube > 0.0) || (MIN_PLAIN_CUBE..=MAX_PLAIN_CUBE).contains(&cube) {
-        return 1.0;
-    }
-    let k = -8 - cube.log2().round() as i32;
-    2f32.powi(k.clamp(-126, 126))
 }
 
 /// `grid` with its lengths multiplied by `s` (a power of two: exact).
@@ -524,7 +511,7 @@ impl IncrementalBuilder {
         // the model exactly at little cost, and a loaded model cuts as the
         // built one.
         for p in &mut tree.vertices.positions {
-            *p = crate::model_file_v2::snapped_position(&field.grid, *p);
+            *p = crate::mco_file::snapped_position(&field.grid, *p);
         }
         let together = crate::crack_patch::expand_together(&tree);
         let rank = crate::octree_build::expansion_rank(&model, &tree.vertices.positions);
@@ -547,7 +534,7 @@ impl IncrementalBuilder {
         // The normals a `.mco` file stores (octahedral, 2 × 16 bits): the
         // model and the model read from its file cut alike, bit for bit.
         for n in &mut model.vertices.normals {
-            *n = crate::model_file_v2::stored_normal(*n);
+            *n = crate::mco_file::stored_normal(*n);
         }
         Ok(model)
     }

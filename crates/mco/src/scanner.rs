@@ -52,17 +52,22 @@ pub struct ScanOptions {
     pub seed: u64,
 }
 
+impl ScanOptions {
+    /// The defaults: 8 views on the horizon, 256 × 256 samples, no noise.
+    pub const DEFAULT: ScanOptions = ScanOptions {
+        views: 8,
+        width: 256,
+        height: 256,
+        elevation_deg: 0.0,
+        alternate: false,
+        noise: 0.0,
+        seed: 1,
+    };
+}
+
 impl Default for ScanOptions {
     fn default() -> Self {
-        ScanOptions {
-            views: 8,
-            width: 256,
-            height: 256,
-            elevation_deg: 0.0,
-            alternate: false,
-            noise: 0.0,
-            seed: 1,
-        }
+        ScanOptions::DEFAULT
     }
 }
 

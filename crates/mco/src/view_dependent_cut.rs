@@ -66,8 +66,6 @@
 //! state. None of these changes the result: the same triangles in the
 //! same order as a fresh cut.
 
-use std::sync::OnceLock;
-
 use glam::Vec3;
 
 use crate::model::McoModel;
@@ -76,7 +74,9 @@ mod closure;
 mod compact_cut;
 mod frontier;
 mod layout;
+pub(crate) mod view_data;
 use layout::*;
+use view_data::*;
 
 /// A perspective camera, in the model's object units. Only what decides
 /// which nodes are refined: where it is, where it looks, and how many
@@ -281,37 +281,13 @@ const SCAN_SHARE: usize = 40;
 /// separate a child's corners from its parent's.
 const BOUND_GROWTH: f32 = 1.0 / (1 << 18) as f32;
 
-/// The derived arrays of a model's view-dependent cuts once built (see
-/// [`ViewData`]). Derived from the other fields, so it never makes two
-/// models differ: every value compares equal.
-#[derive(Debug, Clone, Default)]
-pub(crate) struct LazyViewBounds(OnceLock<ViewData>);
-
-impl PartialEq for LazyViewBounds {
-    fn eq(&self, _: &Self) -> bool {
-        true
-    }
-}
-
-/// What a model's view-dependent cuts read beyond the model: the compact
-/// layout of a regular model ([`ViewLayout`], every model a loader or the
-/// pipeline makes), or only the subtree bounds of any other (a hand-made
-/// model; its cuts read the node arrays directly, with the same result).
-#[derive(Debug, Clone)]
-enum ViewData {
-    Layout(Box<ViewLayout>),
-    Bounds(Vec<f32>),
-}
-
 /// Per node, the largest error of an inner node in its subtree (its own
 /// included; 0 for a leaf), or infinity where the subtree must always be
 /// searched (children not inside the node's cube, or a cube that is not
 /// finite). Children follow their parent in node order (the loaders check
 /// it), so one reverse pass suffices.
-/// The subtree bounds [`ViewCut::update_by_nodes`] reads (`O(nodes)`;
-/// not a stable API).
-#[doc(hidden)]
-pub fn view_subtree_bounds(model: &McoModel) -> Vec<f32> {
+/// `O(nodes)`.
+pub(crate) fn view_subtree_bounds(model: &McoModel) -> Vec<f32> {
     let n = model.nodes.len();
     let mut b = vec![0.0f32; n];
     for i in (0..n).rev() {
@@ -436,6 +412,9 @@ pub struct ViewCut {
     /// ranks, per rank outside every group and per LOD group its support,
     /// and the expanded count. `new_want` and `work` are its scratch.
     inc_layout: u64,
+    /// The subtree bounds [`ViewCut::update_by_nodes`] searches with
+    /// ([`view_subtree_bounds`] of its model, built at its first call).
+    node_bounds: Vec<f32>,
     want: Vec<u64>,
     new_want: Vec<u64>,
     support: Vec<i32>,
@@ -490,14 +469,14 @@ impl ViewCut {
     }
 
     /// The same cut as [`ViewCut::update_into`] by the search on the node
-    /// arrays that every model without a compact layout gets, given
-    /// [`view_subtree_bounds`]`(model)`: for the bench's paired
-    /// comparison of the two on one model (not a stable API).
+    /// arrays that every model without a compact layout gets: for the
+    /// bench's paired comparison of the two on one model (not a stable
+    /// API). Keep one `ViewCut` per model for it: the subtree bounds are
+    /// built at the first call (`O(nodes)`) and kept.
     #[doc(hidden)]
     pub fn update_by_nodes(
         &mut self,
         model: &McoModel,
-        bounds: &[f32],
         camera: &Camera,
         tolerance_px: f32,
         out: &mut Vec<u32>,
@@ -507,7 +486,12 @@ impl ViewCut {
             self.count = 0;
             return 0;
         }
-        self.count = self.cut_nodes(model, bounds, camera, tolerance_px, out);
+        if self.node_bounds.len() != model.nodes.len() {
+            self.node_bounds = view_subtree_bounds(model);
+        }
+        let bounds = std::mem::take(&mut self.node_bounds);
+        self.count = self.cut_nodes(model, &bounds, camera, tolerance_px, out);
+        self.node_bounds = bounds;
         self.count
     }
 

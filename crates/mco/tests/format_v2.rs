@@ -10,7 +10,7 @@ use lodkit_mco::{
 };
 
 /// The writer's target size of chunk 0 (`FIRST_CHUNK_BYTES` in
-/// `model_file_v2.rs`, `docs/formats/mco.md`).
+/// `mco_file/v2.rs`, `docs/formats/mco.md`).
 const FIRST_CHUNK_BYTES: u64 = 4096;
 
 /// `lodkit build`'s scans (its `BUILD_SCANS`): 8 views, alternately 30°

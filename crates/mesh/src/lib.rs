@@ -22,6 +22,8 @@
 //! | [`info::model_info`] | counts, topology defects, genus |
 //! | [`topology::UnionFind`], [`topology::edge_multiplicities`], [`topology::non_manifold_faces`], [`topology::topology_stats`] | shared connectivity primitives |
 //! | [`weld::weld`], [`normals::vertex_normals`], [`shapes`] | welding, normals, test shapes |
+//! | [`Intrinsics`] | pinhole intrinsics (COLMAP's convention), shared by the renderer's cameras and the silhouette calibration's lens |
+//! | `image::decode_rgba`, `image::image_size` (feature `images`) | the one PNG/JPEG decoder, for photographs and textures; sizes bounded from the header before any pixel is allocated |
 //!
 //! Conventions for every crate (see [`mesh`](mod@mesh)): positions are `f32`
 //! object units, never rescaled; faces are CCW seen from outside; colours
@@ -45,7 +47,10 @@
 /// marching-cubes and particle triangulation tables.
 pub mod cube_symmetry;
 pub mod error;
+#[cfg(feature = "images")]
+pub mod image;
 pub mod info;
+mod intrinsics;
 pub mod io;
 pub mod mesh;
 pub mod metrics;
@@ -57,5 +62,6 @@ pub mod weld;
 
 pub use error::{Error, ParseError, Result};
 pub use glam;
+pub use intrinsics::Intrinsics;
 pub use mesh::{Aabb, Model, PointCloud, Pose, RangeImage, TriMesh};
 pub use scene::{Scene, SceneMesh};

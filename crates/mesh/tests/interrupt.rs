@@ -1,6 +1,6 @@
-//! Ctrl-C in the middle of a write removes the temporary file (issue 14,
-//! item 13): this test runs itself again as a child that opts in, starts a
-//! write that stalls half-way, and is sent SIGINT / SIGTERM while the temp
+//! Ctrl-C in the middle of a write removes the temporary file: this test
+//! runs itself again as a child that opts in, starts a write that stalls
+//! half-way, and is sent SIGINT / SIGTERM while the temp
 //! file exists. A folder listed with `TempGuard` goes the same way.
 
 #![cfg(unix)]

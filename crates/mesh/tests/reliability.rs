@@ -1,4 +1,4 @@
-//! Issue 14's reader and writer rules, one test per rule: what reaches the
+//! The readers' and writers' reliability rules, one test per rule: what reaches the
 //! terminal is escaped, text readers skip a byte-order mark, lodkit reads
 //! back what it writes (or refuses to write it), and the corpus files made
 //! for these rules fail with the expected reason.
@@ -15,7 +15,7 @@ fn corpus(name: &str) -> PathBuf {
         .join(name)
 }
 
-/// The corpus files of issue 14's probe classes, with what their one-line
+/// The corpus files of the malformed-input probe classes, with what their one-line
 /// error must say.
 #[test]
 fn probe_corpus_files_fail_for_the_right_reason() {

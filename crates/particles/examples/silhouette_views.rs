@@ -17,7 +17,7 @@ use lodkit_particles::silhouette::{
     ImageSet, SilhouetteOptions, SilhouetteSource, encode_silhouettes,
 };
 use lodkit_particles::{DecodeOptions, EncodeOptions, TriangulateOptions, decode};
-use lodkit_render::{CameraRing, RenderOptions, render, ring};
+use lodkit_render::{COLMAP_DIR, CameraRing, IMAGES_DIR, MASKS_DIR, RenderOptions, render};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -43,7 +43,7 @@ fn main() {
             size,
         )
         .expect("ring");
-        for sub in [ring::IMAGES_DIR, ring::MASKS_DIR, ring::COLMAP_DIR] {
+        for sub in [IMAGES_DIR, MASKS_DIR, COLMAP_DIR] {
             std::fs::create_dir_all(dir.path().join(sub)).expect("folders");
         }
         let opts = RenderOptions {
@@ -55,12 +55,12 @@ fn main() {
             let img = render(&bunny, &v.camera, &opts).expect("render");
             let name = r.file_name(i);
             std::fs::write(
-                dir.path().join(ring::IMAGES_DIR).join(&name),
+                dir.path().join(IMAGES_DIR).join(&name),
                 img.to_png().expect("png"),
             )
             .expect("write");
             std::fs::write(
-                dir.path().join(ring::MASKS_DIR).join(&name),
+                dir.path().join(MASKS_DIR).join(&name),
                 img.mask().to_png().expect("png"),
             )
             .expect("write");

@@ -7,8 +7,6 @@
 //! adds one bit to every vertex coordinate (§7.2). A reader may stop after
 //! any chunk ([`DecodeOptions`]); a damaged or cut chunk is an error that
 //! says which.
-use glam::Vec3;
-use lodkit_mesh::{PointCloud, TriMesh};
 
 use crate::attributes::{self, Channel};
 use crate::coding::bit_coder::BitCoder;
@@ -18,17 +16,32 @@ use crate::coding::range_coder::EntropyReader;
 use crate::coding::raw_bits::BitReader;
 use crate::container::{Chunk, ChunkKind, ChunkReader, Header, Mode, read_header};
 use crate::error::{Result, stream_err};
-use crate::octree::{Frame, QBITS};
+use crate::level_surface::LevelSurface;
+use crate::octree::QBITS;
 use crate::ordering::HLevel;
 use crate::triangulate::{TriangulateOptions, Triangulation};
 
 /// Where to stop reading.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct DecodeOptions {
     /// Last octree level to decode (`None`: all present).
     pub max_level: Option<u8>,
     /// Highest vertex precision to decode (`None`: all present).
     pub max_precision: Option<u8>,
+}
+
+impl DecodeOptions {
+    /// The defaults: every level and precision present.
+    pub const DEFAULT: DecodeOptions = DecodeOptions {
+        max_level: None,
+        max_precision: None,
+    };
+}
+
+impl Default for DecodeOptions {
+    fn default() -> Self {
+        DecodeOptions::DEFAULT
+    }
 }
 
 /// What a prefix of a stream holds.
@@ -72,57 +85,6 @@ pub struct Cut {
     pub offset: usize,
     /// What is missing, in words (as [`decode`]'s error would say).
     pub message: String,
-}
-
-/// One decoded octree surface `S^r` ready for triangulation or display.
-#[derive(Debug, Clone)]
-pub struct LevelSurface {
-    /// Octree level `r` (cubes of side `frame.size / 2^r`).
-    pub level: u8,
-    /// The octree cube, as in the header.
-    pub frame: Frame,
-    /// Kept cells, sorted Morton codes.
-    pub cells: Vec<u64>,
-    /// One vertex per cell (its particle), in model units.
-    pub positions: Vec<Vec3>,
-    /// RGBA8 colours per vertex, when the stream has them.
-    pub colours: Option<Vec<[u8; 4]>>,
-    /// Unit normals per vertex, when the stream has them.
-    pub normals: Option<Vec<Vec3>>,
-}
-
-impl LevelSurface {
-    /// The particles as a point cloud.
-    pub fn to_point_cloud(&self) -> PointCloud {
-        PointCloud {
-            positions: self.positions.clone(),
-            normals: self.normals.clone(),
-            colors: self.colours.clone(),
-        }
-    }
-
-    /// Empty mesh carrying the particles as vertices (faces added by
-    /// triangulation).
-    pub fn vertices_only(&self) -> TriMesh {
-        TriMesh {
-            positions: self.positions.clone(),
-            normals: self.normals.clone(),
-            colors: self.colours.clone(),
-            uvs: None,
-            faces: Vec::new(),
-        }
-    }
-
-    /// [`vertices_only`](Self::vertices_only), moving the particles.
-    pub fn into_vertices(self) -> TriMesh {
-        TriMesh {
-            positions: self.positions,
-            normals: self.normals,
-            colors: self.colours,
-            uvs: None,
-            faces: Vec::new(),
-        }
-    }
 }
 
 trait ChunkRead<'a>: BitCoder + Sized {

@@ -36,7 +36,7 @@
 //! coding (`coding/`: `levels.rs` and `precision_layers.rs` over the
 //! symbol interface `bit_coder.rs`, with `raw_bits.rs` or `range_coder.rs`
 //! and the entropy mode's `contexts.rs` and `links.rs`) → container
-//! (`container.rs`); and back: `decode.rs` → `triangulate/` (the 256
+//! (`container.rs`); and back: `decode.rs` → `level_surface.rs` (one level's particles) → `triangulate/` (the 256
 //! cases in `triangulation_table.rs`, then `orientation.rs`) → `stats.rs`.
 //!
 //! ## What to expect
@@ -71,6 +71,7 @@ pub(crate) mod decode;
 pub(crate) mod decode_stream;
 pub(crate) mod encode;
 pub(crate) mod error;
+pub(crate) mod level_surface;
 pub(crate) mod octree;
 pub(crate) mod ordering;
 pub(crate) mod orientation;
@@ -87,18 +88,19 @@ pub use container::{
     CHUNK_HEADER_LEN, Chunk, ChunkKind, ChunkReader, HEADER_LEN, Header, MAGIC, Mode, VERSION,
     read_header,
 };
-pub use decode::{Cut, DecodeOptions, Decoded, LevelSurface, decode, decode_prefix};
+pub use decode::{Cut, DecodeOptions, Decoded, decode, decode_prefix};
 pub use decode_stream::PrefixDecoder;
 pub use encode::{
     DEFAULT_PRECISION, EncodeOptions, EncodeReport, Encoded, LevelReport, Placement, encode,
 };
 pub use error::{Error, Result};
+pub use level_surface::LevelSurface;
 pub use octree::{Frame, Sidedness};
 pub use ordering::HLevel;
 pub use orientation::orient;
 pub use stats::{
-    LevelStats, ProgressiveLevel, StreamStats, non_manifold_flags, non_manifold_triangles,
-    progressive_levels, stream_stats,
+    LevelStats, ProgressiveLevel, StreamStats, non_manifold_triangles, progressive_levels,
+    stream_stats,
 };
 pub use thinning::ThinningOptions;
 pub use triangulate::{

@@ -264,13 +264,27 @@ pub struct Octree {
 }
 
 /// Options of [`Octree::build`].
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy)]
 pub struct BuildOptions {
     /// Octree resolution `R`; `None` picks it from the sampling density.
     pub depth: Option<u8>,
     /// Force a labelling; `None` floods closed meshes, uses normals when
     /// the input is open and has them, floods otherwise.
     pub sidedness: Option<Sidedness>,
+}
+
+impl BuildOptions {
+    /// The defaults: depth and labelling chosen from the input.
+    pub const DEFAULT: BuildOptions = BuildOptions {
+        depth: None,
+        sidedness: None,
+    };
+}
+
+impl Default for BuildOptions {
+    fn default() -> Self {
+        BuildOptions::DEFAULT
+    }
 }
 
 #[derive(Default, Clone, Copy)]

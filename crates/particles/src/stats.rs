@@ -268,29 +268,11 @@ impl std::fmt::Display for StreamStats {
 }
 
 /// Triangles incident to an edge that more than two triangles use (the
-/// strict count; Table 1 counts non-manifold *local triangulations*, see
+/// strict count, [`lodkit_mesh::topology::non_manifold_face_count`];
+/// Table 1 counts non-manifold *local triangulations*, see
 /// [`TriangulationStats::fallbacks`]).
 ///
 /// Cost: one sort of the `3 · faces` edge keys.
 pub fn non_manifold_triangles(mesh: &TriMesh) -> usize {
-    non_manifold_flags(mesh).iter().filter(|b| **b).count()
-}
-
-/// Per triangle: whether it is incident to an edge used more than twice
-/// (edges counted by [`lodkit_mesh::topology::edge_multiplicities`]).
-pub fn non_manifold_flags(mesh: &TriMesh) -> Vec<bool> {
-    let over_used: Vec<(u32, u32)> = lodkit_mesh::topology::edge_multiplicities(mesh)
-        .into_iter()
-        .filter(|e| e.count > 2)
-        .map(|e| (e.a, e.b))
-        .collect();
-    mesh.faces
-        .iter()
-        .map(|f| {
-            (0..3).any(|k| {
-                let (a, b) = (f[k].min(f[(k + 1) % 3]), f[k].max(f[(k + 1) % 3]));
-                over_used.binary_search(&(a, b)).is_ok()
-            })
-        })
-        .collect()
+    lodkit_mesh::topology::non_manifold_face_count(mesh)
 }

@@ -169,7 +169,7 @@ pub fn choose_relax_level(tree: &Octree) -> u8 {
 /// thinned octree, vertices at each particle's leaf mean, and each
 /// level's triangle count.
 fn coarse_non_manifold_share(tree: &Octree, last: usize) -> (f64, Vec<usize>) {
-    use crate::decode::LevelSurface;
+    use crate::level_surface::LevelSurface;
     use crate::stats::non_manifold_triangles;
     use crate::triangulate::{TriangulateOptions, triangulate};
     let Ok((h, leaf_source)) = crate::ordering::Hierarchy::from_thinned(tree) else {

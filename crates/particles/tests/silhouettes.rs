@@ -11,12 +11,12 @@ use lodkit_particles::silhouette::{
     ImageSet, SilhouetteOptions, SilhouetteSource, carve_octree, encode_carved, encode_silhouettes,
 };
 use lodkit_particles::{DecodeOptions, EncodeOptions, decode};
-use lodkit_render::{CameraRing, RenderOptions, render, ring};
+use lodkit_render::{COLMAP_DIR, CameraRing, IMAGES_DIR, MASKS_DIR, RenderOptions, render};
 
 /// Writes a ring of `per_ring` views at each elevation, `size` pixels.
 fn write_ring(mesh: &TriMesh, dir: &Path, per_ring: u32, elevations: &[f32], size: u32) {
     let r = CameraRing::new(&mesh.bbox(), per_ring, elevations, 35.0, size, size).unwrap();
-    for sub in [ring::IMAGES_DIR, ring::MASKS_DIR, ring::COLMAP_DIR] {
+    for sub in [IMAGES_DIR, MASKS_DIR, COLMAP_DIR] {
         std::fs::create_dir_all(dir.join(sub)).unwrap();
     }
     let opts = RenderOptions {
@@ -27,13 +27,9 @@ fn write_ring(mesh: &TriMesh, dir: &Path, per_ring: u32, elevations: &[f32], siz
     for (i, v) in r.views.iter().enumerate() {
         let img = render(mesh, &v.camera, &opts).unwrap();
         let name = r.file_name(i);
+        std::fs::write(dir.join(IMAGES_DIR).join(&name), img.to_png().unwrap()).unwrap();
         std::fs::write(
-            dir.join(ring::IMAGES_DIR).join(&name),
-            img.to_png().unwrap(),
-        )
-        .unwrap();
-        std::fs::write(
-            dir.join(ring::MASKS_DIR).join(&name),
+            dir.join(MASKS_DIR).join(&name),
             img.mask().to_png().unwrap(),
         )
         .unwrap();
@@ -456,7 +452,7 @@ fn images_symlinked_out_of_the_folder_are_refused() {
     std::fs::create_dir(&outside).unwrap();
     let dir = root.path().join("ring");
     write_ring(&sphere(), &dir, 4, &[20.0], 32);
-    let images = dir.join(ring::IMAGES_DIR);
+    let images = dir.join(IMAGES_DIR);
     let first = std::fs::read_dir(&images)
         .unwrap()
         .map(|e| e.unwrap().path())
@@ -466,7 +462,7 @@ fn images_symlinked_out_of_the_folder_are_refused() {
     symlink(outside.join("x.png"), &first).unwrap();
     for calibration in [
         dir.join("transforms.json"),
-        dir.join(ring::COLMAP_DIR).join("images.txt"),
+        dir.join(COLMAP_DIR).join("images.txt"),
     ] {
         let e = ImageSet::load(&calibration, SilhouetteSource::Auto)
             .err()
@@ -483,7 +479,7 @@ fn images_symlinked_out_of_the_folder_are_refused() {
     symlink(&moved, &images).unwrap();
     for calibration in [
         dir.join("transforms.json"),
-        dir.join(ring::COLMAP_DIR).join("images.txt"),
+        dir.join(COLMAP_DIR).join("images.txt"),
     ] {
         let e = ImageSet::load(&calibration, SilhouetteSource::Auto)
             .err()

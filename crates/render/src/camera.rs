@@ -30,33 +30,11 @@ pub struct Camera {
     pub fov_y_deg: f32,
 }
 
-/// Pinhole intrinsics of a [`Camera`] for a `width × height` image, in
-/// pixels, COLMAP's convention: the top-left pixel's centre is at
-/// `(0.5, 0.5)`, `u` grows right and `v` down, and a camera-frame point
-/// `(x, y, z)` (OpenCV axes: +X right, +Y down, +Z forward) lands at
-/// `u = fx·x/z + cx`, `v = fy·y/z + cy`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Intrinsics {
-    /// Image width in pixels.
-    pub width: u32,
-    /// Image height in pixels.
-    pub height: u32,
-    /// Horizontal focal length in pixels.
-    pub fx: f64,
-    /// Vertical focal length in pixels (equal to `fx`: square pixels).
-    pub fy: f64,
-    /// Principal point, `width / 2`.
-    pub cx: f64,
-    /// Principal point, `height / 2`.
-    pub cy: f64,
-}
-
-impl Intrinsics {
-    /// Horizontal field of view in radians (NeRF's `camera_angle_x`).
-    pub fn angle_x(&self) -> f64 {
-        2.0 * (self.width as f64 / (2.0 * self.fx)).atan()
-    }
-}
+/// Pinhole intrinsics (the type is `lodkit_mesh::Intrinsics`, shared with
+/// the silhouette calibration's lens): a [`Camera`]'s for a
+/// `width × height` image ([`Camera::intrinsics`]) have square pixels
+/// (`fx = fy`) and the principal point at the image centre.
+pub use lodkit_mesh::Intrinsics;
 
 fn check_fov(fov_y_deg: f32) -> Result<(), RenderError> {
     if fov_y_deg.is_finite() && fov_y_deg > 0.0 && fov_y_deg < 180.0 {

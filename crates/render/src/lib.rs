@@ -13,12 +13,14 @@
 //! let png = render(&mesh, &cam, &opts).unwrap().over(opts.background).to_png().unwrap();
 //! ```
 //!
-//! The stages read in the file names: [`camera`] (pose and pinhole) →
-//! `clip` (near-plane and guard-band clipping, fixed-point snapping) →
-//! `raster` (edge functions, top-left rule, depth buffer) → [`shade`]
-//! (ambient + Lambert headlight) → [`render`](mod@render) (bands, box
-//! filter) → [`image`] (RGBA, mask, PNG); [`colour_scale`](mod@colour_scale) maps numbers to
-//! heat-map colours; [`ring`] writes camera rings.
+//! The stages read in the file names: `camera.rs` (pose and pinhole,
+//! [`Camera`]) → `clip.rs` (near-plane and guard-band clipping, fixed-point
+//! snapping) → `raster.rs` (edge functions, top-left rule, depth buffer) →
+//! `shade.rs` (ambient + Lambert headlight) → `render.rs` (bands, box
+//! filter, [`render`]) → `image.rs` (RGBA, mask, PNG: [`Image`], [`Mask`]);
+//! `colour_scale.rs` maps numbers to heat-map colours ([`colour_scale`]);
+//! `camera_ring.rs` writes camera rings ([`CameraRing`]). Every public item
+//! is at the crate root.
 //!
 //! Why hand-written: the kept Rust software rasteriser, `euc` (0.5), is a
 //! generic shader pipeline over its own vector library (`vek`, a second
@@ -40,7 +42,7 @@
 //!   image size, plus about 100 bytes a face.
 //!
 //! Colour: vertex colours, or a clay base colour; [`render_textured`] adds
-//! materials (base colour factors and decoded textures, [`texture`]).
+//! materials (base colour factors and decoded textures, [`Materials`]).
 //!
 //! # Conventions
 //!
@@ -67,7 +69,7 @@
 //!
 //! # Camera ring layout
 //!
-//! [`ring::CameraRing`] and `lodkit render MESH --ring N --out DIR` write:
+//! [`CameraRing`] and `lodkit render MESH --ring N --out DIR` write:
 //!
 //! ```text
 //! DIR/images/NNN.png     RGBA8, alpha = coverage (0 = background); RGB straight
@@ -114,24 +116,34 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
-pub mod camera;
+mod camera;
+mod camera_ring;
 mod clip;
-pub mod colour_scale;
-pub mod image;
+mod colour_scale;
+mod image;
 mod raster;
-pub mod render;
-pub mod ring;
-pub mod shade;
-pub mod texture;
+mod render;
+mod shade;
+mod texture;
 
-pub use camera::{Camera, Intrinsics};
+pub use camera::{Camera, FRAMING_MARGIN, Intrinsics};
+pub use camera_ring::{
+    COLMAP_DIR, CameraRing, IMAGES_DIR, MASKS_DIR, MAX_VIEWS, RingView, TRANSFORMS_FILE,
+};
 pub use colour_scale::colour_scale;
-pub use image::{Image, Mask};
+pub use image::{Image, Mask, PNG_DEFLATE_LEVEL};
 pub use render::{
     MAX_SIZE, MAX_SUPERSAMPLE, Normals, RenderOptions, render, render_points, render_textured,
 };
-pub use ring::{CameraRing, RingView};
+pub use shade::{AMBIENT, DIFFUSE, FAR_POINT_BRIGHTNESS};
 pub use texture::{Look, Materials, TextureImage, Wrap};
+
+/// The camera ring's folder layout under the path the CLI still names
+/// (the same items as at the crate root).
+#[doc(hidden)]
+pub mod ring {
+    pub use crate::camera_ring::{COLMAP_DIR, IMAGES_DIR, MASKS_DIR, TRANSFORMS_FILE};
+}
 
 /// What can go wrong when rendering.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]

@@ -9,8 +9,8 @@ use std::path::Path;
 use glam::Vec3;
 
 use crate::partition::{block_input, block_output};
-use crate::run::io_err;
 use crate::soup::{self, Layout, Sum};
+use crate::staging::io_err;
 
 /// A round folder's record that its partition is complete: the bounding
 /// box, the round's [`Cuts::reach`], and per block its faces and the

@@ -11,7 +11,7 @@ use crate::partition::{Cuts, Grid, Writers, block_input, block_output};
 use crate::round_manifest::{Manifest, check_staging, read_manifest, write_manifest};
 use crate::runner::{BLOCKS_IN_FLIGHT, Runner};
 use crate::soup::{self, Layout, Welder};
-use crate::staging::StagingLock;
+use crate::staging::{StagingLock, io_err};
 use crate::tasks::BlockTask;
 use glam::Vec3;
 use lodkit_mesh::TriMesh;
@@ -523,11 +523,6 @@ struct Pipeline<'a> {
     current: Option<(PathBuf, Vec<usize>)>,
     /// Faces of the current mesh.
     current_faces: u64,
-}
-
-pub(crate) fn io_err(p: &Path) -> impl Fn(std::io::Error) -> String + use<> {
-    let p = p.to_path_buf();
-    move |e| format!("{}: {e}", p.display())
 }
 
 impl<'a> Pipeline<'a> {

@@ -11,6 +11,12 @@
 use std::fs::File;
 use std::path::{Path, PathBuf};
 
+/// Maps an I/O error on `p` to the one-line message naming it.
+pub(crate) fn io_err(p: &Path) -> impl Fn(std::io::Error) -> String + use<> {
+    let p = p.to_path_buf();
+    move |e| format!("{}: {e}", p.display())
+}
+
 /// A third of the machine's memory (`MemTotal` in /proc/meminfo), leaving
 /// room for other processes and the page cache; 4 GiB where that file
 /// cannot be read.

@@ -78,7 +78,7 @@ fn out_of_core_hits_the_target_deterministically() {
     }
 }
 
-/// Issue #19's quality bound (mean error within 1.1× in core, max within
+/// The out-of-core quality bound (mean error within 1.1× in core, max within
 /// 1.2×), on a mesh small enough to run both ways in a test: budgets that
 /// force blocks (one round of 8 blocks; two rounds of 26 and 25) but let
 /// the final pass hold more than the target, which is what the block goal

@@ -13,7 +13,8 @@
 //! usable once its colours and normals are there too.
 
 use glam::Vec3;
-use lodkit_mco::{Camera, McoModel, McoStream, ViewCut};
+pub use lodkit_mco::Camera;
+use lodkit_mco::{McoModel, McoStream, ViewCut};
 use lodkit_particles::{DecodeOptions, Decoded, PrefixDecoder, TriangulateOptions};
 
 /// A mesh ready to be copied into GPU buffers: positions (and normals,
@@ -187,30 +188,12 @@ pub fn mco_extract_triangles(m: &McoModel, triangles: usize, out: &mut Vec<u32>)
     m.extract_triangles(triangles, out)
 }
 
-/// A perspective camera as `lodkit_mco::Camera` wants it.
-pub struct View {
-    pub position: Vec3,
-    pub direction: Vec3,
-    pub up: Vec3,
-    pub vfov_deg: f32,
-    pub viewport_height: f32,
-    pub aspect: f32,
-}
-
 /// View-dependent index buffer at `tolerance_px` pixels of projected error,
 /// left in `cut`, the handle's kept state ([`ViewCut::indices`]: so a cut
 /// per frame allocates and copies nothing once warm; the same cut as
 /// `McoModel::extract_view`); returns the number of expanded nodes.
-pub fn mco_extract_view(m: &McoModel, cut: &mut ViewCut, v: &View, tolerance_px: f32) -> usize {
-    let cam = Camera {
-        position: v.position,
-        direction: v.direction,
-        up: v.up,
-        vfov_deg: v.vfov_deg,
-        viewport_height: v.viewport_height,
-        aspect: v.aspect,
-    };
-    cut.update(m, &cam, tolerance_px);
+pub fn mco_extract_view(m: &McoModel, cut: &mut ViewCut, cam: &Camera, tolerance_px: f32) -> usize {
+    cut.update(m, cam, tolerance_px);
     cut.expanded_nodes()
 }
 
@@ -336,7 +319,7 @@ mod tests {
         assert!(!a.is_empty());
         let (lo, hi) = mco_bounds(&whole);
         let c = (lo + hi) * 0.5;
-        let view = View {
+        let view = Camera {
             position: c + Vec3::new(0.0, 0.0, 2.0),
             direction: Vec3::new(0.0, 0.0, -1.0),
             up: Vec3::Y,

@@ -52,7 +52,7 @@ pub mod engine;
 
 use std::cell::RefCell;
 
-use engine::{MeshOut, PopPrefix, PopStream, View};
+use engine::{Camera, MeshOut, PopPrefix, PopStream};
 use glam::Vec3;
 use lodkit_mco::{McoModel, McoStream, ViewCut};
 
@@ -584,7 +584,7 @@ pub extern "C" fn lk_mco_extract_view(
     aspect: f32,
     tolerance_px: f32,
 ) -> i32 {
-    let v = View {
+    let v = Camera {
         position: Vec3::new(px, py, pz),
         direction: Vec3::new(dx, dy, dz),
         up: Vec3::new(ux, uy, uz),

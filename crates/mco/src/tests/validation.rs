@@ -1,12 +1,13 @@
 //! Every table of a loaded model is checked against the others before the
-//! model is used (`model_file::validate`): one hand-mutated file per table,
+//! model is used (`mco_file::validate`): one hand-mutated file per table,
 //! version 1 (flat arrays, every table stored) and version 2 (the tables
 //! it stores), each refused with one line naming what disagrees, never
 //! accepted with a table that could size an allocation wrongly.
 
 use crate::McoModel;
+use crate::mco_file::decode;
+use crate::mco_file::v1::{HEADER_BYTES, NODE_BYTES, encode};
 use crate::model::Node;
-use crate::model_file::{HEADER_BYTES, NODE_BYTES, decode, encode};
 use crate::pipeline::{Options, build_from_mesh};
 
 fn model() -> McoModel {
@@ -242,7 +243,7 @@ fn each_array_is_checked_against_the_others() {
 fn version_2_tables_are_checked_the_same_way() {
     let m = model();
     let (inner, _, with_deps) = picks(&m);
-    let v2 = |m: &McoModel| crate::model_file_v2::decode(&m.to_bytes());
+    let v2 = |m: &McoModel| crate::mco_file::v2::decode(&m.to_bytes());
     let back = v2(&m).unwrap();
     for k in 0..=m.max_lod() {
         assert_eq!(back.triangles_at_lod(k), m.triangles_at_lod(k));
@@ -260,9 +261,9 @@ fn version_2_tables_are_checked_the_same_way() {
     let mut bytes = m.to_bytes();
     let nodes = u32::from_le_bytes(bytes[64..68].try_into().unwrap());
     bytes[64..68].copy_from_slice(&(nodes + 1).to_le_bytes());
-    let crc = crc32fast::hash(&bytes[..crate::model_file_v2::HEADER_BYTES - 4]);
-    let h = crate::model_file_v2::HEADER_BYTES;
+    let crc = crc32fast::hash(&bytes[..crate::mco_file::v2::HEADER_BYTES - 4]);
+    let h = crate::mco_file::v2::HEADER_BYTES;
     bytes[h - 4..h].copy_from_slice(&crc.to_le_bytes());
-    let e = crate::model_file_v2::decode(&bytes).unwrap_err();
+    let e = crate::mco_file::v2::decode(&bytes).unwrap_err();
     assert!(e.contains("totals"), "{e}");
 }

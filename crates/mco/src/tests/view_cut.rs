@@ -8,7 +8,7 @@
 use super::support;
 
 use crate::pipeline::{Options, build_from_mesh};
-use crate::view_dependent_cut::{hairline_tolerances, has_layout, select, view_subtree_bounds};
+use crate::view_dependent_cut::{hairline_tolerances, has_layout, select};
 use crate::{Camera, McoModel, ViewCut};
 use lodkit_mesh::glam::Vec3;
 use lodkit_mesh::shapes;
@@ -69,13 +69,12 @@ fn assert_same_cuts(name: &str, m: &McoModel, state: &mut ViewCut) {
     // Built and loaded models get the compact layout; the search on the
     // node arrays (any other model's) must give the same cuts.
     assert!(has_layout(m), "{name}: no compact layout");
-    let bounds = view_subtree_bounds(m);
     let mut nodes_state = ViewCut::new();
     let mut by_nodes = Vec::new();
     for (step, (cam, tol)) in camera_path(m).into_iter().enumerate() {
         let expanded = m.extract_view(&cam, tol, &mut fresh);
         let kept = state.update(m, &cam, tol).to_vec();
-        let e = nodes_state.update_by_nodes(m, &bounds, &cam, tol, &mut by_nodes);
+        let e = nodes_state.update_by_nodes(m, &cam, tol, &mut by_nodes);
         assert_eq!(by_nodes, kept, "{name}, step {step}: node arrays vs layout");
         assert_eq!(e, expanded, "{name}, step {step}");
         assert_eq!(kept, fresh, "{name}, step {step}: kept state vs fresh cut");

@@ -111,10 +111,21 @@ impl Format {
 }
 
 /// Options for writing; the defaults are what `lodkit convert` uses.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct WriteOptions {
     /// PLY and STL: binary (default) or ASCII.
     pub ascii: bool,
+}
+
+impl WriteOptions {
+    /// The defaults: binary.
+    pub const DEFAULT: WriteOptions = WriteOptions { ascii: false };
+}
+
+impl Default for WriteOptions {
+    fn default() -> Self {
+        WriteOptions::DEFAULT
+    }
 }
 
 /// Files larger than this (16 GiB) are refused before reading, and no read

@@ -94,17 +94,21 @@ pub struct CompareOptions {
 
 impl Default for CompareOptions {
     fn default() -> Self {
-        CompareOptions {
-            samples: None,
-            seed: DEFAULT_SEED,
-            vertex_samples: true,
-            edge_samples: true,
-            face_samples: true,
-        }
+        CompareOptions::DEFAULT
     }
 }
 
 impl CompareOptions {
+    /// The defaults: `max(10 × faces, 1 000 000)` samples of every kind,
+    /// seed [`DEFAULT_SEED`].
+    pub const DEFAULT: CompareOptions = CompareOptions {
+        samples: None,
+        seed: DEFAULT_SEED,
+        vertex_samples: true,
+        edge_samples: true,
+        face_samples: true,
+    };
+
     /// The per-kind count `N` for meshes of `faces_a` and `faces_b` faces:
     /// `samples` if set, else `max(10 × max(faces_a, faces_b), 1 000 000)`.
     pub fn resolved_samples(&self, faces_a: usize, faces_b: usize) -> usize {

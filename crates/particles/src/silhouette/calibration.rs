@@ -15,32 +15,24 @@
 use std::path::{Path, PathBuf};
 
 use glam::{DMat3, DQuat, DVec3};
+use lodkit_mesh::Intrinsics;
 use lodkit_mesh::io::input::{lexically_inside, read_file, resolve_inside, strip_bom};
 
 use crate::error::{Error, Result};
-use crate::silhouette::images;
 
 /// Most views one calibration may list.
 pub const MAX_VIEWS: usize = 10_000;
-/// Largest image side accepted, in pixels.
-pub const MAX_SIDE: u32 = 16_384;
+/// Largest image side accepted, in pixels (the image decoder's).
+pub use lodkit_mesh::image::MAX_SIDE;
 
-/// Pinhole intrinsics with OpenCV's radial (`k1`, `k2`) and tangential
-/// (`p1`, `p2`) distortion, in pixels (COLMAP's convention).
+/// Pinhole intrinsics ([`Intrinsics`], the renderer's type: COLMAP's
+/// convention, in pixels) with OpenCV's radial (`k1`, `k2`) and
+/// tangential (`p1`, `p2`) distortion. The pinhole's fields read through
+/// (`lens.fx` is `lens.intrinsics.fx`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Lens {
-    /// Image width the intrinsics are for.
-    pub width: u32,
-    /// Image height the intrinsics are for.
-    pub height: u32,
-    /// Focal lengths in pixels.
-    pub fx: f64,
-    /// See `fx`.
-    pub fy: f64,
-    /// Principal point in pixels.
-    pub cx: f64,
-    /// See `cx`.
-    pub cy: f64,
+    /// Image size, focal lengths and principal point.
+    pub intrinsics: Intrinsics,
     /// Radial distortion coefficients.
     pub k1: f64,
     /// See `k1`.
@@ -49,6 +41,13 @@ pub struct Lens {
     pub p1: f64,
     /// See `p1`.
     pub p2: f64,
+}
+
+impl std::ops::Deref for Lens {
+    type Target = Intrinsics;
+    fn deref(&self) -> &Intrinsics {
+        &self.intrinsics
+    }
 }
 
 impl Lens {
@@ -355,12 +354,14 @@ fn parse_colmap(cameras: &Path, ctext: &str, images: &Path, itext: &str) -> Resu
             );
         }
         let mut l = Lens {
-            width: w,
-            height: h,
-            fx: ps[0],
-            fy: ps[0],
-            cx: ps[1],
-            cy: ps[2],
+            intrinsics: Intrinsics {
+                width: w,
+                height: h,
+                fx: ps[0],
+                fy: ps[0],
+                cx: ps[1],
+                cy: ps[2],
+            },
             k1: 0.0,
             k2: 0.0,
             p1: 0.0,
@@ -368,9 +369,9 @@ fn parse_colmap(cameras: &Path, ctext: &str, images: &Path, itext: &str) -> Resu
         };
         match t[1] {
             "PINHOLE" | "OPENCV" => {
-                l.fy = ps[1];
-                l.cx = ps[2];
-                l.cy = ps[3];
+                l.intrinsics.fy = ps[1];
+                l.intrinsics.cx = ps[2];
+                l.intrinsics.cy = ps[3];
                 if t[1] == "OPENCV" {
                     (l.k1, l.k2, l.p1, l.p2) = (ps[4], ps[5], ps[6], ps[7]);
                 }
@@ -641,7 +642,7 @@ fn parse_transforms(path: &Path, text: &str) -> Result<Calibration> {
         let (w, h) = match (key("w")?, key("h")?) {
             (Some(w), Some(h)) => (w, h),
             _ => {
-                let (w, h) = images::header_size(&image)
+                let (w, h) = lodkit_mesh::image::header_size(&image)
                     .or_else(|e| err(path, format!("{who}: no w, h given, and {e}")))?;
                 (f64::from(w), f64::from(h))
             }
@@ -675,12 +676,14 @@ fn parse_transforms(path: &Path, text: &str) -> Result<Calibration> {
             _ => fx,
         };
         let lens = Lens {
-            width,
-            height,
-            fx,
-            fy,
-            cx: key("cx")?.unwrap_or(w * 0.5),
-            cy: key("cy")?.unwrap_or(h * 0.5),
+            intrinsics: Intrinsics {
+                width,
+                height,
+                fx,
+                fy,
+                cx: key("cx")?.unwrap_or(w * 0.5),
+                cy: key("cy")?.unwrap_or(h * 0.5),
+            },
             k1: key("k1")?.unwrap_or(0.0),
             k2: key("k2")?.unwrap_or(0.0),
             p1: key("p1")?.unwrap_or(0.0),

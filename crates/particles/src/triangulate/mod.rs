@@ -31,7 +31,7 @@
 use std::borrow::Cow;
 use std::time::Instant;
 
-use crate::decode::LevelSurface;
+use crate::level_surface::LevelSurface;
 use crate::triangulation_table::CLASS_COUNT;
 use lodkit_mesh::TriMesh;
 
@@ -202,7 +202,7 @@ fn triangulate_impl(
     // 6. A triangle whose three cubes share a coordinate lies on the face
     // between two neighbourhoods; two solid ones may both have built it:
     // keep one.
-    let scan::Scanned {
+    let settle::Scanned {
         mut faces,
         merges,
         from_solids,

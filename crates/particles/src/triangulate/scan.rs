@@ -13,32 +13,12 @@
 use super::decimate::merge_short_edge;
 use super::hamiltonian_split::{Split, smoother_disc, split_by_cycle};
 use super::quad_choice::{choose_quad, defer_face};
-use super::settle::{SETTLE_SKIP_CLASS, Trial, all_bits};
+use super::settle::{SETTLE_SKIP_CLASS, Scanned, Trial, all_bits};
 use super::shared_edges::{SHARED_MEMO_BITS, shared_edges};
 use super::window::{Bricks, EXT, ROW_GROUPS, Window, owns};
 use super::{NONE, TriangulateOptions, TriangulationStats};
-use crate::decode::LevelSurface;
+use crate::level_surface::LevelSurface;
 use crate::triangulation_table::{CLASS_COUNT, Compact, Shape, table};
-
-/// What the scan built: the triangles of every neighbourhood it could
-/// settle alone, and the ambiguous solids left for [`super::settle`].
-pub(super) struct Scanned {
-    /// Triangles, as vertex indices of the surface.
-    pub(super) faces: Vec<[u32; 3]>,
-    /// §6.3's merged cube pairs (empty without decimation).
-    pub(super) merges: Vec<(u32, u32)>,
-    /// Indices into `faces` (increasing) of the triangles solid
-    /// configurations built on a face of their neighbourhood: the only
-    /// ones two neighbourhoods can both build.
-    pub(super) from_solids: Vec<u32>,
-    /// The ambiguous solids, in scan order.
-    pub(super) trials: Vec<Trial>,
-    /// First face each brick built, plus the end (see
-    /// [`super::settle::settle_ranges`]).
-    pub(super) brick_faces: Vec<u32>,
-    /// Configuration counts, and the solids resolved or left whole so far.
-    pub(super) stats: TriangulationStats,
-}
 
 /// Scans every occupied brick of the level (`cells`: strictly increasing
 /// Morton codes; `order`: the surface's vertex of each when it was not

@@ -13,11 +13,30 @@
 //! the triangulation.
 use std::collections::HashMap;
 
-use super::scan::Scanned;
 use super::window::{BRICK_BITS, BrickIndex};
-use super::{NONE, edge_key};
+use super::{NONE, TriangulationStats, edge_key};
 use crate::octree::{MortonMap, unmorton};
 use crate::triangulation_table::{Shape, table};
+
+/// What the scan built: the triangles of every neighbourhood it could
+/// settle alone, and the ambiguous solids left for [`settle`].
+pub(super) struct Scanned {
+    /// Triangles, as vertex indices of the surface.
+    pub(super) faces: Vec<[u32; 3]>,
+    /// §6.3's merged cube pairs (empty without decimation).
+    pub(super) merges: Vec<(u32, u32)>,
+    /// Indices into `faces` (increasing) of the triangles solid
+    /// configurations built on a face of their neighbourhood: the only
+    /// ones two neighbourhoods can both build.
+    pub(super) from_solids: Vec<u32>,
+    /// The ambiguous solids, in scan order.
+    pub(super) trials: Vec<Trial>,
+    /// First face each brick built, plus the end (see
+    /// [`settle_ranges`]).
+    pub(super) brick_faces: Vec<u32>,
+    /// Configuration counts, and the solids resolved or left whole so far.
+    pub(super) stats: TriangulationStats,
+}
 
 /// An ambiguous solid whose triangles are chosen once the level is
 /// scanned ([`settle`]).

@@ -3,7 +3,6 @@
 
 use gltf::json;
 
-use super::write::{Builder, MSFT_LOD};
 use crate::error::ParseError;
 use crate::parse_err;
 
@@ -113,13 +112,17 @@ fn below_4_digits(x: f64) -> f64 {
     ((x * s).round() - 1.0) / s
 }
 
-/// Makes `nodes[0]` the `MSFT_lod` base of `nodes[1..]`: `MSFT_lod` used
-/// (not required), `extras.MSFT_screencoverage` on the base (the
-/// [`screen_coverages`] of `coverage`, checked by [`check_coverage`], and
-/// the levels' `triangles`); returns the base node's extension object for
-/// [`Builder::finish`]. One node: nothing to link.
+/// The glTF extension that links the levels of a chain.
+pub(super) const MSFT_LOD: &str = "MSFT_lod";
+
+/// Makes `nodes[0]` of `root` the `MSFT_lod` base of `nodes[1..]`:
+/// `extras.MSFT_screencoverage` on the base (the [`screen_coverages`] of
+/// `coverage`, checked by [`check_coverage`], and the levels'
+/// `triangles`); returns the base node's extension object for the
+/// writer's `finish`, which the caller marks [`MSFT_LOD`] used (not
+/// required). One node: nothing to link (empty).
 pub(super) fn link_lods(
-    b: &mut Builder,
+    root: &mut json::Root,
     nodes: &[json::Index<json::Node>],
     coverage: &[f64],
     triangles: &[usize],
@@ -128,9 +131,8 @@ pub(super) fn link_lods(
         return Ok(Vec::new());
     }
     let coverage = screen_coverages(coverage, triangles);
-    b.uses(MSFT_LOD, false);
     let ids: Vec<usize> = nodes[1..].iter().map(|n| n.value()).collect();
-    let base = &mut b.root.nodes[nodes[0].value()];
+    let base = &mut root.nodes[nodes[0].value()];
     let mut extras: serde_json::Value =
         serde_json::from_str(base.extras.as_ref().map_or("{}", |r| r.get()))
             .map_err(|e| parse_err!("GLB: {e}"))?;

@@ -32,7 +32,7 @@ use glam::{Mat4, Quat, Vec3};
 use gltf::json;
 use json::validation::Checked::Valid;
 
-use super::lod_links::{check_coverage, link_lods};
+use super::lod_links::check_coverage;
 use super::write::{Builder, GlbOptions, Quantise, union_box};
 use crate::error::ParseError;
 use crate::mesh::TriMesh;
@@ -566,6 +566,6 @@ pub fn write_scene_lod_glb(
     }
     let coverage: Vec<f64> = levels.iter().map(|l| l.coverage).collect();
     let triangles: Vec<usize> = levels.iter().map(|l| l.scene.face_count()).collect();
-    let ext = link_lods(&mut b, &wrappers, &coverage, &triangles)?;
+    let ext = b.link_lods(&wrappers, &coverage, &triangles)?;
     b.finish(vec![wrappers[0]], ext)
 }

@@ -19,7 +19,7 @@ use json::validation::Checked::Valid;
 
 use super::color::srgb8_to_linear;
 use super::glb::join_glb;
-use super::lod_links::{check_coverage, link_lods};
+use super::lod_links::{MSFT_LOD, check_coverage, link_lods};
 use crate::error::ParseError;
 use crate::mesh::{Aabb, PointCloud, TriMesh};
 use crate::parse_err;
@@ -132,7 +132,6 @@ pub(super) struct Builder {
 
 const MESHOPT: &str = "EXT_meshopt_compression";
 const QUANTIZATION: &str = "KHR_mesh_quantization";
-pub(super) const MSFT_LOD: &str = "MSFT_lod";
 
 pub(super) fn le_bytes<const N: usize, T: Copy>(items: &[T], f: impl Fn(T) -> [u8; N]) -> Vec<u8> {
     let mut v = Vec::with_capacity(items.len() * N);
@@ -216,6 +215,22 @@ impl Builder {
             used: Vec::new(),
             required: Vec::new(),
         })
+    }
+
+    /// Links `nodes` as one `MSFT_lod` chain ([`link_lods`]) and marks the
+    /// extension used when there is more than one; returns the node
+    /// extensions for [`Builder::finish`].
+    pub(super) fn link_lods(
+        &mut self,
+        nodes: &[json::Index<json::Node>],
+        coverage: &[f64],
+        triangles: &[usize],
+    ) -> Result<Vec<(usize, serde_json::Value)>, ParseError> {
+        let ext = link_lods(&mut self.root, nodes, coverage, triangles)?;
+        if !ext.is_empty() {
+            self.uses(MSFT_LOD, false);
+        }
+        Ok(ext)
     }
 
     pub(super) fn uses(&mut self, ext: &'static str, required: bool) {
@@ -756,7 +771,7 @@ pub fn write_lod_glb(levels: &[LodLevel<'_>], opts: &GlbOptions) -> Result<Vec<u
     }
     let coverage: Vec<f64> = levels.iter().map(|l| l.coverage).collect();
     let triangles: Vec<usize> = levels.iter().map(|l| l.mesh.faces.len()).collect();
-    let node_extensions = link_lods(&mut b, &nodes, &coverage, &triangles)?;
+    let node_extensions = b.link_lods(&nodes, &coverage, &triangles)?;
     b.finish(vec![nodes[0]], node_extensions)
 }
 

@@ -1045,7 +1045,7 @@ fn shared_range_images() {
 }
 
 /// ASCII PLY is line-structured: one record per line, never spread over
-/// several, and every error names the file line (issue 14, item 6).
+/// several, and every error names the file line.
 #[test]
 fn ascii_records_are_lines() {
     let mut h = XYZ.to_vec();

@@ -35,8 +35,8 @@
 //!
 //! **Exactness.** A model read from its file cuts exactly as the model
 //! written, bit for bit: positions are quantised on the lattice box with
-//! [`position_bits`] bits per axis (within a 1024th of a leaf cube,
-//! [`position_error`]) and each coordinate's residual follows (header flag
+//! [`position_bits`] bits per axis (within a 1024th of a leaf cube:
+//! half a step, `cube / 2^(bits - depth + 1)`) and each coordinate's residual follows (header flag
 //! `FLAG_EXACT_POSITIONS`), so crack patching's compensation points stay on
 //! the coarse segments they close; a build puts its marching-cubes vertices
 //! on that grid ([`snapped_position`]), so most residuals are 0. Normals
@@ -54,13 +54,13 @@
 //! one byte), every index against the tables read so far and the header's
 //! totals, so memory grows with the bytes present and a hostile file cannot
 //! make extraction allocate more than its triangles need. Errors are one
-//! line, without the path ([`crate::model_file::load`] adds it).
+//! line, without the path (the loader in `mco_file` adds it).
 
 use glam::Vec3;
 
+use super::format::{MAGIC, MAX_NODE_TRIANGLES, MAX_PATCH_SUBS};
 use crate::lattice::{Grid, KEY_BITS};
 use crate::model::{BuildStats, McoModel, Node, Patch};
-use crate::model_file::{MAGIC, MAX_NODE_TRIANGLES, MAX_PATCH_SUBS};
 use crate::signed_distance::NO_COLOR;
 
 /// The format version this module writes and reads.
@@ -100,16 +100,6 @@ const EXPLICIT: u8 = 1 << 3;
 /// `2^9` steps (at least 16 bits in all).
 pub fn position_bits(depth: u32) -> u32 {
     (depth + 9).max(16)
-}
-
-/// Largest error, per axis, of a quantised position inside the lattice box
-/// (half a quantisation step), in object units: `cube / 2^(b - depth + 1)`,
-/// at most `cube / 1024` (plus the `f32` rounding of the coordinate).
-// The bound the tests check quantisation against; documented with the layout.
-#[cfg_attr(not(test), allow(dead_code))]
-pub fn position_error(grid: &Grid) -> f32 {
-    let b = position_bits(grid.depth);
-    grid.cube / (1u64 << (b - grid.depth + 1)) as f32
 }
 
 /// The version field of `.mco` bytes (`None`: too short or not `.mco`).
@@ -264,7 +254,7 @@ pub(crate) fn stored_normal(n: Vec3) -> Vec3 {
 
 /// `p` moved onto the position grid a file of a model on `grid` stores
 /// (the quantised position, read back), when that is within
-/// [`position_error`] (it is for every point of the lattice box); else `p`.
+/// half a quantisation step (it is for every point of the lattice box); else `p`.
 /// A model whose vertices are snapped costs one byte per coordinate of
 /// residual, which deflates away. The grid scales with a power-of-two
 /// scaling of `grid`, exactly.

@@ -2,6 +2,14 @@ use super::*;
 use crate::Camera;
 use crate::pipeline::{Options, build_from_mesh};
 
+/// Largest error, per axis, of a quantised position inside the lattice box
+/// (half a quantisation step), in object units: `cube / 2^(b - depth + 1)`,
+/// at most `cube / 1024` (plus the `f32` rounding of the coordinate).
+fn position_error(grid: &Grid) -> f32 {
+    let b = position_bits(grid.depth);
+    grid.cube / (1u64 << (b - grid.depth + 1)) as f32
+}
+
 fn build(mesh: &lodkit_mesh::TriMesh, resolution: u32) -> McoModel {
     build_from_mesh(
         mesh,
@@ -245,11 +253,11 @@ fn every_prefix_serves_the_lod_numbers_it_claims() {
 #[test]
 fn errors_are_one_line_and_version_1_still_reads() {
     let m = small();
-    let v1 = crate::model_file::encode(&m);
-    assert_eq!(crate::model_file::decode(&v1).unwrap(), m);
+    let v1 = crate::mco_file::v1::encode(&m);
+    assert_eq!(crate::mco_file::decode(&v1).unwrap(), m);
     let bytes = encode(&m);
     assert_eq!(
-        crate::model_file::decode(&bytes).unwrap(),
+        crate::mco_file::decode(&bytes).unwrap(),
         decode(&bytes).unwrap()
     );
     assert_eq!(file_version(&bytes), Some(2));
@@ -263,7 +271,7 @@ fn errors_are_one_line_and_version_1_still_reads() {
         bytes.len() / 2,
         bytes.len() - 1,
     ] {
-        let e = crate::model_file::decode(&bytes[..cut]).unwrap_err();
+        let e = crate::mco_file::decode(&bytes[..cut]).unwrap_err();
         assert!(!e.contains('\n'));
         assert!(
             e.contains("shorter") || e.contains("size mismatch"),
@@ -272,7 +280,7 @@ fn errors_are_one_line_and_version_1_still_reads() {
     }
     let mut v3 = bytes.clone();
     v3[8] = 3;
-    let e = crate::model_file::decode(&v3).unwrap_err();
+    let e = crate::mco_file::decode(&v3).unwrap_err();
     assert!(e.contains("version 3"), "{e}");
     assert!(
         McoStream::new()
@@ -281,7 +289,7 @@ fn errors_are_one_line_and_version_1_still_reads() {
             .to_string()
             .contains("version 3")
     );
-    let e = crate::model_file::decode(&v3[..20]).unwrap_err();
+    let e = crate::mco_file::decode(&v3[..20]).unwrap_err();
     assert!(e.contains("version 3"), "{e}");
     let mut flipped = bytes.clone();
     flipped[HEADER_BYTES + 20] ^= 0x10;

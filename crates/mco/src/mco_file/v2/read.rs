@@ -404,7 +404,7 @@ impl McoStream {
                 }
             }
         }
-        crate::model_file::validate(&m)?;
+        crate::mco_file::validate::validate(&m)?;
         m.prepare_extraction();
         Ok(m)
     }

@@ -1,0 +1,185 @@
+//! The one image decoder of lodkit (feature `images`): PNG (`png`, any
+//! bit depth and colour type) and JPEG (`zune-jpeg`) to RGBA8, for
+//! photographs (silhouettes) and textures alike.
+//!
+//! Sizes are read from the header and bounded ([`MAX_SIDE`] a side,
+//! [`MAX_PIXELS`] in all) before any pixel buffer is allocated, so a small
+//! file whose header claims 16384² pixels costs nothing.
+
+use std::path::Path;
+
+use crate::io::input::read_file;
+
+/// Largest image side accepted, in pixels.
+pub const MAX_SIDE: u32 = 16_384;
+
+/// Most pixels one image may have (64 Mi: 256 MiB as RGBA8).
+pub const MAX_PIXELS: u64 = 1 << 26;
+
+/// A PNG or JPEG decoded to RGBA8 ([`decode_rgba`]).
+#[derive(Debug, Clone)]
+pub struct RgbaImage {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `width × height × 4` bytes, rows top to bottom.
+    pub rgba: Vec<u8>,
+    /// Whether some pixel is not opaque (an alpha channel opaque
+    /// everywhere counts as none).
+    pub has_alpha: bool,
+}
+
+/// Decodes a PNG (any bit depth and colour type) or JPEG (by its
+/// signature) to RGBA8.
+///
+/// Sizes are read from the header and bounded (`1..=`[`MAX_SIDE`] a side,
+/// at most [`MAX_PIXELS`]) before any pixel buffer is allocated. Errors: one
+/// phrase saying what is wrong with the bytes (the caller names the
+/// file). Cost: `O(width × height)`; memory about 12 bytes a pixel at
+/// the peak.
+pub fn decode_rgba(bytes: &[u8]) -> std::result::Result<RgbaImage, String> {
+    decode(bytes)
+}
+
+fn check_size(w: u32, h: u32) -> std::result::Result<(), String> {
+    if w == 0 || h == 0 || w > MAX_SIDE || h > MAX_SIDE {
+        return Err(format!(
+            "image size {w}x{h} is outside 1..={MAX_SIDE} a side"
+        ));
+    }
+    if u64::from(w) * u64::from(h) > MAX_PIXELS {
+        return Err(format!(
+            "image size {w}x{h} is over the {MAX_PIXELS} pixels one image may have"
+        ));
+    }
+    Ok(())
+}
+
+fn is_jpeg(bytes: &[u8]) -> bool {
+    bytes.starts_with(&[0xFF, 0xD8, 0xFF])
+}
+
+/// Width and height of PNG or JPEG bytes, from the header only (nothing
+/// is decoded). Errors: one phrase, as [`decode_rgba`].
+pub fn image_size(bytes: &[u8]) -> std::result::Result<(u32, u32), String> {
+    size_of(bytes)
+}
+
+/// Width and height of the PNG or JPEG at `path`, from its header only.
+/// Errors name the file, one line.
+pub fn header_size(path: &Path) -> std::result::Result<(u32, u32), String> {
+    let bytes = read_file(path).map_err(|e| e.to_string())?;
+    size_of(&bytes).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+fn size_of(bytes: &[u8]) -> std::result::Result<(u32, u32), String> {
+    if is_jpeg(bytes) {
+        let mut d = zune_jpeg::JpegDecoder::new(bytes);
+        d.decode_headers()
+            .map_err(|e| format!("not a readable JPEG ({e:?})"))?;
+        let i = d.info().ok_or("not a readable JPEG")?;
+        Ok((u32::from(i.width), u32::from(i.height)))
+    } else {
+        let d = png::Decoder::new(std::io::Cursor::new(bytes));
+        let r = d
+            .read_info()
+            .map_err(|e| format!("not a readable PNG or JPEG ({e})"))?;
+        let (w, h) = r.info().size();
+        Ok((w, h))
+    }
+}
+
+fn decode(bytes: &[u8]) -> std::result::Result<RgbaImage, String> {
+    let (w, h) = size_of(bytes)?;
+    check_size(w, h)?;
+    let px = w as usize * h as usize;
+    if is_jpeg(bytes) {
+        let opts = zune_jpeg::zune_core::options::DecoderOptions::default()
+            .set_max_width(MAX_SIDE as usize)
+            .set_max_height(MAX_SIDE as usize)
+            .jpeg_set_out_colorspace(zune_jpeg::zune_core::colorspace::ColorSpace::RGB);
+        let mut d = zune_jpeg::JpegDecoder::new_with_options(bytes, opts);
+        let rgb = d
+            .decode()
+            .map_err(|e| format!("not a readable JPEG ({e:?})"))?;
+        if rgb.len() != px * 3 {
+            return Err("JPEG decoded to an unexpected size".into());
+        }
+        let mut rgba = Vec::with_capacity(px * 4);
+        for p in rgb.chunks_exact(3) {
+            rgba.extend_from_slice(&[p[0], p[1], p[2], 255]);
+        }
+        return Ok(RgbaImage {
+            width: w,
+            height: h,
+            rgba,
+            has_alpha: false,
+        });
+    }
+    let mut d = png::Decoder::new_with_limits(
+        std::io::Cursor::new(bytes),
+        png::Limits {
+            bytes: px * 8 + (1 << 20),
+        },
+    );
+    d.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
+    let mut r = d
+        .read_info()
+        .map_err(|e| format!("not a readable PNG ({e})"))?;
+    let size = r.output_buffer_size().ok_or("PNG too large")?;
+    if size > px * 8 {
+        return Err("PNG frame larger than its size says".into());
+    }
+    let mut buf = vec![0u8; size];
+    let info = r
+        .next_frame(&mut buf)
+        .map_err(|e| format!("not a readable PNG ({e})"))?;
+    let (ct, _) = r.output_color_type();
+    let ch = match ct {
+        png::ColorType::Grayscale => 1,
+        png::ColorType::GrayscaleAlpha => 2,
+        png::ColorType::Rgb => 3,
+        png::ColorType::Rgba => 4,
+        png::ColorType::Indexed => return Err("PNG palette was not expanded".into()),
+    };
+    let line = info.line_size;
+    if line < w as usize * ch || buf.len() < line * h as usize {
+        return Err("PNG rows shorter than its size says".into());
+    }
+    let rgba = if ch == 4 && line == w as usize * 4 {
+        // Already RGBA8, rows packed: the decode buffer is the image.
+        buf.truncate(px * 4);
+        buf
+    } else {
+        to_rgba(&buf, line, w as usize, h as usize, ch)
+    };
+    // An alpha channel that is opaque everywhere says nothing about the
+    // object (a photograph saved as RGBA): treated as no alpha.
+    let has_alpha = (ch == 2 || ch == 4) && rgba.chunks_exact(4).any(|p| p[3] < 255);
+    Ok(RgbaImage {
+        width: w,
+        height: h,
+        rgba,
+        has_alpha,
+    })
+}
+
+/// Rows of `ch` channels (grey, grey + alpha, RGB, RGBA), `line` bytes
+/// apart, as packed RGBA8.
+fn to_rgba(buf: &[u8], line: usize, w: usize, h: usize, ch: usize) -> Vec<u8> {
+    let mut rgba = Vec::with_capacity(w * h * 4);
+    for y in 0..h {
+        let row = &buf[y * line..y * line + w * ch];
+        for p in row.chunks_exact(ch) {
+            let v = match ch {
+                1 => [p[0], p[0], p[0], 255],
+                2 => [p[0], p[0], p[0], p[1]],
+                3 => [p[0], p[1], p[2], 255],
+                _ => [p[0], p[1], p[2], p[3]],
+            };
+            rgba.extend_from_slice(&v);
+        }
+    }
+    rgba
+}
