@@ -8,8 +8,8 @@
 //! written on one [`QuantGrid`] ([`depth_grid`]), so a border vertex
 //! dequantises to the same `f32` in every tile that holds it.
 
-use lodkit_mesh::io::gltf::{GlbOptions, QuantGrid, write_glb_on_grid, write_points_glb_on_grid};
 use lodkit_mesh::glam::Vec3;
+use lodkit_mesh::io::gltf::{GlbOptions, QuantGrid, write_glb_on_grid, write_points_glb_on_grid};
 use lodkit_mesh::{Aabb, PointCloud, TriMesh};
 
 use crate::{Error, Result};
