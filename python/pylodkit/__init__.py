@@ -29,6 +29,7 @@ from __future__ import annotations
 from importlib.metadata import PackageNotFoundError, version as _version
 
 from . import errors, mco, pop
+from .tiles import tiles
 from ._core import (
     MAX_HEAP_SIZE,
     MAX_LEVELS,
@@ -58,6 +59,6 @@ except PackageNotFoundError:  # imported from a source tree
 __all__ = [
     "Mesh", "PointCloud", "load", "save", "bunny", "blob", "icosphere", "simplify",
     "lod_chain", "compare", "from_trimesh", "to_trimesh", "from_open3d", "to_open3d",
-    "mco", "pop", "errors", "LodkitError", "InputError", "FileError", "OptionError",
+    "mco", "pop", "tiles", "errors", "LodkitError", "InputError", "FileError", "OptionError",
     "MAX_SAMPLES", "MAX_HEAP_SIZE", "MAX_LEVELS", "__version__",
 ]

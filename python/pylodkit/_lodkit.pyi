@@ -80,6 +80,14 @@ def lod_chain(
 ) -> List[Tuple[MeshDict, Dict[str, Any]]]:
     """Each level from the previous. Example: ``lod_chain(bunny(), [0.5, 0.25])``"""
 
+def tiles(
+    input: str,
+    out: str,
+    leaf_triangles: Optional[int] = None,
+    leaf_points: Optional[int] = None,
+    skirts: bool = True,
+) -> Dict[str, Any]: ...
+
 def compare(
     a: Any,
     b: Any,

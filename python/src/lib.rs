@@ -27,6 +27,7 @@ mod errors;
 mod mco;
 mod pop;
 mod scale;
+mod tiles;
 
 use convert::{json_to_py, mesh_from_py, mesh_to_py, model_from_py, model_to_py};
 use errors::input;
@@ -398,6 +399,14 @@ fn limits_dict(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     d.set_item("max_error", real(limits::MAX_ERROR))?;
     d.set_item("weight", real(limits::WEIGHT))?;
     d.set_item("prune", real(limits::PRUNE))?;
+    d.set_item(
+        "tile_leaf_triangles",
+        int(&lodkit_tiles::TilesOptions::LEAF_TRIANGLES),
+    )?;
+    d.set_item(
+        "tile_leaf_points",
+        int(&lodkit_tiles::PointTilesOptions::LEAF_POINTS),
+    )?;
     Ok(d)
 }
 
@@ -415,6 +424,7 @@ fn _lodkit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(compare, m)?)?;
     m.add_function(wrap_pyfunction!(scale::block_task_count, m)?)?;
     m.add_function(wrap_pyfunction!(scale::run_block_task, m)?)?;
+    m.add_function(wrap_pyfunction!(tiles::tiles, m)?)?;
     mco::register(m)?;
     pop::register(m)?;
     m.add("LIMITS", limits_dict(m.py())?)?;

@@ -71,7 +71,11 @@ fn scan_build_extract_info_round_trip() {
         s(&out),
     ]));
     let m = lodkit_mesh::io::load_mesh(&out).unwrap();
-    assert!(m.faces.len().abs_diff(target as usize) <= (target as usize / 100).max(40));
+    assert!(
+        m.faces.len().abs_diff(target as usize) <= (target as usize / 100).max(40),
+        "{} faces for a budget of {target}",
+        m.faces.len()
+    );
     let near = dir.path().join("near.ply");
     ok(&lodkit(&[
         "-q",

@@ -225,6 +225,7 @@ impl Lifetimes {
             bucket_start,
             cut,
             cut_start,
+            drawn: Vec::new(),
         }
     }
 
@@ -271,6 +272,30 @@ fn patches_overlap(m: &McoModel, n: u32) -> bool {
     false
 }
 
+/// Whether a triangle has two equal indices: crack patching collapsed one
+/// of its edges onto a coarse segment's end (no area, drawn as nothing).
+#[inline]
+fn degenerate(t: [u32; 3]) -> bool {
+    t[0] == t[1] || t[1] == t[2] || t[0] == t[2]
+}
+
+/// Drops the triangles of `out[from..]` that crack patching collapsed
+/// ([`degenerate`]), keeping the others in order. `O(len)`.
+pub(crate) fn drop_degenerate(out: &mut Vec<u32>, from: usize) {
+    let mut w = from;
+    for r in (from..out.len()).step_by(3) {
+        if r + 3 > out.len() {
+            break;
+        }
+        let t = [out[r], out[r + 1], out[r + 2]];
+        if !degenerate(t) {
+            out[w..w + 3].copy_from_slice(&t);
+            w += 3;
+        }
+    }
+    out.truncate(w);
+}
+
 /// Record header: `meta = ntri | npatch << 8 | len << 16` (`len` in words,
 /// header included).
 const NTRI_MASK: u32 = 0xFF;
@@ -284,7 +309,7 @@ impl McoModel {
         self.lifetimes = self.lifetimes();
         let mut best = 0u32;
         self.acc_max = self
-            .acc
+            .drawn_table()
             .iter()
             .map(|&a| {
                 best = best.max(a);
@@ -453,7 +478,9 @@ impl McoModel {
                     match open.get_mut(t) {
                         Some(r) if r.tri == tri => r.death = to,
                         Some(r) => {
-                            recs.push(*r);
+                            if !degenerate(r.tri) {
+                                recs.push(*r);
+                            }
                             *r = Record {
                                 tri,
                                 birth: from,
@@ -468,9 +495,26 @@ impl McoModel {
                     }
                 }
             }
-            recs.extend_from_slice(&open);
+            recs.extend(open.iter().filter(|r| !degenerate(r.tri)));
         }
-        Lifetimes::from_records(recs, &self.acc)
+        // Triangles drawn per LOD number: +1 at each birth, −1 at each death.
+        let n = self.acc.len();
+        let mut step = vec![0i64; n + 1];
+        for r in &recs {
+            step[(r.birth as usize).min(n)] += 1;
+            step[(r.death as usize).min(n)] -= 1;
+        }
+        let mut live = 0i64;
+        let drawn = step[..n]
+            .iter()
+            .map(|d| {
+                live += d;
+                live.clamp(0, u32::MAX as i64) as u32
+            })
+            .collect();
+        let mut lt = Lifetimes::from_records(recs, &self.acc);
+        lt.drawn = drawn;
+        lt
     }
 
     /// Bytes held by the derived extraction arrays beyond the stored model:
@@ -574,6 +618,13 @@ impl McoModel {
     /// on the first call (`O(n)`, about the size of the stored triangles;
     /// thread-safe).
     pub fn extract_lod_traversal(&self, k: usize, out: &mut Vec<u32>) {
+        self.traversal_with_collapsed(k, out);
+        drop_degenerate(out, 0);
+    }
+
+    /// [`McoModel::extract_lod_traversal`] with the triangles crack
+    /// patching collapses still in.
+    fn traversal_with_collapsed(&self, k: usize, out: &mut Vec<u32>) {
         out.clear();
         if self.nodes.is_empty() {
             return;
@@ -671,8 +722,9 @@ impl McoModel {
     /// the count). `O(log n)`. The same choice as
     /// `priority_numbering::lod_for_triangles`'s linear scan.
     pub fn lod_for_triangles(&self, triangles: usize) -> usize {
-        if self.acc_max.len() != self.acc.len() || self.acc.is_empty() {
-            return crate::priority_numbering::lod_for_triangles(&self.acc, triangles);
+        let table = self.drawn_table();
+        if self.acc_max.len() != table.len() || table.is_empty() {
+            return crate::priority_numbering::lod_for_triangles(table, triangles);
         }
         let target = triangles.min(u32::MAX as usize) as u32;
         let k = self.acc_max.partition_point(|&a| a < target);
@@ -682,10 +734,7 @@ impl McoModel {
         if k == 0 {
             return 0;
         }
-        let (hi, lo) = (
-            self.acc[k].abs_diff(target),
-            self.acc[k - 1].abs_diff(target),
-        );
+        let (hi, lo) = (table[k].abs_diff(target), table[k - 1].abs_diff(target));
         if lo < hi { k - 1 } else { k }
     }
 
@@ -695,6 +744,12 @@ impl McoModel {
     /// definition the prepared forms are tested against.
     #[cfg(test)]
     pub(crate) fn extract_lod_nodes(&self, k: usize, out: &mut Vec<u32>) {
+        self.nodes_with_collapsed(k, out);
+        drop_degenerate(out, 0);
+    }
+
+    #[cfg(test)]
+    fn nodes_with_collapsed(&self, k: usize, out: &mut Vec<u32>) {
         out.clear();
         if self.nodes.is_empty() {
             return;

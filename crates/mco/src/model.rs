@@ -160,6 +160,9 @@ pub(crate) struct Lifetimes {
     pub(crate) bucket_start: Vec<u32>,
     pub(crate) cut: Vec<u32>,
     pub(crate) cut_start: Vec<u32>,
+    /// Triangles drawn at each LOD number, those crack patching collapses
+    /// (two equal indices) left out: what [`McoModel::extract_lod`] gives.
+    pub(crate) drawn: Vec<u32>,
 }
 
 impl McoModel {
@@ -334,12 +337,25 @@ impl McoModel {
 
     /// Triangles a cut at LOD number `k` has (clamped to
     /// [`McoModel::max_lod`]; 0 for an empty model): the accumulation
-    /// table (§6.1). An index buffer for it needs `3 ×` this many `u32`.
+    /// table (§6.1) less the triangles crack patching collapses. An index
+    /// buffer for it needs `3 ×` this many `u32`.
     /// `O(1)`.
     pub fn triangles_at_lod(&self, k: usize) -> usize {
-        match self.acc.len() {
+        let table = self.drawn_table();
+        match table.len() {
             0 => 0,
-            n => self.acc[k.min(n - 1)] as usize,
+            n => table[k.min(n - 1)] as usize,
+        }
+    }
+
+    /// Triangles drawn per LOD number: without the ones crack patching
+    /// collapses once extraction is prepared, else the stored accumulation
+    /// table.
+    pub(crate) fn drawn_table(&self) -> &[u32] {
+        if self.lifetimes.drawn.len() == self.acc.len() {
+            &self.lifetimes.drawn
+        } else {
+            &self.acc
         }
     }
 }

@@ -792,6 +792,12 @@ impl McoModel {
     ///   plus one byte per node allocated and zeroed per call; a renderer
     ///   cutting every frame keeps a [`ViewCut`] instead, which gives the
     ///   same cut without that allocation.
+    ///
+    /// The buffer may hold triangles with two equal indices, where crack
+    /// patching collapsed a fine edge onto a coarse segment's end: they
+    /// have no area and draw nothing (an incremental cut copies runs of
+    /// the previous buffer, so they are kept in place);
+    /// [`McoModel::mesh_from_indices`] leaves them out.
     pub fn extract_view(&self, camera: &Camera, tolerance_px: f32, out: &mut Vec<u32>) -> usize {
         let mut cut = ViewCut {
             one_shot: true,

@@ -46,7 +46,7 @@ fn assert_same_as_traversal(name: &str, m: &McoModel) {
         m.extract_lod(k, &mut bd);
         m.extract_lod_traversal(k, &mut tr);
         m.extract_lod_nodes(k, &mut nodes);
-        assert_eq!(bd.len(), 3 * m.acc[k] as usize, "{name} lod {k}");
+        assert_eq!(bd.len(), 3 * m.triangles_at_lod(k), "{name} lod {k}");
         let want = sorted(&nodes);
         assert_eq!(sorted(&tr), want, "{name} lod {k}: stream traversal");
         assert_eq!(sorted(&bd), want, "{name} lod {k}: birth/death");
@@ -83,13 +83,13 @@ fn extraction_is_deterministic() {
 }
 
 #[test]
-fn triangle_count_lookup_matches_the_accumulation_table() {
+fn triangle_count_lookup_matches_the_drawn_counts() {
     let m = model(&shapes::blob(20_000), 32);
     let full = m.full_triangles();
     for target in (0..=full + 10).step_by(7).chain([0, 1, full, usize::MAX]) {
         assert_eq!(
             m.lod_for_triangles(target),
-            crate::priority_numbering::lod_for_triangles(&m.acc, target),
+            crate::priority_numbering::lod_for_triangles(m.drawn_table(), target),
             "target {target}"
         );
     }
