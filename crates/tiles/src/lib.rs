@@ -26,8 +26,8 @@
 //! 4. `skirts.rs`: a strip under every cut edge of a tile.
 //! 5. `tile_content.rs` (GLB bytes), `tileset_json.rs` (`tileset.json`,
 //!    external tilesets every [`tileset_json::SUBTREE_LEVELS`] depths,
-//!    boxes in the z-up frame), `out_folder.rs` (the whole folder or
-//!    nothing, never over a user's files).
+//!    boxes in the z-up frame), then `lodkit_mesh::io::out_folder` (the
+//!    whole folder or nothing, never over a user's files).
 //!
 //! # Cracks: why skirts, not locked borders
 //! A client refines where it likes, so any tile may sit beside any level
@@ -66,7 +66,6 @@
 
 mod level_chain;
 mod octree_partition;
-mod out_folder;
 mod point_tiles;
 mod skirts;
 mod tile_content;
@@ -77,8 +76,9 @@ use std::path::{Path, PathBuf};
 
 use lodkit_mesh::{Aabb, TriMesh};
 
+use lodkit_mesh::io::out_folder;
+pub use lodkit_mesh::io::out_folder::MANIFEST;
 pub use octree_partition::{CellKey, MAX_DEPTH};
-pub use out_folder::MANIFEST;
 pub use point_tiles::{
     PointTilesOptions, PointTilesReport, PointTileset, tileset_from_points, write_point_tileset,
 };
@@ -119,6 +119,16 @@ pub enum Error {
     /// An error of `lodkit-mesh` (measurement, writing).
     #[error(transparent)]
     Mesh(#[from] lodkit_mesh::Error),
+}
+
+impl From<out_folder::FolderError> for Error {
+    fn from(e: out_folder::FolderError) -> Self {
+        match e {
+            out_folder::FolderError::Refused(m) => Error::Usage(m),
+            out_folder::FolderError::Io { path, source } => Error::Io { path, source },
+            out_folder::FolderError::Write(e) => Error::Mesh(e),
+        }
+    }
 }
 
 /// The crate's result.

@@ -27,7 +27,9 @@ use lodkit_mesh::{Aabb, PointCloud};
 
 use crate::octree_partition::{CellKey, Grid, MAX_DEPTH, Node, Octree};
 use crate::tileset_json::{NodeInfo, Refine};
-use crate::{Error, Event, Phase, Result, out_folder};
+use lodkit_mesh::io::out_folder;
+
+use crate::{Error, Event, Phase, Result};
 
 /// Options of a point tileset.
 #[derive(Clone, Debug, PartialEq)]

@@ -41,6 +41,7 @@ pub mod interrupt;
 pub mod las;
 pub mod mtl;
 pub mod obj;
+pub mod out_folder;
 pub mod overwrite_guard;
 pub mod ply;
 pub mod scene_io;

@@ -1,52 +1,72 @@
-//! The output folder written as a whole or not at all, and never over a
-//! user's files: the rule `lodkit build --out` follows (the same manifest,
-//! so either command may replace a folder the other wrote). The CLI's
-//! `build/staging.rs` holds the same code; they become one when the CLI's
-//! jobs move into the product library.
+//! An output folder written as a whole or not at all, and never over a
+//! user's files: the rule of `lodkit build --out` and `lodkit tiles --out`
+//! (one manifest, so either command may replace a folder the other wrote).
 //!
-//! Every file goes into a temporary sibling folder, which replaces `--out`
-//! only when the build has finished. A failed build removes its temporary
-//! folder, and so does one ended by Ctrl-C, SIGTERM or SIGHUP (the folder
-//! is listed with `lodkit_mesh::io::interrupt::TempGuard`); `--out` stays
-//! as it was.
+//! Every file goes into a temporary sibling folder, which replaces the
+//! target only when the job has finished. A failed job removes its
+//! temporary folder, and so does one ended by Ctrl-C, SIGTERM or SIGHUP
+//! (the folder is listed with [`super::interrupt::TempGuard`]); the target
+//! stays as it was.
 //!
-//! Which folder a build may replace: lodkit's own, provably. Each build
-//! ends with [`MANIFEST`] in its folder, listing every file it wrote with
-//! its size; `--out` is replaced only when it is absent, empty, or holds
+//! Which folder a job may replace: lodkit's own, provably. Each job ends
+//! with [`MANIFEST`] in its folder, listing every file it wrote with its
+//! size; the target is replaced only when it is absent, empty, or holds
 //! exactly the files its manifest lists, at the listed sizes (nothing
 //! else: no other file, folder or link), and never when the input lies
 //! inside it (canonical paths) or it is the current folder or one above
 //! it. Anything else is refused before a byte is written, with one line
-//! saying what is not lodkit's (exit 2). The check is made again just
-//! before the swap, so a file added to `--out` during the build is not
-//! lost either.
+//! saying what is not lodkit's ([`FolderError::Refused`]: the CLI's exit
+//! 2). The check is made again just before the swap, so a file added to
+//! the target during the job is not lost either.
 //!
-//! A build killed outright (SIGKILL, power loss) leaves the hidden
+//! A job killed outright (SIGKILL, power loss) leaves the hidden
 //! `.NAME.lodkit-tmp-PID` (or, in the instant of the swap,
-//! `.NAME.lodkit-old-PID`) beside `--out`, never a folder at `--out`. The
-//! next build of the same `--out` removes such folders when their process
-//! is gone (on Linux, where `/proc` tells) and they are provably lodkit's:
-//! a temporary folder holds [`MANIFEST`] from its creation (marked as being
-//! written), an old one a complete manifest matching its files.
+//! `.NAME.lodkit-old-PID`) beside the target, never a folder at the
+//! target. The next job on the same target removes such folders when their
+//! process is gone (on Linux, where `/proc` tells) and they are provably
+//! lodkit's: a temporary folder holds [`MANIFEST`] from its creation
+//! (marked as being written), an old one a complete manifest matching its
+//! files.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
-use lodkit_mesh::io::interrupt::TempGuard;
 use serde::{Deserialize, Serialize};
 
-use crate::{Error, Result};
+use super::interrupt::TempGuard;
 
-/// An I/O error on `path`, in the crate's error type.
-fn io(path: &Path) -> impl FnOnce(std::io::Error) -> Error + '_ {
-    move |source| Error::Io {
+/// Why an output folder could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum FolderError {
+    /// The target may not be replaced (not provably lodkit's, holds the
+    /// input, no folder name…): a request the caller must change.
+    #[error("{0}")]
+    Refused(String),
+    /// Creating, renaming or removing a folder failed.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The folder.
+        path: PathBuf,
+        /// What the operating system said.
+        source: std::io::Error,
+    },
+    /// Writing the manifest failed.
+    #[error(transparent)]
+    Write(#[from] crate::Error),
+}
+
+type Result<T> = std::result::Result<T, FolderError>;
+
+/// An I/O error on `path`.
+fn io(path: &Path) -> impl FnOnce(std::io::Error) -> FolderError + '_ {
+    move |source| FolderError::Io {
         path: path.to_path_buf(),
         source,
     }
 }
 
-fn usage(msg: String) -> Error {
-    Error::Usage(msg)
+fn usage(msg: String) -> FolderError {
+    FolderError::Refused(msg)
 }
 
 /// The manifest every build folder holds: the files lodkit wrote there.
@@ -66,7 +86,7 @@ struct Manifest {
 }
 
 /// A build's temporary output folder.
-pub(crate) struct Staging {
+pub struct Staging {
     /// Where the finished build goes.
     target: PathBuf,
     /// The input file or folder, kept out of `target`.
@@ -83,7 +103,7 @@ impl Staging {
     /// build that does not hold `input`) and creates the temporary
     /// sibling. Errors: a usage error (exit 2) naming what is not
     /// lodkit's, or I/O creating the folders.
-    pub(crate) fn new(target: &Path, input: Option<&Path>) -> Result<Self> {
+    pub fn new(target: &Path, input: Option<&Path>) -> Result<Self> {
         check_target(target, input)?;
         let name = target
             .file_name()
@@ -123,14 +143,14 @@ impl Staging {
     }
 
     /// The temporary folder every output is written into.
-    pub(crate) fn dir(&self) -> &Path {
+    pub fn dir(&self) -> &Path {
         &self.dir
     }
 
     /// Lists every file of the finished folder in its manifest, then moves
     /// it into place: the previous build (if any, checked again) is
     /// renamed aside, the new one renamed in, the old one removed.
-    pub(crate) fn commit(mut self) -> Result<()> {
+    pub fn commit(mut self) -> Result<()> {
         let files = walk(&self.dir)
             .map_err(|why| usage(format!("{}: {why}", self.dir.display())))?
             .into_iter()
@@ -178,12 +198,12 @@ impl Drop for Staging {
 
 /// `name` shortened so `.NAME.lodkit-tmp-PID` fits a file name's limit.
 fn short_name(name: &str) -> String {
-    lodkit_mesh::io::fit_name(name, ".".len() + ".lodkit-tmp-".len() + 10)
+    super::fit_name(name, ".".len() + ".lodkit-tmp-".len() + 10)
 }
 
 fn write_manifest(dir: &Path, m: &Manifest) -> Result<()> {
-    let json = serde_json::to_string_pretty(m).map_err(|e| Error::Input(e.to_string()))? + "\n";
-    lodkit_mesh::io::write_atomic(&dir.join(MANIFEST), json.as_bytes())?;
+    let json = serde_json::to_string_pretty(m).map_err(|e| usage(e.to_string()))? + "\n";
+    super::write_atomic(&dir.join(MANIFEST), json.as_bytes())?;
     Ok(())
 }
 
