@@ -103,6 +103,7 @@
 //! (`POINTS` primitives → a point cloud; which reader a file needs).
 
 mod buffers;
+mod codec;
 mod color;
 mod extensions;
 mod glb;
