@@ -57,6 +57,12 @@ pub fn run(job: &TilesJob, events: &Progress) -> Result<TilesReport> {
     step.finish();
     match located.model {
         Model::Mesh(mesh) => {
+            if mesh.uvs.is_some() {
+                events.status(format!(
+                    "note: {}: tiles carry its geometry, normals and colours; its UVs and textures are not carried yet",
+                    job.input.display()
+                ));
+            }
             let mut draw = phases(events, "levels: simplify, cut and measure");
             let tileset = lodkit_tiles::tileset_from_mesh(&mesh, &job.mesh, &mut draw)
                 .map_err(|e| error(e, &job.input))?;

@@ -41,6 +41,8 @@ pub mod interrupt;
 pub mod las;
 pub mod mtl;
 pub mod obj;
+// Output folders live on a file system with signals: not in the browser.
+#[cfg(not(target_arch = "wasm32"))]
 pub mod out_folder;
 pub mod overwrite_guard;
 pub mod ply;
