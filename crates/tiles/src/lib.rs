@@ -258,14 +258,11 @@ pub fn tileset_from_mesh(
     opts: &TilesOptions,
     progress: &mut dyn FnMut(Event),
 ) -> Result<Tileset> {
-    if !TilesOptions::LEAF_TRIANGLES.contains(&opts.leaf_triangles) {
-        return Err(Error::Usage(format!(
-            "leaf triangles {}: must be in {}..={}",
-            opts.leaf_triangles,
-            TilesOptions::LEAF_TRIANGLES.start(),
-            TilesOptions::LEAF_TRIANGLES.end()
-        )));
-    }
+    check_option(
+        "leaf triangles",
+        opts.leaf_triangles,
+        &TilesOptions::LEAF_TRIANGLES,
+    )?;
     mesh.validate().map_err(|e| Error::Input(e.to_string()))?;
     if mesh.faces.is_empty() {
         return Err(Error::Input("the mesh has no faces to tile".into()));
@@ -366,6 +363,40 @@ pub fn write_tileset(
     progress: &mut dyn FnMut(Event),
 ) -> Result<TilesReport> {
     let t0 = std::time::Instant::now();
+    let bytes = write_folder(
+        out,
+        input,
+        (&tileset.tree, &tileset.info),
+        (tileset_json::Refine::Replace, None),
+        tileset
+            .tiles()
+            .map(|(name, depth, _, mesh)| (name, depth, mesh)),
+        tileset.report.tiles,
+        |name, mesh, grid| encode_tile(name, mesh, opts.compress, grid),
+        progress,
+    )?;
+    let mut report = tileset.report.clone();
+    report.bytes = bytes;
+    report.seconds[3] = t0.elapsed().as_secs_f64();
+    Ok(report)
+}
+
+/// Writes a tileset folder (see [`write_tileset`]'s layout) atomically
+/// under the output-folder rule: every tile's GLB, made by `encode` on its
+/// depth's grid ([`depth_grid`]), then the tileset files. `total` counts
+/// the tiles for progress. Returns the bytes written. The mesh and the
+/// point tilesets both write through it.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn write_folder<T>(
+    out: &Path,
+    input: Option<&Path>,
+    (tree, info): (&octree_partition::Octree, &[tileset_json::NodeInfo]),
+    (refine, origin): (tileset_json::Refine, Option<[f64; 3]>),
+    tiles: impl Iterator<Item = (String, u8, T)>,
+    total: usize,
+    encode: impl Fn(&str, T, &lodkit_mesh::io::gltf::QuantGrid) -> Result<Vec<u8>>,
+    progress: &mut dyn FnMut(Event),
+) -> Result<u64> {
     let staging = out_folder::Staging::new(out, input)?;
     let dir = staging.dir().to_path_buf();
     let tiles_dir = dir.join("tiles");
@@ -374,11 +405,9 @@ pub fn write_tileset(
         source,
     })?;
     let mut bytes = 0u64;
-    let total = tileset.report.tiles;
-    let bounds = tileset.info[0].bbox;
-    for (i, (name, depth, _, mesh)) in tileset.tiles().enumerate() {
-        let grid = tile_content::depth_grid(&bounds, depth);
-        let glb = encode_tile(&name, mesh, opts.compress, &grid)?;
+    let bounds = info[0].bbox;
+    for (i, (name, depth, tile)) in tiles.enumerate() {
+        let glb = encode(&name, tile, &depth_grid(&bounds, depth))?;
         lodkit_mesh::io::write_atomic(&tiles_dir.join(format!("{name}.glb")), &glb)?;
         bytes += glb.len() as u64;
         progress(Event::Progress {
@@ -387,14 +416,29 @@ pub fn write_tileset(
             total,
         });
     }
-    let root_cube = (tileset.tree.grid.size * 3f64.sqrt()).max(tileset.info[0].error);
-    for (path, json) in tileset_json::tileset_files(&tileset.tree, &tileset.info, root_cube) {
+    // The error of drawing nothing: at least the root cube's diagonal.
+    let top = (tree.grid.size * 3f64.sqrt()).max(info[0].error);
+    for (path, json) in tileset_json::tileset_files_with(tree, info, top, refine, origin) {
         lodkit_mesh::io::write_atomic(&dir.join(&path), &json)?;
         bytes += json.len() as u64;
     }
     staging.commit()?;
-    let mut report = tileset.report.clone();
-    report.bytes = bytes;
-    report.seconds[3] = t0.elapsed().as_secs_f64();
-    Ok(report)
+    Ok(bytes)
+}
+
+/// `value` of the option `what` within `range`, else [`Error::Usage`].
+pub(crate) fn check_option(
+    what: &str,
+    value: usize,
+    range: &std::ops::RangeInclusive<usize>,
+) -> Result<()> {
+    if range.contains(&value) {
+        Ok(())
+    } else {
+        Err(Error::Usage(format!(
+            "{what} {value}: must be in {}..={}",
+            range.start(),
+            range.end()
+        )))
+    }
 }

@@ -27,8 +27,6 @@ use lodkit_mesh::{Aabb, PointCloud};
 
 use crate::octree_partition::{CellKey, Grid, MAX_DEPTH, Node, Octree};
 use crate::tileset_json::{NodeInfo, Refine};
-use lodkit_mesh::io::out_folder;
-
 use crate::{Error, Event, Phase, Result};
 
 /// Options of a point tileset.
@@ -170,14 +168,11 @@ pub fn tileset_from_points(
     opts: &PointTilesOptions,
     progress: &mut dyn FnMut(Event),
 ) -> Result<PointTileset> {
-    if !PointTilesOptions::LEAF_POINTS.contains(&opts.leaf_points) {
-        return Err(Error::Usage(format!(
-            "leaf points {}: must be in {}..={}",
-            opts.leaf_points,
-            PointTilesOptions::LEAF_POINTS.start(),
-            PointTilesOptions::LEAF_POINTS.end()
-        )));
-    }
+    crate::check_option(
+        "leaf points",
+        opts.leaf_points,
+        &PointTilesOptions::LEAF_POINTS,
+    )?;
     cloud.validate().map_err(|e| Error::Input(e.to_string()))?;
     if cloud.positions.is_empty() {
         return Err(Error::Input("the cloud has no points to tile".into()));
@@ -308,44 +303,21 @@ pub fn write_point_tileset(
     progress: &mut dyn FnMut(Event),
 ) -> Result<PointTilesReport> {
     let t0 = std::time::Instant::now();
-    let staging = out_folder::Staging::new(out, input)?;
-    let dir = staging.dir().to_path_buf();
-    let tiles_dir = dir.join("tiles");
-    std::fs::create_dir(&tiles_dir).map_err(|source| Error::Io {
-        path: tiles_dir.clone(),
-        source,
-    })?;
-    let mut bytes = 0u64;
-    let total = tileset.report.tiles;
-    let mut done = 0;
-    let bounds = tileset.info[0].bbox;
-    for (name, depth, _, cloud) in tileset.tiles() {
-        if cloud.positions.is_empty() {
-            continue;
-        }
-        let grid = crate::tile_content::depth_grid(&bounds, depth);
-        let glb = crate::tile_content::encode_point_tile(&name, cloud, opts.compress, &grid)?;
-        lodkit_mesh::io::write_atomic(&tiles_dir.join(format!("{name}.glb")), &glb)?;
-        bytes += glb.len() as u64;
-        done += 1;
-        progress(Event::Progress {
-            phase: Phase::Write,
-            done,
-            total,
-        });
-    }
-    let top = (tileset.tree.grid.size * 3f64.sqrt()).max(tileset.info[0].error);
-    for (path, json) in crate::tileset_json::tileset_files_with(
-        &tileset.tree,
-        &tileset.info,
-        top,
-        Refine::Add,
-        origin,
-    ) {
-        lodkit_mesh::io::write_atomic(&dir.join(&path), &json)?;
-        bytes += json.len() as u64;
-    }
-    staging.commit()?;
+    let bytes = crate::write_folder(
+        out,
+        input,
+        (&tileset.tree, &tileset.info),
+        (Refine::Add, origin),
+        tileset
+            .tiles()
+            .filter(|(_, _, _, cloud)| !cloud.positions.is_empty())
+            .map(|(name, depth, _, cloud)| (name, depth, cloud)),
+        tileset.report.tiles,
+        |name, cloud, grid| {
+            crate::tile_content::encode_point_tile(name, cloud, opts.compress, grid)
+        },
+        progress,
+    )?;
     let mut report = tileset.report.clone();
     report.bytes = bytes;
     report.seconds[1] = t0.elapsed().as_secs_f64();
