@@ -236,3 +236,83 @@ fn outer_thinning_reports_the_relax_level_it_chose_or_was_given() {
         stderr(&o)
     );
 }
+
+/// `n` points on a bumpy unit sphere (a Fibonacci spiral), coloured, as
+/// an ASCII PLY point cloud: an unorganised scan's samples.
+fn write_cloud(path: &std::path::Path, n: usize) {
+    let mut s = format!(
+        "ply\nformat ascii 1.0\nelement vertex {n}\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n"
+    );
+    for i in 0..n {
+        let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+        let r = (1.0 - z * z).sqrt();
+        let a = i as f64 * 2.399963229728653;
+        let (x, y) = (r * a.cos(), r * a.sin());
+        let k = 1.0 + 0.08 * (5.0 * x).sin() * (4.0 * y).sin() * (3.0 * z).sin();
+        let c = |v: f64| (40.0 + 100.0 * (v + 1.0)) as u8;
+        s += &format!(
+            "{:.6} {:.6} {:.6} {} {} {}\n",
+            x * k,
+            y * k,
+            z * k,
+            c(x),
+            c(y),
+            c(z)
+        );
+    }
+    std::fs::write(path, s).unwrap();
+}
+
+/// A point cloud's stream codes its reconstructed surface at about one
+/// particle per sample (within 2× of the points), coloured, and its
+/// finest level triangulates; `--raw` codes the samples as they are.
+#[test]
+fn a_cloud_is_coded_from_its_surface_at_its_detail() {
+    let dir = tempfile::tempdir().unwrap();
+    let cloud = dir.path().join("cloud.ply");
+    let n = 30_000;
+    write_cloud(&cloud, n);
+    for (raw, source) in [(false, "surface"), (true, "samples")] {
+        let pop = dir.path().join(format!("{source}.pop"));
+        let mut args = vec![
+            "-q",
+            "pop",
+            "encode",
+            cloud.to_str().unwrap(),
+            "-o",
+            pop.to_str().unwrap(),
+            "--json",
+        ];
+        if raw {
+            args.push("--raw");
+        }
+        let o = lodkit(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(v["source"], source);
+        let particles = v["particles"].as_u64().unwrap() as usize;
+        if !raw {
+            assert!(
+                (n / 2..=2 * n).contains(&particles),
+                "{particles} particles for {n} points"
+            );
+        }
+        let mesh = dir.path().join(format!("{source}.ply"));
+        let o = lodkit(&[
+            "-q",
+            "pop",
+            "decode",
+            pop.to_str().unwrap(),
+            "-o",
+            mesh.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let o = lodkit(&["info", mesh.to_str().unwrap(), "--json"]);
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert!(v["faces"].as_u64().unwrap() > 0, "{v}");
+        if !raw {
+            let attrs = v["attributes"].to_string();
+            assert!(attrs.contains("colors"), "{v}");
+        }
+    }
+}

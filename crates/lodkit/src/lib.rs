@@ -34,7 +34,7 @@
 //! - [`limits`]: every range and default of every option;
 //! - [`plan`]: in core or out of core;
 //! - jobs: [`simplify`], [`lod_chain`], [`build_all`], [`compare`], [`info`],
-//!   [`render`];
+//!   [`render`], [`stream_encode`];
 //! - [`report`]: the serde types front-ends print (one definition each);
 //! - [`output`], [`materials`], [`measure`]: what the jobs share.
 
@@ -54,6 +54,7 @@ pub mod progress;
 pub mod render;
 pub mod report;
 pub mod simplify;
+pub mod stream_encode;
 pub mod tiles;
 pub mod usage;
 

@@ -53,7 +53,7 @@ pub struct FieldVertex {
 
 /// Largest offset along the tangent plane, in cubes, for a band vertex to
 /// be defined when the rule is on (see [`SignedDistanceField::slot_defined`]). The
-/// default cube is twice the sample spacing, so on continuous data some
+/// default cube is 1.5 to 2 sample spacings, so on continuous data some
 /// sample is always within half a cube tangentially; 1.5 leaves room for
 /// irregular sampling. On scans the rule removes the spurious sheets past
 /// their edges; on closed meshes it would open holes at thin features, so

@@ -4,6 +4,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand, ValueEnum};
+use lodkit::stream_encode::{StreamSource, encode_model};
 use lodkit_mesh::Model;
 use lodkit_mesh::io::WriteOptions;
 use lodkit_particles::silhouette::{
@@ -11,7 +12,7 @@ use lodkit_particles::silhouette::{
 };
 use lodkit_particles::{
     DecodeOptions, EncodeOptions, Mode, Placement, ThinningOptions, TriangulateOptions, decode,
-    decode_prefix, encode, triangulate,
+    decode_prefix, triangulate,
 };
 use serde::Serialize;
 
@@ -20,9 +21,9 @@ use crate::ui::value::{self, Real};
 
 #[derive(Subcommand)]
 pub enum PopCommand {
-    /// Encode a mesh or point cloud as a progressive `.pop` stream.
+    /// Encode a mesh, point cloud or range image as a progressive `.pop` stream.
     #[command(
-        after_help = "Examples:\n  lodkit pop encode bunny.ply -o bunny.pop\n  lodkit pop encode scan.ply -o scan.pop --depth 9 --precision 14 --mode baseline"
+        after_help = "Examples:\n  lodkit pop encode bunny.ply -o bunny.pop\n  lodkit pop encode scan.ply -o scan.pop --depth 9 --precision 14 --mode baseline\n  lodkit pop encode cloud.ply -o cloud.pop --raw"
     )]
     Encode(EncodeArgs),
     /// Decode one level of a `.pop` stream to a mesh (or its particles).
@@ -60,9 +61,16 @@ pub enum PlacementArg {
 
 #[derive(Args)]
 pub struct EncodeArgs {
-    /// Input mesh or point cloud.
+    /// Input mesh, point cloud or range image. A cloud or range image is
+    /// coded from its reconstructed surface, at about one particle per
+    /// sample (see --raw).
     #[arg(required_unless_present = "silhouettes")]
     pub input: Option<PathBuf>,
+    /// Code a cloud's or range image's samples as they are, one particle
+    /// per occupied leaf (faster; at the samples' own detail the direct
+    /// triangulation of raw points has holes).
+    #[arg(long, conflicts_with = "silhouettes")]
+    pub raw: bool,
     /// Carve the octree from calibrated photographs instead: a NeRF
     /// transforms.json or a COLMAP cameras.txt / images.txt (or a folder
     /// holding one); silhouettes from mask images, alpha or --key-colour.
@@ -275,7 +283,7 @@ fn run_encode(ui: &Ui, a: &EncodeArgs) -> Result<()> {
         },
         ..EncodeOptions::DEFAULT
     };
-    let (e, input) = match (&a.silhouettes, &a.input) {
+    let (e, input, source) = match (&a.silhouettes, &a.input) {
         (Some(cams), _) => {
             let c = carve_image_set(ui, cams, &a.carve, &opts)?;
             let step = ui.spinner("encoding octree particles");
@@ -289,15 +297,26 @@ fn run_encode(ui: &Ui, a: &EncodeArgs) -> Result<()> {
                 c.report.surface_leaves,
                 c.report.particles
             ));
-            (e, cams.clone())
+            (e, cams.clone(), "carved")
         }
         (None, Some(input)) => {
             let model = super::load(ui, input)?;
-            let step = ui.spinner("encoding octree particles");
-            let e =
-                encode(&model, &opts).with_context(|| format!("encoding {}", input.display()))?;
-            step.finish();
-            (e, input.clone())
+            let source = if a.raw {
+                StreamSource::Samples
+            } else {
+                StreamSource::Surface
+            };
+            let (e, plan) = ui.run(|events| {
+                encode_model(&model, &input.display().to_string(), &opts, source, events)
+            })?;
+            if let Some((resolution, triangles)) = plan.reconstruction {
+                ui.status(format!(
+                    "{}: {} samples reconstructed at lattice resolution {resolution} ({triangles} triangles); coding that surface (--raw codes the samples)",
+                    input.display(),
+                    plan.samples
+                ));
+            }
+            (e, input.clone(), plan.source)
         }
         (None, None) => return Err(crate::ui::usage("give an input file or --silhouettes")),
     };
@@ -308,12 +327,14 @@ fn run_encode(ui: &Ui, a: &EncodeArgs) -> Result<()> {
         struct Encoded<'a> {
             input: String,
             output: String,
+            source: &'a str,
             #[serde(flatten)]
             report: &'a lodkit_particles::EncodeReport,
         }
         return super::print_json(&Encoded {
             input: input.display().to_string(),
             output: a.output.display().to_string(),
+            source,
             report: r,
         });
     }

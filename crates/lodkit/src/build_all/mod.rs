@@ -23,7 +23,7 @@ mod continuous;
 mod html;
 mod html_page;
 mod input;
-mod progressive;
+pub(crate) mod progressive;
 mod staging;
 
 use std::fmt::Write as _;

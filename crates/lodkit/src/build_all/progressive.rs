@@ -92,7 +92,7 @@ pub fn plan(input: &BuildInput) -> Plan {
 /// axis-aligned tables occupy fewer leaves than curved surfaces), and a
 /// level is 4 times the one above it: the count decides. Errors as
 /// [`encode`]'s. Cost: one or two encodings.
-fn encode_near(source: &Model, opts: &EncodeOptions, samples: usize) -> Result<Encoded> {
+pub(crate) fn encode_near(source: &Model, opts: &EncodeOptions, samples: usize) -> Result<Encoded> {
     let first = encode(source, opts)?;
     let Some(depth) = opts.depth else {
         return Ok(first);
