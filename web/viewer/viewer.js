@@ -87,6 +87,14 @@ const viewer = {
     controls.update();
     renderNow();
   },
+  /** The model's surface point under the view at normalised device
+   * coordinates `x`, `y` (each in -1..1; 0, 0 is the centre), or null. */
+  pick(x, y) {
+    const ray = new THREE.Raycaster();
+    ray.setFromCamera(new THREE.Vector2(x, y), camera);
+    const hit = viewer.model && ray.intersectObject(viewer.model, true)[0];
+    return hit ? hit.point.toArray() : null;
+  },
 };
 window.lodkitViewer = viewer;
 
