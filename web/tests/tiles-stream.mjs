@@ -3,10 +3,12 @@
 //   - first frame: time from navigation start to the first frame that
 //     draws tile content, and the tileset bytes (tileset JSON and tile
 //     contents) fetched by then;
-//   - a close-up: the camera moved to a twentieth of the model's radius
-//     from the surface point under the screen's centre; once settled, the
-//     bytes fetched since the page started against the bytes of the tiles
-//     the final view draws, and against the whole tileset on disk.
+//   - the overview settled at the viewer's error target (1 px);
+//   - a close-up, in a fresh page that opens with the camera at a
+//     twentieth of the model's radius from the surface point under the
+//     overview's centre (`?camera=`): once settled, the bytes it fetched
+//     against the bytes of the tiles its final view draws, and against
+//     the whole tileset on disk.
 // Prints one JSON object (and writes it to LODKIT_WEB_OUT/stream.json).
 // A benchmark, not a test: it asserts nothing but that the tileset loads.
 //
@@ -65,120 +67,125 @@ function folderBytes(dir) {
 }
 
 const server = await staticServer(path.resolve(site), models);
-const browser = await launch();
-const page = await browser.context.newPage();
-const errors = [];
-page.on('pageerror', (e) => errors.push(String(e)));
-page.on('console', (m) => {
-  if (m.type() === 'error' && !/\/api\/models/.test(m.location().url || '')) errors.push(m.text());
-});
-
-// Every response's body size by URL (the link is emulated in the page's
-// network stack, so the sizes are what crossed it).
-const cdp = await browser.context.newCDPSession(page);
-await cdp.send('Network.enable');
-await cdp.send('Network.setCacheDisabled', { cacheDisabled: true });
-await cdp.send('Network.emulateNetworkConditions', {
-  offline: false,
-  latency: latencyMs,
-  downloadThroughput: (mbps * 1e6) / 8,
-  uploadThroughput: (mbps * 1e6) / 8,
-});
-const urls = new Map();
-const bodyBytes = new Map();
-cdp.on('Network.responseReceived', (e) => urls.set(e.requestId, e.response.url));
-cdp.on('Network.dataReceived', (e) => {
-  const u = urls.get(e.requestId);
-  if (u) bodyBytes.set(u, (bodyBytes.get(u) || 0) + e.dataLength);
-});
-const modelsPrefix = `${server.url}/models/`;
-const tilesetFetched = () => [...bodyBytes].filter(([u]) => u.startsWith(modelsPrefix)).reduce((s, [, n]) => s + n, 0);
-const appFetched = () => [...bodyBytes].filter(([u]) => !u.startsWith(modelsPrefix)).reduce((s, [, n]) => s + n, 0);
-
-// The first frame that draws tile content, timed in the page (performance
-// time: milliseconds since navigation start).
-await page.addInitScript(() => {
-  const poll = () => {
-    const v = window.lodkitViewer;
-    if (v && v.state && v.state.kind === 'tileset' && v.state.triangles + v.state.points > 0) {
-      window.__firstFrame = { ms: performance.now(), tilesetBytes: v.state.tilesetBytes };
-      return;
-    }
-    requestAnimationFrame(poll);
-  };
-  requestAnimationFrame(poll);
-});
-
 const url = `/models/${rel.split('/').map(encodeURIComponent).join('/')}`;
-await page.goto(`${server.url}/?model=${encodeURIComponent(url)}`);
-await page.waitForFunction(() => window.__firstFrame || (window.lodkitViewer && window.lodkitViewer.state.error), null, { timeout: TIMEOUT });
-const first = await page.evaluate(() => ({ ...window.__firstFrame, error: window.lodkitViewer.state.error }));
-if (first.error) {
-  console.error(`${rel}: ${first.error}`);
-  process.exit(1);
-}
-const firstFetched = { tileset: tilesetFetched(), app: appFetched() };
 
-async function settle() {
+// One page in a fresh browser (no cache) over the emulated link; every
+// response's body bytes by URL.
+async function openStreamed(query) {
+  const browser = await launch();
+  const page = await browser.context.newPage();
+  const errors = [];
+  page.on('pageerror', (e) => errors.push(String(e)));
+  page.on('console', (m) => {
+    if (m.type() === 'error' && !/\/api\/models/.test(m.location().url || '')) errors.push(m.text());
+  });
+  const cdp = await browser.context.newCDPSession(page);
+  await cdp.send('Network.enable');
+  await cdp.send('Network.setCacheDisabled', { cacheDisabled: true });
+  await cdp.send('Network.emulateNetworkConditions', {
+    offline: false,
+    latency: latencyMs,
+    downloadThroughput: (mbps * 1e6) / 8,
+    uploadThroughput: (mbps * 1e6) / 8,
+  });
+  const urls = new Map();
+  const bodyBytes = new Map();
+  cdp.on('Network.responseReceived', (e) => urls.set(e.requestId, e.response.url));
+  cdp.on('Network.dataReceived', (e) => {
+    const u = urls.get(e.requestId);
+    if (u) bodyBytes.set(u, (bodyBytes.get(u) || 0) + e.dataLength);
+  });
+  const prefix = `${server.url}/models/`;
+  const sum = (keep) => [...bodyBytes].filter(([u]) => keep(u.startsWith(prefix))).reduce((n, [, b]) => n + b, 0);
+  // The first frame that draws tile content, timed in the page
+  // (milliseconds since navigation start).
+  await page.addInitScript(() => {
+    const poll = () => {
+      const v = window.lodkitViewer;
+      if (v && v.state && v.state.kind === 'tileset' && v.state.triangles + v.state.points > 0) {
+        // From the request of the tileset's JSON, too (the viewer's own
+        // code and decoders come first).
+        const json = performance.getEntriesByType('resource').find((r) => /\/models\/.*\.json(\?|$)/.test(r.name));
+        const ms = performance.now();
+        window.__firstFrame = { ms, fromTilesetMs: json ? ms - json.startTime : null };
+        return;
+      }
+      requestAnimationFrame(poll);
+    };
+    requestAnimationFrame(poll);
+  });
+  await page.goto(`${server.url}/?model=${encodeURIComponent(url)}${query}`);
+  await page.waitForFunction(() => window.__firstFrame || (window.lodkitViewer && window.lodkitViewer.state.error), null, { timeout: TIMEOUT });
+  const first = await page.evaluate(() => ({ ...window.__firstFrame, error: window.lodkitViewer.state.error }));
+  if (first.error) {
+    console.error(`${rel}: ${first.error}`);
+    process.exit(1);
+  }
+  first.tilesetBytes = sum((m) => m);
+  first.viewerBytes = sum((m) => !m);
+  return { browser, page, errors, bodyBytes, tilesetBytes: () => sum((m) => m), first };
+}
+
+async function settle(page) {
   const deadline = Date.now() + TIMEOUT;
+  const t0 = Date.now();
   for (;;) {
     const s = await page.evaluate(() => {
       window.lodkitViewer.render();
       return window.lodkitViewer.state.settledFrames;
     });
-    if (s >= 5) return;
+    if (s >= 5) return Date.now() - t0;
     if (Date.now() > deadline) throw new Error('the tileset did not settle');
     await page.waitForTimeout(50);
   }
 }
-await settle();
-const overview = await page.evaluate(() => ({ triangles: window.lodkitViewer.state.triangles, tiles: window.lodkitViewer.state.tilesVisible }));
-const overviewFetched = tilesetFetched();
+const drawnState = (page) => page.evaluate(() => ({ triangles: window.lodkitViewer.state.triangles, tiles: window.lodkitViewer.state.tilesVisible }));
 
-// The close-up: the surface point under the screen's centre, seen from a
-// twentieth of the bounding sphere's radius along the view direction.
-const t0 = Date.now();
-const moved = await page.evaluate(() => {
+// The overview.
+const a = await openStreamed('');
+const overviewMs = await settle(a.page);
+const overview = { ...(await drawnState(a.page)), settleMs: overviewMs, tilesetBytes: a.tilesetBytes() };
+// The close-up's camera: the surface point under the centre, seen from a
+// twentieth of the bounding sphere's radius back along the view.
+const camera = await a.page.evaluate(() => {
   const v = window.lodkitViewer;
   const hit = v.pick(0, 0);
   if (!hit) return null;
   const eye = v.camera.position.toArray();
   const d = Math.hypot(eye[0] - hit[0], eye[1] - hit[1], eye[2] - hit[2]);
   const k = v.bounds.radius / 20 / d;
-  v.setCamera(hit.map((h, i) => h + (eye[i] - h) * k), hit);
-  return { distance: v.bounds.radius / 20 };
+  return [...hit.map((h, i) => h + (eye[i] - h) * k), ...hit];
 });
-if (!moved) {
-  console.error(`${rel}: no surface under the screen's centre`);
+await a.browser.close();
+if (!camera) {
+  console.error(`${rel}: no surface under the overview's centre`);
   process.exit(1);
 }
-await settle();
-const closeMs = Date.now() - t0;
-// The tiles the final view draws, and their bytes as fetched.
-const drawn = await page.evaluate(() => {
+
+// The close-up, from a cold start.
+const b = await openStreamed(`&camera=${camera.map((x) => x.toPrecision(9)).join(',')}`);
+const closeMs = await settle(b.page);
+const drawn = await b.page.evaluate(() => {
   const t = window.lodkitViewer.tiles;
   return [...t.visibleTiles]
     .filter((tile) => tile.content && tile.content.uri)
     .map((tile) => new URL(tile.content.uri, `${tile.internal.basePath}/`).toString());
 });
-const drawnBytes = drawn.reduce((s, u) => s + (bodyBytes.get(u) || 0), 0);
-const close = await page.evaluate(() => ({ triangles: window.lodkitViewer.state.triangles, tiles: window.lodkitViewer.state.tilesVisible }));
-const fetched = tilesetFetched();
-const total = folderBytes(path.dirname(tilesetFile));
-await browser.close();
+const drawnBytes = drawn.reduce((n, u) => n + (b.bodyBytes.get(u) || 0), 0);
+const close = await drawnState(b.page);
+const fetched = b.tilesetBytes();
+await b.browser.close();
 await server.close();
+const total = folderBytes(path.dirname(tilesetFile));
 
 const out = {
   tileset: rel,
   link: { mbps, latencyMs },
-  firstFrame: {
-    ms: Math.round(first.ms),
-    tilesetBytes: firstFetched.tileset,
-    viewerBytes: firstFetched.app,
-  },
-  overview: { ...overview, tilesetBytes: overviewFetched },
+  firstFrame: { ms: Math.round(a.first.ms), fromTilesetMs: Math.round(a.first.fromTilesetMs), tilesetBytes: a.first.tilesetBytes, viewerBytes: a.first.viewerBytes },
+  overview,
   closeUp: {
     ...close,
+    firstFrameMs: Math.round(b.first.ms),
     settleMs: closeMs,
     fetchedBytes: fetched,
     drawnTileBytes: drawnBytes,
@@ -186,8 +193,8 @@ const out = {
     fetchedShareOfTileset: +(fetched / total).toFixed(4),
   },
   tilesetBytesOnDisk: total,
-  consoleErrors: errors,
+  consoleErrors: [...a.errors, ...b.errors],
 };
 fs.writeFileSync(path.join(outDir, 'stream.json'), JSON.stringify(out, null, 2));
 console.log(JSON.stringify(out, null, 2));
-process.exit(errors.length ? 1 : 0);
+process.exit(out.consoleErrors.length ? 1 : 0);

@@ -97,6 +97,7 @@ const viewer = {
   },
 };
 window.lodkitViewer = viewer;
+let startCamera = null;
 
 window.addEventListener('error', (e) => showError(e.message));
 window.addEventListener('unhandledrejection', (e) => showError(String(e.reason && e.reason.message ? e.reason.message : e.reason)));
@@ -462,7 +463,11 @@ async function openTileset(url) {
     },
   });
   tiles.group.rotation.x = -Math.PI / 2;
-  tiles.errorTarget = state.tolerance;
+  // The first frame draws what the root alone shows (one small download,
+  // not a link shared by every tile the view wants); refinement to the
+  // error target starts once it is on screen.
+  let firstDrawn = false;
+  tiles.errorTarget = Infinity;
   tiles.setCamera(camera);
   tiles.setResolutionFromRenderer(camera, renderer);
   viewer.tiles = tiles;
@@ -473,7 +478,7 @@ async function openTileset(url) {
   for (const ev of ['needs-update', 'needs-render', 'load-model', 'tiles-load-end']) tiles.addEventListener(ev, update);
   tiles.addEventListener('load-model', ({ scene: s }) => setWireframe(s, state.wireframe));
   onFrame = () => {
-    tiles.errorTarget = state.tolerance;
+    tiles.errorTarget = firstDrawn ? state.tolerance : Infinity;
     camera.updateMatrixWorld();
     tiles.setResolutionFromRenderer(camera, renderer);
     tiles.update();
@@ -487,7 +492,12 @@ async function openTileset(url) {
     state.points = renderer.info.render.points;
     // Settled: nothing queued, downloading or parsing and something drawn
     // (`settledFrames` counts such frames in a row).
-    const settled = s.queued + s.downloading + s.parsing === 0 && s.visible > 0;
+    if (!firstDrawn && s.visible > 0 && state.triangles + state.points > 0) {
+      firstDrawn = true;
+      requestRender();
+      return;
+    }
+    const settled = firstDrawn && s.queued + s.downloading + s.parsing === 0 && s.visible > 0;
     state.settledFrames = settled ? state.settledFrames + 1 : 0;
     if (settled) state.complete = true;
     else requestRender();
@@ -500,6 +510,7 @@ async function openTileset(url) {
       sphere.applyMatrix4(tiles.group.matrixWorld);
       viewer.bounds = sphere;
       frameSphere(sphere, Math.PI / 5);
+      if (startCamera) viewer.setCamera(startCamera.slice(0, 3), startCamera.slice(3));
       resolve();
     });
     tiles.addEventListener('load-error', ({ tile, error, url: u }) => {
@@ -637,6 +648,10 @@ async function main() {
   controlsUi();
   resize();
   const params = new URLSearchParams(location.search);
+  // ?camera=EX,EY,EZ,TX,TY,TZ: a tileset's first view, eye and target in
+  // the scene's frame (y up), instead of the framing of the whole model.
+  const cam = (params.get('camera') || '').split(',').map(Number);
+  if (cam.length === 6 && cam.every(Number.isFinite)) startCamera = cam;
   const models = await listModels();
   let url = params.get('model');
   if (models.length) {
