@@ -3,9 +3,11 @@
 //! `PointCloud` classes, checks option ranges and documents each call).
 //!
 //! Contract of every function here:
-//! - **Inputs** are numpy arrays read in place (see [`convert`]); options
-//!   arrive already range-checked by the Python layer, with the CLI's
-//!   defaults (`crates/cli/src/commands/{simplify,lods,compare,mco,pop}.rs`).
+//! - **Inputs** are numpy arrays read in place (see [`convert`]), or paths
+//!   for the library's jobs on files ([`jobs`]); options arrive already
+//!   range-checked by the Python layer against `LIMITS`, with the defaults
+//!   of `DEFAULTS` (both read from `lodkit::limits` and the engines'
+//!   option types, as the CLI reads them).
 //! - **The GIL is released** (`Python::detach`) around every computation:
 //!   file reading and writing, simplification, measurement, builds, cuts,
 //!   encoding, decoding. Other Python threads run meanwhile.
@@ -13,6 +15,8 @@
 //!   line ([`errors`]): what the CLI prints, without the file name when
 //!   there is no file.
 //! - Only the crates' public APIs are used (no dependency on the CLI).
+//! - **Progress**: the jobs on files take `progress`, a function called
+//!   with each of the job's events as a dict ([`progress`]).
 
 use std::path::PathBuf;
 
@@ -24,8 +28,10 @@ use pyo3::types::PyDict;
 
 mod convert;
 mod errors;
+mod jobs;
 mod mco;
 mod pop;
+mod progress;
 mod scale;
 mod tiles;
 
@@ -33,6 +39,7 @@ use convert::{json_to_py, mesh_from_py, mesh_to_py, model_from_py, model_to_py};
 use errors::input;
 
 use lodkit::limits::{self, MAX_SAMPLES};
+use lodkit::measure::Sampling;
 
 /// `load(path) -> (kind, dict)`: any file lodkit reads (format by
 /// extension); kind is `"mesh"` or `"points"`.
@@ -141,7 +148,7 @@ fn write_lod_glb(
 
 /// The simplifier options, from the Python keywords (CLI defaults).
 #[allow(clippy::too_many_arguments)]
-fn options(
+pub(crate) fn options(
     target: Target,
     max_error: Option<f32>,
     lock_border: bool,
@@ -295,18 +302,16 @@ fn lod_chain<'py>(
             if !measure {
                 return Ok(chain.into_iter().map(|l| (l, None)).collect());
             }
+            // Measured as the library's chain measures its levels.
             let reference = Reference::new(&m).map_err(|e| e.to_string())?;
+            let sampling = samples.map_or(Sampling::Adaptive, Sampling::PerKind);
             chain
                 .into_iter()
                 .map(|l| {
-                    if l.mesh.faces.is_empty() {
-                        return Ok((l, None));
-                    }
-                    let r = reference
-                        .compare_level(&l.mesh, samples)
+                    let d = sampling
+                        .measure(&reference, &l.mesh)
                         .map_err(|e| e.to_string())?;
-                    let d = Some((r.symmetric.mean, r.symmetric.max, r.samples_per_kind));
-                    Ok((l, d))
+                    Ok((l, d.map(|d| (d.mean, d.max, d.samples))))
                 })
                 .collect()
         })
@@ -407,6 +412,33 @@ fn limits_dict(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
         "tile_leaf_points",
         int(&lodkit_tiles::PointTilesOptions::LEAF_POINTS),
     )?;
+    d.set_item("memory", (*limits::MEMORY.start(), *limits::MEMORY.end()))?;
+    d.set_item("fov", real(limits::FOV))?;
+    d.set_item("elevation", real(limits::ELEVATION))?;
+    d.set_item(
+        "picture_size",
+        (*limits::PICTURE_SIZE.start(), *limits::PICTURE_SIZE.end()),
+    )?;
+    Ok(d)
+}
+
+/// `DEFAULTS`: the default of every option pylodkit offers by name, from
+/// `lodkit::limits` and the engines' option types (what the CLI's flags
+/// default to).
+fn defaults_dict(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("levels", limits::DEFAULT_LEVELS)?;
+    d.set_item("heap_size", Options::DEFAULT_HEAP_SIZE)?;
+    d.set_item("normal_weight", AttributeWeights::DEFAULT.normal)?;
+    d.set_item("color_weight", AttributeWeights::DEFAULT.color)?;
+    d.set_item("uv_weight", AttributeWeights::DEFAULT.uv)?;
+    d.set_item("seed", lodkit_mesh::metrics::DEFAULT_SEED)?;
+    d.set_item("fov", limits::DEFAULT_FOV)?;
+    d.set_item("azimuth", limits::DEFAULT_VIEW.0)?;
+    d.set_item("elevation", limits::DEFAULT_VIEW.1)?;
+    d.set_item("width", limits::DEFAULT_PICTURE_SIZE.0)?;
+    d.set_item("height", limits::DEFAULT_PICTURE_SIZE.1)?;
+    d.set_item("background", limits::DEFAULT_BACKGROUND.map(u32::from))?;
     Ok(d)
 }
 
@@ -427,7 +459,9 @@ fn _lodkit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(tiles::tiles, m)?)?;
     mco::register(m)?;
     pop::register(m)?;
+    jobs::register(m)?;
     m.add("LIMITS", limits_dict(m.py())?)?;
+    m.add("DEFAULTS", defaults_dict(m.py())?)?;
     m.add("DEFAULT_LEVELS", limits::DEFAULT_LEVELS)?;
     Ok(())
 }
