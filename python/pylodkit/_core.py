@@ -472,8 +472,8 @@ def compare(
     reads them and, given ``heatmap`` (.ply, .obj or .glb), also writes
     ``b`` coloured by each vertex's distance to ``a`` there (the report
     then has a ``heatmap`` entry), exactly as ``lodkit compare A B
-    --heatmap FILE`` does, sending its events to ``progress`` (see
-    :mod:`pylodkit.jobs`).
+    --heatmap FILE`` does. Either way the measurement is the library's, and
+    its events go to ``progress`` (see :mod:`pylodkit.jobs`).
 
     Samples each surface on its vertices, edges and faces (``samples`` of
     each kind per mesh, 1..=10,000,000; default max(10 × faces of the
@@ -500,9 +500,9 @@ def compare(
                                   heatmap=heatmap, progress=progress)
     if _is_path(a) or _is_path(b):
         raise OptionError("a and b: give two paths or two meshes")
-    _in_memory(heatmap=heatmap, progress=progress)
+    _in_memory(heatmap=heatmap)
     return _native.compare(_as_input(a), _as_input(b), n, seed, bool(vertex_samples),
-                           bool(edge_samples), bool(face_samples))
+                           bool(edge_samples), bool(face_samples), jobs._progress(progress))
 
 
 # -- trimesh and open3d -------------------------------------------------------

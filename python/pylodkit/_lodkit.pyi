@@ -142,6 +142,7 @@ def compare(
     vertex_samples: bool = True,
     edge_samples: bool = True,
     face_samples: bool = True,
+    progress: Progress = None,
 ) -> Dict[str, Any]:
     """``lodkit compare --json``'s report. Example: ``compare(bunny(), bunny())["symmetric"]["max"]``"""
 
@@ -164,9 +165,9 @@ class McoModel:
         self,
         position: Tuple[float, float, float],
         look_at: Optional[Tuple[float, float, float]] = None,
-        fov: float = 60.0,
-        viewport: float = 1080.0,
-        tolerance: float = 1.0,
+        fov: Optional[float] = None,
+        viewport: Optional[float] = None,
+        tolerance: Optional[float] = None,
     ) -> Tuple[MeshDict, int]:
         """``(mesh dict, expanded nodes)``. Example: ``m.extract_view((0, 0.1, 0.4))``"""
     def save(self, path: str) -> None:

@@ -124,9 +124,9 @@ class Model:
         d, _ = self._m.extract_view(
             pos,
             target,
-            _check.real("fov", 60.0 if fov is None else fov, 0.0, 180.0, lo_open=True, hi_open=True),
-            _check.real("viewport", 1080.0 if viewport is None else viewport, 1.0, 65536.0),
-            _check.real("tolerance", 1.0 if tolerance is None else tolerance, 0.0, lo_open=True),
+            _check.within("fov", fov, "view_fov"),
+            _check.within("viewport", viewport, "viewport"),
+            _check.within("tolerance", tolerance, "tolerance"),
         )
         return Mesh(**d)
 

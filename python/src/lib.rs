@@ -38,7 +38,7 @@ mod tiles;
 use convert::{json_to_py, mesh_from_py, mesh_to_py, model_from_py, model_to_py};
 use errors::input;
 
-use lodkit::limits::{self, MAX_SAMPLES};
+use lodkit::limits;
 use lodkit::measure::Sampling;
 
 /// `load(path) -> (kind, dict)`: any file lodkit reads (format by
@@ -330,10 +330,12 @@ fn lod_chain<'py>(
         .collect()
 }
 
-/// `compare(a, b, ...) -> dict`: `lodkit compare --json`'s report.
+/// `compare(a, b, ...) -> dict`: `lodkit compare --json`'s report, measured
+/// by the library's `lodkit::compare::measure` (the `compare` job's
+/// measurement; the meshes are called `mesh a` and `mesh b` in errors).
 #[pyfunction]
 #[pyo3(signature = (a, b, samples = None, seed = lodkit_mesh::metrics::DEFAULT_SEED,
-    vertex_samples = true, edge_samples = true, face_samples = true))]
+    vertex_samples = true, edge_samples = true, face_samples = true, progress = None))]
 // Python keyword options, one parameter each (as the CLI's flags).
 #[allow(clippy::too_many_arguments)]
 fn compare<'py>(
@@ -345,6 +347,7 @@ fn compare<'py>(
     vertex_samples: bool,
     edge_samples: bool,
     face_samples: bool,
+    progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let a = mesh_from_py(a)?;
     let b = mesh_from_py(b)?;
@@ -355,23 +358,12 @@ fn compare<'py>(
         edge_samples,
         face_samples,
     };
-    // The default grows with the meshes; bounded like an explicit count.
-    let n = opts
-        .resolved_samples(a.faces.len(), b.faces.len())
-        .min(MAX_SAMPLES);
-    let opts = CompareOptions {
-        samples: Some(n),
-        ..opts
-    };
-    let report = py
-        .detach(|| lodkit_mesh::metrics::compare(&a, &b, &opts))
-        .map_err(|e| {
-            input(
-                e.to_string()
-                    .replace("mesh A", "mesh a")
-                    .replace("mesh B", "mesh b"),
-            )
-        })?;
+    let bridge = progress::Bridge::new(progress)?;
+    let report = bridge
+        .run(py, |events| {
+            lodkit::compare::measure(&a, &b, ("mesh a", "mesh b"), &opts, events)
+        })?
+        .map_err(errors::job)?;
     json_to_py(py, &report)
 }
 
@@ -414,6 +406,9 @@ fn limits_dict(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     )?;
     d.set_item("memory", (*limits::MEMORY.start(), *limits::MEMORY.end()))?;
     d.set_item("fov", real(limits::FOV))?;
+    d.set_item("view_fov", real(limits::VIEW_FOV))?;
+    d.set_item("viewport", real(limits::VIEWPORT))?;
+    d.set_item("tolerance", real(limits::TOLERANCE))?;
     d.set_item("elevation", real(limits::ELEVATION))?;
     d.set_item(
         "picture_size",

@@ -156,15 +156,17 @@ impl PyMco {
 
     /// The view-dependent cut for a camera at `position` looking at
     /// `look_at` (default: the model's centre): `(mesh dict, expanded nodes)`.
-    #[pyo3(signature = (position, look_at = None, fov = 60.0, viewport = 1080.0, tolerance = 1.0))]
+    /// `None`: `lodkit mco extract`'s defaults (the camera's field of view
+    /// and viewport, [`lodkit::limits::DEFAULT_TOLERANCE`]).
+    #[pyo3(signature = (position, look_at = None, fov = None, viewport = None, tolerance = None))]
     fn extract_view<'py>(
         &self,
         py: Python<'py>,
         position: [f32; 3],
         look_at: Option<[f32; 3]>,
-        fov: f32,
-        viewport: f32,
-        tolerance: f32,
+        fov: Option<f32>,
+        viewport: Option<f32>,
+        tolerance: Option<f32>,
     ) -> PyResult<(Bound<'py, PyDict>, usize)> {
         let model = &self.inner;
         let position = Vec3::from(position);
@@ -175,11 +177,13 @@ impl PyMco {
                 "view and look_at are the same point: the camera has no direction",
             ));
         }
+        let cam = Camera::looking_at(position, target);
         let cam = Camera {
-            vfov_deg: fov,
-            viewport_height: viewport,
-            ..Camera::looking_at(position, target)
+            vfov_deg: fov.unwrap_or(cam.vfov_deg),
+            viewport_height: viewport.unwrap_or(cam.viewport_height),
+            ..cam
         };
+        let tolerance = tolerance.unwrap_or(lodkit::limits::DEFAULT_TOLERANCE);
         let (mesh, n) = py.detach(|| {
             let mut idx = Vec::new();
             let n = model.extract_view(&cam, tolerance, &mut idx);

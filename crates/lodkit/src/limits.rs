@@ -66,6 +66,18 @@ pub const WELD: Real = Real::NON_NEGATIVE;
 /// A crease angle in degrees (`--normals auto=DEGREES`).
 pub const CREASE_DEGREES: Real = Real::closed(0.0, 180.0);
 
+/// A view-dependent cut's vertical field of view in degrees (`mco extract
+/// --fov`; default: `lodkit_mco::Camera::looking_at`'s).
+pub const VIEW_FOV: Real = Real::open(0.0, 180.0);
+/// A view-dependent cut's viewport height in pixels (`mco extract
+/// --viewport`; default: `lodkit_mco::Camera::looking_at`'s).
+pub const VIEWPORT: Real = Real::closed(1.0, 65536.0);
+/// A view-dependent cut's largest projected error in pixels (`mco extract
+/// --tolerance`).
+pub const TOLERANCE: Real = Real::POSITIVE;
+/// The tolerance when none is given: one pixel.
+pub const DEFAULT_TOLERANCE: f32 = 1.0;
+
 /// A picture's vertical field of view in degrees (`render --fov`).
 pub const FOV: Real = Real::closed(1.0, 170.0);
 /// The field of view of a picture when none is asked for.

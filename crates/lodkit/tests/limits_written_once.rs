@@ -72,6 +72,23 @@ const SPELLINGS: &[(&str, &[&str])] = &[
     ),
     ("FOV", &["Real::closed(1.0, 170.0)", "1.0, 170.0)"]),
     (
+        "VIEW_FOV",
+        &[
+            "Real::open(0.0, 180.0)",
+            "0.0, 180.0, lo_open=True, hi_open=True",
+        ],
+    ),
+    ("VIEWPORT", &["Real::closed(1.0, 65536.0)", "1.0, 65536.0)"]),
+    (
+        "DEFAULT_TOLERANCE",
+        &[
+            "DEFAULT_TOLERANCE: f32 = 1.0",
+            "tolerance.unwrap_or(1.0)",
+            "1.0 if tolerance is None",
+            "tolerance = 1.0)",
+        ],
+    ),
+    (
         "DEFAULT_FOV",
         &[
             "DEFAULT_FOV: f32 = 35.0",
@@ -153,6 +170,20 @@ const ENGINE_DEFAULTS: &[(&str, &str, &[&str])] = &[
             "heap_size: int = 1",
             "heap_size = 1,",
             "heap_size = 1)",
+        ],
+    ),
+    (
+        "crates/mco/src/view_dependent_cut.rs",
+        "lodkit_mco::Camera::looking_at",
+        &[
+            "vfov_deg: 60.0",
+            "viewport_height: 1080.0",
+            "unwrap_or(60.0)",
+            "unwrap_or(1080.0)",
+            "60.0 if fov is None",
+            "1080.0 if viewport is None",
+            "fov = 60.0",
+            "viewport = 1080.0",
         ],
     ),
     (

@@ -79,13 +79,13 @@ pub struct ExtractArgs {
     )]
     pub look_at: Option<[f32; 3]>,
     /// Vertical field of view, degrees in (0, 180) (default 60).
-    #[arg(long, requires = "view", value_parser = Real::open(0.0, 180.0).f32())]
+    #[arg(long, requires = "view", value_parser = lodkit::limits::VIEW_FOV.f32())]
     pub fov: Option<f32>,
     /// Viewport height, pixels in [1, 65536] (default 1080).
-    #[arg(long, requires = "view", value_parser = Real::closed(1.0, 65536.0).f32())]
+    #[arg(long, requires = "view", value_parser = lodkit::limits::VIEWPORT.f32())]
     pub viewport: Option<f32>,
     /// Largest projected error allowed, pixels (a finite number > 0; default 1).
-    #[arg(long, requires = "view", value_parser = Real::POSITIVE.f32())]
+    #[arg(long, requires = "view", value_parser = lodkit::limits::TOLERANCE.f32())]
     pub tolerance: Option<f32>,
     /// Refuse a file cut short (default: cut from its complete chunks,
     /// which serve the LOD numbers they cover, and say where it stopped).
@@ -229,11 +229,6 @@ fn extract(ui: &Ui, a: &ExtractArgs) -> Result<()> {
             }
         }
     }
-    let (fov, viewport, tolerance) = (
-        a.fov.unwrap_or(60.0),
-        a.viewport.unwrap_or(1080.0),
-        a.tolerance.unwrap_or(1.0),
-    );
     let (model, cut, _) = ui.run(|events| lodkit::info::load_mco(events, &a.model, a.strict))?;
     let mut idx = Vec::new();
     let step = ui.spinner("extracting");
@@ -264,11 +259,13 @@ fn extract(ui: &Ui, a: &ExtractArgs) -> Result<()> {
                 "--view and --look-at are the same point: the camera has no direction",
             ));
         }
+        let cam = Camera::looking_at(position, target);
         let cam = Camera {
-            vfov_deg: fov,
-            viewport_height: viewport,
-            ..Camera::looking_at(position, target)
+            vfov_deg: a.fov.unwrap_or(cam.vfov_deg),
+            viewport_height: a.viewport.unwrap_or(cam.viewport_height),
+            ..cam
         };
+        let tolerance = a.tolerance.unwrap_or(lodkit::limits::DEFAULT_TOLERANCE);
         let n = model.extract_view(&cam, tolerance, &mut idx);
         (format!("view-dependent cut ({n} nodes expanded)"), None)
     };
