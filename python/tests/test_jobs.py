@@ -248,3 +248,31 @@ def test_mco_build_is_the_cli_build(files, tmp_path, lodkit_bin):
     assert any(n.startswith("lattice: resolution") for n in notes)
     assert any(n.startswith("added %s" % (files / "lod.ply")) for n in notes)
     check_stages(ev.events)
+
+
+def test_jobs_write_the_cli_bytes(files, tmp_path, lodkit_bin):
+    def cli(*args):
+        subprocess.run([lodkit_bin, *map(str, args)], check=True, capture_output=True)
+
+    # build: every file but the two holding wall times (and the manifest
+    # listing their sizes) is the CLI's, byte for byte.
+    r = lk.build(files / "lod.ply", tmp_path / "py", levels=2, samples=5_000)
+    cli("build", files / "lod.ply", "--out", tmp_path / "cli", "--levels", "2", "--samples", "5000")
+    timed = {"lods/lods.json", "report.html", ".lodkit-build.json"}
+    def made(d):
+        return sorted(str(p.relative_to(d)) for p in d.rglob("*") if p.is_file())
+
+    listed = made(tmp_path / "py")
+    assert listed == made(tmp_path / "cli")
+    assert {f for f, _ in r["outputs"]} <= set(listed)
+    for f in listed:
+        if f not in timed:
+            assert (tmp_path / "py" / f).read_bytes() == (tmp_path / "cli" / f).read_bytes(), f
+    # simplify and render of a file.
+    lk.simplify(files / "bunny.ply", 3000, output=tmp_path / "py.glb")
+    cli("simplify", files / "bunny.ply", "-o", tmp_path / "cli.glb", "--target", "3000")
+    assert (tmp_path / "py.glb").read_bytes() == (tmp_path / "cli.glb").read_bytes()
+    lk.render(files / "lod.mco", tmp_path / "py.png", size=(64, 48), azimuth=-40, elevation=10)
+    cli("render", files / "lod.mco", "-o", tmp_path / "cli.png", "--size", "64x48",
+        "--view=-40,10")
+    assert (tmp_path / "py.png").read_bytes() == (tmp_path / "cli.png").read_bytes()
