@@ -310,8 +310,9 @@ def simplify(
     ``memory`` bytes (``LIMITS["memory"]``; default a third of the
     machine's memory), exactly as ``lodkit simplify IN -o OUT`` does; a
     scene keeps its materials in a .glb or .obj output unless ``merge``.
-    It returns ``lodkit simplify --json``'s report (a dict) and sends the
-    job's events to ``progress`` (see :mod:`pylodkit.jobs`).
+    It returns ``lodkit simplify --json``'s report (a dict). Either way
+    the simplification is the library's (a mesh in memory: its in-core
+    step), and its events go to ``progress`` (see :mod:`pylodkit.jobs`).
 
     ``mesh`` is a :class:`Mesh`, a ``trimesh.Trimesh`` or an open3d
     ``TriangleMesh`` (converted as :func:`from_trimesh` / :func:`from_open3d`
@@ -351,8 +352,8 @@ def simplify(
             raise OptionError("output: give the path to write when the input is a file")
         return jobs.simplify_file(mesh, output, t, r, opts, merge=merge, memory=memory,
                                   progress=progress)
-    _in_memory(output=output, merge=merge, memory=memory, progress=progress)
-    d, report = _native.simplify(_as_input(mesh), t, r, **opts)
+    _in_memory(output=output, merge=merge, memory=memory)
+    d, report = _native.simplify(_as_input(mesh), t, r, progress=jobs._progress(progress), **opts)
     return Mesh(**d), report
 
 

@@ -65,6 +65,7 @@ def simplify(
     color_weight: float = ...,
     uv_weight: float = ...,
     prune: Optional[float] = None,
+    progress: Progress = None,
 ) -> Tuple[MeshDict, Dict[str, Any]]:
     """One mesh to one budget: ``(mesh dict, report)``. Example: ``simplify(bunny(), None, 0.1)``"""
 

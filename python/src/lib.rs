@@ -214,12 +214,13 @@ fn report_dict<'py>(
     Ok(d)
 }
 
-/// `simplify(mesh, ...) -> (dict, report)`: one mesh to one budget.
+/// `simplify(mesh, ...) -> (dict, report)`: one mesh to one budget, by
+/// the library's in-core step (`lodkit::simplify::simplify_mesh`).
 #[pyfunction]
 #[pyo3(signature = (mesh, target = None, ratio = None, max_error = None, lock_border = false,
     fill_holes = true, heap_size = Options::DEFAULT_HEAP_SIZE,
     normal_weight = AttributeWeights::DEFAULT.normal, color_weight = AttributeWeights::DEFAULT.color,
-    uv_weight = AttributeWeights::DEFAULT.uv, prune = None))]
+    uv_weight = AttributeWeights::DEFAULT.uv, prune = None, progress = None))]
 #[allow(clippy::too_many_arguments)]
 fn simplify<'py>(
     py: Python<'py>,
@@ -234,6 +235,7 @@ fn simplify<'py>(
     color_weight: f32,
     uv_weight: f32,
     prune: Option<f32>,
+    progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<(Bound<'py, PyDict>, Bound<'py, PyDict>)> {
     let m = mesh_from_py(mesh)?;
     let opts = options(
@@ -248,8 +250,11 @@ fn simplify<'py>(
         prune,
     );
     let faces = m.faces.len();
-    let out = py
-        .detach(|| Simplifier::new().simplify(&m, &opts))
+    let bridge = progress::Bridge::new(progress)?;
+    let out = bridge
+        .run(py, |events| {
+            lodkit::simplify::simplify_mesh(&m, &opts, events)
+        })?
         .map_err(|e| input(e.to_string()))?;
     let report = report_dict(py, faces, &out.report)?;
     Ok((mesh_to_py(py, out.mesh)?, report))

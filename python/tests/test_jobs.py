@@ -221,6 +221,14 @@ def test_lod_chain_file_sends_each_level(files, tmp_path):
         lk.lod_chain(files / "bunny.ply", ratios=[0.5, 0.6], out=out)
 
 
+def test_in_memory_simplify_reports_its_stage():
+    ev = Events()
+    lod, report = lk.simplify(lk.icosphere(3), ratio=0.5, progress=ev)
+    assert lod.n_faces == report["triangles"]
+    assert [(e["event"], e["name"]) for e in ev.events] == [
+        ("stage_started", "simplifying"), ("stage_finished", "simplifying")]
+
+
 def test_progress_errors(files, tmp_path):
     with pytest.raises(lk.OptionError, match="progress"):
         lk.info(files / "lod.ply", progress=3)
