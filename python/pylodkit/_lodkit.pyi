@@ -50,8 +50,9 @@ def icosphere(level: int) -> MeshDict:
 def write_atomic(path: str, data: bytes) -> None:
     """lodkit's atomic write (temporary file, fsync, rename). Example: ``write_atomic("a.pop", data)``"""
 
-def write_lod_glb(path: str, levels: List[Tuple[Any, str, str, float]]) -> None:
-    """An LOD chain GLB as ``lodkit lods`` writes it: ``(mesh, name, extras_json, error)`` per level, level 0 first."""
+def write_lod_glb(path: str, stem: str,
+                  levels: List[Tuple[Any, int, Optional[Tuple[float, float]], float]]) -> None:
+    """An LOD chain GLB as ``lodkit lods`` writes it: ``(mesh, lod, measured, estimated)`` per level, level 0 first."""
 
 def simplify(
     mesh: Any,

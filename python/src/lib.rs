@@ -95,52 +95,50 @@ fn write_atomic(py: Python<'_>, path: PathBuf, data: &[u8]) -> PyResult<()> {
         .map_err(errors::mesh)
 }
 
-/// `write_lod_glb(path, levels)`: an LOD chain as one GLB, as `lodkit lods`
-/// writes `NAME_lods.glb` (`lodkit_mesh::io::gltf::write_lod_glb`), written
-/// atomically. `levels`: `(mesh, name, extras_json, error)` per level,
-/// level 0 (the input) first; `extras_json` is the node's extras (a JSON
-/// object), `error` the level's error against level 0 in object units
-/// (its measured maximum, else the estimate). Level k is shown down to the
-/// coverage at which level k + 1's error is one pixel
-/// (`gltf::error_coverage` on level 0's diagonal), the last down to 0, and
-/// the writer makes the values strictly decrease. Meshes without normals
-/// get smooth ones, as the CLI's GLBs do.
+/// One level of [`write_lod_glb`]: `(mesh, lod, measured, estimated)`.
+type GlbLevelArgs<'py> = (Bound<'py, PyAny>, usize, Option<(f64, f64)>, f64);
+
+/// `write_lod_glb(path, stem, levels)`: an LOD chain as one GLB, as
+/// `lodkit lods` writes `STEM_lods.glb` (`lodkit::lod_chain::chain_glb`:
+/// the same nodes, extras, coverages and normals), written atomically.
+/// `levels`: `(mesh, lod, measured, estimated)` per level, level 0 (the
+/// input, measured `(0, 0)`) first; `measured` is the level's `(mean,
+/// max)` distance to the input or `None`, `estimated` the simplifier's
+/// estimate, both in object units.
 #[pyfunction]
 fn write_lod_glb(
     py: Python<'_>,
     path: PathBuf,
-    levels: Vec<(Bound<'_, PyAny>, String, String, f64)>,
+    stem: String,
+    levels: Vec<GlbLevelArgs<'_>>,
 ) -> PyResult<()> {
-    use lodkit_mesh::io::gltf;
     let mut meshes = Vec::with_capacity(levels.len());
     let mut rest = Vec::with_capacity(levels.len());
-    for (mesh, name, extras, error) in &levels {
+    for (mesh, lod, measured, estimated) in &levels {
         meshes.push(mesh_from_py(mesh)?);
-        let extras: serde_json::Map<String, serde_json::Value> = serde_json::from_str(extras)
-            .map_err(|e| input(format!("level {name}: extras: {e}")))?;
-        rest.push((name.clone(), extras, *error));
+        rest.push((*lod, *measured, *estimated));
     }
     py.detach(|| -> Result<(), lodkit_mesh::Error> {
         let diagonal = meshes.first().map_or(0.0, |m| m.bbox().diagonal() as f64);
-        let with_normals: Vec<_> = meshes
+        let glb_levels: Vec<lodkit::lod_chain::GlbLevel> = rest
             .iter()
-            .map(|m| lodkit_mesh::normals::NormalsMode::default_for(m).apply(m))
+            .zip(&meshes)
+            .map(
+                |(&(lod, measured, estimated), mesh)| lodkit::lod_chain::GlbLevel {
+                    lod,
+                    mesh,
+                    measured,
+                    estimated,
+                },
+            )
             .collect();
-        let glb_levels: Vec<gltf::LodLevel> = rest
-            .iter()
-            .zip(&with_normals)
-            .enumerate()
-            .map(|(k, ((name, extras, _), m))| gltf::LodLevel {
-                name: name.clone(),
-                mesh: m,
-                extras: extras.clone(),
-                coverage: rest
-                    .get(k + 1)
-                    .map_or(0.0, |next| gltf::error_coverage(next.2, diagonal)),
-            })
-            .collect();
-        let bytes = gltf::write_lod_glb(&glb_levels, &gltf::GlbOptions::default())
-            .map_err(|e| lodkit_mesh::Error::parse(&path, e))?;
+        let bytes = lodkit::lod_chain::chain_glb(
+            &stem,
+            &glb_levels,
+            diagonal,
+            &lodkit::output::OutputOptions::default(),
+        )
+        .map_err(|e| lodkit_mesh::Error::parse(&path, e))?;
         lodkit_mesh::io::write_atomic(&path, &bytes)
     })
     .map_err(errors::mesh)

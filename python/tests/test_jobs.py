@@ -284,3 +284,16 @@ def test_jobs_write_the_cli_bytes(files, tmp_path, lodkit_bin):
     cli("render", files / "lod.mco", "-o", tmp_path / "cli.png", "--size", "64x48",
         "--view=-40,10")
     assert (tmp_path / "py.png").read_bytes() == (tmp_path / "cli.png").read_bytes()
+
+
+def test_batch_chain_glb_is_the_cli_one(files, tmp_path, lodkit_bin):
+    from pylodkit.batch import process_asset
+
+    opts = {"ratios": [0.5, 0.25], "measure": True, "samples": None, "pop": False,
+            "mco": False, "resolution": None}
+    r = process_asset("lod", str(files / "lod.ply"), str(tmp_path / "batch"), opts)
+    assert r["status"] == "ok", r
+    subprocess.run([lodkit_bin, "lods", str(files / "lod.ply"), "--out", str(tmp_path / "cli"),
+                    "--ratios", "0.5,0.25"], check=True, capture_output=True)
+    assert ((tmp_path / "batch" / "lod" / "lod_lods.glb").read_bytes()
+            == (tmp_path / "cli" / "lod_lods.glb").read_bytes())
