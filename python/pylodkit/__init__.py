@@ -6,8 +6,16 @@ an unrelated project). Install from a checkout with ``pip install ./python``.
 - :func:`load` / :func:`save`: .ply .obj .stl .gltf .glb .xyz .pts files.
 - :class:`Mesh` (``vertices`` (n, 3), ``faces`` (m, 3), optional
   ``normals``, ``colors``, ``uvs``) and :class:`PointCloud`.
-- :func:`simplify`, :func:`lod_chain`: HQMS simplification and LOD chains.
+- :func:`simplify`, :func:`lod_chain`: HQMS simplification and LOD chains
+  (of a :class:`Mesh`, or of a file through the ``lodkit`` library's job,
+  in or out of core).
 - :func:`compare`: Metro distances, as ``lodkit compare --json``.
+- :func:`build`, :func:`render`, :func:`info`, :func:`tiles`: the library's
+  ``build``, ``render``, ``info`` and ``tiles`` jobs on files
+  (:mod:`pylodkit.jobs`); every job takes ``progress=``, a function of one
+  event dict.
+- :data:`LIMITS` and :data:`DEFAULTS`: every option's range and default,
+  read from the ``lodkit`` library.
 - :mod:`pylodkit.mco`: continuous LOD (marching cube octree).
 - :mod:`pylodkit.pop`: progressive particle streams.
 - :mod:`pylodkit.batch`: LODs for a folder of assets (on Ray when it is installed).
@@ -28,7 +36,9 @@ from __future__ import annotations
 
 from importlib.metadata import PackageNotFoundError, version as _version
 
-from . import errors, mco, pop
+from . import errors, jobs, mco, pop
+from ._check import DEFAULTS, LIMITS
+from .jobs import build, info, render
 from .tiles import tiles
 from ._core import (
     MAX_HEAP_SIZE,
@@ -59,6 +69,6 @@ except PackageNotFoundError:  # imported from a source tree
 __all__ = [
     "Mesh", "PointCloud", "load", "save", "bunny", "blob", "icosphere", "simplify",
     "lod_chain", "compare", "from_trimesh", "to_trimesh", "from_open3d", "to_open3d",
-    "mco", "pop", "tiles", "errors", "LodkitError", "InputError", "FileError", "OptionError",
+    "mco", "pop", "tiles", "build", "render", "info", "jobs", "LIMITS", "DEFAULTS", "errors", "LodkitError", "InputError", "FileError", "OptionError",
     "MAX_SAMPLES", "MAX_HEAP_SIZE", "MAX_LEVELS", "__version__",
 ]

@@ -11,6 +11,9 @@ from .errors import OptionError
 #: Every option range of ``lodkit::limits`` by name: ``(lo, hi)`` for an
 #: integer, ``(lo, hi, lo_open, hi_open)`` for a real.
 LIMITS = _native.LIMITS
+#: The default of every option pylodkit offers, by name (``lodkit::limits``
+#: and the engines' option types: the CLI's defaults).
+DEFAULTS = _native.DEFAULTS
 
 
 def _fmt(x: float) -> str:

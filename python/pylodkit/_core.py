@@ -3,11 +3,11 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
-from . import _check
+from . import _check, jobs
 from . import _lodkit as _native
 from .errors import InputError, OptionError
 
@@ -179,6 +179,19 @@ def _as_input(obj: Any) -> Any:
     return obj
 
 
+def _is_path(obj: Any) -> bool:
+    """Whether ``obj`` names a file (a job on files reads it)."""
+    return isinstance(obj, (str, os.PathLike))
+
+
+def _in_memory(**file_options: Any) -> None:
+    """``OptionError`` for an option of the jobs on files given with an
+    in-memory mesh."""
+    for name, v in file_options.items():
+        if v is not None and v is not False:
+            raise OptionError("%s: applies when the input is a path, not an in-memory mesh" % name)
+
+
 def _wrap(kind: str, d: Dict[str, Any]) -> Geometry:
     return Mesh(**d) if kind == "mesh" else PointCloud(**d)
 
@@ -278,13 +291,28 @@ def simplify(
     max_error: Optional[float] = None,
     lock_border: bool = False,
     fill_holes: bool = True,
-    heap_size: int = 1,
-    normal_weight: float = 0.05,
-    color_weight: float = 0.05,
-    uv_weight: float = 0.1,
+    heap_size: int = _check.DEFAULTS["heap_size"],
+    normal_weight: float = _check.DEFAULTS["normal_weight"],
+    color_weight: float = _check.DEFAULTS["color_weight"],
+    uv_weight: float = _check.DEFAULTS["uv_weight"],
     prune: Optional[float] = None,
-) -> Tuple[Mesh, Dict[str, Any]]:
+    output: Optional[PathLike] = None,
+    merge: bool = False,
+    memory: Optional[int] = None,
+    progress: Optional[Callable[[Dict[str, Any]], Any]] = None,
+) -> Any:
     """Simplifies a mesh to a budget with lodkit's HQMS simplifier (``lodkit simplify``).
+
+    ``mesh`` may also be a path: the library's ``simplify`` job then reads
+    it (a mesh or a scene, any format lodkit reads) and writes ``output``
+    (required; the format follows its extension, written atomically), in
+    core, or out of core in blocks when a binary PLY or STL needs more than
+    ``memory`` bytes (``LIMITS["memory"]``; default a third of the
+    machine's memory), exactly as ``lodkit simplify IN -o OUT`` does; a
+    scene keeps its materials in a .glb or .obj output unless ``merge``.
+    It returns ``lodkit simplify --json``'s report (a dict). Either way
+    the simplification is the library's (a mesh in memory: its in-core
+    step), and its events go to ``progress`` (see :mod:`pylodkit.jobs`).
 
     ``mesh`` is a :class:`Mesh`, a ``trimesh.Trimesh`` or an open3d
     ``TriangleMesh`` (converted as :func:`from_trimesh` / :func:`from_open3d`
@@ -319,7 +347,13 @@ def simplify(
     r = _check.within("ratio", ratio, "ratio")
     opts = _simplify_options(max_error, lock_border, fill_holes, heap_size, normal_weight,
                              color_weight, uv_weight, prune)
-    d, report = _native.simplify(_as_input(mesh), t, r, **opts)
+    if _is_path(mesh):
+        if output is None:
+            raise OptionError("output: give the path to write when the input is a file")
+        return jobs.simplify_file(mesh, output, t, r, opts, merge=merge, memory=memory,
+                                  progress=progress)
+    _in_memory(output=output, merge=merge, memory=memory)
+    d, report = _native.simplify(_as_input(mesh), t, r, progress=jobs._progress(progress), **opts)
     return Mesh(**d), report
 
 
@@ -342,13 +376,27 @@ def lod_chain(
     max_error: Optional[float] = None,
     lock_border: bool = False,
     fill_holes: bool = True,
-    heap_size: int = 1,
-    normal_weight: float = 0.05,
-    color_weight: float = 0.05,
-    uv_weight: float = 0.1,
+    heap_size: int = _check.DEFAULTS["heap_size"],
+    normal_weight: float = _check.DEFAULTS["normal_weight"],
+    color_weight: float = _check.DEFAULTS["color_weight"],
+    uv_weight: float = _check.DEFAULTS["uv_weight"],
     prune: Optional[float] = None,
-) -> List[Tuple[Mesh, Dict[str, Any]]]:
+    out: Optional[PathLike] = None,
+    merge: bool = False,
+    memory: Optional[int] = None,
+    progress: Optional[Callable[[Dict[str, Any]], Any]] = None,
+) -> Any:
     """A discrete LOD chain, each level simplified from the previous one (``lodkit lods``).
+
+    ``mesh`` may also be a path: the library's LOD chain job then reads it
+    and writes ``STEM_lodN.ply`` per level (``.glb`` for a scene, unless
+    ``merge``), ``STEM_lods.glb`` and ``lods.json`` into the folder ``out``
+    (required), in core, or out of core when a binary PLY or STL needs
+    more than ``memory`` bytes (levels then not measured), exactly as
+    ``lodkit lods IN --out DIR`` does. It returns ``lods.json`` as a dict
+    and sends the job's events to ``progress`` (a ``level`` event per level
+    written; see :mod:`pylodkit.jobs`); ``measure=False`` is for in-memory
+    meshes only.
 
     ``levels`` (1..=32, default 6) halves the triangles per level (1/2,
     1/4, ...); ``ratios`` gives each level's fraction of the input instead,
@@ -375,8 +423,25 @@ def lod_chain(
     """
     if levels is not None and ratios is not None:
         raise OptionError("levels and ratios conflict: give one of them")
+    if _is_path(mesh):
+        if out is None:
+            raise OptionError("out: give the folder to write when the input is a file")
+        if not measure:
+            raise OptionError("measure=False: a chain made from a file is always measured")
+        rs = None if ratios is None else [_check.within("ratios", r, "ratio") for r in ratios]
+        if rs is not None:
+            if not rs:
+                raise OptionError("ratios: give at least one fraction in [0, 1]")
+            check_ratios_fall("ratios", rs)
+        n = _check.within("levels", levels, "levels")
+        s = _check.within("samples", samples, "samples")
+        opts = _simplify_options(max_error, lock_border, fill_holes, heap_size, normal_weight,
+                                 color_weight, uv_weight, prune)
+        return jobs.lod_chain_file(mesh, out, rs, n, s, opts, merge=merge, memory=memory,
+                                   progress=progress)
+    _in_memory(out=out, merge=merge, memory=memory, progress=progress)
     if ratios is None:
-        n = _check.within("levels", _native.DEFAULT_LEVELS if levels is None else levels, "levels")
+        n = _check.within("levels", _check.DEFAULTS["levels"] if levels is None else levels, "levels")
         rs = [0.5 ** (i + 1) for i in range(n)]
     else:
         rs = [_check.within("ratios", r, "ratio") for r in ratios]
@@ -395,12 +460,21 @@ def compare(
     b: Any,
     *,
     samples: Optional[int] = None,
-    seed: int = 1998,
+    seed: int = _check.DEFAULTS["seed"],
     vertex_samples: bool = True,
     edge_samples: bool = True,
     face_samples: bool = True,
+    heatmap: Optional[PathLike] = None,
+    progress: Optional[Callable[[Dict[str, Any]], Any]] = None,
 ) -> Dict[str, Any]:
     """Metro-style distances between two meshes (``lodkit compare --json``).
+
+    ``a`` and ``b`` may both be paths: the library's ``compare`` job then
+    reads them and, given ``heatmap`` (.ply, .obj or .glb), also writes
+    ``b`` coloured by each vertex's distance to ``a`` there (the report
+    then has a ``heatmap`` entry), exactly as ``lodkit compare A B
+    --heatmap FILE`` does. Either way the measurement is the library's, and
+    its events go to ``progress`` (see :mod:`pylodkit.jobs`).
 
     Samples each surface on its vertices, edges and faces (``samples`` of
     each kind per mesh, 1..=10,000,000; default max(10 × faces of the
@@ -422,8 +496,14 @@ def compare(
     """
     n = _check.within("samples", samples, "samples")
     _check.integer("seed", seed, 0, 2**64 - 1)
+    if _is_path(a) and _is_path(b):
+        return jobs.compare_files(a, b, n, seed, vertex_samples, edge_samples, face_samples,
+                                  heatmap=heatmap, progress=progress)
+    if _is_path(a) or _is_path(b):
+        raise OptionError("a and b: give two paths or two meshes")
+    _in_memory(heatmap=heatmap)
     return _native.compare(_as_input(a), _as_input(b), n, seed, bool(vertex_samples),
-                           bool(edge_samples), bool(face_samples))
+                           bool(edge_samples), bool(face_samples), jobs._progress(progress))
 
 
 # -- trimesh and open3d -------------------------------------------------------

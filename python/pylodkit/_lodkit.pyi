@@ -13,7 +13,7 @@ Example::
     >>> d, report = _lodkit.simplify(_lodkit.bunny(), None, 0.1)
 """
 import os
-from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -21,6 +21,10 @@ MeshDict = Dict[str, Optional[np.ndarray]]
 #: Every option range of ``lodkit::limits``: ``(lo, hi)`` or ``(lo, hi, lo_open, hi_open)``.
 LIMITS: Dict[str, Tuple[Any, ...]]
 DEFAULT_LEVELS: int
+#: Every option's default by name (``lodkit::limits`` and the engines' option types).
+DEFAULTS: Dict[str, Any]
+#: A progress function: one dict per event of a job (see ``pylodkit.jobs``).
+Progress = Optional[Callable[[Dict[str, Any]], Any]]
 
 def load(path: str) -> Tuple[str, Dict[str, Optional[np.ndarray]]]:
     """``(kind, dict)`` of a file; kind is ``"mesh"`` or ``"points"``.
@@ -46,8 +50,9 @@ def icosphere(level: int) -> MeshDict:
 def write_atomic(path: str, data: bytes) -> None:
     """lodkit's atomic write (temporary file, fsync, rename). Example: ``write_atomic("a.pop", data)``"""
 
-def write_lod_glb(path: str, levels: List[Tuple[Any, str, str, float]]) -> None:
-    """An LOD chain GLB as ``lodkit lods`` writes it: ``(mesh, name, extras_json, error)`` per level, level 0 first."""
+def write_lod_glb(path: str, stem: str,
+                  levels: List[Tuple[Any, int, Optional[Tuple[float, float]], float]]) -> None:
+    """An LOD chain GLB as ``lodkit lods`` writes it: ``(mesh, lod, measured, estimated)`` per level, level 0 first."""
 
 def simplify(
     mesh: Any,
@@ -56,11 +61,12 @@ def simplify(
     max_error: Optional[float] = None,
     lock_border: bool = False,
     fill_holes: bool = True,
-    heap_size: int = 1,
-    normal_weight: float = 0.05,
-    color_weight: float = 0.05,
-    uv_weight: float = 0.1,
+    heap_size: int = ...,
+    normal_weight: float = ...,
+    color_weight: float = ...,
+    uv_weight: float = ...,
     prune: Optional[float] = None,
+    progress: Progress = None,
 ) -> Tuple[MeshDict, Dict[str, Any]]:
     """One mesh to one budget: ``(mesh dict, report)``. Example: ``simplify(bunny(), None, 0.1)``"""
 
@@ -70,10 +76,10 @@ def lod_chain(
     max_error: Optional[float] = None,
     lock_border: bool = False,
     fill_holes: bool = True,
-    heap_size: int = 1,
-    normal_weight: float = 0.05,
-    color_weight: float = 0.05,
-    uv_weight: float = 0.1,
+    heap_size: int = ...,
+    normal_weight: float = ...,
+    color_weight: float = ...,
+    uv_weight: float = ...,
     prune: Optional[float] = None,
     measure: bool = True,
     samples: Optional[int] = None,
@@ -88,14 +94,57 @@ def tiles(
     skirts: bool = True,
 ) -> Dict[str, Any]: ...
 
+def simplify_file(
+    input: str, output: str, target: Optional[int] = None, ratio: Optional[float] = None,
+    max_error: Optional[float] = None, lock_border: bool = False, fill_holes: bool = True,
+    heap_size: int = ..., normal_weight: float = ..., color_weight: float = ...,
+    uv_weight: float = ..., prune: Optional[float] = None, merge: bool = False,
+    memory: Optional[int] = None, progress: Progress = None,
+) -> Dict[str, Any]:
+    """The ``simplify`` job: ``lodkit simplify IN -o OUT --json``'s report."""
+
+def lod_chain_file(
+    input: str, out: str, ratios: Optional[List[float]] = None, levels: Optional[int] = None,
+    max_error: Optional[float] = None, lock_border: bool = False, fill_holes: bool = True,
+    heap_size: int = ..., normal_weight: float = ..., color_weight: float = ...,
+    uv_weight: float = ..., prune: Optional[float] = None, samples: Optional[int] = None,
+    merge: bool = False, memory: Optional[int] = None, progress: Progress = None,
+) -> Dict[str, Any]:
+    """The ``lods`` job: ``lods.json`` as a dict."""
+
+def build(
+    input: Optional[str], out: str, levels: int = ..., samples: Optional[int] = None,
+    measure: bool = True, merge: bool = False, progress: Progress = None,
+) -> Dict[str, Any]:
+    """The ``build`` job: ``{"model", "outputs": [[file, bytes], ...]}``."""
+
+def compare_files(
+    a: str, b: str, samples: Optional[int] = None, seed: int = ...,
+    vertex_samples: bool = True, edge_samples: bool = True, face_samples: bool = True,
+    heatmap: Optional[str] = None, progress: Progress = None,
+) -> Dict[str, Any]:
+    """The ``compare`` job: ``lodkit compare A B --json``."""
+
+def render(
+    input: str, output: str, azimuth: float = ..., elevation: float = ..., width: int = ...,
+    height: int = ..., fov: float = ..., background: Sequence[int] = ..., smooth: bool = False,
+    triangles: Optional[int] = None, lod: Optional[int] = None, level: Optional[int] = None,
+    progress: Progress = None,
+) -> Dict[str, Any]:
+    """The ``render`` job, one view: ``lodkit render IN -o PNG --json``."""
+
+def info(path: str, progress: Progress = None) -> Tuple[str, Dict[str, Any]]:
+    """``(kind, dict)``: ``lodkit info FILE --json``; kind is ``model``, ``mco``, ``pop`` or ``image_set``."""
+
 def compare(
     a: Any,
     b: Any,
     samples: Optional[int] = None,
-    seed: int = 1998,
+    seed: int = ...,
     vertex_samples: bool = True,
     edge_samples: bool = True,
     face_samples: bool = True,
+    progress: Progress = None,
 ) -> Dict[str, Any]:
     """``lodkit compare --json``'s report. Example: ``compare(bunny(), bunny())["symmetric"]["max"]``"""
 
@@ -118,9 +167,9 @@ class McoModel:
         self,
         position: Tuple[float, float, float],
         look_at: Optional[Tuple[float, float, float]] = None,
-        fov: float = 60.0,
-        viewport: float = 1080.0,
-        tolerance: float = 1.0,
+        fov: Optional[float] = None,
+        viewport: Optional[float] = None,
+        tolerance: Optional[float] = None,
     ) -> Tuple[MeshDict, int]:
         """``(mesh dict, expanded nodes)``. Example: ``m.extract_view((0, 0.1, 0.4))``"""
     def save(self, path: str) -> None:
@@ -130,7 +179,7 @@ class McoModel:
     def info(self) -> Dict[str, Any]:
         """Example: ``m.info()["nodes"]``"""
 
-def mco_build(inputs: Sequence[Any], resolution: Optional[int] = None) -> McoModel:
+def mco_build(inputs: Sequence[Any], resolution: Optional[int] = None, progress: Progress = None) -> McoModel:
     """Example: ``mco_build([bunny()], 128)``"""
 
 def mco_load(path: str) -> McoModel:

@@ -51,7 +51,6 @@ import csv
 import hashlib
 import io
 import json
-import math
 import os
 import sys
 import time
@@ -125,28 +124,6 @@ def read_complete(asset_dir: Path, opts: Dict[str, Any]) -> Optional[Dict[str, A
         except OSError:
             return None
     return m
-
-
-def _significant(x: Optional[float]) -> Optional[float]:
-    """``x`` to 4 significant digits (``None`` for none or not finite)."""
-    if x is None or not math.isfinite(x):
-        return None
-    return float("%.3e" % x) if x != 0 else 0.0
-
-
-def _level_extras(lod: int, measured: Optional[Tuple[float, float]], estimated: float,
-                  diagonal: float) -> Dict[str, Any]:
-    """A chain GLB node's extras, as ``lodkit lods`` writes them (docs/gltf.md)."""
-    pct = (lambda x: x / diagonal * 100.0) if diagonal > 0 else (lambda x: 0.0)
-    error: Dict[str, Any] = {"measured": measured is not None}
-    if measured is not None:
-        mean, mx = measured
-        error.update(mean=_significant(mean), max=_significant(mx),
-                     mean_percent_of_diagonal=_significant(pct(mean)),
-                     max_percent_of_diagonal=_significant(pct(mx)))
-    error.update(estimated=_significant(estimated),
-                 estimated_percent_of_diagonal=_significant(pct(estimated)))
-    return {"lod": lod, "error": error}
 
 
 def _glb_chain_ids(path: Path) -> List[int]:
@@ -265,8 +242,7 @@ def process_asset(name: str, path: str, out_dir: str, opts: Dict[str, Any]) -> D
                                  samples=opts["samples"])
             v = geometry.vertices
             diagonal = float(np.linalg.norm(v.max(axis=0) - v.min(axis=0))) if len(v) else 0.0
-            glb_levels = [(geometry, "%s_LOD0" % stem,
-                           json.dumps(_level_extras(0, (0.0, 0.0), 0.0, diagonal)), 0.0)]
+            glb_levels = [(geometry, 0, (0.0, 0.0), 0.0)]
             for i, (mesh, report) in enumerate(chain, start=1):
                 file = "%s_lod%d.ply" % (stem, i)
                 lk.save(mesh, asset_dir / file)
@@ -276,12 +252,9 @@ def process_asset(name: str, path: str, out_dir: str, opts: Dict[str, Any]) -> D
                     continue
                 mean, mx = report["measured_mean_error"], report["measured_max_error"]
                 measured = (mean, mx) if mean is not None and mx is not None else None
-                est = float(report["estimated_error"])
-                error = mx if measured is not None else est
-                glb_levels.append((mesh, "%s_LOD%d" % (stem, i),
-                                   json.dumps(_level_extras(i, measured, est, diagonal)), error))
+                glb_levels.append((mesh, i, measured, float(report["estimated_error"])))
             glb = "%s_lods.glb" % stem
-            _lodkit.write_lod_glb(str(asset_dir / glb), glb_levels)
+            _lodkit.write_lod_glb(str(asset_dir / glb), stem, glb_levels)
             wrote(glb, "glb", (geometry.n_faces, len(glb_levels) - 1))
             row["triangles"] = [lv["triangles"] for lv in levels]
             mean = levels[-1]["measured_mean_error"] if levels else None

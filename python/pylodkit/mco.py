@@ -12,7 +12,7 @@ Build a model once from meshes, point clouds or scans, keep it as a
 from __future__ import annotations
 
 import os
-from typing import Any, Dict, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, Optional, Sequence, Tuple, Union
 
 from . import _check
 from . import _lodkit as _native
@@ -124,9 +124,9 @@ class Model:
         d, _ = self._m.extract_view(
             pos,
             target,
-            _check.real("fov", 60.0 if fov is None else fov, 0.0, 180.0, lo_open=True, hi_open=True),
-            _check.real("viewport", 1080.0 if viewport is None else viewport, 1.0, 65536.0),
-            _check.real("tolerance", 1.0 if tolerance is None else tolerance, 0.0, lo_open=True),
+            _check.within("fov", fov, "view_fov"),
+            _check.within("viewport", viewport, "viewport"),
+            _check.within("tolerance", tolerance, "tolerance"),
         )
         return Mesh(**d)
 
@@ -178,7 +178,8 @@ def _vec3(name: str, v: Sequence[float]) -> Tuple[float, float, float]:
     return xs[0], xs[1], xs[2]
 
 
-def build(inputs: Any, *more: Any, resolution: Optional[int] = None) -> Model:
+def build(inputs: Any, *more: Any, resolution: Optional[int] = None,
+          progress: Optional[Callable[[Dict[str, Any]], Any]] = None) -> Model:
     """Builds a model from meshes, point clouds and files (``lodkit mco build``).
 
     ``inputs`` is one input or a list; each is a :class:`~pylodkit.Mesh`, a
@@ -187,8 +188,13 @@ def build(inputs: Any, *more: Any, resolution: Optional[int] = None) -> Model:
     / :func:`~pylodkit.from_open3d` convert them), anything with
     ``vertices``/``faces`` arrays, or a path (a ``.conf`` adds each posed
     scan it lists). All go on one lattice of ``resolution`` leaf cubes
-    along the longest axis (2..=512; default: a cube of twice the sample
-    spacing). Deterministic; the GIL is released while it builds.
+    along the longest axis (``LIMITS["resolution"]``; default: for one
+    mesh, a lattice whose full cut has about its triangle count, else a
+    cube of twice the sample spacing); closed meshes give a closed model.
+    This is the ``lodkit`` library's build, the one ``lodkit mco build``
+    runs (the same ``.mco`` bytes for the same inputs); ``progress`` gets
+    its events (see :mod:`pylodkit.jobs`). Deterministic; the GIL is
+    released while it builds.
 
     Example::
 
@@ -200,7 +206,9 @@ def build(inputs: Any, *more: Any, resolution: Optional[int] = None) -> Model:
         raise OptionError("give at least one input")
     items = [os.fspath(i) if isinstance(i, os.PathLike) else _as_input(i) for i in items]
     r = _check.within("resolution", resolution, "resolution")
-    return Model(_native.mco_build(items, r))
+    if progress is not None and not callable(progress):
+        raise OptionError("progress=%r: expected a function taking one dict, or None" % (progress,))
+    return Model(_native.mco_build(items, r, progress))
 
 
 def load(path: Union[str, "os.PathLike[str]"]) -> Model:

@@ -5,8 +5,9 @@
 //! - `InputError` (a `ValueError`): bad data — a malformed file, an array
 //!   of the wrong shape, a mesh the crates refuse. The CLI's exit 1.
 //! - `FileError` (an `OSError`): a file that cannot be read or written.
-//! - `OptionError` (a `ValueError`): an option outside its range. The
-//!   CLI's exit 2 (raised by the Python layer, which checks the ranges).
+//! - `OptionError` (a `ValueError`): an option outside its range, or a
+//!   request a job's options cannot serve (the library's
+//!   `lodkit::usage::Usage`). The CLI's exit 2.
 //!
 //! All three derive from `pylodkit.errors.LodkitError`. They are defined
 //! in Python (a class with two bases, `LodkitError` and `ValueError` /
@@ -20,6 +21,7 @@ use pyo3::prelude::*;
 pub enum Kind {
     Input,
     File,
+    Option,
 }
 
 /// A `pylodkit.errors` exception carrying `msg` (falls back to the
@@ -30,6 +32,7 @@ pub fn raise(kind: Kind, msg: impl Into<String>) -> PyErr {
     let name = match kind {
         Kind::Input => "InputError",
         Kind::File => "FileError",
+        Kind::Option => "OptionError",
     };
     Python::attach(|py| {
         let made = py
@@ -39,7 +42,7 @@ pub fn raise(kind: Kind, msg: impl Into<String>) -> PyErr {
         match made {
             Ok(exc) => PyErr::from_value(exc),
             Err(_) => match kind {
-                Kind::Input => PyValueError::new_err(msg),
+                Kind::Input | Kind::Option => PyValueError::new_err(msg),
                 Kind::File => PyOSError::new_err(msg),
             },
         }
@@ -67,4 +70,28 @@ pub fn mco(e: lodkit_mco::Error) -> PyErr {
         lodkit_mco::Error::Mesh(m) => mesh(m),
         other => input(other.to_string()),
     }
+}
+
+/// A library job's error, with its one line: a `Usage` is an
+/// `OptionError`, a failure to read or write a file a `FileError`, the
+/// rest (bad input) an `InputError`.
+pub fn job(e: anyhow::Error) -> PyErr {
+    let kind = if e.downcast_ref::<lodkit::usage::Usage>().is_some() {
+        Kind::Option
+    } else if e.chain().any(|c| c.is::<std::io::Error>()) {
+        Kind::File
+    } else {
+        Kind::Input
+    };
+    // The chain on one line, as the CLI prints it: a cause the outer
+    // message already quotes is not said twice.
+    let mut line = e.to_string();
+    for cause in e.chain().skip(1) {
+        let cause = cause.to_string();
+        if !line.contains(&cause) {
+            line.push_str(": ");
+            line.push_str(&cause);
+        }
+    }
+    raise(kind, line.replace('\n', " "))
 }

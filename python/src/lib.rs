@@ -3,9 +3,11 @@
 //! `PointCloud` classes, checks option ranges and documents each call).
 //!
 //! Contract of every function here:
-//! - **Inputs** are numpy arrays read in place (see [`convert`]); options
-//!   arrive already range-checked by the Python layer, with the CLI's
-//!   defaults (`crates/cli/src/commands/{simplify,lods,compare,mco,pop}.rs`).
+//! - **Inputs** are numpy arrays read in place (see [`convert`]), or paths
+//!   for the library's jobs on files ([`jobs`]); options arrive already
+//!   range-checked by the Python layer against `LIMITS`, with the defaults
+//!   of `DEFAULTS` (both read from `lodkit::limits` and the engines'
+//!   option types, as the CLI reads them).
 //! - **The GIL is released** (`Python::detach`) around every computation:
 //!   file reading and writing, simplification, measurement, builds, cuts,
 //!   encoding, decoding. Other Python threads run meanwhile.
@@ -13,6 +15,8 @@
 //!   line ([`errors`]): what the CLI prints, without the file name when
 //!   there is no file.
 //! - Only the crates' public APIs are used (no dependency on the CLI).
+//! - **Progress**: the jobs on files take `progress`, a function called
+//!   with each of the job's events as a dict ([`progress`]).
 
 use std::path::PathBuf;
 
@@ -24,15 +28,18 @@ use pyo3::types::PyDict;
 
 mod convert;
 mod errors;
+mod jobs;
 mod mco;
 mod pop;
+mod progress;
 mod scale;
 mod tiles;
 
 use convert::{json_to_py, mesh_from_py, mesh_to_py, model_from_py, model_to_py};
 use errors::input;
 
-use lodkit::limits::{self, MAX_SAMPLES};
+use lodkit::limits;
+use lodkit::measure::Sampling;
 
 /// `load(path) -> (kind, dict)`: any file lodkit reads (format by
 /// extension); kind is `"mesh"` or `"points"`.
@@ -88,52 +95,50 @@ fn write_atomic(py: Python<'_>, path: PathBuf, data: &[u8]) -> PyResult<()> {
         .map_err(errors::mesh)
 }
 
-/// `write_lod_glb(path, levels)`: an LOD chain as one GLB, as `lodkit lods`
-/// writes `NAME_lods.glb` (`lodkit_mesh::io::gltf::write_lod_glb`), written
-/// atomically. `levels`: `(mesh, name, extras_json, error)` per level,
-/// level 0 (the input) first; `extras_json` is the node's extras (a JSON
-/// object), `error` the level's error against level 0 in object units
-/// (its measured maximum, else the estimate). Level k is shown down to the
-/// coverage at which level k + 1's error is one pixel
-/// (`gltf::error_coverage` on level 0's diagonal), the last down to 0, and
-/// the writer makes the values strictly decrease. Meshes without normals
-/// get smooth ones, as the CLI's GLBs do.
+/// One level of [`write_lod_glb`]: `(mesh, lod, measured, estimated)`.
+type GlbLevelArgs<'py> = (Bound<'py, PyAny>, usize, Option<(f64, f64)>, f64);
+
+/// `write_lod_glb(path, stem, levels)`: an LOD chain as one GLB, as
+/// `lodkit lods` writes `STEM_lods.glb` (`lodkit::lod_chain::chain_glb`:
+/// the same nodes, extras, coverages and normals), written atomically.
+/// `levels`: `(mesh, lod, measured, estimated)` per level, level 0 (the
+/// input, measured `(0, 0)`) first; `measured` is the level's `(mean,
+/// max)` distance to the input or `None`, `estimated` the simplifier's
+/// estimate, both in object units.
 #[pyfunction]
 fn write_lod_glb(
     py: Python<'_>,
     path: PathBuf,
-    levels: Vec<(Bound<'_, PyAny>, String, String, f64)>,
+    stem: String,
+    levels: Vec<GlbLevelArgs<'_>>,
 ) -> PyResult<()> {
-    use lodkit_mesh::io::gltf;
     let mut meshes = Vec::with_capacity(levels.len());
     let mut rest = Vec::with_capacity(levels.len());
-    for (mesh, name, extras, error) in &levels {
+    for (mesh, lod, measured, estimated) in &levels {
         meshes.push(mesh_from_py(mesh)?);
-        let extras: serde_json::Map<String, serde_json::Value> = serde_json::from_str(extras)
-            .map_err(|e| input(format!("level {name}: extras: {e}")))?;
-        rest.push((name.clone(), extras, *error));
+        rest.push((*lod, *measured, *estimated));
     }
     py.detach(|| -> Result<(), lodkit_mesh::Error> {
         let diagonal = meshes.first().map_or(0.0, |m| m.bbox().diagonal() as f64);
-        let with_normals: Vec<_> = meshes
+        let glb_levels: Vec<lodkit::lod_chain::GlbLevel> = rest
             .iter()
-            .map(|m| lodkit_mesh::normals::NormalsMode::default_for(m).apply(m))
+            .zip(&meshes)
+            .map(
+                |(&(lod, measured, estimated), mesh)| lodkit::lod_chain::GlbLevel {
+                    lod,
+                    mesh,
+                    measured,
+                    estimated,
+                },
+            )
             .collect();
-        let glb_levels: Vec<gltf::LodLevel> = rest
-            .iter()
-            .zip(&with_normals)
-            .enumerate()
-            .map(|(k, ((name, extras, _), m))| gltf::LodLevel {
-                name: name.clone(),
-                mesh: m,
-                extras: extras.clone(),
-                coverage: rest
-                    .get(k + 1)
-                    .map_or(0.0, |next| gltf::error_coverage(next.2, diagonal)),
-            })
-            .collect();
-        let bytes = gltf::write_lod_glb(&glb_levels, &gltf::GlbOptions::default())
-            .map_err(|e| lodkit_mesh::Error::parse(&path, e))?;
+        let bytes = lodkit::lod_chain::chain_glb(
+            &stem,
+            &glb_levels,
+            diagonal,
+            &lodkit::output::OutputOptions::default(),
+        )
+        .map_err(|e| lodkit_mesh::Error::parse(&path, e))?;
         lodkit_mesh::io::write_atomic(&path, &bytes)
     })
     .map_err(errors::mesh)
@@ -141,7 +146,7 @@ fn write_lod_glb(
 
 /// The simplifier options, from the Python keywords (CLI defaults).
 #[allow(clippy::too_many_arguments)]
-fn options(
+pub(crate) fn options(
     target: Target,
     max_error: Option<f32>,
     lock_border: bool,
@@ -207,12 +212,13 @@ fn report_dict<'py>(
     Ok(d)
 }
 
-/// `simplify(mesh, ...) -> (dict, report)`: one mesh to one budget.
+/// `simplify(mesh, ...) -> (dict, report)`: one mesh to one budget, by
+/// the library's in-core step (`lodkit::simplify::simplify_mesh`).
 #[pyfunction]
 #[pyo3(signature = (mesh, target = None, ratio = None, max_error = None, lock_border = false,
     fill_holes = true, heap_size = Options::DEFAULT_HEAP_SIZE,
     normal_weight = AttributeWeights::DEFAULT.normal, color_weight = AttributeWeights::DEFAULT.color,
-    uv_weight = AttributeWeights::DEFAULT.uv, prune = None))]
+    uv_weight = AttributeWeights::DEFAULT.uv, prune = None, progress = None))]
 #[allow(clippy::too_many_arguments)]
 fn simplify<'py>(
     py: Python<'py>,
@@ -227,6 +233,7 @@ fn simplify<'py>(
     color_weight: f32,
     uv_weight: f32,
     prune: Option<f32>,
+    progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<(Bound<'py, PyDict>, Bound<'py, PyDict>)> {
     let m = mesh_from_py(mesh)?;
     let opts = options(
@@ -241,8 +248,11 @@ fn simplify<'py>(
         prune,
     );
     let faces = m.faces.len();
-    let out = py
-        .detach(|| Simplifier::new().simplify(&m, &opts))
+    let bridge = progress::Bridge::new(progress)?;
+    let out = bridge
+        .run(py, |events| {
+            lodkit::simplify::simplify_mesh(&m, &opts, events)
+        })?
         .map_err(|e| input(e.to_string()))?;
     let report = report_dict(py, faces, &out.report)?;
     Ok((mesh_to_py(py, out.mesh)?, report))
@@ -295,18 +305,16 @@ fn lod_chain<'py>(
             if !measure {
                 return Ok(chain.into_iter().map(|l| (l, None)).collect());
             }
+            // Measured as the library's chain measures its levels.
             let reference = Reference::new(&m).map_err(|e| e.to_string())?;
+            let sampling = samples.map_or(Sampling::Adaptive, Sampling::PerKind);
             chain
                 .into_iter()
                 .map(|l| {
-                    if l.mesh.faces.is_empty() {
-                        return Ok((l, None));
-                    }
-                    let r = reference
-                        .compare_level(&l.mesh, samples)
+                    let d = sampling
+                        .measure(&reference, &l.mesh)
                         .map_err(|e| e.to_string())?;
-                    let d = Some((r.symmetric.mean, r.symmetric.max, r.samples_per_kind));
-                    Ok((l, d))
+                    Ok((l, d.map(|d| (d.mean, d.max, d.samples))))
                 })
                 .collect()
         })
@@ -325,10 +333,12 @@ fn lod_chain<'py>(
         .collect()
 }
 
-/// `compare(a, b, ...) -> dict`: `lodkit compare --json`'s report.
+/// `compare(a, b, ...) -> dict`: `lodkit compare --json`'s report, measured
+/// by the library's `lodkit::compare::measure` (the `compare` job's
+/// measurement; the meshes are called `mesh a` and `mesh b` in errors).
 #[pyfunction]
 #[pyo3(signature = (a, b, samples = None, seed = lodkit_mesh::metrics::DEFAULT_SEED,
-    vertex_samples = true, edge_samples = true, face_samples = true))]
+    vertex_samples = true, edge_samples = true, face_samples = true, progress = None))]
 // Python keyword options, one parameter each (as the CLI's flags).
 #[allow(clippy::too_many_arguments)]
 fn compare<'py>(
@@ -340,6 +350,7 @@ fn compare<'py>(
     vertex_samples: bool,
     edge_samples: bool,
     face_samples: bool,
+    progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let a = mesh_from_py(a)?;
     let b = mesh_from_py(b)?;
@@ -350,23 +361,12 @@ fn compare<'py>(
         edge_samples,
         face_samples,
     };
-    // The default grows with the meshes; bounded like an explicit count.
-    let n = opts
-        .resolved_samples(a.faces.len(), b.faces.len())
-        .min(MAX_SAMPLES);
-    let opts = CompareOptions {
-        samples: Some(n),
-        ..opts
-    };
-    let report = py
-        .detach(|| lodkit_mesh::metrics::compare(&a, &b, &opts))
-        .map_err(|e| {
-            input(
-                e.to_string()
-                    .replace("mesh A", "mesh a")
-                    .replace("mesh B", "mesh b"),
-            )
-        })?;
+    let bridge = progress::Bridge::new(progress)?;
+    let report = bridge
+        .run(py, |events| {
+            lodkit::compare::measure(&a, &b, ("mesh a", "mesh b"), &opts, events)
+        })?
+        .map_err(errors::job)?;
     json_to_py(py, &report)
 }
 
@@ -407,6 +407,36 @@ fn limits_dict(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
         "tile_leaf_points",
         int(&lodkit_tiles::PointTilesOptions::LEAF_POINTS),
     )?;
+    d.set_item("memory", (*limits::MEMORY.start(), *limits::MEMORY.end()))?;
+    d.set_item("fov", real(limits::FOV))?;
+    d.set_item("view_fov", real(limits::VIEW_FOV))?;
+    d.set_item("viewport", real(limits::VIEWPORT))?;
+    d.set_item("tolerance", real(limits::TOLERANCE))?;
+    d.set_item("elevation", real(limits::ELEVATION))?;
+    d.set_item(
+        "picture_size",
+        (*limits::PICTURE_SIZE.start(), *limits::PICTURE_SIZE.end()),
+    )?;
+    Ok(d)
+}
+
+/// `DEFAULTS`: the default of every option pylodkit offers by name, from
+/// `lodkit::limits` and the engines' option types (what the CLI's flags
+/// default to).
+fn defaults_dict(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("levels", limits::DEFAULT_LEVELS)?;
+    d.set_item("heap_size", Options::DEFAULT_HEAP_SIZE)?;
+    d.set_item("normal_weight", AttributeWeights::DEFAULT.normal)?;
+    d.set_item("color_weight", AttributeWeights::DEFAULT.color)?;
+    d.set_item("uv_weight", AttributeWeights::DEFAULT.uv)?;
+    d.set_item("seed", lodkit_mesh::metrics::DEFAULT_SEED)?;
+    d.set_item("fov", limits::DEFAULT_FOV)?;
+    d.set_item("azimuth", limits::DEFAULT_VIEW.0)?;
+    d.set_item("elevation", limits::DEFAULT_VIEW.1)?;
+    d.set_item("width", limits::DEFAULT_PICTURE_SIZE.0)?;
+    d.set_item("height", limits::DEFAULT_PICTURE_SIZE.1)?;
+    d.set_item("background", limits::DEFAULT_BACKGROUND.map(u32::from))?;
     Ok(d)
 }
 
@@ -427,7 +457,9 @@ fn _lodkit(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(tiles::tiles, m)?)?;
     mco::register(m)?;
     pop::register(m)?;
+    jobs::register(m)?;
     m.add("LIMITS", limits_dict(m.py())?)?;
+    m.add("DEFAULTS", defaults_dict(m.py())?)?;
     m.add("DEFAULT_LEVELS", limits::DEFAULT_LEVELS)?;
     Ok(())
 }

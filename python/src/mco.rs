@@ -1,12 +1,11 @@
-//! `McoModel`: the continuous-LOD model of `lodkit-mco`, built, saved,
-//! loaded and cut from Python (`lodkit mco build|extract|info`).
+//! `McoModel`: the continuous-LOD model of `lodkit-mco`, built (by the
+//! library's `lodkit::mco_build`, as `lodkit mco build`), saved, loaded
+//! and cut from Python (`lodkit mco extract|info`).
 
 use std::path::PathBuf;
 
 use glam::Vec3;
-use lodkit_mco::{
-    Camera, IncrementalBuilder, McoModel, Options, densify_meshes, grid_for, samples_of,
-};
+use lodkit_mco::{Camera, McoModel};
 use lodkit_mesh::Model;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
@@ -22,70 +21,49 @@ pub struct PyMco {
     inner: McoModel,
 }
 
-/// Builds from meshes, point clouds and files, as `lodkit mco build`
-/// does: every input on one lattice, meshes densified, Hoppe's tangential
-/// rule when any input is not a mesh (a `.conf` path adds its posed scans).
-fn build_models(models: &[Model], resolution: Option<u32>) -> Result<McoModel, lodkit_mco::Error> {
-    let opts = Options { resolution };
-    if resolution.is_some() {
-        let bytes = lodkit_mco::estimate_build_bytes(models, &opts)?;
-        if bytes > lodkit_mco::MAX_BUILD_BYTES {
-            return Err(lodkit_mco::Error::Input(format!(
-                "resolution {}: the build would need about {:.1} GB of memory, more than its {:.1} GB limit; use a lower resolution",
-                resolution.unwrap_or(0),
-                bytes as f64 / 1e9,
-                lodkit_mco::MAX_BUILD_BYTES as f64 / 1e9
-            )));
-        }
-    }
-    let samples = models
-        .iter()
-        .map(samples_of)
-        .collect::<Result<Vec<_>, _>>()?;
-    if samples.iter().all(|s| s.is_empty()) {
-        return Err(lodkit_mco::Error::Input(
-            "the input has no usable samples".into(),
-        ));
-    }
-    let grid = grid_for(models, &samples, &opts)?;
-    let samples = densify_meshes(models, samples, &grid);
-    let mut builder = IncrementalBuilder::new(grid);
-    if models.iter().any(|m| !matches!(m, Model::Mesh(_))) {
-        builder = builder.with_tangential_rule();
-    }
-    for s in &samples {
-        let _ = builder.add(s);
-    }
-    builder.build()
-}
-
-/// `mco_build(inputs, resolution) -> McoModel`.
+/// `mco_build(inputs, resolution, progress) -> McoModel`: the library's
+/// build (`lodkit::mco_build`, what `lodkit mco build` runs): every input
+/// on one lattice, a `.conf` path adding its posed scans. Inputs are named
+/// in messages by their path, else `input N` (from 1).
 #[pyfunction]
-#[pyo3(signature = (inputs, resolution = None))]
-fn mco_build(
-    py: Python<'_>,
-    inputs: Vec<Bound<'_, PyAny>>,
+#[pyo3(signature = (inputs, resolution = None, progress = None))]
+fn mco_build<'py>(
+    py: Python<'py>,
+    inputs: Vec<Bound<'py, PyAny>>,
     resolution: Option<u32>,
+    progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<PyMco> {
     let mut models = Vec::with_capacity(inputs.len());
-    for obj in &inputs {
-        let conf = obj.extract::<PathBuf>().ok().filter(|p| {
-            p.extension()
-                .is_some_and(|e| e.eq_ignore_ascii_case("conf"))
-        });
-        match conf {
-            Some(path) => {
+    for (i, obj) in inputs.iter().enumerate() {
+        let path = obj
+            .extract::<PathBuf>()
+            .ok()
+            .filter(|_| !obj.hasattr("shape").unwrap_or(false));
+        match path {
+            Some(path)
+                if path
+                    .extension()
+                    .is_some_and(|e| e.eq_ignore_ascii_case("conf")) =>
+            {
                 let scans = py
                     .detach(|| lodkit_mesh::io::conf::load_scans(&path))
                     .map_err(errors::mesh)?;
-                models.extend(scans.into_iter().map(|(_, r)| Model::Range(r)));
+                models.extend(
+                    scans
+                        .into_iter()
+                        .map(|(p, r)| (p.display().to_string(), Model::Range(r))),
+                );
             }
-            None => models.push(model_from_py(obj)?),
+            Some(path) => models.push((path.display().to_string(), model_from_py(obj)?)),
+            None => models.push((format!("input {}", i + 1), model_from_py(obj)?)),
         }
     }
-    let inner = py
-        .detach(|| build_models(&models, resolution))
-        .map_err(errors::mco)?;
+    let bridge = crate::progress::Bridge::new(progress)?;
+    let (inner, _) = bridge
+        .run(py, |events| {
+            lodkit::mco_build::build_model(&models, resolution, events)
+        })?
+        .map_err(errors::job)?;
     Ok(PyMco { inner })
 }
 
@@ -178,15 +156,17 @@ impl PyMco {
 
     /// The view-dependent cut for a camera at `position` looking at
     /// `look_at` (default: the model's centre): `(mesh dict, expanded nodes)`.
-    #[pyo3(signature = (position, look_at = None, fov = 60.0, viewport = 1080.0, tolerance = 1.0))]
+    /// `None`: `lodkit mco extract`'s defaults (the camera's field of view
+    /// and viewport, [`lodkit::limits::DEFAULT_TOLERANCE`]).
+    #[pyo3(signature = (position, look_at = None, fov = None, viewport = None, tolerance = None))]
     fn extract_view<'py>(
         &self,
         py: Python<'py>,
         position: [f32; 3],
         look_at: Option<[f32; 3]>,
-        fov: f32,
-        viewport: f32,
-        tolerance: f32,
+        fov: Option<f32>,
+        viewport: Option<f32>,
+        tolerance: Option<f32>,
     ) -> PyResult<(Bound<'py, PyDict>, usize)> {
         let model = &self.inner;
         let position = Vec3::from(position);
@@ -197,11 +177,13 @@ impl PyMco {
                 "view and look_at are the same point: the camera has no direction",
             ));
         }
+        let cam = Camera::looking_at(position, target);
         let cam = Camera {
-            vfov_deg: fov,
-            viewport_height: viewport,
-            ..Camera::looking_at(position, target)
+            vfov_deg: fov.unwrap_or(cam.vfov_deg),
+            viewport_height: viewport.unwrap_or(cam.viewport_height),
+            ..cam
         };
+        let tolerance = tolerance.unwrap_or(lodkit::limits::DEFAULT_TOLERANCE);
         let (mesh, n) = py.detach(|| {
             let mut idx = Vec::new();
             let n = model.extract_view(&cam, tolerance, &mut idx);

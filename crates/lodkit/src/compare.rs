@@ -40,7 +40,28 @@ pub struct CompareReport {
 pub fn run(job: &CompareJob, events: &Progress) -> Result<CompareReport> {
     let a = crate::input::load_mesh(events, &job.a)?;
     let b = crate::input::load_mesh(events, &job.b)?;
-    let n = job.options.resolved_samples(a.faces.len(), b.faces.len());
+    let names = (job.a.display().to_string(), job.b.display().to_string());
+    let report = measure(&a, &b, (&names.0, &names.1), &job.options, events)?;
+    let heatmap = match &job.heatmap {
+        Some(out) => Some(write_heatmap(&a, &b, &job.a, out)?),
+        None => None,
+    };
+    Ok(CompareReport { report, heatmap })
+}
+
+/// Measures `b` against `a` in memory, as [`run`] does (sample counts
+/// bounded by [`crate::limits::SAMPLES`], said in a note when the default
+/// would exceed it); `names` are how errors call the two meshes. Errors:
+/// a mesh the metric refuses, named. Cost: about 100 bytes and one
+/// nearest-point query a sample.
+pub fn measure(
+    a: &lodkit_mesh::TriMesh,
+    b: &lodkit_mesh::TriMesh,
+    names: (&str, &str),
+    options: &CompareOptions,
+    events: &Progress,
+) -> Result<lodkit_mesh::metrics::CompareReport> {
+    let n = options.resolved_samples(a.faces.len(), b.faces.len());
     if n > crate::limits::MAX_SAMPLES {
         events.status(format!(
             "sampling {} per kind rather than the default {n} (10 per face): the most --samples allows",
@@ -52,27 +73,19 @@ pub fn run(job: &CompareJob, events: &Progress) -> Result<CompareReport> {
     let n = n.min(crate::limits::MAX_SAMPLES);
     let opts = CompareOptions {
         samples: Some(n),
-        ..job.options
+        ..*options
     };
     let step = events.stage(&format!("measuring ({n} samples of each kind per mesh)"));
-    // The metric names the meshes "A" and "B"; the user knows their paths.
-    let report = compare(&a, &b, &opts).map_err(|e| {
+    // The metric names the meshes "A" and "B"; the caller knows their names.
+    let report = compare(a, b, &opts).map_err(|e| {
         let msg = e
             .to_string()
-            .replace("mesh A", &job.a.display().to_string())
-            .replace("mesh B", &job.b.display().to_string());
-        anyhow::anyhow!(
-            "comparing {} with {}: {msg}",
-            job.a.display(),
-            job.b.display()
-        )
+            .replace("mesh A", names.0)
+            .replace("mesh B", names.1);
+        anyhow::anyhow!("comparing {} with {}: {msg}", names.0, names.1)
     })?;
     step.finish();
-    let heatmap = match &job.heatmap {
-        Some(out) => Some(write_heatmap(&a, &b, &job.a, out)?),
-        None => None,
-    };
-    Ok(CompareReport { report, heatmap })
+    Ok(report)
 }
 
 use lodkit_mesh::io::{Format, WriteOptions, encode, write_atomic};

@@ -34,7 +34,7 @@
 //! - [`limits`]: every range and default of every option;
 //! - [`plan`]: in core or out of core;
 //! - jobs: [`simplify`], [`lod_chain`], [`build_all`], [`compare`], [`info`],
-//!   [`render`], [`stream_encode`];
+//!   [`render`], [`mco_build`], [`stream_encode`];
 //! - [`report`]: the serde types front-ends print (one definition each);
 //! - [`output`], [`materials`], [`measure`]: what the jobs share.
 
@@ -47,6 +47,7 @@ pub mod input;
 pub mod limits;
 pub mod lod_chain;
 pub mod materials;
+pub mod mco_build;
 pub mod measure;
 pub mod output;
 pub mod plan;

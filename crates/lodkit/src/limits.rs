@@ -66,6 +66,35 @@ pub const WELD: Real = Real::NON_NEGATIVE;
 /// A crease angle in degrees (`--normals auto=DEGREES`).
 pub const CREASE_DEGREES: Real = Real::closed(0.0, 180.0);
 
+/// A view-dependent cut's vertical field of view in degrees (`mco extract
+/// --fov`; default: `lodkit_mco::Camera::looking_at`'s).
+pub const VIEW_FOV: Real = Real::open(0.0, 180.0);
+/// A view-dependent cut's viewport height in pixels (`mco extract
+/// --viewport`; default: `lodkit_mco::Camera::looking_at`'s).
+pub const VIEWPORT: Real = Real::closed(1.0, 65536.0);
+/// A view-dependent cut's largest projected error in pixels (`mco extract
+/// --tolerance`).
+pub const TOLERANCE: Real = Real::POSITIVE;
+/// The tolerance when none is given: one pixel.
+pub const DEFAULT_TOLERANCE: f32 = 1.0;
+
+/// A picture's vertical field of view in degrees (`render --fov`).
+pub const FOV: Real = Real::closed(1.0, 170.0);
+/// The field of view of a picture when none is asked for.
+pub const DEFAULT_FOV: f32 = 35.0;
+/// A camera's elevation in degrees (`render --view`, `--elevations`),
+/// towards +Y.
+pub const ELEVATION: Real = Real::closed(-90.0, 90.0);
+/// Azimuth and elevation in degrees of a picture when none are asked for
+/// (`render --view`).
+pub const DEFAULT_VIEW: (f32, f32) = (30.0, 20.0);
+/// Each side of a picture in pixels (`render --size`).
+pub const PICTURE_SIZE: RangeInclusive<u32> = 1..=lodkit_render::MAX_SIZE;
+/// Width and height of a picture when none are asked for.
+pub const DEFAULT_PICTURE_SIZE: (u32, u32) = (1024, 1024);
+/// A picture's background when none is asked for: white (RGB, 0..=255).
+pub const DEFAULT_BACKGROUND: [u8; 3] = [255, 255, 255];
+
 /// A finite real in an interval; each end closed or open, the upper
 /// end possibly absent (`hi = inf`: any finite value above `lo`).
 #[derive(Clone, Copy, Debug)]

@@ -117,11 +117,10 @@ pub fn run(a: &SimplifyJob, events: &Progress) -> Result<Report> {
             other.kind()
         ),
     };
-    let step = events.spinner("simplifying");
-    let out = Simplifier::new()
-        .simplify(&mesh, opts)
+    let start = std::time::Instant::now();
+    let out = simplify_mesh(&mesh, opts, events)
         .map_err(|e| anyhow::anyhow!("{}: {e}", a.input.display()))?;
-    let t = step.finish();
+    let t = start.elapsed();
     let r = out.report;
     let bytes = a
         .out
@@ -153,6 +152,20 @@ pub fn run(a: &SimplifyJob, events: &Progress) -> Result<Report> {
         out_of_core: None,
         summary,
     })
+}
+
+/// One mesh in memory to `opts.target`: the in-core step of [`run`] (a
+/// stage named `simplifying`). Errors: the simplifier's, about the mesh
+/// (the caller names it). Cost: the simplifier's, about 80 bytes a face.
+pub fn simplify_mesh(
+    mesh: &TriMesh,
+    opts: &Options,
+    events: &Progress,
+) -> Result<lodkit_simplify::Simplified, lodkit_simplify::Error> {
+    let step = events.spinner("simplifying");
+    let out = Simplifier::new().simplify(mesh, opts);
+    step.finish();
+    out
 }
 
 /// `simplify` on a scene: every mesh simplified, materials kept

@@ -4,7 +4,9 @@
 //! them. The code of those folders is searched for each limit's literal
 //! spellings; comments and docstrings (help text, prose) are not code and
 //! are passed over. Each spelling list must also match `limits.rs`, so a
-//! list cannot drift from the value it guards.
+//! list cannot drift from the value it guards. The defaults the engines'
+//! option types own (the simplifier's heap and weights, the metric's
+//! seed) are guarded the same way against their own home file.
 
 use std::path::{Path, PathBuf};
 
@@ -68,12 +70,126 @@ const SPELLINGS: &[(&str, &[&str])] = &[
         "POP_BITS",
         &["1..=16", "u8 = 16", "int = 16", "1u8, 16)", "1, 16)"],
     ),
+    ("FOV", &["Real::closed(1.0, 170.0)", "1.0, 170.0)"]),
+    (
+        "VIEW_FOV",
+        &[
+            "Real::open(0.0, 180.0)",
+            "0.0, 180.0, lo_open=True, hi_open=True",
+        ],
+    ),
+    ("VIEWPORT", &["Real::closed(1.0, 65536.0)", "1.0, 65536.0)"]),
+    (
+        "DEFAULT_TOLERANCE",
+        &[
+            "DEFAULT_TOLERANCE: f32 = 1.0",
+            "tolerance.unwrap_or(1.0)",
+            "1.0 if tolerance is None",
+            "tolerance = 1.0)",
+        ],
+    ),
+    (
+        "DEFAULT_FOV",
+        &[
+            "DEFAULT_FOV: f32 = 35.0",
+            "default_value_t = 35.0",
+            "fov: float = 35.0",
+            "fov = 35.0",
+        ],
+    ),
+    (
+        "ELEVATION",
+        &[
+            "Real::closed(-90.0, 90.0)",
+            "(-90.0..=90.0)",
+            "-90.0, 90.0)",
+        ],
+    ),
+    (
+        "DEFAULT_VIEW",
+        &[
+            "(f32, f32) = (30.0, 20.0)",
+            "default_value = \"30,20\"",
+            "azimuth: float = 30",
+            "elevation: float = 20",
+            "azimuth = 30.0",
+            "elevation = 20.0",
+        ],
+    ),
+    (
+        "DEFAULT_PICTURE_SIZE",
+        &[
+            "(u32, u32) = (1024, 1024)",
+            "default_value = \"1024x1024\"",
+            "(1024, 1024)",
+            "width = 1024",
+            "height = 1024",
+        ],
+    ),
+    (
+        "DEFAULT_BACKGROUND",
+        &[
+            "[u8; 3] = [255, 255, 255]",
+            "default_value = \"255,255,255\"",
+            "(255, 255, 255)",
+        ],
+    ),
     (
         "POP_DECIMATE",
         &[
             "POP_DECIMATE: Real = Real::closed(0.0, 1.0)",
             "\"decimate\", decimate, 0.0, 1.0",
         ],
+    ),
+];
+
+/// Defaults an engine's option type owns: its home file (from the
+/// workspace root), the item, and the ways the CLI or pylodkit would write
+/// them as code.
+const ENGINE_DEFAULTS: &[(&str, &str, &[&str])] = &[
+    (
+        "crates/simplify/src/options.rs",
+        "AttributeWeights::DEFAULT",
+        &[
+            "normal: 0.05",
+            "color: 0.05",
+            "uv: 0.1",
+            "normal_weight: float = 0.05",
+            "color_weight: float = 0.05",
+            "uv_weight: float = 0.1",
+            "normal_weight = 0.05",
+            "color_weight = 0.05",
+            "uv_weight = 0.1",
+        ],
+    ),
+    (
+        "crates/simplify/src/options.rs",
+        "Options::DEFAULT_HEAP_SIZE",
+        &[
+            "DEFAULT_HEAP_SIZE: usize = 1",
+            "heap_size: int = 1",
+            "heap_size = 1,",
+            "heap_size = 1)",
+        ],
+    ),
+    (
+        "crates/mco/src/view_dependent_cut.rs",
+        "lodkit_mco::Camera::looking_at",
+        &[
+            "vfov_deg: 60.0",
+            "viewport_height: 1080.0",
+            "unwrap_or(60.0)",
+            "unwrap_or(1080.0)",
+            "60.0 if fov is None",
+            "1080.0 if viewport is None",
+            "fov = 60.0",
+            "viewport = 1080.0",
+        ],
+    ),
+    (
+        "crates/mesh/src/metrics/mod.rs",
+        "metrics::DEFAULT_SEED",
+        &["DEFAULT_SEED: u64 = 1998", "1998"],
     ),
 ];
 
@@ -155,6 +271,19 @@ fn every_spelling_list_matches_the_limit_it_guards() {
 }
 
 #[test]
+fn every_engine_default_list_matches_its_home() {
+    for (home, name, spellings) in ENGINE_DEFAULTS {
+        let lines = code_lines(&root().join(home));
+        assert!(
+            lines
+                .iter()
+                .any(|(_, l)| spellings.iter().any(|s| holds(l, s))),
+            "{name}: none of {spellings:?} is in {home}"
+        );
+    }
+}
+
+#[test]
 fn no_limit_is_written_again_in_the_cli_or_pylodkit() {
     let mut files = Vec::new();
     for dir in ["crates/cli/src", "python/src", "python/pylodkit"] {
@@ -168,10 +297,18 @@ fn no_limit_is_written_again_in_the_cli_or_pylodkit() {
     let mut found = Vec::new();
     for f in &files {
         for (n, line) in code_lines(f) {
-            for (name, spellings) in SPELLINGS {
+            let lists = SPELLINGS
+                .iter()
+                .map(|(name, s)| (format!("lodkit::limits::{name}"), *s))
+                .chain(
+                    ENGINE_DEFAULTS
+                        .iter()
+                        .map(|(_, name, s)| (name.to_string(), *s)),
+                );
+            for (name, spellings) in lists {
                 if let Some(s) = spellings.iter().find(|s| holds(&line, s)) {
                     found.push(format!(
-                        "{}:{n}: {s} (lodkit::limits::{name})",
+                        "{}:{n}: {s} ({name})",
                         f.strip_prefix(root()).unwrap_or(f).display()
                     ));
                 }

@@ -2,9 +2,9 @@
 //! octree).
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
+use anyhow::Result;
 use clap::{Args, Subcommand};
-use lodkit_mco::{Camera, IncrementalBuilder, Options, densify_meshes, grid_for, samples_of};
+use lodkit_mco::Camera;
 use lodkit_mesh::glam::Vec3;
 use lodkit_mesh::io::{WriteOptions, save_mesh};
 use lodkit_mesh::{Model, RangeImage};
@@ -79,13 +79,13 @@ pub struct ExtractArgs {
     )]
     pub look_at: Option<[f32; 3]>,
     /// Vertical field of view, degrees in (0, 180) (default 60).
-    #[arg(long, requires = "view", value_parser = Real::open(0.0, 180.0).f32())]
+    #[arg(long, requires = "view", value_parser = lodkit::limits::VIEW_FOV.f32())]
     pub fov: Option<f32>,
     /// Viewport height, pixels in [1, 65536] (default 1080).
-    #[arg(long, requires = "view", value_parser = Real::closed(1.0, 65536.0).f32())]
+    #[arg(long, requires = "view", value_parser = lodkit::limits::VIEWPORT.f32())]
     pub viewport: Option<f32>,
     /// Largest projected error allowed, pixels (a finite number > 0; default 1).
-    #[arg(long, requires = "view", value_parser = Real::POSITIVE.f32())]
+    #[arg(long, requires = "view", value_parser = lodkit::limits::TOLERANCE.f32())]
     pub tolerance: Option<f32>,
     /// Refuse a file cut short (default: cut from its complete chunks,
     /// which serve the LOD numbers they cover, and say where it stopped).
@@ -137,20 +137,12 @@ fn load_inputs(ui: &Ui, path: &Path) -> Result<Vec<(String, Model)>> {
 }
 
 #[derive(Serialize)]
-struct Added {
-    input: String,
-    samples: usize,
-    cubes_recomputed: usize,
-    surface_cubes: usize,
-}
-
-#[derive(Serialize)]
 struct Built {
     output: String,
     resolution: u32,
     cube: f32,
     depth: u32,
-    added: Vec<Added>,
+    added: Vec<lodkit::mco_build::Added>,
     nodes: usize,
     lod_numbers: usize,
     full_triangles: usize,
@@ -170,75 +162,14 @@ fn build(
     for p in inputs {
         models.extend(load_inputs(ui, p)?);
     }
-    let samples = models
-        .iter()
-        .map(|(name, m)| samples_of(m).with_context(|| name.clone()))
-        .collect::<Result<Vec<_>>>()?;
-    if samples.iter().all(|s| s.is_empty()) {
-        let names: Vec<String> = models.iter().map(|(n, _)| n.clone()).collect();
-        bail!("{}: no usable samples", names.join(", "));
-    }
-    let plain: Vec<Model> = models.iter().map(|(_, m)| m.clone()).collect();
-    // One mesh keeps its detail: a lattice whose full cut has about its
-    // triangle count, as `lodkit build` makes it (scans take the paper's
-    // default, twice their sample spacing).
-    let resolution = match (resolution, plain.as_slice()) {
-        (None, [Model::Mesh(mesh)]) => {
-            lodkit_mco::mesh_resolution(mesh, lodkit_mco::MAX_BUILD_BYTES / 4)
-                .with_context(|| models[0].0.clone())?
-        }
-        (r, _) => r,
-    };
-    if let Some(r) = resolution {
-        // A resolution the user chose that needs more memory than a build
-        // may take is a bad option value (exit 2), not bad input.
-        let bytes = lodkit_mco::estimate_build_bytes(&plain, &Options { resolution })?;
-        if bytes > lodkit_mco::MAX_BUILD_BYTES {
-            return Err(crate::ui::usage(format!(
-                "--resolution {r}: the build would need about {:.1} GB of memory, more than its {:.1} GB limit; use a lower resolution",
-                bytes as f64 / 1e9,
-                lodkit_mco::MAX_BUILD_BYTES as f64 / 1e9
-            )));
-        }
-    }
-    let grid = grid_for(&plain, &samples, &Options { resolution })?;
-    let samples = densify_meshes(&plain, samples, &grid);
-    let status = |line: String| {
-        if !json {
-            ui.status(line)
+    // With --json the lines the build says are left out (stdout is JSON).
+    let sink = |e: &lodkit::Event<'_>| {
+        if !(json && matches!(e, lodkit::Event::Note(_))) {
+            ui.draw(e)
         }
     };
-    status(format!(
-        "lattice: resolution {}, cube {:.6}, octree depth {}",
-        grid.resolution(),
-        grid.cube(),
-        grid.depth()
-    ));
-    let mut builder = IncrementalBuilder::new(grid);
-    // Scan data has edges: Hoppe's tangential rule (meshes build without it).
-    if plain.iter().any(|m| !matches!(m, Model::Mesh(_))) {
-        builder = builder.with_tangential_rule();
-    } else if lodkit_mco::all_closed_meshes(&plain) {
-        // Closed meshes give closed models (`band_edge_pruning.rs`).
-        builder = builder.with_band_edge_pruning();
-    }
-    let mut added = Vec::new();
-    for ((name, _), s) in models.iter().zip(&samples) {
-        let r = builder.add(s);
-        status(format!(
-            "added {name}: {} samples, {} cubes recomputed, {} surface cubes",
-            r.samples, r.cubes_recomputed, r.surface_cubes
-        ));
-        added.push(Added {
-            input: name.clone(),
-            samples: r.samples,
-            cubes_recomputed: r.cubes_recomputed,
-            surface_cubes: r.surface_cubes,
-        });
-    }
-    let step = ui.spinner("building the octree");
-    let model = builder.build()?;
-    step.finish();
+    let (model, added) =
+        lodkit::mco_build::build_model(&models, resolution, &lodkit::Progress::new(&sink))?;
     let seconds = t0.elapsed().as_secs_f64();
     model.save(output)?;
     if json {
@@ -298,11 +229,6 @@ fn extract(ui: &Ui, a: &ExtractArgs) -> Result<()> {
             }
         }
     }
-    let (fov, viewport, tolerance) = (
-        a.fov.unwrap_or(60.0),
-        a.viewport.unwrap_or(1080.0),
-        a.tolerance.unwrap_or(1.0),
-    );
     let (model, cut, _) = ui.run(|events| lodkit::info::load_mco(events, &a.model, a.strict))?;
     let mut idx = Vec::new();
     let step = ui.spinner("extracting");
@@ -333,11 +259,13 @@ fn extract(ui: &Ui, a: &ExtractArgs) -> Result<()> {
                 "--view and --look-at are the same point: the camera has no direction",
             ));
         }
+        let cam = Camera::looking_at(position, target);
         let cam = Camera {
-            vfov_deg: fov,
-            viewport_height: viewport,
-            ..Camera::looking_at(position, target)
+            vfov_deg: a.fov.unwrap_or(cam.vfov_deg),
+            viewport_height: a.viewport.unwrap_or(cam.viewport_height),
+            ..cam
         };
+        let tolerance = a.tolerance.unwrap_or(lodkit::limits::DEFAULT_TOLERANCE);
         let n = model.extract_view(&cam, tolerance, &mut idx);
         (format!("view-dependent cut ({n} nodes expanded)"), None)
     };

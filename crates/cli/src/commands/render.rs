@@ -5,11 +5,12 @@ use std::path::{Path, PathBuf};
 use anyhow::Result;
 use clap::Args;
 use clap::error::ErrorKind;
+use lodkit::limits;
 use lodkit::render::{RenderJob, Select, Views};
-use lodkit_render::{MAX_SIZE, Normals, RenderOptions};
+use lodkit_render::{Normals, RenderOptions};
 
 use crate::ui::Ui;
-use crate::ui::value::{self, Real};
+use crate::ui::value;
 
 /// Most views per elevation of a ring.
 const MAX_RING: u32 = 720;
@@ -29,16 +30,19 @@ pub struct RenderArgs {
     pub output: Option<PathBuf>,
     /// Camera azimuth and elevation in degrees: azimuth about +Y from the
     /// +Z side towards +X, elevation in [-90, 90] towards +Y.
-    #[arg(long, value_name = "AZ,EL", default_value = "30,20", value_parser = parse_view, allow_hyphen_values = true, conflicts_with = "ring")]
+    #[arg(long, value_name = "AZ,EL", value_parser = parse_view, allow_hyphen_values = true, conflicts_with = "ring",
+          default_value_t = View { azimuth: limits::DEFAULT_VIEW.0, elevation: limits::DEFAULT_VIEW.1 })]
     pub view: View,
     /// Image size in pixels, each side in 1..=8192.
-    #[arg(long, value_name = "WxH", default_value = "1024x1024", value_parser = value::size(1, MAX_SIZE))]
-    pub size: (u32, u32),
+    #[arg(long, value_name = "WxH",
+          default_value_t = Size(limits::DEFAULT_PICTURE_SIZE.0, limits::DEFAULT_PICTURE_SIZE.1),
+          value_parser = parse_size)]
+    pub size: Size,
     /// Background colour, three values in 0..=255.
-    #[arg(long, value_name = "R,G,B", default_value = "255,255,255", value_parser = parse_rgb)]
+    #[arg(long, value_name = "R,G,B", default_value_t = Rgb(limits::DEFAULT_BACKGROUND), value_parser = parse_rgb)]
     pub background: Rgb,
     /// Vertical field of view in degrees, in [1, 170].
-    #[arg(long, value_name = "DEG", default_value_t = 35.0, value_parser = Real::closed(1.0, 170.0).f32())]
+    #[arg(long, value_name = "DEG", default_value_t = limits::DEFAULT_FOV, value_parser = limits::FOV.f32())]
     pub fov: f32,
     /// Smooth shading from computed vertex normals when the mesh has none
     /// (default: the mesh's normals if it has them, else flat faces).
@@ -80,6 +84,35 @@ pub struct View {
 #[derive(Clone, Copy, Debug)]
 pub struct Rgb(pub [u8; 3]);
 
+/// `WIDTHxHEIGHT` in pixels.
+#[derive(Clone, Copy, Debug)]
+pub struct Size(pub u32, pub u32);
+
+// As the values are written on the command line (clap shows defaults so).
+impl std::fmt::Display for View {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{},{}", self.azimuth, self.elevation)
+    }
+}
+
+impl std::fmt::Display for Rgb {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let [r, g, b] = self.0;
+        write!(f, "{r},{g},{b}")
+    }
+}
+
+impl std::fmt::Display for Size {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}x{}", self.0, self.1)
+    }
+}
+
+fn parse_size(s: &str) -> std::result::Result<Size, String> {
+    let (lo, hi) = (*limits::PICTURE_SIZE.start(), *limits::PICTURE_SIZE.end());
+    value::size(lo, hi)(s).map(|(w, h)| Size(w, h))
+}
+
 #[derive(Clone, Debug)]
 pub struct Elevations(pub Vec<f32>);
 
@@ -88,7 +121,7 @@ fn numbers(s: &str) -> Option<Vec<f32>> {
 }
 
 fn parse_elevation(e: f32) -> std::result::Result<f32, String> {
-    if e.is_finite() && (-90.0..=90.0).contains(&e) {
+    if limits::ELEVATION.contains(e as f64) {
         Ok(e)
     } else {
         Err(format!("elevation {e} is outside [-90, 90] degrees"))

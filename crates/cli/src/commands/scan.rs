@@ -34,7 +34,7 @@ pub struct ScanArgs {
     pub out: PathBuf,
     /// Elevation of the views above the horizontal plane, degrees in [-90, 90].
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true,
-          value_parser = Real::closed(-90.0, 90.0).f32())]
+          value_parser = lodkit::limits::ELEVATION.f32())]
     pub elevation: f32,
     /// Odd views look from below (−elevation), to see the bottom too.
     #[arg(long)]

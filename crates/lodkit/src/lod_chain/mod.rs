@@ -26,6 +26,7 @@ pub(crate) mod write;
 
 pub use crate::report::{Level, Lods};
 pub use job::{LodChainJob, LodChainReport};
+pub use write::{GlbLevel, chain_glb};
 
 /// The targets of `--ratios R,R,…` (`None`: `levels` halvings, default
 /// [`crate::limits::DEFAULT_LEVELS`]). Errors ([`crate::usage::Usage`]):

@@ -100,6 +100,53 @@ pub fn level_extras(
     e
 }
 
+/// One level of a chain GLB ([`chain_glb`]).
+pub struct GlbLevel<'a> {
+    /// Its number; 0 is the input.
+    pub lod: usize,
+    pub mesh: &'a TriMesh,
+    /// Its measured (mean, max) distance to the input, object units, when
+    /// measured (the input's is `(0, 0)`).
+    pub measured: Option<(f64, f64)>,
+    /// The simplifier's estimate, object units.
+    pub estimated: f64,
+}
+
+/// The chain GLB of `levels` (level 0, the input, first; each a node
+/// `STEM_LODk` with [`level_extras`]), each level shown down to the
+/// coverage at which the next one's error (its measured maximum, else its
+/// estimate) is a pixel ([`level_coverages`] on `diagonal`, the input's
+/// bounding-box diagonal); normals and compression as `output` says.
+/// `lodkit lods`, `build` and pylodkit's batch all write their chain GLBs
+/// here. Errors: no level. Cost: one pass over the meshes.
+pub fn chain_glb(
+    stem: &str,
+    levels: &[GlbLevel],
+    diagonal: f64,
+    output: &OutputOptions,
+) -> Result<Vec<u8>, lodkit_mesh::ParseError> {
+    let with_normals: Vec<std::borrow::Cow<TriMesh>> = levels
+        .iter()
+        .map(|l| output.normals_for(l.mesh, Format::Glb).apply(l.mesh))
+        .collect();
+    let errors: Vec<f64> = levels
+        .iter()
+        .map(|l| l.measured.map_or(l.estimated, |(_, max)| max))
+        .collect();
+    let glb_levels: Vec<LodLevel> = levels
+        .iter()
+        .zip(&with_normals)
+        .zip(level_coverages(&errors, diagonal))
+        .map(|((l, m), coverage)| LodLevel {
+            name: format!("{stem}_LOD{}", l.lod),
+            mesh: m,
+            extras: level_extras(l.lod, l.measured, l.estimated, diagonal),
+            coverage,
+        })
+        .collect();
+    write_lod_glb(&glb_levels, &output.glb())
+}
+
 /// The chain as written, with each level's mesh and measurement.
 pub struct Chain {
     pub lods: Lods,
@@ -174,45 +221,25 @@ pub(super) fn write_mesh_chain(
     }
     let glb_name = format!("{stem}_lods.glb");
     let diagonal = mesh.bbox().diagonal() as f64;
-    // Level 0 is the input; then each non-empty level with its error (the
-    // measured maximum when measured, else the simplifier's estimate).
-    let mut written: Vec<(usize, &TriMesh, Map<String, Value>, f64)> = vec![(
-        0,
+    // Level 0 is the input; then each non-empty level.
+    let mut written = vec![GlbLevel {
+        lod: 0,
         mesh,
-        level_extras(0, Some((0.0, 0.0)), 0.0, diagonal),
-        0.0,
-    )];
+        measured: Some((0.0, 0.0)),
+        estimated: 0.0,
+    }];
     for (l, (m, me)) in levels.iter().zip(meshes.iter().zip(&measured)) {
         if m.faces.is_empty() {
             continue;
         }
-        let est = l.estimated_error as f64;
-        let measured = me.map(|x| (x.mean, x.max));
-        let error = measured.map_or(est, |(_, max)| max);
-        written.push((
-            l.level,
-            m,
-            level_extras(l.level, measured, est, diagonal),
-            error,
-        ));
-    }
-    let with_normals: Vec<std::borrow::Cow<TriMesh>> = written
-        .iter()
-        .map(|(_, m, _, _)| output.normals_for(m, Format::Glb).apply(m))
-        .collect();
-    let errors: Vec<f64> = written.iter().map(|w| w.3).collect();
-    let glb_levels: Vec<LodLevel> = written
-        .iter()
-        .zip(&with_normals)
-        .zip(level_coverages(&errors, diagonal))
-        .map(|(((lod, _, extras, _), m), coverage)| LodLevel {
-            name: format!("{stem}_LOD{lod}"),
+        written.push(GlbLevel {
+            lod: l.level,
             mesh: m,
-            extras: extras.clone(),
-            coverage,
-        })
-        .collect();
-    let glb = write_lod_glb(&glb_levels, &output.glb())
+            measured: me.map(|x| (x.mean, x.max)),
+            estimated: l.estimated_error as f64,
+        });
+    }
+    let glb = chain_glb(stem, &written, diagonal, output)
         .map_err(|e| anyhow::anyhow!("{}: {e}", out.join(&glb_name).display()))?;
     write_atomic(&out.join(&glb_name), &glb)?;
     let lods = Lods {
