@@ -24,7 +24,10 @@
 //!    (`tile_content::add_rounding`; a leaf's whole error); the tileset's
 //!    is the root cube's diagonal.
 //! 4. `skirts.rs`: a strip under every cut edge of a tile.
-//! 5. `tile_content.rs` (GLB bytes), `tileset_json.rs` (`tileset.json`,
+//! 5. `tile_textures.rs` (a textured input, [`tileset_from_scene`]):
+//!    materials kept as seams through every level, each tile's texture
+//!    cropped to its UVs and halved per level above the leaves.
+//! 6. `tile_content.rs` (GLB bytes), `tileset_json.rs` (`tileset.json`,
 //!    external tilesets every [`tileset_json::SUBTREE_LEVELS`] depths,
 //!    boxes in the z-up frame), then `lodkit_mesh::io::out_folder` (the
 //!    whole folder or nothing, never over a user's files).

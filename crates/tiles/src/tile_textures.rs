@@ -13,7 +13,8 @@
 //! texels, so bilinear and mipmapped sampling near a chart's edge reads
 //! the chart's own colours), box-filtered down by `2^h` where `h` is the
 //! tile's height above the leaves (a leaf keeps the source resolution,
-//! each level up halves it), and written as PNG inside the GLB; the
+//! each level up halves it), and written inside the GLB in the source's
+//! format (JPEG at quality 90 for a JPEG, else PNG); the
 //! tile's UVs are remapped to the crop. The root of a scan with an 8K
 //! texture so carries `8192 / 2^depth` texels a side at most. Where a
 //! material's UVs leave `[0, 1]` (a repeating texture), cropping would
@@ -25,10 +26,9 @@
 //! between them too; repacking the charts into an atlas per tile would
 //! crop tighter. Only the base-colour texture is carried (normal,
 //! metallic-roughness, occlusion and emissive maps are dropped from the
-//! tiles); images are PNG whatever the source (a JPEG source's tiles are
-//! lossless crops of the decoded pixels).
+//! tiles).
 
-use lodkit_mesh::image::{RgbaImage, decode_rgba};
+use lodkit_mesh::image::{RgbaImage, decode_rgba, encode_like, resample};
 use lodkit_mesh::io::gltf::{GlbOptions, QuantGrid, write_scene_glb_on_grid};
 use lodkit_mesh::scene::{
     Image, Material, MtlExtras, NO_MATERIAL, Node, Sampler, Scene, SceneMesh, Texture, TextureRef,
@@ -57,8 +57,9 @@ pub(crate) struct Textures {
     materials: Vec<Material>,
     textures: Vec<Texture>,
     samplers: Vec<Sampler>,
-    /// Per texture: its image decoded (base-colour textures only).
-    decoded: Vec<Option<RgbaImage>>,
+    /// Per texture: its image decoded and the bytes it was decoded from
+    /// (base-colour textures only).
+    decoded: Vec<Option<(RgbaImage, Vec<u8>)>>,
 }
 
 /// Builds the tileset of a scene (y-up, object units) with its materials
@@ -84,7 +85,7 @@ pub fn tileset_from_scene(
     if scene.materials.is_empty() {
         return crate::tileset_from_mesh(&merged.mesh, opts, progress);
     }
-    let mut decoded: Vec<Option<RgbaImage>> = vec![None; scene.textures.len()];
+    let mut decoded: Vec<Option<(RgbaImage, Vec<u8>)>> = vec![None; scene.textures.len()];
     for m in &scene.materials {
         let Some(r) = m.base_color_texture else {
             continue;
@@ -104,7 +105,7 @@ pub fn tileset_from_scene(
                 lodkit_mesh::error::escape(what)
             ))
         })?;
-        decoded[r.texture] = Some(rgba);
+        decoded[r.texture] = Some((rgba, image.bytes.clone()));
     }
     let (mesh, groups) = lodkit_simplify::scene::split_by_material(&merged);
     let mut tileset = crate::build_tileset(&mesh, groups, opts, progress)?;
@@ -192,13 +193,13 @@ impl Textures {
                         mine[v as usize] = true;
                     }
                 }
-                let (png, sampler) = self.tile_image(r, image, uvs, &mine, height)?;
+                let (bytes, mime, sampler) = self.tile_image(r, image, uvs, &mine, height)?;
                 out.samplers.push(sampler);
                 out.images.push(Image {
                     name: Some(format!("{name}_{}", out.images.len())),
                     file_name: None,
-                    mime_type: "image/png".into(),
-                    bytes: png,
+                    mime_type: mime.into(),
+                    bytes,
                 });
                 out.textures.push(Texture {
                     name: None,
@@ -227,15 +228,16 @@ impl Textures {
 
     /// The image of texture `r` for the vertices flagged in `mine`: cropped
     /// to their UV rectangle (their UVs remapped to it) unless they leave
-    /// `[0, 1]`, and scaled by `2^-height`; PNG bytes and the sampler.
+    /// `[0, 1]`, and scaled by `2^-height`; its bytes (the source's format,
+    /// `encode_like`), their MIME type and the sampler.
     fn tile_image(
         &self,
         r: TextureRef,
-        image: &RgbaImage,
+        (image, source): &(RgbaImage, Vec<u8>),
         uvs: &mut [Vec2],
         mine: &[bool],
         height: u32,
-    ) -> Result<(Vec<u8>, Sampler)> {
+    ) -> Result<(Vec<u8>, &'static str, Sampler)> {
         let (w, h) = (image.width as f32, image.height as f32);
         let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
         for (uv, _) in uvs.iter().zip(mine).filter(|p| *p.1) {
@@ -279,111 +281,22 @@ impl Textures {
                 });
             [0, 0, image.width, image.height]
         };
-        let scaled = box_scaled(image, rect, factor);
-        Ok((encode_png(&scaled)?, sampler))
+        let [x0, y0, x1, y1] = rect;
+        let side = |n: u32| (u64::from(n).div_ceil(factor).max(1)) as u32;
+        let scaled = resample(image, rect, side(x1 - x0), side(y1 - y0));
+        let (bytes, mime) = encode_like(source, &scaled)
+            .map_err(|e| Error::Encode(format!("a tile's image: {e}")))?;
+        Ok((bytes, mime, sampler))
     }
-}
-
-/// The texels of `image` in `[x0, y0, x1, y1)`, box-filtered down by
-/// `factor` (each side `ceil(side / factor)`, at least 1): each output
-/// texel the mean of the source texels its area covers. RGBA8 rows top to
-/// bottom.
-fn box_scaled(image: &RgbaImage, [x0, y0, x1, y1]: [u32; 4], factor: u64) -> RgbaImage {
-    let (cw, ch) = (u64::from(x1 - x0), u64::from(y1 - y0));
-    let (ow, oh) = (cw.div_ceil(factor).max(1), ch.div_ceil(factor).max(1));
-    let mut rgba = Vec::with_capacity((ow * oh * 4) as usize);
-    let stride = image.width as usize * 4;
-    for oy in 0..oh {
-        let sy0 = u64::from(y0) + oy * ch / oh;
-        let sy1 = (u64::from(y0) + ((oy + 1) * ch).div_ceil(oh)).max(sy0 + 1);
-        for ox in 0..ow {
-            let sx0 = u64::from(x0) + ox * cw / ow;
-            let sx1 = (u64::from(x0) + ((ox + 1) * cw).div_ceil(ow)).max(sx0 + 1);
-            let mut sum = [0u64; 4];
-            for sy in sy0..sy1 {
-                let row = &image.rgba[sy as usize * stride..][..stride];
-                for sx in sx0..sx1 {
-                    let p = &row[sx as usize * 4..][..4];
-                    for k in 0..4 {
-                        sum[k] += u64::from(p[k]);
-                    }
-                }
-            }
-            let n = (sy1 - sy0) * (sx1 - sx0);
-            rgba.extend(sum.map(|s| ((s + n / 2) / n) as u8));
-        }
-    }
-    RgbaImage {
-        width: ow as u32,
-        height: oh as u32,
-        rgba,
-        has_alpha: image.has_alpha,
-    }
-}
-
-/// PNG bytes of `image` (RGB when it is opaque, else RGBA; 8 bits).
-fn encode_png(image: &RgbaImage) -> Result<Vec<u8>> {
-    let mut bytes = Vec::new();
-    let mut enc = png::Encoder::new(&mut bytes, image.width, image.height);
-    let data: Vec<u8> = if image.has_alpha {
-        enc.set_color(png::ColorType::Rgba);
-        image.rgba.clone()
-    } else {
-        enc.set_color(png::ColorType::Rgb);
-        image
-            .rgba
-            .chunks_exact(4)
-            .flat_map(|p| [p[0], p[1], p[2]])
-            .collect()
-    };
-    enc.set_depth(png::BitDepth::Eight);
-    enc.set_compression(png::Compression::Balanced);
-    let png_error = |e: png::EncodingError| Error::Encode(format!("a tile's image: {e}"));
-    let mut writer = enc.write_header().map_err(png_error)?;
-    writer.write_image_data(&data).map_err(png_error)?;
-    writer.finish().map_err(png_error)?;
-    Ok(bytes)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn image(w: u32, h: u32) -> RgbaImage {
-        let rgba = (0..w * h)
-            .flat_map(|i| [(i % w) as u8, (i / w) as u8, 7, 255])
-            .collect();
-        RgbaImage {
-            width: w,
-            height: h,
-            rgba,
-            has_alpha: false,
-        }
-    }
-
-    #[test]
-    fn box_scaling_halves_each_side_and_averages() {
-        let im = image(8, 6);
-        let s = box_scaled(&im, [0, 0, 8, 6], 2);
-        assert_eq!((s.width, s.height), (4, 3));
-        // Texel (1, 1) averages x 2..4, y 2..4: x mean 2.5 → 3 (rounded), y 2.5 → 3.
-        assert_eq!(&s.rgba[(4 + 1) * 4..][..4], &[3, 3, 7, 255]);
-        let one = box_scaled(&im, [2, 1, 5, 4], 1);
-        assert_eq!((one.width, one.height), (3, 3));
-        assert_eq!(&one.rgba[..4], &[2, 1, 7, 255]);
-    }
-
     #[test]
     fn heights_count_levels_below() {
         let children = vec![vec![1, 2], vec![3], vec![], vec![]];
         assert_eq!(heights(&children), vec![2, 1, 0, 0]);
-    }
-
-    #[test]
-    fn a_png_round_trips() {
-        let im = image(5, 3);
-        let back = decode_rgba(&encode_png(&im).unwrap()).unwrap();
-        assert_eq!((back.width, back.height), (5, 3));
-        assert_eq!(back.rgba, im.rgba);
     }
 }

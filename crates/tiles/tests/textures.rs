@@ -48,17 +48,16 @@ fn terrain(n: u32) -> TriMesh {
 
 /// A `SIDE²` gradient: red counts columns, green rows (both /2).
 fn gradient_png() -> Vec<u8> {
-    let mut bytes = Vec::new();
-    let mut enc = png::Encoder::new(&mut bytes, SIDE, SIDE);
-    enc.set_color(png::ColorType::Rgb);
-    enc.set_depth(png::BitDepth::Eight);
-    let data: Vec<u8> = (0..SIDE * SIDE)
-        .flat_map(|i| [((i % SIDE) / 2) as u8, ((i / SIDE) / 2) as u8, 128])
+    let rgba = (0..SIDE * SIDE)
+        .flat_map(|i| [((i % SIDE) / 2) as u8, ((i / SIDE) / 2) as u8, 128, 255])
         .collect();
-    let mut w = enc.write_header().unwrap();
-    w.write_image_data(&data).unwrap();
-    w.finish().unwrap();
-    bytes
+    let image = lodkit_mesh::image::RgbaImage {
+        width: SIDE,
+        height: SIDE,
+        rgba,
+        has_alpha: false,
+    };
+    lodkit_mesh::image::encode_png(&image).unwrap()
 }
 
 fn textured_scene() -> Scene {
@@ -190,4 +189,86 @@ fn textured_tilesets_are_byte_identical_on_rerun() {
         files.push(common::all_files(&out));
     }
     assert_eq!(files[0], files[1]);
+}
+
+/// Tiles `path` (a textured file) and reads every tile back: each face's
+/// material textured as in the source, each textured material with its own
+/// image; returns (source image bytes, root tile image bytes, tiles).
+fn tile_file(path: &std::path::Path, leaf: usize) -> (usize, usize, usize) {
+    let scene = lodkit_mesh::io::load_scene(path).unwrap();
+    let source_bytes: usize = scene.images.iter().map(|i| i.bytes.len()).sum();
+    let opts = TilesOptions {
+        leaf_triangles: leaf,
+        ..TilesOptions::DEFAULT
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("tiles");
+    let ts = tileset_from_scene(&scene, &opts, &mut |_| {}).unwrap();
+    let report = write_tileset(&ts, &out, None, &opts, &mut |_| {}).unwrap();
+    let read = read_tileset(&out);
+    let mut root_bytes = 0;
+    let mut tiles = 0;
+    for t in read.tiles.iter().filter(|t| t.mesh.is_some()) {
+        let glb = std::fs::read(out.join("tiles").join(format!("{}.glb", t.name))).unwrap();
+        let tile = lodkit_mesh::io::gltf::read_scene(&glb, None).unwrap();
+        tile.validate().unwrap();
+        let textured = tile
+            .materials
+            .iter()
+            .filter(|m| m.base_color_texture.is_some())
+            .count();
+        assert_eq!(
+            tile.images.len(),
+            textured,
+            "{}: one image a textured material",
+            t.name
+        );
+        assert!(textured > 0, "{}: textured", t.name);
+        for im in &tile.images {
+            decode_rgba(&im.bytes).unwrap();
+        }
+        if t.depth == 0 {
+            root_bytes = tile.images.iter().map(|i| i.bytes.len()).sum();
+        }
+        tiles += 1;
+    }
+    assert_eq!(tiles, report.tiles);
+    (source_bytes, root_bytes, tiles)
+}
+
+fn test_data(name: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../mesh/tests/data/textured")
+        .join(name)
+}
+
+#[test]
+fn a_textured_scan_and_a_multi_material_scene_tile_with_their_textures() {
+    let (source, root, tiles) = tile_file(&test_data("mug_scan.obj"), 256);
+    assert!(tiles > 4, "{tiles} tiles");
+    assert!(root < source, "root image {root} bytes, source {source}");
+    // Two objects, three materials, a PNG and a JPEG texture.
+    let (_, _, tiles) = tile_file(&test_data("parts.gltf"), 64);
+    assert!(tiles >= 1);
+}
+
+#[test]
+fn the_rgbd_mug_scan_tiles_with_its_texture_when_present() {
+    let shared = std::env::var_os("LODKIT_SHARED_DATA").map_or_else(
+        || std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"),
+        std::path::PathBuf::from,
+    );
+    let path = shared.join("textured/table_scene_mug_rgbd.obj");
+    if !path.exists() {
+        eprintln!("skipped: {} is absent", path.display());
+        return;
+    }
+    let (source, root, tiles) = tile_file(&path, 32_768);
+    eprintln!(
+        "RGB-D mug: {tiles} tiles, source image {source} bytes, root tile image {root} bytes"
+    );
+    assert!(
+        root * 4 < source,
+        "root image {root} bytes, source {source}"
+    );
 }
