@@ -257,6 +257,10 @@ fn build_keeps_the_materials_of_a_multi_part_textured_input() {
     assert!(report.contains("materials are kept"), "{report}");
     assert!(report.contains("`lods/parts_lod1.glb`"), "{report}");
     assert!(out.join("report.html").is_file() && out.join("parts.pop").is_file());
+    // Its tileset keeps the materials and textures too.
+    let root = lodkit_mesh::io::load_scene(&out.join("tiles/tiles/0-0-0-0.glb")).unwrap();
+    assert!(root.materials.len() >= 2, "{:?}", root.materials);
+    assert!(!root.images.is_empty());
     // --merge: one mesh, no material anywhere, PLY levels as for any mesh.
     let merged = dir.path().join("merged");
     let o = lodkit(&[
