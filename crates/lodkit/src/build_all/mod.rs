@@ -211,7 +211,8 @@ fn write_all(
         write!(
             path_sentence,
             " Its materials are kept ({}): `{name}.glb` and every level of the HQMS chain \
-             (`lods/*.glb`) carry them, one primitive per material, images byte for byte; \
+             (`lods/*.glb`) carry them, one primitive per material (each level's images scaled to \
+             its size), and so do the tiles (`tiles/`); \
              `{name}.ply`, the octree and the stream hold its geometry merged into one mesh.",
             crate::input::describe(scene)
         )?;
