@@ -7,7 +7,7 @@
 #      viewer (3DTilesRendererJS) and CesiumJS load each tileset with no
 #      console error and show the model (web/tests/tiles.test.mjs);
 #   3. `lodkit serve` lists the tilesets and its viewer opens them.
-# The tilesets: `lodkit tiles` of the shipped bunny and textured scan when the binary has that
+# The tilesets: `lodkit tiles` of the shipped bunny when the binary has that
 # command, else a fixture made from GLBs lodkit writes
 # (web/tests/make_fixture_tileset.mjs: plain and meshopt-compressed).
 #
@@ -57,9 +57,7 @@ elif "$lodkit" tiles --help >/dev/null 2>&1; then
   rm -rf "$sets_dir"
   mkdir -p "$sets_dir"
   "$lodkit" -q tiles data/models/stanford_bunny.ply --out "$sets_dir/bunny"
-  # A textured scan (OBJ + MTL + PNG): each tile its cropped texture.
-  "$lodkit" -q tiles crates/mesh/tests/data/textured/mug_scan.obj --out "$sets_dir/mug_scan" --leaf-triangles 256
-  sets=(bunny/tileset.json mug_scan/tileset.json)
+  sets=(bunny/tileset.json)
   shared=${LODKIT_SHARED_DATA:-$root/../shared/data}
   for pair in closed_bunny:meshes/stanford_bunny_closed_glmark2.ply mug_rgbd:textured/table_scene_mug_rgbd.obj \
     lms400:points/table_scene_lms400.ply autzen:points/autzen_trim.laz; do
