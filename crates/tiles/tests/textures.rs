@@ -193,8 +193,9 @@ fn textured_tilesets_are_byte_identical_on_rerun() {
 
 /// Tiles `path` (a textured file) and reads every tile back: each face's
 /// material textured as in the source, each textured material with its own
-/// image; returns (source image bytes, root tile image bytes, tiles).
-fn tile_file(path: &std::path::Path, leaf: usize) -> (usize, usize, usize) {
+/// image; returns (source image bytes, root tile image bytes, tiles, the
+/// tiles' image MIME types).
+fn tile_file(path: &std::path::Path, leaf: usize) -> (usize, usize, usize, Vec<String>) {
     let scene = lodkit_mesh::io::load_scene(path).unwrap();
     let source_bytes: usize = scene.images.iter().map(|i| i.bytes.len()).sum();
     let opts = TilesOptions {
@@ -208,6 +209,7 @@ fn tile_file(path: &std::path::Path, leaf: usize) -> (usize, usize, usize) {
     let read = read_tileset(&out);
     let mut root_bytes = 0;
     let mut tiles = 0;
+    let mut mimes = Vec::new();
     for t in read.tiles.iter().filter(|t| t.mesh.is_some()) {
         let glb = std::fs::read(out.join("tiles").join(format!("{}.glb", t.name))).unwrap();
         let tile = lodkit_mesh::io::gltf::read_scene(&glb, None).unwrap();
@@ -226,6 +228,7 @@ fn tile_file(path: &std::path::Path, leaf: usize) -> (usize, usize, usize) {
         assert!(textured > 0, "{}: textured", t.name);
         for im in &tile.images {
             decode_rgba(&im.bytes).unwrap();
+            mimes.push(im.mime_type.clone());
         }
         if t.depth == 0 {
             root_bytes = tile.images.iter().map(|i| i.bytes.len()).sum();
@@ -233,7 +236,9 @@ fn tile_file(path: &std::path::Path, leaf: usize) -> (usize, usize, usize) {
         tiles += 1;
     }
     assert_eq!(tiles, report.tiles);
-    (source_bytes, root_bytes, tiles)
+    mimes.sort();
+    mimes.dedup();
+    (source_bytes, root_bytes, tiles, mimes)
 }
 
 fn test_data(name: &str) -> std::path::PathBuf {
@@ -244,12 +249,14 @@ fn test_data(name: &str) -> std::path::PathBuf {
 
 #[test]
 fn a_textured_scan_and_a_multi_material_scene_tile_with_their_textures() {
-    let (source, root, tiles) = tile_file(&test_data("mug_scan.obj"), 256);
+    let (source, root, tiles, _) = tile_file(&test_data("mug_scan.obj"), 256);
     assert!(tiles > 4, "{tiles} tiles");
     assert!(root < source, "root image {root} bytes, source {source}");
-    // Two objects, three materials, a PNG and a JPEG texture.
-    let (_, _, tiles) = tile_file(&test_data("parts.gltf"), 64);
+    // Two objects, three materials, a PNG and a JPEG texture: each tile's
+    // crop in its source's format.
+    let (_, _, tiles, mimes) = tile_file(&test_data("parts.gltf"), 64);
     assert!(tiles >= 1);
+    assert_eq!(mimes, ["image/jpeg", "image/png"]);
 }
 
 #[test]
@@ -263,7 +270,7 @@ fn the_rgbd_mug_scan_tiles_with_its_texture_when_present() {
         eprintln!("skipped: {} is absent", path.display());
         return;
     }
-    let (source, root, tiles) = tile_file(&path, 32_768);
+    let (source, root, tiles, _) = tile_file(&path, 32_768);
     eprintln!(
         "RGB-D mug: {tiles} tiles, source image {source} bytes, root tile image {root} bytes"
     );
