@@ -89,8 +89,13 @@ run lods "$tex/parts.gltf" --out "$work/lods_parts" --ratios 0.5,0.2 --samples 2
 run lods "$tex/parts.obj" --out "$work/lods_parts_c" --ratios 0.5,0.2 --samples 20000 --compress
 run convert "$tex/parts.gltf" "$work/parts_c.glb" --compress
 run simplify "$tex/mug_scan.ply" -o "$work/mug_10_c.glb" --ratio 0.1 --compress
-# build keeps a scene's materials in its GLB and its HQMS chain.
+# build keeps a scene's materials in its GLB and its HQMS chain (and its tileset).
 run build "$tex/parts.gltf" --out "$work/build_parts" --levels 2 --no-measure
+# Textured tiles: each tile's texture cropped to its UVs (PNG, and JPEG
+# for parts' JPEG texture), compressed too.
+run tiles "$tex/mug_scan.obj" --out "$work/tiles_mug" --leaf-triangles 256
+run tiles "$tex/parts.gltf" --out "$work/tiles_parts" --leaf-triangles 64
+run tiles "$tex/parts.obj" --out "$work/tiles_parts_c" --leaf-triangles 64 --compress
 # Tile contents on one quantisation grid shared by several files
 # (io::gltf::write_*_on_grid: two neighbouring mesh tiles and a POINTS
 # tile, plain and compressed), written by the mesh crate's test.

@@ -42,6 +42,7 @@ fn build_ok(input: &Path, out: &Path) -> String {
         "report.html",
         "lod_error.svg",
         "lods/lods.json",
+        "tiles/tileset.json",
     ] {
         assert!(out.join(f).is_file(), "{}: no {f}", input.display());
     }
@@ -90,6 +91,46 @@ fn meshes_of_every_format_take_the_mesh_path() {
         assert!(out.join("small.mco").is_file() && out.join("small.pop").is_file());
         no_staging_left(&out);
     }
+}
+
+#[test]
+fn build_writes_a_tileset_listed_in_its_manifest_and_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("small.ply");
+    save(&input, &Model::Mesh(small_bunny()), WriteOptions::default()).unwrap();
+    let out = dir.path().join("out");
+    let report = build_ok(&input, &out);
+    assert!(report.contains("## 3D Tiles"), "{report}");
+    assert!(
+        report.contains("3D Tiles: `tiles/tileset.json`, 1 tiles in 1 levels"),
+        "{report}"
+    );
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(html.contains("3D Tiles: tiles/tileset.json"));
+    // The manifest lists the tileset and its tiles; every tile reads back.
+    let manifest: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join(".lodkit-build.json")).unwrap()).unwrap();
+    let files = manifest["files"].as_object().unwrap();
+    assert!(files.contains_key("tiles/tileset.json"), "{files:?}");
+    let tiles: Vec<&String> = files
+        .keys()
+        .filter(|f| f.starts_with("tiles/tiles/") && f.ends_with(".glb"))
+        .collect();
+    assert!(!tiles.is_empty(), "{files:?}");
+    let faces: usize = tiles
+        .iter()
+        .map(|f| {
+            lodkit_mesh::io::load_mesh(&out.join(f))
+                .unwrap()
+                .faces
+                .len()
+        })
+        .sum();
+    assert_eq!(faces, small_bunny().faces.len());
+    let tileset: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("tiles/tileset.json")).unwrap()).unwrap();
+    assert_eq!(tileset["asset"]["version"], "1.1");
+    assert_eq!(tileset["root"]["content"]["uri"], "tiles/0-0-0-0.glb");
 }
 
 #[test]

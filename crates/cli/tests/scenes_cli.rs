@@ -116,6 +116,68 @@ fn lods_of_a_textured_scan_embed_its_texture_in_every_level() {
 }
 
 #[test]
+fn lods_levels_carry_textures_scaled_to_their_size() {
+    // The mug scan with a 512² texture (the shipped one is 64², already
+    // the smallest a level keeps). UVs span the image, so any pattern does.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(data("mug_scan.ply"), dir.path().join("mug_scan.ply")).unwrap();
+    // Noise (a texture worth its texels: nothing for PNG to predict).
+    let rgba = (0..512u32 * 512)
+        .flat_map(|i| {
+            let h = i.wrapping_mul(2_654_435_761).rotate_left(13) ^ i;
+            [h as u8, (h >> 8) as u8, (h >> 16) as u8, 255]
+        })
+        .collect();
+    let big = lodkit_mesh::image::RgbaImage {
+        width: 512,
+        height: 512,
+        rgba,
+        has_alpha: false,
+    };
+    let png = lodkit_mesh::image::encode_png(&big).unwrap();
+    std::fs::write(dir.path().join("mug_scan.png"), &png).unwrap();
+    let out = dir.path().join("lods");
+    let o = lodkit(&[
+        "lods",
+        s(&dir.path().join("mug_scan.ply")),
+        "--out",
+        s(&out),
+        "--ratios",
+        "0.5,0.1",
+        "--samples",
+        "2000",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let input = lodkit_mesh::io::load_scene(&dir.path().join("mug_scan.ply")).unwrap();
+    let mut sides = vec![512];
+    for f in ["mug_scan_lod1.glb", "mug_scan_lod2.glb"] {
+        let sc = lodkit_mesh::io::load_scene(&out.join(f)).unwrap();
+        assert_eq!(sc.images.len(), 1, "{f}");
+        let im = lodkit_mesh::image::decode_rgba(&sc.images[0].bytes).unwrap();
+        let ratio = sc.face_count() as f64 / input.face_count() as f64;
+        let want = (512.0 * ratio.sqrt()).round() as u32;
+        assert_eq!((im.width, im.height), (want, want), "{f}: {ratio}");
+        let bytes = sc.images[0].bytes.len();
+        assert!(
+            bytes < png.len(),
+            "{f}: {bytes} bytes, source {}",
+            png.len()
+        );
+        sides.push(im.width);
+    }
+    assert!(sides.windows(2).all(|w| w[1] < w[0]), "{sides:?}");
+    // The chain GLB: one image per level, each level's faces on its own.
+    let chain = lodkit_mesh::io::load_scene(&out.join("mug_scan_lods.glb")).unwrap();
+    let mut chain_sides: Vec<u32> = chain
+        .images
+        .iter()
+        .map(|i| lodkit_mesh::image::decode_rgba(&i.bytes).unwrap().width)
+        .collect();
+    chain_sides.sort_unstable_by(|a, b| b.cmp(a));
+    assert_eq!(chain_sides, sides);
+}
+
+#[test]
 fn compress_on_a_scene_needs_a_glb_output() {
     let dir = tempfile::tempdir().unwrap();
     let o = lodkit(&[
@@ -195,6 +257,10 @@ fn build_keeps_the_materials_of_a_multi_part_textured_input() {
     assert!(report.contains("materials are kept"), "{report}");
     assert!(report.contains("`lods/parts_lod1.glb`"), "{report}");
     assert!(out.join("report.html").is_file() && out.join("parts.pop").is_file());
+    // Its tileset keeps the materials and textures too.
+    let root = lodkit_mesh::io::load_scene(&out.join("tiles/tiles/0-0-0-0.glb")).unwrap();
+    assert!(root.materials.len() >= 2, "{:?}", root.materials);
+    assert!(!root.images.is_empty());
     // --merge: one mesh, no material anywhere, PLY levels as for any mesh.
     let merged = dir.path().join("merged");
     let o = lodkit(&[

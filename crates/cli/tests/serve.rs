@@ -681,3 +681,46 @@ fn a_port_in_use_is_one_line_and_exit_1() {
     assert!(err.contains(&port), "{err}");
     assert_eq!(err.trim().lines().count(), 1, "{err}");
 }
+
+/// A build folder's tileset (`lodkit tiles`, as `build` writes it under
+/// `tiles/`): listed once with kind `tileset` (what the viewer opens via
+/// `?model=`), its external tilesets and tiles as parts of it, each URL
+/// answering with its file.
+#[test]
+fn tilesets_are_listed_as_models_the_viewer_opens() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = dir.path().join("out");
+    let bunny = common::bunny();
+    let o = lodkit(&[
+        "-q",
+        "tiles",
+        &bunny,
+        "--out",
+        root.join("tiles").to_str().unwrap(),
+        "--leaf-triangles",
+        "2048",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = Server::start(&[&root]);
+    let v: serde_json::Value = serde_json::from_slice(&s.get("/api/models", &[]).body).unwrap();
+    let entries = v.as_array().unwrap();
+    let sets: Vec<&serde_json::Value> = entries.iter().filter(|e| e["kind"] == "tileset").collect();
+    assert_eq!(sets.len(), 1, "{v}");
+    assert_eq!(sets[0]["name"], "tiles/tileset.json");
+    assert_eq!(sets[0]["url"], "/models/tiles/tileset.json");
+    // External tilesets (tiles/tiles/D-X-Y-Z.json) are parts, not models.
+    assert!(
+        entries
+            .iter()
+            .filter(|e| e["name"].as_str().unwrap().starts_with("tiles/tiles/"))
+            .all(|e| e["kind"] != "tileset"),
+        "{v}"
+    );
+    let tileset = s.get("/models/tiles/tileset.json", &[]);
+    assert_eq!(tileset.status, 200);
+    let json: serde_json::Value = serde_json::from_slice(&tileset.body).unwrap();
+    let uri = json["root"]["content"]["uri"].as_str().unwrap();
+    let tile = s.get(&format!("/models/tiles/{uri}"), &[]);
+    assert_eq!(tile.status, 200);
+    assert!(tile.body.starts_with(b"glTF"));
+}

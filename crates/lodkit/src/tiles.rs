@@ -3,7 +3,10 @@
 //!
 //! A mesh gives a `REPLACE`-refined tileset: leaves hold the input at full
 //! resolution, each level above the whole object simplified (HQMS) and cut
-//! by an octree, every tile's `geometricError` measured. A point cloud or
+//! by an octree, every tile's `geometricError` measured; a textured mesh
+//! (OBJ + MTL, glTF, a PLY naming its texture) keeps its materials, each
+//! tile carrying the texels its faces use, halved per level up
+//! (`lodkit_tiles::tileset_from_scene`). A point cloud or
 //! range image gives an `ADD`-refined point tileset (an even subsample per
 //! node). A LAS/LAZ cloud is z-up with positions relative to an `f64`
 //! origin: it is turned into the y-up frame tile contents use (the
@@ -57,15 +60,13 @@ pub fn run(job: &TilesJob, events: &Progress) -> Result<TilesReport> {
     step.finish();
     match located.model {
         Model::Mesh(mesh) => {
-            if mesh.uvs.is_some() {
-                events.status(format!(
-                    "note: {}: tiles carry its geometry, normals and colours; its UVs and textures are not carried yet",
-                    job.input.display()
-                ));
-            }
+            let scene = materials_of(events, &job.input, mesh)?;
             let mut draw = phases(events, "levels: simplify, cut and measure");
-            let tileset = lodkit_tiles::tileset_from_mesh(&mesh, &job.mesh, &mut draw)
-                .map_err(|e| error(e, &job.input))?;
+            let tileset = match &scene {
+                Ok(scene) => lodkit_tiles::tileset_from_scene(scene, &job.mesh, &mut draw),
+                Err(mesh) => lodkit_tiles::tileset_from_mesh(mesh, &job.mesh, &mut draw),
+            }
+            .map_err(|e| error(e, &job.input))?;
             let report = lodkit_tiles::write_tileset(
                 &tileset,
                 &job.out,
@@ -80,6 +81,31 @@ pub fn run(job: &TilesJob, events: &Progress) -> Result<TilesReport> {
         Model::Points(p) => points(job, events, p, located.origin),
         Model::Range(r) => points(job, events, r.to_point_cloud(), located.origin),
     }
+}
+
+/// The input as a scene when it has materials (OBJ + MTL, glTF, a PLY
+/// naming its texture), its base-colour textures within the run's pixel
+/// budget (checked from their headers); else the mesh as read. Warnings
+/// of the scene reader are said as status lines.
+fn materials_of(
+    events: &Progress,
+    input: &Path,
+    mesh: lodkit_mesh::TriMesh,
+) -> Result<std::result::Result<lodkit_mesh::Scene, lodkit_mesh::TriMesh>> {
+    use lodkit_mesh::io::Format;
+    let scene = match Format::from_path(input) {
+        Some(Format::Ply) => lodkit_mesh::io::scene_io::ply_scene(input, mesh.clone()),
+        Some(Format::Obj | Format::Gltf | Format::Glb) => lodkit_mesh::io::load_scene(input)?,
+        _ => return Ok(Err(mesh)),
+    };
+    if scene.is_plain_mesh() || !lodkit_mesh::io::scene_io::has_materials(&scene) {
+        return Ok(Err(mesh));
+    }
+    for w in &scene.warnings {
+        events.status(format!("warning: {}: {w}", input.display()));
+    }
+    crate::materials::texture_budget(&input.display().to_string(), &scene)?;
+    Ok(Ok(scene))
 }
 
 fn points(

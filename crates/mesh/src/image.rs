@@ -1,6 +1,8 @@
 //! The one image decoder of lodkit (feature `images`): PNG (`png`, any
 //! bit depth and colour type) and JPEG (`zune-jpeg`) to RGBA8, for
-//! photographs (silhouettes) and textures alike.
+//! photographs (silhouettes) and textures alike; and what textures made
+//! smaller need: an area-averaging resampler ([`resample`]) and the
+//! encoders ([`encode_png`], [`encode_jpeg`], [`encode_like`]).
 //!
 //! Sizes are read from the header and bounded ([`MAX_SIDE`] a side,
 //! [`MAX_PIXELS`] in all) before any pixel buffer is allocated, so a small
@@ -182,4 +184,164 @@ fn to_rgba(buf: &[u8], line: usize, w: usize, h: usize, ch: usize) -> Vec<u8> {
         }
     }
     rgba
+}
+
+/// The texels of `image` in the rectangle `[x0, y0, x1, y1)` (clamped to
+/// the image, at least one texel) resampled to `width × height` (each at
+/// least 1) by area averaging: each output texel is the rounded mean of
+/// the source texels its area touches (a box filter; exact halving when
+/// the sizes divide). Rows top to bottom, as [`RgbaImage`]. Cost: `O(rect
+/// area + width × height)`; allocates the output only.
+pub fn resample(image: &RgbaImage, rect: [u32; 4], width: u32, height: u32) -> RgbaImage {
+    let x0 = rect[0].min(image.width - 1);
+    let y0 = rect[1].min(image.height - 1);
+    let (x1, y1) = (
+        rect[2].clamp(x0 + 1, image.width),
+        rect[3].clamp(y0 + 1, image.height),
+    );
+    let (cw, ch) = (u64::from(x1 - x0), u64::from(y1 - y0));
+    let (ow, oh) = (u64::from(width.max(1)), u64::from(height.max(1)));
+    let mut rgba = Vec::with_capacity((ow * oh * 4) as usize);
+    let stride = image.width as usize * 4;
+    for oy in 0..oh {
+        let sy0 = u64::from(y0) + oy * ch / oh;
+        let sy1 = (u64::from(y0) + ((oy + 1) * ch).div_ceil(oh)).max(sy0 + 1);
+        for ox in 0..ow {
+            let sx0 = u64::from(x0) + ox * cw / ow;
+            let sx1 = (u64::from(x0) + ((ox + 1) * cw).div_ceil(ow)).max(sx0 + 1);
+            let mut sum = [0u64; 4];
+            for sy in sy0..sy1 {
+                let row = &image.rgba[sy as usize * stride..][..stride];
+                for p in row[sx0 as usize * 4..sx1 as usize * 4].chunks_exact(4) {
+                    for k in 0..4 {
+                        sum[k] += u64::from(p[k]);
+                    }
+                }
+            }
+            let n = (sy1 - sy0) * (sx1 - sx0);
+            rgba.extend(sum.map(|s| ((s + n / 2) / n) as u8));
+        }
+    }
+    RgbaImage {
+        width: ow as u32,
+        height: oh as u32,
+        rgba,
+        has_alpha: image.has_alpha,
+    }
+}
+
+/// PNG bytes of `image`: 8-bit RGB when it is opaque ([`RgbaImage::has_alpha`]
+/// false), else RGBA. Deterministic (same pixels, same bytes). Errors: one
+/// phrase (an image whose buffer is not `width × height × 4` bytes).
+pub fn encode_png(image: &RgbaImage) -> std::result::Result<Vec<u8>, String> {
+    let mut bytes = Vec::new();
+    let mut enc = png::Encoder::new(&mut bytes, image.width, image.height);
+    let data: Vec<u8> = if image.has_alpha {
+        enc.set_color(png::ColorType::Rgba);
+        image.rgba.clone()
+    } else {
+        enc.set_color(png::ColorType::Rgb);
+        image
+            .rgba
+            .chunks_exact(4)
+            .flat_map(|p| [p[0], p[1], p[2]])
+            .collect()
+    };
+    enc.set_depth(png::BitDepth::Eight);
+    enc.set_compression(png::Compression::Balanced);
+    let fail = |e: png::EncodingError| format!("cannot encode a PNG ({e})");
+    let mut writer = enc.write_header().map_err(fail)?;
+    writer.write_image_data(&data).map_err(fail)?;
+    writer.finish().map_err(fail)?;
+    Ok(bytes)
+}
+
+/// Quality of the JPEGs lodkit writes (textures made smaller): 90 keeps
+/// a photographic texture's detail at about a tenth of its PNG size.
+pub const JPEG_QUALITY: u8 = 90;
+
+/// Baseline JPEG bytes of `image` at `quality` (1..=100; alpha dropped),
+/// 4:2:0 chroma subsampling. Deterministic (the scalar encoder, no
+/// CPU-dependent paths). Errors: one phrase (a side over 65535 texels).
+pub fn encode_jpeg(image: &RgbaImage, quality: u8) -> std::result::Result<Vec<u8>, String> {
+    let (w, h) = (
+        u16::try_from(image.width).map_err(|_| "image too wide for a JPEG".to_string())?,
+        u16::try_from(image.height).map_err(|_| "image too tall for a JPEG".to_string())?,
+    );
+    let mut bytes = Vec::new();
+    let enc = jpeg_encoder::Encoder::new(&mut bytes, quality.clamp(1, 100));
+    enc.encode(&image.rgba, w, h, jpeg_encoder::ColorType::Rgba)
+        .map_err(|e| format!("cannot encode a JPEG ({e})"))?;
+    Ok(bytes)
+}
+
+/// `image` encoded in the format of `source` (the bytes it was decoded
+/// from): JPEG ([`JPEG_QUALITY`]) for a JPEG source whose pixels are
+/// opaque, else PNG. Returns the bytes and their MIME type. Errors: those
+/// of the encoder.
+pub fn encode_like(
+    source: &[u8],
+    image: &RgbaImage,
+) -> std::result::Result<(Vec<u8>, &'static str), String> {
+    if is_jpeg(source) && !image.has_alpha {
+        Ok((encode_jpeg(image, JPEG_QUALITY)?, "image/jpeg"))
+    } else {
+        Ok((encode_png(image)?, "image/png"))
+    }
+}
+
+#[cfg(test)]
+mod resample_tests {
+    use super::*;
+
+    fn image(w: u32, h: u32) -> RgbaImage {
+        let rgba = (0..w * h)
+            .flat_map(|i| [(i % w) as u8, (i / w) as u8, 7, 255])
+            .collect();
+        RgbaImage {
+            width: w,
+            height: h,
+            rgba,
+            has_alpha: false,
+        }
+    }
+
+    #[test]
+    fn halving_averages_each_two_by_two_block() {
+        let s = resample(&image(8, 6), [0, 0, 8, 6], 4, 3);
+        assert_eq!((s.width, s.height), (4, 3));
+        // Texel (1, 1): x 2..4, y 2..4, means 2.5 each, rounded up.
+        assert_eq!(&s.rgba[(4 + 1) * 4..][..4], &[3, 3, 7, 255]);
+        let crop = resample(&image(8, 6), [2, 1, 5, 4], 3, 3);
+        assert_eq!(&crop.rgba[..4], &[2, 1, 7, 255]);
+    }
+
+    #[test]
+    fn an_encoded_png_decodes_to_the_same_pixels() {
+        let im = image(5, 3);
+        let back = decode_rgba(&encode_png(&im).unwrap()).unwrap();
+        assert_eq!((back.width, back.height), (5, 3));
+        assert_eq!(back.rgba, im.rgba);
+    }
+
+    #[test]
+    fn an_encoded_jpeg_decodes_to_about_the_same_pixels() {
+        let im = image(16, 8);
+        let jpeg = encode_jpeg(&im, JPEG_QUALITY).unwrap();
+        assert!(is_jpeg(&jpeg));
+        let back = decode_rgba(&jpeg).unwrap();
+        assert_eq!((back.width, back.height), (16, 8));
+        let worst = back
+            .rgba
+            .iter()
+            .zip(&im.rgba)
+            .map(|(a, b)| a.abs_diff(*b))
+            .max();
+        assert!(worst.unwrap() <= 12, "{worst:?}");
+        assert_eq!(encode_like(&jpeg, &im).unwrap().1, "image/jpeg");
+        assert_eq!(
+            encode_like(&encode_png(&im).unwrap(), &im).unwrap().1,
+            "image/png"
+        );
+    }
 }

@@ -111,6 +111,21 @@ impl Simplifier {
         Ok((out, std::mem::take(&mut self.m.group)))
     }
 
+    /// [`Simplifier::simplify_grouped`] with the vertices flagged in
+    /// `locked` kept where they are, as [`Simplifier::simplify_locked`]:
+    /// a part of a textured mesh simplified alone, its shared border
+    /// fixed and its materials kept. Errors: as both. Cost: as both.
+    pub fn simplify_grouped_locked(
+        &mut self,
+        mesh: &TriMesh,
+        groups: &[u32],
+        locked: &[bool],
+        opts: &Options,
+    ) -> Result<(Simplified, Vec<u32>), Error> {
+        let out = self.simplify_with(mesh, Some(groups), Some(locked), opts)?;
+        Ok((out, std::mem::take(&mut self.m.group)))
+    }
+
     fn simplify_with(
         &mut self,
         mesh: &TriMesh,

@@ -48,8 +48,12 @@ pub struct Levels {
 }
 
 /// Builds every level of `tree` over `input` (which must have normals).
+/// `groups` (one per input vertex, each face's corners in one group; or
+/// empty) are materials: kept as seams through every simplification
+/// (`Simplifier::simplify_grouped`) and carried into the tiles.
 pub fn build_levels(
     input: &TriMesh,
+    groups: &[u32],
     tree: &Octree,
     leaf_budget: usize,
     progress: &mut dyn FnMut(Event),
@@ -70,7 +74,7 @@ pub fn build_levels(
     for (s, &l) in leaves.iter().enumerate() {
         slot[l] = s;
     }
-    for (s, t) in split(input, leaves.len(), |f| {
+    for (s, t) in split(input, groups, leaves.len(), |f| {
         Some(slot[tree.leaf_of_face[f] as usize])
     })
     .into_iter()
@@ -82,12 +86,14 @@ pub fn build_levels(
     let total_internal = n - leaves.len();
     let mut done = 0;
     let mut simplifier = Simplifier::new();
-    let mut finer: Option<TriMesh> = None;
+    let mut finer: Option<(TriMesh, Vec<u32>)> = None;
     for depth in (0..tree.depth).rev() {
         let internal: Vec<usize> = (0..n)
             .filter(|&i| tree.nodes[i].key.depth == depth && !tree.nodes[i].children.is_empty())
             .collect();
-        let source = finer.as_ref().unwrap_or(input);
+        let (source, source_groups) = finer
+            .as_ref()
+            .map_or((input, groups), |(m, g)| (m, g.as_slice()));
         let index: std::collections::HashMap<_, usize> = internal
             .iter()
             .enumerate()
@@ -114,16 +120,21 @@ pub fn build_levels(
         };
         let goal = ((source.faces.len() as f64 * ratio).ceil() as usize).max(1);
         let t0 = std::time::Instant::now();
-        let level = if goal < source.faces.len() {
-            simplifier
-                .simplify(source, &Options::faces(goal))
-                .map_err(|e| Error::Simplify(e.to_string()))?
-                .mesh
+        let simplify_error = |e: lodkit_simplify::Error| Error::Simplify(e.to_string());
+        let (level, level_groups) = if goal >= source.faces.len() {
+            (source.clone(), source_groups.to_vec())
+        } else if source_groups.is_empty() {
+            let out = simplifier.simplify(source, &Options::faces(goal));
+            (out.map_err(simplify_error)?.mesh, Vec::new())
         } else {
-            source.clone()
+            let out = simplifier.simplify_grouped(source, source_groups, &Options::faces(goal));
+            let (out, g) = out.map_err(simplify_error)?;
+            (out.mesh, g)
         };
         level_faces[depth as usize] = level.faces.len();
-        let mut parts = split(&level, internal.len(), |f| cell_slot(&level, f));
+        let mut parts = split(&level, &level_groups, internal.len(), |f| {
+            cell_slot(&level, f)
+        });
         for part in parts.iter_mut() {
             if part.mesh.faces.len() > leaf_budget {
                 refit(&mut simplifier, part, leaf_budget)?;
@@ -134,7 +145,7 @@ pub fn build_levels(
 
         // Measure each tile against the input faces of its cell.
         let t1 = std::time::Instant::now();
-        let regions = split(input, internal.len(), |f| cell_slot(input, f));
+        let regions = split(input, &[], internal.len(), |f| cell_slot(input, f));
         for (s, (part, region)) in parts.into_iter().zip(regions).enumerate() {
             let node = internal[s];
             if !part.mesh.faces.is_empty() && !region.mesh.faces.is_empty() {
@@ -153,7 +164,7 @@ pub fn build_levels(
             });
         }
         t_measure += t1.elapsed().as_secs_f64();
-        finer = Some(level);
+        finer = Some((level, level_groups));
     }
     Ok(Levels {
         tiles,
@@ -181,14 +192,23 @@ fn refit(simplifier: &mut Simplifier, part: &mut TileMesh, budget: usize) -> Res
         fill_holes: false,
         ..Options::DEFAULT
     };
-    let out = simplifier
-        .simplify_locked(m, &locked, &opts)
-        .map_err(|e| Error::Simplify(e.to_string()))?
-        .mesh;
+    let simplify_error = |e: lodkit_simplify::Error| Error::Simplify(e.to_string());
+    let (out, groups) = if part.groups.is_empty() {
+        let out = simplifier.simplify_locked(m, &locked, &opts);
+        (out.map_err(simplify_error)?.mesh, Vec::new())
+    } else {
+        let out = simplifier.simplify_grouped_locked(m, &part.groups, &locked, &opts);
+        let (out, g) = out.map_err(simplify_error)?;
+        (out.mesh, g)
+    };
     let cuts = border_edges(&out)
         .into_iter()
         .filter(|&e| cut_bits.contains(&edge_bits(&out, e)))
         .collect();
-    *part = TileMesh { mesh: out, cuts };
+    *part = TileMesh {
+        mesh: out,
+        cuts,
+        groups,
+    };
     Ok(())
 }

@@ -24,7 +24,10 @@
 //!    (`tile_content::add_rounding`; a leaf's whole error); the tileset's
 //!    is the root cube's diagonal.
 //! 4. `skirts.rs`: a strip under every cut edge of a tile.
-//! 5. `tile_content.rs` (GLB bytes), `tileset_json.rs` (`tileset.json`,
+//! 5. `tile_textures.rs` (a textured input, [`tileset_from_scene`]):
+//!    materials kept as seams through every level, each tile's texture
+//!    cropped to its UVs and halved per level above the leaves.
+//! 6. `tile_content.rs` (GLB bytes), `tileset_json.rs` (`tileset.json`,
 //!    external tilesets every [`tileset_json::SUBTREE_LEVELS`] depths,
 //!    boxes in the z-up frame), then `lodkit_mesh::io::out_folder` (the
 //!    whole folder or nothing, never over a user's files).
@@ -70,6 +73,7 @@ mod point_tiles;
 mod skirts;
 mod tile_content;
 mod tile_split;
+mod tile_textures;
 pub mod tileset_json;
 
 use std::path::{Path, PathBuf};
@@ -83,6 +87,7 @@ pub use point_tiles::{
     PointTilesOptions, PointTilesReport, PointTileset, tileset_from_points, write_point_tileset,
 };
 pub use tile_content::{depth_grid, encode_point_tile, encode_tile};
+pub use tile_textures::{MARGIN_TEXELS, tileset_from_scene};
 
 /// How deep a skirt hangs, in units of the larger of its tile's and its
 /// parent's `geometricError`. Measured (`tests/cracks.rs`, random cuts of
@@ -197,6 +202,10 @@ pub struct Tileset {
     tree: octree_partition::Octree,
     /// Per node: its content (with skirts), if any.
     tiles: Vec<Option<TriMesh>>,
+    /// Per node: the material of each content vertex (textured tilesets).
+    groups: Vec<Vec<u32>>,
+    /// The materials and decoded textures of a textured input.
+    textures: Option<tile_textures::Textures>,
     info: Vec<tileset_json::NodeInfo>,
     report: TilesReport,
 }
@@ -258,6 +267,17 @@ pub fn tileset_from_mesh(
     opts: &TilesOptions,
     progress: &mut dyn FnMut(Event),
 ) -> Result<Tileset> {
+    build_tileset(mesh, Vec::new(), opts, progress)
+}
+
+/// [`tileset_from_mesh`] with one group (material) per vertex of `mesh`
+/// (or none), kept through every level and carried into each tile.
+pub(crate) fn build_tileset(
+    mesh: &TriMesh,
+    groups: Vec<u32>,
+    opts: &TilesOptions,
+    progress: &mut dyn FnMut(Event),
+) -> Result<Tileset> {
     check_option(
         "leaf triangles",
         opts.leaf_triangles,
@@ -274,7 +294,7 @@ pub fn tileset_from_mesh(
     }
     let tree = octree_partition::Octree::build(&input, opts.leaf_triangles);
     let t_partition = t0.elapsed().as_secs_f64();
-    let levels = level_chain::build_levels(&input, &tree, opts.leaf_triangles, progress)?;
+    let levels = level_chain::build_levels(&input, &groups, &tree, opts.leaf_triangles, progress)?;
 
     // Monotone errors, children before parents (breadth-first order backwards).
     let n = tree.nodes.len();
@@ -291,9 +311,10 @@ pub fn tileset_from_mesh(
         }
     }
     let mut tiles = Vec::with_capacity(n);
+    let mut tile_groups = vec![Vec::new(); n];
     let (mut max_tile, mut skirt_triangles, mut count) = (0, 0, 0);
     for (i, t) in levels.tiles.into_iter().enumerate() {
-        tiles.push(t.map(|t| {
+        tiles.push(t.map(|mut t| {
             max_tile = max_tile.max(t.mesh.faces.len());
             count += 1;
             let depth = if i == 0 || !opts.skirts {
@@ -301,7 +322,8 @@ pub fn tileset_from_mesh(
             } else {
                 SKIRT_DEPTH * error[i].max(error[parent[i]])
             };
-            let m = skirts::with_skirts(&t.mesh, &t.cuts, depth as f32);
+            let m = skirts::with_skirts(&t.mesh, &t.cuts, depth as f32, &mut t.groups);
+            tile_groups[i] = t.groups;
             skirt_triangles += m.faces.len() - t.mesh.faces.len();
             m
         }));
@@ -340,6 +362,8 @@ pub fn tileset_from_mesh(
     Ok(Tileset {
         tree,
         tiles,
+        groups: tile_groups,
+        textures: None,
         info,
         report,
     })
@@ -363,16 +387,28 @@ pub fn write_tileset(
     progress: &mut dyn FnMut(Event),
 ) -> Result<TilesReport> {
     let t0 = std::time::Instant::now();
+    let nodes = &tileset.tree.nodes;
+    let heights =
+        tile_textures::heights(&nodes.iter().map(|n| n.children.clone()).collect::<Vec<_>>());
     let bytes = write_folder(
         out,
         input,
         (&tileset.tree, &tileset.info),
         (tileset_json::Refine::Replace, None),
-        tileset
-            .tiles()
-            .map(|(name, depth, _, mesh)| (name, depth, mesh)),
+        (0..nodes.len())
+            .filter(|&i| tileset.tiles[i].is_some())
+            .map(|i| (nodes[i].key.name(), nodes[i].key.depth, i)),
         tileset.report.tiles,
-        |name, mesh, grid| encode_tile(name, mesh, opts.compress, grid),
+        |name, i, grid| {
+            let mesh = tileset.tiles[i].as_ref().expect("a tile with content");
+            match &tileset.textures {
+                None => encode_tile(name, mesh, opts.compress, grid),
+                Some(t) => {
+                    let groups = &tileset.groups[i];
+                    t.encode(name, mesh, groups, heights[i], opts.compress, grid)
+                }
+            }
+        },
         progress,
     )?;
     let mut report = tileset.report.clone();

@@ -18,7 +18,14 @@ use lodkit_mesh::TriMesh;
 /// `mesh` with a skirt of `depth` (object units, > 0) on each of `cuts`.
 /// Adds two vertices and four triangles per cut; `mesh` must have normals
 /// (a vertex without one hangs its skirt nowhere: zero-length normal).
-pub fn with_skirts(mesh: &TriMesh, cuts: &[[u32; 2]], depth: f32) -> TriMesh {
+/// `groups` (one per vertex, or empty) gets one entry per added vertex,
+/// its edge vertex's.
+pub fn with_skirts(
+    mesh: &TriMesh,
+    cuts: &[[u32; 2]],
+    depth: f32,
+    groups: &mut Vec<u32>,
+) -> TriMesh {
     let mut out = mesh.clone();
     if cuts.is_empty() || depth <= 0.0 {
         return out;
@@ -39,6 +46,9 @@ pub fn with_skirts(mesh: &TriMesh, cuts: &[[u32; 2]], depth: f32) -> TriMesh {
             }
             if let Some(u) = out.uvs.as_mut() {
                 u.push(mesh.uvs.as_ref().map(|u| u[i]).unwrap_or_default());
+            }
+            if let Some(&g) = groups.get(i) {
+                groups.push(g);
             }
             low[i] = out.positions.len() as u32 - 1;
         }

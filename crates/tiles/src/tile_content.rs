@@ -9,7 +9,9 @@
 //! dequantises to the same `f32` in every tile that holds it.
 
 use lodkit_mesh::glam::Vec3;
-use lodkit_mesh::io::gltf::{GlbOptions, QuantGrid, write_glb_on_grid, write_points_glb_on_grid};
+use lodkit_mesh::io::gltf::{
+    GlbOptions, MAX_GRID_INDEX, QuantGrid, write_glb_on_grid, write_points_glb_on_grid,
+};
 use lodkit_mesh::{Aabb, PointCloud, TriMesh};
 
 use crate::{Error, Result};
@@ -19,9 +21,24 @@ use crate::{Error, Result};
 /// `2^-depth` of it, with room to spare for skirts and vertices that
 /// simplification moved past its cell) spans at most `2^16 − 1` steps of
 /// its own, and each level keeps a finer grid than the one above it (at
-/// most 24 bits: an `f32`'s).
+/// most 24 bits: an `f32`'s). A small object far from the origin (a
+/// box narrower than its coordinates' `f32` precision at that many bits)
+/// gets the finest grid whose points are all exact `f32`s there instead:
+/// its coordinates, divided by the step, stay under `2^24`.
 pub fn depth_grid(bounds: &Aabb, depth: u8) -> QuantGrid {
-    QuantGrid::covering(*bounds, 15 + u32::from(depth).min(9))
+    let mut grid = QuantGrid::covering(*bounds, 15 + u32::from(depth).min(9));
+    let far = bounds.min.abs().max(bounds.max.abs()).max_element() as f64;
+    while grid.step_log2 < 127 && far / 2f64.powi(grid.step_log2) >= MAX_GRID_INDEX - 2.0 {
+        grid.step_log2 += 1;
+        let step = 2f64.powi(grid.step_log2);
+        grid.origin = Vec3::from_array(
+            bounds
+                .min
+                .to_array()
+                .map(|m| ((f64::from(m) / step).floor() * step) as f32),
+        );
+    }
+    grid
 }
 
 /// The farthest [`depth_grid`] moves a point: half a step along each
@@ -77,4 +94,32 @@ pub fn encode_point_tile(
 ) -> Result<Vec<u8>> {
     write_points_glb_on_grid(name, cloud, &GlbOptions { compress }, grid)
         .map_err(|e| Error::Encode(format!("tile {name}: {e}")))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_small_object_far_from_the_origin_gets_an_exact_grid() {
+        let mut mesh = lodkit_mesh::shapes::icosphere(2);
+        for p in &mut mesh.positions {
+            *p = *p * 0.001 + Vec3::splat(100.0);
+        }
+        mesh.normals = Some(lodkit_mesh::normals::vertex_normals(&mesh));
+        let grid = depth_grid(&mesh.bbox(), 0);
+        assert!(100.0 / 2f64.powi(grid.step_log2) < MAX_GRID_INDEX);
+        let glb = encode_tile("far", &mesh, false, &grid).unwrap();
+        let back = lodkit_mesh::io::decode(lodkit_mesh::io::Format::Glb, &glb, None).unwrap();
+        let lodkit_mesh::Model::Mesh(back) = back else {
+            panic!("a mesh")
+        };
+        assert_eq!(back.faces.len(), mesh.faces.len());
+        // An ordinary box keeps the grid it always had.
+        let unit = Aabb {
+            min: Vec3::ZERO,
+            max: Vec3::ONE,
+        };
+        assert_eq!(depth_grid(&unit, 3), QuantGrid::covering(unit, 18));
+    }
 }

@@ -48,14 +48,19 @@ pub struct TileMesh {
     pub mesh: TriMesh,
     /// Border edges of the tile that are interior edges of the source.
     pub cuts: Vec<[u32; 2]>,
+    /// The group (material) of each vertex, when the source has groups
+    /// (empty otherwise).
+    pub groups: Vec<u32>,
 }
 
 /// Splits `source` into `slots` tiles: face `f` goes to `slot_of(f)`
 /// (`None`: dropped). Vertex order within a tile is first use by face
 /// order, so the result is a function of the inputs alone. Cost: `O(F log
-/// F)` (the edge table), one copy of the source.
+/// F)` (the edge table), one copy of the source. `groups` (one per
+/// source vertex, or empty) are carried to the tiles' vertices.
 pub fn split(
     source: &TriMesh,
+    groups: &[u32],
     slots: usize,
     slot_of: impl Fn(usize) -> Option<usize>,
 ) -> Vec<TileMesh> {
@@ -109,7 +114,12 @@ pub fn split(
             for &v in &used {
                 local[v as usize] = u32::MAX;
             }
-            TileMesh { mesh, cuts }
+            let groups = if groups.is_empty() {
+                Vec::new()
+            } else {
+                used.iter().map(|&v| groups[v as usize]).collect()
+            };
+            TileMesh { mesh, cuts, groups }
         })
         .collect()
 }

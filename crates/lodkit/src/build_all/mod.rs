@@ -5,7 +5,8 @@
 //! sets reconstructed first), the discrete LOD chain ([`crate::lod_chain`],
 //! HQMS), the continuous model (`continuous.rs`, marching cube octree), the
 //! progressive stream (`progressive.rs`, octree particles), each measured
-//! against the input through one shared distance index ([`crate::measure`]), then
+//! against the input through one shared distance index ([`crate::measure`]),
+//! the 3D Tiles tileset (`tileset.rs`, `lodkit_tiles`), then
 //! `report.md` and `report.html` (`html.rs`, `html_page.rs`).
 //!
 //! Every option is checked before anything is written, and the whole
@@ -25,6 +26,7 @@ mod html_page;
 mod input;
 pub(crate) mod progressive;
 mod staging;
+mod tileset;
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -73,7 +75,9 @@ pub struct BuildJob {
 pub struct BuildReport {
     /// The model's name (the input's stem, or `stanford_bunny`).
     pub model: String,
-    /// Each file written, relative to the output folder, with its size.
+    /// Each file written, relative to the output folder, with its size
+    /// (the tileset by its `tiles/tileset.json`; the manifest lists its
+    /// tiles too).
     pub outputs: Vec<(String, usize)>,
 }
 
@@ -91,7 +95,8 @@ impl Timings {
 
 /// Builds every level of detail of `args.input` into `args.out`: the
 /// input as GLB and PLY, the HQMS chain (`lods/`), the marching cube
-/// octree (`.mco`), the progressive stream (`.pop`), each measured
+/// octree (`.mco`), the progressive stream (`.pop`), the 3D Tiles
+/// tileset (`tiles/tileset.json`, `lodkit_tiles`), each measured
 /// against the input, with `report.md`, `report.html` and the manifest
 /// `.lodkit-build.json`. The folder is made beside `args.out` and moved
 /// into place at the end: a failed build leaves `args.out` as it was.
@@ -206,7 +211,8 @@ fn write_all(
         write!(
             path_sentence,
             " Its materials are kept ({}): `{name}.glb` and every level of the HQMS chain \
-             (`lods/*.glb`) carry them, one primitive per material, images byte for byte; \
+             (`lods/*.glb`) carry them, one primitive per material (each level's images scaled to \
+             its size), and so do the tiles (`tiles/`); \
              `{name}.ply`, the octree and the stream hold its geometry merged into one mesh.",
             crate::input::describe(scene)
         )?;
@@ -337,6 +343,11 @@ fn write_all(
     })?;
     outputs.push(prog.file.clone());
 
+    let tiles = timings.time("3D Tiles tileset (levels, measure, write)", || {
+        tileset::section(events, input, args, dir, &mut report)
+    })?;
+    outputs.push(tileset::TILESET.into());
+
     let details = details(input, &cont, &prog);
     let diagonal = mesh.bbox().diagonal() as f64;
     writeln!(
@@ -400,6 +411,7 @@ fn write_all(
         intro: vec![
             input_sentence.replace('`', ""),
             path_sentence.replace('`', ""),
+            tiles.replace('`', ""),
         ],
         reference: &reference,
         sampling,

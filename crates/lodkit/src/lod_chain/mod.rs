@@ -20,6 +20,7 @@ use crate::progress::{Event, Progress};
 use write::Chain;
 
 mod job;
+pub mod level_textures;
 mod out_of_core;
 mod scene;
 pub(crate) mod write;

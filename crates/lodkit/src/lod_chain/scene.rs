@@ -14,7 +14,8 @@ use crate::progress::Progress;
 /// `lodkit_simplify::scene::scene_lod_chain` (each from the previous, face
 /// budgets shared by face count, material borders kept as seams), measured
 /// merged against `reference` (the merged input), written as
-/// `STEM_lodN.glb` (materials and images embedded); `STEM_lods.glb` holds
+/// `STEM_lodN.glb` (materials and images embedded, each image scaled to
+/// the level's size: [`super::level_textures`]); `STEM_lods.glb` holds
 /// the input as level 0 and every non-empty level, one root node
 /// `STEM_LODk` per level over that level's node tree, linked by `MSFT_lod`
 /// as the one-mesh chain is (`lodkit_mesh::io::gltf::write_scene_lod_glb`;
@@ -64,6 +65,9 @@ pub fn write_scene_chain(
     let mut face_materials = Vec::new();
     for (i, (level, reports)) in chain.into_iter().enumerate() {
         let level = output.scene(level, &glb_path)?;
+        let faces = level.face_count();
+        let level = super::level_textures::scale_textures(level, faces, scene.face_count())
+            .map_err(|e| anyhow::anyhow!("{input}: {e}"))?;
         let r = lodkit_simplify::scene::combined_report(&reports)
             .ok_or_else(|| anyhow::anyhow!("{input}: the scene has no meshes"))?;
         let file = format!("{stem}_lod{}.glb", i + 1);
@@ -105,8 +109,14 @@ pub fn write_scene_chain(
         measured.push(m);
     }
     let errors: Vec<f64> = kept.iter().map(|k| k.3).collect();
+    // One table of materials and images for the chain GLB: each level
+    // keeps its own (smaller) images.
+    let mut scenes: Vec<Scene> = kept.iter_mut().map(|k| std::mem::take(&mut k.1)).collect();
+    super::level_textures::share_tables(&mut scenes);
     let glb_levels: Vec<lodkit_mesh::io::gltf::SceneLodLevel> = kept
         .iter()
+        .zip(&scenes)
+        .map(|((lod, _, extras, e), level)| (lod, level, extras, e))
         .zip(level_coverages(&errors, diagonal))
         .map(
             |((lod, level, extras, _), coverage)| lodkit_mesh::io::gltf::SceneLodLevel {
