@@ -198,6 +198,7 @@ def pop_encode(
     relax_below: Optional[int] = None,
     normals: bool = False,
     colours: bool = True,
+    raw: bool = False,
 ) -> Tuple[bytes, Dict[str, Any]]:
     """``(stream, report)``. Example: ``data, report = pop_encode(bunny())``"""
 

@@ -34,13 +34,15 @@ def encode_with_report(
     relax_below: Union[str, int] = "auto",
     normals: bool = False,
     colours: bool = True,
+    raw: bool = False,
 ) -> Tuple[bytes, Dict[str, Any]]:
     """:func:`encode`, also returning ``lodkit pop encode --json``'s figures.
 
     The report has ``mode``, ``depth``, ``precision``, ``particles``,
     per-level ``levels`` (kept, eliminated, phantoms, new_particles,
     structure_bits, attribute_bytes, bytes_so_far), ``precision_bits``,
-    ``total_bytes`` and ``relax_below``.
+    ``total_bytes``, ``relax_below`` and ``source`` (``"mesh"``, ``"surface"``:
+    a cloud's reconstruction, or ``"samples"``).
 
     Example::
 
@@ -66,7 +68,7 @@ def encode_with_report(
             raise OptionError("relax_below applies with outer_thinning=True")
         relax = _check.within("relax_below", relax_below, "pop_bits")
     return _native.pop_encode(_as_input(obj), d, p, mode, placement, bool(outer_thinning), relax,
-                              bool(normals), bool(colours))
+                              bool(normals), bool(colours), bool(raw))
 
 
 def encode(obj: Any, **options: Any) -> bytes:
@@ -78,7 +80,9 @@ def encode(obj: Any, **options: Any) -> bytes:
     ``"baseline"``), ``placement`` (``"column"`` or ``"mean"``; entropy mode),
     ``outer_thinning``, ``relax_below`` (``"auto"`` or 1..=16, with outer
     thinning), ``normals`` (code particle normals), ``colours`` (keep the
-    input's colours). Deterministic; the GIL is released while it encodes.
+    input's colours), ``raw`` (a cloud's samples as they are; by default a
+    cloud is coded from its reconstructed surface, at about one particle
+    per point). Deterministic; the GIL is released while it encodes.
 
     Example::
 

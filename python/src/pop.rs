@@ -2,8 +2,10 @@
 
 use lodkit_particles::{
     DecodeOptions, EncodeOptions, Mode, Placement, ThinningOptions, TriangulateOptions, decode,
-    decode_prefix, encode, triangulate,
+    decode_prefix, triangulate,
 };
+use lodkit::progress::Progress;
+use lodkit::stream_encode::{StreamSource, encode_model};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 
@@ -11,10 +13,11 @@ use crate::convert::{json_to_py, mesh_to_py, model_from_py, points_to_py};
 use crate::errors::input;
 
 /// `pop_encode(obj, ...) -> (bytes, report)`: `lodkit pop encode`'s
-/// options and defaults (`relax_below = None` is `auto`).
+/// options and defaults (`relax_below = None` is `auto`; a cloud is coded
+/// from its reconstructed surface unless `raw`).
 #[pyfunction]
 #[pyo3(signature = (obj, depth = None, precision = None, mode = "entropy", placement = None,
-    outer_thinning = false, relax_below = None, normals = false, colours = true))]
+    outer_thinning = false, relax_below = None, normals = false, colours = true, raw = false))]
 #[allow(clippy::too_many_arguments)]
 fn pop_encode<'py>(
     py: Python<'py>,
@@ -27,6 +30,7 @@ fn pop_encode<'py>(
     relax_below: Option<u8>,
     normals: bool,
     colours: bool,
+    raw: bool,
 ) -> PyResult<(Bound<'py, PyBytes>, Bound<'py, PyAny>)> {
     let model = model_from_py(obj)?;
     let mode = match mode {
@@ -60,10 +64,16 @@ fn pop_encode<'py>(
         placement,
         ..EncodeOptions::DEFAULT
     };
-    let e = py
-        .detach(|| encode(&model, &opts))
+    let source = if raw {
+        StreamSource::Samples
+    } else {
+        StreamSource::Surface
+    };
+    let (e, plan) = py
+        .detach(|| encode_model(&model, "the input", &opts, source, &Progress::silent()))
         .map_err(|e| input(e.to_string()))?;
     let report = json_to_py(py, &e.report)?;
+    report.set_item("source", plan.source)?;
     Ok((PyBytes::new(py, &e.bytes), report))
 }
 

@@ -88,3 +88,17 @@ def test_pop_from_a_point_array():
     pts /= np.linalg.norm(pts, axis=1, keepdims=True)
     data = lk.pop.encode(pts, depth=5)
     assert lk.pop.decode(data).n_faces > 0
+
+
+def test_pop_of_a_cloud_keeps_its_detail():
+    # A cloud is coded from its reconstructed surface at about one particle
+    # per point (as `lodkit pop encode` does); raw=True codes the samples.
+    rng = np.random.default_rng(5)
+    pts = rng.normal(size=(20000, 3))
+    pts /= np.linalg.norm(pts, axis=1, keepdims=True)
+    data, report = lk.pop.encode_with_report(pts)
+    assert report["source"] == "surface"
+    assert 10000 <= report["particles"] <= 40000
+    assert lk.pop.decode(data).n_faces > 0
+    raw, report = lk.pop.encode_with_report(pts, raw=True)
+    assert report["source"] == "samples" and raw != data
