@@ -16,8 +16,10 @@
 # if missing). Installs chromium and npm with apt-get when missing, and the
 # npm packages of web/ and web/tests/tiles/ with `npm ci`.
 # Output (screenshots, results.json): target/web-test/tiles/.
-# CesiumGS's 3d-tiles-validator is not run: npm has no `3d-tiles-validator`
-# package (it is published from its GitHub repository only).
+# CesiumGS's 3d-tiles-validator runs when LODKIT_3DTILES_VALIDATOR names a
+# built checkout of it (its `build/main.js`): npm has no `3d-tiles-validator`
+# package (it is published from its GitHub repository only), so CI without
+# one says so in one line.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
@@ -79,6 +81,23 @@ fi
 status=0
 echo "== every tile through glTF-Validator"
 node web/tests/tiles/check_tileset.mjs "${sets[@]/#/$sets_dir/}" || status=1
+
+validator=${LODKIT_3DTILES_VALIDATOR:-}
+if [ -n "$validator" ] && [ -f "$validator/build/main.js" ]; then
+  echo "== every tileset through CesiumGS's 3d-tiles-validator"
+  for s in "${sets[@]}"; do
+    report=$(node "$validator/build/main.js" --tilesetFile "$sets_dir/$s" 2>&1 || true)
+    if printf '%s' "$report" | grep -q '"numErrors": 0,' && printf '%s' "$report" | grep -q '"numWarnings": 0,'; then
+      echo "ok   3d-tiles-validator: $s ($(printf '%s' "$report" | grep -o '"numInfos": [0-9]*'))"
+    else
+      echo "FAIL 3d-tiles-validator: $s"
+      printf '%s\n' "$report" | head -40
+      status=1
+    fi
+  done
+else
+  echo "skipped 3d-tiles-validator: not on npm; set LODKIT_3DTILES_VALIDATOR to a built checkout of CesiumGS/3d-tiles-validator"
+fi
 
 echo "== Chromium: the viewer (3DTilesRendererJS) and CesiumJS"
 LODKIT_WEB_SITE=$work/site LODKIT_WEB_OUT=$work/static node web/tests/tiles.test.mjs "$sets_dir" "${sets[@]}" || status=1
