@@ -139,6 +139,11 @@ fn load(events: &Progress, a: &RenderJob) -> Result<(Drawable, String)> {
                 Ok((Drawable::Textured(mesh, materials), what))
             }
             crate::input::Input::Model(model) => geometry(model),
+            other => bail!(
+                "{}: holds a {}, not a mesh or point cloud to draw",
+                a.input.display(),
+                other.kind()
+            ),
         },
     }
 }

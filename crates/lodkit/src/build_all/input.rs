@@ -101,6 +101,7 @@ pub fn load(events: &Progress, path: &Path, merge: bool) -> Result<BuildInput> {
                 });
             }
             crate::input::Input::Model(model) => model,
+            other => bail!("{}: holds a {}", path.display(), other.kind()),
         };
         match model {
             Model::Mesh(m) => {

@@ -70,7 +70,16 @@ impl ImageSet {
     /// plus some 16 bytes a pixel of the views being decoded (at most
     /// [`DECODE_BATCH_PIXELS`] at once).
     pub fn load(path: &Path, source: SilhouetteSource) -> Result<ImageSet> {
-        let calibration = calibration::read(path)?;
+        ImageSet::from_calibration(calibration::read(path)?, source)
+    }
+
+    /// Reads every image and silhouette of a calibration already read
+    /// (in parallel): [`ImageSet::load`] without reading the calibration
+    /// file again. Errors and memory as [`ImageSet::load`].
+    pub fn from_calibration(
+        calibration: Calibration,
+        source: SilhouetteSource,
+    ) -> Result<ImageSet> {
         let file = calibration.file.clone();
         let mut budget = images::PixelBudget::run();
         for v in &calibration.views {
