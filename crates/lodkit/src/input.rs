@@ -11,8 +11,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use lodkit_mesh::io::Format;
+use lodkit_mesh::io::cameras::{self, Calibration};
 use lodkit_mesh::{Model, RangeImage, Scene};
-use lodkit_particles::silhouette::Calibration;
 
 use crate::progress::Progress;
 
@@ -128,7 +128,7 @@ pub fn load_scans(events: &Progress, conf: &Path) -> Result<ScanSet> {
 /// a NeRF file gives no image size).
 pub fn load_silhouettes(events: &Progress, path: &Path) -> Result<Calibration> {
     let step = events.spinner(&format!("reading the cameras of {}", path.display()));
-    let calibration = lodkit_particles::silhouette::calibration::read(path)?;
+    let calibration = cameras::read(path)?;
     step.finish();
     Ok(calibration)
 }
@@ -153,7 +153,7 @@ pub fn load_input(events: &Progress, input: &Path, keeps: bool) -> Result<Input>
     if is_scan_set(input) {
         return Ok(Input::Scans(load_scans(events, input)?));
     }
-    if lodkit_particles::silhouette::calibration::is_calibration(input) {
+    if cameras::is_calibration(input) {
         return Ok(Input::Silhouettes(load_silhouettes(events, input)?));
     }
     let fmt = Format::from_path(input);

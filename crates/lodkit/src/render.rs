@@ -6,8 +6,9 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
 use lodkit_mesh::Model;
+use lodkit_mesh::io::cameras as ring;
 use lodkit_mesh::io::write_atomic;
-use lodkit_render::{Camera, CameraRing, Image, RenderOptions, render, render_points, ring};
+use lodkit_render::{Camera, CameraRing, Image, RenderOptions, render, render_points};
 use serde::Serialize;
 
 use crate::progress::Progress;

@@ -31,9 +31,10 @@
 //!   LAS/LAZ positions are stored relative to an `f64` origin so that
 //!   `f32` keeps them exact; every other format's origin is `None`.
 //! - One module per format ([`ply`], [`obj`], [`stl`], [`gltf`], [`xyz`],
-//!   [`conf`], [`las`]), each documenting what it reads, what it writes and its
+//!   [`conf`], [`las`], [`cameras`]), each documenting what it reads, what it writes and its
 //!   conventions (units are never converted; UV origin and colour space are).
 
+pub mod cameras;
 pub mod conf;
 pub mod gltf;
 pub mod input;
