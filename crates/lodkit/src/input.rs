@@ -167,7 +167,7 @@ pub fn load_input(events: &Progress, input: &Path, keeps: bool) -> Result<Input>
     }
     let scene = if fmt == Some(Format::Ply) {
         match load(events, input)? {
-            Model::Mesh(m) => lodkit_mesh::io::scene_io::ply_scene(input, m),
+            Model::Mesh(m) => lodkit_mesh::io::ply_scene(input, m),
             other => return Ok(Input::Model(other)),
         }
     } else {

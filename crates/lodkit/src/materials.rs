@@ -31,7 +31,7 @@ pub fn texture_budget(name: &str, scene: &Scene) -> anyhow::Result<()> {
                 let what = im.file_name.as_deref().unwrap_or("an embedded image");
                 anyhow::anyhow!(
                     "{name}: texture image {image} ({}): {e}",
-                    lodkit_mesh::error::escape(what)
+                    lodkit_mesh::escape(what)
                 )
             })?;
         }
@@ -85,7 +85,7 @@ pub fn render_materials(
                             events.status(format!(
                                 "warning: {name}: texture {} ({}): {e}; drawn without it",
                                 r.texture,
-                                lodkit_mesh::error::escape(what)
+                                lodkit_mesh::escape(what)
                             ));
                             None
                         }
