@@ -108,7 +108,7 @@ impl Ui {
         // Control bytes from file names or contents never reach the
         // terminal raw.
         let line = line.replace('\n', " ");
-        eprintln!("lodkit: error: {}", lodkit_mesh::error::escape(&line));
+        eprintln!("lodkit: error: {}", lodkit_mesh::escape(&line));
     }
 
     /// A spinner for a step of unknown length; hidden unless stderr is a

@@ -5,7 +5,8 @@ use std::path::Path;
 
 use anyhow::{Context, Result, bail};
 use lodkit_mco::{McoHeader, McoModel, McoStream};
-use lodkit_particles::silhouette::{ImageSet, SilhouetteSource, calibration};
+use lodkit_mesh::io::cameras as calibration;
+use lodkit_particles::silhouette::{ImageSet, SilhouetteSource};
 use serde::Serialize;
 
 use crate::progress::Progress;

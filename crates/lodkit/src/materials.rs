@@ -6,11 +6,11 @@ use crate::progress::Progress;
 
 /// Checks that the base-colour textures `render_materials` would decode
 /// fit in one run's pixel budget
-/// ([`lodkit_particles::silhouette::images::MAX_RUN_PIXELS`]), from their
+/// ([`lodkit_mesh::image::MAX_RUN_PIXELS`]), from their
 /// headers alone (nothing is decoded). Errors: one line naming `name` and
 /// the texture image that does not fit. Cost: one header parse a texture.
 pub fn texture_budget(name: &str, scene: &Scene) -> anyhow::Result<()> {
-    use lodkit_particles::silhouette::images;
+    use lodkit_mesh::image as images;
     let mut budget = images::PixelBudget::run();
     let mut charged = vec![false; scene.images.len()];
     for m in &scene.materials {
@@ -31,7 +31,7 @@ pub fn texture_budget(name: &str, scene: &Scene) -> anyhow::Result<()> {
                 let what = im.file_name.as_deref().unwrap_or("an embedded image");
                 anyhow::anyhow!(
                     "{name}: texture image {image} ({}): {e}",
-                    lodkit_mesh::error::escape(what)
+                    lodkit_mesh::escape(what)
                 )
             })?;
         }
@@ -67,7 +67,7 @@ pub fn render_materials(
                 *slot.get_or_insert_with(|| {
                     let t = &scene.textures[r.texture];
                     let image = scene.images.get(t.image)?;
-                    match lodkit_particles::silhouette::images::decode_rgba(&image.bytes) {
+                    match lodkit_mesh::image::decode_rgba(&image.bytes) {
                         Ok(d) => {
                             let s = t.sampler.and_then(|i| scene.samplers.get(i));
                             textures.push(TextureImage {
@@ -85,7 +85,7 @@ pub fn render_materials(
                             events.status(format!(
                                 "warning: {name}: texture {} ({}): {e}; drawn without it",
                                 r.texture,
-                                lodkit_mesh::error::escape(what)
+                                lodkit_mesh::escape(what)
                             ));
                             None
                         }

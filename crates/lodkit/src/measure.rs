@@ -59,8 +59,8 @@ impl Sampling {
             Sampling::Adaptive => format!(
                 "are measured against the input with `lodkit compare`'s Metro sampling, symmetric, \
                  {} samples of each kind per face of the level ({}–{}; column *samples*)",
-                lodkit_mesh::metrics::reference::LEVEL_SAMPLES_PER_FACE,
-                lodkit_mesh::metrics::reference::MIN_LEVEL_SAMPLES,
+                lodkit_mesh::metrics::LEVEL_SAMPLES_PER_FACE,
+                lodkit_mesh::metrics::MIN_LEVEL_SAMPLES,
                 lodkit_mesh::metrics::DEFAULT_MIN_SAMPLES
             ),
             Sampling::PerKind(n) => format!(

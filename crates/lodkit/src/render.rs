@@ -6,8 +6,9 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
 use lodkit_mesh::Model;
+use lodkit_mesh::io::cameras as ring;
 use lodkit_mesh::io::write_atomic;
-use lodkit_render::{Camera, CameraRing, Image, RenderOptions, render, render_points, ring};
+use lodkit_render::{Camera, CameraRing, Image, RenderOptions, render, render_points};
 use serde::Serialize;
 
 use crate::progress::Progress;
@@ -139,6 +140,11 @@ fn load(events: &Progress, a: &RenderJob) -> Result<(Drawable, String)> {
                 Ok((Drawable::Textured(mesh, materials), what))
             }
             crate::input::Input::Model(model) => geometry(model),
+            other => bail!(
+                "{}: holds a {}, not a mesh or point cloud to draw",
+                a.input.display(),
+                other.kind()
+            ),
         },
     }
 }

@@ -111,7 +111,7 @@ pub fn run(a: &SimplifyJob, events: &Progress) -> Result<Report> {
     )? {
         crate::input::Input::Scene(scene) => return run_scene(events, a, &scene, opts),
         crate::input::Input::Model(Model::Mesh(m)) => m,
-        crate::input::Input::Model(other) => bail!(
+        other => bail!(
             "{}: holds a {} with no faces, a mesh is needed",
             a.input.display(),
             other.kind()

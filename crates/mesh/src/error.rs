@@ -70,7 +70,7 @@ fn escape_path(p: &Path) -> String {
 /// Shorthand for returning a [`ParseError`] from a decoder.
 #[macro_export]
 macro_rules! parse_err {
-    ($($arg:tt)*) => { $crate::error::ParseError(format!($($arg)*)) };
+    ($($arg:tt)*) => { $crate::ParseError(format!($($arg)*)) };
 }
 
 /// Errors from lodkit's mesh layer. `Display` is always a single line, with

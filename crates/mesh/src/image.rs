@@ -290,6 +290,51 @@ pub fn encode_like(
     }
 }
 
+/// Most pixels the images of one run may hold together (64 Mi: 64 views
+/// of 1024², or one 8192² texture). Each decoded pixel costs 4 to 12 bytes
+/// while decoding and some 8 kept (colour, silhouette, summed-area table),
+/// so this keeps a run's images under about 700 MB.
+pub const MAX_RUN_PIXELS: u64 = 1 << 26;
+
+/// The pixels one run may still decode; every decode charges its header
+/// size before allocating.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PixelBudget {
+    left: u64,
+}
+
+impl PixelBudget {
+    /// A budget of `pixels`.
+    pub const fn new(pixels: u64) -> PixelBudget {
+        PixelBudget { left: pixels }
+    }
+
+    /// A run's budget, [`MAX_RUN_PIXELS`].
+    pub const fn run() -> PixelBudget {
+        PixelBudget::new(MAX_RUN_PIXELS)
+    }
+
+    /// Pixels still allowed.
+    pub fn left(&self) -> u64 {
+        self.left
+    }
+
+    /// Takes `width × height` pixels from the budget. Errors (one phrase):
+    /// the image does not fit in what is left.
+    pub fn charge(&mut self, width: u32, height: u32) -> std::result::Result<(), String> {
+        let px = u64::from(width) * u64::from(height);
+        if px > self.left {
+            return Err(format!(
+                "an image of {width}x{height} pixels does not fit in the {} pixels left of the \
+                 run's budget of {MAX_RUN_PIXELS} (all its images together)",
+                self.left
+            ));
+        }
+        self.left -= px;
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod resample_tests {
     use super::*;

@@ -25,7 +25,7 @@
 //! | [`Intrinsics`] | pinhole intrinsics (COLMAP's convention), shared by the renderer's cameras and the silhouette calibration's lens |
 //! | `image::decode_rgba`, `image::image_size` (feature `images`) | the one PNG/JPEG decoder, for photographs and textures; sizes bounded from the header before any pixel is allocated |
 //!
-//! Conventions for every crate (see [`mesh`](mod@mesh)): positions are `f32`
+//! Conventions for every crate (see [`TriMesh`]): positions are `f32`
 //! object units, never rescaled; faces are CCW seen from outside; colours
 //! are straight sRGB RGBA8; UVs have a bottom-left origin. Errors:
 //! [`ParseError`] (what is wrong) inside decoders, [`Error`] (which file)
@@ -46,13 +46,13 @@
 /// The 48 symmetries of the cube acting on its corners, shared by the
 /// marching-cubes and particle triangulation tables.
 pub mod cube_symmetry;
-pub mod error;
+mod error;
 #[cfg(feature = "images")]
 pub mod image;
 pub mod info;
 mod intrinsics;
 pub mod io;
-pub mod mesh;
+mod mesh;
 pub mod metrics;
 pub mod normals;
 pub mod scene;
@@ -60,7 +60,7 @@ pub mod shapes;
 pub mod topology;
 pub mod weld;
 
-pub use error::{Error, ParseError, Result};
+pub use error::{Error, ParseError, Result, escape};
 pub use glam;
 pub use intrinsics::Intrinsics;
 pub use mesh::{Aabb, Model, PointCloud, Pose, RangeImage, TriMesh};

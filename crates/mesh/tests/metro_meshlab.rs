@@ -12,7 +12,7 @@
 use std::path::{Path, PathBuf};
 
 use lodkit_mesh::io::load_mesh;
-use lodkit_mesh::metrics::{CompareOptions, DirectionStats, compare, sample};
+use lodkit_mesh::metrics::{CompareOptions, DirectionStats, compare, referenced_vertices};
 use serde_json::Value;
 
 fn repo(rel: &str) -> PathBuf {
@@ -78,7 +78,7 @@ fn bunny_vs_simplified_bunny_agrees_with_meshlab() {
         num(&reference["original"], "faces")
     );
     assert_eq!(
-        sample::referenced_vertices(&original).len() as f64,
+        referenced_vertices(&original).len() as f64,
         num(&reference, "original_referenced_vertices")
     );
     assert_eq!(

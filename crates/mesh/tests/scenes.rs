@@ -227,7 +227,7 @@ fn an_obj_output_never_overwrites_a_file_and_reuses_identical_ones() {
 #[test]
 fn ply_texture_file_and_textured_obj_scans_read_their_texture() {
     let ply = lodkit_mesh::io::load_mesh(&data("mug_scan.ply")).unwrap();
-    let s = lodkit_mesh::io::scene_io::ply_scene(&data("mug_scan.ply"), ply);
+    let s = lodkit_mesh::io::ply_scene(&data("mug_scan.ply"), ply);
     assert_eq!(s.materials.len(), 1);
     assert_eq!(s.images[0].bytes, bytes("mug_scan.png"));
     assert!(s.meshes[0].face_materials.iter().all(|&m| m == 0));

@@ -12,12 +12,13 @@
 //! through `transforms.json`. A figure for the report, not a test.
 use std::time::Instant;
 
+use lodkit_mesh::io::cameras::{COLMAP_DIR, IMAGES_DIR, MASKS_DIR};
 use lodkit_mesh::metrics::{CompareOptions, compare};
 use lodkit_particles::silhouette::{
     ImageSet, SilhouetteOptions, SilhouetteSource, encode_silhouettes,
 };
 use lodkit_particles::{DecodeOptions, EncodeOptions, TriangulateOptions, decode};
-use lodkit_render::{COLMAP_DIR, CameraRing, IMAGES_DIR, MASKS_DIR, RenderOptions, render};
+use lodkit_render::{CameraRing, RenderOptions, render};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();

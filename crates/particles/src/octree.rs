@@ -355,7 +355,7 @@ impl Octree {
         if mesh.faces.is_empty() {
             return Err(Error::Input("the mesh has no faces".into()));
         }
-        let bbox = lodkit_mesh::metrics::sample::surface_bbox(mesh);
+        let bbox = lodkit_mesh::metrics::surface_bbox(mesh);
         if bbox.is_empty() {
             return Err(Error::Input("the mesh has no finite vertex".into()));
         }

@@ -7,7 +7,7 @@ use crate::ordering::Hierarchy;
 use crate::thinning::thin;
 use crate::{DecodeOptions, EncodeOptions, Mode, TriangulateOptions, decode, encode, triangulate};
 use glam::Vec3;
-use lodkit_mesh::metrics::distance::SurfaceIndex;
+use lodkit_mesh::metrics::SurfaceIndex;
 use lodkit_mesh::{Model, TriMesh};
 
 fn coloured_sphere() -> TriMesh {

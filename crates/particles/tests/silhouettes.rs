@@ -7,11 +7,12 @@ use std::path::{Path, PathBuf};
 
 use glam::{DVec3, Vec3};
 use lodkit_mesh::TriMesh;
+use lodkit_mesh::io::cameras::{COLMAP_DIR, IMAGES_DIR, MASKS_DIR};
 use lodkit_particles::silhouette::{
     ImageSet, SilhouetteOptions, SilhouetteSource, carve_octree, encode_carved, encode_silhouettes,
 };
 use lodkit_particles::{DecodeOptions, EncodeOptions, decode};
-use lodkit_render::{COLMAP_DIR, CameraRing, IMAGES_DIR, MASKS_DIR, RenderOptions, render};
+use lodkit_render::{CameraRing, RenderOptions, render};
 
 /// Writes a ring of `per_ring` views at each elevation, `size` pixels.
 fn write_ring(mesh: &TriMesh, dir: &Path, per_ring: u32, elevations: &[f32], size: u32) {
@@ -368,12 +369,13 @@ fn bad_calibrations_are_one_line_errors_naming_the_file_and_the_camera() {
     assert_eq!(e.lines().count(), 1, "{e}");
 }
 
-/// The fuzz target's entries (`crates/particles/fuzz`, `calibration`) on
+/// The fuzz target's entries (`crates/mesh/fuzz`, `cameras`) on
 /// every prefix of the malformed corpus's calibrations and a PNG: an error
 /// or a count, never a panic.
 #[test]
 fn the_readers_survive_every_prefix_of_the_malformed_corpus() {
-    use lodkit_particles::silhouette::{calibration, images};
+    use lodkit_mesh::io::cameras as calibration;
+    let decode = |b: &[u8]| lodkit_mesh::image::decode_rgba(b).map(|d| (d.width, d.height));
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/malformed/calibrations");
     let mut cases: Vec<PathBuf> = std::fs::read_dir(&root)
         .unwrap()
@@ -397,9 +399,9 @@ fn the_readers_survive_every_prefix_of_the_malformed_corpus() {
         }
         let png = std::fs::read(case.join("images/000.png")).unwrap();
         for n in 0..=png.len() {
-            let _ = images::decode_for_fuzzing(&png[..n]);
+            let _ = decode(&png[..n]);
         }
-        assert_eq!(images::decode_for_fuzzing(&png).unwrap(), (8, 8));
+        assert_eq!(decode(&png).unwrap(), (8, 8));
     }
 }
 

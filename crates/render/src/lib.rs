@@ -127,9 +127,7 @@ mod shade;
 mod texture;
 
 pub use camera::{Camera, FRAMING_MARGIN, Intrinsics};
-pub use camera_ring::{
-    COLMAP_DIR, CameraRing, IMAGES_DIR, MASKS_DIR, MAX_VIEWS, RingView, TRANSFORMS_FILE,
-};
+pub use camera_ring::{CameraRing, RingView};
 pub use colour_scale::colour_scale;
 pub use image::{Image, Mask, PNG_DEFLATE_LEVEL};
 pub use render::{
@@ -137,13 +135,6 @@ pub use render::{
 };
 pub use shade::{AMBIENT, DIFFUSE, FAR_POINT_BRIGHTNESS};
 pub use texture::{Look, Materials, TextureImage, Wrap};
-
-/// The camera ring's folder layout under the path the CLI still names
-/// (the same items as at the crate root).
-#[doc(hidden)]
-pub mod ring {
-    pub use crate::camera_ring::{COLMAP_DIR, IMAGES_DIR, MASKS_DIR, TRANSFORMS_FILE};
-}
 
 /// What can go wrong when rendering.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]

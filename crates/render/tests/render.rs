@@ -217,7 +217,8 @@ fn ring_calibration_projects_every_vertex_into_its_mask() {
         .map(|v| render(&mesh, &v.camera, &opts(w, h, 2)).unwrap().mask())
         .collect();
 
-    let t: serde_json::Value = serde_json::from_str(&ring.transforms_json()).unwrap();
+    let t: serde_json::Value =
+        serde_json::from_str(&ring.camera_files().transforms_json()).unwrap();
     let fx = t["fl_x"].as_f64().unwrap();
     let fy = t["fl_y"].as_f64().unwrap();
     let cx = t["cx"].as_f64().unwrap();
@@ -231,7 +232,7 @@ fn ring_calibration_projects_every_vertex_into_its_mask() {
     assert_eq!(frames[3]["file_path"], "images/003.png");
     assert_eq!(frames[3]["mask_path"], "masks/003.png");
 
-    let cams = ring.colmap_cameras();
+    let cams = ring.camera_files().colmap_cameras();
     let cam_line: Vec<&str> = cams
         .lines()
         .find(|l| !l.starts_with('#'))
@@ -241,7 +242,7 @@ fn ring_calibration_projects_every_vertex_into_its_mask() {
     assert_eq!(&cam_line[..4], ["1", "PINHOLE", "96", "80"]);
     let k: Vec<f64> = cam_line[4..].iter().map(|s| s.parse().unwrap()).collect();
     assert_eq!(k, [fx, fy, cx, cy]);
-    let images = ring.colmap_images();
+    let images = ring.camera_files().colmap_images();
     let poses: Vec<Vec<&str>> = images
         .lines()
         .filter(|l| !l.starts_with('#') && !l.is_empty())

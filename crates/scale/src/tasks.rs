@@ -22,8 +22,9 @@ use glam::Vec3;
 /// Version of the task file; [`read_tasks`] refuses any other, and any
 /// field it does not know, so a worker with another lodkit never runs a
 /// block by other rules than the driver's (2: each task names its goal;
-/// 3: and the round's cuts, so a block locks only what may lie on one).
-const TASKS_VERSION: u32 = 3;
+/// 3: and the round's cuts, so a block locks only what may lie on one;
+/// 4: the attribute weights as the simplifier's own `weights` object).
+const TASKS_VERSION: u32 = 4;
 
 /// Most tasks a task file may hold (a round has at most 512 blocks).
 const MAX_TASKS: usize = 4096;
@@ -125,9 +126,7 @@ impl CutsRecord {
 struct OptionsRecord {
     max_error: Option<f32>,
     heap_size: usize,
-    normal_weight: f32,
-    color_weight: f32,
-    uv_weight: f32,
+    weights: AttributeWeights,
     prune: Option<f32>,
     max_passes: u32,
 }
@@ -137,9 +136,7 @@ impl OptionsRecord {
         OptionsRecord {
             max_error: o.max_error,
             heap_size: o.heap_size,
-            normal_weight: o.weights.normal,
-            color_weight: o.weights.color,
-            uv_weight: o.weights.uv,
+            weights: o.weights,
             prune: o.prune,
             max_passes: o.max_passes,
         }
@@ -149,11 +146,7 @@ impl OptionsRecord {
         Options {
             max_error: self.max_error,
             heap_size: self.heap_size,
-            weights: AttributeWeights {
-                normal: self.normal_weight,
-                color: self.color_weight,
-                uv: self.uv_weight,
-            },
+            weights: self.weights,
             prune: self.prune,
             max_passes: self.max_passes,
             ..Options::default()
@@ -347,13 +340,13 @@ mod tests {
         assert!(write_tasks(&path, &opts, layout, &outside).is_err());
         for name in ["../x.in", "/etc/passwd", "..", "", "a/b"] {
             let json = format!(
-                r#"{{"version":3,"options":{{"max_error":null,"heap_size":1,"normal_weight":0,"color_weight":0,"uv_weight":0,"prune":null,"max_passes":8}},"layout":"-","tasks":[{{"input":{name:?},"output":"o","ratio":0.5,"goal":"interior","cuts":{{"min":[0,0,0],"cell":[1,1,1],"g":2,"shift":0,"reach":0.5}},"faces":1}}]}}"#
+                r#"{{"version":4,"options":{{"max_error":null,"heap_size":1,"weights":{{"normal":0,"color":0,"uv":0}},"prune":null,"max_passes":8}},"layout":"-","tasks":[{{"input":{name:?},"output":"o","ratio":0.5,"goal":"interior","cuts":{{"min":[0,0,0],"cell":[1,1,1],"g":2,"shift":0,"reach":0.5}},"faces":1}}]}}"#
             );
             std::fs::write(&path, json).unwrap();
             let e = read_tasks(&path).unwrap_err();
             assert!(e.contains("plain file name"), "{name}: {e}");
         }
-        let json = r#"{"version":3,"options":{"max_error":null,"heap_size":1,"normal_weight":0,"color_weight":0,"uv_weight":0,"prune":null,"max_passes":8},"layout":"-","tasks":[{"input":"i","output":"o","ratio":0.5,"goal":"interior","cuts":{"min":[0,0,0],"cell":[1,1,1],"g":0,"shift":0,"reach":0.5},"faces":1}]}"#;
+        let json = r#"{"version":4,"options":{"max_error":null,"heap_size":1,"weights":{"normal":0,"color":0,"uv":0},"prune":null,"max_passes":8},"layout":"-","tasks":[{"input":"i","output":"o","ratio":0.5,"goal":"interior","cuts":{"min":[0,0,0],"cell":[1,1,1],"g":0,"shift":0,"reach":0.5},"faces":1}]}"#;
         std::fs::write(&path, json).unwrap();
         let e = read_tasks(&path).unwrap_err();
         assert!(e.contains("not a block grid"), "{e}");

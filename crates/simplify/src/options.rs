@@ -38,6 +38,11 @@ impl Target {
 /// a 100 m terrain. `0` ignores that attribute in the cost (it is still
 /// interpolated). Attributes the mesh does not have are ignored.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(deny_unknown_fields)
+)]
 pub struct AttributeWeights {
     /// Unit normals (components in [-1, 1]).
     pub normal: f32,

@@ -200,53 +200,42 @@ pub fn mco_extract_view(m: &McoModel, cut: &mut ViewCut, cam: &Camera, tolerance
 #[cfg(test)]
 mod tests {
     use super::*;
-    use lodkit_mesh::Model;
-    use lodkit_particles::{EncodeOptions, encode};
 
-    fn stream(normals: bool) -> Vec<u8> {
-        let mesh = lodkit_mesh::shapes::icosphere(3);
-        let opts = EncodeOptions {
-            depth: Some(5),
-            normals,
-            ..EncodeOptions::DEFAULT
-        };
-        encode(&Model::Mesh(mesh), &opts).expect("encodes").bytes
-    }
+    /// The stream the browser's worker warms up on (a shipped `.pop`):
+    /// what `PrefixDecoder` guarantees for every prefix, attributes
+    /// included, is tested with it (`lodkit_particles::decode_stream`);
+    /// here, that these bindings hand it on.
+    const STREAM: &[u8] = include_bytes!("warm_up.pop");
 
     #[test]
     fn a_stream_read_as_it_arrives_shows_only_levels_with_their_attributes() {
-        for normals in [false, true] {
-            let bytes = stream(normals);
-            let full = pop_decode_prefix(&bytes).unwrap().expect("levels");
-            assert_eq!(full.bytes_used, bytes.len());
-            let mut s = pop_stream_new();
-            let mut levels = 0;
-            for piece in bytes.chunks(7) {
-                s.bytes.extend_from_slice(piece);
-                let used = pop_stream_read(&mut s).expect("a prefix is no error");
-                assert!(used <= s.bytes.len());
-                let Some(p) = pop_stream_decoded(&s).unwrap() else {
-                    continue;
-                };
-                assert!(p.levels >= levels, "levels never go back");
-                levels = p.levels;
-                // A level with attributes is usable only with them.
-                if let Some(n) = &p.decoded.normals {
-                    assert!(n.len() >= levels);
-                }
-                assert!(pop_level_mesh(&p.decoded, (levels - 1) as u8).is_ok());
+        let full = pop_decode_prefix(STREAM).unwrap().expect("levels");
+        assert_eq!(full.bytes_used, STREAM.len());
+        let mut s = pop_stream_new();
+        let mut levels = 0;
+        for piece in STREAM.chunks(7) {
+            s.bytes.extend_from_slice(piece);
+            let used = pop_stream_read(&mut s).expect("a prefix is no error");
+            assert!(used <= s.bytes.len());
+            let Some(p) = pop_stream_decoded(&s).unwrap() else {
+                continue;
+            };
+            assert!(p.levels >= levels, "levels never go back");
+            levels = p.levels;
+            if let Some(n) = &p.decoded.normals {
+                assert!(n.len() >= levels, "a level comes with its normals");
             }
-            assert_eq!(levels, full.levels);
+            assert!(pop_level_mesh(&p.decoded, (levels - 1) as u8).is_ok());
         }
+        assert_eq!(levels, full.levels);
     }
 
     #[test]
     fn the_finest_level_matches_a_plain_decode() {
-        let bytes = stream(false);
-        let p = pop_decode_prefix(&bytes).unwrap().unwrap();
+        let p = pop_decode_prefix(STREAM).unwrap().unwrap();
         let r = pop_depth(&p.decoded);
         let mesh = pop_level_mesh(&p.decoded, r).unwrap();
-        let d = lodkit_particles::decode(&bytes, &DecodeOptions::default()).unwrap();
+        let d = lodkit_particles::decode(STREAM, &DecodeOptions::default()).unwrap();
         let s = d.surface(r).unwrap();
         let t = lodkit_particles::triangulate(&s, &TriangulateOptions::DEFAULT);
         assert_eq!(mesh.indices, t.mesh.faces.into_flattened());
@@ -333,7 +322,7 @@ mod tests {
 
     #[test]
     fn a_damaged_header_is_an_error_not_a_panic() {
-        let mut bytes = stream(false);
+        let mut bytes = STREAM.to_vec();
         bytes[0] ^= 0xff;
         let mut s = pop_stream_new();
         s.bytes = bytes.clone();

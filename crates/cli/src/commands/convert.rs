@@ -74,6 +74,11 @@ pub fn run(
             ));
             return Ok(());
         }
+        other => anyhow::bail!(
+            "{}: holds a {}; convert reads meshes, scenes, point clouds and range images",
+            input.display(),
+            other.kind()
+        ),
     };
     if weld.is_some() && !matches!(model, Model::Mesh(_)) {
         return Err(crate::ui::usage(format!(

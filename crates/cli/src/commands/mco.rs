@@ -10,6 +10,7 @@ use lodkit_mesh::io::{WriteOptions, save_mesh};
 use lodkit_mesh::{Model, RangeImage};
 use serde::Serialize;
 
+use super::Input;
 use crate::ui::Ui;
 use crate::ui::value::{self, Real};
 
@@ -119,21 +120,22 @@ pub fn run(ui: &Ui, cmd: &McoCommand) -> Result<()> {
     }
 }
 
-/// Loads an input: a `.conf` expands to its posed scans.
+/// Loads an input ([`lodkit::input::load_input`]): a scan set expands to
+/// its posed scans; meshes, clouds and range images are taken as read.
 fn load_inputs(ui: &Ui, path: &Path) -> Result<Vec<(String, Model)>> {
-    if path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("conf"))
-    {
-        let step = ui.spinner(&format!("reading {}", path.display()));
-        let scans = lodkit_mesh::io::conf::load_scans(path)?;
-        step.finish();
-        return Ok(scans
+    match super::load_input(ui, path, false)? {
+        Input::Scans(set) => Ok(set
+            .scans
             .into_iter()
             .map(|(p, r): (PathBuf, RangeImage)| (p.display().to_string(), Model::Range(r)))
-            .collect());
+            .collect()),
+        Input::Model(m) => Ok(vec![(path.display().to_string(), m)]),
+        other => bail!(
+            "{}: holds a {}; mco build reads meshes, point clouds, range images and scan sets (.conf)",
+            path.display(),
+            other.kind()
+        ),
     }
-    Ok(vec![(path.display().to_string(), super::load(ui, path)?)])
 }
 
 #[derive(Serialize)]

@@ -69,7 +69,7 @@ pub fn load(events: &Progress, path: &Path, merge: bool) -> Result<BuildInput> {
         .map(|s| s.to_string_lossy().into_owned())
         .filter(|s| !s.is_empty())
         .unwrap_or_else(|| "model".into());
-    if lodkit_particles::silhouette::calibration::is_calibration(path) {
+    if lodkit_mesh::io::cameras::is_calibration(path) {
         return carve(events, path, name);
     }
     let (what, models) = if path.is_dir() {
@@ -101,6 +101,7 @@ pub fn load(events: &Progress, path: &Path, merge: bool) -> Result<BuildInput> {
                 });
             }
             crate::input::Input::Model(model) => model,
+            other => bail!("{}: holds a {}", path.display(), other.kind()),
         };
         match model {
             Model::Mesh(m) => {

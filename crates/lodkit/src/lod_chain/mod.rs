@@ -88,7 +88,7 @@ pub fn run(a: &LodChainJob, events: &Progress) -> Result<LodChainReport> {
         match crate::input::load_input(events, &a.input, !a.merge)? {
             crate::input::Input::Scene(s) => (s.merged().mesh, Some(s)),
             crate::input::Input::Model(lodkit_mesh::Model::Mesh(m)) => (m, None),
-            crate::input::Input::Model(other) => anyhow::bail!(
+            other => anyhow::bail!(
                 "{}: holds a {} with no faces, a mesh is needed",
                 a.input.display(),
                 other.kind()

@@ -30,28 +30,29 @@
 //!   positions' zero lies in the file's own coordinates ([`Located`]):
 //!   LAS/LAZ positions are stored relative to an `f64` origin so that
 //!   `f32` keeps them exact; every other format's origin is `None`.
-//! - One module per format ([`ply`], [`obj`], [`stl`], [`gltf`], [`xyz`],
-//!   [`conf`], [`las`]), each documenting what it reads, what it writes and its
+//! - One module per format (`ply`, `obj`, `stl`, `gltf`, `xyz`, `conf`,
+//!   `las`, `cameras`; those other crates call by name are public), each documenting what it reads, what it writes and its
 //!   conventions (units are never converted; UV origin and colour space are).
 
+pub mod cameras;
 pub mod conf;
 pub mod gltf;
 pub mod input;
 pub mod interrupt;
-pub mod las;
+mod las;
 pub mod mtl;
-pub mod obj;
+mod obj;
 // Output folders live on a file system with signals: not in the browser.
 #[cfg(not(target_arch = "wasm32"))]
 pub mod out_folder;
 pub mod overwrite_guard;
 pub mod ply;
-pub mod scene_io;
-pub mod stl;
+mod scene_io;
+mod stl;
 pub mod stl_stream;
-pub mod xyz;
+mod xyz;
 
-pub use scene_io::{load_scene, save_scene, save_scene_with};
+pub use scene_io::{load_scene, ply_scene, save_scene, save_scene_with};
 
 #[cfg(not(target_arch = "wasm32"))]
 use std::io::Write;
@@ -155,7 +156,7 @@ pub struct Located {
     pub model: Model,
     /// The `f64` point, in the file's coordinates and units, that the
     /// model's positions are relative to: set by the LAS/LAZ reader
-    /// ([`las`]), `None` for every format whose positions are the file's
+    /// (LAS/LAZ), `None` for every format whose positions are the file's
     /// own.
     pub origin: Option<[f64; 3]>,
     /// The coordinate reference system the file names (LAS/LAZ: WKT or

@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 
 use crate::error::{Error, ParseError, Result};
 use crate::mesh::Model;
-use crate::scene::{Image, Material, NO_MATERIAL, Scene, Texture, TextureRef, image_mime};
+use crate::scene::{Image, Material, Scene, Texture, TextureRef, image_mime};
 
 use super::{Format, WriteOptions};
 
@@ -331,12 +331,4 @@ fn save_obj(path: &Path, scene: &Scene) -> Result<()> {
         super::write_atomic(&dir.join(&mtl_name), &mtl)?;
     }
     super::write_atomic(path, &obj)
-}
-
-/// Whether faces of `scene` use any material (for reports).
-pub fn has_materials(scene: &Scene) -> bool {
-    scene
-        .meshes
-        .iter()
-        .any(|m| m.face_materials.iter().any(|&f| f != NO_MATERIAL))
 }

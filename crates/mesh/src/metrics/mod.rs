@@ -47,15 +47,15 @@
 //! - Results do not depend on the thread count: chunked seeded RNG streams
 //!   and in-order reductions.
 
-pub mod distance;
-pub mod reference;
-pub mod report;
-pub mod sample;
+mod distance;
+mod reference;
+mod report;
+mod sample;
 
 pub use distance::{Closest, SurfaceIndex};
-pub use reference::{Reference, level_samples};
+pub use reference::{LEVEL_SAMPLES_PER_FACE, MIN_LEVEL_SAMPLES, Reference, level_samples};
 pub use report::{CompareReport, DirectionStats, SymmetricStats};
-pub use sample::{SampleCounts, SamplingPlan, SurfaceSampler};
+pub use sample::{SampleCounts, SamplingPlan, SurfaceSampler, referenced_vertices, surface_bbox};
 
 use rayon::prelude::*;
 

@@ -20,9 +20,9 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use crate::octree::{Label, Octree, QBITS, morton, unmorton};
-use crate::silhouette::calibration::View;
 use crate::silhouette::carve::{Carved, SUB};
 use crate::silhouette::images::ViewImage;
+use lodkit_mesh::io::cameras::View;
 
 /// Views blended into a particle's colour.
 pub const BLEND_VIEWS: usize = 3;

@@ -40,8 +40,8 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use crate::octree::{Frame, Label, MortonMap, morton, unmorton};
-use crate::silhouette::calibration::View;
 use crate::silhouette::sat::Sat;
+use lodkit_mesh::io::cameras::View;
 
 /// Points per axis of a leaf's refinement sampling (64 points: one `u64`).
 pub const SUB: usize = 4;

@@ -2,19 +2,17 @@
 //! from a mask image, the alpha channel or a background colour key.
 //!
 //! Sizes are read from the header and bounded (`lodkit_mesh::image::MAX_SIDE` a side, and
-//! [`MAX_RUN_PIXELS`] for all the images of one run, [`PixelBudget`])
+//! `lodkit_mesh::image::MAX_RUN_PIXELS` for all the images of one run, `PixelBudget`)
 //! before any pixel buffer is allocated, so a small file whose header
 //! claims 16384² pixels costs nothing; a size that disagrees with the
 //! calibration's intrinsics is an error naming the camera.
 use std::path::Path;
 
+use lodkit_mesh::image::{RgbaImage, decode_rgba, image_size};
+use lodkit_mesh::io::cameras::View;
 use lodkit_mesh::io::input::read_file;
-// The decoder's home is `lodkit_mesh::image`; these paths stay for the
-// CLI's textures.
-pub use lodkit_mesh::image::{RgbaImage as Decoded, decode_rgba, header_size, image_size};
 
 use crate::error::{Error, Result};
-use crate::silhouette::calibration::View;
 
 /// Where silhouettes come from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -51,51 +49,6 @@ pub struct ViewImage {
     pub silhouette: Vec<bool>,
 }
 
-/// Most pixels the images of one run may hold together (64 Mi: 64 views
-/// of 1024², or one 8192² texture). Each decoded pixel costs 4 to 12 bytes
-/// while decoding and some 8 kept (colour, silhouette, summed-area table),
-/// so this keeps a run's images under about 700 MB.
-pub const MAX_RUN_PIXELS: u64 = 1 << 26;
-
-/// The pixels one run may still decode; every decode charges its header
-/// size before allocating.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct PixelBudget {
-    left: u64,
-}
-
-impl PixelBudget {
-    /// A budget of `pixels`.
-    pub const fn new(pixels: u64) -> PixelBudget {
-        PixelBudget { left: pixels }
-    }
-
-    /// A run's budget, [`MAX_RUN_PIXELS`].
-    pub const fn run() -> PixelBudget {
-        PixelBudget::new(MAX_RUN_PIXELS)
-    }
-
-    /// Pixels still allowed.
-    pub fn left(&self) -> u64 {
-        self.left
-    }
-
-    /// Takes `width × height` pixels from the budget. Errors (one phrase):
-    /// the image does not fit in what is left.
-    pub fn charge(&mut self, width: u32, height: u32) -> std::result::Result<(), String> {
-        let px = u64::from(width) * u64::from(height);
-        if px > self.left {
-            return Err(format!(
-                "an image of {width}x{height} pixels does not fit in the {} pixels left of the \
-                 run's budget of {MAX_RUN_PIXELS} (all its images together)",
-                self.left
-            ));
-        }
-        self.left -= px;
-        Ok(())
-    }
-}
-
 /// Reads and decodes `path` when its header says `size` (checked before
 /// any pixel is decoded); `mismatch` words the error when it does not.
 fn read_image(
@@ -105,7 +58,7 @@ fn read_image(
     what: &str,
     size: (u32, u32),
     mismatch: &dyn Fn(u32, u32) -> String,
-) -> Result<Decoded> {
+) -> Result<RgbaImage> {
     if !path.is_file() {
         return Err(Error::Input(format!(
             "{}: {who}: {what} {} is missing",
@@ -203,10 +156,4 @@ pub fn load(file: &Path, view: &View, source: SilhouetteSource) -> Result<ViewIm
         rgb,
         silhouette,
     })
-}
-
-/// Decodes image bytes (the fuzz target's entry): width and height.
-#[doc(hidden)]
-pub fn decode_for_fuzzing(bytes: &[u8]) -> std::result::Result<(u32, u32), String> {
-    decode_rgba(bytes).map(|d| (d.width, d.height))
 }

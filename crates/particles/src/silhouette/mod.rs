@@ -6,11 +6,11 @@
 //! (the visual hull of Laurentini 1994, carved as an octree after Szeliski
 //! 1993 and Schmitt & Yemez 1999), each particle coloured from the images.
 //!
-//! Stages, one file each: [`calibration`] (COLMAP text model, NeRF
-//! `transforms.json`) → [`images`] (PNG/JPEG, silhouettes from masks,
-//! alpha or a colour key) → [`sat`] (summed-area tables) → [`carve`]
+//! Stages, one file each: the calibration (COLMAP text model, NeRF
+//! `transforms.json`, read by `lodkit_mesh::io::cameras`) → `images` (PNG/JPEG, silhouettes from masks,
+//! alpha or a colour key) → `sat` (summed-area tables) → `carve`
 //! (IN/OUT/ON octree to level `R`) → the existing thinning (§4.3) →
-//! [`attributes`] (vertex, normal, colour) → the existing ordering,
+//! `attributes` (vertex, normal, colour) → the existing ordering,
 //! coding and container, unchanged.
 //!
 //! ```no_run
@@ -21,9 +21,8 @@
 //! let (pop, report) = encode_silhouettes(&set, &SilhouetteOptions::DEFAULT, &opts).unwrap();
 //! ```
 pub(crate) mod attributes;
-pub mod calibration;
 pub(crate) mod carve;
-pub mod images;
+pub(crate) mod images;
 pub(crate) mod sat;
 
 use std::path::Path;
@@ -35,8 +34,9 @@ use crate::encode::{EncodeOptions, Encoded, encode_thinned};
 use crate::error::{Error, Result};
 use crate::octree::{Frame, LeafAttributes, Level, MAX_DEPTH, Octree, Sidedness};
 use crate::thinning::thin_choosing;
-pub use calibration::{Calibration, Lens, View};
 pub use images::{SilhouetteSource, ViewImage};
+use lodkit_mesh::image::PixelBudget;
+use lodkit_mesh::io::cameras::{self, Calibration, View};
 use sat::Sat;
 
 /// Level of the coarse carvings that find the box of the cameras' common
@@ -58,21 +58,31 @@ pub struct ImageSet {
 }
 
 impl ImageSet {
-    /// Reads the calibration at `path` ([`calibration::read`]) and every
+    /// Reads the calibration at `path` (`lodkit_mesh::io::cameras::read`) and every
     /// image and silhouette (in parallel).
     ///
     /// Errors: one line naming the calibration file and the camera — a
     /// malformed line or key, an image missing, unreadable or not of the
     /// intrinsics' size (checked from its header, before decoding), no
     /// silhouette source, an empty silhouette; the views' pixels together
-    /// over [`images::MAX_RUN_PIXELS`] (checked from the calibration,
+    /// over `lodkit_mesh::image::MAX_RUN_PIXELS` (checked from the calibration,
     /// before any image is read). Memory: 8 bytes a pixel of every view,
     /// plus some 16 bytes a pixel of the views being decoded (at most
     /// [`DECODE_BATCH_PIXELS`] at once).
     pub fn load(path: &Path, source: SilhouetteSource) -> Result<ImageSet> {
-        let calibration = calibration::read(path)?;
+        let calibration = cameras::read(path).map_err(|e| Error::Input(e.to_string()))?;
+        ImageSet::from_calibration(calibration, source)
+    }
+
+    /// Reads every image and silhouette of a calibration already read
+    /// (in parallel): [`ImageSet::load`] without reading the calibration
+    /// file again. Errors and memory as [`ImageSet::load`].
+    pub fn from_calibration(
+        calibration: Calibration,
+        source: SilhouetteSource,
+    ) -> Result<ImageSet> {
         let file = calibration.file.clone();
-        let mut budget = images::PixelBudget::run();
+        let mut budget = PixelBudget::run();
         for v in &calibration.views {
             budget.charge(v.lens.width, v.lens.height).map_err(|e| {
                 Error::Input(format!(
@@ -346,7 +356,7 @@ fn finest_depth(set: &ImageSet, frame: &Frame) -> u8 {
 
 /// Carves the image set's octree to `opts.depth` (`None`: leaves of about
 /// a pixel, [`auto_depth`]), thins it with `opts.thinning` and computes
-/// the particle attributes (see [`attributes`]).
+/// the particle attributes (see `attributes`).
 ///
 /// Errors: a depth outside `1..=16` or finer than the images resolve
 /// (leaves under half a pixel in every view), a carving past

@@ -1,142 +1,29 @@
-//! Calibrated views from the two layouts people have: a COLMAP text model
-//! (`cameras.txt` + `images.txt`) and NeRF's `transforms.json`.
-//!
-//! Both become [`View`]s: the image (and mask) path, pinhole intrinsics
-//! with radial-tangential distortion, and the world-to-camera pose in the
-//! OpenCV frame (+X right, +Y down, +Z forward), COLMAP's pixel convention
-//! (the top-left pixel's centre at `(0.5, 0.5)`; nerfstudio's too).
+//! The readers: a COLMAP text model (`cameras.txt` + `images.txt`) and
+//! NeRF's `transforms.json`, to a [`Calibration`].
 //!
 //! **Paths.** Every name a calibration file holds goes through
-//! [`lodkit_mesh::io::input::resolve_inside`]: relative, no `..`, no
-//! scheme, inside the folder it is relative to (the JSON file's folder; for
-//! COLMAP the image folder, COLMAP's own convention for `NAME`). NeRF paths
-//! are percent-decoded first. **Errors** are one line naming the file, the
-//! camera (frame index or image id and its name) and what is wrong.
+//! [`resolve_inside`]: relative, no `..`, no scheme, inside the folder it
+//! is relative to (the JSON file's folder; for COLMAP the image folder,
+//! COLMAP's own convention for `NAME`). NeRF paths are percent-decoded
+//! first. **Errors** are one line naming the file, the camera (frame index
+//! or image id and its name) and what is wrong.
 use std::path::{Path, PathBuf};
 
 use glam::{DMat3, DQuat, DVec3};
-use lodkit_mesh::Intrinsics;
-use lodkit_mesh::io::input::{lexically_inside, read_file, resolve_inside, strip_bom};
 
+use super::{
+    COLMAP_DIR, Calibration, IMAGES_DIR, Lens, MASKS_DIR, MAX_VIEWS, TRANSFORMS_FILE, View,
+};
+use crate::Intrinsics;
 use crate::error::{Error, Result};
-
-/// Most views one calibration may list.
-pub const MAX_VIEWS: usize = 10_000;
-/// Largest image side accepted, in pixels (the image decoder's).
-pub use lodkit_mesh::image::MAX_SIDE;
-
-/// Pinhole intrinsics ([`Intrinsics`], the renderer's type: COLMAP's
-/// convention, in pixels) with OpenCV's radial (`k1`, `k2`) and
-/// tangential (`p1`, `p2`) distortion. The pinhole's fields read through
-/// (`lens.fx` is `lens.intrinsics.fx`).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Lens {
-    /// Image size, focal lengths and principal point.
-    pub intrinsics: Intrinsics,
-    /// Radial distortion coefficients.
-    pub k1: f64,
-    /// See `k1`.
-    pub k2: f64,
-    /// Tangential distortion coefficients.
-    pub p1: f64,
-    /// See `p1`.
-    pub p2: f64,
-}
-
-impl std::ops::Deref for Lens {
-    type Target = Intrinsics;
-    fn deref(&self) -> &Intrinsics {
-        &self.intrinsics
-    }
-}
-
-impl Lens {
-    /// Distorts normalised image coordinates `(x, y)` (OpenCV's model).
-    pub fn distort(&self, x: f64, y: f64) -> (f64, f64) {
-        let r2 = x * x + y * y;
-        let s = 1.0 + self.k1 * r2 + self.k2 * r2 * r2;
-        (
-            x * s + 2.0 * self.p1 * x * y + self.p2 * (r2 + 2.0 * x * x),
-            y * s + self.p1 * (r2 + 2.0 * y * y) + 2.0 * self.p2 * x * y,
-        )
-    }
-
-    /// Whether any distortion coefficient is non-zero.
-    pub fn distorted(&self) -> bool {
-        self.k1 != 0.0 || self.k2 != 0.0 || self.p1 != 0.0 || self.p2 != 0.0
-    }
-
-    /// Largest displacement `|distort(p) − p|` (per axis) over the
-    /// normalised rectangle `[x0, x1] × [y0, y1]`: a bound from the
-    /// triangle inequality on each term of [`Lens::distort`].
-    pub fn displacement_bound(&self, x0: f64, x1: f64, y0: f64, y1: f64) -> (f64, f64) {
-        let ax = x0.abs().max(x1.abs());
-        let ay = y0.abs().max(y1.abs());
-        let r2 = ax * ax + ay * ay;
-        let radial = self.k1.abs() * r2 + self.k2.abs() * r2 * r2;
-        let dx = ax * radial + 2.0 * self.p1.abs() * ax * ay + self.p2.abs() * (r2 + 2.0 * ax * ax);
-        let dy = ay * radial + self.p1.abs() * (r2 + 2.0 * ay * ay) + 2.0 * self.p2.abs() * ax * ay;
-        (dx, dy)
-    }
-}
-
-/// One calibrated view.
-#[derive(Debug, Clone, PartialEq)]
-pub struct View {
-    /// How errors name the camera: `frame 3 (images/003.png)` or
-    /// `image 4 (003.png)`.
-    pub label: String,
-    /// The image file.
-    pub image: PathBuf,
-    /// A separate mask image, if the calibration names one or the layout's
-    /// mask folder holds one.
-    pub mask: Option<PathBuf>,
-    /// Intrinsics.
-    pub lens: Lens,
-    /// World-to-camera rotation, OpenCV axes.
-    pub rotation: DMat3,
-    /// World-to-camera translation: `x_cam = rotation · x + translation`.
-    pub translation: DVec3,
-}
-
-impl View {
-    /// Camera centre in world coordinates.
-    pub fn centre(&self) -> DVec3 {
-        -(self.rotation.transpose() * self.translation)
-    }
-
-    /// A world point in the camera frame (OpenCV axes; `z` = depth).
-    pub fn to_camera(&self, p: DVec3) -> DVec3 {
-        self.rotation * p + self.translation
-    }
-
-    /// Pixel position of a world point, or `None` behind the camera.
-    pub fn project(&self, p: DVec3) -> Option<(f64, f64)> {
-        let c = self.to_camera(p);
-        if c.z <= 0.0 {
-            return None;
-        }
-        let (x, y) = self.lens.distort(c.x / c.z, c.y / c.z);
-        Some((
-            self.lens.fx * x + self.lens.cx,
-            self.lens.fy * y + self.lens.cy,
-        ))
-    }
-}
-
-/// Views read from one calibration file.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Calibration {
-    /// The file read (`transforms.json` or `cameras.txt`), for messages.
-    pub file: PathBuf,
-    /// The views, in the file's order.
-    pub views: Vec<View>,
-    /// The object box the file states (lodkit's `object_bbox` extra), if any.
-    pub bbox: Option<(DVec3, DVec3)>,
-}
+use crate::image::MAX_SIDE;
+use crate::io::input::{lexically_inside, read_file, resolve_inside, strip_bom};
 
 fn err<T>(file: &Path, msg: impl std::fmt::Display) -> Result<T> {
-    Err(Error::Input(format!("{}: {msg}", file.display())))
+    Err(Error::Parse {
+        path: file.to_path_buf(),
+        message: msg.to_string(),
+    })
 }
 
 /// Reads a calibration: a `transforms.json` (any `.json`), a COLMAP
@@ -149,10 +36,10 @@ fn err<T>(file: &Path, msg: impl std::fmt::Display) -> Result<T> {
 pub fn read(path: &Path) -> Result<Calibration> {
     let path = if path.is_dir() {
         let found = [
-            "transforms.json",
-            "sparse/0/cameras.txt",
-            "sparse/cameras.txt",
-            "cameras.txt",
+            TRANSFORMS_FILE.to_string(),
+            format!("{COLMAP_DIR}/cameras.txt"),
+            "sparse/cameras.txt".to_string(),
+            "cameras.txt".to_string(),
         ]
         .iter()
         .map(|n| path.join(n))
@@ -183,19 +70,8 @@ pub fn read(path: &Path) -> Result<Calibration> {
     }
 }
 
-/// Whether `path` names a calibration [`read`] takes (by its name only).
-pub fn is_calibration(path: &Path) -> bool {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().to_ascii_lowercase());
-    matches!(
-        name.as_deref(),
-        Some("transforms.json" | "cameras.txt" | "images.txt")
-    )
-}
-
 fn read_text(path: &Path) -> Result<String> {
-    let bytes = read_file(path).map_err(|e| Error::Input(e.to_string()))?;
+    let bytes = read_file(path)?;
     match std::str::from_utf8(strip_bom(&bytes)) {
         Ok(s) => Ok(s.to_string()),
         Err(e) => err(
@@ -273,7 +149,7 @@ fn colmap_image_dir(model_dir: &Path) -> (PathBuf, &'static str) {
             None => break,
         }
     }
-    if model_dir.join("images").is_dir() {
+    if model_dir.join(IMAGES_DIR).is_dir() {
         (model_dir.to_path_buf(), "images/")
     } else {
         (model_dir.to_path_buf(), "")
@@ -396,7 +272,7 @@ fn parse_colmap(cameras: &Path, ctext: &str, images: &Path, itext: &str) -> Resu
     let (base, prefix) = colmap_image_dir(model_dir);
     // Masks sit in `masks/` beside `images/`.
     let (mask_base, mask_prefix) = if prefix.is_empty() {
-        (base.with_file_name("masks"), "")
+        (base.with_file_name(MASKS_DIR), "")
     } else {
         (base.clone(), "masks/")
     };
@@ -642,7 +518,7 @@ fn parse_transforms(path: &Path, text: &str) -> Result<Calibration> {
         let (w, h) = match (key("w")?, key("h")?) {
             (Some(w), Some(h)) => (w, h),
             _ => {
-                let (w, h) = lodkit_mesh::image::header_size(&image)
+                let (w, h) = crate::image::header_size(&image)
                     .or_else(|e| err(path, format!("{who}: no w, h given, and {e}")))?;
                 (f64::from(w), f64::from(h))
             }
@@ -778,7 +654,7 @@ pub fn parse_for_fuzzing(json: bool, bytes: &[u8]) -> Result<usize> {
     let text = |b: &[u8]| {
         std::str::from_utf8(b)
             .map(str::to_owned)
-            .map_err(|e| Error::Input(e.to_string()))
+            .map_err(|e| Error::Invalid(e.to_string()))
     };
     let r = if json {
         parse_transforms(&dir.join("transforms.json"), &text(bytes)?)
