@@ -1,11 +1,11 @@
 //! `.pop` progressive octree particle streams (`lodkit pop encode|decode`).
 
+use lodkit::progress::Progress;
+use lodkit::stream_encode::{StreamSource, encode_model};
 use lodkit_particles::{
     DecodeOptions, EncodeOptions, Mode, Placement, ThinningOptions, TriangulateOptions, decode,
     decode_prefix, triangulate,
 };
-use lodkit::progress::Progress;
-use lodkit::stream_encode::{StreamSource, encode_model};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 

@@ -94,11 +94,11 @@ fn materials_of(
 ) -> Result<std::result::Result<lodkit_mesh::Scene, lodkit_mesh::TriMesh>> {
     use lodkit_mesh::io::Format;
     let scene = match Format::from_path(input) {
-        Some(Format::Ply) => lodkit_mesh::io::scene_io::ply_scene(input, mesh.clone()),
+        Some(Format::Ply) => lodkit_mesh::io::ply_scene(input, mesh.clone()),
         Some(Format::Obj | Format::Gltf | Format::Glb) => lodkit_mesh::io::load_scene(input)?,
         _ => return Ok(Err(mesh)),
     };
-    if scene.is_plain_mesh() || !lodkit_mesh::io::scene_io::has_materials(&scene) {
+    if scene.is_plain_mesh() || !lodkit_mesh::io::has_materials(&scene) {
         return Ok(Err(mesh));
     }
     for w in &scene.warnings {

@@ -102,7 +102,7 @@ pub fn tileset_from_scene(
             Error::Input(format!(
                 "texture image {} ({}): {e}",
                 t.image,
-                lodkit_mesh::error::escape(what)
+                lodkit_mesh::escape(what)
             ))
         })?;
         decoded[r.texture] = Some((rgba, image.bytes.clone()));

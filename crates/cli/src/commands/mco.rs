@@ -2,7 +2,7 @@
 //! octree).
 use std::path::{Path, PathBuf};
 
-use anyhow::Result;
+use anyhow::{Result, bail};
 use clap::{Args, Subcommand};
 use lodkit_mco::Camera;
 use lodkit_mesh::glam::Vec3;

@@ -70,10 +70,7 @@ pub fn scale_textures(mut scene: Scene, faces: usize, full: usize) -> anyhow::Re
         let scaled = resample(&rgba, [0, 0, w, h], nw, nh);
         let (bytes, mime) = encode_like(&image.bytes, &scaled).map_err(|e| {
             let what = image.file_name.as_deref().unwrap_or("an embedded image");
-            anyhow::anyhow!(
-                "level image {i} ({}): {e}",
-                lodkit_mesh::error::escape(what)
-            )
+            anyhow::anyhow!("level image {i} ({}): {e}", lodkit_mesh::escape(what))
         })?;
         image.bytes = bytes;
         image.mime_type = mime.to_string();

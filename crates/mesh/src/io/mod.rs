@@ -52,7 +52,7 @@ mod stl;
 pub mod stl_stream;
 mod xyz;
 
-pub use scene_io::{load_scene, ply_scene, save_scene, save_scene_with};
+pub use scene_io::{has_materials, load_scene, ply_scene, save_scene, save_scene_with};
 
 #[cfg(not(target_arch = "wasm32"))]
 use std::io::Write;

@@ -332,3 +332,12 @@ fn save_obj(path: &Path, scene: &Scene) -> Result<()> {
     }
     super::write_atomic(path, &obj)
 }
+
+/// Whether faces of `scene` use any material.
+pub fn has_materials(scene: &Scene) -> bool {
+    scene.meshes.iter().any(|m| {
+        m.face_materials
+            .iter()
+            .any(|&f| f != crate::scene::NO_MATERIAL)
+    })
+}
