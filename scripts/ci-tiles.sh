@@ -41,7 +41,7 @@ fi
 lodkit=${LODKIT:-$root/target/release/lodkit}
 if [ ! -x "$lodkit" ]; then
   echo "== release binary"
-  cargo build --release --quiet -p lodkit
+  cargo build --release --quiet -p lodkit-cli
 fi
 echo "== the viewer and the npm packages"
 scripts/build-web.sh "$work/site"

@@ -26,9 +26,14 @@ pub struct TilesArgs {
     #[arg(long, value_name = "N", default_value_t = PointTilesOptions::DEFAULT_LEAF_POINTS,
           value_parser = value::range(PointTilesOptions::LEAF_POINTS))]
     pub leaf_points: usize,
-    /// Compressed tiles: EXT_meshopt_compression with KHR_mesh_quantization
-    /// (needs lodkit built with `--features compress`).
+    /// Plain tiles: no EXT_meshopt_compression, float normals (positions
+    /// stay quantised on the tileset's shared grid). Tiles are compressed
+    /// by default (EXT_meshopt_compression, KHR_mesh_quantization,
+    /// octahedral normals).
     #[arg(long)]
+    pub no_compress: bool,
+    /// Compressed tiles (the default; kept for scripts that ask for it).
+    #[arg(long, hide = true, conflicts_with = "no_compress")]
     pub compress: bool,
     /// No skirts under tile borders (slivers may show where tiles of
     /// different levels meet).
@@ -42,12 +47,12 @@ pub fn run(ui: &Ui, args: &TilesArgs) -> Result<()> {
         out: args.out.clone(),
         mesh: TilesOptions {
             leaf_triangles: args.leaf_triangles,
-            compress: args.compress,
+            compress: args.compress || (!args.no_compress && cfg!(feature = "compress")),
             skirts: !args.no_skirts,
         },
         points: PointTilesOptions {
             leaf_points: args.leaf_points,
-            compress: args.compress,
+            compress: args.compress || (!args.no_compress && cfg!(feature = "compress")),
         },
     };
     let tileset = args.out.join("tileset.json");
