@@ -86,6 +86,7 @@ def tiles(
     leaf_triangles: Optional[int] = None,
     leaf_points: Optional[int] = None,
     skirts: bool = True,
+    memory: Optional[int] = None,
 ) -> Dict[str, Any]: ...
 
 def compare(

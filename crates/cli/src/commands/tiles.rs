@@ -34,6 +34,12 @@ pub struct TilesArgs {
     /// different levels meet).
     #[arg(long)]
     pub no_skirts: bool,
+    /// Meshes: a binary PLY whose in-core tiling would need more than
+    /// --memory (about 400 bytes per triangle) is tiled out of core, in
+    /// bounded memory, staged beside --out (the same command resumes a
+    /// failed run). --ray runs its simplification blocks as Ray tasks.
+    #[command(flatten)]
+    pub scale: crate::args::OutOfCoreArgs,
 }
 
 pub fn run(ui: &Ui, args: &TilesArgs) -> Result<()> {
@@ -49,6 +55,7 @@ pub fn run(ui: &Ui, args: &TilesArgs) -> Result<()> {
             leaf_points: args.leaf_points,
             compress: args.compress,
         },
+        scale: args.scale.options(),
     };
     let tileset = args.out.join("tileset.json");
     match ui.run(|events| lodkit::tiles::run(&job, events))? {
