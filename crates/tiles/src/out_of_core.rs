@@ -490,7 +490,10 @@ fn build(
                     .into_iter()
                     .map(|i| (tree.nodes[i].key, i))
                     .collect();
-                progress(ScaleEvent::Phase("level: faces by cell", total));
+                progress(ScaleEvent::Phase(
+                    &format!("level {k}: faces by cell"),
+                    total,
+                ));
                 let mut spill = Spill::new(&dir, layout, n, buffers)?;
                 let mut c = 0u64;
                 each(&mut |t| {
@@ -598,7 +601,7 @@ fn build(
             at.iter().for_each(|&i| staged[i] = None);
         }
         progress(ScaleEvent::Phase(
-            "tiles: weld, refit, measure",
+            &format!("tiles at depth {k}: weld, refit, measure"),
             at.len() as u64,
         ));
         let mut record = String::new();
