@@ -116,6 +116,9 @@ pub type OutOfCoreEvent<'a> = ScaleEvent<'a>;
 /// interrupted run handed over before its spill was complete).
 const RESTART: &str = "lodkit-tiles: staging spill incomplete, restart";
 
+/// A stream of faces handed to a sink (which may fail).
+type Faces<'a> = dyn FnMut(&mut dyn FnMut(&[Corner; 3]) -> Result<()>) -> Result<()> + 'a;
+
 /// Faces between progress advances.
 const ADVANCE_EVERY: u64 = 1 << 16;
 
@@ -396,7 +399,7 @@ fn build(
                 .entry(morton(grid.cell_of(centroid(t), fine)))
                 .or_insert(0) += 1;
             faces += 1;
-            if faces % ADVANCE_EVERY == 0 {
+            if faces.is_multiple_of(ADVANCE_EVERY) {
                 progress(ScaleEvent::Advance(ADVANCE_EVERY));
             }
             Ok(())
@@ -440,7 +443,7 @@ fn build(
             })?;
             spill.put(node as usize, t)?;
             k += 1;
-            if k % ADVANCE_EVERY == 0 {
+            if k.is_multiple_of(ADVANCE_EVERY) {
                 progress(ScaleEvent::Advance(ADVANCE_EVERY));
             }
             Ok(())
@@ -480,35 +483,31 @@ fn build(
             staging: o.staging.join("chain"),
             runner: o.runner.clone(),
         };
-        let spill_level =
-            |k: u8,
-             each: &mut dyn FnMut(&mut dyn FnMut(&[Corner; 3]) -> Result<()>) -> Result<()>,
-             total: u64|
-             -> Result<()> {
-                let dir = cells.join(format!("d{k}"));
-                let slot: HashMap<CellKey, usize> = internal_at(k)
-                    .into_iter()
-                    .map(|i| (tree.nodes[i].key, i))
-                    .collect();
-                progress(ScaleEvent::Phase(
-                    &format!("level {k}: faces by cell"),
-                    total,
-                ));
-                let mut spill = Spill::new(&dir, layout, n, buffers)?;
-                let mut c = 0u64;
-                each(&mut |t| {
-                    if let Some(&i) = slot.get(&tree.grid.cell_of(centroid(t), k)) {
-                        spill.put(i, t)?;
-                    }
-                    c += 1;
-                    if c % ADVANCE_EVERY == 0 {
-                        progress(ScaleEvent::Advance(ADVANCE_EVERY));
-                    }
-                    Ok(())
-                })?;
-                progress(ScaleEvent::Advance(c % ADVANCE_EVERY));
-                spill.finish(&cells.join(format!("d{k}.done")))
-            };
+        let spill_level = |k: u8, each: &mut Faces, total: u64| -> Result<()> {
+            let dir = cells.join(format!("d{k}"));
+            let slot: HashMap<CellKey, usize> = internal_at(k)
+                .into_iter()
+                .map(|i| (tree.nodes[i].key, i))
+                .collect();
+            progress(ScaleEvent::Phase(
+                &format!("level {k}: faces by cell"),
+                total,
+            ));
+            let mut spill = Spill::new(&dir, layout, n, buffers)?;
+            let mut c = 0u64;
+            each(&mut |t| {
+                if let Some(&i) = slot.get(&tree.grid.cell_of(centroid(t), k)) {
+                    spill.put(i, t)?;
+                }
+                c += 1;
+                if c.is_multiple_of(ADVANCE_EVERY) {
+                    progress(ScaleEvent::Advance(ADVANCE_EVERY));
+                }
+                Ok(())
+            })?;
+            progress(ScaleEvent::Advance(c % ADVANCE_EVERY));
+            spill.finish(&cells.join(format!("d{k}.done")))
+        };
         let result = lodkit_scale::lod_chain_file(input, &targets, &so, progress, &mut |i, l| {
             let k = d - 1 - i as u8;
             let done = cells.join(format!("d{k}.done"));
