@@ -33,15 +33,20 @@
 //!    that boundary). A rim of the input near a cell's boundary gets a
 //!    skirt too, which hangs below the surface and costs four triangles
 //!    per edge.
-//! 5. **Errors** without the input: a tile `N` is measured against its
-//!    children's tiles `R(N)` (both directions, the symmetric maximum,
-//!    as in core), and `geometricError(N) = d(N, R(N)) + max over
-//!    children of geometricError(child)`, leaves 0 (plus rounding, as in
-//!    core). The input in `N`'s cell is the union of its children's
-//!    inputs, so by the triangle inequality on Hausdorff distances this
-//!    bounds `N`'s distance to its input from above: an honest
-//!    `geometricError` (≥ the measured error), looser than in core by
-//!    the error of the levels in between.
+//! 5. **Errors** without the whole input: a tile whose cell holds few
+//!    enough input faces (a quarter of the budget at
+//!    `MEASURE_BYTES_PER_FACE`) is measured against them, read back from
+//!    its leaves' tiles, exactly as in core (both directions, the
+//!    symmetric maximum; at least its children's errors). A tile `N`
+//!    above that is measured against its children's tiles `R(N)`, and
+//!    `geometricError(N) = d(N, R(N)) + max over children of
+//!    geometricError(child)`. The input in `N`'s cell is the union of its
+//!    children's inputs, so by the triangle inequality on Hausdorff
+//!    distances this bounds `N`'s distance to its input from above: an
+//!    honest `geometricError` (≥ the measured error), looser than in core
+//!    by the errors of the levels below (on a 10⁶-face blob with every
+//!    tile bounded so, the root's 2.4× the in-core measure). Leaves 0
+//!    (plus rounding, as in core).
 //! 6. **Write**: each staged tile is read back, its skirts hung, encoded
 //!    on its depth's grid, through the same output-folder rule as in
 //!    core. Bounding boxes include where skirts may hang (each tile's box
@@ -115,6 +120,12 @@ pub type OutOfCoreEvent<'a> = ScaleEvent<'a>;
 /// The message by which a level handler asks for a restart (a level an
 /// interrupted run handed over before its spill was complete).
 const RESTART: &str = "lodkit-tiles: staging spill incomplete, restart";
+
+/// Bytes per face of a measurement region (the mesh and its distance
+/// index, about 150, with room): a tile whose cell's input fits a
+/// quarter of the budget at this rate is measured against that input
+/// directly, as in core; one above it through its children's tiles.
+const MEASURE_BYTES_PER_FACE: u64 = 200;
 
 /// A stream of faces handed to a sink (which may fail).
 type Faces<'a> = dyn FnMut(&mut dyn FnMut(&[Corner; 3]) -> Result<()>) -> Result<()> + 'a;
@@ -623,23 +634,37 @@ fn build(
                 mesh.normals = Some(lodkit_mesh::normals::vertex_normals(&mesh));
             }
             let cuts = cut_edges(&mesh, &tree.grid, tree.nodes[i].key);
-            // The children's tiles stand for the input of this cell.
             let mut error = 0.0f64;
             if !is_leaf(i) {
+                let child_error = tree.nodes[i]
+                    .children
+                    .iter()
+                    .filter_map(|&c| staged[c].map(|s| s.error))
+                    .fold(0.0f64, f64::max);
+                let direct = (tree.nodes[i].input_faces as u64)
+                    .saturating_mul(MEASURE_BYTES_PER_FACE)
+                    <= o.memory / 4;
+                // The input of this cell (its leaves' tiles) when it fits
+                // a quarter of the budget, as in core; else the children's
+                // tiles, which stand for it up to their own error.
                 let mut region = TriMesh::default();
-                let mut child_error = 0.0f64;
-                for &c in &tree.nodes[i].children {
-                    if let Some(s) = staged[c] {
-                        let t = StagedTile::read(&tile_path(c))?;
-                        append(&mut region, &t.mesh);
-                        child_error = child_error.max(s.error);
+                let mut stack = tree.nodes[i].children.clone();
+                while let Some(c) = stack.pop() {
+                    if direct && !is_leaf(c) {
+                        stack.extend(tree.nodes[c].children.iter().rev());
+                    } else if staged[c].is_some() {
+                        append(&mut region, &StagedTile::read(&tile_path(c))?.mesh);
                     }
                 }
                 if !region.faces.is_empty() {
                     let reference = Reference::new(&region)?;
                     error = reference.compare_level(&mesh, None)?.symmetric.max;
                 }
-                error += child_error;
+                error = if direct {
+                    error.max(child_error)
+                } else {
+                    error + child_error
+                };
             }
             let normals = mesh.normals.as_deref().unwrap_or_default();
             let s = Staged {
