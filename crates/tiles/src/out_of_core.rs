@@ -585,6 +585,15 @@ fn build(
             Err(e) if e == RESTART => return Ok(None),
             Err(e) => return Err(Error::Simplify(e)),
         }
+        // A chain that stalled (the simplifier could not go lower) made
+        // fewer levels than the depths ask.
+        if let Some(k) = (0..d).find(|k| !cells.join(format!("d{k}.done")).exists()) {
+            return Err(Error::Simplify(format!(
+                "{}: the level chain stopped before depth {k}'s level (the mesh cannot be simplified to {} faces); use a larger --leaf-triangles",
+                input.display(),
+                level_target(&targets, d, k)
+            )));
+        }
     }
     let t_levels = t1.elapsed().as_secs_f64();
 
@@ -783,6 +792,15 @@ fn build(
         seconds: [t_partition, t_levels, t_measure, t3.elapsed().as_secs_f64()],
         bytes,
     }))
+}
+
+/// The face target of depth `k`'s level (`targets` run from depth
+/// `d − 1` up to 0).
+fn level_target(targets: &[Target], d: u8, k: u8) -> usize {
+    match targets[(d - 1 - k) as usize] {
+        Target::Faces(f) => f,
+        Target::Ratio(_) => 0,
+    }
 }
 
 /// `b`'s triangles added to `a` (positions only: a measurement region).
