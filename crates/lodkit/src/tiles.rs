@@ -50,13 +50,17 @@ pub enum TilesReport {
 }
 
 /// Runs the job: reads the input, builds the tileset in memory, writes it
-/// into `out` atomically.
+/// into `out` atomically. A binary PLY mesh whose in-core tiling would
+/// exceed `job.scale.memory` is tiled out of core instead
+/// (`lodkit_tiles::tileset_out_of_core`: never loaded whole; its staging
+/// folder beside `out` is kept after a failure, so the same job resumes,
+/// and removed after success).
 ///
 /// Errors: an unreadable input or one with nothing to tile (one line
 /// naming the file); an output folder that is not lodkit's, or an option
 /// out of range ([`crate::usage::Usage`]). Cost: see `lodkit-tiles` (about
 /// one `simplify` of a mesh plus one distance measurement per tile; a
-/// cloud in `O(points × depth)`).
+/// cloud in `O(points × depth)`; out of core, about `--memory`).
 pub fn run(job: &TilesJob, events: &Progress) -> Result<TilesReport> {
     if let Some((memory, in_core)) = out_of_core_memory(job, events) {
         events.status(format!(
