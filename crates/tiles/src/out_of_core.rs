@@ -44,9 +44,11 @@
 //!    children's inputs, so by the triangle inequality on Hausdorff
 //!    distances this bounds `N`'s distance to its input from above: an
 //!    honest `geometricError` (≥ the measured error), looser than in core
-//!    by the errors of the levels below (on a 10⁶-face blob with every
-//!    tile bounded so, the root's 2.4× the in-core measure). Leaves 0
-//!    (plus rounding, as in core).
+//!    by the errors of the levels below. Leaves 0 (plus rounding, as in
+//!    core). Measured on a 10⁶-face blob at `--memory 200M`: the root's
+//!    `geometricError` 2.1× the in-core one, while the geometry is as
+//!    good (the input's mean distance to each depth's cut 0.73–0.95× the
+//!    in-core tileset's).
 //! 6. **Write**: each staged tile is read back, its skirts hung, encoded
 //!    on its depth's grid, through the same output-folder rule as in
 //!    core. Bounding boxes include where skirts may hang (each tile's box
