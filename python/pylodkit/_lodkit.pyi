@@ -92,6 +92,8 @@ def tiles(
     leaf_triangles: Optional[int] = None,
     leaf_points: Optional[int] = None,
     skirts: bool = True,
+    memory: Optional[int] = None,
+    compress: bool = True,
 ) -> Dict[str, Any]: ...
 
 def simplify_file(

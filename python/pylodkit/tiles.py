@@ -13,7 +13,8 @@ __all__ = ["tiles"]
 
 def tiles(input: Union[str, os.PathLike], out: Union[str, os.PathLike], *,
           leaf_triangles: Optional[int] = None, leaf_points: Optional[int] = None,
-          skirts: bool = True) -> Dict[str, Any]:
+          skirts: bool = True, memory: Optional[int] = None,
+          compress: bool = True) -> Dict[str, Any]:
     """Writes a 3D Tiles 1.1 tileset of the mesh or point cloud file
     ``input`` (any format lodkit reads, LAS/LAZ included) into the folder
     ``out`` (absent, empty, or one lodkit wrote; a folder holding other
@@ -23,7 +24,12 @@ def tiles(input: Union[str, os.PathLike], out: Union[str, os.PathLike], *,
     ``ADD`` point tiles (at most ``leaf_points`` a leaf). Returns what was
     written: ``kind``, ``tiles``, ``depth``, ``root_error``, ``bytes``,
     ``tileset`` (the path of ``tileset.json``), and ``level_triangles`` (a
-    mesh) or ``points`` and ``origin`` (a cloud).
+    mesh) or ``points`` and ``origin`` (a cloud). ``memory`` (bytes, as
+    ``lodkit tiles --memory``; default a third of the machine's): a binary
+    PLY mesh whose in-core tiling would exceed it is tiled out of core, in
+    bounded memory, staged beside ``out``. ``compress``: tiles with
+    ``EXT_meshopt_compression`` (the default, as ``lodkit tiles``); False
+    writes plain tiles.
 
     Example::
 
@@ -36,4 +42,6 @@ def tiles(input: Union[str, os.PathLike], out: Union[str, os.PathLike], *,
         within("leaf_triangles", leaf_triangles, "tile_leaf_triangles"),
         within("leaf_points", leaf_points, "tile_leaf_points"),
         bool(skirts),
+        within("memory", memory, "memory"),
+        bool(compress),
     )

@@ -399,6 +399,7 @@ fn limits_dict(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     d.set_item("max_error", real(limits::MAX_ERROR))?;
     d.set_item("weight", real(limits::WEIGHT))?;
     d.set_item("prune", real(limits::PRUNE))?;
+    d.set_item("memory", (*limits::MEMORY.start(), *limits::MEMORY.end()))?;
     d.set_item(
         "tile_leaf_triangles",
         int(&lodkit_tiles::TilesOptions::LEAF_TRIANGLES),

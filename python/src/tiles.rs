@@ -1,4 +1,4 @@
-//! `tiles(input, out, leaf_triangles, leaf_points, skirts) -> dict`: the
+//! `tiles(input, out, leaf_triangles, leaf_points, skirts, memory) -> dict`: the
 //! library's `tiles` job (`lodkit tiles`), a 3D Tiles 1.1 tileset of a
 //! mesh or point cloud file written into the folder `out`.
 
@@ -16,7 +16,8 @@ use crate::errors::{Kind, raise};
 /// is not lodkit's, an option out of range) and bad input are
 /// `InputError`s, an I/O failure a `FileError`.
 #[pyfunction]
-#[pyo3(signature = (input, out, leaf_triangles = None, leaf_points = None, skirts = true))]
+#[pyo3(signature = (input, out, leaf_triangles = None, leaf_points = None, skirts = true, memory = None, compress = true))]
+#[allow(clippy::too_many_arguments)]
 pub fn tiles<'py>(
     py: Python<'py>,
     input: PathBuf,
@@ -24,19 +25,22 @@ pub fn tiles<'py>(
     leaf_triangles: Option<usize>,
     leaf_points: Option<usize>,
     skirts: bool,
+    memory: Option<u64>,
+    compress: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let job = TilesJob {
         input,
         out: out.clone(),
         mesh: TilesOptions {
             leaf_triangles: leaf_triangles.unwrap_or(TilesOptions::DEFAULT_LEAF_TRIANGLES),
-            compress: false,
+            compress,
             skirts,
         },
         points: PointTilesOptions {
             leaf_points: leaf_points.unwrap_or(PointTilesOptions::DEFAULT_LEAF_POINTS),
-            compress: false,
+            compress,
         },
+        scale: lodkit::plan::OutOfCore { memory, ray: None },
     };
     let report = py
         .detach(|| lodkit::tiles::run(&job, &Progress::silent()))

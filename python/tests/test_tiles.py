@@ -69,3 +69,17 @@ def test_bad_options_and_a_users_folder_are_refused(tmp_path):
     with pytest.raises(lk.LodkitError):
         lk.tiles(src, mine)
     assert (mine / "notes.txt").read_text() == "keep me"
+
+
+def test_a_tiny_memory_tiles_out_of_core_with_the_same_bytes(tmp_path):
+    src = tmp_path / "bunny.ply"
+    lk.save(lk.bunny(), src)
+    a = lk.tiles(src, tmp_path / "a", leaf_triangles=8000, memory=1 << 20)
+    b = lk.tiles(src, tmp_path / "b", leaf_triangles=8000, memory=1 << 20)
+    assert a["kind"] == "mesh" and a["tiles"] == b["tiles"] >= 2
+    for f in (tmp_path / "a").rglob("*"):
+        if f.is_file():
+            assert f.read_bytes() == (tmp_path / "b" / f.relative_to(tmp_path / "a")).read_bytes()
+    assert not [p for p in tmp_path.iterdir() if "lodkit-staging" in p.name]
+    with pytest.raises(lk.OptionError):
+        lk.tiles(src, tmp_path / "c", memory=12)

@@ -20,7 +20,8 @@ use lodkit_mesh::glam::Vec3;
 use lodkit_mesh::{Model, PointCloud};
 use lodkit_tiles::{Event as TilesEvent, Phase, PointTilesOptions, TilesOptions};
 
-use crate::progress::{Event, Progress};
+use crate::plan::{OutOfCore, kept};
+use crate::progress::{Event, Progress, human_bytes};
 use crate::usage::usage;
 
 /// What to tile and how.
@@ -35,6 +36,11 @@ pub struct TilesJob {
     pub mesh: TilesOptions,
     /// Options of a point cloud's tileset.
     pub points: PointTilesOptions,
+    /// `--memory` and `--ray`: a binary PLY mesh whose in-core tiling
+    /// would exceed the budget ([`lodkit_tiles::IN_CORE_BYTES_PER_FACE`]
+    /// per face) is tiled out of core, staged beside `out` (resumed by
+    /// the same command after a failure, removed after success).
+    pub scale: OutOfCore,
 }
 
 /// What a tiles job wrote.
@@ -47,14 +53,27 @@ pub enum TilesReport {
 }
 
 /// Runs the job: reads the input, builds the tileset in memory, writes it
-/// into `out` atomically.
+/// into `out` atomically. A binary PLY mesh whose in-core tiling would
+/// exceed `job.scale.memory` is tiled out of core instead
+/// (`lodkit_tiles::tileset_out_of_core`: never loaded whole; its staging
+/// folder beside `out` is kept after a failure, so the same job resumes,
+/// and removed after success).
 ///
 /// Errors: an unreadable input or one with nothing to tile (one line
 /// naming the file); an output folder that is not lodkit's, or an option
 /// out of range ([`crate::usage::Usage`]). Cost: see `lodkit-tiles` (about
 /// one `simplify` of a mesh plus one distance measurement per tile; a
-/// cloud in `O(points × depth)`).
+/// cloud in `O(points × depth)`; out of core, about `--memory`).
 pub fn run(job: &TilesJob, events: &Progress) -> Result<TilesReport> {
+    if let Some((memory, in_core)) = out_of_core_memory(job, events) {
+        events.status(format!(
+            "out of core: {} needs about {} to tile in core, over --memory {}; tiling in bounded memory",
+            job.input.display(),
+            human_bytes(in_core),
+            human_bytes(memory)
+        ));
+        return mesh_out_of_core(job, events, memory);
+    }
     let step = events.spinner(&format!("reading {}", job.input.display()));
     let located = lodkit_mesh::io::load_located(&job.input)?;
     step.finish();
@@ -106,6 +125,72 @@ fn materials_of(
     }
     crate::materials::texture_budget(&input.display().to_string(), &scene)?;
     Ok(Ok(scene))
+}
+
+/// The budget and the in-core estimate when `job.input` is tiled out of core: a `.ply` whose
+/// in-core tiling (estimated from its size) exceeds `--memory` and that
+/// the stream reader accepts (binary, vertices then faces). A `.ply` too
+/// big but not streamable is tiled in core, with one line saying so.
+fn out_of_core_memory(job: &TilesJob, events: &Progress) -> Option<(u64, u64)> {
+    use lodkit_mesh::io::Format;
+    if Format::from_path(&job.input) != Some(Format::Ply) {
+        return None;
+    }
+    let meta = std::fs::metadata(&job.input).ok().filter(|m| m.is_file())?;
+    let memory = job
+        .scale
+        .memory
+        .unwrap_or_else(lodkit_scale::default_memory);
+    let faces = meta.len() / lodkit_scale::PLY_BYTES_PER_FACE;
+    let in_core = faces.saturating_mul(lodkit_tiles::IN_CORE_BYTES_PER_FACE);
+    if in_core <= memory {
+        return None;
+    }
+    match lodkit_mesh::io::ply::stream::PlyStream::open(&job.input) {
+        Ok(s) if s.face_records() > 0 => Some((memory, in_core)),
+        Ok(_) => None,
+        Err(e) => {
+            events.status(format!(
+                "note: {} needs about {} to tile in core, over --memory {}, but cannot be streamed ({e}); tiling in core",
+                job.input.display(),
+                human_bytes(in_core),
+                human_bytes(memory)
+            ));
+            None
+        }
+    }
+}
+
+/// The mesh tileset of a binary PLY built out of core in `memory` bytes
+/// (`lodkit_tiles::tileset_out_of_core`), its staging folder beside `out`.
+fn mesh_out_of_core(job: &TilesJob, events: &Progress, memory: u64) -> Result<TilesReport> {
+    let settings = format!("tiles {:?}; memory {memory}", job.mesh);
+    let staging = lodkit_scale::staging_dir(&job.input, &job.out, &settings);
+    for old in lodkit_scale::remove_abandoned(&job.out, &staging) {
+        events.status(format!(
+            "removed {}, the staging folder an earlier run for this output left",
+            old.display()
+        ));
+    }
+    if staging.exists() {
+        events.status(format!("resuming from {}", staging.display()));
+    }
+    let o = lodkit_tiles::OutOfCoreOptions {
+        memory,
+        staging: staging.clone(),
+        runner: job.scale.runner(),
+    };
+    let report =
+        lodkit_tiles::tileset_out_of_core(&job.input, &job.out, &job.mesh, &o, &|e| match e {
+            lodkit_scale::Event::Phase(name, len) => events.emit(&Event::Phase { name, len }),
+            lodkit_scale::Event::Advance(k) => events.emit(&Event::Advance(k)),
+        })
+        .map_err(|e| match e {
+            lodkit_tiles::Error::Usage(m) => usage(m),
+            e => kept(&error(e, &job.input), &staging),
+        })?;
+    events.emit(&Event::PhasesFinished);
+    Ok(TilesReport::Mesh(report))
 }
 
 fn points(

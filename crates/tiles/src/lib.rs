@@ -67,8 +67,10 @@
 //! `simplify` of the input plus one distance measurement of every
 //! internal tile.
 
+mod cell_spill;
 mod level_chain;
 mod octree_partition;
+mod out_of_core;
 mod point_tiles;
 mod skirts;
 mod tile_content;
@@ -83,6 +85,9 @@ use lodkit_mesh::{Aabb, TriMesh};
 use lodkit_mesh::io::out_folder;
 pub use lodkit_mesh::io::out_folder::MANIFEST;
 pub use octree_partition::{CellKey, MAX_DEPTH};
+pub use out_of_core::{
+    IN_CORE_BYTES_PER_FACE, OutOfCoreEvent, OutOfCoreOptions, tileset_out_of_core,
+};
 pub use point_tiles::{
     PointTilesOptions, PointTilesReport, PointTileset, tileset_from_points, write_point_tileset,
 };

@@ -39,6 +39,18 @@ pub struct TilesArgs {
     /// different levels meet).
     #[arg(long)]
     pub no_skirts: bool,
+    /// Memory budget for a mesh, in 1M..=1P bytes (K, M, G, T, P: powers
+    /// of 1024; e.g. 8G, 512M). A binary PLY whose in-core tiling would
+    /// need more (about 400 bytes per triangle) is tiled out of core: never
+    /// loaded whole, staged beside --out (the same command resumes a
+    /// failed run; the staging is removed after success). Default: a third
+    /// of the machine's memory.
+    #[arg(long, value_name = "SIZE", value_parser = value::bytes(*lodkit::limits::MEMORY.start(), *lodkit::limits::MEMORY.end()))]
+    pub memory: Option<u64>,
+    /// Out of core: run the simplification blocks as Ray tasks (`local`,
+    /// `auto` or HOST:PORT, as `simplify --ray`); the same bytes as without.
+    #[arg(long, value_name = "ADDRESS", value_parser = value::ray_address)]
+    pub ray: Option<String>,
 }
 
 pub fn run(ui: &Ui, args: &TilesArgs) -> Result<()> {
@@ -53,6 +65,10 @@ pub fn run(ui: &Ui, args: &TilesArgs) -> Result<()> {
         points: PointTilesOptions {
             leaf_points: args.leaf_points,
             compress: args.compress || (!args.no_compress && cfg!(feature = "compress")),
+        },
+        scale: lodkit::plan::OutOfCore {
+            memory: args.memory,
+            ray: args.ray.clone(),
         },
     };
     let tileset = args.out.join("tileset.json");
