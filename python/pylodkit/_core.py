@@ -242,7 +242,7 @@ def bunny() -> Mesh:
     return Mesh(**_native.bunny())
 
 
-def blob(triangles: int, seed: int = 1) -> Mesh:
+def blob(triangles: int, seed: int = _check.DEFAULTS["noise_seed"]) -> Mesh:
     """A noise-displaced sphere of about ``triangles`` faces (closed, genus 0).
 
     The benchmarks' stand-in for a dense scan; deterministic for a seed.

@@ -41,7 +41,7 @@ def save(obj: Any, path: str, ascii: bool = False) -> None:
 def bunny() -> MeshDict:
     """The built-in Stanford bunny. Example: ``bunny()["faces"].shape``"""
 
-def blob(triangles: int, seed: int = 1) -> MeshDict:
+def blob(triangles: int, seed: int = ...) -> MeshDict:
     """A noise-displaced sphere of about ``triangles`` faces. Example: ``blob(10_000)``"""
 
 def icosphere(level: int) -> MeshDict:

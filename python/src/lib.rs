@@ -74,7 +74,7 @@ fn bunny(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
 /// `blob(triangles, seed) -> dict`: lodkit's noise-displaced sphere of
 /// about `triangles` faces (closed, genus 0; the benchmarks' large mesh).
 #[pyfunction]
-#[pyo3(signature = (triangles, seed = 1))]
+#[pyo3(signature = (triangles, seed = lodkit_mesh::shapes::DEFAULT_NOISE_SEED))]
 fn blob(py: Python<'_>, triangles: usize, seed: u32) -> PyResult<Bound<'_, PyDict>> {
     let m = py.detach(|| lodkit_mesh::shapes::blob_with_seed(triangles, seed));
     mesh_to_py(py, m)
@@ -432,6 +432,7 @@ fn defaults_dict(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     d.set_item("color_weight", AttributeWeights::DEFAULT.color)?;
     d.set_item("uv_weight", AttributeWeights::DEFAULT.uv)?;
     d.set_item("seed", lodkit_mesh::metrics::DEFAULT_SEED)?;
+    d.set_item("noise_seed", lodkit_mesh::shapes::DEFAULT_NOISE_SEED)?;
     d.set_item("fov", limits::DEFAULT_FOV)?;
     d.set_item("azimuth", limits::DEFAULT_VIEW.0)?;
     d.set_item("elevation", limits::DEFAULT_VIEW.1)?;

@@ -31,7 +31,7 @@ pub struct SubdividedArgs {
     #[arg(long, value_name = "N", value_parser = value::int(1u64, MAX_TRIANGLES))]
     pub triangles: u64,
     /// Noise seed, in 0..=4294967295.
-    #[arg(long, default_value_t = 1, value_parser = value::int(0u32, u32::MAX))]
+    #[arg(long, default_value_t = lodkit_mesh::shapes::DEFAULT_NOISE_SEED, value_parser = value::int(0u32, u32::MAX))]
     pub seed: u32,
     /// Output file (.ply).
     #[arg(short, long, value_parser = value::output(&["ply"], "the generated mesh"))]
@@ -44,7 +44,7 @@ pub struct BlobArgs {
     #[arg(long, value_name = "N", value_parser = value::int(12u64, MAX_TRIANGLES))]
     pub triangles: u64,
     /// Noise seed, in 0..=4294967295.
-    #[arg(long, default_value_t = 1, value_parser = value::int(0u32, u32::MAX))]
+    #[arg(long, default_value_t = lodkit_mesh::shapes::DEFAULT_NOISE_SEED, value_parser = value::int(0u32, u32::MAX))]
     pub seed: u32,
     /// Output file (.ply).
     #[arg(short, long, value_parser = value::output(&["ply"], "the generated mesh"))]

@@ -14,8 +14,13 @@ use crate::weld::weld;
 /// The default blob: seed 1, about `target_triangles` triangles (within a
 /// few percent; never fewer than 12).
 pub fn blob(target_triangles: usize) -> TriMesh {
-    blob_with_seed(target_triangles, 1)
+    blob_with_seed(target_triangles, DEFAULT_NOISE_SEED)
 }
+
+/// The default noise seed of generated meshes (the blob, a subdivided
+/// scan's displacement: `lodkit generate`, `pylodkit.blob`, the
+/// benchmarks): 1.
+pub const DEFAULT_NOISE_SEED: u32 = 1;
 
 /// [`blob`] with a chosen noise seed.
 pub fn blob_with_seed(target_triangles: usize, seed: u32) -> TriMesh {

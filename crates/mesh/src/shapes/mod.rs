@@ -17,7 +17,7 @@ mod spheres;
 mod subdivided;
 mod torus;
 
-pub use blob::{blob, blob_with_seed};
+pub use blob::{DEFAULT_NOISE_SEED, blob, blob_with_seed};
 pub use blob_stream::{BlobCounts, blob_counts, write_blob_ply};
 pub use defects::{holey_sphere, non_manifold, terrain};
 pub use spheres::{icosphere, uv_sphere};
