@@ -138,10 +138,21 @@ pub fn run(a: &SimplifyJob, events: &Progress) -> Result<Report> {
         t.as_secs_f64(),
         r.stop
     );
-    Ok(Report {
+    Ok(in_core_report(a, mesh.faces.len(), &r, t, summary))
+}
+
+/// The report of an in-core run: `r` for the `input_triangles` read.
+fn in_core_report(
+    a: &SimplifyJob,
+    input_triangles: usize,
+    r: &lodkit_simplify::LevelReport,
+    t: std::time::Duration,
+    summary: String,
+) -> Report {
+    Report {
         input: a.input.clone(),
         output: a.output.clone(),
-        input_triangles: mesh.faces.len(),
+        input_triangles,
         target_triangles: r.target_faces,
         triangles: r.triangles,
         vertices: r.vertices,
@@ -151,7 +162,7 @@ pub fn run(a: &SimplifyJob, events: &Progress) -> Result<Report> {
         seconds: t.as_secs_f64(),
         out_of_core: None,
         summary,
-    })
+    }
 }
 
 /// One mesh in memory to `opts.target`: the in-core step of [`run`] (a
@@ -195,20 +206,7 @@ fn run_scene(
         crate::input::describe(&out),
         r.stop
     );
-    Ok(Report {
-        input: a.input.clone(),
-        output: a.output.clone(),
-        input_triangles: scene.face_count(),
-        target_triangles: r.target_faces,
-        triangles: r.triangles,
-        vertices: r.vertices,
-        estimated_error: r.estimated_error,
-        passes: r.passes,
-        stop: r.stop.to_string(),
-        seconds: t.as_secs_f64(),
-        out_of_core: None,
-        summary,
-    })
+    Ok(in_core_report(a, scene.face_count(), &r, t, summary))
 }
 
 /// `simplify` out of core (`lodkit_scale::simplify_file`): blocks staged
