@@ -22,6 +22,7 @@ use anyhow::{Context, Result, bail};
 use lodkit_mco::McoModel;
 use lodkit_mesh::{Model, TriMesh};
 
+use crate::input::Input;
 use crate::progress::Progress;
 
 /// How the input reached the surface the chain starts from.
@@ -69,64 +70,58 @@ pub fn load(events: &Progress, path: &Path, merge: bool) -> Result<BuildInput> {
         .map(|s| s.to_string_lossy().into_owned())
         .filter(|s| !s.is_empty())
         .unwrap_or_else(|| "model".into());
-    if lodkit_mesh::io::cameras::is_calibration(path) {
-        return carve(events, path, name);
+    if path.is_dir() && !lodkit_mesh::io::cameras::is_calibration(path) {
+        let (what, models) = scan_folder(events, path)?;
+        return reconstruct(events, path, name, what, &models);
     }
-    let (what, models) = if path.is_dir() {
-        scan_folder(events, path)?
-    } else if is_conf(path) {
-        let step = events.spinner(&format!("reading {}", path.display()));
-        let scans = lodkit_mesh::io::conf::load_scans(path)?;
-        step.finish();
-        let n = scans.len();
-        (
-            format!("scan set of {n} range images"),
-            scans.into_iter().map(|(_, r)| Model::Range(r)).collect(),
-        )
-    } else {
-        let model = match crate::input::load_input(events, path, !merge)? {
-            crate::input::Input::Scene(scene) => {
-                let surface = scene.merged().mesh;
-                if surface.faces.is_empty() {
-                    bail!("{}: the mesh has no faces", path.display());
-                }
-                return Ok(BuildInput {
-                    name,
-                    samples: (surface.positions.len(), "vertices"),
-                    stream_source: Model::Mesh(surface.clone()),
-                    surface,
-                    reconstruction: None,
-                    path: InputPath::Mesh,
-                    scene: Some(scene),
-                });
-            }
-            crate::input::Input::Model(model) => model,
-            other => bail!("{}: holds a {}", path.display(), other.kind()),
-        };
-        match model {
-            Model::Mesh(m) => {
-                if m.faces.is_empty() {
-                    bail!("{}: the mesh has no faces", path.display());
-                }
-                return Ok(BuildInput {
-                    name,
-                    samples: (m.positions.len(), "vertices"),
-                    stream_source: Model::Mesh(m.clone()),
-                    surface: m,
-                    reconstruction: None,
-                    path: InputPath::Mesh,
-                    scene: None,
-                });
-            }
-            other => (other.kind().to_string(), vec![other]),
+    let model = match crate::input::load_input(events, path, !merge)? {
+        Input::Silhouettes(calibration) => return carve(events, path, name, calibration),
+        Input::Scans(set) => {
+            let what = format!("scan set of {} range images", set.scans.len());
+            let models: Vec<Model> = set
+                .scans
+                .into_iter()
+                .map(|(_, r)| Model::Range(r))
+                .collect();
+            return reconstruct(events, path, name, what, &models);
         }
+        Input::Scene(scene) => {
+            let surface = scene.merged().mesh;
+            if surface.faces.is_empty() {
+                bail!("{}: the mesh has no faces", path.display());
+            }
+            return Ok(BuildInput {
+                name,
+                samples: (surface.positions.len(), "vertices"),
+                stream_source: Model::Mesh(surface.clone()),
+                surface,
+                reconstruction: None,
+                path: InputPath::Mesh,
+                scene: Some(scene),
+            });
+        }
+        Input::Model(model) => model,
     };
-    reconstruct(events, path, name, what, &models)
-}
-
-fn is_conf(path: &Path) -> bool {
-    path.extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("conf"))
+    match model {
+        Model::Mesh(m) => {
+            if m.faces.is_empty() {
+                bail!("{}: the mesh has no faces", path.display());
+            }
+            Ok(BuildInput {
+                name,
+                samples: (m.positions.len(), "vertices"),
+                stream_source: Model::Mesh(m.clone()),
+                surface: m,
+                reconstruction: None,
+                path: InputPath::Mesh,
+                scene: None,
+            })
+        }
+        other => {
+            let what = other.kind().to_string();
+            reconstruct(events, path, name, what, &[other])
+        }
+    }
 }
 
 /// A folder of range images: the `.conf` in it when there is exactly one,
@@ -140,7 +135,7 @@ fn scan_folder(events: &Progress, dir: &Path) -> Result<(String, Vec<Model>)> {
         let p = e
             .with_context(|| format!("{}: cannot read folder", dir.display()))?
             .path();
-        if is_conf(&p) {
+        if crate::input::is_scan_set(&p) {
             confs.push(p);
         } else if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply")) {
             plys.push(p);
@@ -148,13 +143,17 @@ fn scan_folder(events: &Progress, dir: &Path) -> Result<(String, Vec<Model>)> {
     }
     match confs.len() {
         1 => {
-            let step = events.spinner(&format!("reading {}", confs[0].display()));
-            let scans = lodkit_mesh::io::conf::load_scans(&confs[0])?;
-            step.finish();
-            let n = scans.len();
+            let set = crate::input::load_scans(events, &confs[0])?;
             return Ok((
-                format!("scan set of {n} range images ({})", confs[0].display()),
-                scans.into_iter().map(|(_, r)| Model::Range(r)).collect(),
+                format!(
+                    "scan set of {} range images ({})",
+                    set.scans.len(),
+                    confs[0].display()
+                ),
+                set.scans
+                    .into_iter()
+                    .map(|(_, r)| Model::Range(r))
+                    .collect(),
             ));
         }
         0 => {}
@@ -222,7 +221,12 @@ fn reconstruct(
 
 /// A calibrated image set: carved (default depth and silhouette source),
 /// its finest level triangulated.
-fn carve(events: &Progress, path: &Path, name: String) -> Result<BuildInput> {
+fn carve(
+    events: &Progress,
+    path: &Path,
+    name: String,
+    calibration: lodkit_mesh::io::cameras::Calibration,
+) -> Result<BuildInput> {
     // `ring/transforms.json`, `ring/sparse/0/cameras.txt`: named `ring`.
     let name = path
         .ancestors()
@@ -232,9 +236,9 @@ fn carve(events: &Progress, path: &Path, name: String) -> Result<BuildInput> {
         .find(|n| n != "sparse" && n.parse::<u32>().is_err())
         .unwrap_or(name);
     let opts = lodkit_particles::EncodeOptions::DEFAULT;
-    let c = crate::input::carve_image_set(
+    let c = crate::input::carve(
         events,
-        path,
+        calibration,
         lodkit_particles::silhouette::SilhouetteSource::Auto,
         &lodkit_particles::silhouette::SilhouetteOptions {
             bbox: None,
