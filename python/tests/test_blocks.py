@@ -46,9 +46,10 @@ def test_ray_blocks_give_the_single_process_bytes(lodkit_bin, tmp_path):
 
 def task_file(path, name):
     path.write_text(json.dumps({
-        "version": 3,
-        "options": {"max_error": None, "heap_size": 1, "normal_weight": 0.0, "color_weight": 0.0,
-                    "uv_weight": 0.0, "prune": None, "max_passes": 64},
+        "version": 4,
+        "options": {"max_error": None, "heap_size": 1,
+                    "weights": {"normal": 0.0, "color": 0.0, "uv": 0.0},
+                    "prune": None, "max_passes": 64},
         "layout": "-",
         "tasks": [{"input": name, "output": "b.out", "ratio": 0.5, "goal": "total",
                    "cuts": {"min": [0, 0, 0], "cell": [1, 1, 1], "g": 2, "shift": 0, "reach": 0.5},
