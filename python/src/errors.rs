@@ -83,15 +83,5 @@ pub fn job(e: anyhow::Error) -> PyErr {
     } else {
         Kind::Input
     };
-    // The chain on one line, as the CLI prints it: a cause the outer
-    // message already quotes is not said twice.
-    let mut line = e.to_string();
-    for cause in e.chain().skip(1) {
-        let cause = cause.to_string();
-        if !line.contains(&cause) {
-            line.push_str(": ");
-            line.push_str(&cause);
-        }
-    }
-    raise(kind, line.replace('\n', " "))
+    raise(kind, lodkit::usage::one_line(&e))
 }

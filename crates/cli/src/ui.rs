@@ -95,19 +95,9 @@ impl Ui {
 
     /// The error chain on one line: `lodkit: error: <outer>: <inner>`.
     pub fn error(&self, e: &anyhow::Error) {
-        let mut line = e.to_string();
-        for cause in e.chain().skip(1) {
-            // Library errors already quote their source (`x.ply: No such
-            // file`); don't say it twice.
-            let cause = cause.to_string();
-            if !line.contains(&cause) {
-                line.push_str(": ");
-                line.push_str(&cause);
-            }
-        }
+        let line = lodkit::usage::one_line(e);
         // Control bytes from file names or contents never reach the
         // terminal raw.
-        let line = line.replace('\n', " ");
         eprintln!("lodkit: error: {}", lodkit_mesh::escape(&line));
     }
 

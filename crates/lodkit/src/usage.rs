@@ -20,3 +20,19 @@ impl std::error::Error for Usage {}
 pub fn usage(msg: impl Into<String>) -> anyhow::Error {
     Usage(msg.into()).into()
 }
+
+/// A job's error on one line, as every front-end shows it: the message,
+/// then each cause it does not already quote (library errors name their
+/// source themselves: `x.ply: No such file`), newlines as spaces. Control
+/// bytes are left to the caller (a terminal escapes them).
+pub fn one_line(e: &anyhow::Error) -> String {
+    let mut line = e.to_string();
+    for cause in e.chain().skip(1) {
+        let cause = cause.to_string();
+        if !line.contains(&cause) {
+            line.push_str(": ");
+            line.push_str(&cause);
+        }
+    }
+    line.replace('\n', " ")
+}
