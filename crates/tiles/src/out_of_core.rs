@@ -23,7 +23,8 @@
 //! 3. **Spill** (`cell_spill.rs`): the input, then each level as the
 //!    chain hands it over, is streamed once and its faces distributed by
 //!    centroid into one soup file per cell of its depth, through buffers
-//!    of an eighth of the budget. Tiles are then made one at a time: a
+//!    of an eighth of the budget. Tiles are then made two at a time (one
+//!    depth after the other, the tiles of a depth in parallel): a
 //!    cell's faces welded, refitted to the budget with the border locked
 //!    when over it (as in core), normals where the input has none.
 //! 4. **Cuts** for the skirts: no whole level is ever in memory to tell a
@@ -34,7 +35,7 @@
 //!    skirt too, which hangs below the surface and costs four triangles
 //!    per edge.
 //! 5. **Errors** without the whole input: a tile whose cell holds few
-//!    enough input faces (a quarter of the budget at
+//!    enough input faces (an eighth of the budget at
 //!    `MEASURE_BYTES_PER_FACE`) is measured against them, read back from
 //!    its leaves' tiles, exactly as in core (both directions, the
 //!    symmetric maximum; at least its children's errors). A tile `N`
@@ -67,7 +68,7 @@
 //! # Cost
 //! Memory: the cell map, the octree, one level in core once it fits the
 //! budget (the chain's rule), the spill buffers (an eighth of the
-//! budget), one tile and its children. Disk: the chain's (36 B per face
+//! budget), two tiles and their children. Disk: the chain's (36 B per face
 //! of the largest level, twice) plus each level once more as spills (36
 //! B per face) and the staged tiles. Time: the chain, four streams over
 //! the input, one weld of every tile and one measurement of every
@@ -84,6 +85,7 @@ use lodkit_mesh::{Aabb, TriMesh};
 use lodkit_scale::soup::{Corner, Layout};
 use lodkit_scale::{ChainLevel, Event as ScaleEvent, Runner, ScaleOptions, StagingLock};
 use lodkit_simplify::{Options, Simplifier, Target};
+use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
 use crate::cell_spill::{Spill, StagedTile};
@@ -125,7 +127,8 @@ const RESTART: &str = "lodkit-tiles: staging spill incomplete, restart";
 
 /// Bytes per face of a measurement region (the mesh and its distance
 /// index, about 150, with room): a tile whose cell's input fits a
-/// quarter of the budget at this rate is measured against that input
+/// quarter of the budget at this rate, shared by the tiles in flight, is
+/// measured against that input
 /// directly, as in core; one above it through its children's tiles.
 const MEASURE_BYTES_PER_FACE: u64 = 200;
 
@@ -602,9 +605,8 @@ fn build(
     // 4–5. Tiles, deepest depth first: weld, refit, cuts, measure.
     let t2 = Instant::now();
     let mut staged: Vec<Option<Staged>> = vec![None; n];
-    let mut simplifier = Simplifier::new();
     let mut refitted = 0;
-    let tile_path = |i: usize| tiles_dir.join(format!("{i}.tile"));
+    let tile_path = |i: usize| tile_file(&tiles_dir, i);
     for k in (0..=d).rev() {
         let at: Vec<usize> = (0..n).filter(|&i| tree.nodes[i].key.depth == k).collect();
         let done = tiles_dir.join(format!("d{k}.done"));
@@ -625,70 +627,43 @@ fn build(
             &format!("tiles at depth {k}: weld, refit, measure"),
             at.len() as u64,
         ));
+        // Tiles of one depth are independent (their children are staged):
+        // `IN_FLIGHT` at a time, each measuring against at most an
+        // `IN_FLIGHT`-th of the measurement room, so the budget holds
+        // whatever the machine's thread count, and the bytes too.
+        let ctx = TileCtx {
+            tree: &tree,
+            staged: &staged,
+            leaves_dir: &leaves_dir,
+            cells: &cells,
+            tiles_dir: &tiles_dir,
+            layout,
+            leaf,
+            is_leaf: &is_leaf,
+            direct_faces: o.memory / 4 / IN_FLIGHT as u64 / MEASURE_BYTES_PER_FACE,
+        };
+        let mut made = Vec::with_capacity(at.len());
+        for batch in at.chunks(IN_FLIGHT) {
+            let part: Vec<Result<Option<(Staged, bool)>>> = batch
+                .par_iter()
+                .map_init(Simplifier::new, |simplifier, &i| {
+                    let r = ctx.make(i, simplifier);
+                    progress(ScaleEvent::Advance(1));
+                    r
+                })
+                .collect();
+            for (&i, m) in batch.iter().zip(part) {
+                made.push((i, m?));
+            }
+        }
         let mut record = String::new();
-        for &i in &at {
-            let dir = if is_leaf(i) {
-                leaves_dir.clone()
-            } else {
-                cells.join(format!("d{k}"))
-            };
-            let mut mesh = Spill::read(&dir, i, layout)?;
-            progress(ScaleEvent::Advance(1));
-            if mesh.faces.is_empty() {
-                continue;
+        for (i, m) in made {
+            if let Some((s, refit)) = m {
+                refitted += usize::from(refit);
+                record += &s.line(i);
+                record.push('\n');
+                staged[i] = Some(s);
             }
-            if !is_leaf(i) && mesh.faces.len() > leaf {
-                mesh = refit(&mut simplifier, &mesh, leaf)?;
-                refitted += 1;
-            }
-            if mesh.normals.is_none() {
-                mesh.normals = Some(lodkit_mesh::normals::vertex_normals(&mesh));
-            }
-            let cuts = cut_edges(&mesh, &tree.grid, tree.nodes[i].key);
-            let mut error = 0.0f64;
-            if !is_leaf(i) {
-                let child_error = tree.nodes[i]
-                    .children
-                    .iter()
-                    .filter_map(|&c| staged[c].map(|s| s.error))
-                    .fold(0.0f64, f64::max);
-                let direct = (tree.nodes[i].input_faces as u64)
-                    .saturating_mul(MEASURE_BYTES_PER_FACE)
-                    <= o.memory / 4;
-                // The input of this cell (its leaves' tiles) when it fits
-                // a quarter of the budget, as in core; else the children's
-                // tiles, which stand for it up to their own error.
-                let mut region = TriMesh::default();
-                let mut stack = tree.nodes[i].children.clone();
-                while let Some(c) = stack.pop() {
-                    if direct && !is_leaf(c) {
-                        stack.extend(tree.nodes[c].children.iter().rev());
-                    } else if staged[c].is_some() {
-                        append(&mut region, &StagedTile::read(&tile_path(c))?.mesh);
-                    }
-                }
-                if !region.faces.is_empty() {
-                    let reference = Reference::new(&region)?;
-                    error = reference.compare_level(&mesh, None)?.symmetric.max;
-                }
-                error = if direct {
-                    error.max(child_error)
-                } else {
-                    error + child_error
-                };
-            }
-            let normals = mesh.normals.as_deref().unwrap_or_default();
-            let s = Staged {
-                error,
-                bbox: bbox_of(&mesh.positions),
-                normals: bbox_of(cuts.iter().flatten().map(|&v| &normals[v as usize])),
-                faces: mesh.faces.len(),
-                cuts: cuts.len(),
-            };
-            StagedTile { mesh, cuts }.write(&tile_path(i))?;
-            record += &s.line(i);
-            record.push('\n');
-            staged[i] = Some(s);
         }
         record += "end\n";
         lodkit_mesh::io::write_atomic(&done, record.as_bytes())?;
@@ -795,6 +770,96 @@ fn build(
         seconds: [t_partition, t_levels, t_measure, t3.elapsed().as_secs_f64()],
         bytes,
     }))
+}
+
+/// Tiles staged at once in the tile pass.
+const IN_FLIGHT: usize = 2;
+
+fn tile_file(dir: &Path, node: usize) -> PathBuf {
+    dir.join(format!("{node}.tile"))
+}
+
+/// What making one tile reads: the tree, the staged children, the folders.
+struct TileCtx<'a> {
+    tree: &'a Octree,
+    staged: &'a [Option<Staged>],
+    leaves_dir: &'a Path,
+    cells: &'a Path,
+    tiles_dir: &'a Path,
+    layout: Layout,
+    leaf: usize,
+    is_leaf: &'a (dyn Fn(usize) -> bool + Sync),
+    /// Most input faces a tile is measured against directly.
+    direct_faces: u64,
+}
+
+impl TileCtx<'_> {
+    /// Node `i`'s tile: its cell's faces welded, refitted to the leaf
+    /// budget when over it, normals, cuts, its error (see the module
+    /// docs), staged to its file. `None` for an empty cell; the flag says
+    /// whether it was refitted.
+    fn make(&self, i: usize, simplifier: &mut Simplifier) -> Result<Option<(Staged, bool)>> {
+        let (tree, is_leaf) = (self.tree, self.is_leaf);
+        let k = tree.nodes[i].key.depth;
+        let dir = if is_leaf(i) {
+            self.leaves_dir.to_path_buf()
+        } else {
+            self.cells.join(format!("d{k}"))
+        };
+        let mut mesh = Spill::read(&dir, i, self.layout)?;
+        if mesh.faces.is_empty() {
+            return Ok(None);
+        }
+        let refitted = !is_leaf(i) && mesh.faces.len() > self.leaf;
+        if refitted {
+            mesh = refit(simplifier, &mesh, self.leaf)?;
+        }
+        if mesh.normals.is_none() {
+            mesh.normals = Some(lodkit_mesh::normals::vertex_normals(&mesh));
+        }
+        let cuts = cut_edges(&mesh, &tree.grid, tree.nodes[i].key);
+        let mut error = 0.0f64;
+        if !is_leaf(i) {
+            let child_error = tree.nodes[i]
+                .children
+                .iter()
+                .filter_map(|&c| self.staged[c].map(|s| s.error))
+                .fold(0.0f64, f64::max);
+            let direct = (tree.nodes[i].input_faces as u64) <= self.direct_faces;
+            // The input of this cell (its leaves' tiles) when it fits the
+            // measurement room, as in core; else the children's tiles,
+            // which stand for it up to their own error.
+            let mut region = TriMesh::default();
+            let mut stack = tree.nodes[i].children.clone();
+            while let Some(c) = stack.pop() {
+                if direct && !is_leaf(c) {
+                    stack.extend(tree.nodes[c].children.iter().rev());
+                } else if self.staged[c].is_some() {
+                    let tile = StagedTile::read(&tile_file(self.tiles_dir, c))?;
+                    append(&mut region, &tile.mesh);
+                }
+            }
+            if !region.faces.is_empty() {
+                let reference = Reference::new(&region)?;
+                error = reference.compare_level(&mesh, None)?.symmetric.max;
+            }
+            error = if direct {
+                error.max(child_error)
+            } else {
+                error + child_error
+            };
+        }
+        let normals = mesh.normals.as_deref().unwrap_or_default();
+        let s = Staged {
+            error,
+            bbox: bbox_of(&mesh.positions),
+            normals: bbox_of(cuts.iter().flatten().map(|&v| &normals[v as usize])),
+            faces: mesh.faces.len(),
+            cuts: cuts.len(),
+        };
+        StagedTile { mesh, cuts }.write(&tile_file(self.tiles_dir, i))?;
+        Ok(Some((s, refitted)))
+    }
 }
 
 /// The face target of depth `k`'s level (`targets` run from depth
