@@ -173,7 +173,8 @@ async function openStreamed(query) {
     process.exit(1);
   }
   const local = (u) => u.slice(server.url.length);
-  const requests = (atFirst || []).filter((r) => r.url.startsWith(server.url));
+  // Requests that had received bytes by then (one just started is not counted).
+  const requests = (atFirst || []).filter((r) => r.url.startsWith(server.url) && r.bytes > 0);
   const part = (tiles) => {
     const rs = requests.filter((r) => r.url.startsWith(prefix) === tiles);
     return { bytes: rs.reduce((n, r) => n + r.bytes, 0), requests: Object.fromEntries(rs.map((r) => [local(r.url), r.bytes])) };
