@@ -6,8 +6,9 @@
 //     the viewer's own files (page, script, decoders) and the tileset's
 //     (tileset JSON and tile contents). Judged against the targets: first
 //     frame within 1 s of navigation start, from at most 256 KB (256,000
-//     bytes) of tileset bytes (printed PASS/FAIL; the exit status does not
-//     depend on them: timings on a shared machine are not assertions);
+//     bytes) of tileset bytes, and none of the .pop/.mco decoders fetched
+//     (printed PASS/FAIL; the exit status does not depend on them: timings
+//     on a shared machine are not assertions);
 //   - the overview settled at the viewer's error target (1 px);
 //   - a close-up, in a fresh page that opens with the camera at a
 //     twentieth of the model's radius from the surface point under the
@@ -231,7 +232,14 @@ const firstFrame = {
   // The first run's requests before its first frame: path -> bytes.
   requests: firsts[0].requests,
 };
-firstFrame.pass = { ms: firstFrame.ms <= FIRST_FRAME_MS, tilesetBytes: firstFrame.tilesetBytes <= FIRST_FRAME_TILESET_BYTES };
+// The .pop/.mco decoders (the viewer's lodkit/ folder) are no part of a
+// tileset's first frame.
+const decoderRequests = firsts.flatMap((f) => Object.keys(f.requests.viewer).filter((u) => u.startsWith('/lodkit/')));
+firstFrame.pass = {
+  ms: firstFrame.ms <= FIRST_FRAME_MS,
+  tilesetBytes: firstFrame.tilesetBytes <= FIRST_FRAME_TILESET_BYTES,
+  noDecoders: decoderRequests.length === 0,
+};
 
 let overview = null;
 let closeUp = null;
@@ -299,4 +307,5 @@ const kb = (n) => `${(n / 1000).toFixed(1)} KB`;
 const of = runs > 1 ? ` (median of ${runs}: ${firsts.map((f) => Math.round(f.ms)).join(', ')} ms)` : '';
 console.log(`first frame ${firstFrame.ms} ms after navigation start${of}, ${firstFrame.fromTilesetMs} ms after the tileset request: ${verdict(firstFrame.pass.ms)} (target ${FIRST_FRAME_MS} ms)`);
 console.log(`fetched before it: tileset ${kb(firstFrame.tilesetBytes)} in ${Object.keys(firstFrame.requests.tileset).length} requests: ${verdict(firstFrame.pass.tilesetBytes)} (target ${kb(FIRST_FRAME_TILESET_BYTES)}); viewer ${kb(firstFrame.viewerBytes)} in ${Object.keys(firstFrame.requests.viewer).length} requests`);
+console.log(`.pop/.mco decoders before it: ${decoderRequests.length ? [...new Set(decoderRequests)].join(' ') : 'none'}: ${verdict(firstFrame.pass.noDecoders)}`);
 process.exit(consoleErrors.length ? 1 : 0);
