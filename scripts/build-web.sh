@@ -5,8 +5,9 @@
 #   three/build/… three/examples/jsm/…      the three.js files the page imports
 #   3d-tiles-renderer/build/…               3DTilesRendererJS (tilesets), its three.js entry
 # index.html gets a <link rel="modulepreload"> for every module a tileset's
-# first frame needs (the page's static imports, followed through), so the
-# browser fetches them all at once instead of one import level at a time.
+# first frame needs (viewer.js's static imports and theirs: listed below,
+# 3DTilesRendererJS's chunks as found), so the browser fetches them all at
+# once instead of one import level at a time.
 # The .pop/.mco decoders (lodkit/) and the PLY reader are not among them:
 # the viewer imports those only when it opens such a file.
 # Usage: scripts/build-web.sh [OUT_DIR]   (default web/dist)
@@ -84,6 +85,17 @@ preload=(viewer.js three/build/three.core.js three/build/three.module.js
   three/examples/jsm/loaders/GLTFLoader.js three/examples/jsm/controls/OrbitControls.js
   three/examples/jsm/utils/BufferGeometryUtils.js three/examples/jsm/utils/SkeletonUtils.js
   three/examples/jsm/libs/meshopt_decoder.module.js "${tiles_js[@]}")
+# A static import of viewer.js missing from the list fails the build.
+while read -r spec; do
+  case $spec in
+    three) f=three/build/three.module.js ;;
+    three/addons/*) f=three/examples/jsm/${spec#three/addons/} ;;
+    3d-tiles-renderer) f=3d-tiles-renderer/build/index.three.js ;;
+    *) f=${spec#./} ;;
+  esac
+  printf '%s\n' "${preload[@]}" | grep -qxF "$f" \
+    || { echo "build-web: viewer.js imports $spec, which index.html does not preload (add it to build-web.sh's list)" >&2; exit 1; }
+done < <(grep -oE "^import .* from '[^']+';" "$web/viewer/viewer.js" | sed -E "s/.* from '([^']+)';$/\1/")
 marker='<!-- modulepreload:'
 grep -q "^$marker" "$web/viewer/index.html" || { echo "build-web: web/viewer/index.html has no '$marker' line" >&2; exit 1; }
 while IFS= read -r line || [ -n "$line" ]; do
