@@ -117,27 +117,31 @@ async function openStreamed(query) {
   });
   const urls = new Map();
   const bodyBytes = new Map(); // URL -> body bytes (decoded)
-  const received = new Map(); // request id -> {url, bytes (as received)}
+  const received = new Map(); // request id -> {url, bytes (as received), head}
+  const rec = (id) => {
+    if (!received.has(id)) received.set(id, { url: '', bytes: 0, head: 0 });
+    return received.get(id);
+  };
   cdp.on('Network.responseReceived', (e) => {
     urls.set(e.requestId, e.response.url);
-    if (!received.has(e.requestId)) received.set(e.requestId, { url: e.response.url, bytes: 0 });
+    rec(e.requestId).url = e.response.url;
   });
   cdp.on('Network.dataReceived', (e) => {
     const u = urls.get(e.requestId);
     if (!u) return;
     bodyBytes.set(u, (bodyBytes.get(u) || 0) + e.dataLength);
-    // Bytes on the wire; Chromium reports 0 here for some bodies and the
-    // total at loadingFinished instead.
-    received.get(e.requestId).bytes += e.encodedDataLength || 0;
+    // Bytes on the wire; Chromium may report 0 here and the total at
+    // loadingFinished instead.
+    rec(e.requestId).bytes += e.encodedDataLength || 0;
+  });
+  // (May come before responseReceived.)
+  cdp.on('Network.responseReceivedExtraInfo', (e) => {
+    if (e.headersText) rec(e.requestId).head = e.headersText.length;
   });
   cdp.on('Network.loadingFinished', (e) => {
     const r = received.get(e.requestId);
-    // The total includes the response head: keep the body's share when known.
-    if (r && r.bytes === 0) r.bytes = Math.max(0, e.encodedDataLength - (r.head || 0));
-  });
-  cdp.on('Network.responseReceivedExtraInfo', (e) => {
-    const r = received.get(e.requestId);
-    if (r && e.headersText) r.head = e.headersText.length;
+    // That total includes the response head: keep the body's share.
+    if (r && r.bytes === 0) r.bytes = Math.max(0, e.encodedDataLength - r.head);
   });
   const prefix = `${server.url}/models/`;
   const sum = (keep) => [...bodyBytes].filter(([u]) => keep(u.startsWith(prefix))).reduce((n, [, b]) => n + b, 0);
@@ -145,7 +149,7 @@ async function openStreamed(query) {
   // page reports it (before refinement adds its tiles).
   let atFirst = null;
   await page.exposeFunction('__lodkitFirstFrameSeen', () => {
-    atFirst = [...received.values()].map((r) => ({ url: r.url, bytes: r.bytes || bodyBytes.get(r.url) || 0 }));
+    atFirst = [...received.values()].filter((r) => r.url).map((r) => ({ url: r.url, bytes: r.bytes || bodyBytes.get(r.url) || 0 }));
   });
   // The first frame that draws tile content, timed in the page
   // (milliseconds since navigation start: performance.now()'s origin), by
