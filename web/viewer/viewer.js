@@ -229,17 +229,20 @@ async function headSize(url) {
 }
 
 // One loader (one worker) per kind for the page, made when the decoders
-// are first wanted: a promise of {popLoader, mcoLoader}. The wasm module
-// and the .pop worker start at once (an .mco model starts its own worker).
+// are first wanted: a promise of {popLoader, mcoLoader, wasm}, resolved
+// once their script is in. The wasm module (`wasm`, a promise) and the
+// .pop worker start then, beside the model's own download (an .mco model
+// starts its own worker).
 let decoders = null;
 function loadDecoders() {
   if (!decoders) {
-    decoders = import('./lodkit/index.js').then(async (m) => {
+    decoders = import('./lodkit/index.js').then((m) => {
       const popLoader = new m.PopLoader();
       const mcoLoader = new m.McoLoader();
       popLoader.preload();
-      await m.wasmModule();
-      return { popLoader, mcoLoader };
+      const wasm = m.wasmModule();
+      wasm.catch(() => {}); // reported by the loader that needs it
+      return { popLoader, mcoLoader, wasm };
     });
     // A failed download is tried again by the next model that wants it.
     decoders.catch(() => (decoders = null));
@@ -774,7 +777,7 @@ async function main() {
   if (idle) {
     await listing;
     // Ready means ready to stream: the decoders are in.
-    await decoding;
+    await (await decoding).wasm;
     return;
   }
   if (!url) {
