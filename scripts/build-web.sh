@@ -4,6 +4,12 @@
 #   lodkit/*.js lodkit/lodkit.wasm          the loaders, the worker, the decoders
 #   three/build/… three/examples/jsm/…      the three.js files the page imports
 #   3d-tiles-renderer/build/…               3DTilesRendererJS (tilesets), its three.js entry
+# index.html gets a <link rel="modulepreload"> for every module a tileset's
+# first frame needs (viewer.js's static imports and theirs: listed below,
+# 3DTilesRendererJS's chunks as found), so the browser fetches them all at
+# once instead of one import level at a time.
+# The .pop/.mco decoders (lodkit/) and the PLY reader are not among them:
+# the viewer imports those only when it opens such a file.
 # Usage: scripts/build-web.sh [OUT_DIR]   (default web/dist)
 # Installs what it needs: the wasm32-unknown-unknown target (rustup) and the
 # npm packages of web/package-lock.json (npm ci). crates/cli/build.rs runs it
@@ -48,7 +54,7 @@ trap 'rm -rf "$tmp"' EXIT
 mkdir -p "$tmp/lodkit" "$tmp/three/build" "$tmp/three/examples/jsm/controls" \
   "$tmp/three/examples/jsm/loaders" "$tmp/three/examples/jsm/utils" "$tmp/three/examples/jsm/libs" \
   "$tmp/3d-tiles-renderer/build"
-cp "$web/viewer/index.html" "$web/viewer/viewer.js" "$tmp/"
+cp "$web/viewer/viewer.js" "$tmp/"
 cp "$web"/src/*.js "$tmp/lodkit/"
 cp "$wasm" "$tmp/lodkit/lodkit.wasm"
 cp "$three/LICENSE" "$tmp/three/LICENSE"
@@ -63,14 +69,45 @@ cp "$three/examples/jsm/libs/meshopt_decoder.module.js" "$tmp/three/examples/jsm
 tiles=$web/node_modules/3d-tiles-renderer
 cp "$tiles/LICENSE" "$tmp/3d-tiles-renderer/LICENSE"
 pending=(index.three.js)
+tiles_js=()
 while [ ${#pending[@]} -gt 0 ]; do
   f=${pending[0]}
   pending=("${pending[@]:1}")
   [ -f "$tmp/3d-tiles-renderer/build/$f" ] && continue
   cp "$tiles/build/$f" "$tmp/3d-tiles-renderer/build/$f"
+  tiles_js+=("3d-tiles-renderer/build/$f")
   mapfile -t deps < <(grep -o 'from "\./[^"]*\.js"' "$tiles/build/$f" | sed 's/^from "\.\///; s/"$//')
   pending+=("${deps[@]}")
 done
+# The page, its marker line replaced by the modulepreload links (largest
+# first: three.js's core is the longest download).
+preload=(viewer.js three/build/three.core.js three/build/three.module.js
+  three/examples/jsm/loaders/GLTFLoader.js three/examples/jsm/controls/OrbitControls.js
+  three/examples/jsm/utils/BufferGeometryUtils.js three/examples/jsm/utils/SkeletonUtils.js
+  three/examples/jsm/libs/meshopt_decoder.module.js "${tiles_js[@]}")
+# A static import of viewer.js missing from the list fails the build.
+while read -r spec; do
+  case $spec in
+    three) f=three/build/three.module.js ;;
+    three/addons/*) f=three/examples/jsm/${spec#three/addons/} ;;
+    3d-tiles-renderer) f=3d-tiles-renderer/build/index.three.js ;;
+    *) f=${spec#./} ;;
+  esac
+  printf '%s\n' "${preload[@]}" | grep -qxF "$f" \
+    || { echo "build-web: viewer.js imports $spec, which index.html does not preload (add it to build-web.sh's list)" >&2; exit 1; }
+done < <(grep -oE "^import .* from '[^']+';" "$web/viewer/viewer.js" | sed -E "s/.* from '([^']+)';$/\1/")
+marker='<!-- modulepreload:'
+grep -q "^$marker" "$web/viewer/index.html" || { echo "build-web: web/viewer/index.html has no '$marker' line" >&2; exit 1; }
+while IFS= read -r line || [ -n "$line" ]; do
+  if [[ $line == "$marker"* ]]; then
+    for f in "${preload[@]}"; do
+      [ -f "$tmp/$f" ] || { echo "build-web: $f (preloaded by index.html) is not in the site" >&2; exit 1; }
+      printf '<link rel="modulepreload" href="./%s">\n' "$f"
+    done
+  else
+    printf '%s\n' "$line"
+  fi
+done < "$web/viewer/index.html" > "$tmp/index.html"
 rm -rf "$out"
 chmod 755 "$tmp"
 mv "$tmp" "$out"

@@ -1,5 +1,6 @@
-"""Out-of-core blocks on Ray: `lodkit simplify --ray local` gives the bytes
-the single-process run gives; task files are checked before they run."""
+"""Out-of-core blocks on Ray: `lodkit simplify --ray local` and `lodkit tiles
+--ray local` give the bytes the single-process run gives; task files are
+checked before they run."""
 import json
 import os
 import subprocess
@@ -41,6 +42,36 @@ def test_ray_blocks_give_the_single_process_bytes(lodkit_bin, tmp_path):
     assert on_ray.returncode == 0, on_ray.stderr
     assert (tmp_path / "ray.ply").read_bytes() == (tmp_path / "threads.ply").read_bytes()
     # The staging folder (tasks.json, ray.log) is gone once the output is written.
+    assert not [p for p in tmp_path.iterdir() if "lodkit-staging" in p.name]
+
+
+def tiles(exe, src, out, *extra):
+    env = dict(os.environ, LODKIT_PYTHON=sys.executable)
+    return subprocess.run([exe, "tiles", str(src), "--out", str(out), "--memory", "1M", *extra],
+                          env=env, capture_output=True, text=True)
+
+
+def folder_bytes(folder):
+    """Every file under `folder`, by its relative path, with its bytes."""
+    return {p.relative_to(folder).as_posix(): p.read_bytes()
+            for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def test_ray_tiles_give_the_single_process_bytes(lodkit_bin, tmp_path):
+    src = tmp_path / "blob.ply"
+    lk.save(lk.blob(40_000, seed=5), src)
+    here = tiles(lodkit_bin, src, tmp_path / "threads")
+    assert here.returncode == 0, here.stderr
+    assert "out of core" in here.stderr
+    on_ray = tiles(lodkit_bin, src, tmp_path / "ray", "--ray", "local")
+    assert on_ray.returncode == 0, on_ray.stderr
+    threads = folder_bytes(tmp_path / "threads")
+    ray = folder_bytes(tmp_path / "ray")
+    assert "tileset.json" in threads and len(threads) > 2
+    assert sorted(ray) == sorted(threads)
+    differ = [name for name in threads if ray[name] != threads[name]]
+    assert not differ, f"{len(differ)} of {len(threads)} files differ: {differ[:5]}"
+    # The staging folders are gone once the tilesets are written.
     assert not [p for p in tmp_path.iterdir() if "lodkit-staging" in p.name]
 
 

@@ -9,10 +9,12 @@
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
-import { PLYLoader } from 'three/addons/loaders/PLYLoader.js';
 import { MeshoptDecoder } from 'three/addons/libs/meshopt_decoder.module.js';
 import { TilesRenderer } from '3d-tiles-renderer';
-import { PopLoader, McoLoader, wasmModule } from './lodkit/index.js';
+// Not imported here: the .pop/.mco decoders (./lodkit/: loaders, worker,
+// wasm) and the PLY reader, loaded when a page opens such a file (or may
+// open any: `?idle`, a listing), so that a tileset's first frame does not
+// share the link or the CPU with them.
 
 // The LOD-chain switch uses a level's mean edge length as its error; an
 // edge this many times the pixel tolerance on screen is still accepted
@@ -68,6 +70,8 @@ const state = {
   tilesetBytes: 0,
   settledFrames: 0,
   points: 0, // a tileset: points drawn this frame (POINTS tiles)
+  firstFrameMs: -1, // a tileset: performance.now() of the first frame drawing tile content
+  prefetched: 0, // a tileset: requests answered by the page's prefetch
 };
 const viewer = {
   state,
@@ -129,6 +133,12 @@ function requestRender() {
 }
 
 let onFrame = null; // per-kind work before each frame (cuts, level switch)
+let onFirstShown = null; // the page's model on screen (its first frame drawn)
+function firstShown() {
+  const f = onFirstShown;
+  onFirstShown = null;
+  if (f) f();
+}
 let afterFrame = null;
 function renderNow() {
   if (onFrame) onFrame();
@@ -218,12 +228,30 @@ async function headSize(url) {
   }
 }
 
-// One loader (one worker) for the page, started with the page.
-const popLoader = new PopLoader();
-const mcoLoader = new McoLoader();
+// One loader (one worker) per kind for the page, made when the decoders
+// are first wanted: a promise of {popLoader, mcoLoader, wasm}, resolved
+// once their script is in. The wasm module (`wasm`, a promise) and the
+// .pop worker start then, beside the model's own download (an .mco model
+// starts its own worker).
+let decoders = null;
+function loadDecoders() {
+  if (!decoders) {
+    decoders = import('./lodkit/index.js').then((m) => {
+      const popLoader = new m.PopLoader();
+      const mcoLoader = new m.McoLoader();
+      popLoader.preload();
+      const wasm = m.wasmModule();
+      wasm.catch(() => {}); // reported by the loader that needs it
+      return { popLoader, mcoLoader, wasm };
+    });
+    // A failed download is tried again by the next model that wants it.
+    decoders.catch(() => (decoders = null));
+  }
+  return decoders;
+}
 
 async function openPop(url) {
-  const loader = popLoader.preload();
+  const { popLoader: loader } = await loadDecoders();
   viewer.loader = loader;
   let framed = false;
   let pending = null; // the refinement waiting for its first frame
@@ -251,6 +279,7 @@ async function openPop(url) {
         frameSphere(mesh.geometry.boundingSphere);
       }
       renderNow();
+      firstShown();
     });
     afterFrame = () => {
       if (!pending) return;
@@ -301,6 +330,7 @@ async function openPop(url) {
 async function openMco(url) {
   // Resolves at the file's first chunk: the coarse cut shows while the rest
   // streams in, and each chunk re-cuts it with finer LOD numbers.
+  const { mcoLoader } = await loadDecoders();
   const model = await mcoLoader.setTolerance(state.tolerance).loadAsync(url, (p) => {
     state.loaded = p.loaded;
     state.total = p.total;
@@ -314,6 +344,7 @@ async function openMco(url) {
   // Framed on the first chunks' vertices: coarse, but spread as the
   // model's (the bounding cube is larger than the surface).
   frameSphere(model.geometry.boundingSphere);
+  firstShown();
   const sync = () => {
     const m = model.state;
     Object.assign(state, { level: m.lod, expanded: m.expanded, triangles: m.triangles, decodeMs: m.cutMs, cuts: m.cuts, digest: m.digest, maxLod: m.maxLod, fileBytes: m.bytes });
@@ -421,6 +452,7 @@ async function openGlb(url) {
 }
 
 async function openPly(url) {
+  const { PLYLoader } = await import('three/addons/loaders/PLYLoader.js');
   const g = await new PLYLoader().loadAsync(url, (p) => {
     state.loaded = p.loaded;
     state.total = p.total || state.total;
@@ -439,6 +471,22 @@ async function openPly(url) {
   state.complete = true;
 }
 
+// `fetch(u, options)`, answered by the page's prefetch of `u` when there
+// is one not yet used (a GET with no options but the renderer's abort
+// signal: the prefetch was made the same way).
+function fetchOnce(u, options) {
+  const early = window.lodkitPrefetch;
+  const href = new URL(u, location.href).href;
+  const plain = !options || Object.keys(options).every((k) => k === 'signal');
+  if (early && plain && early.has(href)) {
+    const r = early.get(href);
+    early.delete(href);
+    state.prefetched += 1;
+    return r.catch(() => fetch(u, options));
+  }
+  return fetch(u, options);
+}
+
 // A 3D Tiles tileset (tileset.json, external tilesets, GLB contents plain
 // or with EXT_meshopt_compression + KHR_mesh_quantization) streamed by
 // 3DTilesRendererJS: tiles are fetched and swapped as the camera moves,
@@ -450,11 +498,12 @@ async function openTileset(url) {
   const gltf = new GLTFLoader(tiles.manager);
   gltf.setMeshoptDecoder(MeshoptDecoder);
   tiles.manager.addHandler(/\.(gltf|glb)$/i, gltf);
-  // Counts the bytes of every fetch (JSON and contents) for the HUD.
+  // Counts the bytes of every fetch (JSON and contents) for the HUD; the
+  // page's prefetch (index.html) answers the first requests.
   tiles.registerPlugin({
     name: 'LODKIT_BYTE_COUNT',
     fetchData: async (u, options) => {
-      const r = await fetch(u, options);
+      const r = await fetchOnce(u, options);
       if (!r.ok) return r;
       const body = await r.arrayBuffer();
       state.tilesetBytes += body.byteLength;
@@ -474,6 +523,10 @@ async function openTileset(url) {
   viewer.model = tiles.group;
   viewer.model.isTileset = true;
   scene.add(tiles.group);
+  // The root tileset's request goes out now, not at the next frame, and
+  // the tiles' shaders compile while it is read.
+  tiles.update();
+  warmShaders(true);
   const update = () => requestRender();
   for (const ev of ['needs-update', 'needs-render', 'load-model', 'tiles-load-end']) tiles.addEventListener(ev, update);
   tiles.addEventListener('load-model', ({ scene: s }) => setWireframe(s, state.wireframe));
@@ -494,6 +547,8 @@ async function openTileset(url) {
     // (`settledFrames` counts such frames in a row).
     if (!firstDrawn && s.visible > 0 && state.triangles + state.points > 0) {
       firstDrawn = true;
+      state.firstFrameMs = performance.now();
+      firstShown();
       requestRender();
       return;
     }
@@ -574,6 +629,8 @@ async function open(url, kind) {
     tilesetBytes: 0,
     settledFrames: 0,
     points: 0,
+    firstFrameMs: -1,
+    prefetched: 0,
   });
   const t0 = performance.now();
   if (state.kind !== 'tileset')
@@ -620,62 +677,118 @@ function controlsUi() {
   });
 }
 
-// Draws the loaders' material (plain and with vertex colours) once before
-// any model arrives, so that the first level is not kept off the screen by
-// shader compilation (a software GL such as SwiftShader also compiles its
-// draw routines on the first draw).
-function warmShaders() {
+// Draws a triangle in each material the first model will use before it
+// arrives, so that the model is not kept off the screen by shader
+// compilation (a software GL such as SwiftShader also compiles its draw
+// routines on the first draw, per vertex format). The .pop/.mco loaders'
+// material: plain and with vertex colours, both sides or front only, float
+// attributes; waits for the GPU. A tileset's (`tiles`): GLTFLoader's
+// default material on lodkit's tiles (KHR_mesh_quantization: 16-bit
+// positions, 8-bit normals), compiled without blocking, then drawn without
+// waiting, while the page reads the tileset.
+function warmShaders(tiles = false) {
   const warm = new THREE.Scene();
   warm.add(...scene.children.filter((o) => o.isLight).map((l) => l.clone()));
-  for (const [side, vertexColors] of [[THREE.DoubleSide, false], [THREE.DoubleSide, true], [THREE.FrontSide, false], [THREE.FrontSide, true]]) {
+  const cam = new THREE.PerspectiveCamera(45, 1, 0.1, 10);
+  const variants = tiles
+    ? [[THREE.FrontSide, false]]
+    : [[THREE.DoubleSide, false], [THREE.DoubleSide, true], [THREE.FrontSide, false], [THREE.FrontSide, true]];
+  for (const [side, vertexColors] of variants) {
     const g = new THREE.BufferGeometry();
-    g.setAttribute('position', new THREE.Float32BufferAttribute([0, 0, -2, 1, 0, -2, 0, 1, -2], 3));
-    g.setAttribute('normal', new THREE.Float32BufferAttribute([0, 0, 1, 0, 0, 1, 0, 0, 1], 3));
+    if (tiles) {
+      g.setAttribute('position', new THREE.Uint16BufferAttribute([0, 0, 0, 1, 0, 0, 0, 1, 0], 3));
+      g.setAttribute('normal', new THREE.Int8BufferAttribute([0, 0, 127, 0, 0, 127, 0, 0, 127], 3, true));
+      g.setIndex(new THREE.Uint16BufferAttribute([0, 1, 2], 1));
+    } else {
+      g.setAttribute('position', new THREE.Float32BufferAttribute([0, 0, 0, 1, 0, 0, 0, 1, 0], 3));
+      g.setAttribute('normal', new THREE.Float32BufferAttribute([0, 0, 1, 0, 0, 1, 0, 0, 1], 3));
+    }
     if (vertexColors) g.setAttribute('color', new THREE.Uint8BufferAttribute([255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255], 4, true));
-    warm.add(new THREE.Mesh(g, new THREE.MeshStandardMaterial({ roughness: 0.8, metalness: 0.0, side, vertexColors })));
+    const material = tiles
+      ? new THREE.MeshStandardMaterial({ color: 0xffffff, metalness: 1, roughness: 1 })
+      : new THREE.MeshStandardMaterial({ roughness: 0.8, metalness: 0.0, side, vertexColors });
+    const mesh = new THREE.Mesh(g, material);
+    mesh.position.z = -2;
+    warm.add(mesh);
   }
-  renderer.render(warm, camera);
-  renderer.getContext().finish();
-  for (const m of warm.children) if (m.isMesh) m.geometry.dispose();
+  const done = () => {
+    for (const m of warm.children) if (m.isMesh) m.geometry.dispose();
+  };
+  if (!tiles) {
+    renderer.render(warm, cam);
+    renderer.getContext().finish();
+    done();
+    return;
+  }
+  renderer.compileAsync(warm, cam).then(() => {
+    // Not over a frame that already shows tiles.
+    if (state.triangles + state.points === 0) renderer.render(warm, cam);
+    done();
+    requestRender();
+  });
+}
+
+// The server's listing in the menu, `url` selected.
+function fillMenu(models, url) {
+  if (!models.length) return;
+  const sel = $('models');
+  for (const m of models) {
+    const o = document.createElement('option');
+    o.value = m.url;
+    o.textContent = `${m.name} (${m.kind}, ${fmtBytes(m.bytes)})`;
+    sel.appendChild(o);
+  }
+  $('models-row').hidden = false;
+  sel.value = url;
+  sel.addEventListener('change', () => {
+    location.search = `?model=${encodeURIComponent(sel.value)}`;
+  });
 }
 
 async function main() {
   resize();
-  warmShaders();
-  // The decoders download while the page sets up (shared by all models).
-  wasmModule().catch(() => {});
-  popLoader.preload();
   controlsUi();
-  resize();
   const params = new URLSearchParams(location.search);
   // ?camera=EX,EY,EZ,TX,TY,TZ: a tileset's first view, eye and target in
   // the scene's frame (y up), instead of the framing of the whole model.
   const cam = (params.get('camera') || '').split(',').map(Number);
   if (cam.length === 6 && cam.every(Number.isFinite)) startCamera = cam;
-  const models = await listModels();
   let url = params.get('model');
-  if (models.length) {
-    const sel = $('models');
-    for (const m of models) {
-      const o = document.createElement('option');
-      o.value = m.url;
-      o.textContent = `${m.name} (${m.kind}, ${fmtBytes(m.bytes)})`;
-      sel.appendChild(o);
-    }
-    $('models-row').hidden = false;
-    if (!url) url = (models.find((m) => m.kind === 'pop') || models[0]).url;
-    sel.value = url;
-    sel.addEventListener('change', () => {
-      location.search = `?model=${encodeURIComponent(sel.value)}`;
-    });
-  }
+  const idle = params.has('idle');
   // ?idle: open nothing (a test opens its model itself).
-  if (params.has('idle')) return;
+  const kind = url && !idle ? kindOf(url, params.get('kind')) : '';
+  // The decoders and their shaders, where this page streams a .pop or
+  // .mco or may open any model (a page that opens another kind never
+  // loads them).
+  const streams = kind === '' || kind === 'pop' || kind === 'mco';
+  const decoding = streams ? loadDecoders() : null;
+  if (streams) warmShaders();
+  // A named model opens at once; the listing (a long one for a folder of
+  // tiles) is fetched once the model is on screen or has failed, so that
+  // it shares neither the link nor the page's time with the first frame.
+  const listing = url && !idle ? new Promise((resolve) => (onFirstShown = resolve)).then(listModels) : listModels();
+  if (url) {
+    listing.then((models) => fillMenu(models, url));
+  } else {
+    const models = await listing;
+    if (models.length) url = (models.find((m) => m.kind === 'pop') || models[0]).url;
+    fillMenu(models, url);
+  }
+  if (idle) {
+    await listing;
+    // Ready means ready to stream: the decoders are in.
+    await (await decoding).wasm;
+    return;
+  }
   if (!url) {
     $('error').textContent = 'No model: open ?model=URL (a .pop, .mco, .glb, .ply or a 3D Tiles tileset.json).';
     return;
   }
-  await open(url, params.get('kind'));
+  try {
+    await open(url, params.get('kind'));
+  } finally {
+    firstShown();
+  }
 }
 
 viewer.ready = main().catch((e) => showError(String(e && e.message ? e.message : e)));
