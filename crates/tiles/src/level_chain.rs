@@ -25,7 +25,7 @@
 
 use lodkit_mesh::TriMesh;
 use lodkit_mesh::metrics::Reference;
-use lodkit_simplify::{Options, Simplifier, Target};
+use lodkit_simplify::{AttributeWeights, Options, Simplifier, Target};
 
 use crate::octree_partition::{Octree, centroid};
 use crate::tile_split::{TileMesh, border_edges, edge_bits, split};
@@ -51,13 +51,28 @@ pub struct Levels {
 /// `groups` (one per input vertex, each face's corners in one group; or
 /// empty) are materials: kept as seams through every simplification
 /// (`Simplifier::simplify_grouped`) and carried into the tiles.
+///
+/// `derived_normals`: the input's normals were computed from its faces,
+/// not scanned. They then play no part in the collapse costs (a level is
+/// simplified on its geometry alone, as `lodkit simplify` does a file
+/// without normals) and each level gets its own, computed from its faces
+/// over the whole level, so neighbouring tiles shade alike.
 pub fn build_levels(
     input: &TriMesh,
     groups: &[u32],
     tree: &Octree,
     leaf_budget: usize,
+    derived_normals: bool,
     progress: &mut dyn FnMut(Event),
 ) -> Result<Levels> {
+    let weights = if derived_normals {
+        AttributeWeights {
+            normal: 0.0,
+            ..AttributeWeights::DEFAULT
+        }
+    } else {
+        AttributeWeights::DEFAULT
+    };
     let n = tree.nodes.len();
     let mut tiles: Vec<Option<TileMesh>> = vec![None; n];
     let mut measured = vec![0.0; n];
@@ -121,23 +136,30 @@ pub fn build_levels(
         let goal = ((source.faces.len() as f64 * ratio).ceil() as usize).max(1);
         let t0 = std::time::Instant::now();
         let simplify_error = |e: lodkit_simplify::Error| Error::Simplify(e.to_string());
-        let (level, level_groups) = if goal >= source.faces.len() {
+        let opts = Options {
+            weights,
+            ..Options::faces(goal)
+        };
+        let (mut level, level_groups) = if goal >= source.faces.len() {
             (source.clone(), source_groups.to_vec())
         } else if source_groups.is_empty() {
-            let out = simplifier.simplify(source, &Options::faces(goal));
+            let out = simplifier.simplify(source, &opts);
             (out.map_err(simplify_error)?.mesh, Vec::new())
         } else {
-            let out = simplifier.simplify_grouped(source, source_groups, &Options::faces(goal));
+            let out = simplifier.simplify_grouped(source, source_groups, &opts);
             let (out, g) = out.map_err(simplify_error)?;
             (out.mesh, g)
         };
+        if derived_normals && goal < source.faces.len() {
+            level.normals = Some(lodkit_mesh::normals::vertex_normals(&level));
+        }
         level_faces[depth as usize] = level.faces.len();
         let mut parts = split(&level, &level_groups, internal.len(), |f| {
             cell_slot(&level, f)
         });
         for part in parts.iter_mut() {
             if part.mesh.faces.len() > leaf_budget {
-                refit(&mut simplifier, part, leaf_budget)?;
+                refit(&mut simplifier, part, leaf_budget, weights)?;
                 refitted += 1;
             }
         }
@@ -178,7 +200,12 @@ pub fn build_levels(
 /// Simplifies one tile to `budget` triangles with its border vertices
 /// locked (so it still meets its same-level neighbours), keeping its cut
 /// edges by their positions.
-fn refit(simplifier: &mut Simplifier, part: &mut TileMesh, budget: usize) -> Result<()> {
+fn refit(
+    simplifier: &mut Simplifier,
+    part: &mut TileMesh,
+    budget: usize,
+    weights: AttributeWeights,
+) -> Result<()> {
     let m = &part.mesh;
     let mut locked = vec![false; m.positions.len()];
     for [a, b] in border_edges(m) {
@@ -190,6 +217,7 @@ fn refit(simplifier: &mut Simplifier, part: &mut TileMesh, budget: usize) -> Res
     let opts = Options {
         target: Target::Faces(budget),
         fill_holes: false,
+        weights,
         ..Options::DEFAULT
     };
     let simplify_error = |e: lodkit_simplify::Error| Error::Simplify(e.to_string());

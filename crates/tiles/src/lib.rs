@@ -294,12 +294,20 @@ pub(crate) fn build_tileset(
     }
     let t0 = std::time::Instant::now();
     let mut input = mesh.clone();
-    if input.normals.is_none() {
+    let derived_normals = input.normals.is_none();
+    if derived_normals {
         input.normals = Some(lodkit_mesh::normals::vertex_normals(&input));
     }
     let tree = octree_partition::Octree::build(&input, opts.leaf_triangles);
     let t_partition = t0.elapsed().as_secs_f64();
-    let levels = level_chain::build_levels(&input, &groups, &tree, opts.leaf_triangles, progress)?;
+    let levels = level_chain::build_levels(
+        &input,
+        &groups,
+        &tree,
+        opts.leaf_triangles,
+        derived_normals,
+        progress,
+    )?;
 
     // Monotone errors, children before parents (breadth-first order backwards).
     let n = tree.nodes.len();

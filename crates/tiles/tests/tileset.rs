@@ -167,3 +167,56 @@ fn a_small_mesh_is_one_root_tile() {
     assert!(ts.tiles[0].error > 0.0 && ts.tiles[0].error < 1e-4 * diag);
     assert!(ts.tileset_error > ts.tiles[0].error);
 }
+
+/// Each depth's cut above the leaves is within 1.25× the mean error of
+/// simplifying the input in core to the same triangle count (a blob has
+/// no normals: the levels are simplified on their geometry, as
+/// `lodkit simplify` does such a file).
+#[test]
+fn levels_are_within_a_quarter_of_in_core_simplification() {
+    let input = blob(100_000);
+    assert!(input.normals.is_none());
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("t");
+    let o = TilesOptions {
+        skirts: false,
+        ..opts()
+    };
+    let ts = tileset_from_mesh(&input, &o, &mut |_| {}).unwrap();
+    write_tileset(&ts, &out, None, &o, &mut |_| {}).unwrap();
+    let read = read_tileset(&out);
+    let first_leaf = read
+        .tiles
+        .iter()
+        .filter(|t| t.children.is_empty())
+        .map(|t| t.depth)
+        .min()
+        .unwrap();
+    assert!(first_leaf >= 2, "two levels above the leaves");
+    let reference = lodkit_mesh::metrics::Reference::new(&input).unwrap();
+    for depth in 0..first_leaf {
+        let mut cut = lodkit_mesh::TriMesh::default();
+        for t in read.tiles.iter().filter(|t| t.depth == depth) {
+            let m = t.mesh.as_ref().unwrap();
+            let base = cut.positions.len() as u32;
+            cut.positions.extend_from_slice(&m.positions);
+            cut.faces
+                .extend(m.faces.iter().map(|f| f.map(|v| v + base)));
+        }
+        let simplified =
+            lodkit_simplify::simplify(&input, &lodkit_simplify::Options::faces(cut.faces.len()))
+                .unwrap()
+                .mesh;
+        let tiles = reference.compare_level(&cut, None).unwrap().symmetric.mean;
+        let direct = reference
+            .compare_level(&simplified, None)
+            .unwrap()
+            .symmetric
+            .mean;
+        println!(
+            "depth {depth}: {} triangles, mean {tiles:.3e} against {direct:.3e}",
+            cut.faces.len()
+        );
+        assert!(tiles <= 1.25 * direct, "depth {depth}: {tiles} vs {direct}");
+    }
+}
