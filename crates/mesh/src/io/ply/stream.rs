@@ -17,7 +17,7 @@
 //! be finite and within range. Every problem is a one-line error naming
 //! the file. Supported layout: binary (either endianness), a `vertex`
 //! element whose properties are all scalars with float or double `x y z`,
-//! then a `face` element whose only list holds the indices (any integer
+//! alone (a point cloud: no faces) or followed by a `face` element whose only list holds the indices (any integer
 //! types; polygons are fanned like the in-core reader); other scalar face
 //! properties are skipped, elements after `face` must have fixed-size
 //! records (they are skipped). Anything else is refused with a message
@@ -104,16 +104,21 @@ impl PlyStream {
             Encoding::BinaryLittleEndian => false,
             Encoding::BinaryBigEndian => true,
         };
-        let (Some(v), Some(fe)) = (h.elements.first(), h.elements.get(1)) else {
-            return Err(bad(ParseError::new(
-                "streaming needs a vertex element followed by a face element",
-            )));
-        };
-        if v.name != "vertex" || fe.name != "face" {
+        let Some(v) = h.elements.first().filter(|v| v.name == "vertex") else {
             return Err(bad(ParseError::new(
                 "streaming needs the vertex element first and the face element second",
             )));
-        }
+        };
+        // A point cloud: the vertex element alone.
+        let fe = match h.elements.get(1) {
+            None => None,
+            Some(fe) if fe.name == "face" => Some(fe),
+            Some(_) => {
+                return Err(bad(ParseError::new(
+                    "streaming needs the vertex element first and the face element second",
+                )));
+            }
+        };
         let vertex_stride = v.fixed_stride().ok_or_else(|| {
             bad(ParseError::new(
                 "streaming needs vertex records of fixed size (no list property)",
@@ -128,6 +133,20 @@ impl PlyStream {
                 )));
             }
         }
+        let Some(fe) = fe else {
+            return Ok(PlyStream {
+                path: path.to_path_buf(),
+                big_endian,
+                body_start: h.body_start as u64,
+                vertex_count: v.count,
+                vertex_stride,
+                plan,
+                face_count: 0,
+                face_layout: (0, ScalarType::U8, ScalarType::U32, 0),
+                tail_bytes: 0,
+                file_len,
+            });
+        };
         let lists: Vec<usize> = (0..fe.properties.len())
             .filter(|&i| matches!(fe.properties[i].kind, PropertyKind::List { .. }))
             .collect();
