@@ -134,9 +134,15 @@ pub(crate) fn cell_and_distance(grid: &Grid, key: CellKey, p: glam::Vec3) -> (u3
         f64::from(key.xyz[2]),
     ) * f64::from(cells);
     let rel = (p.as_dvec3() - grid.origin) / h - base;
-    let c = rel
-        .floor()
-        .clamp(DVec3::ZERO, DVec3::splat(f64::from(cells - 1)));
+    // `floor` then clamped to the grid; a truncating cast gives the same
+    // cell (it differs from `floor` only below 0, where both clamp to 0)
+    // without a libm call per axis.
+    let top = cells - 1;
+    let c = DVec3::new(
+        f64::from((rel.x as i64).clamp(0, i64::from(top)) as u32),
+        f64::from((rel.y as i64).clamp(0, i64::from(top)) as u32),
+        f64::from((rel.z as i64).clamp(0, i64::from(top)) as u32),
+    );
     let d = (rel - c - DVec3::splat(0.5)).length_squared();
     ((c.z as u32 * cells + c.y as u32) * cells + c.x as u32, d)
 }

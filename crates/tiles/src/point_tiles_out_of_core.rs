@@ -92,14 +92,14 @@ use crate::{Error, OutOfCoreEvent, Result, check_option};
 /// Bytes per point the in-core path
 /// ([`tileset_from_points`](crate::tileset_from_points) then
 /// [`write_point_tileset`](crate::write_point_tileset), from reading
-/// the file to the last tile) peaks at, about: measured on a 10⁶-point
-/// binary PLY with colours and the default leaves (the file's bytes while
-/// it is parsed, the cloud, the index lists of a node and its children,
-/// the tiles' copy of the cloud). Front-ends go out of core when a
+/// the file to the last tile) peaks at, about: measured 33 (peak RSS over
+/// points) on a 10⁷-point binary PLY with colours and the default leaves
+/// (the cloud, 16 B a point, the index lists of a node and its
+/// children, the tiles' copy of the cloud); normals add 24. Front-ends go out of core when a
 /// cloud's points times this exceed the memory budget; out of core, a
 /// node whose reaching points times this fit half the budget is tiled
 /// in core.
-pub const IN_CORE_BYTES_PER_POINT: u64 = 120;
+pub const IN_CORE_BYTES_PER_POINT: u64 = 48;
 
 /// Bytes of a winner map per occupied cell (the entry and the table's
 /// slack): what groups a depth's streamed nodes into passes.
@@ -230,16 +230,27 @@ impl Layout {
         }
     }
 
-    /// The cloud of a staged file (none: empty).
-    fn read(self, path: &Path) -> Result<PointCloud> {
-        let bytes = match std::fs::read(path) {
-            Ok(b) => b,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Vec::new(),
-            Err(source) => {
-                return Err(Error::Io {
-                    path: path.to_path_buf(),
-                    source,
-                });
+    /// The cloud of a staged file (none: empty), or of the byte range
+    /// `at` of it.
+    fn read(self, path: &Path, at: Option<(u64, u64)>) -> Result<PointCloud> {
+        let bytes = match at {
+            None => match std::fs::read(path) {
+                Ok(b) => b,
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => Vec::new(),
+                Err(source) => {
+                    return Err(Error::Io {
+                        path: path.to_path_buf(),
+                        source,
+                    });
+                }
+            },
+            Some((start, len)) => {
+                use std::io::{Read, Seek, SeekFrom};
+                let mut f = std::fs::File::open(path).map_err(io_err(path))?;
+                f.seek(SeekFrom::Start(start)).map_err(io_err(path))?;
+                let mut b = Vec::new();
+                f.take(len).read_to_end(&mut b).map_err(io_err(path))?;
+                b
             }
         };
         let n = bytes.len() / self.size();
@@ -263,18 +274,17 @@ impl Layout {
         Ok(c)
     }
 
-    /// Stages `cloud` at `path`.
-    fn write(self, path: &Path, cloud: &PointCloud) -> Result<()> {
-        let mut out = Vec::with_capacity(cloud.positions.len() * self.size());
+    /// Appends `cloud` to `out`.
+    fn append(self, cloud: &PointCloud, out: &mut Vec<u8>) {
+        out.reserve(cloud.positions.len() * self.size());
         for (i, &position) in cloud.positions.iter().enumerate() {
             let p = Point {
                 position,
                 normal: cloud.normals.as_ref().map_or(Vec3::ZERO, |n| n[i]),
                 color: cloud.colors.as_ref().map_or([0; 4], |c| c[i]),
             };
-            self.put(&p, &mut out);
+            self.put(&p, out);
         }
-        std::fs::write(path, out).map_err(io_err(path))
     }
 }
 
@@ -350,10 +360,10 @@ struct Winner {
 
 /// How a node of the top of the tree is made.
 enum Kind {
-    /// Decided in a pass: its winners, its children by octant, the spill
-    /// slot of the points it keeps.
+    /// Decided in a pass (once `decided`): its children by octant, the
+    /// spill slot of the points it keeps, how many it keeps.
     Streamed {
-        winners: FxHashMap<u32, Winner>,
+        decided: bool,
         children: [Option<usize>; 8],
         slot: usize,
         kept: u64,
@@ -365,14 +375,23 @@ enum Kind {
 struct Top {
     key: CellKey,
     count: u64,
+    /// At least the cells its winner map will hold: its points, and 8
+    /// per cell its parent's map held in its octant (a parent's cell
+    /// holds 8 of its child's).
+    cells: u64,
     kind: Kind,
 }
 
-/// The octant of `key`'s child that holds `p` (as the in-core rule
-/// routes it).
+/// The octant of the child of a node at `depth` that holds `p`: the
+/// in-core rule's `grid.cell_of(p, depth + 1)`, its low bits. Computed
+/// as `cell_of` computes the cell, with a truncating cast for its
+/// `floor` (they differ only below 0, where both give cell 0), so without
+/// a libm call per axis.
 fn octant(grid: &Grid, p: Vec3, depth: u8) -> u8 {
-    let c = grid.cell_of(p, depth + 1);
-    ((c.xyz[0] & 1) | ((c.xyz[1] & 1) << 1) | ((c.xyz[2] & 1) << 2)) as u8
+    let n = 1u64 << (depth + 1);
+    let rel = (p.as_dvec3() - grid.origin) / grid.size * n as f64;
+    let c = |v: f64| ((v as u64).min(n - 1) & 1) as u8;
+    c(rel.x) | (c(rel.y) << 1) | (c(rel.z) << 2)
 }
 
 /// Where a point goes among the top nodes: the streamed node at `depth`
@@ -384,21 +403,33 @@ enum Reach {
     Subtree(usize),
 }
 
-fn walk(top: &[Top], grid: &Grid, i: u32, p: Vec3) -> Result<Reach> {
+/// Where point `i` at `p` goes. `kept` lists every decided node's kept
+/// points by input index with the node (sorted); `cursor` is where the
+/// points before `i` left it (points come in input order, so a point is
+/// found kept in O(1) instead of by a lookup per depth).
+fn walk(
+    top: &[Top],
+    (kept, cursor): (&[(u32, u32)], &mut usize),
+    grid: &Grid,
+    i: u32,
+    p: Vec3,
+) -> Result<Reach> {
+    if let Some(&(k, n)) = kept.get(*cursor)
+        && k == i
+    {
+        *cursor += 1;
+        return Ok(Reach::Kept(n as usize));
+    }
     let mut n = 0usize;
     loop {
         let node = &top[n];
         match &node.kind {
             Kind::Subtree { .. } => return Ok(Reach::Subtree(n)),
             Kind::Streamed {
-                winners, children, ..
+                decided, children, ..
             } => {
-                if winners.is_empty() {
+                if !decided {
                     return Ok(Reach::Undecided(n));
-                }
-                let (cell, _) = cell_and_distance(grid, node.key, p);
-                if winners.get(&cell).is_some_and(|w| w.index == i) {
-                    return Ok(Reach::Kept(n));
                 }
                 let o = octant(grid, p, node.key.depth);
                 n = children[o as usize].ok_or_else(|| {
@@ -511,17 +542,20 @@ fn build(
 
     // 2. Streamed nodes, one depth at a time.
     let mut slots = 0usize;
-    let new_node = |key: CellKey, count: u64, slots: &mut usize| -> Top {
+    let new_node = |key: CellKey, count: u64, cells: u64, slots: &mut usize| -> Top {
         let slot = *slots;
         *slots += 1;
         Top {
             key,
             count,
+            cells: cells
+                .min(count)
+                .min(u64::from(PointTilesOptions::CELLS).pow(3)),
             kind: if fits(count, key.depth) {
                 Kind::Subtree { slot }
             } else {
                 Kind::Streamed {
-                    winners: FxHashMap::default(),
+                    decided: false,
                     children: [None; 8],
                     slot,
                     kept: 0,
@@ -529,7 +563,8 @@ fn build(
             },
         }
     };
-    let mut top = vec![new_node(CellKey::ROOT, total, &mut slots)];
+    let mut top = vec![new_node(CellKey::ROOT, total, u64::MAX, &mut slots)];
+    let mut kept_by: Vec<(u32, u32)> = Vec::new();
     let mut frontier: Vec<usize> = match top[0].kind {
         Kind::Streamed { .. } => vec![0],
         Kind::Subtree { .. } => Vec::new(),
@@ -539,9 +574,8 @@ fn build(
         // Groups whose winner maps fit a quarter of the budget.
         let mut groups: Vec<Vec<usize>> = Vec::new();
         let mut held = u64::MAX;
-        let cells = u64::from(PointTilesOptions::CELLS).pow(3);
         for &n in &frontier {
-            let need = top[n].count.min(cells) * WINNER_BYTES;
+            let need = top[n].cells * WINNER_BYTES;
             if held.saturating_add(need) > o.memory / 4 {
                 groups.push(Vec::new());
                 held = 0;
@@ -557,8 +591,10 @@ fn build(
                 .iter()
                 .map(|&n| (n, FxHashMap::default()))
                 .collect();
+            let mut cursor = 0;
             pass(&format!("points: choosing at depth {depth}"), &mut |i, p| {
-                let Reach::Undecided(n) = walk(&top, &grid, i, p.position)? else {
+                let at = (&kept_by[..], &mut cursor);
+                let Reach::Undecided(n) = walk(&top, at, &grid, i, p.position)? else {
                     return Ok(());
                 };
                 let (Some(reach), Some(map)) = (active.get_mut(&n), maps.get_mut(&n)) else {
@@ -585,33 +621,38 @@ fn build(
             for &n in &group {
                 let map = maps.remove(&n).unwrap_or_default();
                 let mut reach = active.remove(&n).unwrap_or_default();
+                let mut occupied = [0u64; 8];
                 for w in map.values() {
                     reach[w.octant as usize] -= 1;
+                    occupied[w.octant as usize] += 1;
                 }
                 let key = top[n].key;
                 let mut kids = [None; 8];
                 for (oct, &count) in reach.iter().enumerate() {
                     if count > 0 {
                         kids[oct] = Some(top.len());
-                        let child = new_node(key.child(oct), count, &mut slots);
+                        let child =
+                            new_node(key.child(oct), count, 8 * occupied[oct], &mut slots);
                         if matches!(child.kind, Kind::Streamed { .. }) {
                             next.push(top.len());
                         }
                         top.push(child);
                     }
                 }
+                kept_by.extend(map.values().map(|w| (w.index, n as u32)));
                 if let Kind::Streamed {
-                    winners,
+                    decided,
                     children,
                     kept,
                     ..
                 } = &mut top[n].kind
                 {
                     *kept = map.len() as u64;
-                    *winners = map;
+                    *decided = true;
                     *children = kids;
                 }
             }
+            kept_by.sort_unstable();
         }
         frontier = next;
     }
@@ -628,8 +669,9 @@ fn build(
         })
         .collect();
     let mut spill = Spill::new(&spill_dir, slots, cap)?;
+    let mut cursor = 0;
     pass("points: to their subtrees", &mut |i, p| {
-        let n = match walk(&top, &grid, i, p.position)? {
+        let n = match walk(&top, (&kept_by, &mut cursor), &grid, i, p.position)? {
             Reach::Kept(n) | Reach::Subtree(n) => n,
             Reach::Undecided(_) => {
                 return Err(Error::Input("the input changed while it was read".into()));
@@ -639,12 +681,14 @@ fn build(
     })?;
     spill.flush()?;
     drop(spill);
+    drop(kept_by);
 
     // 4. Tiles: streamed nodes' kept points, subtrees tiled in core. All
     // nodes in one list; `tile` names each content's staged file.
     struct Made {
         node: Node,
-        tile: Option<PathBuf>,
+        /// The staged file of its content and the byte range in it.
+        tile: Option<(PathBuf, Option<(u64, u64)>)>,
         bbox: Aabb,
         error: f64,
         points: usize,
@@ -672,17 +716,16 @@ fn build(
     for (n, t) in top.iter_mut().enumerate() {
         match &mut t.kind {
             Kind::Streamed {
-                winners,
                 children,
                 slot,
                 kept,
+                ..
             } => {
-                *winners = FxHashMap::default();
                 let path = Spill::file(&spill_dir, *slot);
-                let cloud = layout.read(&path)?;
+                let cloud = layout.read(&path, None)?;
                 made[n].bbox = bbox_of(&cloud.positions);
                 made[n].points = cloud.positions.len();
-                made[n].tile = Some(path);
+                made[n].tile = Some((path, None));
                 made[n].node.children = children.iter().flatten().copied().collect();
                 made[n].error = if t.count > *kept {
                     cell_diagonal(&grid, t.key.depth)
@@ -692,7 +735,7 @@ fn build(
             }
             Kind::Subtree { slot } => {
                 let path = Spill::file(&spill_dir, *slot);
-                let cloud = layout.read(&path)?;
+                let cloud = layout.read(&path, None)?;
                 if cloud.positions.len() as u64 != t.count {
                     return Err(named(Error::Input(
                         "the input changed while it was read".into(),
@@ -707,21 +750,24 @@ fn build(
                 drop(cloud);
                 let _ = std::fs::remove_file(&path);
                 // The subtree's node 0 is `n`; the others are appended.
+                // Its tiles go into one file (one file made per subtree,
+                // not per tile: creating files is what costs).
+                let staged = tiles_dir.join(format!("{slot}.pts"));
+                let mut bytes = Vec::new();
                 let base = made.len();
                 let id = |k: usize| if k == 0 { n } else { base + k - 1 };
                 for (k, ((node, tile), error)) in nodes.into_iter().zip(tiles).zip(errors).enumerate() {
-                    let staged = tiles_dir.join(format!("{}.pts", node.key.name()));
+                    let start = bytes.len() as u64;
+                    layout.append(&tile, &mut bytes);
+                    let range = (start, bytes.len() as u64 - start);
                     let has = !tile.positions.is_empty();
-                    if has {
-                        layout.write(&staged, &tile)?;
-                    }
                     let m = Made {
                         node: Node {
                             key: node.key,
                             children: node.children.iter().map(|&c| id(c)).collect(),
                             input_faces: node.input_faces,
                         },
-                        tile: has.then_some(staged),
+                        tile: has.then(|| (staged.clone(), Some(range))),
                         bbox: bbox_of(&tile.positions),
                         error,
                         points: tile.positions.len(),
@@ -732,6 +778,7 @@ fn build(
                         made.push(m);
                     }
                 }
+                std::fs::write(&staged, bytes).map_err(io_err(&staged))?;
                 progress(OutOfCoreEvent::Advance(1));
             }
         }
@@ -797,12 +844,12 @@ fn build(
             (
                 m.node.key.name(),
                 m.node.key.depth,
-                m.tile.as_deref().expect("a tile with content"),
+                m.tile.as_ref().expect("a tile with content"),
             )
         }),
         content.len(),
-        |name, path, grid| {
-            let cloud = layout.read(path)?;
+        |name, (path, at), grid| {
+            let cloud = layout.read(path, *at)?;
             crate::tile_content::encode_point_tile(name, &cloud, opts.compress, grid)
         },
         &mut |_| progress(OutOfCoreEvent::Advance(1)),
