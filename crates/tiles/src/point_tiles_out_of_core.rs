@@ -866,3 +866,35 @@ fn bbox_of(points: &[Vec3]) -> Aabb {
     }
     b
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `octant` is the in-core routing (`cell_of`'s low bits), also for
+    /// points on cell borders and outside the cube (clamped).
+    #[test]
+    fn octant_routes_as_cell_of() {
+        let grid = Grid::around(&Aabb {
+            min: Vec3::new(-1.0, -2.0, 0.5),
+            max: Vec3::new(3.0, 1.0, 0.75),
+        });
+        let mut x = 12345u64;
+        for k in 0..100_000 {
+            x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            let f = |s: u64| ((x >> s) & 0xffff) as f32 / 65535.0 * 6.0 - 2.5;
+            let mut p = Vec3::new(f(0), f(16), f(32));
+            if k % 3 == 0 {
+                // On a cell border of some depth.
+                let d = (x >> 48) as u8 % 8;
+                let c = grid.size / f64::from(1u32 << d);
+                p.x = (grid.origin.x + c * ((x >> 52) % 4) as f64) as f32;
+            }
+            for depth in [0u8, 1, 3, 7, 12] {
+                let c = grid.cell_of(p, depth + 1);
+                let want = (c.xyz[0] & 1) | ((c.xyz[1] & 1) << 1) | ((c.xyz[2] & 1) << 2);
+                assert_eq!(u32::from(octant(&grid, p, depth)), want, "{p} at {depth}");
+            }
+        }
+    }
+}
