@@ -105,6 +105,10 @@ pub const IN_CORE_BYTES_PER_POINT: u64 = 48;
 /// slack): what groups a depth's streamed nodes into passes.
 const WINNER_BYTES: u64 = 40;
 
+/// The name of the pass that spills points, the one that reads their
+/// attributes.
+const SPILL_PASS: &str = "points: to their subtrees";
+
 /// Points between progress advances.
 const ADVANCE_EVERY: u64 = 1 << 16;
 
@@ -175,25 +179,41 @@ impl Source {
         }
     }
 
-    /// Calls `f` with every point and its input index, in input order.
-    fn for_each(&self, f: &mut dyn FnMut(u32, &Point) -> Result<()>) -> Result<()> {
+    /// Calls `f` with every point and its input index, in input order;
+    /// with positions only (the rest zero) unless `attributes`.
+    fn for_each(
+        &self,
+        attributes: bool,
+        f: &mut dyn FnMut(u32, &Point) -> Result<()>,
+    ) -> Result<()> {
         let mut failed = None;
         let mut i = 0u32;
         match self {
             Source::Ply(s) => {
-                s.for_each_vertex(|v| {
+                let mut each = |p: &Point| {
                     if failed.is_none() {
-                        let p = Point {
-                            position: v.position,
-                            normal: v.normal,
-                            color: v.color,
-                        };
-                        if let Err(e) = f(i, &p) {
+                        if let Err(e) = f(i, p) {
                             failed = Some(e);
                         }
                         i = i.wrapping_add(1);
                     }
-                })?;
+                };
+                if attributes {
+                    s.for_each_vertex(|v| {
+                        each(&Point {
+                            position: v.position,
+                            normal: v.normal,
+                            color: v.color,
+                        })
+                    })?;
+                } else {
+                    s.for_each_position(|position| {
+                        each(&Point {
+                            position,
+                            ..Point::default()
+                        })
+                    })?;
+                }
                 // A vertex-only file ends with its last vertex, as the
                 // in-core reader requires.
                 s.for_each_face(|_| Ok(()))?;
@@ -508,11 +528,12 @@ fn build(
         ))));
     }
     let layout = source.layout();
+    // Only the spill needs more than positions.
     let pass = |name: &str, f: &mut dyn FnMut(u32, &Point) -> Result<()>| -> Result<()> {
         progress(OutOfCoreEvent::Phase(name, total));
         let mut k = 0u64;
         source
-            .for_each(&mut |i, p| {
+            .for_each(name == SPILL_PASS, &mut |i, p| {
                 f(i, p)?;
                 k += 1;
                 if k.is_multiple_of(ADVANCE_EVERY) {
@@ -670,7 +691,7 @@ fn build(
         .collect();
     let mut spill = Spill::new(&spill_dir, slots, cap)?;
     let mut cursor = 0;
-    pass("points: to their subtrees", &mut |i, p| {
+    pass(SPILL_PASS, &mut |i, p| {
         let n = match walk(&top, (&kept_by, &mut cursor), &grid, i, p.position)? {
             Reach::Kept(n) | Reach::Subtree(n) => n,
             Reach::Undecided(_) => {
