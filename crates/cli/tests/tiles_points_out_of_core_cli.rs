@@ -16,7 +16,11 @@ fn cloud(dir: &Path) -> (String, usize) {
     let positions: Vec<Vec3> = (0..n)
         .map(|i| {
             let t = i as f32 * 0.001;
-            Vec3::new(t.cos() * (1.0 + t), t.sin() * (1.0 + t), (i % 97) as f32 * 0.01)
+            Vec3::new(
+                t.cos() * (1.0 + t),
+                t.sin() * (1.0 + t),
+                (i % 97) as f32 * 0.01,
+            )
         })
         .collect();
     let colors = (0..n).map(|i| [(i % 256) as u8, 9, 200, 255]).collect();

@@ -224,14 +224,17 @@ fn points_out_of_core(job: &TilesJob, events: &Progress, memory: u64) -> Result<
         ));
     }
     let o = lodkit_tiles::PointsOutOfCoreOptions { memory, staging };
-    let (report, origin) =
-        lodkit_tiles::point_tileset_out_of_core(&job.input, &job.out, &job.points, &o, &|e| {
-            match e {
-                lodkit_scale::Event::Phase(name, len) => events.emit(&Event::Phase { name, len }),
-                lodkit_scale::Event::Advance(k) => events.emit(&Event::Advance(k)),
-            }
-        })
-        .map_err(|e| error(e, &job.input))?;
+    let (report, origin) = lodkit_tiles::point_tileset_out_of_core(
+        &job.input,
+        &job.out,
+        &job.points,
+        &o,
+        &|e| match e {
+            lodkit_scale::Event::Phase(name, len) => events.emit(&Event::Phase { name, len }),
+            lodkit_scale::Event::Advance(k) => events.emit(&Event::Advance(k)),
+        },
+    )
+    .map_err(|e| error(e, &job.input))?;
     events.emit(&Event::PhasesFinished);
     Ok(TilesReport::Points(report, origin))
 }

@@ -27,7 +27,8 @@ impl Rng {
 
 fn main() -> std::io::Result<()> {
     let args: Vec<String> = std::env::args().collect();
-    let (Some(n), Some(out)) = (args.get(1).and_then(|s| s.parse::<u64>().ok()), args.get(2)) else {
+    let (Some(n), Some(out)) = (args.get(1).and_then(|s| s.parse::<u64>().ok()), args.get(2))
+    else {
         eprintln!("usage: noisy_cloud N OUT.ply");
         std::process::exit(2);
     };
@@ -43,7 +44,8 @@ fn main() -> std::io::Result<()> {
         let a = std::f64::consts::TAU * rng.unit();
         let s = (1.0 - z * z).sqrt();
         let (x, y) = (s * a.cos(), s * a.sin());
-        let r = 1.0 + 0.1 * (5.0 * x).sin() * (4.0 * y).cos() * (3.0 * z).sin() + 0.002 * rng.unit();
+        let r =
+            1.0 + 0.1 * (5.0 * x).sin() * (4.0 * y).cos() * (3.0 * z).sin() + 0.002 * rng.unit();
         let p = [x * r, y * r, z * r];
         for c in p {
             w.write_all(&(c as f32).to_le_bytes())?;

@@ -45,11 +45,10 @@
 //! # Inputs
 //! A binary PLY whose only element is `vertex` (positions as float or
 //! double; normals and colours kept, converted as the in-core reader
-//! converts them), read by [`PlyStream`]; checked as the in-core reader
-//! checks (counts against the file size, finite coordinates within
-//! range, no byte after the last vertex). LAS/LAZ through
-//! [`lodkit_mesh::io::las::LasStream`] (the in-core reader's origin and
-//! colour rule; turned to y-up as the job turns an in-core LAS cloud).
+//! converts them), read by [`PlyStream`] and checked as the in-core
+//! reader checks it (counts against the file size, finite coordinates
+//! within range, no byte after the last vertex). LAS/LAZ clouds are not
+//! streamed yet: the front-ends tile them in core.
 //!
 //! # Guarantees
 //! The same bytes as the in-core path for the same input and options
@@ -64,13 +63,17 @@
 //! bookkeeping).
 //!
 //! # Cost
-//! Memory: the largest subtree (at most the budget by construction, or
-//! `leaf_points` points), the winner maps of the streamed nodes (about
-//! 40 B per occupied cell, held until the spill), the spill buffers (an
-//! eighth of the budget). Disk: the points twice (spills, then tiles; 12
-//! B a point, plus 12 with normals and 4 with colours). Time: 3 passes
-//! plus one per streamed depth over the file, one in-core tiling of
-//! every subtree, one encoding of every tile.
+//! Memory: the largest subtree (at most half the budget at
+//! [`IN_CORE_BYTES_PER_POINT`], or `leaf_points` points), the winner
+//! maps of one pass (a quarter of the budget, at least one node's: up to
+//! `CELLS³` cells, 80 MB, for a node of that many points), 8 B per point
+//! a streamed node keeps (held until the spill), the spill buffers (an
+//! eighth of the budget). Disk: the points twice (spills, then staged
+//! tiles: 12 B a point, plus 12 with normals and 4 with colours). Time:
+//! three passes over the file plus one per streamed depth (more where a
+//! depth's maps exceed their quarter), one in-core tiling of every
+//! subtree, one encoding of every tile: 10⁷ coloured points in 4.7 s of
+//! CPU at `--memory 128M` (docs/benchmarks.md).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -452,19 +455,18 @@ fn walk(
                     return Ok(Reach::Undecided(n));
                 }
                 let o = octant(grid, p, node.key.depth);
-                n = children[o as usize].ok_or_else(|| {
-                    Error::Input("the input changed while it was read".into())
-                })?;
+                n = children[o as usize]
+                    .ok_or_else(|| Error::Input("the input changed while it was read".into()))?;
             }
         }
     }
 }
 
 /// Builds the point tileset of the cloud in `input` (a vertex-only binary
-/// PLY, LAS or LAZ) into the folder `out` in about `o.memory` bytes; see
+/// PLY) into the folder `out` in about `o.memory` bytes; see
 /// the module docs. `out` follows
 /// [`write_point_tileset`](crate::write_point_tileset)'s rule. Returns
-/// the report and the origin a LAS/LAZ cloud's root transform holds.
+/// the report and the origin the root transform holds (none for a PLY).
 ///
 /// Guarantees: the bytes of the in-core path for the same input and
 /// options; nothing staged is left after the call. Errors: an input the
@@ -519,7 +521,9 @@ fn build(
     };
     let total = source.len();
     if total == 0 {
-        return Err(named(Error::Input("the cloud has no points to tile".into())));
+        return Err(named(Error::Input(
+            "the cloud has no points to tile".into(),
+        )));
     }
     if total > u64::from(u32::MAX) {
         return Err(named(Error::Input(format!(
@@ -608,37 +612,38 @@ fn build(
         for group in groups {
             let mut active: FxHashMap<usize, [u64; 8]> =
                 group.iter().map(|&n| (n, [0u64; 8])).collect();
-            let mut maps: FxHashMap<usize, FxHashMap<u32, Winner>> = group
-                .iter()
-                .map(|&n| (n, FxHashMap::default()))
-                .collect();
+            let mut maps: FxHashMap<usize, FxHashMap<u32, Winner>> =
+                group.iter().map(|&n| (n, FxHashMap::default())).collect();
             let mut cursor = 0;
-            pass(&format!("points: choosing at depth {depth}"), &mut |i, p| {
-                let at = (&kept_by[..], &mut cursor);
-                let Reach::Undecided(n) = walk(&top, at, &grid, i, p.position)? else {
-                    return Ok(());
-                };
-                let (Some(reach), Some(map)) = (active.get_mut(&n), maps.get_mut(&n)) else {
-                    return Ok(());
-                };
-                let key = top[n].key;
-                let (cell, d) = cell_and_distance(&grid, key, p.position);
-                let o = octant(&grid, p.position, key.depth);
-                reach[o as usize] += 1;
-                let w = map.entry(cell).or_insert(Winner {
-                    d,
-                    index: i,
-                    octant: o,
-                });
-                if d < w.d {
-                    *w = Winner {
+            pass(
+                &format!("points: choosing at depth {depth}"),
+                &mut |i, p| {
+                    let at = (&kept_by[..], &mut cursor);
+                    let Reach::Undecided(n) = walk(&top, at, &grid, i, p.position)? else {
+                        return Ok(());
+                    };
+                    let (Some(reach), Some(map)) = (active.get_mut(&n), maps.get_mut(&n)) else {
+                        return Ok(());
+                    };
+                    let key = top[n].key;
+                    let (cell, d) = cell_and_distance(&grid, key, p.position);
+                    let o = octant(&grid, p.position, key.depth);
+                    reach[o as usize] += 1;
+                    let w = map.entry(cell).or_insert(Winner {
                         d,
                         index: i,
                         octant: o,
-                    };
-                }
-                Ok(())
-            })?;
+                    });
+                    if d < w.d {
+                        *w = Winner {
+                            d,
+                            index: i,
+                            octant: o,
+                        };
+                    }
+                    Ok(())
+                },
+            )?;
             for &n in &group {
                 let map = maps.remove(&n).unwrap_or_default();
                 let mut reach = active.remove(&n).unwrap_or_default();
@@ -652,8 +657,7 @@ fn build(
                 for (oct, &count) in reach.iter().enumerate() {
                     if count > 0 {
                         kids[oct] = Some(top.len());
-                        let child =
-                            new_node(key.child(oct), count, 8 * occupied[oct], &mut slots);
+                        let child = new_node(key.child(oct), count, 8 * occupied[oct], &mut slots);
                         if matches!(child.kind, Kind::Streamed { .. }) {
                             next.push(top.len());
                         }
@@ -777,7 +781,9 @@ fn build(
                 let mut bytes = Vec::new();
                 let base = made.len();
                 let id = |k: usize| if k == 0 { n } else { base + k - 1 };
-                for (k, ((node, tile), error)) in nodes.into_iter().zip(tiles).zip(errors).enumerate() {
+                for (k, ((node, tile), error)) in
+                    nodes.into_iter().zip(tiles).zip(errors).enumerate()
+                {
                     let start = bytes.len() as u64;
                     layout.append(&tile, &mut bytes);
                     let range = (start, bytes.len() as u64 - start);
@@ -902,7 +908,9 @@ mod tests {
         });
         let mut x = 12345u64;
         for k in 0..100_000 {
-            x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             let f = |s: u64| ((x >> s) & 0xffff) as f32 / 65535.0 * 6.0 - 2.5;
             let mut p = Vec3::new(f(0), f(16), f(32));
             if k % 3 == 0 {

@@ -34,13 +34,12 @@ fn cloud(n: usize) -> PointCloud {
         let a = 3.0 * u;
         let p = Vec3::new(a.cos(), a.sin(), v) * (1.0 + 0.05 * (17.0 * u * v).sin());
         let k = if i % 50 == 7 { i - 1 } else { i };
-        let q = if k == i {
-            p
-        } else {
-            c.positions[k]
-        };
+        let q = if k == i { p } else { c.positions[k] };
         c.positions.push(q);
-        c.normals.as_mut().unwrap().push(Vec3::new(a.cos(), a.sin(), 0.0));
+        c.normals
+            .as_mut()
+            .unwrap()
+            .push(Vec3::new(a.cos(), a.sin(), 0.0));
         c.colors
             .as_mut()
             .unwrap()
@@ -126,7 +125,11 @@ fn every_budget_gives_the_in_core_bytes() {
             let got = all_files(&out);
             assert_eq!(got.len(), want.len(), "leaf {leaf_points}, memory {memory}");
             for (g, w) in got.iter().zip(&want) {
-                assert!(g == w, "{} differs (leaf {leaf_points}, memory {memory})", g.0);
+                assert!(
+                    g == w,
+                    "{} differs (leaf {leaf_points}, memory {memory})",
+                    g.0
+                );
             }
             // The same call again over its own output: the same bytes.
             out_of_core(&input, &out, &opts, memory).unwrap();
@@ -176,7 +179,9 @@ fn bad_inputs_are_refused_with_one_line_and_leave_nothing() {
     .unwrap();
     for input in [&truncated, &long, &mesh, &ascii, &empty] {
         let out = dir.path().join("out");
-        let e = out_of_core(input, &out, &opts, 1 << 14).unwrap_err().to_string();
+        let e = out_of_core(input, &out, &opts, 1 << 14)
+            .unwrap_err()
+            .to_string();
         let name = input.file_name().unwrap().to_str().unwrap();
         assert!(e.contains(name) && !e.contains('\n'), "{e}");
         assert!(!out.exists(), "{name}: no output");
