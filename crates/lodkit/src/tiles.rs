@@ -136,14 +136,24 @@ fn materials_of(
 
 /// The budget, the in-core estimate and whether the input is a cloud,
 /// when `job.input` is tiled out of core: a binary `.ply` of vertices
-/// only whose points times [`lodkit_tiles::IN_CORE_BYTES_PER_POINT`]
-/// exceed `--memory`; a `.ply` mesh whose in-core tiling (estimated from
+/// only, or a LAS/LAZ file, whose points times
+/// [`lodkit_tiles::IN_CORE_BYTES_PER_POINT`] exceed `--memory`; a `.ply` mesh whose in-core tiling (estimated from
 /// its size) exceeds `--memory` and that the stream reader accepts
 /// (binary, vertices then faces). A `.ply` too big but not streamable is
 /// tiled in core, with one line saying so.
 fn out_of_core_memory(job: &TilesJob, events: &Progress) -> Option<(u64, u64, bool)> {
     use lodkit_mesh::io::Format;
-    if Format::from_path(&job.input) != Some(Format::Ply) {
+    let format = Format::from_path(&job.input);
+    if format == Some(Format::Las) {
+        let memory = job
+            .scale
+            .memory
+            .unwrap_or_else(lodkit_scale::default_memory);
+        let points = lodkit_mesh::io::LasStream::header_count(&job.input)?;
+        let in_core = points.saturating_mul(lodkit_tiles::IN_CORE_BYTES_PER_POINT);
+        return (in_core > memory).then_some((memory, in_core, true));
+    }
+    if format != Some(Format::Ply) {
         return None;
     }
     let meta = std::fs::metadata(&job.input).ok().filter(|m| m.is_file())?;
@@ -211,7 +221,7 @@ fn mesh_out_of_core(job: &TilesJob, events: &Progress, memory: u64) -> Result<Ti
     Ok(TilesReport::Mesh(report))
 }
 
-/// The point tileset of a vertex-only binary PLY built out of core in
+/// The point tileset of a vertex-only binary PLY or a LAS/LAZ file built out of core in
 /// `memory` bytes (`lodkit_tiles::point_tileset_out_of_core`: the
 /// in-core bytes), its staging folder beside `out`, removed after the run.
 fn points_out_of_core(job: &TilesJob, events: &Progress, memory: u64) -> Result<TilesReport> {

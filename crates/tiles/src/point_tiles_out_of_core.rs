@@ -47,8 +47,11 @@
 //! double; normals and colours kept, converted as the in-core reader
 //! converts them), read by [`PlyStream`] and checked as the in-core
 //! reader checks it (counts against the file size, finite coordinates
-//! within range, no byte after the last vertex). LAS/LAZ clouds are not
-//! streamed yet: the front-ends tile them in core.
+//! within range, no byte after the last vertex). LAS/LAZ through
+//! [`lodkit_mesh::io::LasStream`]: the in-core reader's checks, origin
+//! and colour rule (it reads the file once more to find them), turned
+//! to y-up as the job turns an in-core LAS cloud, the origin the root
+//! `transform`.
 //!
 //! # Guarantees
 //! The same bytes as the in-core path for the same input and options
@@ -137,6 +140,7 @@ struct Point {
 /// A cloud read in passes.
 enum Source {
     Ply(PlyStream),
+    Las(lodkit_mesh::io::LasStream),
 }
 
 impl Source {
@@ -153,8 +157,9 @@ impl Source {
                 }
                 Ok(Source::Ply(s))
             }
+            Some(Format::Las) => Ok(Source::Las(lodkit_mesh::io::LasStream::open(path)?)),
             _ => Err(Error::Input(format!(
-                "{}: a point tileset out of core reads a vertex-only binary PLY",
+                "{}: a point tileset out of core reads a vertex-only binary PLY, LAS or LAZ",
                 path.display()
             ))),
         }
@@ -164,6 +169,7 @@ impl Source {
     fn len(&self) -> u64 {
         match self {
             Source::Ply(s) => s.vertex_count(),
+            Source::Las(s) => s.len(),
         }
     }
 
@@ -173,12 +179,17 @@ impl Source {
                 normals: s.attributes().normals,
                 colors: s.attributes().colors,
             },
+            Source::Las(s) => Layout {
+                normals: false,
+                colors: s.has_colors(),
+            },
         }
     }
 
     fn origin(&self) -> Option<[f64; 3]> {
         match self {
             Source::Ply(_) => None,
+            Source::Las(s) => Some(s.origin()),
         }
     }
 
@@ -221,6 +232,21 @@ impl Source {
                 // in-core reader requires.
                 s.for_each_face(|_| Ok(()))?;
             }
+            Source::Las(s) => s.for_each(|position, color| {
+                if failed.is_none() {
+                    // z-up to the y-up frame of tile contents, as the job
+                    // turns an in-core LAS cloud: (x, y, z) ↦ (x, z, −y).
+                    let p = Point {
+                        position: Vec3::new(position.x, position.z, -position.y),
+                        normal: Vec3::ZERO,
+                        color,
+                    };
+                    if let Err(e) = f(i, &p) {
+                        failed = Some(e);
+                    }
+                    i = i.wrapping_add(1);
+                }
+            })?,
         }
         failed.map_or(Ok(()), Err)
     }
@@ -463,10 +489,11 @@ fn walk(
 }
 
 /// Builds the point tileset of the cloud in `input` (a vertex-only binary
-/// PLY) into the folder `out` in about `o.memory` bytes; see
+/// PLY, LAS or LAZ) into the folder `out` in about `o.memory` bytes; see
 /// the module docs. `out` follows
 /// [`write_point_tileset`](crate::write_point_tileset)'s rule. Returns
-/// the report and the origin the root transform holds (none for a PLY).
+/// the report and the origin the root transform holds (a LAS/LAZ file's;
+/// none for a PLY).
 ///
 /// Guarantees: the bytes of the in-core path for the same input and
 /// options; nothing staged is left after the call. Errors: an input the

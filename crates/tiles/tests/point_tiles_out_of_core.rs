@@ -199,3 +199,60 @@ fn bad_inputs_are_refused_with_one_line_and_leave_nothing() {
     .unwrap_err();
     assert!(matches!(e, lodkit_tiles::Error::Usage(_)), "{e}");
 }
+
+/// The shared Autzen LAZ (z-up, far from zero) forced out of core: the
+/// in-core bytes, its origin the root transform. Skips when the shared
+/// data is absent.
+#[test]
+fn a_laz_cloud_gives_the_in_core_bytes() {
+    let data = std::env::var_os("LODKIT_SHARED_DATA").map_or_else(
+        || Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"),
+        std::path::PathBuf::from,
+    );
+    let input = data.join("points/autzen_trim.laz");
+    if !input.is_file() {
+        eprintln!("skipped: {} is absent", input.display());
+        return;
+    }
+    let opts = PointTilesOptions {
+        leaf_points: 2_000,
+        ..PointTilesOptions::DEFAULT
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let (want, got) = (dir.path().join("in"), dir.path().join("out"));
+    let located = lodkit_mesh::io::load_located(&input).unwrap();
+    let Model::Points(c) = located.model else {
+        panic!("a cloud")
+    };
+    // The job's turn to y-up.
+    let c = PointCloud {
+        positions: c
+            .positions
+            .iter()
+            .map(|v| Vec3::new(v.x, v.z, -v.y))
+            .collect(),
+        ..c
+    };
+    let t = tileset_from_points(&c, &opts, &mut |_| {}).unwrap();
+    write_point_tileset(&t, &want, Some(&input), &opts, located.origin, &mut |_| {}).unwrap();
+    let o = PointsOutOfCoreOptions {
+        memory: 1 << 16,
+        staging: dir.path().join("staging"),
+    };
+    let (r, origin) = point_tileset_out_of_core(&input, &got, &opts, &o, &|_| {}).unwrap();
+    assert_eq!(origin, located.origin);
+    assert_eq!(r.input_points, c.positions.len());
+    assert!(all_files(&got) == all_files(&want), "the in-core bytes");
+    assert!(!dir.path().join("staging").exists());
+    // Cut short: one line naming the file, nothing written.
+    let bytes = std::fs::read(&input).unwrap();
+    let short = dir.path().join("short.laz");
+    std::fs::write(&short, &bytes[..bytes.len() * 2 / 3]).unwrap();
+    let out = dir.path().join("short");
+    let e = point_tileset_out_of_core(&short, &out, &opts, &o, &|_| {})
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(e.contains("short.laz") && !e.contains('\n'), "{e}");
+    assert!(!out.exists() && !dir.path().join("staging").exists());
+}
