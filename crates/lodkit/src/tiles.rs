@@ -161,7 +161,7 @@ fn out_of_core_memory(job: &TilesJob, events: &Progress) -> Option<(u64, u64, bo
         .scale
         .memory
         .unwrap_or_else(lodkit_scale::default_memory);
-    if let Ok(s) = lodkit_mesh::io::ply::stream::PlyStream::open(&job.input)
+    if let Ok(s) = lodkit_mesh::io::ply::stream::PlyStream::open_points(&job.input)
         && s.face_records() == 0
     {
         let in_core = s

@@ -139,7 +139,7 @@ struct Point {
 
 /// A cloud read in passes.
 enum Source {
-    Ply(PlyStream),
+    Ply(Box<PlyStream>),
     Las(lodkit_mesh::io::LasStream),
 }
 
@@ -148,14 +148,14 @@ impl Source {
         use lodkit_mesh::io::Format;
         match Format::from_path(path) {
             Some(Format::Ply) => {
-                let s = PlyStream::open(path)?;
+                let s = PlyStream::open_points(path)?;
                 if s.face_records() > 0 {
                     return Err(Error::Input(format!(
                         "{}: has faces; a point tileset out of core reads a vertex-only PLY",
                         path.display()
                     )));
                 }
-                Ok(Source::Ply(s))
+                Ok(Source::Ply(Box::new(s)))
             }
             Some(Format::Las) => Ok(Source::Las(lodkit_mesh::io::LasStream::open(path)?)),
             _ => Err(Error::Input(format!(

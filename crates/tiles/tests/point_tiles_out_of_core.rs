@@ -250,8 +250,7 @@ fn a_laz_cloud_gives_the_in_core_bytes() {
     std::fs::write(&short, &bytes[..bytes.len() * 2 / 3]).unwrap();
     let out = dir.path().join("short");
     let e = point_tileset_out_of_core(&short, &out, &opts, &o, &|_| {})
-        .err()
-        .expect("refused")
+        .expect_err("refused")
         .to_string();
     assert!(e.contains("short.laz") && !e.contains('\n'), "{e}");
     assert!(!out.exists() && !dir.path().join("staging").exists());
