@@ -39,7 +39,10 @@ pub struct TilesJob {
     /// `--memory` and `--ray`: a binary PLY mesh whose in-core tiling
     /// would exceed the budget ([`lodkit_tiles::IN_CORE_BYTES_PER_FACE`]
     /// per face) is tiled out of core, staged beside `out` (resumed by
-    /// the same command after a failure, removed after success).
+    /// the same command after a failure, removed after success); so is a
+    /// vertex-only binary PLY cloud
+    /// ([`lodkit_tiles::IN_CORE_BYTES_PER_POINT`] per point; the in-core
+    /// bytes, its staging removed after the run).
     pub scale: OutOfCore,
 }
 
@@ -65,14 +68,18 @@ pub enum TilesReport {
 /// one `simplify` of a mesh plus one distance measurement per tile; a
 /// cloud in `O(points × depth)`; out of core, about `--memory`).
 pub fn run(job: &TilesJob, events: &Progress) -> Result<TilesReport> {
-    if let Some((memory, in_core)) = out_of_core_memory(job, events) {
+    if let Some((memory, in_core, cloud)) = out_of_core_memory(job, events) {
         events.status(format!(
             "out of core: {} needs about {} to tile in core, over --memory {}; tiling in bounded memory",
             job.input.display(),
             human_bytes(in_core),
             human_bytes(memory)
         ));
-        return mesh_out_of_core(job, events, memory);
+        return if cloud {
+            points_out_of_core(job, events, memory)
+        } else {
+            mesh_out_of_core(job, events, memory)
+        };
     }
     let step = events.spinner(&format!("reading {}", job.input.display()));
     let located = lodkit_mesh::io::load_located(&job.input)?;
@@ -127,13 +134,26 @@ fn materials_of(
     Ok(Ok(scene))
 }
 
-/// The budget and the in-core estimate when `job.input` is tiled out of core: a `.ply` whose
-/// in-core tiling (estimated from its size) exceeds `--memory` and that
-/// the stream reader accepts (binary, vertices then faces). A `.ply` too
-/// big but not streamable is tiled in core, with one line saying so.
-fn out_of_core_memory(job: &TilesJob, events: &Progress) -> Option<(u64, u64)> {
+/// The budget, the in-core estimate and whether the input is a cloud,
+/// when `job.input` is tiled out of core: a binary `.ply` of vertices
+/// only, or a LAS/LAZ file, whose points times
+/// [`lodkit_tiles::IN_CORE_BYTES_PER_POINT`] exceed `--memory`; a `.ply` mesh whose in-core tiling (estimated from
+/// its size) exceeds `--memory` and that the stream reader accepts
+/// (binary, vertices then faces). A `.ply` too big but not streamable is
+/// tiled in core, with one line saying so.
+fn out_of_core_memory(job: &TilesJob, events: &Progress) -> Option<(u64, u64, bool)> {
     use lodkit_mesh::io::Format;
-    if Format::from_path(&job.input) != Some(Format::Ply) {
+    let format = Format::from_path(&job.input);
+    if format == Some(Format::Las) {
+        let memory = job
+            .scale
+            .memory
+            .unwrap_or_else(lodkit_scale::default_memory);
+        let points = lodkit_mesh::io::LasStream::header_count(&job.input)?;
+        let in_core = points.saturating_mul(lodkit_tiles::IN_CORE_BYTES_PER_POINT);
+        return (in_core > memory).then_some((memory, in_core, true));
+    }
+    if format != Some(Format::Ply) {
         return None;
     }
     let meta = std::fs::metadata(&job.input).ok().filter(|m| m.is_file())?;
@@ -141,13 +161,21 @@ fn out_of_core_memory(job: &TilesJob, events: &Progress) -> Option<(u64, u64)> {
         .scale
         .memory
         .unwrap_or_else(lodkit_scale::default_memory);
+    if let Ok(s) = lodkit_mesh::io::ply::stream::PlyStream::open_points(&job.input)
+        && s.face_records() == 0
+    {
+        let in_core = s
+            .vertex_count()
+            .saturating_mul(lodkit_tiles::IN_CORE_BYTES_PER_POINT);
+        return (in_core > memory).then_some((memory, in_core, true));
+    }
     let faces = meta.len() / lodkit_scale::PLY_BYTES_PER_FACE;
     let in_core = faces.saturating_mul(lodkit_tiles::IN_CORE_BYTES_PER_FACE);
     if in_core <= memory {
         return None;
     }
     match lodkit_mesh::io::ply::stream::PlyStream::open(&job.input) {
-        Ok(s) if s.face_records() > 0 => Some((memory, in_core)),
+        Ok(s) if s.face_records() > 0 => Some((memory, in_core, false)),
         Ok(_) => None,
         Err(e) => {
             events.status(format!(
@@ -191,6 +219,34 @@ fn mesh_out_of_core(job: &TilesJob, events: &Progress, memory: u64) -> Result<Ti
         })?;
     events.emit(&Event::PhasesFinished);
     Ok(TilesReport::Mesh(report))
+}
+
+/// The point tileset of a vertex-only binary PLY or a LAS/LAZ file built out of core in
+/// `memory` bytes (`lodkit_tiles::point_tileset_out_of_core`: the
+/// in-core bytes), its staging folder beside `out`, removed after the run.
+fn points_out_of_core(job: &TilesJob, events: &Progress, memory: u64) -> Result<TilesReport> {
+    let settings = format!("points {:?}; memory {memory}", job.points);
+    let staging = lodkit_scale::staging_dir(&job.input, &job.out, &settings);
+    for old in lodkit_scale::remove_abandoned(&job.out, &staging) {
+        events.status(format!(
+            "removed {}, the staging folder an earlier run for this output left",
+            old.display()
+        ));
+    }
+    let o = lodkit_tiles::PointsOutOfCoreOptions { memory, staging };
+    let (report, origin) = lodkit_tiles::point_tileset_out_of_core(
+        &job.input,
+        &job.out,
+        &job.points,
+        &o,
+        &|e| match e {
+            lodkit_scale::Event::Phase(name, len) => events.emit(&Event::Phase { name, len }),
+            lodkit_scale::Event::Advance(k) => events.emit(&Event::Advance(k)),
+        },
+    )
+    .map_err(|e| error(e, &job.input))?;
+    events.emit(&Event::PhasesFinished);
+    Ok(TilesReport::Points(report, origin))
 }
 
 fn points(

@@ -72,6 +72,7 @@ mod level_chain;
 mod octree_partition;
 mod out_of_core;
 mod point_tiles;
+mod point_tiles_out_of_core;
 mod skirts;
 mod tile_content;
 mod tile_split;
@@ -90,6 +91,9 @@ pub use out_of_core::{
 };
 pub use point_tiles::{
     PointTilesOptions, PointTilesReport, PointTileset, tileset_from_points, write_point_tileset,
+};
+pub use point_tiles_out_of_core::{
+    IN_CORE_BYTES_PER_POINT, PointsOutOfCoreOptions, point_tileset_out_of_core,
 };
 pub use tile_content::{depth_grid, encode_point_tile, encode_tile};
 pub use tile_textures::{MARGIN_TEXELS, tileset_from_scene};

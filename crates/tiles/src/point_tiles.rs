@@ -19,11 +19,11 @@
 //! indices once in all (8 bytes a point) plus one hash slot per occupied
 //! cell of the node being split.
 
-use std::collections::HashMap;
 use std::path::Path;
 
 use glam::DVec3;
 use lodkit_mesh::{Aabb, PointCloud};
+use rustc_hash::FxHashMap;
 
 use crate::octree_partition::{CellKey, Grid, MAX_DEPTH, Node, Octree};
 use crate::tileset_json::{NodeInfo, Refine};
@@ -119,10 +119,12 @@ fn gather(cloud: &PointCloud, idx: &[u32]) -> PointCloud {
     }
 }
 
-/// Splits `idx` (the points reaching the node `key`) into the points the
-/// node keeps and the rest: one per occupied cell of its
-/// [`PointTilesOptions::CELLS`]³ grid, the nearest the cell's centre.
-fn subsample(cloud: &PointCloud, grid: &Grid, key: CellKey, idx: Vec<u32>) -> (Vec<u32>, Vec<u32>) {
+/// The cell of the node `key`'s [`PointTilesOptions::CELLS`]³ grid that
+/// holds `p` (clamped into it, `(z · CELLS + y) · CELLS + x`) and the
+/// squared distance from `p` to the cell's centre in cell units: the
+/// one computation behind a node's choice, in core and out of core, so
+/// both choose the same points bit for bit.
+pub(crate) fn cell_and_distance(grid: &Grid, key: CellKey, p: glam::Vec3) -> (u32, f64) {
     let cells = PointTilesOptions::CELLS;
     let n = f64::from(1u32 << key.depth) * f64::from(cells);
     let h = grid.size / n;
@@ -131,14 +133,33 @@ fn subsample(cloud: &PointCloud, grid: &Grid, key: CellKey, idx: Vec<u32>) -> (V
         f64::from(key.xyz[1]),
         f64::from(key.xyz[2]),
     ) * f64::from(cells);
-    let mut best: HashMap<u32, (f64, u32)> = HashMap::new();
+    let rel = (p.as_dvec3() - grid.origin) / h - base;
+    // `floor` then clamped to the grid; a truncating cast gives the same
+    // cell (it differs from `floor` only below 0, where both clamp to 0)
+    // without a libm call per axis.
+    let top = cells - 1;
+    let c = DVec3::new(
+        f64::from((rel.x as i64).clamp(0, i64::from(top)) as u32),
+        f64::from((rel.y as i64).clamp(0, i64::from(top)) as u32),
+        f64::from((rel.z as i64).clamp(0, i64::from(top)) as u32),
+    );
+    let d = (rel - c - DVec3::splat(0.5)).length_squared();
+    ((c.z as u32 * cells + c.y as u32) * cells + c.x as u32, d)
+}
+
+/// The `geometricError` of a node at `depth` that passes points on: its
+/// cell's diagonal `h·√3`.
+pub(crate) fn cell_diagonal(grid: &Grid, depth: u8) -> f64 {
+    grid.size / (f64::from(1u32 << depth) * f64::from(PointTilesOptions::CELLS)) * 3f64.sqrt()
+}
+
+/// Splits `idx` (the points reaching the node `key`) into the points the
+/// node keeps and the rest: one per occupied cell of its
+/// [`PointTilesOptions::CELLS`]³ grid, the nearest the cell's centre.
+fn subsample(cloud: &PointCloud, grid: &Grid, key: CellKey, idx: Vec<u32>) -> (Vec<u32>, Vec<u32>) {
+    let mut best: FxHashMap<u32, (f64, u32)> = FxHashMap::default();
     for &i in &idx {
-        let rel = (cloud.positions[i as usize].as_dvec3() - grid.origin) / h - base;
-        let c = rel
-            .floor()
-            .clamp(DVec3::ZERO, DVec3::splat(f64::from(cells - 1)));
-        let d = (rel - c - DVec3::splat(0.5)).length_squared();
-        let cell = (c.z as u32 * cells + c.y as u32) * cells + c.x as u32;
+        let (cell, d) = cell_and_distance(grid, key, cloud.positions[i as usize]);
         let e = best.entry(cell).or_insert((d, i));
         if d < e.0 || (d == e.0 && i < e.1) {
             *e = (d, i);
@@ -156,6 +177,115 @@ fn subsample(cloud: &PointCloud, grid: &Grid, key: CellKey, idx: Vec<u32>) -> (V
         }
     }
     (kept, rest)
+}
+
+/// The nodes below (and including) one node, made by the in-core rule.
+pub(crate) struct Subtree {
+    /// Breadth-first from the node given, children in octant order
+    /// (indices into this vector).
+    pub nodes: Vec<Node>,
+    /// Per node: the points it keeps, in input order.
+    pub tiles: Vec<PointCloud>,
+    /// Per node: its `geometricError` before rounding (0 for a leaf).
+    pub errors: Vec<f64>,
+    /// The deepest node's depth.
+    pub depth: u8,
+}
+
+/// Applies the rule of the module docs to `cloud`, the points (in input
+/// order) that reach the node `root` of the octree on `grid`; `placed`
+/// hears the points placed so far. The whole cloud at [`CellKey::ROOT`]
+/// is the in-core tileset; any node's reaching points give that node's
+/// subtree of it exactly (ties break by input order, which a subset
+/// keeps).
+pub(crate) fn subdivide(
+    cloud: &PointCloud,
+    grid: &Grid,
+    root: CellKey,
+    leaf_points: usize,
+    placed: &mut dyn FnMut(usize),
+) -> Subtree {
+    let mut nodes = vec![Node {
+        key: root,
+        children: Vec::new(),
+        input_faces: cloud.positions.len(),
+    }];
+    let mut tiles: Vec<PointCloud> = vec![PointCloud::default()];
+    let mut errors = vec![0f64];
+    let mut queue = std::collections::VecDeque::new();
+    queue.push_back((
+        0usize,
+        (0..cloud.positions.len() as u32).collect::<Vec<u32>>(),
+    ));
+    let (mut depth, mut done) = (root.depth, 0usize);
+    while let Some((n, idx)) = queue.pop_front() {
+        let key = nodes[n].key;
+        depth = depth.max(key.depth);
+        if idx.len() <= leaf_points || key.depth >= MAX_DEPTH {
+            done += idx.len();
+            tiles[n] = gather(cloud, &idx);
+        } else {
+            let (kept, rest) = subsample(cloud, grid, key, idx);
+            done += kept.len();
+            tiles[n] = gather(cloud, &kept);
+            // Nothing passed on (every point in a cell of its own): a leaf.
+            errors[n] = if rest.is_empty() {
+                0.0
+            } else {
+                cell_diagonal(grid, key.depth)
+            };
+            let mut parts: [Vec<u32>; 8] = Default::default();
+            for i in rest {
+                let c = grid.cell_of(cloud.positions[i as usize], key.depth + 1);
+                let o = (c.xyz[0] & 1) | ((c.xyz[1] & 1) << 1) | ((c.xyz[2] & 1) << 2);
+                parts[o as usize].push(i);
+            }
+            for (o, part) in parts.into_iter().enumerate() {
+                if part.is_empty() {
+                    continue;
+                }
+                let id = nodes.len();
+                nodes.push(Node {
+                    key: key.child(o),
+                    children: Vec::new(),
+                    input_faces: part.len(),
+                });
+                nodes[n].children.push(id);
+                tiles.push(PointCloud::default());
+                errors.push(0.0);
+                queue.push_back((id, part));
+            }
+        }
+        placed(done);
+    }
+    Subtree {
+        nodes,
+        tiles,
+        errors,
+        depth,
+    }
+}
+
+/// Every node's tileset entry from its tile's box ([`Aabb::EMPTY`]: no
+/// points) and its error: boxes grown to hold the subtree's, then each
+/// depth's quantisation rounding added (in core and out of core alike).
+pub(crate) fn node_info(nodes: &[Node], boxes: &[Aabb], errors: &[f64]) -> Vec<NodeInfo> {
+    let mut info: Vec<NodeInfo> = boxes
+        .iter()
+        .zip(errors)
+        .map(|(b, &error)| NodeInfo {
+            bbox: *b,
+            error,
+            content: b.min.x <= b.max.x,
+        })
+        .collect();
+    for i in (0..nodes.len()).rev() {
+        for &c in &nodes[i].children {
+            info[i].bbox = info[i].bbox.union(&info[c].bbox);
+        }
+    }
+    crate::tile_content::add_rounding(&mut info, |i| nodes[i].key.depth);
+    info
 }
 
 /// Builds the point tileset of `cloud` (y-up, object units) in memory:
@@ -186,84 +316,30 @@ pub fn tileset_from_points(
     }
     let t0 = std::time::Instant::now();
     let grid = Grid::around(&cloud.bbox());
-    let mut nodes = vec![Node {
-        key: CellKey::ROOT,
-        children: Vec::new(),
-        input_faces: cloud.positions.len(),
-    }];
-    let mut tiles: Vec<PointCloud> = vec![PointCloud::default()];
-    let mut errors = vec![0f64];
-    let mut queue = std::collections::VecDeque::new();
-    queue.push_back((
-        0usize,
-        (0..cloud.positions.len() as u32).collect::<Vec<u32>>(),
-    ));
-    let (mut depth, mut placed) = (0u8, 0usize);
-    while let Some((n, idx)) = queue.pop_front() {
-        let key = nodes[n].key;
-        depth = depth.max(key.depth);
-        if idx.len() <= opts.leaf_points || key.depth >= MAX_DEPTH {
-            placed += idx.len();
-            tiles[n] = gather(cloud, &idx);
-        } else {
-            let (kept, rest) = subsample(cloud, &grid, key, idx);
-            placed += kept.len();
-            tiles[n] = gather(cloud, &kept);
-            let h =
-                grid.size / (f64::from(1u32 << key.depth) * f64::from(PointTilesOptions::CELLS));
-            // Nothing passed on (every point in a cell of its own): a leaf.
-            errors[n] = if rest.is_empty() {
-                0.0
-            } else {
-                h * 3f64.sqrt()
-            };
-            let mut parts: [Vec<u32>; 8] = Default::default();
-            for i in rest {
-                let c = grid.cell_of(cloud.positions[i as usize], key.depth + 1);
-                let o = (c.xyz[0] & 1) | ((c.xyz[1] & 1) << 1) | ((c.xyz[2] & 1) << 2);
-                parts[o as usize].push(i);
-            }
-            for (o, part) in parts.into_iter().enumerate() {
-                if part.is_empty() {
-                    continue;
-                }
-                let id = nodes.len();
-                nodes.push(Node {
-                    key: key.child(o),
-                    children: Vec::new(),
-                    input_faces: part.len(),
-                });
-                nodes[n].children.push(id);
-                tiles.push(PointCloud::default());
-                errors.push(0.0);
-                queue.push_back((id, part));
-            }
-        }
+    let total = cloud.positions.len();
+    let Subtree {
+        nodes,
+        tiles,
+        errors,
+        depth,
+    } = subdivide(cloud, &grid, CellKey::ROOT, opts.leaf_points, &mut |done| {
         progress(Event::Progress {
             phase: Phase::Levels,
-            done: placed,
-            total: cloud.positions.len(),
-        });
-    }
-    let mut info: Vec<NodeInfo> = tiles
+            done,
+            total,
+        })
+    });
+    let boxes: Vec<Aabb> = tiles
         .iter()
-        .zip(&errors)
-        .map(|(t, &error)| NodeInfo {
-            bbox: if t.positions.is_empty() {
+        .map(|t| {
+            if t.positions.is_empty() {
                 Aabb::EMPTY
             } else {
                 t.bbox()
-            },
-            error,
-            content: !t.positions.is_empty(),
+            }
         })
         .collect();
-    for i in (0..nodes.len()).rev() {
-        for c in nodes[i].children.clone() {
-            info[i].bbox = info[i].bbox.union(&info[c].bbox);
-        }
-    }
-    crate::tile_content::add_rounding(&mut info, |i| nodes[i].key.depth);
+    let info = node_info(&nodes, &boxes, &errors);
     let report = PointTilesReport {
         input_points: cloud.positions.len(),
         tiles: tiles.iter().filter(|t| !t.positions.is_empty()).count(),

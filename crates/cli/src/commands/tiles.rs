@@ -39,12 +39,13 @@ pub struct TilesArgs {
     /// different levels meet).
     #[arg(long)]
     pub no_skirts: bool,
-    /// Memory budget for a mesh, in 1M..=1P bytes (K, M, G, T, P: powers
-    /// of 1024; e.g. 8G, 512M). A binary PLY whose in-core tiling would
-    /// need more (about 400 bytes per triangle) is tiled out of core: never
+    /// Memory budget, in 1M..=1P bytes (K, M, G, T, P: powers of 1024;
+    /// e.g. 8G, 512M). A binary PLY mesh whose in-core tiling would need
+    /// more (about 400 bytes per triangle) is tiled out of core: never
     /// loaded whole, staged beside --out (the same command resumes a
-    /// failed run; the staging is removed after success). Default: a third
-    /// of the machine's memory.
+    /// failed run; the staging is removed after success). So is a cloud
+    /// over it (a vertex-only binary PLY, LAS or LAZ; about 48 bytes per
+    /// point), into the in-core bytes. Default: a third of the machine's memory.
     #[arg(long, value_name = "SIZE", value_parser = value::bytes(*lodkit::limits::MEMORY.start(), *lodkit::limits::MEMORY.end()))]
     pub memory: Option<u64>,
     /// Out of core: run the simplification blocks as Ray tasks (`local`,

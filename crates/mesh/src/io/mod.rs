@@ -40,6 +40,8 @@ pub mod gltf;
 pub mod input;
 pub mod interrupt;
 mod las;
+#[cfg(not(target_arch = "wasm32"))]
+pub use las::LasStream;
 pub mod mtl;
 mod obj;
 // Output folders live on a file system with signals: not in the browser.

@@ -17,7 +17,8 @@
 //! be finite and within range. Every problem is a one-line error naming
 //! the file. Supported layout: binary (either endianness), a `vertex`
 //! element whose properties are all scalars with float or double `x y z`,
-//! then a `face` element whose only list holds the indices (any integer
+//! alone (a point cloud, through [`PlyStream::open_points`]) or followed
+//! by a `face` element whose only list holds the indices (any integer
 //! types; polygons are fanned like the in-core reader); other scalar face
 //! properties are skipped, elements after `face` must have fixed-size
 //! records (they are skipped). Anything else is refused with a message
@@ -88,6 +89,19 @@ impl PlyStream {
     /// Errors: I/O, a malformed header, a layout this reader does not
     /// stream, counts that cannot fit in the file. Cost: the header only.
     pub fn open(path: &Path) -> Result<PlyStream> {
+        Self::open_with(path, false)
+    }
+
+    /// [`open`](Self::open) that also takes a point cloud: a file whose
+    /// only element is `vertex` (then [`face_records`](Self::face_records)
+    /// is 0 and [`for_each_face`](Self::for_each_face) only checks the
+    /// file's end). The mesh readers use `open`, which refuses such a
+    /// file, so a cloud never reaches them as a mesh of no faces.
+    pub fn open_points(path: &Path) -> Result<PlyStream> {
+        Self::open_with(path, true)
+    }
+
+    fn open_with(path: &Path, points: bool) -> Result<PlyStream> {
         let bad = |e| Error::parse(path, e);
         let (_, file_len, head) = crate::io::open_head(path, MAX_HEADER as u64)?;
         let h = header::parse(&head).map_err(bad)?;
@@ -104,16 +118,26 @@ impl PlyStream {
             Encoding::BinaryLittleEndian => false,
             Encoding::BinaryBigEndian => true,
         };
-        let (Some(v), Some(fe)) = (h.elements.first(), h.elements.get(1)) else {
-            return Err(bad(ParseError::new(
-                "streaming needs a vertex element followed by a face element",
-            )));
-        };
-        if v.name != "vertex" || fe.name != "face" {
+        let Some(v) = h.elements.first().filter(|v| v.name == "vertex") else {
             return Err(bad(ParseError::new(
                 "streaming needs the vertex element first and the face element second",
             )));
-        }
+        };
+        // A point cloud: the vertex element alone.
+        let fe = match h.elements.get(1) {
+            None if points => None,
+            None => {
+                return Err(bad(ParseError::new(
+                    "streaming needs a vertex element followed by a face element",
+                )));
+            }
+            Some(fe) if fe.name == "face" => Some(fe),
+            Some(_) => {
+                return Err(bad(ParseError::new(
+                    "streaming needs the vertex element first and the face element second",
+                )));
+            }
+        };
         let vertex_stride = v.fixed_stride().ok_or_else(|| {
             bad(ParseError::new(
                 "streaming needs vertex records of fixed size (no list property)",
@@ -128,6 +152,20 @@ impl PlyStream {
                 )));
             }
         }
+        let Some(fe) = fe else {
+            return Ok(PlyStream {
+                path: path.to_path_buf(),
+                big_endian,
+                body_start: h.body_start as u64,
+                vertex_count: v.count,
+                vertex_stride,
+                plan,
+                face_count: 0,
+                face_layout: (0, ScalarType::U8, ScalarType::U32, 0),
+                tail_bytes: 0,
+                file_len,
+            });
+        };
         let lists: Vec<usize> = (0..fe.properties.len())
             .filter(|&i| matches!(fe.properties[i].kind, PropertyKind::List { .. }))
             .collect();
@@ -476,5 +514,27 @@ mod tests {
             assert_eq!(r.get(i).unwrap(), all[i as usize], "vertex {i}");
         }
         assert!(r.get(n).is_err());
+    }
+
+    /// A vertex-only file streams as a cloud through `open_points` only;
+    /// `open` (the mesh readers') refuses it.
+    #[test]
+    fn a_cloud_opens_as_points_not_as_a_mesh() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("c.ply");
+        let c = crate::PointCloud {
+            positions: vec![glam::Vec3::X, glam::Vec3::Y, glam::Vec3::Z],
+            normals: None,
+            colors: Some(vec![[1, 2, 3, 255]; 3]),
+        };
+        crate::io::save(&path, &crate::Model::Points(c), Default::default()).unwrap();
+        let e = PlyStream::open(&path).unwrap_err().to_string();
+        assert!(e.contains("followed by a face element"), "{e}");
+        let s = PlyStream::open_points(&path).unwrap();
+        assert_eq!((s.vertex_count(), s.face_records()), (3, 0));
+        let mut colors = Vec::new();
+        s.for_each_vertex(|v| colors.push(v.color)).unwrap();
+        assert_eq!(colors, [[1, 2, 3, 255]; 3]);
+        s.for_each_face(|_| panic!("no faces")).unwrap();
     }
 }

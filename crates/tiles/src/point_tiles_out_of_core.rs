@@ -1,0 +1,956 @@
+//! The point tileset of a cloud too big for memory, built in passes over
+//! the file: the same tree, the same tiles and the same bytes as
+//! [`tileset_from_points`](crate::tileset_from_points) then
+//! [`write_point_tileset`](crate::write_point_tileset), in about the
+//! memory budget given, whatever the cloud's size.
+//!
+//! # Why passes, then subtrees in core
+//! The in-core rule is top-down: a node keeps, per cell of its
+//! [`PointTilesOptions::CELLS`]³ grid, the point nearest the cell's
+//! centre (ties: the lower input index) and passes the rest to its
+//! children. A node's choice depends only on the points that reach it,
+//! and a node's reaching points in input order give exactly its in-core
+//! subtree (`point_tiles::subdivide`: ties by input order, which a subset
+//! keeps). So:
+//!
+//! 1. **Bounds** (one pass): the box, hence the root cube and every cell.
+//! 2. **Streamed nodes** (one pass per depth, more when the depth's
+//!    winner maps exceed the budget): a node whose reaching points do not
+//!    fit the budget ([`IN_CORE_BYTES_PER_POINT`] each) is decided in a
+//!    pass: each point walks down from the root through the nodes
+//!    already decided (kept by one: it stops), and at the depth being
+//!    decided competes for its cell in a map of winners (one entry per
+//!    occupied cell: bounded by `CELLS³` per node, not by the points)
+//!    and is counted in its child octant. The counts less each octant's
+//!    winners are the children's reaching points; a child that fits the
+//!    budget (or holds at most `leaf_points`, or sits at [`MAX_DEPTH`])
+//!    becomes the root of a subtree built in core.
+//! 3. **Spill** (one pass): each point walks down again and is appended,
+//!    in input order, to the file of the streamed node that keeps it or
+//!    of the subtree root it reaches.
+//! 4. **Subtrees** (each file in turn): read back and tiled in core by the
+//!    in-core code, each tile staged as raw points; a streamed node's
+//!    file is its tile already.
+//! 5. **Write**: the nodes in the in-core breadth-first order, boxes and
+//!    errors through the in-core code, then every staged tile encoded on
+//!    its depth's grid into the output folder, atomically, by the writer
+//!    the in-core path uses.
+//!
+//! Rejected: spilling by a fixed depth's cells first (a dense part of a
+//! scan would need a deeper depth than the rest, and a fixed depth needs
+//! the counts first: one pass more), and deciding every node in passes
+//! (a pass per depth of the whole tree instead of the few depths that do
+//! not fit).
+//!
+//! # Inputs
+//! A binary PLY whose only element is `vertex` (positions as float or
+//! double; normals and colours kept, converted as the in-core reader
+//! converts them), read by [`PlyStream`] and checked as the in-core
+//! reader checks it (counts against the file size, finite coordinates
+//! within range, no byte after the last vertex). LAS/LAZ through
+//! [`lodkit_mesh::io::LasStream`]: the in-core reader's checks, origin
+//! and colour rule (it reads the file once more to find them), turned
+//! to y-up as the job turns an in-core LAS cloud, the origin the root
+//! `transform`.
+//!
+//! # Guarantees
+//! The same bytes as the in-core path for the same input and options
+//! (`tests/point_tiles_out_of_core.rs`); so every input point is stored
+//! exactly once and each node's `geometricError` bounds the distance from
+//! any point below it to one it keeps, as in core. The output folder is
+//! written whole or not at all, never over a user's files. Everything
+//! staged lives in the staging folder the caller names, locked for the
+//! run and removed after success and after a failure; a run that was
+//! killed leaves it, and the next run with the same folder starts it
+//! over (nothing is resumed: the passes are cheap next to a restart's
+//! bookkeeping).
+//!
+//! # Cost
+//! Memory: the largest subtree (at most half the budget at
+//! [`IN_CORE_BYTES_PER_POINT`], or `leaf_points` points), the winner
+//! maps of one pass (a quarter of the budget, at least one node's: up to
+//! `CELLS³` cells, 80 MB, for a node of that many points), 8 B per point
+//! a streamed node keeps (held until the spill), the spill buffers (an
+//! eighth of the budget). Disk: the points twice (spills, then staged
+//! tiles: 12 B a point, plus 12 with normals and 4 with colours). Time:
+//! three passes over the file plus one per streamed depth (more where a
+//! depth's maps exceed their quarter), one in-core tiling of every
+//! subtree, one encoding of every tile: 10⁷ coloured points in 4.7 s of
+//! CPU at `--memory 128M` (docs/benchmarks.md).
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use glam::Vec3;
+use lodkit_mesh::io::ply::stream::PlyStream;
+use lodkit_mesh::{Aabb, PointCloud};
+use rustc_hash::FxHashMap;
+
+use crate::octree_partition::{CellKey, Grid, MAX_DEPTH, Node, Octree};
+use crate::point_tiles::{
+    PointTilesOptions, PointTilesReport, Subtree, cell_and_distance, cell_diagonal, node_info,
+    subdivide,
+};
+use crate::tileset_json::Refine;
+use crate::{Error, OutOfCoreEvent, Result, check_option};
+
+/// Bytes per point the in-core path
+/// ([`tileset_from_points`](crate::tileset_from_points) then
+/// [`write_point_tileset`](crate::write_point_tileset), from reading
+/// the file to the last tile) peaks at, about: measured 33 (peak RSS over
+/// points) on a 10⁷-point binary PLY with colours and the default leaves
+/// (the cloud, 16 B a point, the index lists of a node and its
+/// children, the tiles' copy of the cloud); normals add 24. Front-ends go out of core when a
+/// cloud's points times this exceed the memory budget; out of core, a
+/// node whose reaching points times this fit half the budget is tiled
+/// in core.
+pub const IN_CORE_BYTES_PER_POINT: u64 = 48;
+
+/// Bytes of a winner map per occupied cell (the entry and the table's
+/// slack): what groups a depth's streamed nodes into passes.
+const WINNER_BYTES: u64 = 40;
+
+/// The name of the pass that spills points, the one that reads their
+/// attributes.
+const SPILL_PASS: &str = "points: to their subtrees";
+
+/// Points between progress advances.
+const ADVANCE_EVERY: u64 = 1 << 16;
+
+/// Where and in how much memory an out-of-core point tileset is built.
+#[derive(Clone, Debug)]
+pub struct PointsOutOfCoreOptions {
+    /// Memory budget in bytes.
+    pub memory: u64,
+    /// The staging folder: created and locked for the run, removed after
+    /// it (`lodkit_scale::staging_dir` gives one keyed by input and
+    /// options).
+    pub staging: PathBuf,
+}
+
+/// One streamed point; attributes the source lacks are zero.
+#[derive(Clone, Copy, Debug, Default)]
+struct Point {
+    position: Vec3,
+    normal: Vec3,
+    color: [u8; 4],
+}
+
+/// A cloud read in passes.
+enum Source {
+    Ply(Box<PlyStream>),
+    Las(lodkit_mesh::io::LasStream),
+}
+
+impl Source {
+    fn open(path: &Path) -> Result<Source> {
+        use lodkit_mesh::io::Format;
+        match Format::from_path(path) {
+            Some(Format::Ply) => {
+                let s = PlyStream::open_points(path)?;
+                if s.face_records() > 0 {
+                    return Err(Error::Input(format!(
+                        "{}: has faces; a point tileset out of core reads a vertex-only PLY",
+                        path.display()
+                    )));
+                }
+                Ok(Source::Ply(Box::new(s)))
+            }
+            Some(Format::Las) => Ok(Source::Las(lodkit_mesh::io::LasStream::open(path)?)),
+            _ => Err(Error::Input(format!(
+                "{}: a point tileset out of core reads a vertex-only binary PLY, LAS or LAZ",
+                path.display()
+            ))),
+        }
+    }
+
+    /// Points the header declares.
+    fn len(&self) -> u64 {
+        match self {
+            Source::Ply(s) => s.vertex_count(),
+            Source::Las(s) => s.len(),
+        }
+    }
+
+    fn layout(&self) -> Layout {
+        match self {
+            Source::Ply(s) => Layout {
+                normals: s.attributes().normals,
+                colors: s.attributes().colors,
+            },
+            Source::Las(s) => Layout {
+                normals: false,
+                colors: s.has_colors(),
+            },
+        }
+    }
+
+    fn origin(&self) -> Option<[f64; 3]> {
+        match self {
+            Source::Ply(_) => None,
+            Source::Las(s) => Some(s.origin()),
+        }
+    }
+
+    /// Calls `f` with every point and its input index, in input order;
+    /// with positions only (the rest zero) unless `attributes`.
+    fn for_each(
+        &self,
+        attributes: bool,
+        f: &mut dyn FnMut(u32, &Point) -> Result<()>,
+    ) -> Result<()> {
+        let mut failed = None;
+        let mut i = 0u32;
+        match self {
+            Source::Ply(s) => {
+                let mut each = |p: &Point| {
+                    if failed.is_none() {
+                        if let Err(e) = f(i, p) {
+                            failed = Some(e);
+                        }
+                        i = i.wrapping_add(1);
+                    }
+                };
+                if attributes {
+                    s.for_each_vertex(|v| {
+                        each(&Point {
+                            position: v.position,
+                            normal: v.normal,
+                            color: v.color,
+                        })
+                    })?;
+                } else {
+                    s.for_each_position(|position| {
+                        each(&Point {
+                            position,
+                            ..Point::default()
+                        })
+                    })?;
+                }
+                // A vertex-only file ends with its last vertex, as the
+                // in-core reader requires.
+                s.for_each_face(|_| Ok(()))?;
+            }
+            Source::Las(s) => s.for_each(|position, color| {
+                if failed.is_none() {
+                    // z-up to the y-up frame of tile contents, as the job
+                    // turns an in-core LAS cloud: (x, y, z) ↦ (x, z, −y).
+                    let p = Point {
+                        position: Vec3::new(position.x, position.z, -position.y),
+                        normal: Vec3::ZERO,
+                        color,
+                    };
+                    if let Err(e) = f(i, &p) {
+                        failed = Some(e);
+                    }
+                    i = i.wrapping_add(1);
+                }
+            })?,
+        }
+        failed.map_or(Ok(()), Err)
+    }
+}
+
+/// The raw record of a staged point: position, then the normal and the
+/// colour when the cloud has them (little-endian `f32` bits, RGBA8).
+#[derive(Clone, Copy, Debug)]
+struct Layout {
+    normals: bool,
+    colors: bool,
+}
+
+impl Layout {
+    fn size(self) -> usize {
+        12 + if self.normals { 12 } else { 0 } + if self.colors { 4 } else { 0 }
+    }
+
+    fn put(self, p: &Point, out: &mut Vec<u8>) {
+        for v in p.position.to_array() {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+        if self.normals {
+            for v in p.normal.to_array() {
+                out.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+        if self.colors {
+            out.extend_from_slice(&p.color);
+        }
+    }
+
+    /// The cloud of a staged file (none: empty), or of the byte range
+    /// `at` of it.
+    fn read(self, path: &Path, at: Option<(u64, u64)>) -> Result<PointCloud> {
+        let bytes = match at {
+            None => match std::fs::read(path) {
+                Ok(b) => b,
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => Vec::new(),
+                Err(source) => {
+                    return Err(Error::Io {
+                        path: path.to_path_buf(),
+                        source,
+                    });
+                }
+            },
+            Some((start, len)) => {
+                use std::io::{Read, Seek, SeekFrom};
+                let mut f = std::fs::File::open(path).map_err(io_err(path))?;
+                f.seek(SeekFrom::Start(start)).map_err(io_err(path))?;
+                let mut b = Vec::new();
+                f.take(len).read_to_end(&mut b).map_err(io_err(path))?;
+                b
+            }
+        };
+        let n = bytes.len() / self.size();
+        let mut c = PointCloud {
+            positions: Vec::with_capacity(n),
+            normals: self.normals.then(|| Vec::with_capacity(n)),
+            colors: self.colors.then(|| Vec::with_capacity(n)),
+        };
+        let f = |b: &[u8], k: usize| f32::from_le_bytes([b[k], b[k + 1], b[k + 2], b[k + 3]]);
+        for r in bytes.chunks_exact(self.size()) {
+            c.positions.push(Vec3::new(f(r, 0), f(r, 4), f(r, 8)));
+            let mut at = 12;
+            if let Some(ns) = &mut c.normals {
+                ns.push(Vec3::new(f(r, 12), f(r, 16), f(r, 20)));
+                at = 24;
+            }
+            if let Some(cs) = &mut c.colors {
+                cs.push([r[at], r[at + 1], r[at + 2], r[at + 3]]);
+            }
+        }
+        Ok(c)
+    }
+
+    /// Appends `cloud` to `out`.
+    fn append(self, cloud: &PointCloud, out: &mut Vec<u8>) {
+        out.reserve(cloud.positions.len() * self.size());
+        for (i, &position) in cloud.positions.iter().enumerate() {
+            let p = Point {
+                position,
+                normal: cloud.normals.as_ref().map_or(Vec3::ZERO, |n| n[i]),
+                color: cloud.colors.as_ref().map_or([0; 4], |c| c[i]),
+            };
+            self.put(&p, out);
+        }
+    }
+}
+
+fn io_err(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
+    move |source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// Files of raw points, one per slot, appended through buffers that are
+/// written out together whenever they hold more than `cap` bytes (one
+/// open file at a time, however many slots).
+struct Spill {
+    dir: PathBuf,
+    bufs: Vec<Vec<u8>>,
+    held: usize,
+    cap: usize,
+}
+
+impl Spill {
+    fn new(dir: &Path, slots: usize, cap: usize) -> Result<Spill> {
+        std::fs::create_dir_all(dir).map_err(io_err(dir))?;
+        Ok(Spill {
+            dir: dir.to_path_buf(),
+            bufs: vec![Vec::new(); slots],
+            held: 0,
+            cap,
+        })
+    }
+
+    fn file(dir: &Path, slot: usize) -> PathBuf {
+        dir.join(format!("{slot}.pts"))
+    }
+
+    fn put(&mut self, slot: usize, layout: Layout, p: &Point) -> Result<()> {
+        let before = self.bufs[slot].len();
+        layout.put(p, &mut self.bufs[slot]);
+        self.held += self.bufs[slot].len() - before;
+        if self.held > self.cap {
+            self.flush()?;
+        }
+        Ok(())
+    }
+
+    fn flush(&mut self) -> Result<()> {
+        for (slot, buf) in self.bufs.iter_mut().enumerate() {
+            if buf.is_empty() {
+                continue;
+            }
+            let path = Self::file(&self.dir, slot);
+            let mut f = std::fs::OpenOptions::new()
+                .create(true)
+                .append(true)
+                .open(&path)
+                .map_err(io_err(&path))?;
+            f.write_all(buf).map_err(io_err(&path))?;
+            *buf = Vec::new();
+        }
+        self.held = 0;
+        Ok(())
+    }
+}
+
+/// A point's winner of one cell: its squared distance to the centre, its
+/// index, and the child octant it would go to.
+#[derive(Clone, Copy, Debug)]
+struct Winner {
+    d: f64,
+    index: u32,
+    octant: u8,
+}
+
+/// How a node of the top of the tree is made.
+enum Kind {
+    /// Decided in a pass (once `decided`): its children by octant, the
+    /// spill slot of the points it keeps, how many it keeps.
+    Streamed {
+        decided: bool,
+        children: [Option<usize>; 8],
+        slot: usize,
+        kept: u64,
+    },
+    /// Tiled in core from the spill slot of its reaching points.
+    Subtree { slot: usize },
+}
+
+struct Top {
+    key: CellKey,
+    count: u64,
+    /// At least the cells its winner map will hold: its points, and 8
+    /// per cell its parent's map held in its octant (a parent's cell
+    /// holds 8 of its child's).
+    cells: u64,
+    kind: Kind,
+}
+
+/// The octant of the child of a node at `depth` that holds `p`: the
+/// in-core rule's `grid.cell_of(p, depth + 1)`, its low bits. Computed
+/// as `cell_of` computes the cell, with a truncating cast for its
+/// `floor` (they differ only below 0, where both give cell 0), so without
+/// a libm call per axis.
+fn octant(grid: &Grid, p: Vec3, depth: u8) -> u8 {
+    let n = 1u64 << (depth + 1);
+    let rel = (p.as_dvec3() - grid.origin) / grid.size * n as f64;
+    let c = |v: f64| ((v as u64).min(n - 1) & 1) as u8;
+    c(rel.x) | (c(rel.y) << 1) | (c(rel.z) << 2)
+}
+
+/// Where a point goes among the top nodes: the streamed node at `depth`
+/// it reaches (still undecided), the streamed node that keeps it, or the
+/// subtree root it reaches.
+enum Reach {
+    Undecided(usize),
+    Kept(usize),
+    Subtree(usize),
+}
+
+/// Where point `i` at `p` goes. `kept` lists every decided node's kept
+/// points by input index with the node (sorted); `cursor` is where the
+/// points before `i` left it (points come in input order, so a point is
+/// found kept in O(1) instead of by a lookup per depth).
+fn walk(
+    top: &[Top],
+    (kept, cursor): (&[(u32, u32)], &mut usize),
+    grid: &Grid,
+    i: u32,
+    p: Vec3,
+) -> Result<Reach> {
+    if let Some(&(k, n)) = kept.get(*cursor)
+        && k == i
+    {
+        *cursor += 1;
+        return Ok(Reach::Kept(n as usize));
+    }
+    let mut n = 0usize;
+    loop {
+        let node = &top[n];
+        match &node.kind {
+            Kind::Subtree { .. } => return Ok(Reach::Subtree(n)),
+            Kind::Streamed {
+                decided, children, ..
+            } => {
+                if !decided {
+                    return Ok(Reach::Undecided(n));
+                }
+                let o = octant(grid, p, node.key.depth);
+                n = children[o as usize]
+                    .ok_or_else(|| Error::Input("the input changed while it was read".into()))?;
+            }
+        }
+    }
+}
+
+/// Builds the point tileset of the cloud in `input` (a vertex-only binary
+/// PLY, LAS or LAZ) into the folder `out` in about `o.memory` bytes; see
+/// the module docs. `out` follows
+/// [`write_point_tileset`](crate::write_point_tileset)'s rule. Returns
+/// the report and the origin the root transform holds (a LAS/LAZ file's;
+/// none for a PLY).
+///
+/// Guarantees: the bytes of the in-core path for the same input and
+/// options; nothing staged is left after the call. Errors: an input the
+/// stream readers refuse (one line naming the file), no points, more than
+/// `u32::MAX` points, `leaf_points` out of range or an output folder that
+/// is not lodkit's ([`Error::Usage`]), another run holding the staging
+/// folder, I/O. Cost: see the module docs.
+pub fn point_tileset_out_of_core(
+    input: &Path,
+    out: &Path,
+    opts: &PointTilesOptions,
+    o: &PointsOutOfCoreOptions,
+    progress: &(dyn Fn(OutOfCoreEvent) + Sync),
+) -> Result<(PointTilesReport, Option<[f64; 3]>)> {
+    check_option(
+        "leaf points",
+        opts.leaf_points,
+        &PointTilesOptions::LEAF_POINTS,
+    )?;
+    let source = Source::open(input)?;
+    drop(lodkit_mesh::io::out_folder::Staging::new(out, Some(input))?);
+    let lock = lodkit_scale::StagingLock::take(&o.staging).map_err(Error::Input)?;
+    // A killed run's files: start over.
+    for sub in ["spill", "tiles"] {
+        let p = o.staging.join(sub);
+        if p.exists() {
+            std::fs::remove_dir_all(&p).map_err(io_err(&p))?;
+        }
+    }
+    let result = build(&source, input, out, opts, o, progress);
+    drop(lock);
+    let removed = lodkit_scale::remove_staging(&o.staging).map_err(Error::Input);
+    let report = result?;
+    removed?;
+    Ok((report, source.origin()))
+}
+
+fn build(
+    source: &Source,
+    input: &Path,
+    out: &Path,
+    opts: &PointTilesOptions,
+    o: &PointsOutOfCoreOptions,
+    progress: &(dyn Fn(OutOfCoreEvent) + Sync),
+) -> Result<PointTilesReport> {
+    let t0 = Instant::now();
+    let named = |e: Error| match e {
+        Error::Input(m) if !m.starts_with(&input.display().to_string()) => {
+            Error::Input(format!("{}: {m}", input.display()))
+        }
+        e => e,
+    };
+    let total = source.len();
+    if total == 0 {
+        return Err(named(Error::Input(
+            "the cloud has no points to tile".into(),
+        )));
+    }
+    if total > u64::from(u32::MAX) {
+        return Err(named(Error::Input(format!(
+            "{total} points: at most {} in one tileset",
+            u32::MAX
+        ))));
+    }
+    let layout = source.layout();
+    // Only the spill needs more than positions.
+    let pass = |name: &str, f: &mut dyn FnMut(u32, &Point) -> Result<()>| -> Result<()> {
+        progress(OutOfCoreEvent::Phase(name, total));
+        let mut k = 0u64;
+        source
+            .for_each(name == SPILL_PASS, &mut |i, p| {
+                f(i, p)?;
+                k += 1;
+                if k.is_multiple_of(ADVANCE_EVERY) {
+                    progress(OutOfCoreEvent::Advance(ADVANCE_EVERY));
+                }
+                Ok(())
+            })
+            .map_err(named)?;
+        progress(OutOfCoreEvent::Advance(k % ADVANCE_EVERY));
+        Ok(())
+    };
+
+    // 1. Bounds.
+    let mut bounds = Aabb::EMPTY;
+    pass("points: bounds", &mut |_, p| {
+        bounds.min = bounds.min.min(p.position);
+        bounds.max = bounds.max.max(p.position);
+        Ok(())
+    })?;
+    let grid = Grid::around(&bounds);
+    let leaf = opts.leaf_points as u64;
+    let fits = |count: u64, depth: u8| {
+        count <= leaf
+            || depth >= MAX_DEPTH
+            || count.saturating_mul(IN_CORE_BYTES_PER_POINT) <= o.memory / 2
+    };
+
+    // 2. Streamed nodes, one depth at a time.
+    let mut slots = 0usize;
+    let new_node = |key: CellKey, count: u64, cells: u64, slots: &mut usize| -> Top {
+        let slot = *slots;
+        *slots += 1;
+        Top {
+            key,
+            count,
+            cells: cells
+                .min(count)
+                .min(u64::from(PointTilesOptions::CELLS).pow(3)),
+            kind: if fits(count, key.depth) {
+                Kind::Subtree { slot }
+            } else {
+                Kind::Streamed {
+                    decided: false,
+                    children: [None; 8],
+                    slot,
+                    kept: 0,
+                }
+            },
+        }
+    };
+    let mut top = vec![new_node(CellKey::ROOT, total, u64::MAX, &mut slots)];
+    let mut kept_by: Vec<(u32, u32)> = Vec::new();
+    let mut frontier: Vec<usize> = match top[0].kind {
+        Kind::Streamed { .. } => vec![0],
+        Kind::Subtree { .. } => Vec::new(),
+    };
+    while !frontier.is_empty() {
+        let depth = top[frontier[0]].key.depth;
+        // Groups whose winner maps fit a quarter of the budget.
+        let mut groups: Vec<Vec<usize>> = Vec::new();
+        let mut held = u64::MAX;
+        for &n in &frontier {
+            let need = top[n].cells * WINNER_BYTES;
+            if held.saturating_add(need) > o.memory / 4 {
+                groups.push(Vec::new());
+                held = 0;
+            }
+            held += need;
+            groups.last_mut().expect("a group").push(n);
+        }
+        let mut next = Vec::new();
+        for group in groups {
+            let mut active: FxHashMap<usize, [u64; 8]> =
+                group.iter().map(|&n| (n, [0u64; 8])).collect();
+            let mut maps: FxHashMap<usize, FxHashMap<u32, Winner>> =
+                group.iter().map(|&n| (n, FxHashMap::default())).collect();
+            let mut cursor = 0;
+            pass(
+                &format!("points: choosing at depth {depth}"),
+                &mut |i, p| {
+                    let at = (&kept_by[..], &mut cursor);
+                    let Reach::Undecided(n) = walk(&top, at, &grid, i, p.position)? else {
+                        return Ok(());
+                    };
+                    let (Some(reach), Some(map)) = (active.get_mut(&n), maps.get_mut(&n)) else {
+                        return Ok(());
+                    };
+                    let key = top[n].key;
+                    let (cell, d) = cell_and_distance(&grid, key, p.position);
+                    let o = octant(&grid, p.position, key.depth);
+                    reach[o as usize] += 1;
+                    let w = map.entry(cell).or_insert(Winner {
+                        d,
+                        index: i,
+                        octant: o,
+                    });
+                    if d < w.d {
+                        *w = Winner {
+                            d,
+                            index: i,
+                            octant: o,
+                        };
+                    }
+                    Ok(())
+                },
+            )?;
+            for &n in &group {
+                let map = maps.remove(&n).unwrap_or_default();
+                let mut reach = active.remove(&n).unwrap_or_default();
+                let mut occupied = [0u64; 8];
+                for w in map.values() {
+                    reach[w.octant as usize] -= 1;
+                    occupied[w.octant as usize] += 1;
+                }
+                let key = top[n].key;
+                let mut kids = [None; 8];
+                for (oct, &count) in reach.iter().enumerate() {
+                    if count > 0 {
+                        kids[oct] = Some(top.len());
+                        let child = new_node(key.child(oct), count, 8 * occupied[oct], &mut slots);
+                        if matches!(child.kind, Kind::Streamed { .. }) {
+                            next.push(top.len());
+                        }
+                        top.push(child);
+                    }
+                }
+                kept_by.extend(map.values().map(|w| (w.index, n as u32)));
+                if let Kind::Streamed {
+                    decided,
+                    children,
+                    kept,
+                    ..
+                } = &mut top[n].kind
+                {
+                    *kept = map.len() as u64;
+                    *decided = true;
+                    *children = kids;
+                }
+            }
+            kept_by.sort_unstable();
+        }
+        frontier = next;
+    }
+
+    // 3. Spill: each point to the node that keeps it or its subtree.
+    let spill_dir = o.staging.join("spill");
+    let tiles_dir = o.staging.join("tiles");
+    std::fs::create_dir_all(&tiles_dir).map_err(io_err(&tiles_dir))?;
+    let cap = (o.memory / 8).clamp(1 << 16, 1 << 30) as usize;
+    let slot_of: Vec<usize> = top
+        .iter()
+        .map(|t| match t.kind {
+            Kind::Streamed { slot, .. } | Kind::Subtree { slot } => slot,
+        })
+        .collect();
+    let mut spill = Spill::new(&spill_dir, slots, cap)?;
+    let mut cursor = 0;
+    pass(SPILL_PASS, &mut |i, p| {
+        let n = match walk(&top, (&kept_by, &mut cursor), &grid, i, p.position)? {
+            Reach::Kept(n) | Reach::Subtree(n) => n,
+            Reach::Undecided(_) => {
+                return Err(Error::Input("the input changed while it was read".into()));
+            }
+        };
+        spill.put(slot_of[n], layout, p)
+    })?;
+    spill.flush()?;
+    drop(spill);
+    drop(kept_by);
+
+    // 4. Tiles: streamed nodes' kept points, subtrees tiled in core. All
+    // nodes in one list; `tile` names each content's staged file.
+    struct Made {
+        node: Node,
+        /// The staged file of its content and the byte range in it.
+        tile: Option<(PathBuf, Option<(u64, u64)>)>,
+        bbox: Aabb,
+        error: f64,
+        points: usize,
+    }
+    let mut made: Vec<Made> = Vec::new();
+    // Top nodes keep their index in `made`; subtree nodes follow.
+    for t in &top {
+        made.push(Made {
+            node: Node {
+                key: t.key,
+                children: Vec::new(),
+                input_faces: t.count as usize,
+            },
+            tile: None,
+            bbox: Aabb::EMPTY,
+            error: 0.0,
+            points: 0,
+        });
+    }
+    let subtrees = top
+        .iter()
+        .filter(|t| matches!(t.kind, Kind::Subtree { .. }))
+        .count() as u64;
+    progress(OutOfCoreEvent::Phase("points: subtrees in core", subtrees));
+    for (n, t) in top.iter_mut().enumerate() {
+        match &mut t.kind {
+            Kind::Streamed {
+                children,
+                slot,
+                kept,
+                ..
+            } => {
+                let path = Spill::file(&spill_dir, *slot);
+                let cloud = layout.read(&path, None)?;
+                made[n].bbox = bbox_of(&cloud.positions);
+                made[n].points = cloud.positions.len();
+                made[n].tile = Some((path, None));
+                made[n].node.children = children.iter().flatten().copied().collect();
+                made[n].error = if t.count > *kept {
+                    cell_diagonal(&grid, t.key.depth)
+                } else {
+                    0.0
+                };
+            }
+            Kind::Subtree { slot } => {
+                let path = Spill::file(&spill_dir, *slot);
+                let cloud = layout.read(&path, None)?;
+                if cloud.positions.len() as u64 != t.count {
+                    return Err(named(Error::Input(
+                        "the input changed while it was read".into(),
+                    )));
+                }
+                let Subtree {
+                    nodes,
+                    tiles,
+                    errors,
+                    ..
+                } = subdivide(&cloud, &grid, t.key, opts.leaf_points, &mut |_| {});
+                drop(cloud);
+                let _ = std::fs::remove_file(&path);
+                // The subtree's node 0 is `n`; the others are appended.
+                // Its tiles go into one file (one file made per subtree,
+                // not per tile: creating files is what costs).
+                let staged = tiles_dir.join(format!("{slot}.pts"));
+                let mut bytes = Vec::new();
+                let base = made.len();
+                let id = |k: usize| if k == 0 { n } else { base + k - 1 };
+                for (k, ((node, tile), error)) in
+                    nodes.into_iter().zip(tiles).zip(errors).enumerate()
+                {
+                    let start = bytes.len() as u64;
+                    layout.append(&tile, &mut bytes);
+                    let range = (start, bytes.len() as u64 - start);
+                    let has = !tile.positions.is_empty();
+                    let m = Made {
+                        node: Node {
+                            key: node.key,
+                            children: node.children.iter().map(|&c| id(c)).collect(),
+                            input_faces: node.input_faces,
+                        },
+                        tile: has.then(|| (staged.clone(), Some(range))),
+                        bbox: bbox_of(&tile.positions),
+                        error,
+                        points: tile.positions.len(),
+                    };
+                    if k == 0 {
+                        made[n] = m;
+                    } else {
+                        made.push(m);
+                    }
+                }
+                std::fs::write(&staged, bytes).map_err(io_err(&staged))?;
+                progress(OutOfCoreEvent::Advance(1));
+            }
+        }
+    }
+    drop(top);
+
+    // 5. The nodes in the in-core order (breadth-first, children in
+    // octant order), then the folder.
+    let mut order = vec![0usize];
+    let mut new_id = vec![usize::MAX; made.len()];
+    new_id[0] = 0;
+    let mut head = 0;
+    while head < order.len() {
+        let m = order[head];
+        head += 1;
+        for &c in &made[m].node.children {
+            new_id[c] = order.len();
+            order.push(c);
+        }
+    }
+    let nodes: Vec<Node> = order
+        .iter()
+        .map(|&m| Node {
+            key: made[m].node.key,
+            children: made[m].node.children.iter().map(|&c| new_id[c]).collect(),
+            input_faces: made[m].node.input_faces,
+        })
+        .collect();
+    let boxes: Vec<Aabb> = order.iter().map(|&m| made[m].bbox).collect();
+    let errors: Vec<f64> = order.iter().map(|&m| made[m].error).collect();
+    let info = node_info(&nodes, &boxes, &errors);
+    let depth = nodes.iter().map(|n| n.key.depth).max().unwrap_or(0);
+    let content: Vec<usize> = order
+        .iter()
+        .enumerate()
+        .filter(|&(_, &m)| made[m].tile.is_some())
+        .map(|(i, _)| i)
+        .collect();
+    let mut report = PointTilesReport {
+        input_points: total as usize,
+        tiles: content.len(),
+        depth,
+        max_tile_points: made.iter().map(|m| m.points).max().unwrap_or(0),
+        root_error: info[0].error,
+        seconds: [t0.elapsed().as_secs_f64(), 0.0],
+        bytes: 0,
+    };
+    let tree = Octree {
+        grid,
+        nodes,
+        leaf_of_face: Vec::new(),
+        depth,
+    };
+    let t1 = Instant::now();
+    progress(OutOfCoreEvent::Phase("writing tiles", content.len() as u64));
+    report.bytes = crate::write_folder(
+        out,
+        Some(input),
+        (&tree, &info),
+        (Refine::Add, source.origin()),
+        content.iter().map(|&i| {
+            let m = &made[order[i]];
+            (
+                m.node.key.name(),
+                m.node.key.depth,
+                m.tile.as_ref().expect("a tile with content"),
+            )
+        }),
+        content.len(),
+        |name, (path, at), grid| {
+            let cloud = layout.read(path, *at)?;
+            crate::tile_content::encode_point_tile(name, &cloud, opts.compress, grid)
+        },
+        &mut |_| progress(OutOfCoreEvent::Advance(1)),
+    )?;
+    report.seconds[1] = t1.elapsed().as_secs_f64();
+    Ok(report)
+}
+
+fn bbox_of(points: &[Vec3]) -> Aabb {
+    let mut b = Aabb::EMPTY;
+    for p in points {
+        b.min = b.min.min(*p);
+        b.max = b.max.max(*p);
+    }
+    b
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `octant` is the in-core routing (`cell_of`'s low bits), also for
+    /// points on cell borders and outside the cube (clamped).
+    #[test]
+    fn octant_routes_as_cell_of() {
+        let grid = Grid::around(&Aabb {
+            min: Vec3::new(-1.0, -2.0, 0.5),
+            max: Vec3::new(3.0, 1.0, 0.75),
+        });
+        let mut x = 12345u64;
+        for k in 0..100_000 {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let f = |s: u64| ((x >> s) & 0xffff) as f32 / 65535.0 * 6.0 - 2.5;
+            let mut p = Vec3::new(f(0), f(16), f(32));
+            if k % 3 == 0 {
+                // On a cell border of some depth.
+                let d = (x >> 48) as u8 % 8;
+                let c = grid.size / f64::from(1u32 << d);
+                p.x = (grid.origin.x + c * ((x >> 52) % 4) as f64) as f32;
+            }
+            for depth in [0u8, 1, 3, 7, 12] {
+                let c = grid.cell_of(p, depth + 1);
+                let want = (c.xyz[0] & 1) | ((c.xyz[1] & 1) << 1) | ((c.xyz[2] & 1) << 2);
+                assert_eq!(u32::from(octant(&grid, p, depth)), want, "{p} at {depth}");
+            }
+        }
+    }
+}
