@@ -5,7 +5,7 @@
 use std::path::Path;
 
 mod common;
-use common::{lodkit, stderr};
+use common::{files, lodkit, stderr};
 
 /// A binary PLY blob of about 20k triangles: about 8 MB to tile in core,
 /// so `--memory 1M` sends it out of core.
@@ -13,25 +13,6 @@ fn blob(dir: &Path) -> String {
     let p = dir.join("blob.ply");
     lodkit_mesh::shapes::write_blob_ply(&p, 20_000, 3).unwrap();
     p.display().to_string()
-}
-
-/// Every file under `dir`, by relative path, with its bytes.
-fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                let rel = p.strip_prefix(dir).unwrap().display().to_string();
-                out.push((rel, std::fs::read(&p).unwrap()));
-            }
-        }
-    }
-    out.sort();
-    out
 }
 
 fn tiles(input: &str, out: &Path, extra: &[&str]) -> std::process::Output {

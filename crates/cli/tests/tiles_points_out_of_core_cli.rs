@@ -6,7 +6,7 @@
 use std::path::Path;
 
 mod common;
-use common::{lodkit, stderr};
+use common::{files, lodkit, stderr};
 use lodkit_mesh::glam::Vec3;
 
 /// A coloured spiral sheet of 30k points as binary PLY: about 1.4 MB to
@@ -32,25 +32,6 @@ fn cloud(dir: &Path) -> (String, usize) {
     let p = dir.join("cloud.ply");
     lodkit_mesh::io::save(&p, &lodkit_mesh::Model::Points(c), Default::default()).unwrap();
     (p.display().to_string(), n)
-}
-
-/// Every file under `dir`, by relative path, with its bytes.
-fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                let rel = p.strip_prefix(dir).unwrap().display().to_string();
-                out.push((rel, std::fs::read(&p).unwrap()));
-            }
-        }
-    }
-    out.sort();
-    out
 }
 
 /// The points of every tile `json` (a tileset file in `base`) names,
