@@ -189,17 +189,25 @@ fn out_of_core_memory(job: &TilesJob, events: &Progress) -> Option<(u64, u64, bo
     }
 }
 
-/// The mesh tileset of a binary PLY built out of core in `memory` bytes
-/// (`lodkit_tiles::tileset_out_of_core`), its staging folder beside `out`.
-fn mesh_out_of_core(job: &TilesJob, events: &Progress, memory: u64) -> Result<TilesReport> {
-    let settings = format!("tiles {:?}; memory {memory}", job.mesh);
-    let staging = lodkit_scale::staging_dir(&job.input, &job.out, &settings);
+/// The staging folder beside `job.out` for these `settings` (keyed by the
+/// input and them), after removing any an earlier run for this output
+/// abandoned under other settings (each named in a status line).
+fn staging_for(job: &TilesJob, events: &Progress, settings: &str) -> PathBuf {
+    let staging = lodkit_scale::staging_dir(&job.input, &job.out, settings);
     for old in lodkit_scale::remove_abandoned(&job.out, &staging) {
         events.status(format!(
             "removed {}, the staging folder an earlier run for this output left",
             old.display()
         ));
     }
+    staging
+}
+
+/// The mesh tileset of a binary PLY built out of core in `memory` bytes
+/// (`lodkit_tiles::tileset_out_of_core`), its staging folder beside `out`.
+fn mesh_out_of_core(job: &TilesJob, events: &Progress, memory: u64) -> Result<TilesReport> {
+    let settings = format!("tiles {:?}; memory {memory}", job.mesh);
+    let staging = staging_for(job, events, &settings);
     if staging.exists() {
         events.status(format!("resuming from {}", staging.display()));
     }
@@ -226,13 +234,7 @@ fn mesh_out_of_core(job: &TilesJob, events: &Progress, memory: u64) -> Result<Ti
 /// in-core bytes), its staging folder beside `out`, removed after the run.
 fn points_out_of_core(job: &TilesJob, events: &Progress, memory: u64) -> Result<TilesReport> {
     let settings = format!("points {:?}; memory {memory}", job.points);
-    let staging = lodkit_scale::staging_dir(&job.input, &job.out, &settings);
-    for old in lodkit_scale::remove_abandoned(&job.out, &staging) {
-        events.status(format!(
-            "removed {}, the staging folder an earlier run for this output left",
-            old.display()
-        ));
-    }
+    let staging = staging_for(job, events, &settings);
     let o = lodkit_tiles::PointsOutOfCoreOptions { memory, staging };
     let (report, origin) = lodkit_tiles::point_tileset_out_of_core(
         &job.input,
