@@ -5,7 +5,7 @@
 use std::path::Path;
 
 mod common;
-use common::{files, lodkit, stderr};
+use common::{files, stderr, tiles};
 
 /// A binary PLY blob of about 20k triangles: about 8 MB to tile in core,
 /// so `--memory 1M` sends it out of core.
@@ -13,12 +13,6 @@ fn blob(dir: &Path) -> String {
     let p = dir.join("blob.ply");
     lodkit_mesh::shapes::write_blob_ply(&p, 20_000, 3).unwrap();
     p.display().to_string()
-}
-
-fn tiles(input: &str, out: &Path, extra: &[&str]) -> std::process::Output {
-    let mut args = vec!["tiles", input, "--out", out.to_str().unwrap()];
-    args.extend_from_slice(extra);
-    lodkit(&args)
 }
 
 #[test]

@@ -6,7 +6,7 @@
 use std::path::Path;
 
 mod common;
-use common::{files, lodkit, stderr};
+use common::{files, stderr, tiles};
 use lodkit_mesh::glam::Vec3;
 
 /// A coloured spiral sheet of 30k points as binary PLY: about 1.4 MB to
@@ -65,12 +65,6 @@ fn count_points(tile: &serde_json::Value, base: &Path) -> usize {
         n += count_points(c, base);
     }
     n
-}
-
-fn tiles(input: &str, out: &Path, extra: &[&str]) -> std::process::Output {
-    let mut args = vec!["tiles", input, "--out", out.to_str().unwrap()];
-    args.extend_from_slice(extra);
-    lodkit(&args)
 }
 
 #[test]

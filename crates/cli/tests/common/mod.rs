@@ -48,3 +48,10 @@ pub fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
     out.sort();
     out
 }
+
+/// `lodkit tiles INPUT --out OUT EXTRA...`.
+pub fn tiles(input: &str, out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec!["tiles", input, "--out", out.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    lodkit(&args)
+}
