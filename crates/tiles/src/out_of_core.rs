@@ -640,7 +640,6 @@ fn build(
             tiles_dir: &tiles_dir,
             layout,
             leaf,
-            is_leaf: &is_leaf,
             direct_faces: o.memory / 4 / IN_FLIGHT as u64 / MEASURE_BYTES_PER_FACE,
         };
         let mut made = Vec::with_capacity(at.len());

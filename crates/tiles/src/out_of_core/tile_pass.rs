@@ -33,7 +33,6 @@ pub(super) struct TileCtx<'a> {
     pub(super) tiles_dir: &'a Path,
     pub(super) layout: Layout,
     pub(super) leaf: usize,
-    pub(super) is_leaf: &'a (dyn Fn(usize) -> bool + Sync),
     /// Most input faces a tile is measured against directly.
     pub(super) direct_faces: u64,
 }
@@ -48,7 +47,8 @@ impl TileCtx<'_> {
         i: usize,
         simplifier: &mut Simplifier,
     ) -> Result<Option<(Staged, bool)>> {
-        let (tree, is_leaf) = (self.tree, self.is_leaf);
+        let tree = self.tree;
+        let is_leaf = |n: usize| tree.nodes[n].children.is_empty();
         let k = tree.nodes[i].key.depth;
         let dir = if is_leaf(i) {
             self.leaves_dir.to_path_buf()
