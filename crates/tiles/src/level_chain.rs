@@ -1,6 +1,6 @@
 //! The levels: one HQMS chain over the whole object, finest first, each
 //! level cut into the tiles of its octree depth, each tile measured
-//! against the input it stands for.
+//! against the input it stands for (`tile_error.rs`).
 //!
 //! Level `D` (the octree's depth) is the input. Level `k < D` is the
 //! simplification of level `k + 1` (the whole mesh, as `lodkit simplify`
@@ -24,16 +24,16 @@
 //! meets its same-level neighbours.
 
 use lodkit_mesh::TriMesh;
-use lodkit_mesh::metrics::Reference;
 use lodkit_simplify::{AttributeWeights, Options, Simplifier, Target};
+use rayon::prelude::*;
 
 use crate::octree_partition::{Octree, centroid};
 use crate::tile_split::{TileMesh, border_edges, edge_bits, split};
-use crate::{Error, Event, Phase, Result};
+use crate::{Error, Event, Phase, Result, tile_error};
 
 /// Every node's tile (`None`: no content, a cell the level left empty)
-/// and measured error (max of both directions against its input region,
-/// object units; 0 for leaves), before the monotone pass.
+/// and measured error (`tile_error::measure`, object units; 0 for
+/// leaves), before the monotone pass.
 pub struct Levels {
     /// Per node (indexed as [`Octree::nodes`]).
     pub tiles: Vec<Option<TileMesh>>,
@@ -165,16 +165,44 @@ pub fn build_levels(
         }
         t_simplify += t0.elapsed().as_secs_f64();
 
-        // Measure each tile against the input faces of its cell.
+        // Measure each tile (see `tile_error.rs`): against the input near
+        // its cell, and the cell's input against the level near it (its
+        // tiles, and its faces in the cells of leaves above this depth).
         let t1 = std::time::Instant::now();
-        let regions = split(input, &[], internal.len(), |f| cell_slot(input, f));
-        for (s, (part, region)) in parts.into_iter().zip(regions).enumerate() {
+        let mut drawn = TriMesh::default();
+        for part in &parts {
+            append(&mut drawn, &part.mesh);
+        }
+        let in_leaves: Vec<u32> = (0..level.faces.len() as u32)
+            .filter(|&f| {
+                let key = tree.grid.cell_of(centroid(&level, f as usize), depth);
+                !index.contains_key(&key) && tree.leaf_holding(key).is_some()
+            })
+            .collect();
+        append(&mut drawn, &tile_error::gather(&level, &in_leaves));
+        let slot_of = |k| index.get(&k).copied();
+        let (own, input_near) =
+            tile_error::faces_near(input, &tree.grid, depth, internal.len(), slot_of);
+        let (_, drawn_near) =
+            tile_error::faces_near(&drawn, &tree.grid, depth, internal.len(), slot_of);
+        drop(in_leaves);
+        let errors: Vec<f64> = (0..internal.len())
+            .into_par_iter()
+            .map(|s| {
+                if parts[s].mesh.faces.is_empty() {
+                    return Ok(0.0);
+                }
+                tile_error::measure(
+                    &parts[s].mesh,
+                    &tile_error::gather(input, &own[s]),
+                    &tile_error::gather(input, &input_near[s]),
+                    &tile_error::gather(&drawn, &drawn_near[s]),
+                )
+            })
+            .collect::<Result<_>>()?;
+        for (s, part) in parts.into_iter().enumerate() {
             let node = internal[s];
-            if !part.mesh.faces.is_empty() && !region.mesh.faces.is_empty() {
-                let reference = Reference::new(&region.mesh)?;
-                let report = reference.compare_level(&part.mesh, None)?;
-                measured[node] = report.symmetric.max;
-            }
+            measured[node] = errors[s];
             if !part.mesh.faces.is_empty() {
                 tiles[node] = Some(part);
             }
@@ -239,4 +267,11 @@ fn refit(
         groups,
     };
     Ok(())
+}
+
+/// `b`'s triangles added to `a` (positions only: a measurement surface).
+pub(crate) fn append(a: &mut TriMesh, b: &TriMesh) {
+    let base = a.positions.len() as u32;
+    a.positions.extend_from_slice(&b.positions);
+    a.faces.extend(b.faces.iter().map(|f| f.map(|v| v + base)));
 }

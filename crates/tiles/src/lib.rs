@@ -16,13 +16,14 @@
 //!    still over the budget is simplified again alone, its border locked.
 //!    The root is the whole object at about one tile's budget, never
 //!    empty.
-//! 3. Errors (`level_chain.rs`): each internal tile against the input
-//!    faces of its cell, `lodkit_mesh::metrics::Reference::compare_level`,
-//!    the symmetric maximum (both directions, object units). A tile's
-//!    `geometricError` is the largest of its own and its descendants'
-//!    (monotone), and at least what its depth's quantisation grid rounds
-//!    (`tile_content::add_rounding`; a leaf's whole error); the tileset's
-//!    is the root cube's diagonal.
+//! 3. Errors (`tile_error.rs`): each internal tile's surface against the
+//!    input near its cell, and the input of its cell against its level
+//!    near the cell (the maximum of both directions over Metro samples,
+//!    object units; near: within an eighth of the cell's side, which only
+//!    ever overestimates). A tile's `geometricError` is the largest of
+//!    its own and its descendants' (monotone), and at least what its
+//!    depth's quantisation grid rounds (`tile_content::add_rounding`; a
+//!    leaf's whole error); the tileset's is the root cube's diagonal.
 //! 4. `skirts.rs`: a strip under every cut edge of a tile.
 //! 5. `tile_textures.rs` (a textured input, [`tileset_from_scene`]):
 //!    materials kept as seams through every level, each tile's texture
@@ -46,26 +47,28 @@
 //! levels that meet their *own* neighbours, but in a tree any two levels
 //! may meet. So: tiles of one level are cut from one mesh and share
 //! their borders bit for bit; where levels differ, each tile's cut edges
-//! carry a skirt hung inwards along the normals by twice the larger of its
-//! own and its parent's `geometricError` (about the farthest its border
-//! and a neighbour's are apart; a coarser neighbour's own skirt is
-//! deeper), wound both ways (clients cull back faces, and where the
-//! surface curves the strip leans over the neighbour). Skirts add four
-//! triangles per cut edge at the tile's own resolution, so they scale
-//! with the tile, not with the input (about 8 % of the triangles with
-//! 32k-triangle tiles). They are not part of the measured error (they
-//! hang below the surface). Measured by casting rays at random cuts of
-//! closed meshes (`tests/cracks.rs`): of the rays that pass through
-//! slivers without skirts, 2 of 616 still do on a blob (five cuts) and 0
-//! of 204 on the closed bunny (two cuts). Skirts hang inwards, so a part
-//! thinner than a skirt's depth may show the skirt's tip on its far side.
+//! carry a skirt hung inwards along the normals by twice the largest of
+//! its own and its parent's `geometricError` and longest face on a cut
+//! (a level's faces go to the cell of their centroid, so the sliver
+//! between two levels' borders is about as wide as the coarser one's
+//! faces there), at most a quarter of its cell, wound both ways (clients
+//! cull back faces, and where the surface curves the strip leans over the
+//! neighbour). Skirts add four triangles per cut edge at the tile's own
+//! resolution, so they scale with the tile, not with the input (about
+//! 8 % of the triangles with 32k-triangle tiles). They are not part of
+//! the measured error (they hang below the surface). Measured by casting
+//! rays at random cuts of closed meshes (`tests/cracks.rs`): of the rays
+//! that pass through slivers without skirts, 0 of 582 still do on a blob
+//! (five cuts) and 0 of 209 on the closed bunny (two cuts). Skirts hang
+//! inwards, so a part thinner than a skirt's depth may show the skirt's
+//! tip on its far side.
 //!
 //! # Contract
 //! Same input and options → the same bytes in every file. Cost (in
-//! core): the input, each level's mesh (about 1.4 × the input in all)
-//! and one copy of the input per depth while measuring; time about one
-//! `simplify` of the input plus one distance measurement of every
-//! internal tile.
+//! core): the input, each level's mesh (about 1.4 × the input in all),
+//! and while measuring a depth its level once more and lists of the
+//! faces near each cell; time about one `simplify` of the input plus one
+//! distance measurement of every internal tile.
 
 mod cell_spill;
 mod level_chain;
@@ -75,6 +78,7 @@ mod point_tiles;
 mod point_tiles_out_of_core;
 mod skirts;
 mod tile_content;
+mod tile_error;
 mod tile_split;
 mod tile_textures;
 pub mod tileset_json;
@@ -97,14 +101,6 @@ pub use point_tiles_out_of_core::{
 };
 pub use tile_content::{depth_grid, encode_point_tile, encode_tile};
 pub use tile_textures::{MARGIN_TEXELS, tileset_from_scene};
-
-/// How deep a skirt hangs, in units of the larger of its tile's and its
-/// parent's `geometricError`. Measured (`tests/cracks.rs`, random cuts of
-/// a 40k-face blob with 1k-face leaves, one-sided strips then): rays
-/// through slivers fell from 399 without skirts to 17 at 1×, 6 at 1.5×,
-/// 4 at 2× and 4 at 3×; two-sided strips at 2× leave 2 of 616 (blob) and
-/// 0 of 204 (closed bunny).
-const SKIRT_DEPTH: f64 = 2.0;
 
 /// Errors of a tileset build; each displays as one line.
 #[derive(Debug, thiserror::Error)]
@@ -327,6 +323,14 @@ pub(crate) fn build_tileset(
             parent[c] = i;
         }
     }
+    let reach: Vec<f64> = levels
+        .tiles
+        .iter()
+        .map(|t| {
+            t.as_ref()
+                .map_or(0.0, |t| skirts::border_reach(&t.mesh, &t.cuts))
+        })
+        .collect();
     let mut tiles = Vec::with_capacity(n);
     let mut tile_groups = vec![Vec::new(); n];
     let (mut max_tile, mut skirt_triangles, mut count) = (0, 0, 0);
@@ -337,7 +341,10 @@ pub(crate) fn build_tileset(
             let depth = if i == 0 || !opts.skirts {
                 0.0
             } else {
-                SKIRT_DEPTH * error[i].max(error[parent[i]])
+                skirts::skirt_depth(
+                    [error[i], error[parent[i]], reach[i], reach[parent[i]]],
+                    tree.grid.size / (1u64 << tree.nodes[i].key.depth) as f64,
+                )
             };
             let m = skirts::with_skirts(&t.mesh, &t.cuts, depth as f32, &mut t.groups);
             tile_groups[i] = t.groups;

@@ -196,6 +196,28 @@ impl Octree {
         }
         Some(n)
     }
+
+    /// Index of the leaf whose cell holds cell `key` (a leaf of depth at
+    /// most `key.depth`), if any: `None` when `key` lies in an internal
+    /// node of its depth or in a cell the input left empty.
+    pub fn leaf_holding(&self, key: CellKey) -> Option<usize> {
+        let mut n = 0;
+        loop {
+            let node = &self.nodes[n];
+            if node.children.is_empty() {
+                return Some(n);
+            }
+            if node.key.depth >= key.depth {
+                return None;
+            }
+            let shift = key.depth - node.key.depth - 1;
+            let want = CellKey {
+                depth: node.key.depth + 1,
+                xyz: key.xyz.map(|v| v >> shift),
+            };
+            n = *node.children.iter().find(|&&c| self.nodes[c].key == want)?;
+        }
+    }
 }
 
 #[cfg(test)]
@@ -221,6 +243,15 @@ mod tests {
                 assert_eq!(s, node.input_faces);
             }
             assert_eq!(t.find(node.key), Some(n));
+            let deeper = CellKey {
+                depth: node.key.depth + 2,
+                xyz: node.key.xyz.map(|v| v * 4 + 1),
+            };
+            let holding = node.children.is_empty().then_some(n);
+            assert_eq!(t.leaf_holding(node.key), holding);
+            if holding.is_some() {
+                assert_eq!(t.leaf_holding(deeper), holding);
+            }
         }
     }
 }

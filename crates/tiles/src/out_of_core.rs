@@ -34,22 +34,22 @@
 //!    that boundary). A rim of the input near a cell's boundary gets a
 //!    skirt too, which hangs below the surface and costs four triangles
 //!    per edge.
-//! 5. **Errors** without the whole input: a tile whose cell holds few
-//!    enough input faces (an eighth of the budget at
-//!    `MEASURE_BYTES_PER_FACE`) is measured against them, read back from
-//!    its leaves' tiles, exactly as in core (both directions, the
-//!    symmetric maximum; at least its children's errors). A tile `N`
-//!    above that is measured against its children's tiles `R(N)`, and
-//!    `geometricError(N) = d(N, R(N)) + max over children of
-//!    geometricError(child)`. The input in `N`'s cell is the union of its
-//!    children's inputs, so by the triangle inequality on Hausdorff
-//!    distances this bounds `N`'s distance to its input from above: an
-//!    honest `geometricError` (≥ the measured error), looser than in core
-//!    by the errors of the levels below. Leaves 0 (plus rounding, as in
-//!    core). Measured on a 10⁶-face blob at `--memory 200M`: the root's
-//!    `geometricError` 2.1× the in-core one, while the geometry is as
-//!    good (the input's mean distance to each depth's cut 0.73–0.95× the
-//!    in-core tileset's).
+//! 5. **Errors** without the whole input (`tile_error.rs`), once every
+//!    tile of a depth is staged: a tile whose cell holds few enough input
+//!    faces (an eighth of the budget at `MEASURE_BYTES_PER_FACE`, twice
+//!    over for the neighbourhood) is measured as in core: against the
+//!    input near its cell (its own and its neighbours' leaves' tiles,
+//!    cropped), and the input of its cell against its depth's staged
+//!    tiles near it (and the level's faces spilled under leaves at or
+//!    above that depth). A tile `N` above that is measured the same way
+//!    with the tiles one depth down `R` standing for the input, and
+//!    `geometricError(N) = d(N, R) + max over the tiles of R used of
+//!    their geometricError`. By the triangle inequality this bounds `N`'s
+//!    distance from the input from above: an honest `geometricError`,
+//!    looser than in core by the errors of the levels below. Leaves 0
+//!    (plus rounding, as in core). Measured on a 10⁷-face blob at
+//!    `--memory 1G`: the root's `geometricError` 0.0057 (the in-core
+//!    path's measure on a 10⁶-face blob is 0.0030).
 //! 6. **Write**: each staged tile is read back, its skirts hung, encoded
 //!    on its depth's grid, through the same output-folder rule as in
 //!    core. Bounding boxes include where skirts may hang (each tile's box
@@ -68,11 +68,12 @@
 //! # Cost
 //! Memory: the cell map, the octree, one level in core once it fits the
 //! budget (the chain's rule), the spill buffers (an eighth of the
-//! budget), two tiles and their children. Disk: the chain's (36 B per face
-//! of the largest level, twice) plus each level once more as spills (36
-//! B per face) and the staged tiles. Time: the chain, four streams over
-//! the input, one weld of every tile and one measurement of every
-//! internal tile against its children.
+//! budget), two tiles and their neighbourhoods. Disk: the chain's (36 B
+//! per face of the largest level, twice) plus each level once more as
+//! spills (36 B per face) and the staged tiles. Time: the chain, four
+//! streams over the input, one weld of every tile and one measurement of
+//! every internal tile against its neighbourhood (the staged tiles
+//! around it are read again for it).
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -93,7 +94,7 @@ use self::tile_pass::{IN_FLIGHT, TileCtx, tile_file};
 use crate::cell_spill::{Spill, StagedTile};
 use crate::octree_partition::{CellKey, Grid, MAX_DEPTH, Node, Octree};
 use crate::tileset_json::{NodeInfo, Refine};
-use crate::{Error, Event, Result, SKIRT_DEPTH, TilesOptions, TilesReport, check_option};
+use crate::{Error, Event, Result, TilesOptions, TilesReport, check_option, skirts};
 
 /// Where and in how much memory an out-of-core tileset is built.
 #[derive(Clone, Debug)]
@@ -307,6 +308,8 @@ fn octree_from_counts(
 #[derive(Clone, Copy, Debug)]
 struct Staged {
     error: f64,
+    /// How far its border may lie from a neighbour's (`skirts::border_reach`).
+    reach: f64,
     bbox: Aabb,
     /// Range of the cut vertices' normals (empty box: no cuts).
     normals: Aabb,
@@ -317,8 +320,9 @@ struct Staged {
 impl Staged {
     fn line(&self, node: usize) -> String {
         let mut s = format!(
-            "{node} {:016x} {} {}",
+            "{node} {:016x} {:016x} {} {}",
             self.error.to_bits(),
+            self.reach.to_bits(),
             self.faces,
             self.cuts
         );
@@ -337,24 +341,26 @@ impl Staged {
 
     fn parse(line: &str) -> Option<(usize, Staged)> {
         let w: Vec<&str> = line.split(' ').collect();
-        if w.len() != 16 {
+        if w.len() != 17 {
             return None;
         }
         let f = |i: usize| u32::from_str_radix(w[i], 16).ok().map(f32::from_bits);
         let v = |i: usize| Some(Vec3::new(f(i)?, f(i + 1)?, f(i + 2)?));
+        let f64_at = |i: usize| u64::from_str_radix(w[i], 16).ok().map(f64::from_bits);
         Some((
             w[0].parse().ok()?,
             Staged {
-                error: f64::from_bits(u64::from_str_radix(w[1], 16).ok()?),
-                faces: w[2].parse().ok()?,
-                cuts: w[3].parse().ok()?,
+                error: f64_at(1)?,
+                reach: f64_at(2)?,
+                faces: w[3].parse().ok()?,
+                cuts: w[4].parse().ok()?,
                 bbox: Aabb {
-                    min: v(4)?,
-                    max: v(7)?,
+                    min: v(5)?,
+                    max: v(8)?,
                 },
                 normals: Aabb {
-                    min: v(10)?,
-                    max: v(13)?,
+                    min: v(11)?,
+                    max: v(14)?,
                 },
             },
         ))
@@ -513,7 +519,11 @@ fn build(
             let mut spill = Spill::new(&dir, layout, n, buffers)?;
             let mut c = 0u64;
             each(&mut |t| {
-                if let Some(&i) = slot.get(&tree.grid.cell_of(centroid(t), k)) {
+                let key = tree.grid.cell_of(centroid(t), k);
+                // Faces in the cell of a leaf at or above this depth are
+                // kept under the leaf: what the level's tiles are measured
+                // against there.
+                if let Some(i) = slot.get(&key).copied().or_else(|| tree.leaf_holding(key)) {
                     spill.put(i, t)?;
                 }
                 c += 1;
@@ -629,12 +639,12 @@ fn build(
             at.len() as u64,
         ));
         // Tiles of one depth are independent (their children are staged):
-        // `IN_FLIGHT` at a time, each measuring against at most an
-        // `IN_FLIGHT`-th of the measurement room, so the budget holds
-        // whatever the machine's thread count, and the bytes too.
+        // made `IN_FLIGHT` at a time, then measured `IN_FLIGHT` at a time
+        // (each against at most an `IN_FLIGHT`-th of the measurement
+        // room), so the budget holds whatever the machine's thread count,
+        // and the bytes too.
         let ctx = TileCtx {
             tree: &tree,
-            staged: &staged,
             leaves_dir: &leaves_dir,
             cells: &cells,
             tiles_dir: &tiles_dir,
@@ -646,16 +656,38 @@ fn build(
         for batch in at.chunks(IN_FLIGHT) {
             let part: Vec<Result<Option<(Staged, bool)>>> = batch
                 .par_iter()
-                .map_init(Simplifier::new, |simplifier, &i| {
-                    let r = ctx.make(i, simplifier);
-                    progress(ScaleEvent::Advance(1));
-                    r
-                })
+                .map_init(Simplifier::new, |simplifier, &i| ctx.make(i, simplifier))
                 .collect();
             for (&i, m) in batch.iter().zip(part) {
                 made.push((i, m?));
             }
         }
+        for &(i, m) in &made {
+            staged[i] = m.map(|(s, _)| s);
+        }
+        // Then each internal tile's error, its neighbours staged.
+        let mut errors = vec![0.0; made.len()];
+        for (b, batch) in made.chunks(IN_FLIGHT).enumerate() {
+            let part: Vec<Result<f64>> = batch
+                .par_iter()
+                .map(|&(i, m)| {
+                    let e = match m {
+                        Some(_) if !is_leaf(i) => ctx.measure(i, &staged),
+                        _ => Ok(0.0),
+                    };
+                    progress(ScaleEvent::Advance(1));
+                    e
+                })
+                .collect();
+            for (j, e) in part.into_iter().enumerate() {
+                errors[b * IN_FLIGHT + j] = e?;
+            }
+        }
+        let made: Vec<_> = made
+            .into_iter()
+            .zip(errors)
+            .map(|((i, m), error)| (i, m.map(|(s, r)| (Staged { error, ..s }, r))))
+            .collect();
         let mut record = String::new();
         for (i, m) in made {
             if let Some((s, refit)) = m {
@@ -697,7 +729,11 @@ fn build(
         if i == 0 || !opts.skirts {
             0.0
         } else {
-            SKIRT_DEPTH * error(i).max(error(parent[i]))
+            let reach = |i: usize| staged[i].map_or(0.0, |s| s.reach);
+            skirts::skirt_depth(
+                [error(i), error(parent[i]), reach(i), reach(parent[i])],
+                tree.grid.size / (1u64 << tree.nodes[i].key.depth) as f64,
+            )
         }
     };
     let mut info: Vec<NodeInfo> = (0..n)

@@ -7,7 +7,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::{all_files, read_tileset, region};
+use common::{all_files, assert_honest, drawn_at, read_tileset};
 use lodkit_mesh::TriMesh;
 use lodkit_mesh::metrics::{CompareOptions, compare};
 use lodkit_tiles::{
@@ -45,17 +45,7 @@ fn ooc_in(input: &Path, out: &Path, staging: &Path, memory: u64) -> TilesReport 
 /// included: they hang below the surface, so the input measures past
 /// them).
 fn cut_error(input: &TriMesh, dir: &Path, depth: u8) -> f64 {
-    let ts = read_tileset(dir);
-    let mut cut = TriMesh::default();
-    for t in &ts.tiles {
-        if t.depth == depth || (t.depth < depth && t.children.is_empty()) {
-            let m = t.mesh.as_ref().expect("content");
-            let base = cut.positions.len() as u32;
-            cut.positions.extend_from_slice(&m.positions);
-            cut.faces
-                .extend(m.faces.iter().map(|f| f.map(|v| v + base)));
-        }
-    }
+    let cut = drawn_at(&read_tileset(dir), depth);
     let r = compare(
         input,
         &cut,
@@ -92,29 +82,10 @@ fn check_against_input_and_in_core(input: &TriMesh, dir: &Path, report: &TilesRe
                 t.name
             );
         }
-        let Some(mesh) = &t.mesh else { continue };
-        let reg = region(input, t.depth, t.xyz);
-        let r = compare(
-            &reg,
-            mesh,
-            &CompareOptions {
-                seed: 7,
-                samples: Some(20_000),
-                ..CompareOptions::default()
-            },
-        )
-        .unwrap();
-        // Distances are measured on samples (another seed here): internal
-        // tiles get the in-core test's 10 % for what samples miss.
-        let slack = if t.children.is_empty() { 1.0 } else { 1.1 };
-        assert!(
-            r.a_to_b.max <= t.error * slack + 1e-6 * diag,
-            "{}: input {} from the tile, geometricError {}",
-            t.name,
-            r.a_to_b.max,
-            t.error
-        );
     }
+    // Distances are measured on samples (another seed here): internal
+    // tiles get the in-core test's 10 % for what samples miss.
+    assert_honest(&ts, input, 1.1);
     // The in-core tileset of the same input.
     let tmp = tempfile::tempdir().unwrap();
     let in_core = tmp.path().join("in-core");

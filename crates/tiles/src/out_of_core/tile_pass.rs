@@ -1,21 +1,22 @@
 //! The tile pass of the out-of-core tiler: one depth's tiles made from
 //! their cells' spills, two at a time, each welded, refitted to the leaf
-//! budget when over it, given normals and cuts, measured (see the parent
-//! module's docs, steps 3–5) and staged to its file.
+//! budget when over it, given normals and cuts and staged to its file;
+//! then, once the whole depth is staged, each internal tile measured
+//! against its neighbourhood (see the parent module's docs, steps 3–5).
 
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 use lodkit_mesh::TriMesh;
-use lodkit_mesh::metrics::Reference;
 use lodkit_scale::soup::Layout;
 use lodkit_simplify::{Options, Simplifier, Target};
 
 use super::{Staged, bbox_of};
 use crate::cell_spill::{Spill, StagedTile};
+use crate::level_chain::append;
 use crate::octree_partition::{CellKey, Grid, Octree};
 use crate::tile_split::welded_edges;
-use crate::{Error, Result};
+use crate::{Error, Result, tile_error};
 
 /// Tiles staged at once in the tile pass.
 pub(super) const IN_FLIGHT: usize = 2;
@@ -24,10 +25,9 @@ pub(super) fn tile_file(dir: &Path, node: usize) -> PathBuf {
     dir.join(format!("{node}.tile"))
 }
 
-/// What making one tile reads: the tree, the staged children, the folders.
+/// What making and measuring a tile read: the tree and the folders.
 pub(super) struct TileCtx<'a> {
     pub(super) tree: &'a Octree,
-    pub(super) staged: &'a [Option<Staged>],
     pub(super) leaves_dir: &'a Path,
     pub(super) cells: &'a Path,
     pub(super) tiles_dir: &'a Path,
@@ -39,9 +39,9 @@ pub(super) struct TileCtx<'a> {
 
 impl TileCtx<'_> {
     /// Node `i`'s tile: its cell's faces welded, refitted to the leaf
-    /// budget when over it, normals, cuts, its error (see the module
-    /// docs), staged to its file. `None` for an empty cell; the flag says
-    /// whether it was refitted.
+    /// budget when over it, normals, cuts, staged to its file (its error
+    /// is 0 until [`Self::measure`]). `None` for an empty cell; the flag
+    /// says whether it was refitted.
     pub(super) fn make(
         &self,
         i: usize,
@@ -67,40 +67,10 @@ impl TileCtx<'_> {
             mesh.normals = Some(lodkit_mesh::normals::vertex_normals(&mesh));
         }
         let cuts = cut_edges(&mesh, &tree.grid, tree.nodes[i].key);
-        let mut error = 0.0f64;
-        if !is_leaf(i) {
-            let child_error = tree.nodes[i]
-                .children
-                .iter()
-                .filter_map(|&c| self.staged[c].map(|s| s.error))
-                .fold(0.0f64, f64::max);
-            let direct = (tree.nodes[i].input_faces as u64) <= self.direct_faces;
-            // The input of this cell (its leaves' tiles) when it fits the
-            // measurement room, as in core; else the children's tiles,
-            // which stand for it up to their own error.
-            let mut region = TriMesh::default();
-            let mut stack = tree.nodes[i].children.clone();
-            while let Some(c) = stack.pop() {
-                if direct && !is_leaf(c) {
-                    stack.extend(tree.nodes[c].children.iter().rev());
-                } else if self.staged[c].is_some() {
-                    let tile = StagedTile::read(&tile_file(self.tiles_dir, c))?;
-                    append(&mut region, &tile.mesh);
-                }
-            }
-            if !region.faces.is_empty() {
-                let reference = Reference::new(&region)?;
-                error = reference.compare_level(&mesh, None)?.symmetric.max;
-            }
-            error = if direct {
-                error.max(child_error)
-            } else {
-                error + child_error
-            };
-        }
         let normals = mesh.normals.as_deref().unwrap_or_default();
         let s = Staged {
-            error,
+            error: 0.0,
+            reach: crate::skirts::border_reach(&mesh, &cuts),
             bbox: bbox_of(&mesh.positions),
             normals: bbox_of(cuts.iter().flatten().map(|&v| &normals[v as usize])),
             faces: mesh.faces.len(),
@@ -111,11 +81,99 @@ impl TileCtx<'_> {
     }
 }
 
-/// `b`'s triangles added to `a` (positions only: a measurement region).
-fn append(a: &mut TriMesh, b: &TriMesh) {
-    let base = a.positions.len() as u32;
-    a.positions.extend_from_slice(&b.positions);
-    a.faces.extend(b.faces.iter().map(|f| f.map(|v| v + base)));
+impl TileCtx<'_> {
+    /// Internal node `i`'s error, once every tile of its depth is staged
+    /// (see `tile_error.rs` and the parent module's docs, step 5): its
+    /// tile against the reference near its cell, and the reference in
+    /// its cell against the depth's tiles near it. The reference is the
+    /// input (its leaves' tiles) when the cell's input fits the
+    /// measurement room, else the tiles one depth down, which stand for
+    /// the input up to their own errors (added). At least its children's
+    /// errors.
+    pub(super) fn measure(&self, i: usize, staged: &[Option<Staged>]) -> Result<f64> {
+        let tree = self.tree;
+        let node = &tree.nodes[i];
+        let tile = StagedTile::read(&tile_file(self.tiles_dir, i))?.mesh;
+        let children_error = node
+            .children
+            .iter()
+            .filter_map(|&c| staged[c].map(|s| s.error))
+            .fold(0.0f64, f64::max);
+        // The neighbourhood holds about (1 + 2 × margin)² of the cell's
+        // surface; the leaves read whole before cropping add to it.
+        let direct = (node.input_faces as u64).saturating_mul(2) <= self.direct_faces;
+        let reference_depth = if direct {
+            crate::MAX_DEPTH + 1
+        } else {
+            node.key.depth + 1
+        };
+        let (reference, region, reference_error) =
+            self.surface_near(node.key, reference_depth, staged)?;
+        let (drawn, _, _) = self.surface_near(node.key, node.key.depth, staged)?;
+        let e = tile_error::measure(&tile, &region, &reference, &drawn)?;
+        Ok(if direct {
+            e.max(children_error)
+        } else {
+            e + reference_error.max(children_error)
+        })
+    }
+
+    /// A surface near `cell`, cropped to the faces whose centroid lies in
+    /// `cell` grown by `tile_error::MARGIN`, with its part inside `cell`
+    /// whole and the largest error among the tiles used. With `stop` at
+    /// `cell`'s depth: that depth's level (its staged tiles, and its
+    /// faces spilled under the leaves at or above it). Deeper: the staged
+    /// tiles of depth `stop` and the input of the leaves above it (the
+    /// reference).
+    fn surface_near(
+        &self,
+        cell: CellKey,
+        stop: u8,
+        staged: &[Option<Staged>],
+    ) -> Result<(TriMesh, TriMesh, f64)> {
+        let tree = self.tree;
+        let grid = &tree.grid;
+        let side = |d: u8| grid.size / (1u64 << d) as f64;
+        let corner = |k: CellKey| {
+            grid.origin + glam::DVec3::from_array(k.xyz.map(f64::from)) * side(k.depth)
+        };
+        let m = side(cell.depth) * tile_error::MARGIN;
+        let (lo, hi) = (corner(cell) - m, corner(cell) + side(cell.depth) + m);
+        let (mut near, mut inside, mut error) = (TriMesh::default(), TriMesh::default(), 0.0f64);
+        let mut stack = vec![0usize];
+        while let Some(n) = stack.pop() {
+            let key = tree.nodes[n].key;
+            let (a, b) = (corner(key), corner(key) + side(key.depth));
+            if (0..3).any(|x| a[x] > hi[x] || b[x] < lo[x]) {
+                continue;
+            }
+            let leaf = tree.nodes[n].children.is_empty();
+            if !leaf && key.depth < stop {
+                stack.extend(tree.nodes[n].children.iter().rev());
+                continue;
+            }
+            let mesh = if leaf && stop == cell.depth {
+                // The level's own faces in a leaf's cell.
+                Spill::read(&self.cells.join(format!("d{stop}")), n, self.layout)?
+            } else if let Some(s) = staged[n] {
+                error = error.max(s.error);
+                StagedTile::read(&tile_file(self.tiles_dir, n))?.mesh
+            } else if leaf && key.depth < cell.depth {
+                // A leaf above this depth: its tile is made later, its
+                // input is still spilled.
+                Spill::read(self.leaves_dir, n, self.layout)?
+            } else {
+                continue;
+            };
+            let within = key.depth >= cell.depth
+                && key.xyz.map(|v| v >> (key.depth - cell.depth)) == cell.xyz;
+            if within {
+                append(&mut inside, &mesh);
+            }
+            append(&mut near, &tile_error::crop_near(&mesh, grid, cell));
+        }
+        Ok((near, inside, error))
+    }
 }
 
 /// Simplifies one tile to `budget` triangles with its border vertices

@@ -142,24 +142,54 @@ pub fn read_tileset(dir: &Path) -> ReadTileset {
     out
 }
 
-/// The input faces whose centroid lies in cell `(depth, xyz)` of the
-/// octree the crate documents (the cube around the box, enlarged by 1e-6).
-pub fn region(input: &TriMesh, depth: u8, xyz: [u32; 3]) -> TriMesh {
+/// The cube of cell `(depth, xyz)` of the octree the crate documents
+/// (the cube around `input`'s box, enlarged by 1e-6): lowest corner, side.
+pub fn cell_cube(input: &TriMesh, depth: u8, xyz: [u32; 3]) -> (DVec3, f64) {
     let b = input.bbox();
     let (lo, hi) = (b.min.as_dvec3(), b.max.as_dvec3());
     let size = (hi - lo).max_element() * (1.0 + 1e-6);
     let origin = (lo + hi) * 0.5 - DVec3::splat(size * 0.5);
-    let n = 1u64 << depth;
+    let side = size / (1u64 << depth) as f64;
+    (origin + DVec3::from_array(xyz.map(f64::from)) * side, side)
+}
+
+/// The input faces whose centroid lies in cell `(depth, xyz)` and is not
+/// within `away` of any of the cubes `avoid` (lowest corner, side).
+pub fn region_away(
+    input: &TriMesh,
+    depth: u8,
+    xyz: [u32; 3],
+    avoid: &[(DVec3, f64)],
+    away: f64,
+) -> TriMesh {
+    let (lo, side) = cell_cube(input, depth, xyz);
+    let gap = |(a, s): (DVec3, f64), p: DVec3, q: DVec3| {
+        (a - q).max(p - (a + s)).max(DVec3::ZERO).length()
+    };
+    let avoid: Vec<(DVec3, f64)> = avoid
+        .iter()
+        .copied()
+        .filter(|&c| gap(c, lo, lo + side) <= away)
+        .collect();
     let mut faces = Vec::new();
     for f in &input.faces {
         let c: Vec3 = f.iter().map(|&v| input.positions[v as usize]).sum::<Vec3>() / 3.0;
-        let rel = (c.as_dvec3() - origin) / size * n as f64;
-        let cell = |v: f64| (v.floor().max(0.0) as u64).min(n - 1) as u32;
-        if [cell(rel.x), cell(rel.y), cell(rel.z)] == xyz {
+        let rel = (c.as_dvec3() - lo) / side;
+        if rel.min_element() < 0.0 || rel.max_element() >= 1.0 {
+            continue;
+        }
+        let c = c.as_dvec3();
+        let near = avoid.iter().any(|&cube| gap(cube, c, c) <= away);
+        if !near {
             faces.push(*f);
         }
     }
     TriMesh::new(input.positions.clone(), faces)
+}
+
+/// The input faces whose centroid lies in cell `(depth, xyz)`.
+pub fn region(input: &TriMesh, depth: u8, xyz: [u32; 3]) -> TriMesh {
+    region_away(input, depth, xyz, &[], 0.0)
 }
 
 /// Every file under `dir` with its bytes, sorted by relative path.
@@ -179,4 +209,117 @@ pub fn all_files(dir: &Path) -> Vec<(String, Vec<u8>)> {
     }
     out.sort();
     out
+}
+
+/// What a client shows when it draws depth `depth` everywhere it can:
+/// every tile of that depth and every shallower leaf (skirts included).
+pub fn drawn_at(ts: &ReadTileset, depth: u8) -> TriMesh {
+    let mut cut = TriMesh::default();
+    for t in &ts.tiles {
+        if t.depth == depth || (t.depth < depth && t.children.is_empty()) {
+            let Some(m) = &t.mesh else { continue };
+            let base = cut.positions.len() as u32;
+            cut.positions.extend_from_slice(&m.positions);
+            cut.faces
+                .extend(m.faces.iter().map(|f| f.map(|v| v + base)));
+        }
+    }
+    cut
+}
+
+/// A tile's surface without its skirts: a skirt's triangles are drawn
+/// both ways (a triangle and its reverse on the same vertices), a
+/// surface's never.
+pub fn without_skirts(m: &TriMesh) -> TriMesh {
+    let key = |f: &[u32; 3]| {
+        let mut k = *f;
+        k.sort_unstable();
+        k
+    };
+    let mut count = std::collections::HashMap::new();
+    for f in &m.faces {
+        *count.entry(key(f)).or_insert(0) += 1;
+    }
+    let faces = m
+        .faces
+        .iter()
+        .filter(|f| count[&key(f)] == 1)
+        .copied()
+        .collect();
+    TriMesh::new(m.positions.clone(), faces)
+}
+
+/// Honest errors, both ways, measured again with another seed: every
+/// tile's surface lies within its `geometricError` of the input, and the
+/// input of an internal tile's cell within it of its depth's tiles
+/// ([`drawn_at`]), away from the cells of leaves shown beside them: there
+/// the level's own faces are not in the tileset (the client shows the
+/// leaf, and the sliver between the two is the skirts' business), so
+/// input within the longest edge of the depth's tiles of such a cell is
+/// left out. `slack` (≥ 1) allows for what samples miss.
+pub fn assert_honest(ts: &ReadTileset, input: &TriMesh, slack: f64) {
+    use lodkit_mesh::metrics::{CompareOptions, SurfaceIndex, one_sided};
+    let diag = input.bbox().diagonal() as f64;
+    let opts = CompareOptions {
+        seed: 7,
+        samples: Some(20_000),
+        ..CompareOptions::default()
+    };
+    let whole = SurfaceIndex::new(input).unwrap();
+    let depth = ts.tiles.iter().map(|t| t.depth).max().unwrap_or(0);
+    let drawn: Vec<SurfaceIndex> = (0..=depth)
+        .map(|d| SurfaceIndex::new(&drawn_at(ts, d)).unwrap())
+        .collect();
+    // The longest edge of each depth's tiles (skirts left out).
+    let mut longest = vec![0.0f64; depth as usize + 1];
+    for t in &ts.tiles {
+        let Some(m) = &t.mesh else { continue };
+        let m = without_skirts(m);
+        for f in &m.faces {
+            let p = f.map(|v| m.positions[v as usize]);
+            for k in 0..3 {
+                let l = p[k].distance(p[(k + 1) % 3]) as f64;
+                longest[t.depth as usize] = longest[t.depth as usize].max(l);
+            }
+        }
+    }
+    for t in &ts.tiles {
+        let Some(mesh) = &t.mesh else { continue };
+        let surface = without_skirts(mesh);
+        let off = one_sided(&surface, &whole, &opts).unwrap().max;
+        let allowed = if t.children.is_empty() {
+            t.error + 1e-6 * diag
+        } else {
+            t.error * slack + 1e-6 * diag
+        };
+        assert!(
+            off <= allowed,
+            "{}: tile {} from the input, geometricError {}",
+            t.name,
+            off,
+            t.error
+        );
+        if !t.children.is_empty() {
+            let leaves: Vec<(DVec3, f64)> = ts
+                .tiles
+                .iter()
+                .filter(|l| l.children.is_empty() && l.depth <= t.depth)
+                .map(|l| cell_cube(input, l.depth, l.xyz))
+                .collect();
+            let reg = region_away(input, t.depth, t.xyz, &leaves, longest[t.depth as usize]);
+            if reg.faces.is_empty() {
+                continue;
+            }
+            let uncovered = one_sided(&reg, &drawn[t.depth as usize], &opts)
+                .unwrap()
+                .max;
+            assert!(
+                uncovered <= allowed,
+                "{}: input {} from its depth's tiles, geometricError {}",
+                t.name,
+                uncovered,
+                t.error
+            );
+        }
+    }
 }
