@@ -66,3 +66,35 @@ fn a_bad_budget_is_a_usage_error() {
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(!dir.path().join("t").exists());
 }
+
+#[test]
+fn ray_without_pylodkit_fails_in_one_line_naming_the_runner() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = blob(dir.path());
+    let out = dir.path().join("t");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_lodkit"))
+        .args(["tiles", &input, "--out", out.to_str().unwrap()])
+        .args([
+            "--memory",
+            "1M",
+            "--leaf-triangles",
+            "2000",
+            "--ray",
+            "local",
+        ])
+        .env("LODKIT_PYTHON", "/nonexistent/python3")
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    let errors: Vec<&str> = err.lines().filter(|l| l.contains("error")).collect();
+    assert_eq!(errors.len(), 1, "{err}");
+    assert!(
+        errors[0].contains("blob.ply")
+            && errors[0].contains("--ray")
+            && errors[0].contains("LODKIT_PYTHON")
+            && !errors[0].contains("simplify:"),
+        "{err}"
+    );
+    assert!(!out.exists());
+}

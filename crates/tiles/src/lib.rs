@@ -115,6 +115,10 @@ pub enum Error {
     /// Simplification failed.
     #[error("simplify: {0}")]
     Simplify(String),
+    /// The out-of-core level chain failed; the message names the cause (a
+    /// block runner that cannot start, a staging file, a simplification).
+    #[error("{0}")]
+    Chain(String),
     /// A tile could not be encoded.
     #[error("{0}")]
     Encode(String),

@@ -599,14 +599,13 @@ fn build(
         match result {
             Ok(_) => {}
             Err(e) if e == RESTART => return Ok(None),
-            Err(e) => return Err(Error::Simplify(e)),
+            Err(e) => return Err(Error::Chain(e)),
         }
         // A chain that stalled (the simplifier could not go lower) made
         // fewer levels than the depths ask.
         if let Some(k) = (0..d).find(|k| !cells.join(format!("d{k}.done")).exists()) {
-            return Err(Error::Simplify(format!(
-                "{}: the level chain stopped before depth {k}'s level (the mesh cannot be simplified to {} faces); use a larger --leaf-triangles",
-                input.display(),
+            return Err(Error::Chain(format!(
+                "the level chain stopped before depth {k}'s level (the mesh cannot be simplified to {} faces); use a larger --leaf-triangles",
                 level_target(&targets, d, k)
             )));
         }
