@@ -25,7 +25,6 @@
 
 use lodkit_mesh::TriMesh;
 use lodkit_simplify::{AttributeWeights, Options, Simplifier, Target};
-use rayon::prelude::*;
 
 use crate::octree_partition::{Octree, centroid};
 use crate::tile_split::{TileMesh, border_edges, edge_bits, split};
@@ -187,15 +186,19 @@ pub fn build_levels(
             tile_error::faces_near(&drawn, &tree.grid, depth, internal.len(), slot_of);
         drop(in_leaves);
         let errors: Vec<f64> = (0..internal.len())
-            .into_par_iter()
             .map(|s| {
                 if parts[s].mesh.faces.is_empty() {
                     return Ok(0.0);
                 }
+                let near = tile_error::gather(input, &input_near[s]);
+                // A cell with nothing near it (the root) measures its own
+                // input against its level: one copy of it, not two.
+                let region = (own[s].len() < input_near[s].len())
+                    .then(|| tile_error::gather(input, &own[s]));
                 tile_error::measure(
                     &parts[s].mesh,
-                    &tile_error::gather(input, &own[s]),
-                    &tile_error::gather(input, &input_near[s]),
+                    region.as_ref().unwrap_or(&near),
+                    &near,
                     &tile_error::gather(&drawn, &drawn_near[s]),
                 )
             })
