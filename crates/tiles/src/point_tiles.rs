@@ -23,6 +23,7 @@ use std::path::Path;
 
 use glam::DVec3;
 use lodkit_mesh::{Aabb, PointCloud};
+use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
 use crate::octree_partition::{CellKey, Grid, MAX_DEPTH, Node, Octree};
@@ -212,35 +213,45 @@ pub(crate) fn subdivide(
     }];
     let mut tiles: Vec<PointCloud> = vec![PointCloud::default()];
     let mut errors = vec![0f64];
-    let mut queue = std::collections::VecDeque::new();
-    queue.push_back((
+    // Breadth-first a level at a time, the nodes of a level on every
+    // thread; children are numbered in the order of their parents, so
+    // the tree is the one a queue would make whatever the thread count.
+    let mut level = vec![(
         0usize,
+        root,
         (0..cloud.positions.len() as u32).collect::<Vec<u32>>(),
-    ));
+    )];
     let (mut depth, mut done) = (root.depth, 0usize);
-    while let Some((n, idx)) = queue.pop_front() {
-        let key = nodes[n].key;
-        depth = depth.max(key.depth);
-        if idx.len() <= leaf_points || key.depth >= MAX_DEPTH {
-            done += idx.len();
-            tiles[n] = gather(cloud, &idx);
-        } else {
-            let (kept, rest) = subsample(cloud, grid, key, idx);
-            done += kept.len();
-            tiles[n] = gather(cloud, &kept);
-            // Nothing passed on (every point in a cell of its own): a leaf.
-            errors[n] = if rest.is_empty() {
-                0.0
-            } else {
-                cell_diagonal(grid, key.depth)
-            };
-            let mut parts: [Vec<u32>; 8] = Default::default();
-            for i in rest {
-                let c = grid.cell_of(cloud.positions[i as usize], key.depth + 1);
-                let o = (c.xyz[0] & 1) | ((c.xyz[1] & 1) << 1) | ((c.xyz[2] & 1) << 2);
-                parts[o as usize].push(i);
-            }
-            for (o, part) in parts.into_iter().enumerate() {
+    while !level.is_empty() {
+        let made: Vec<_> = level
+            .into_par_iter()
+            .map(|(n, key, idx)| {
+                if idx.len() <= leaf_points || key.depth >= MAX_DEPTH {
+                    return (n, key, gather(cloud, &idx), 0.0, idx.len(), None);
+                }
+                let (kept, rest) = subsample(cloud, grid, key, idx);
+                // Nothing passed on (every point in a cell of its own): a leaf.
+                let error = if rest.is_empty() {
+                    0.0
+                } else {
+                    cell_diagonal(grid, key.depth)
+                };
+                let mut parts: [Vec<u32>; 8] = Default::default();
+                for i in rest {
+                    let c = grid.cell_of(cloud.positions[i as usize], key.depth + 1);
+                    let o = (c.xyz[0] & 1) | ((c.xyz[1] & 1) << 1) | ((c.xyz[2] & 1) << 2);
+                    parts[o as usize].push(i);
+                }
+                (n, key, gather(cloud, &kept), error, kept.len(), Some(parts))
+            })
+            .collect();
+        let mut next = Vec::new();
+        for (n, key, tile, error, placed_here, parts) in made {
+            depth = depth.max(key.depth);
+            done += placed_here;
+            tiles[n] = tile;
+            errors[n] = error;
+            for (o, part) in parts.into_iter().flatten().enumerate() {
                 if part.is_empty() {
                     continue;
                 }
@@ -253,10 +264,11 @@ pub(crate) fn subdivide(
                 nodes[n].children.push(id);
                 tiles.push(PointCloud::default());
                 errors.push(0.0);
-                queue.push_back((id, part));
+                next.push((id, key.child(o), part));
             }
         }
         placed(done);
+        level = next;
     }
     Subtree {
         nodes,

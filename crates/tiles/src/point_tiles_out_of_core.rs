@@ -83,11 +83,16 @@ use std::time::Instant;
 
 use glam::Vec3;
 use lodkit_mesh::Aabb;
-use rustc_hash::FxHashMap;
 
 mod cloud_stream;
+mod parallel_pass;
+mod tile_writer;
+mod winners;
 
-use self::cloud_stream::{Point, Source, Spill, io_err};
+use self::cloud_stream::{Layout, Point, Source, Spill, io_err};
+use self::parallel_pass::parallel_pass;
+use self::tile_writer::write_folder_parallel;
+use self::winners::{Winner, Winners};
 use crate::octree_partition::{CellKey, Grid, MAX_DEPTH, Node, Octree};
 use crate::point_tiles::{
     PointTilesOptions, PointTilesReport, Subtree, cell_and_distance, cell_diagonal, node_info,
@@ -95,6 +100,7 @@ use crate::point_tiles::{
 };
 use crate::tileset_json::Refine;
 use crate::{Error, OutOfCoreEvent, Result, check_option};
+use rayon::prelude::*;
 
 /// Bytes per point the in-core path
 /// ([`tileset_from_points`](crate::tileset_from_points) then
@@ -112,12 +118,14 @@ pub const IN_CORE_BYTES_PER_POINT: u64 = 48;
 /// slack): what groups a depth's streamed nodes into passes.
 const WINNER_BYTES: u64 = 40;
 
+/// Bytes per point of a tile being written: its raw record, its cloud
+/// and its GLB, about (what bounds the tiles written at once to a quarter
+/// of the budget: nothing else of note is held by then).
+const WRITE_BYTES_PER_POINT: u64 = 96;
+
 /// The name of the pass that spills points, the one that reads their
 /// attributes.
 const SPILL_PASS: &str = "points: to their subtrees";
-
-/// Points between progress advances.
-const ADVANCE_EVERY: u64 = 1 << 16;
 
 /// Where and in how much memory an out-of-core point tileset is built.
 #[derive(Clone, Debug)]
@@ -128,15 +136,6 @@ pub struct PointsOutOfCoreOptions {
     /// it (`lodkit_scale::staging_dir` gives one keyed by input and
     /// options).
     pub staging: PathBuf,
-}
-
-/// A point's winner of one cell: its squared distance to the centre, its
-/// index, and the child octant it would go to.
-#[derive(Clone, Copy, Debug)]
-struct Winner {
-    d: f64,
-    index: u32,
-    octant: u8,
 }
 
 /// How a node of the top of the tree is made.
@@ -291,31 +290,24 @@ fn build(
         ))));
     }
     let layout = source.layout();
-    // Only the spill needs more than positions.
-    let pass = |name: &str, f: &mut dyn FnMut(u32, &Point) -> Result<()>| -> Result<()> {
-        progress(OutOfCoreEvent::Phase(name, total));
-        let mut k = 0u64;
-        source
-            .for_each(name == SPILL_PASS, &mut |i, p| {
-                f(i, p)?;
-                k += 1;
-                if k.is_multiple_of(ADVANCE_EVERY) {
-                    progress(OutOfCoreEvent::Advance(ADVANCE_EVERY));
-                }
-                Ok(())
-            })
-            .map_err(named)?;
-        progress(OutOfCoreEvent::Advance(k % ADVANCE_EVERY));
-        Ok(())
+    let passes = Passes {
+        source,
+        total,
+        chunking: parallel_pass::chunking(o.memory / 16),
+        named: &named,
+        progress,
     };
-
     // 1. Bounds.
     let mut bounds = Aabb::EMPTY;
-    pass("points: bounds", &mut |_, p| {
-        bounds.min = bounds.min.min(p.position);
-        bounds.max = bounds.max.max(p.position);
-        Ok(())
-    })?;
+    passes.run(
+        "points: bounds",
+        &|_, points| Ok(bbox_of(points.iter().map(|p| p.position))),
+        &mut |_, b| {
+            bounds.min = bounds.min.min(b.min);
+            bounds.max = bounds.max.max(b.max);
+            Ok(())
+        },
+    )?;
     let grid = Grid::around(&bounds);
     let leaf = opts.leaf_points as u64;
     let fits = |count: u64, depth: u8| {
@@ -369,69 +361,84 @@ fn build(
         }
         let mut next = Vec::new();
         for group in groups {
-            let mut active: FxHashMap<usize, [u64; 8]> =
-                group.iter().map(|&n| (n, [0u64; 8])).collect();
-            let mut maps: FxHashMap<usize, FxHashMap<u32, Winner>> =
-                group.iter().map(|&n| (n, FxHashMap::default())).collect();
-            let mut cursor = 0;
-            pass(
+            let mut local = vec![u32::MAX; top.len()];
+            for (g, &n) in group.iter().enumerate() {
+                local[n] = g as u32;
+            }
+            let winners = Winners::new();
+            let mut reach = vec![[0u64; 8]; group.len()];
+            passes.run(
                 &format!("points: choosing at depth {depth}"),
-                &mut |i, p| {
-                    let at = (&kept_by[..], &mut cursor);
-                    let Reach::Undecided(n) = walk(&top, at, &grid, i, p.position)? else {
-                        return Ok(());
-                    };
-                    let (Some(reach), Some(map)) = (active.get_mut(&n), maps.get_mut(&n)) else {
-                        return Ok(());
-                    };
-                    let key = top[n].key;
-                    let (cell, d) = cell_and_distance(&grid, key, p.position);
-                    let o = octant(&grid, p.position, key.depth);
-                    reach[o as usize] += 1;
-                    let w = map.entry(cell).or_insert(Winner {
-                        d,
-                        index: i,
-                        octant: o,
-                    });
-                    if d < w.d {
-                        *w = Winner {
-                            d,
-                            index: i,
-                            octant: o,
+                &|first, points| {
+                    let mut cursor = kept_by.partition_point(|&(k, _)| k < first);
+                    let mut counts = vec![[0u64; 8]; group.len()];
+                    let mut found = Vec::with_capacity(points.len());
+                    for (k, p) in points.iter().enumerate() {
+                        let i = first + k as u32;
+                        let at = (&kept_by[..], &mut cursor);
+                        let Reach::Undecided(n) = walk(&top, at, &grid, i, p.position)? else {
+                            continue;
                         };
+                        let g = local[n];
+                        if g == u32::MAX {
+                            continue;
+                        }
+                        let key = top[n].key;
+                        let (cell, d) = cell_and_distance(&grid, key, p.position);
+                        let octant = octant(&grid, p.position, key.depth);
+                        counts[g as usize][octant as usize] += 1;
+                        found.push((
+                            u64::from(g) << 32 | u64::from(cell),
+                            Winner {
+                                d,
+                                index: i,
+                                octant,
+                            },
+                        ));
+                    }
+                    winners.offer(found);
+                    Ok(counts)
+                },
+                &mut |_, counts| {
+                    for (r, c) in reach.iter_mut().zip(counts.iter()) {
+                        for (a, b) in r.iter_mut().zip(c) {
+                            *a += b;
+                        }
                     }
                     Ok(())
                 },
             )?;
-            for &n in &group {
-                let map = maps.remove(&n).unwrap_or_default();
-                let mut reach = active.remove(&n).unwrap_or_default();
-                let mut occupied = [0u64; 8];
-                for w in map.values() {
-                    reach[w.octant as usize] -= 1;
-                    occupied[w.octant as usize] += 1;
-                }
+            let mut occupied = vec![[0u64; 8]; group.len()];
+            let mut kept = vec![0u64; group.len()];
+            for (key, w) in winners.into_iter() {
+                let g = (key >> 32) as usize;
+                reach[g][w.octant as usize] -= 1;
+                occupied[g][w.octant as usize] += 1;
+                kept[g] += 1;
+                kept_by.push((w.index, group[g] as u32));
+            }
+            for (g, &n) in group.iter().enumerate() {
                 let key = top[n].key;
                 let mut kids = [None; 8];
-                for (oct, &count) in reach.iter().enumerate() {
+                for (oct, &count) in reach[g].iter().enumerate() {
                     if count > 0 {
                         kids[oct] = Some(top.len());
-                        let child = new_node(key.child(oct), count, 8 * occupied[oct], &mut slots);
+                        let child =
+                            new_node(key.child(oct), count, 8 * occupied[g][oct], &mut slots);
                         if matches!(child.kind, Kind::Streamed { .. }) {
                             next.push(top.len());
                         }
                         top.push(child);
                     }
                 }
-                kept_by.extend(map.values().map(|w| (w.index, n as u32)));
                 if let Kind::Streamed {
                     decided,
                     children,
-                    kept,
+                    kept: k,
                     ..
                 } = &mut top[n].kind
                 {
-                    *kept = map.len() as u64;
+                    *k = kept[g];
                     *decided = true;
                     *children = kids;
                 }
@@ -453,16 +460,30 @@ fn build(
         })
         .collect();
     let mut spill = Spill::new(&spill_dir, slots, cap)?;
-    let mut cursor = 0;
-    pass(SPILL_PASS, &mut |i, p| {
-        let n = match walk(&top, (&kept_by, &mut cursor), &grid, i, p.position)? {
-            Reach::Kept(n) | Reach::Subtree(n) => n,
-            Reach::Undecided(_) => {
-                return Err(Error::Input("the input changed while it was read".into()));
+    passes.run(
+        SPILL_PASS,
+        &|first, points| {
+            let mut cursor = kept_by.partition_point(|&(k, _)| k < first);
+            let mut to = Vec::with_capacity(points.len());
+            for (k, p) in points.iter().enumerate() {
+                let i = first + k as u32;
+                let n = match walk(&top, (&kept_by, &mut cursor), &grid, i, p.position)? {
+                    Reach::Kept(n) | Reach::Subtree(n) => n,
+                    Reach::Undecided(_) => {
+                        return Err(Error::Input("the input changed while it was read".into()));
+                    }
+                };
+                to.push(slot_of[n] as u32);
             }
-        };
-        spill.put(slot_of[n], layout, p)
-    })?;
+            Ok(to)
+        },
+        &mut |points, to| {
+            for (p, &slot) in points.iter().zip(to.iter()) {
+                spill.put(slot as usize, layout, p)?;
+            }
+            Ok(())
+        },
+    )?;
     spill.flush()?;
     drop(spill);
     drop(kept_by);
@@ -497,8 +518,9 @@ fn build(
         .filter(|t| matches!(t.kind, Kind::Subtree { .. }))
         .count() as u64;
     progress(OutOfCoreEvent::Phase("points: subtrees in core", subtrees));
-    for (n, t) in top.iter_mut().enumerate() {
-        match &mut t.kind {
+    let mut jobs: Vec<(usize, usize, u64, CellKey)> = Vec::new();
+    for (n, t) in top.iter().enumerate() {
+        match &t.kind {
             Kind::Streamed {
                 children,
                 slot,
@@ -507,7 +529,7 @@ fn build(
             } => {
                 let path = Spill::file(&spill_dir, *slot);
                 let cloud = layout.read(&path, None)?;
-                made[n].bbox = bbox_of(&cloud.positions);
+                made[n].bbox = bbox_of(cloud.positions.iter().copied());
                 made[n].points = cloud.positions.len();
                 made[n].tile = Some((path, None));
                 made[n].node.children = children.iter().flatten().copied().collect();
@@ -517,56 +539,63 @@ fn build(
                     0.0
                 };
             }
-            Kind::Subtree { slot } => {
-                let path = Spill::file(&spill_dir, *slot);
-                let cloud = layout.read(&path, None)?;
-                if cloud.positions.len() as u64 != t.count {
-                    return Err(named(Error::Input(
-                        "the input changed while it was read".into(),
-                    )));
-                }
-                let Subtree {
-                    nodes,
-                    tiles,
-                    errors,
-                    ..
-                } = subdivide(&cloud, &grid, t.key, opts.leaf_points, &mut |_| {});
-                drop(cloud);
-                let _ = std::fs::remove_file(&path);
-                // The subtree's node 0 is `n`; the others are appended.
-                // Its tiles go into one file (one file made per subtree,
-                // not per tile: creating files is what costs).
-                let staged = tiles_dir.join(format!("{slot}.pts"));
-                let mut bytes = Vec::new();
-                let base = made.len();
-                let id = |k: usize| if k == 0 { n } else { base + k - 1 };
-                for (k, ((node, tile), error)) in
-                    nodes.into_iter().zip(tiles).zip(errors).enumerate()
-                {
-                    let start = bytes.len() as u64;
-                    layout.append(&tile, &mut bytes);
-                    let range = (start, bytes.len() as u64 - start);
-                    let has = !tile.positions.is_empty();
-                    let m = Made {
-                        node: Node {
-                            key: node.key,
-                            children: node.children.iter().map(|&c| id(c)).collect(),
-                            input_faces: node.input_faces,
-                        },
-                        tile: has.then(|| (staged.clone(), Some(range))),
-                        bbox: bbox_of(&tile.positions),
-                        error,
-                        points: tile.positions.len(),
-                    };
-                    if k == 0 {
-                        made[n] = m;
-                    } else {
-                        made.push(m);
-                    }
-                }
-                std::fs::write(&staged, bytes).map_err(io_err(&staged))?;
-                progress(OutOfCoreEvent::Advance(1));
+            Kind::Subtree { slot } => jobs.push((n, *slot, t.count, t.key)),
+        }
+    }
+    // Subtrees in core, as many at once as the threads and the budget
+    // allow (their points at IN_CORE_BYTES_PER_POINT within three
+    // quarters of it: nothing else of note is held now), each batch's
+    // nodes appended in the order of the jobs, so the tree does not
+    // depend on the thread count.
+    let threads = rayon::current_num_threads().max(1);
+    let mut rest = &jobs[..];
+    while !rest.is_empty() {
+        let mut take = 1;
+        let mut bytes = rest[0].2.saturating_mul(IN_CORE_BYTES_PER_POINT);
+        while take < rest.len().min(threads) {
+            bytes = bytes.saturating_add(rest[take].2.saturating_mul(IN_CORE_BYTES_PER_POINT));
+            if bytes > o.memory / 4 * 3 {
+                break;
             }
+            take += 1;
+        }
+        let (batch, after) = rest.split_at(take);
+        rest = after;
+        let tiled: Vec<Result<TiledSubtree>> = batch
+            .par_iter()
+            .map(|&(_, slot, count, key)| {
+                tile_subtree(
+                    (&spill_dir, &tiles_dir),
+                    layout,
+                    &grid,
+                    opts.leaf_points,
+                    (slot, count, key),
+                )
+            })
+            .collect();
+        for (&(n, ..), t) in batch.iter().zip(tiled) {
+            let t = t.map_err(named)?;
+            let base = made.len();
+            let id = |k: usize| if k == 0 { n } else { base + k - 1 };
+            for (k, (node, range, bbox, error, points)) in t.nodes.into_iter().enumerate() {
+                let m = Made {
+                    node: Node {
+                        key: node.key,
+                        children: node.children.iter().map(|&c| id(c)).collect(),
+                        input_faces: node.input_faces,
+                    },
+                    tile: range.map(|r| (t.staged.clone(), Some(r))),
+                    bbox,
+                    error,
+                    points,
+                };
+                if k == 0 {
+                    made[n] = m;
+                } else {
+                    made.push(m);
+                }
+            }
+            progress(OutOfCoreEvent::Advance(1));
         }
     }
     drop(top);
@@ -620,37 +649,126 @@ fn build(
     };
     let t1 = Instant::now();
     progress(OutOfCoreEvent::Phase("writing tiles", content.len() as u64));
-    report.bytes = crate::write_folder(
+    let names: Vec<(String, u8)> = content
+        .iter()
+        .map(|&i| {
+            (
+                made[order[i]].node.key.name(),
+                made[order[i]].node.key.depth,
+            )
+        })
+        .collect();
+    // A tile in flight holds its raw points, its cloud and its GLB.
+    let per_tile = (report.max_tile_points as u64).saturating_mul(WRITE_BYTES_PER_POINT);
+    let writers = (o.memory / 4 / per_tile.max(1)).clamp(1, tile_writer::MAX_WRITERS as u64);
+    report.bytes = write_folder_parallel(
         out,
         Some(input),
         (&tree, &info),
         (Refine::Add, source.origin()),
-        content.iter().map(|&i| {
-            let m = &made[order[i]];
-            (
-                m.node.key.name(),
-                m.node.key.depth,
-                m.tile.as_ref().expect("a tile with content"),
-            )
-        }),
-        content.len(),
-        |name, (path, at), grid| {
+        &names,
+        writers as usize,
+        &|k, grid| {
+            let m = &made[order[content[k]]];
+            let (path, at) = m.tile.as_ref().expect("a tile with content");
             let cloud = layout.read(path, *at)?;
-            crate::tile_content::encode_point_tile(name, &cloud, opts.compress, grid)
+            crate::tile_content::encode_point_tile(&names[k].0, &cloud, opts.compress, grid)
         },
-        &mut |_| progress(OutOfCoreEvent::Advance(1)),
+        &|| progress(OutOfCoreEvent::Advance(1)),
     )?;
     report.seconds[1] = t1.elapsed().as_secs_f64();
     Ok(report)
 }
 
-fn bbox_of(points: &[Vec3]) -> Aabb {
+fn bbox_of(points: impl IntoIterator<Item = Vec3>) -> Aabb {
     let mut b = Aabb::EMPTY;
     for p in points {
-        b.min = b.min.min(*p);
-        b.max = b.max.max(*p);
+        b.min = b.min.min(p);
+        b.max = b.max.max(p);
     }
     b
+}
+
+/// A subtree tiled in core ([`tile_subtree`]): per node (breadth-first,
+/// its root first), the node, its tile's byte range in `staged` (none
+/// when it keeps no point), its box, its error and its point count.
+struct TiledSubtree {
+    staged: PathBuf,
+    nodes: Vec<(Node, Option<(u64, u64)>, Aabb, f64, usize)>,
+}
+
+/// The subtree of the node `key` from the spill file of `slot` (which
+/// must hold `count` points; removed after it is read), its tiles staged
+/// into one file of `tiles` named for the slot (one file per subtree,
+/// not per tile: creating files is what costs).
+fn tile_subtree(
+    (spill_dir, tiles_dir): (&Path, &Path),
+    layout: Layout,
+    grid: &Grid,
+    leaf_points: usize,
+    (slot, count, key): (usize, u64, CellKey),
+) -> Result<TiledSubtree> {
+    let path = Spill::file(spill_dir, slot);
+    let cloud = layout.read(&path, None)?;
+    if cloud.positions.len() as u64 != count {
+        return Err(Error::Input("the input changed while it was read".into()));
+    }
+    let Subtree {
+        nodes,
+        tiles,
+        errors,
+        ..
+    } = subdivide(&cloud, grid, key, leaf_points, &mut |_| {});
+    drop(cloud);
+    let _ = std::fs::remove_file(&path);
+    let staged = tiles_dir.join(format!("{slot}.pts"));
+    let mut bytes = Vec::new();
+    let mut out = Vec::with_capacity(nodes.len());
+    for ((node, tile), error) in nodes.into_iter().zip(tiles).zip(errors) {
+        let start = bytes.len() as u64;
+        layout.append(&tile, &mut bytes);
+        let range = (!tile.positions.is_empty()).then(|| (start, bytes.len() as u64 - start));
+        let bbox = bbox_of(tile.positions.iter().copied());
+        out.push((node, range, bbox, error, tile.positions.len()));
+    }
+    std::fs::write(&staged, bytes).map_err(io_err(&staged))?;
+    Ok(TiledSubtree { staged, nodes: out })
+}
+
+/// The passes of one build: each over the whole cloud, on every thread
+/// ([`parallel_pass`]), with its progress.
+struct Passes<'a> {
+    source: &'a Source,
+    total: u64,
+    chunking: (usize, usize),
+    named: &'a dyn Fn(Error) -> Error,
+    progress: &'a (dyn Fn(OutOfCoreEvent) + Sync),
+}
+
+impl Passes<'_> {
+    /// [`parallel_pass`] under the phase `name`; only the spill reads
+    /// more than positions.
+    fn run<R: Send>(
+        &self,
+        name: &str,
+        work: &(dyn Fn(u32, &[Point]) -> Result<R> + Sync),
+        merge: &mut dyn FnMut(&[Point], R) -> Result<()>,
+    ) -> Result<()> {
+        (self.progress)(OutOfCoreEvent::Phase(name, self.total));
+        let attributes = name == SPILL_PASS;
+        parallel_pass(
+            self.source,
+            attributes,
+            self.chunking,
+            work,
+            &mut |points, r| {
+                merge(points, r)?;
+                (self.progress)(OutOfCoreEvent::Advance(points.len() as u64));
+                Ok(())
+            },
+        )
+        .map_err(self.named)
+    }
 }
 
 #[cfg(test)]
