@@ -473,13 +473,25 @@ fn build(
                         return Err(Error::Input("the input changed while it was read".into()));
                     }
                 };
-                to.push(slot_of[n] as u32);
+                to.push((slot_of[n] as u32, k as u32));
             }
-            Ok(to)
+            // The chunk's records grouped by slot, input order within
+            // each: the merge appends whole runs.
+            to.sort_unstable();
+            let mut bytes = Vec::with_capacity(points.len() * layout.size());
+            let mut runs: Vec<(u32, usize)> = Vec::new();
+            for &(slot, k) in &to {
+                if runs.last().is_none_or(|&(s, _)| s != slot) {
+                    runs.push((slot, bytes.len()));
+                }
+                layout.put(&points[k as usize], &mut bytes);
+            }
+            Ok((runs, bytes))
         },
-        &mut |points, to| {
-            for (p, &slot) in points.iter().zip(to.iter()) {
-                spill.put(slot as usize, layout, p)?;
+        &mut |_, (runs, bytes)| {
+            for (r, &(slot, start)) in runs.iter().enumerate() {
+                let end = runs.get(r + 1).map_or(bytes.len(), |&(_, e)| e);
+                spill.put_bytes(slot as usize, &bytes[start..end])?;
             }
             Ok(())
         },
