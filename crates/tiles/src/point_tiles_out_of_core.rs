@@ -92,7 +92,7 @@ mod winners;
 use self::cloud_stream::{Layout, Point, Source, Spill, io_err};
 use self::parallel_pass::parallel_pass;
 use self::tile_writer::write_folder_parallel;
-use self::winners::{Winner, Winners};
+use self::winners::{Runners, Winner, Winners};
 use crate::octree_partition::{CellKey, Grid, MAX_DEPTH, Node, Octree};
 use crate::point_tiles::{
     PointTilesOptions, PointTilesReport, Subtree, cell_and_distance, cell_diagonal, node_info,
@@ -122,6 +122,43 @@ const WINNER_BYTES: u64 = 40;
 /// and its GLB, about (what bounds the tiles written at once to a quarter
 /// of the budget: nothing else of note is held by then).
 const WRITE_BYTES_PER_POINT: u64 = 96;
+
+/// Bytes of the best two claims of a child's cell (the entry and the
+/// table's slack): what bounds the children decided with their parents.
+const RUNNER_BYTES: u64 = 64;
+
+/// Decides the streamed node `n` from its pass: `reach`, the points
+/// passed on per child octant, `occupied`, its kept points per octant
+/// (what bounds each child's cells), `kept`, how many it keeps. Makes its
+/// children (`new_node(key, count, cells)`) and returns them by octant.
+fn decide(
+    top: &mut Vec<Top>,
+    n: usize,
+    (reach, occupied, kept): ([u64; 8], [u64; 8], u64),
+    new_node: &mut dyn FnMut(CellKey, u64, u64) -> Top,
+) -> [Option<usize>; 8] {
+    let key = top[n].key;
+    let mut kids = [None; 8];
+    for (oct, &count) in reach.iter().enumerate() {
+        if count > 0 {
+            kids[oct] = Some(top.len());
+            let child = new_node(key.child(oct), count, 8 * occupied[oct]);
+            top.push(child);
+        }
+    }
+    if let Kind::Streamed {
+        decided,
+        children,
+        kept: k,
+        ..
+    } = &mut top[n].kind
+    {
+        *k = kept;
+        *decided = true;
+        *children = kids;
+    }
+    kids
+}
 
 /// The name of the pass that spills points, the one that reads their
 /// attributes.
@@ -239,6 +276,18 @@ pub fn point_tileset_out_of_core(
     o: &PointsOutOfCoreOptions,
     progress: &(dyn Fn(OutOfCoreEvent) + Sync),
 ) -> Result<(PointTilesReport, Option<[f64; 3]>)> {
+    tuned(input, out, opts, o, &Tuning::default(), progress)
+}
+
+/// [`point_tileset_out_of_core`] with `tuning`.
+fn tuned(
+    input: &Path,
+    out: &Path,
+    opts: &PointTilesOptions,
+    o: &PointsOutOfCoreOptions,
+    tuning: &Tuning,
+    progress: &(dyn Fn(OutOfCoreEvent) + Sync),
+) -> Result<(PointTilesReport, Option<[f64; 3]>)> {
     check_option(
         "leaf points",
         opts.leaf_points,
@@ -254,7 +303,7 @@ pub fn point_tileset_out_of_core(
             std::fs::remove_dir_all(&p).map_err(io_err(&p))?;
         }
     }
-    let result = build(&source, input, out, opts, o, progress);
+    let result = build(&source, (input, out), opts, o, tuning, progress);
     drop(lock);
     let removed = lodkit_scale::remove_staging(&o.staging).map_err(Error::Input);
     let report = result?;
@@ -262,12 +311,20 @@ pub fn point_tileset_out_of_core(
     Ok((report, source.origin()))
 }
 
+/// What tests set to reach paths the budgets of small clouds do not.
+#[derive(Clone, Copy, Debug, Default)]
+struct Tuning {
+    /// The keys the children decided with their parents may hold
+    /// (default: a quarter of the budget at [`RUNNER_BYTES`]).
+    runners: Option<u64>,
+}
+
 fn build(
     source: &Source,
-    input: &Path,
-    out: &Path,
+    (input, out): (&Path, &Path),
     opts: &PointTilesOptions,
     o: &PointsOutOfCoreOptions,
+    tuning: &Tuning,
     progress: &(dyn Fn(OutOfCoreEvent) + Sync),
 ) -> Result<PointTilesReport> {
     let t0 = Instant::now();
@@ -365,14 +422,29 @@ fn build(
             for (g, &n) in group.iter().enumerate() {
                 local[n] = g as u32;
             }
+            // The children decided in the same pass when an average
+            // child will not fit (at least one is streamed, most likely
+            // all), within their own quarter of the budget.
+            let fuse = group.iter().all(|&n| {
+                let (count, depth) = (top[n].count, top[n].key.depth);
+                depth + 1 < MAX_DEPTH && !fits(count / 8, depth + 1)
+            });
             let winners = Winners::new();
+            let runners = Runners::new(if fuse {
+                tuning.runners.unwrap_or(o.memory / 4 / RUNNER_BYTES)
+            } else {
+                0
+            });
             let mut reach = vec![[0u64; 8]; group.len()];
+            let mut below = vec![[[0u64; 8]; 8]; group.len()];
             passes.run(
                 &format!("points: choosing at depth {depth}"),
                 &|first, points| {
                     let mut cursor = kept_by.partition_point(|&(k, _)| k < first);
                     let mut counts = vec![[0u64; 8]; group.len()];
+                    let mut counts_below = vec![[[0u64; 8]; 8]; if fuse { group.len() } else { 0 }];
                     let mut found = Vec::with_capacity(points.len());
+                    let mut found_below = Vec::with_capacity(if fuse { points.len() } else { 0 });
                     for (k, p) in points.iter().enumerate() {
                         let i = first + k as u32;
                         let at = (&kept_by[..], &mut cursor);
@@ -387,22 +459,51 @@ fn build(
                         let (cell, d) = cell_and_distance(&grid, key, p.position);
                         let octant = octant(&grid, p.position, key.depth);
                         counts[g as usize][octant as usize] += 1;
+                        let next = if fuse {
+                            let child = key.child(octant as usize);
+                            let (cell, d) = cell_and_distance(&grid, child, p.position);
+                            let next = self::octant(&grid, p.position, child.depth);
+                            counts_below[g as usize][octant as usize][next as usize] += 1;
+                            found_below.push((
+                                (u64::from(g) << 3 | u64::from(octant)) << 32 | u64::from(cell),
+                                Winner {
+                                    d,
+                                    index: i,
+                                    octant: next,
+                                    next: 0,
+                                },
+                            ));
+                            next
+                        } else {
+                            0
+                        };
                         found.push((
                             u64::from(g) << 32 | u64::from(cell),
                             Winner {
                                 d,
                                 index: i,
                                 octant,
+                                next,
                             },
                         ));
                     }
                     winners.offer(found);
-                    Ok(counts)
+                    if fuse {
+                        runners.offer(found_below);
+                    }
+                    Ok((counts, counts_below))
                 },
-                &mut |_, counts| {
+                &mut |_, (counts, counts_below)| {
                     for (r, c) in reach.iter_mut().zip(counts.iter()) {
                         for (a, b) in r.iter_mut().zip(c) {
                             *a += b;
+                        }
+                    }
+                    for (r, c) in below.iter_mut().zip(counts_below.iter()) {
+                        for (r, c) in r.iter_mut().zip(c) {
+                            for (a, b) in r.iter_mut().zip(c) {
+                                *a += b;
+                            }
                         }
                     }
                     Ok(())
@@ -410,37 +511,74 @@ fn build(
             )?;
             let mut occupied = vec![[0u64; 8]; group.len()];
             let mut kept = vec![0u64; group.len()];
+            let mut taken = Vec::new();
             for (key, w) in winners.into_iter() {
                 let g = (key >> 32) as usize;
                 reach[g][w.octant as usize] -= 1;
                 occupied[g][w.octant as usize] += 1;
+                below[g][w.octant as usize][w.next as usize] =
+                    below[g][w.octant as usize][w.next as usize].saturating_sub(1);
                 kept[g] += 1;
                 kept_by.push((w.index, group[g] as u32));
+                taken.push(w.index);
             }
+            let mut kids = Vec::with_capacity(group.len());
             for (g, &n) in group.iter().enumerate() {
-                let key = top[n].key;
-                let mut kids = [None; 8];
-                for (oct, &count) in reach[g].iter().enumerate() {
-                    if count > 0 {
-                        kids[oct] = Some(top.len());
-                        let child =
-                            new_node(key.child(oct), count, 8 * occupied[g][oct], &mut slots);
-                        if matches!(child.kind, Kind::Streamed { .. }) {
-                            next.push(top.len());
+                let made = decide(
+                    &mut top,
+                    n,
+                    (reach[g], occupied[g], kept[g]),
+                    &mut |key, count, cells| new_node(key, count, cells, &mut slots),
+                );
+                kids.push(made);
+            }
+            // The children decided from the claims on their cells.
+            taken.sort_unstable();
+            let mut undecided = vec![false; group.len() * 8];
+            let decided_below = runners.winners(&|i| taken.binary_search(&i).is_ok(), &mut |key| {
+                undecided[(key >> 32) as usize] = true
+            });
+            let streamed = |top: &[Top], c: usize| matches!(top[c].kind, Kind::Streamed { .. });
+            if let Some(found) = decided_below.filter(|_| fuse) {
+                let mut occupied = vec![[0u64; 8]; group.len() * 8];
+                let mut kept = vec![0u64; group.len() * 8];
+                let mut mine = Vec::new();
+                for (key, w) in found {
+                    let go = (key >> 32) as usize;
+                    let (g, oct) = (go / 8, go % 8);
+                    let Some(c) = kids[g][oct].filter(|&c| streamed(&top, c) && !undecided[go])
+                    else {
+                        continue;
+                    };
+                    below[g][oct][w.octant as usize] -= 1;
+                    occupied[go][w.octant as usize] += 1;
+                    kept[go] += 1;
+                    mine.push((w.index, c as u32));
+                }
+                kept_by.extend(mine);
+                for (g, k) in kids.iter().enumerate() {
+                    for (oct, c) in k.iter().enumerate() {
+                        let Some(c) = *c else { continue };
+                        if !streamed(&top, c) {
+                            continue;
                         }
-                        top.push(child);
+                        let go = g * 8 + oct;
+                        if undecided[go] {
+                            next.push(c);
+                            continue;
+                        }
+                        let grand = decide(
+                            &mut top,
+                            c,
+                            (below[g][oct], occupied[go], kept[go]),
+                            &mut |key, count, cells| new_node(key, count, cells, &mut slots),
+                        );
+                        next.extend(grand.iter().flatten().filter(|&&x| streamed(&top, x)));
                     }
                 }
-                if let Kind::Streamed {
-                    decided,
-                    children,
-                    kept: k,
-                    ..
-                } = &mut top[n].kind
-                {
-                    *k = kept[g];
-                    *decided = true;
-                    *children = kids;
+            } else {
+                for k in &kids {
+                    next.extend(k.iter().flatten().filter(|&&x| streamed(&top, x)));
                 }
             }
             kept_by.sort_unstable();
@@ -786,6 +924,107 @@ impl Passes<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every file of a folder and its bytes, by path.
+    fn files(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
+        let mut all = Vec::new();
+        let mut stack = vec![dir.to_path_buf()];
+        while let Some(d) = stack.pop() {
+            for e in std::fs::read_dir(&d).unwrap() {
+                let p = e.unwrap().path();
+                if p.is_dir() {
+                    stack.push(p);
+                } else {
+                    all.push((
+                        p.strip_prefix(dir).unwrap().to_path_buf(),
+                        std::fs::read(&p).unwrap(),
+                    ));
+                }
+            }
+        }
+        all.sort();
+        all
+    }
+
+    /// Children decided in their parents' pass (the claims' limit lifted,
+    /// so small budgets take that path at every streamed depth), on a
+    /// cloud of many duplicates (ties by input order), clusters and a
+    /// spread: the in-core bytes, in fewer passes.
+    #[test]
+    fn children_decided_with_their_parents_give_the_in_core_bytes() {
+        use lodkit_mesh::{Model, PointCloud};
+        let mut c = PointCloud {
+            positions: Vec::new(),
+            normals: None,
+            colors: Some(Vec::new()),
+        };
+        let mut x = 99u64;
+        for i in 0..30_000u32 {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let f = |s: u64| ((x >> s) & 0xffff) as f32 / 65535.0;
+            let p = match i % 3 {
+                // A coarse lattice: many points on the same spot.
+                0 => Vec3::new(f(0), f(16), f(32)).map(|v| (v * 6.0).floor() / 6.0),
+                1 => Vec3::new(f(0), f(16), f(32)) * 0.01 + Vec3::splat(0.3),
+                _ => Vec3::new(f(0), f(16), f(32)),
+            };
+            c.positions.push(p);
+            c.colors
+                .as_mut()
+                .unwrap()
+                .push([(i % 251) as u8, 0, 0, 255]);
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("c.ply");
+        lodkit_mesh::io::save(&input, &Model::Points(c.clone()), Default::default()).unwrap();
+        let opts = PointTilesOptions {
+            leaf_points: 256,
+            ..PointTilesOptions::DEFAULT
+        };
+        let want = dir.path().join("in");
+        let t = crate::tileset_from_points(&c, &opts, &mut |_| {}).unwrap();
+        crate::write_point_tileset(&t, &want, Some(&input), &opts, None, &mut |_| {}).unwrap();
+        let want = files(&want);
+        for memory in [16 << 10, 256 << 10] {
+            let out = dir.path().join(format!("out{memory}"));
+            let o = PointsOutOfCoreOptions {
+                memory,
+                staging: dir.path().join("staging"),
+            };
+            let passes = std::sync::atomic::AtomicUsize::new(0);
+            let tuning = Tuning {
+                runners: Some(u64::MAX),
+            };
+            tuned(&input, &out, &opts, &o, &tuning, &|e| {
+                if let OutOfCoreEvent::Phase(name, _) = e
+                    && name.starts_with("points: choosing")
+                {
+                    passes.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                }
+            })
+            .unwrap();
+            assert!(files(&out) == want, "memory {memory}: the in-core bytes");
+            // Without the lift: the same bytes, in more passes.
+            let slow = dir.path().join(format!("slow{memory}"));
+            let more = std::sync::atomic::AtomicUsize::new(0);
+            tuned(&input, &slow, &opts, &o, &Tuning::default(), &|e| {
+                if let OutOfCoreEvent::Phase(name, _) = e
+                    && name.starts_with("points: choosing")
+                {
+                    more.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                }
+            })
+            .unwrap();
+            assert!(files(&slow) == want, "memory {memory}: the in-core bytes");
+            let (fused, plain) = (passes.into_inner(), more.into_inner());
+            assert!(
+                fused < plain,
+                "memory {memory}: {fused} passes, {plain} without"
+            );
+        }
+    }
 
     /// `octant` is the in-core routing (`cell_of`'s low bits), also for
     /// points on cell borders and outside the cube (clamped).

@@ -11,6 +11,7 @@
 //! map.
 
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use rustc_hash::FxHashMap;
 
@@ -20,13 +21,23 @@ use rustc_hash::FxHashMap;
 const SHARDS: usize = 64;
 
 /// A point's claim on one cell: its squared distance to the centre (in
-/// cells), its input index, and the child octant it would go to.
+/// cells), its input index, the child octant it would go to and the
+/// octant below that (the grandchild's, within the child).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Winner {
     pub(super) d: f64,
     pub(super) index: u32,
     pub(super) octant: u8,
+    pub(super) next: u8,
 }
+
+/// No claim (the second place of a cell one point claimed).
+const NONE: Winner = Winner {
+    d: f64::INFINITY,
+    index: u32::MAX,
+    octant: 0,
+    next: 0,
+};
 
 impl Winner {
     /// Whether `self` wins the cell over `other`.
@@ -83,6 +94,94 @@ impl Winners {
     }
 }
 
+/// The best two claims of each key, in at most `limit` keys: what
+/// decides a node's children in the pass that decides the node (a child's
+/// cell lies in one cell of its parent's, which keeps at most one point:
+/// the child's winner is the best of its two claims that the parent did
+/// not keep). Past `limit` keys it gives up (frees its maps and takes no
+/// more claims): the children then get a pass of their own.
+pub(super) struct Runners {
+    shards: Vec<Mutex<FxHashMap<u64, [Winner; 2]>>>,
+    held: AtomicU64,
+    limit: u64,
+    over: AtomicBool,
+}
+
+impl Runners {
+    pub(super) fn new(limit: u64) -> Runners {
+        Runners {
+            shards: (0..SHARDS)
+                .map(|_| Mutex::new(FxHashMap::default()))
+                .collect(),
+            held: AtomicU64::new(0),
+            limit,
+            over: AtomicBool::new(false),
+        }
+    }
+
+    /// Offers every claim of `found` (one chunk's, any order): each key
+    /// keeps its two best.
+    pub(super) fn offer(&self, mut found: Vec<(u64, Winner)>) {
+        if self.over.load(Ordering::Relaxed) {
+            return;
+        }
+        found.sort_unstable_by_key(|&(k, _)| shard(k));
+        for run in found.chunk_by(|a, b| shard(a.0) == shard(b.0)) {
+            let mut map = self.shards[shard(run[0].0)]
+                .lock()
+                .unwrap_or_else(|p| p.into_inner());
+            let before = map.len();
+            for &(key, w) in run {
+                let two = map.entry(key).or_insert([NONE; 2]);
+                if w.beats(&two[0]) {
+                    two[1] = two[0];
+                    two[0] = w;
+                } else if w.beats(&two[1]) {
+                    two[1] = w;
+                }
+            }
+            let added = (map.len() - before) as u64;
+            if self.held.fetch_add(added, Ordering::Relaxed) + added > self.limit {
+                self.over.store(true, Ordering::Relaxed);
+                *map = FxHashMap::default();
+                drop(map);
+                for m in &self.shards {
+                    *m.lock().unwrap_or_else(|p| p.into_inner()) = FxHashMap::default();
+                }
+                return;
+            }
+        }
+    }
+
+    /// Every key and its best claim that `taken` (the parents' kept
+    /// points) does not hold (none: the cell has no other claim), or
+    /// `None` when the limit was passed. A key whose two claims both are
+    /// `taken` cannot be decided from them: `undecided` hears it.
+    pub(super) fn winners(
+        self,
+        taken: &dyn Fn(u32) -> bool,
+        undecided: &mut dyn FnMut(u64),
+    ) -> Option<Vec<(u64, Winner)>> {
+        if self.over.into_inner() {
+            return None;
+        }
+        let mut out = Vec::new();
+        for m in self.shards {
+            for (key, [a, b]) in m.into_inner().unwrap_or_else(|p| p.into_inner()) {
+                if !taken(a.index) {
+                    out.push((key, a));
+                } else if b.index == u32::MAX {
+                } else if !taken(b.index) {
+                    out.push((key, b));
+                } else {
+                    undecided(key);
+                }
+            }
+        }
+        Some(out)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -103,6 +202,7 @@ mod tests {
                     d: ((x >> 20) % 4) as f64,
                     index: i,
                     octant: (x % 8) as u8,
+                    next: 0,
                 };
                 (key, w)
             })
@@ -124,5 +224,32 @@ mod tests {
         for (k, w) in &want {
             assert_eq!(got[k].index, w.index);
         }
+        // The best two: the winner once the first is taken.
+        let mut second: FxHashMap<u64, Winner> = FxHashMap::default();
+        for &(k, w) in &claims {
+            if w.index == want[&k].index {
+                continue;
+            }
+            let e = second.entry(k).or_insert(w);
+            if w.d < e.d {
+                *e = w;
+            }
+        }
+        let runners = Runners::new(u64::MAX);
+        for c in chunks.iter().rev() {
+            runners.offer(c.to_vec());
+        }
+        let taken = |i: u32| want.values().any(|w| w.index == i);
+        let got = runners
+            .winners(&taken, &mut |_| panic!("no key undecided"))
+            .unwrap();
+        assert_eq!(got.len(), second.len());
+        for (k, w) in got {
+            assert_eq!(second[&k].index, w.index);
+        }
+        // Past its limit it gives up.
+        let runners = Runners::new(10);
+        runners.offer(claims.clone());
+        assert!(runners.winners(&taken, &mut |_| {}).is_none());
     }
 }
