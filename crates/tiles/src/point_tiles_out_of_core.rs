@@ -465,7 +465,7 @@ fn build(
                             let next = self::octant(&grid, p.position, child.depth);
                             counts_below[g as usize][octant as usize][next as usize] += 1;
                             found_below.push((
-                                (u64::from(g) << 3 | u64::from(octant)) << 32 | u64::from(cell),
+                                (((u64::from(g) << 3) | u64::from(octant)) << 32) | u64::from(cell),
                                 Winner {
                                     d,
                                     index: i,
@@ -478,7 +478,7 @@ fn build(
                             0
                         };
                         found.push((
-                            u64::from(g) << 32 | u64::from(cell),
+                            (u64::from(g) << 32) | u64::from(cell),
                             Winner {
                                 d,
                                 index: i,
@@ -727,7 +727,17 @@ fn build(
             let t = t.map_err(named)?;
             let base = made.len();
             let id = |k: usize| if k == 0 { n } else { base + k - 1 };
-            for (k, (node, range, bbox, error, points)) in t.nodes.into_iter().enumerate() {
+            for (
+                k,
+                TiledNode {
+                    node,
+                    range,
+                    bbox,
+                    error,
+                    points,
+                },
+            ) in t.nodes.into_iter().enumerate()
+            {
                 let m = Made {
                     node: Node {
                         key: node.key,
@@ -839,12 +849,22 @@ fn bbox_of(points: impl IntoIterator<Item = Vec3>) -> Aabb {
     b
 }
 
-/// A subtree tiled in core ([`tile_subtree`]): per node (breadth-first,
-/// its root first), the node, its tile's byte range in `staged` (none
-/// when it keeps no point), its box, its error and its point count.
+/// A subtree tiled in core ([`tile_subtree`]): its nodes breadth-first,
+/// its root first.
 struct TiledSubtree {
     staged: PathBuf,
-    nodes: Vec<(Node, Option<(u64, u64)>, Aabb, f64, usize)>,
+    nodes: Vec<TiledNode>,
+}
+
+/// A node of a [`TiledSubtree`].
+struct TiledNode {
+    node: Node,
+    /// Its tile's byte range in the subtree's staged file (none when it
+    /// keeps no point).
+    range: Option<(u64, u64)>,
+    bbox: Aabb,
+    error: f64,
+    points: usize,
 }
 
 /// The subtree of the node `key` from the spill file of `slot` (which
@@ -879,7 +899,13 @@ fn tile_subtree(
         layout.append(&tile, &mut bytes);
         let range = (!tile.positions.is_empty()).then(|| (start, bytes.len() as u64 - start));
         let bbox = bbox_of(tile.positions.iter().copied());
-        out.push((node, range, bbox, error, tile.positions.len()));
+        out.push(TiledNode {
+            node,
+            range,
+            bbox,
+            error,
+            points: tile.positions.len(),
+        });
     }
     std::fs::write(&staged, bytes).map_err(io_err(&staged))?;
     Ok(TiledSubtree { staged, nodes: out })

@@ -197,7 +197,7 @@ mod tests {
                     .wrapping_mul(6364136223846793005)
                     .wrapping_add(1442695040888963407);
                 // Few distinct distances: many ties.
-                let key = (x >> 60) << 32 | (x >> 40) % 500;
+                let key = ((x >> 60) << 32) | ((x >> 40) % 500);
                 let w = Winner {
                     d: ((x >> 20) % 4) as f64,
                     index: i,
