@@ -24,17 +24,33 @@
 //!    and is counted in its child octant. The counts less each octant's
 //!    winners are the children's reaching points; a child that fits the
 //!    budget (or holds at most `leaf_points`, or sits at [`MAX_DEPTH`])
-//!    becomes the root of a subtree built in core.
+//!    becomes the root of a subtree built in core. When an average child
+//!    will not fit either, the same pass decides the children too: each
+//!    point also claims its cell of its child, whose two best claims are
+//!    kept (a child's cell lies in one cell of the parent, which keeps at
+//!    most one point, so the child's winner is the better of the two the
+//!    parent did not keep): a pass per two streamed depths. Where those
+//!    maps pass their own quarter of the budget, or a cell's two claims
+//!    were both kept above, the children get a pass of their own.
 //! 3. **Spill** (one pass): each point walks down again and is appended,
 //!    in input order, to the file of the streamed node that keeps it or
 //!    of the subtree root it reaches.
-//! 4. **Subtrees** (each file in turn): read back and tiled in core by the
-//!    in-core code, each tile staged as raw points; a streamed node's
-//!    file is its tile already.
+//! 4. **Subtrees** (as many at once as the threads and three quarters of
+//!    the budget allow): read back and tiled in core by the in-core code,
+//!    each tile staged as raw points; a streamed node's file is its tile
+//!    already.
 //! 5. **Write**: the nodes in the in-core breadth-first order, boxes and
 //!    errors through the in-core code, then every staged tile encoded on
-//!    its depth's grid into the output folder, atomically, by the writer
-//!    the in-core path uses.
+//!    its depth's grid into the output folder, atomically, by up to
+//!    eight threads at once (`tile_writer`: the in-core writer's files,
+//!    its syncs overlapped).
+//!
+//! Every pass runs on every thread (`parallel_pass`): the file is decoded
+//! in chunks on a thread of its own while the pool walks the chunks read
+//! before, and each chunk's result is merged in input order. The winner
+//! of a cell is its least `(distance, index)`, so winners offered from
+//! any thread in any order (`winners`: sharded maps) are those of one
+//! pass in input order, and the bytes do not depend on the thread count.
 //!
 //! Rejected: spilling by a fixed depth's cells first (a dense part of a
 //! scan would need a deeper depth than the rest, and a fixed depth needs
@@ -66,17 +82,21 @@
 //! bookkeeping).
 //!
 //! # Cost
-//! Memory: the largest subtree (at most half the budget at
-//! [`IN_CORE_BYTES_PER_POINT`], or `leaf_points` points), the winner
-//! maps of one pass (a quarter of the budget, at least one node's: up to
-//! `CELLS³` cells, 80 MB, for a node of that many points), 8 B per point
-//! a streamed node keeps (held until the spill), the spill buffers (an
-//! eighth of the budget). Disk: the points twice (spills, then staged
-//! tiles: 12 B a point, plus 12 with normals and 4 with colours). Time:
-//! three passes over the file plus one per streamed depth (more where a
-//! depth's maps exceed their quarter), one in-core tiling of every
-//! subtree, one encoding of every tile: 10⁷ coloured points in 4.7 s of
-//! CPU at `--memory 128M` (docs/benchmarks.md).
+//! Memory: the subtrees tiled at once (three quarters of the budget at
+//! [`IN_CORE_BYTES_PER_POINT`], at least one subtree: at most half the
+//! budget or `leaf_points` points), the winner maps of one pass (a
+//! quarter of the budget, at least one node's: up to `CELLS³` cells,
+//! 80 MB, for a node of that many points) and its children's claims
+//! (another quarter), 8 B per point a streamed node keeps (held until
+//! the spill), the spill buffers (an eighth of the budget), the chunks in
+//! flight (a sixteenth), the tiles being written (a quarter, at most
+//! eight). Disk: the points twice (spills, then staged tiles: 12 B a
+//! point, plus 12 with normals and 4 with colours). Time: three passes
+//! over the file plus one per streamed depth, or per two where the
+//! children are decided with their parents (more where a depth's maps
+//! exceed their quarter), one in-core tiling of every subtree, one
+//! encoding of every tile, all on every thread: 5·10⁷ coloured points in
+//! about 20 s at `--memory 512M` on two cores (docs/benchmarks.md).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -611,14 +631,15 @@ fn build(
                         return Err(Error::Input("the input changed while it was read".into()));
                     }
                 };
-                to.push((slot_of[n] as u32, k as u32));
+                to.push(((slot_of[n] as u64) << 32) | k as u64);
             }
             // The chunk's records grouped by slot, input order within
             // each: the merge appends whole runs.
             to.sort_unstable();
             let mut bytes = Vec::with_capacity(points.len() * layout.size());
             let mut runs: Vec<(u32, usize)> = Vec::new();
-            for &(slot, k) in &to {
+            for &sk in &to {
+                let (slot, k) = ((sk >> 32) as u32, sk as u32);
                 if runs.last().is_none_or(|&(s, _)| s != slot) {
                     runs.push((slot, bytes.len()));
                 }

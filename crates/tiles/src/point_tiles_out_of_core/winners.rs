@@ -56,6 +56,26 @@ fn shard(key: u64) -> usize {
     (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 58) as usize % SHARDS
 }
 
+/// `found` grouped by shard (a counting sort: two passes, no compares),
+/// with each shard's run.
+fn by_shard(found: &[(u64, Winner)]) -> (Vec<(u64, Winner)>, [usize; SHARDS + 1]) {
+    let mut start = [0usize; SHARDS + 1];
+    for &(k, _) in found {
+        start[shard(k) + 1] += 1;
+    }
+    for s in 0..SHARDS {
+        start[s + 1] += start[s];
+    }
+    let mut at = start;
+    let mut out = vec![(0u64, NONE); found.len()];
+    for &(k, w) in found {
+        let s = shard(k);
+        out[at[s]] = (k, w);
+        at[s] += 1;
+    }
+    (out, start)
+}
+
 impl Winners {
     pub(super) fn new() -> Winners {
         Winners {
@@ -66,14 +86,16 @@ impl Winners {
     }
 
     /// Offers every claim of `found` (one chunk's, any order): each key
-    /// keeps the claim that beats all others. Cost: a sort of the claims
-    /// by shard, then one lock per shard they touch.
-    pub(super) fn offer(&self, mut found: Vec<(u64, Winner)>) {
-        found.sort_unstable_by_key(|&(k, _)| shard(k));
-        for run in found.chunk_by(|a, b| shard(a.0) == shard(b.0)) {
-            let mut map = self.shards[shard(run[0].0)]
-                .lock()
-                .unwrap_or_else(|p| p.into_inner());
+    /// keeps the claim that beats all others. Cost: a counting sort of
+    /// the claims by shard, then one lock per shard they touch.
+    pub(super) fn offer(&self, found: Vec<(u64, Winner)>) {
+        let (found, start) = by_shard(&found);
+        for s in 0..SHARDS {
+            let run = &found[start[s]..start[s + 1]];
+            if run.is_empty() {
+                continue;
+            }
+            let mut map = self.shards[s].lock().unwrap_or_else(|p| p.into_inner());
             for &(key, w) in run {
                 map.entry(key)
                     .and_modify(|old| {
@@ -121,15 +143,17 @@ impl Runners {
 
     /// Offers every claim of `found` (one chunk's, any order): each key
     /// keeps its two best.
-    pub(super) fn offer(&self, mut found: Vec<(u64, Winner)>) {
+    pub(super) fn offer(&self, found: Vec<(u64, Winner)>) {
         if self.over.load(Ordering::Relaxed) {
             return;
         }
-        found.sort_unstable_by_key(|&(k, _)| shard(k));
-        for run in found.chunk_by(|a, b| shard(a.0) == shard(b.0)) {
-            let mut map = self.shards[shard(run[0].0)]
-                .lock()
-                .unwrap_or_else(|p| p.into_inner());
+        let (found, start) = by_shard(&found);
+        for s in 0..SHARDS {
+            let run = &found[start[s]..start[s + 1]];
+            if run.is_empty() {
+                continue;
+            }
+            let mut map = self.shards[s].lock().unwrap_or_else(|p| p.into_inner());
             let before = map.len();
             for &(key, w) in run {
                 let two = map.entry(key).or_insert([NONE; 2]);
