@@ -21,7 +21,7 @@
 
 use std::path::Path;
 
-use glam::DVec3;
+use glam::{DVec3, Vec3};
 use lodkit_mesh::{Aabb, PointCloud};
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
@@ -148,6 +148,18 @@ pub(crate) fn cell_and_distance(grid: &Grid, key: CellKey, p: glam::Vec3) -> (u3
     ((c.z as u32 * cells + c.y as u32) * cells + c.x as u32, d)
 }
 
+/// The octant of the child of a node at `depth` that holds `p`: the
+/// in-core rule's `grid.cell_of(p, depth + 1)`, its low bits. Computed
+/// as `cell_of` computes the cell, with a truncating cast for its
+/// `floor` (they differ only below 0, where both give cell 0), so without
+/// a libm call per axis.
+pub(crate) fn octant(grid: &Grid, p: Vec3, depth: u8) -> u8 {
+    let n = 1u64 << (depth + 1);
+    let rel = (p.as_dvec3() - grid.origin) / grid.size * n as f64;
+    let c = |v: f64| ((v as u64).min(n - 1) & 1) as u8;
+    c(rel.x) | (c(rel.y) << 1) | (c(rel.z) << 2)
+}
+
 /// The `geometricError` of a node at `depth` that passes points on: its
 /// cell's diagonal `h·√3`.
 pub(crate) fn cell_diagonal(grid: &Grid, depth: u8) -> f64 {
@@ -238,8 +250,7 @@ pub(crate) fn subdivide(
                 };
                 let mut parts: [Vec<u32>; 8] = Default::default();
                 for i in rest {
-                    let c = grid.cell_of(cloud.positions[i as usize], key.depth + 1);
-                    let o = (c.xyz[0] & 1) | ((c.xyz[1] & 1) << 1) | ((c.xyz[2] & 1) << 2);
+                    let o = octant(grid, cloud.positions[i as usize], key.depth);
                     parts[o as usize].push(i);
                 }
                 (n, key, gather(cloud, &kept), error, kept.len(), Some(parts))

@@ -103,6 +103,7 @@ use std::time::Instant;
 
 use glam::Vec3;
 use lodkit_mesh::Aabb;
+use rayon::prelude::*;
 
 mod cloud_stream;
 mod parallel_pass;
@@ -116,11 +117,10 @@ use self::winners::{Runners, Winner, Winners};
 use crate::octree_partition::{CellKey, Grid, MAX_DEPTH, Node, Octree};
 use crate::point_tiles::{
     PointTilesOptions, PointTilesReport, Subtree, cell_and_distance, cell_diagonal, node_info,
-    subdivide,
+    octant, subdivide,
 };
 use crate::tileset_json::Refine;
 use crate::{Error, OutOfCoreEvent, Result, check_option};
-use rayon::prelude::*;
 
 /// Bytes per point the in-core path
 /// ([`tileset_from_points`](crate::tileset_from_points) then
@@ -217,18 +217,6 @@ struct Top {
     /// holds 8 of its child's).
     cells: u64,
     kind: Kind,
-}
-
-/// The octant of the child of a node at `depth` that holds `p`: the
-/// in-core rule's `grid.cell_of(p, depth + 1)`, its low bits. Computed
-/// as `cell_of` computes the cell, with a truncating cast for its
-/// `floor` (they differ only below 0, where both give cell 0), so without
-/// a libm call per axis.
-fn octant(grid: &Grid, p: Vec3, depth: u8) -> u8 {
-    let n = 1u64 << (depth + 1);
-    let rel = (p.as_dvec3() - grid.origin) / grid.size * n as f64;
-    let c = |v: f64| ((v as u64).min(n - 1) & 1) as u8;
-    c(rel.x) | (c(rel.y) << 1) | (c(rel.z) << 2)
 }
 
 /// Where a point goes among the top nodes: the streamed node at `depth`
@@ -482,7 +470,7 @@ fn build(
                         let next = if fuse {
                             let child = key.child(octant as usize);
                             let (cell, d) = cell_and_distance(&grid, child, p.position);
-                            let next = self::octant(&grid, p.position, child.depth);
+                            let next = crate::point_tiles::octant(&grid, p.position, child.depth);
                             counts_below[g as usize][octant as usize][next as usize] += 1;
                             found_below.push((
                                 (((u64::from(g) << 3) | u64::from(octant)) << 32) | u64::from(cell),
