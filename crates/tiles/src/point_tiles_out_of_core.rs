@@ -36,9 +36,8 @@
 //!    in input order, to the file of the streamed node that keeps it or
 //!    of the subtree root it reaches.
 //! 4. **Subtrees** (as many at once as the threads and half the budget
-//!    allow): read back and tiled in core by the in-core code,
-//!    each tile staged as raw points; a streamed node's file is its tile
-//!    already.
+//!    allow): read back and tiled in core by the in-core code, each tile
+//!    staged as raw points; a streamed node's file is its tile already.
 //! 5. **Write**: the nodes in the in-core breadth-first order, boxes and
 //!    errors through the in-core code, then every staged tile encoded on
 //!    its depth's grid into the output folder, atomically, by up to
@@ -83,19 +82,20 @@
 //!
 //! # Cost
 //! Memory: the subtrees tiled at once (half the budget at
-//! [`IN_CORE_BYTES_PER_POINT`], or one subtree of `leaf_points` points), the winner maps of one pass (a
-//! quarter of the budget, at least one node's: up to `CELLS³` cells,
-//! 80 MB, for a node of that many points) and its children's claims
-//! (another quarter), 8 B per point a streamed node keeps (held until
-//! the spill), the spill buffers (an eighth of the budget), the chunks in
-//! flight (a sixteenth), the tiles being written (a quarter, at most
-//! eight). Disk: the points twice (spills, then staged tiles: 12 B a
+//! [`IN_CORE_BYTES_PER_POINT`], or one subtree of `leaf_points` points),
+//! the winner maps of one pass (a quarter of the budget, at least one
+//! node's: up to `CELLS³` cells, 80 MB, for a node of that many points)
+//! and its children's claims (another quarter), 8 B per point a
+//! streamed node keeps (held until the spill), the spill buffers (an
+//! eighth of the budget), the chunks in flight (a sixteenth), the tiles
+//! being written (a quarter, at most eight); one malloc arena, so what
+//! one thread frees another reuses. Disk: the points twice (spills, then staged tiles: 12 B a
 //! point, plus 12 with normals and 4 with colours). Time: three passes
 //! over the file plus one per streamed depth, or per two where the
 //! children are decided with their parents (more where a depth's maps
 //! exceed their quarter), one in-core tiling of every subtree, one
 //! encoding of every tile, all on every thread: 5·10⁷ coloured points in
-//! about 20 s at `--memory 512M` on two cores (docs/benchmarks.md).
+//! 19–26 s at `--memory 512M` on two shared cores (docs/benchmarks.md).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -275,7 +275,10 @@ fn walk(
 /// stream readers refuse (one line naming the file), no points, more than
 /// `u32::MAX` points, `leaf_points` out of range or an output folder that
 /// is not lodkit's ([`Error::Usage`]), another run holding the staging
-/// folder, I/O. Cost: see the module docs.
+/// folder, I/O. Cost: see the module docs; runs on the current rayon
+/// pool (the bytes do not depend on its size) and, on glibc, caps the
+/// process's malloc arenas at one for good (the budget holds whatever the
+/// threads).
 pub fn point_tileset_out_of_core(
     input: &Path,
     out: &Path,
@@ -731,9 +734,8 @@ fn build(
     }
     // Subtrees in core, as many at once as the threads and the budget
     // allow (their points at IN_CORE_BYTES_PER_POINT within the half one
-    // subtree may take), each batch's
-    // nodes appended in the order of the jobs, so the tree does not
-    // depend on the thread count.
+    // subtree may take), each batch's nodes appended in the order of the
+    // jobs, so the tree does not depend on the thread count.
     let threads = rayon::current_num_threads().max(1);
     let mut rest = &jobs[..];
     while !rest.is_empty() {
