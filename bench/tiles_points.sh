@@ -2,8 +2,9 @@
 # Point tilesets out of core: for each size, a noisy coloured sphere
 # written as binary PLY (crates/tiles/examples/noisy_cloud.rs, 15 B a
 # point, deterministic), then `lodkit tiles CLOUD --memory M` under
-# /usr/bin/time; one row per size: wall and CPU seconds, points per second
-# (wall and CPU), peak RSS. With CHECK=1, also tiles each cloud in core
+# /usr/bin/time; one row per size: the load average before it, wall and
+# CPU seconds, points per second (wall and CPU), peak RSS. The passes,
+# subtrees and writes use every core (RAYON_NUM_THREADS=N for fewer). With CHECK=1, also tiles each cloud in core
 # and says whether the two folders hold the same bytes.
 #
 # Usage: bench/tiles_points.sh DIR [SIZES] [MEMORY]
@@ -24,13 +25,14 @@ gen=$root/target/release/examples/noisy_cloud
 [ -x "$gen" ] || cargo build --release -q -p lodkit-tiles --example noisy_cloud --manifest-path "$root/Cargo.toml"
 mkdir -p "$dir"
 
-echo "| points | --memory | wall (s) | CPU (s) | M points/s (wall) | M points/s (CPU) | peak RSS | same bytes as in core |"
-echo "|---:|---:|---:|---:|---:|---:|---:|---|"
+echo "| points | --memory | load | wall (s) | CPU (s) | M points/s (wall) | M points/s (CPU) | peak RSS | same bytes as in core |"
+echo "|---:|---:|---:|---:|---:|---:|---:|---:|---|"
 for n in ${sizes//,/ }; do
     ply="$dir/cloud$n.ply"
     [ -f "$ply" ] || "$gen" "$n" "$ply"
     out="$dir/ooc$n"
     rm -rf "$out"
+    read -r load _ </proc/loadavg
     /usr/bin/time -f "%e %U %S %M" -o "$dir/time$n" "$lodkit" -q tiles "$ply" --out "$out" --memory "$memory"
     read -r wall user sys rss_kb <"$dir/time$n"
     same=-
@@ -41,8 +43,8 @@ for n in ${sizes//,/ }; do
         rm -rf "$dir/in$n"
     fi
     rm -rf "$out"
-    awk -v n="$n" -v m="$memory" -v w="$wall" -v u="$user" -v s="$sys" -v r="$rss_kb" -v same="$same" 'BEGIN {
+    awk -v n="$n" -v m="$memory" -v l="$load" -v w="$wall" -v u="$user" -v s="$sys" -v r="$rss_kb" -v same="$same" 'BEGIN {
         cpu = u + s
-        printf "| %d | %s | %.2f | %.2f | %.2f | %.2f | %.0f MiB | %s |\n", n, m, w, cpu, n / w / 1e6, n / cpu / 1e6, r / 1024, same
+        printf "| %d | %s | %s | %.2f | %.2f | %.2f | %.2f | %.0f MiB | %s |\n", n, m, l, w, cpu, n / w / 1e6, n / cpu / 1e6, r / 1024, same
     }'
 done

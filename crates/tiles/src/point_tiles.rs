@@ -21,8 +21,9 @@
 
 use std::path::Path;
 
-use glam::DVec3;
+use glam::{DVec3, Vec3};
 use lodkit_mesh::{Aabb, PointCloud};
+use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
 use crate::octree_partition::{CellKey, Grid, MAX_DEPTH, Node, Octree};
@@ -147,6 +148,18 @@ pub(crate) fn cell_and_distance(grid: &Grid, key: CellKey, p: glam::Vec3) -> (u3
     ((c.z as u32 * cells + c.y as u32) * cells + c.x as u32, d)
 }
 
+/// The octant of the child of a node at `depth` that holds `p`: the
+/// in-core rule's `grid.cell_of(p, depth + 1)`, its low bits. Computed
+/// as `cell_of` computes the cell, with a truncating cast for its
+/// `floor` (they differ only below 0, where both give cell 0), so without
+/// a libm call per axis.
+pub(crate) fn octant(grid: &Grid, p: Vec3, depth: u8) -> u8 {
+    let n = 1u64 << (depth + 1);
+    let rel = (p.as_dvec3() - grid.origin) / grid.size * n as f64;
+    let c = |v: f64| ((v as u64).min(n - 1) & 1) as u8;
+    c(rel.x) | (c(rel.y) << 1) | (c(rel.z) << 2)
+}
+
 /// The `geometricError` of a node at `depth` that passes points on: its
 /// cell's diagonal `h·√3`.
 pub(crate) fn cell_diagonal(grid: &Grid, depth: u8) -> f64 {
@@ -212,35 +225,44 @@ pub(crate) fn subdivide(
     }];
     let mut tiles: Vec<PointCloud> = vec![PointCloud::default()];
     let mut errors = vec![0f64];
-    let mut queue = std::collections::VecDeque::new();
-    queue.push_back((
+    // Breadth-first a level at a time, the nodes of a level on every
+    // thread; children are numbered in the order of their parents, so
+    // the tree is the one a queue would make whatever the thread count.
+    let mut level = vec![(
         0usize,
+        root,
         (0..cloud.positions.len() as u32).collect::<Vec<u32>>(),
-    ));
+    )];
     let (mut depth, mut done) = (root.depth, 0usize);
-    while let Some((n, idx)) = queue.pop_front() {
-        let key = nodes[n].key;
-        depth = depth.max(key.depth);
-        if idx.len() <= leaf_points || key.depth >= MAX_DEPTH {
-            done += idx.len();
-            tiles[n] = gather(cloud, &idx);
-        } else {
-            let (kept, rest) = subsample(cloud, grid, key, idx);
-            done += kept.len();
-            tiles[n] = gather(cloud, &kept);
-            // Nothing passed on (every point in a cell of its own): a leaf.
-            errors[n] = if rest.is_empty() {
-                0.0
-            } else {
-                cell_diagonal(grid, key.depth)
-            };
-            let mut parts: [Vec<u32>; 8] = Default::default();
-            for i in rest {
-                let c = grid.cell_of(cloud.positions[i as usize], key.depth + 1);
-                let o = (c.xyz[0] & 1) | ((c.xyz[1] & 1) << 1) | ((c.xyz[2] & 1) << 2);
-                parts[o as usize].push(i);
-            }
-            for (o, part) in parts.into_iter().enumerate() {
+    while !level.is_empty() {
+        let made: Vec<_> = level
+            .into_par_iter()
+            .map(|(n, key, idx)| {
+                if idx.len() <= leaf_points || key.depth >= MAX_DEPTH {
+                    return (n, key, gather(cloud, &idx), 0.0, idx.len(), None);
+                }
+                let (kept, rest) = subsample(cloud, grid, key, idx);
+                // Nothing passed on (every point in a cell of its own): a leaf.
+                let error = if rest.is_empty() {
+                    0.0
+                } else {
+                    cell_diagonal(grid, key.depth)
+                };
+                let mut parts: [Vec<u32>; 8] = Default::default();
+                for i in rest {
+                    let o = octant(grid, cloud.positions[i as usize], key.depth);
+                    parts[o as usize].push(i);
+                }
+                (n, key, gather(cloud, &kept), error, kept.len(), Some(parts))
+            })
+            .collect();
+        let mut next = Vec::new();
+        for (n, key, tile, error, placed_here, parts) in made {
+            depth = depth.max(key.depth);
+            done += placed_here;
+            tiles[n] = tile;
+            errors[n] = error;
+            for (o, part) in parts.into_iter().flatten().enumerate() {
                 if part.is_empty() {
                     continue;
                 }
@@ -253,10 +275,11 @@ pub(crate) fn subdivide(
                 nodes[n].children.push(id);
                 tiles.push(PointCloud::default());
                 errors.push(0.0);
-                queue.push_back((id, part));
+                next.push((id, key.child(o), part));
             }
         }
         placed(done);
+        level = next;
     }
     Subtree {
         nodes,

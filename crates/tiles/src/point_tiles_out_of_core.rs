@@ -24,17 +24,32 @@
 //!    and is counted in its child octant. The counts less each octant's
 //!    winners are the children's reaching points; a child that fits the
 //!    budget (or holds at most `leaf_points`, or sits at [`MAX_DEPTH`])
-//!    becomes the root of a subtree built in core.
+//!    becomes the root of a subtree built in core. When an average child
+//!    will not fit either, the same pass decides the children too: each
+//!    point also claims its cell of its child, whose two best claims are
+//!    kept (a child's cell lies in one cell of the parent, which keeps at
+//!    most one point, so the child's winner is the better of the two the
+//!    parent did not keep): a pass per two streamed depths. Where those
+//!    maps pass their own quarter of the budget, or a cell's two claims
+//!    were both kept above, the children get a pass of their own.
 //! 3. **Spill** (one pass): each point walks down again and is appended,
 //!    in input order, to the file of the streamed node that keeps it or
 //!    of the subtree root it reaches.
-//! 4. **Subtrees** (each file in turn): read back and tiled in core by the
-//!    in-core code, each tile staged as raw points; a streamed node's
-//!    file is its tile already.
+//! 4. **Subtrees** (as many at once as the threads and half the budget
+//!    allow): read back and tiled in core by the in-core code, each tile
+//!    staged as raw points; a streamed node's file is its tile already.
 //! 5. **Write**: the nodes in the in-core breadth-first order, boxes and
 //!    errors through the in-core code, then every staged tile encoded on
-//!    its depth's grid into the output folder, atomically, by the writer
-//!    the in-core path uses.
+//!    its depth's grid into the output folder, atomically, by up to
+//!    eight threads at once (`tile_writer`: the in-core writer's files,
+//!    its syncs overlapped).
+//!
+//! Every pass runs on every thread (`parallel_pass`): the file is decoded
+//! in chunks on a thread of its own while the pool walks the chunks read
+//! before, and each chunk's result is merged in input order. The winner
+//! of a cell is its least `(distance, index)`, so winners offered from
+//! any thread in any order (`winners`: sharded maps) are those of one
+//! pass in input order, and the bytes do not depend on the thread count.
 //!
 //! Rejected: spilling by a fixed depth's cells first (a dense part of a
 //! scan would need a deeper depth than the rest, and a fixed depth needs
@@ -66,32 +81,42 @@
 //! bookkeeping).
 //!
 //! # Cost
-//! Memory: the largest subtree (at most half the budget at
-//! [`IN_CORE_BYTES_PER_POINT`], or `leaf_points` points), the winner
-//! maps of one pass (a quarter of the budget, at least one node's: up to
-//! `CELLS³` cells, 80 MB, for a node of that many points), 8 B per point
-//! a streamed node keeps (held until the spill), the spill buffers (an
-//! eighth of the budget). Disk: the points twice (spills, then staged
-//! tiles: 12 B a point, plus 12 with normals and 4 with colours). Time:
-//! three passes over the file plus one per streamed depth (more where a
-//! depth's maps exceed their quarter), one in-core tiling of every
-//! subtree, one encoding of every tile: 10⁷ coloured points in 4.7 s of
-//! CPU at `--memory 128M` (docs/benchmarks.md).
+//! Memory: the subtrees tiled at once (half the budget at
+//! [`IN_CORE_BYTES_PER_POINT`], or one subtree of `leaf_points` points),
+//! the winner maps of one pass (a quarter of the budget, at least one
+//! node's: up to `CELLS³` cells, 80 MB, for a node of that many points)
+//! and its children's claims (another quarter), 8 B per point a
+//! streamed node keeps (held until the spill), the spill buffers (an
+//! eighth of the budget), the chunks in flight (a sixteenth), the tiles
+//! being written (a quarter, at most eight); one malloc arena, so what
+//! one thread frees another reuses. Disk: the points twice (spills, then staged tiles: 12 B a
+//! point, plus 12 with normals and 4 with colours). Time: three passes
+//! over the file plus one per streamed depth, or per two where the
+//! children are decided with their parents (more where a depth's maps
+//! exceed their quarter), one in-core tiling of every subtree, one
+//! encoding of every tile, all on every thread: 5·10⁷ coloured points in
+//! 19–26 s at `--memory 512M` on two shared cores (docs/benchmarks.md).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use glam::Vec3;
 use lodkit_mesh::Aabb;
-use rustc_hash::FxHashMap;
+use rayon::prelude::*;
 
 mod cloud_stream;
+mod parallel_pass;
+mod tile_writer;
+mod winners;
 
-use self::cloud_stream::{Point, Source, Spill, io_err};
+use self::cloud_stream::{Layout, Point, Source, Spill, io_err};
+use self::parallel_pass::parallel_pass;
+use self::tile_writer::write_folder_parallel;
+use self::winners::{Runners, Winner, Winners};
 use crate::octree_partition::{CellKey, Grid, MAX_DEPTH, Node, Octree};
 use crate::point_tiles::{
     PointTilesOptions, PointTilesReport, Subtree, cell_and_distance, cell_diagonal, node_info,
-    subdivide,
+    octant, subdivide,
 };
 use crate::tileset_json::Refine;
 use crate::{Error, OutOfCoreEvent, Result, check_option};
@@ -112,12 +137,51 @@ pub const IN_CORE_BYTES_PER_POINT: u64 = 48;
 /// slack): what groups a depth's streamed nodes into passes.
 const WINNER_BYTES: u64 = 40;
 
+/// Bytes per point of a tile being written: its raw record, its cloud
+/// and its GLB, about (what bounds the tiles written at once to a quarter
+/// of the budget: nothing else of note is held by then).
+const WRITE_BYTES_PER_POINT: u64 = 96;
+
+/// Bytes of the best two claims of a child's cell (the entry and the
+/// table's slack): what bounds the children decided with their parents.
+const RUNNER_BYTES: u64 = 64;
+
+/// Decides the streamed node `n` from its pass: `reach`, the points
+/// passed on per child octant, `occupied`, its kept points per octant
+/// (what bounds each child's cells), `kept`, how many it keeps. Makes its
+/// children (`new_node(key, count, cells)`) and returns them by octant.
+fn decide(
+    top: &mut Vec<Top>,
+    n: usize,
+    (reach, occupied, kept): ([u64; 8], [u64; 8], u64),
+    new_node: &mut dyn FnMut(CellKey, u64, u64) -> Top,
+) -> [Option<usize>; 8] {
+    let key = top[n].key;
+    let mut kids = [None; 8];
+    for (oct, &count) in reach.iter().enumerate() {
+        if count > 0 {
+            kids[oct] = Some(top.len());
+            let child = new_node(key.child(oct), count, 8 * occupied[oct]);
+            top.push(child);
+        }
+    }
+    if let Kind::Streamed {
+        decided,
+        children,
+        kept: k,
+        ..
+    } = &mut top[n].kind
+    {
+        *k = kept;
+        *decided = true;
+        *children = kids;
+    }
+    kids
+}
+
 /// The name of the pass that spills points, the one that reads their
 /// attributes.
 const SPILL_PASS: &str = "points: to their subtrees";
-
-/// Points between progress advances.
-const ADVANCE_EVERY: u64 = 1 << 16;
 
 /// Where and in how much memory an out-of-core point tileset is built.
 #[derive(Clone, Debug)]
@@ -128,15 +192,6 @@ pub struct PointsOutOfCoreOptions {
     /// it (`lodkit_scale::staging_dir` gives one keyed by input and
     /// options).
     pub staging: PathBuf,
-}
-
-/// A point's winner of one cell: its squared distance to the centre, its
-/// index, and the child octant it would go to.
-#[derive(Clone, Copy, Debug)]
-struct Winner {
-    d: f64,
-    index: u32,
-    octant: u8,
 }
 
 /// How a node of the top of the tree is made.
@@ -161,18 +216,6 @@ struct Top {
     /// holds 8 of its child's).
     cells: u64,
     kind: Kind,
-}
-
-/// The octant of the child of a node at `depth` that holds `p`: the
-/// in-core rule's `grid.cell_of(p, depth + 1)`, its low bits. Computed
-/// as `cell_of` computes the cell, with a truncating cast for its
-/// `floor` (they differ only below 0, where both give cell 0), so without
-/// a libm call per axis.
-fn octant(grid: &Grid, p: Vec3, depth: u8) -> u8 {
-    let n = 1u64 << (depth + 1);
-    let rel = (p.as_dvec3() - grid.origin) / grid.size * n as f64;
-    let c = |v: f64| ((v as u64).min(n - 1) & 1) as u8;
-    c(rel.x) | (c(rel.y) << 1) | (c(rel.z) << 2)
 }
 
 /// Where a point goes among the top nodes: the streamed node at `depth`
@@ -232,7 +275,10 @@ fn walk(
 /// stream readers refuse (one line naming the file), no points, more than
 /// `u32::MAX` points, `leaf_points` out of range or an output folder that
 /// is not lodkit's ([`Error::Usage`]), another run holding the staging
-/// folder, I/O. Cost: see the module docs.
+/// folder, I/O. Cost: see the module docs; runs on the current rayon
+/// pool (the bytes do not depend on its size) and, on glibc, caps the
+/// process's malloc arenas at one for good (the budget holds whatever the
+/// threads).
 pub fn point_tileset_out_of_core(
     input: &Path,
     out: &Path,
@@ -240,11 +286,24 @@ pub fn point_tileset_out_of_core(
     o: &PointsOutOfCoreOptions,
     progress: &(dyn Fn(OutOfCoreEvent) + Sync),
 ) -> Result<(PointTilesReport, Option<[f64; 3]>)> {
+    tuned(input, out, opts, o, &Tuning::default(), progress)
+}
+
+/// [`point_tileset_out_of_core`] with `tuning`.
+fn tuned(
+    input: &Path,
+    out: &Path,
+    opts: &PointTilesOptions,
+    o: &PointsOutOfCoreOptions,
+    tuning: &Tuning,
+    progress: &(dyn Fn(OutOfCoreEvent) + Sync),
+) -> Result<(PointTilesReport, Option<[f64; 3]>)> {
     check_option(
         "leaf points",
         opts.leaf_points,
         &PointTilesOptions::LEAF_POINTS,
     )?;
+    few_malloc_arenas();
     let source = Source::open(input)?;
     drop(lodkit_mesh::io::out_folder::Staging::new(out, Some(input))?);
     let lock = lodkit_scale::StagingLock::take(&o.staging).map_err(Error::Input)?;
@@ -255,7 +314,7 @@ pub fn point_tileset_out_of_core(
             std::fs::remove_dir_all(&p).map_err(io_err(&p))?;
         }
     }
-    let result = build(&source, input, out, opts, o, progress);
+    let result = build(&source, (input, out), opts, o, tuning, progress);
     drop(lock);
     let removed = lodkit_scale::remove_staging(&o.staging).map_err(Error::Input);
     let report = result?;
@@ -263,12 +322,48 @@ pub fn point_tileset_out_of_core(
     Ok((report, source.origin()))
 }
 
+/// Malloc arenas at most, process-wide, once a build has run: glibc
+/// gives each thread that allocates an arena of its own (up to 8 per
+/// core) and keeps what is freed in it for that arena, so the passes',
+/// subtrees' and writers' threads together held twice the live memory
+/// (5·10⁷ points at `--memory 128M`: 158 MiB peak with the default, 118
+/// with two arenas, 70 with one, no slower: the threads allocate per
+/// chunk and per node, not per point).
+const MALLOC_ARENAS: i32 = 1;
+
+/// Caps glibc's malloc arenas at [`MALLOC_ARENAS`] (elsewhere: nothing),
+/// so the budget holds whatever the threads. Process-wide and lasting:
+/// the arenas made before stay.
+fn few_malloc_arenas() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    {
+        // glibc's `mallopt` parameter for the arena cap (malloc.h).
+        const M_ARENA_MAX: i32 = -8;
+        unsafe extern "C" {
+            fn mallopt(param: i32, value: i32) -> i32;
+        }
+        // SAFETY: `mallopt` only sets an allocator parameter; glibc
+        // takes it at any time, from any thread.
+        unsafe {
+            mallopt(M_ARENA_MAX, MALLOC_ARENAS);
+        }
+    }
+}
+
+/// What tests set to reach paths the budgets of small clouds do not.
+#[derive(Clone, Copy, Debug, Default)]
+struct Tuning {
+    /// The keys the children decided with their parents may hold
+    /// (default: a quarter of the budget at [`RUNNER_BYTES`]).
+    runners: Option<u64>,
+}
+
 fn build(
     source: &Source,
-    input: &Path,
-    out: &Path,
+    (input, out): (&Path, &Path),
     opts: &PointTilesOptions,
     o: &PointsOutOfCoreOptions,
+    tuning: &Tuning,
     progress: &(dyn Fn(OutOfCoreEvent) + Sync),
 ) -> Result<PointTilesReport> {
     let t0 = Instant::now();
@@ -291,31 +386,24 @@ fn build(
         ))));
     }
     let layout = source.layout();
-    // Only the spill needs more than positions.
-    let pass = |name: &str, f: &mut dyn FnMut(u32, &Point) -> Result<()>| -> Result<()> {
-        progress(OutOfCoreEvent::Phase(name, total));
-        let mut k = 0u64;
-        source
-            .for_each(name == SPILL_PASS, &mut |i, p| {
-                f(i, p)?;
-                k += 1;
-                if k.is_multiple_of(ADVANCE_EVERY) {
-                    progress(OutOfCoreEvent::Advance(ADVANCE_EVERY));
-                }
-                Ok(())
-            })
-            .map_err(named)?;
-        progress(OutOfCoreEvent::Advance(k % ADVANCE_EVERY));
-        Ok(())
+    let passes = Passes {
+        source,
+        total,
+        chunking: parallel_pass::chunking(o.memory / 16),
+        named: &named,
+        progress,
     };
-
     // 1. Bounds.
     let mut bounds = Aabb::EMPTY;
-    pass("points: bounds", &mut |_, p| {
-        bounds.min = bounds.min.min(p.position);
-        bounds.max = bounds.max.max(p.position);
-        Ok(())
-    })?;
+    passes.run(
+        "points: bounds",
+        &|_, points| Ok(bbox_of(points.iter().map(|p| p.position))),
+        &mut |_, b| {
+            bounds.min = bounds.min.min(b.min);
+            bounds.max = bounds.max.max(b.max);
+            Ok(())
+        },
+    )?;
     let grid = Grid::around(&bounds);
     let leaf = opts.leaf_points as u64;
     let fits = |count: u64, depth: u8| {
@@ -369,71 +457,167 @@ fn build(
         }
         let mut next = Vec::new();
         for group in groups {
-            let mut active: FxHashMap<usize, [u64; 8]> =
-                group.iter().map(|&n| (n, [0u64; 8])).collect();
-            let mut maps: FxHashMap<usize, FxHashMap<u32, Winner>> =
-                group.iter().map(|&n| (n, FxHashMap::default())).collect();
-            let mut cursor = 0;
-            pass(
+            let mut local = vec![u32::MAX; top.len()];
+            for (g, &n) in group.iter().enumerate() {
+                local[n] = g as u32;
+            }
+            // The children decided in the same pass when an average
+            // child will not fit (at least one is streamed, most likely
+            // all), within their own quarter of the budget.
+            let fuse = group.iter().all(|&n| {
+                let (count, depth) = (top[n].count, top[n].key.depth);
+                depth + 1 < MAX_DEPTH && !fits(count / 8, depth + 1)
+            });
+            let winners = Winners::new();
+            let runners = Runners::new(if fuse {
+                tuning.runners.unwrap_or(o.memory / 4 / RUNNER_BYTES)
+            } else {
+                0
+            });
+            let mut reach = vec![[0u64; 8]; group.len()];
+            let mut below = vec![[[0u64; 8]; 8]; group.len()];
+            passes.run(
                 &format!("points: choosing at depth {depth}"),
-                &mut |i, p| {
-                    let at = (&kept_by[..], &mut cursor);
-                    let Reach::Undecided(n) = walk(&top, at, &grid, i, p.position)? else {
-                        return Ok(());
-                    };
-                    let (Some(reach), Some(map)) = (active.get_mut(&n), maps.get_mut(&n)) else {
-                        return Ok(());
-                    };
-                    let key = top[n].key;
-                    let (cell, d) = cell_and_distance(&grid, key, p.position);
-                    let o = octant(&grid, p.position, key.depth);
-                    reach[o as usize] += 1;
-                    let w = map.entry(cell).or_insert(Winner {
-                        d,
-                        index: i,
-                        octant: o,
-                    });
-                    if d < w.d {
-                        *w = Winner {
-                            d,
-                            index: i,
-                            octant: o,
+                &|first, points| {
+                    let mut cursor = kept_by.partition_point(|&(k, _)| k < first);
+                    let mut counts = vec![[0u64; 8]; group.len()];
+                    let mut counts_below = vec![[[0u64; 8]; 8]; if fuse { group.len() } else { 0 }];
+                    let mut found = Vec::with_capacity(points.len());
+                    let mut found_below = Vec::with_capacity(if fuse { points.len() } else { 0 });
+                    for (k, p) in points.iter().enumerate() {
+                        let i = first + k as u32;
+                        let at = (&kept_by[..], &mut cursor);
+                        let Reach::Undecided(n) = walk(&top, at, &grid, i, p.position)? else {
+                            continue;
                         };
+                        let g = local[n];
+                        if g == u32::MAX {
+                            continue;
+                        }
+                        let key = top[n].key;
+                        let (cell, d) = cell_and_distance(&grid, key, p.position);
+                        let octant = octant(&grid, p.position, key.depth);
+                        counts[g as usize][octant as usize] += 1;
+                        let next = if fuse {
+                            let child = key.child(octant as usize);
+                            let (cell, d) = cell_and_distance(&grid, child, p.position);
+                            let next = crate::point_tiles::octant(&grid, p.position, child.depth);
+                            counts_below[g as usize][octant as usize][next as usize] += 1;
+                            found_below.push((
+                                (((u64::from(g) << 3) | u64::from(octant)) << 32) | u64::from(cell),
+                                Winner {
+                                    d,
+                                    index: i,
+                                    octant: next,
+                                    next: 0,
+                                },
+                            ));
+                            next
+                        } else {
+                            0
+                        };
+                        found.push((
+                            (u64::from(g) << 32) | u64::from(cell),
+                            Winner {
+                                d,
+                                index: i,
+                                octant,
+                                next,
+                            },
+                        ));
+                    }
+                    winners.offer(found);
+                    if fuse {
+                        runners.offer(found_below);
+                    }
+                    Ok((counts, counts_below))
+                },
+                &mut |_, (counts, counts_below)| {
+                    for (r, c) in reach.iter_mut().zip(counts.iter()) {
+                        for (a, b) in r.iter_mut().zip(c) {
+                            *a += b;
+                        }
+                    }
+                    for (r, c) in below.iter_mut().zip(counts_below.iter()) {
+                        for (r, c) in r.iter_mut().zip(c) {
+                            for (a, b) in r.iter_mut().zip(c) {
+                                *a += b;
+                            }
+                        }
                     }
                     Ok(())
                 },
             )?;
-            for &n in &group {
-                let map = maps.remove(&n).unwrap_or_default();
-                let mut reach = active.remove(&n).unwrap_or_default();
-                let mut occupied = [0u64; 8];
-                for w in map.values() {
-                    reach[w.octant as usize] -= 1;
-                    occupied[w.octant as usize] += 1;
+            let mut occupied = vec![[0u64; 8]; group.len()];
+            let mut kept = vec![0u64; group.len()];
+            let mut taken = Vec::new();
+            for (key, w) in winners.into_iter() {
+                let g = (key >> 32) as usize;
+                reach[g][w.octant as usize] -= 1;
+                occupied[g][w.octant as usize] += 1;
+                below[g][w.octant as usize][w.next as usize] =
+                    below[g][w.octant as usize][w.next as usize].saturating_sub(1);
+                kept[g] += 1;
+                kept_by.push((w.index, group[g] as u32));
+                taken.push(w.index);
+            }
+            let mut kids = Vec::with_capacity(group.len());
+            for (g, &n) in group.iter().enumerate() {
+                let made = decide(
+                    &mut top,
+                    n,
+                    (reach[g], occupied[g], kept[g]),
+                    &mut |key, count, cells| new_node(key, count, cells, &mut slots),
+                );
+                kids.push(made);
+            }
+            // The children decided from the claims on their cells.
+            taken.sort_unstable();
+            let mut undecided = vec![false; group.len() * 8];
+            let decided_below = runners.winners(&|i| taken.binary_search(&i).is_ok(), &mut |key| {
+                undecided[(key >> 32) as usize] = true
+            });
+            let streamed = |top: &[Top], c: usize| matches!(top[c].kind, Kind::Streamed { .. });
+            if let Some(found) = decided_below.filter(|_| fuse) {
+                let mut occupied = vec![[0u64; 8]; group.len() * 8];
+                let mut kept = vec![0u64; group.len() * 8];
+                let mut mine = Vec::new();
+                for (key, w) in found {
+                    let go = (key >> 32) as usize;
+                    let (g, oct) = (go / 8, go % 8);
+                    let Some(c) = kids[g][oct].filter(|&c| streamed(&top, c) && !undecided[go])
+                    else {
+                        continue;
+                    };
+                    below[g][oct][w.octant as usize] -= 1;
+                    occupied[go][w.octant as usize] += 1;
+                    kept[go] += 1;
+                    mine.push((w.index, c as u32));
                 }
-                let key = top[n].key;
-                let mut kids = [None; 8];
-                for (oct, &count) in reach.iter().enumerate() {
-                    if count > 0 {
-                        kids[oct] = Some(top.len());
-                        let child = new_node(key.child(oct), count, 8 * occupied[oct], &mut slots);
-                        if matches!(child.kind, Kind::Streamed { .. }) {
-                            next.push(top.len());
+                kept_by.extend(mine);
+                for (g, k) in kids.iter().enumerate() {
+                    for (oct, c) in k.iter().enumerate() {
+                        let Some(c) = *c else { continue };
+                        if !streamed(&top, c) {
+                            continue;
                         }
-                        top.push(child);
+                        let go = g * 8 + oct;
+                        if undecided[go] {
+                            next.push(c);
+                            continue;
+                        }
+                        let grand = decide(
+                            &mut top,
+                            c,
+                            (below[g][oct], occupied[go], kept[go]),
+                            &mut |key, count, cells| new_node(key, count, cells, &mut slots),
+                        );
+                        next.extend(grand.iter().flatten().filter(|&&x| streamed(&top, x)));
                     }
                 }
-                kept_by.extend(map.values().map(|w| (w.index, n as u32)));
-                if let Kind::Streamed {
-                    decided,
-                    children,
-                    kept,
-                    ..
-                } = &mut top[n].kind
-                {
-                    *kept = map.len() as u64;
-                    *decided = true;
-                    *children = kids;
+            } else {
+                for k in &kids {
+                    next.extend(k.iter().flatten().filter(|&&x| streamed(&top, x)));
                 }
             }
             kept_by.sort_unstable();
@@ -453,16 +637,43 @@ fn build(
         })
         .collect();
     let mut spill = Spill::new(&spill_dir, slots, cap)?;
-    let mut cursor = 0;
-    pass(SPILL_PASS, &mut |i, p| {
-        let n = match walk(&top, (&kept_by, &mut cursor), &grid, i, p.position)? {
-            Reach::Kept(n) | Reach::Subtree(n) => n,
-            Reach::Undecided(_) => {
-                return Err(Error::Input("the input changed while it was read".into()));
+    passes.run(
+        SPILL_PASS,
+        &|first, points| {
+            let mut cursor = kept_by.partition_point(|&(k, _)| k < first);
+            let mut to = Vec::with_capacity(points.len());
+            for (k, p) in points.iter().enumerate() {
+                let i = first + k as u32;
+                let n = match walk(&top, (&kept_by, &mut cursor), &grid, i, p.position)? {
+                    Reach::Kept(n) | Reach::Subtree(n) => n,
+                    Reach::Undecided(_) => {
+                        return Err(Error::Input("the input changed while it was read".into()));
+                    }
+                };
+                to.push(((slot_of[n] as u64) << 32) | k as u64);
             }
-        };
-        spill.put(slot_of[n], layout, p)
-    })?;
+            // The chunk's records grouped by slot, input order within
+            // each: the merge appends whole runs.
+            to.sort_unstable();
+            let mut bytes = Vec::with_capacity(points.len() * layout.size());
+            let mut runs: Vec<(u32, usize)> = Vec::new();
+            for &sk in &to {
+                let (slot, k) = ((sk >> 32) as u32, sk as u32);
+                if runs.last().is_none_or(|&(s, _)| s != slot) {
+                    runs.push((slot, bytes.len()));
+                }
+                layout.put(&points[k as usize], &mut bytes);
+            }
+            Ok((runs, bytes))
+        },
+        &mut |_, (runs, bytes)| {
+            for (r, &(slot, start)) in runs.iter().enumerate() {
+                let end = runs.get(r + 1).map_or(bytes.len(), |&(_, e)| e);
+                spill.put_bytes(slot as usize, &bytes[start..end])?;
+            }
+            Ok(())
+        },
+    )?;
     spill.flush()?;
     drop(spill);
     drop(kept_by);
@@ -497,8 +708,9 @@ fn build(
         .filter(|t| matches!(t.kind, Kind::Subtree { .. }))
         .count() as u64;
     progress(OutOfCoreEvent::Phase("points: subtrees in core", subtrees));
-    for (n, t) in top.iter_mut().enumerate() {
-        match &mut t.kind {
+    let mut jobs: Vec<(usize, usize, u64, CellKey)> = Vec::new();
+    for (n, t) in top.iter().enumerate() {
+        match &t.kind {
             Kind::Streamed {
                 children,
                 slot,
@@ -507,7 +719,7 @@ fn build(
             } => {
                 let path = Spill::file(&spill_dir, *slot);
                 let cloud = layout.read(&path, None)?;
-                made[n].bbox = bbox_of(&cloud.positions);
+                made[n].bbox = bbox_of(cloud.positions.iter().copied());
                 made[n].points = cloud.positions.len();
                 made[n].tile = Some((path, None));
                 made[n].node.children = children.iter().flatten().copied().collect();
@@ -517,56 +729,72 @@ fn build(
                     0.0
                 };
             }
-            Kind::Subtree { slot } => {
-                let path = Spill::file(&spill_dir, *slot);
-                let cloud = layout.read(&path, None)?;
-                if cloud.positions.len() as u64 != t.count {
-                    return Err(named(Error::Input(
-                        "the input changed while it was read".into(),
-                    )));
-                }
-                let Subtree {
-                    nodes,
-                    tiles,
-                    errors,
-                    ..
-                } = subdivide(&cloud, &grid, t.key, opts.leaf_points, &mut |_| {});
-                drop(cloud);
-                let _ = std::fs::remove_file(&path);
-                // The subtree's node 0 is `n`; the others are appended.
-                // Its tiles go into one file (one file made per subtree,
-                // not per tile: creating files is what costs).
-                let staged = tiles_dir.join(format!("{slot}.pts"));
-                let mut bytes = Vec::new();
-                let base = made.len();
-                let id = |k: usize| if k == 0 { n } else { base + k - 1 };
-                for (k, ((node, tile), error)) in
-                    nodes.into_iter().zip(tiles).zip(errors).enumerate()
-                {
-                    let start = bytes.len() as u64;
-                    layout.append(&tile, &mut bytes);
-                    let range = (start, bytes.len() as u64 - start);
-                    let has = !tile.positions.is_empty();
-                    let m = Made {
-                        node: Node {
-                            key: node.key,
-                            children: node.children.iter().map(|&c| id(c)).collect(),
-                            input_faces: node.input_faces,
-                        },
-                        tile: has.then(|| (staged.clone(), Some(range))),
-                        bbox: bbox_of(&tile.positions),
-                        error,
-                        points: tile.positions.len(),
-                    };
-                    if k == 0 {
-                        made[n] = m;
-                    } else {
-                        made.push(m);
-                    }
-                }
-                std::fs::write(&staged, bytes).map_err(io_err(&staged))?;
-                progress(OutOfCoreEvent::Advance(1));
+            Kind::Subtree { slot } => jobs.push((n, *slot, t.count, t.key)),
+        }
+    }
+    // Subtrees in core, as many at once as the threads and the budget
+    // allow (their points at IN_CORE_BYTES_PER_POINT within the half one
+    // subtree may take), each batch's nodes appended in the order of the
+    // jobs, so the tree does not depend on the thread count.
+    let threads = rayon::current_num_threads().max(1);
+    let mut rest = &jobs[..];
+    while !rest.is_empty() {
+        let mut take = 1;
+        let mut bytes = rest[0].2.saturating_mul(IN_CORE_BYTES_PER_POINT);
+        while take < rest.len().min(threads) {
+            bytes = bytes.saturating_add(rest[take].2.saturating_mul(IN_CORE_BYTES_PER_POINT));
+            if bytes > o.memory / 2 {
+                break;
             }
+            take += 1;
+        }
+        let (batch, after) = rest.split_at(take);
+        rest = after;
+        let tiled: Vec<Result<TiledSubtree>> = batch
+            .par_iter()
+            .map(|&(_, slot, count, key)| {
+                tile_subtree(
+                    (&spill_dir, &tiles_dir),
+                    layout,
+                    &grid,
+                    opts.leaf_points,
+                    (slot, count, key),
+                )
+            })
+            .collect();
+        for (&(n, ..), t) in batch.iter().zip(tiled) {
+            let t = t.map_err(named)?;
+            let base = made.len();
+            let id = |k: usize| if k == 0 { n } else { base + k - 1 };
+            for (
+                k,
+                TiledNode {
+                    node,
+                    range,
+                    bbox,
+                    error,
+                    points,
+                },
+            ) in t.nodes.into_iter().enumerate()
+            {
+                let m = Made {
+                    node: Node {
+                        key: node.key,
+                        children: node.children.iter().map(|&c| id(c)).collect(),
+                        input_faces: node.input_faces,
+                    },
+                    tile: range.map(|r| (t.staged.clone(), Some(r))),
+                    bbox,
+                    error,
+                    points,
+                };
+                if k == 0 {
+                    made[n] = m;
+                } else {
+                    made.push(m);
+                }
+            }
+            progress(OutOfCoreEvent::Advance(1));
         }
     }
     drop(top);
@@ -620,42 +848,253 @@ fn build(
     };
     let t1 = Instant::now();
     progress(OutOfCoreEvent::Phase("writing tiles", content.len() as u64));
-    report.bytes = crate::write_folder(
+    let names: Vec<(String, u8)> = content
+        .iter()
+        .map(|&i| {
+            (
+                made[order[i]].node.key.name(),
+                made[order[i]].node.key.depth,
+            )
+        })
+        .collect();
+    // A tile in flight holds its raw points, its cloud and its GLB.
+    let per_tile = (report.max_tile_points as u64).saturating_mul(WRITE_BYTES_PER_POINT);
+    let writers = (o.memory / 4 / per_tile.max(1)).clamp(1, tile_writer::MAX_WRITERS as u64);
+    report.bytes = write_folder_parallel(
         out,
         Some(input),
         (&tree, &info),
         (Refine::Add, source.origin()),
-        content.iter().map(|&i| {
-            let m = &made[order[i]];
-            (
-                m.node.key.name(),
-                m.node.key.depth,
-                m.tile.as_ref().expect("a tile with content"),
-            )
-        }),
-        content.len(),
-        |name, (path, at), grid| {
+        &names,
+        writers as usize,
+        &|k, grid| {
+            let m = &made[order[content[k]]];
+            let (path, at) = m.tile.as_ref().expect("a tile with content");
             let cloud = layout.read(path, *at)?;
-            crate::tile_content::encode_point_tile(name, &cloud, opts.compress, grid)
+            crate::tile_content::encode_point_tile(&names[k].0, &cloud, opts.compress, grid)
         },
-        &mut |_| progress(OutOfCoreEvent::Advance(1)),
+        &|| progress(OutOfCoreEvent::Advance(1)),
     )?;
     report.seconds[1] = t1.elapsed().as_secs_f64();
     Ok(report)
 }
 
-fn bbox_of(points: &[Vec3]) -> Aabb {
+fn bbox_of(points: impl IntoIterator<Item = Vec3>) -> Aabb {
     let mut b = Aabb::EMPTY;
     for p in points {
-        b.min = b.min.min(*p);
-        b.max = b.max.max(*p);
+        b.min = b.min.min(p);
+        b.max = b.max.max(p);
     }
     b
+}
+
+/// A subtree tiled in core ([`tile_subtree`]): its nodes breadth-first,
+/// its root first.
+struct TiledSubtree {
+    staged: PathBuf,
+    nodes: Vec<TiledNode>,
+}
+
+/// A node of a [`TiledSubtree`].
+struct TiledNode {
+    node: Node,
+    /// Its tile's byte range in the subtree's staged file (none when it
+    /// keeps no point).
+    range: Option<(u64, u64)>,
+    bbox: Aabb,
+    error: f64,
+    points: usize,
+}
+
+/// The subtree of the node `key` from the spill file of `slot` (which
+/// must hold `count` points; removed after it is read), its tiles staged
+/// into one file of `tiles` named for the slot (one file per subtree,
+/// not per tile: creating files is what costs).
+fn tile_subtree(
+    (spill_dir, tiles_dir): (&Path, &Path),
+    layout: Layout,
+    grid: &Grid,
+    leaf_points: usize,
+    (slot, count, key): (usize, u64, CellKey),
+) -> Result<TiledSubtree> {
+    let path = Spill::file(spill_dir, slot);
+    let cloud = layout.read(&path, None)?;
+    if cloud.positions.len() as u64 != count {
+        return Err(Error::Input("the input changed while it was read".into()));
+    }
+    let Subtree {
+        nodes,
+        tiles,
+        errors,
+        ..
+    } = subdivide(&cloud, grid, key, leaf_points, &mut |_| {});
+    drop(cloud);
+    let _ = std::fs::remove_file(&path);
+    let staged = tiles_dir.join(format!("{slot}.pts"));
+    let file = std::fs::File::create(&staged).map_err(io_err(&staged))?;
+    let mut file = std::io::BufWriter::new(file);
+    let mut bytes = Vec::new();
+    let mut at = 0u64;
+    let mut out = Vec::with_capacity(nodes.len());
+    for ((node, tile), error) in nodes.into_iter().zip(tiles).zip(errors) {
+        bytes.clear();
+        layout.append(&tile, &mut bytes);
+        std::io::Write::write_all(&mut file, &bytes).map_err(io_err(&staged))?;
+        let range = (!tile.positions.is_empty()).then_some((at, bytes.len() as u64));
+        at += bytes.len() as u64;
+        let bbox = bbox_of(tile.positions.iter().copied());
+        out.push(TiledNode {
+            node,
+            range,
+            bbox,
+            error,
+            points: tile.positions.len(),
+        });
+    }
+    std::io::Write::flush(&mut file).map_err(io_err(&staged))?;
+    Ok(TiledSubtree { staged, nodes: out })
+}
+
+/// The passes of one build: each over the whole cloud, on every thread
+/// ([`parallel_pass`]), with its progress.
+struct Passes<'a> {
+    source: &'a Source,
+    total: u64,
+    chunking: (usize, usize),
+    named: &'a dyn Fn(Error) -> Error,
+    progress: &'a (dyn Fn(OutOfCoreEvent) + Sync),
+}
+
+impl Passes<'_> {
+    /// [`parallel_pass`] under the phase `name`; only the spill reads
+    /// more than positions.
+    fn run<R: Send>(
+        &self,
+        name: &str,
+        work: &(dyn Fn(u32, &[Point]) -> Result<R> + Sync),
+        merge: &mut dyn FnMut(&[Point], R) -> Result<()>,
+    ) -> Result<()> {
+        (self.progress)(OutOfCoreEvent::Phase(name, self.total));
+        let attributes = name == SPILL_PASS;
+        parallel_pass(
+            self.source,
+            attributes,
+            self.chunking,
+            work,
+            &mut |points, r| {
+                merge(points, r)?;
+                (self.progress)(OutOfCoreEvent::Advance(points.len() as u64));
+                Ok(())
+            },
+        )
+        .map_err(self.named)
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every file of a folder and its bytes, by path.
+    fn files(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
+        let mut all = Vec::new();
+        let mut stack = vec![dir.to_path_buf()];
+        while let Some(d) = stack.pop() {
+            for e in std::fs::read_dir(&d).unwrap() {
+                let p = e.unwrap().path();
+                if p.is_dir() {
+                    stack.push(p);
+                } else {
+                    all.push((
+                        p.strip_prefix(dir).unwrap().to_path_buf(),
+                        std::fs::read(&p).unwrap(),
+                    ));
+                }
+            }
+        }
+        all.sort();
+        all
+    }
+
+    /// Children decided in their parents' pass (the claims' limit lifted,
+    /// so small budgets take that path at every streamed depth), on a
+    /// cloud of many duplicates (ties by input order), clusters and a
+    /// spread: the in-core bytes, in fewer passes.
+    #[test]
+    fn children_decided_with_their_parents_give_the_in_core_bytes() {
+        use lodkit_mesh::{Model, PointCloud};
+        let mut c = PointCloud {
+            positions: Vec::new(),
+            normals: None,
+            colors: Some(Vec::new()),
+        };
+        let mut x = 99u64;
+        for i in 0..30_000u32 {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let f = |s: u64| ((x >> s) & 0xffff) as f32 / 65535.0;
+            let p = match i % 3 {
+                // A coarse lattice: many points on the same spot.
+                0 => Vec3::new(f(0), f(16), f(32)).map(|v| (v * 6.0).floor() / 6.0),
+                1 => Vec3::new(f(0), f(16), f(32)) * 0.01 + Vec3::splat(0.3),
+                _ => Vec3::new(f(0), f(16), f(32)),
+            };
+            c.positions.push(p);
+            c.colors
+                .as_mut()
+                .unwrap()
+                .push([(i % 251) as u8, 0, 0, 255]);
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("c.ply");
+        lodkit_mesh::io::save(&input, &Model::Points(c.clone()), Default::default()).unwrap();
+        let opts = PointTilesOptions {
+            leaf_points: 256,
+            ..PointTilesOptions::DEFAULT
+        };
+        let want = dir.path().join("in");
+        let t = crate::tileset_from_points(&c, &opts, &mut |_| {}).unwrap();
+        crate::write_point_tileset(&t, &want, Some(&input), &opts, None, &mut |_| {}).unwrap();
+        let want = files(&want);
+        for memory in [16 << 10, 256 << 10] {
+            let out = dir.path().join(format!("out{memory}"));
+            let o = PointsOutOfCoreOptions {
+                memory,
+                staging: dir.path().join("staging"),
+            };
+            let passes = std::sync::atomic::AtomicUsize::new(0);
+            let tuning = Tuning {
+                runners: Some(u64::MAX),
+            };
+            tuned(&input, &out, &opts, &o, &tuning, &|e| {
+                if let OutOfCoreEvent::Phase(name, _) = e
+                    && name.starts_with("points: choosing")
+                {
+                    passes.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                }
+            })
+            .unwrap();
+            assert!(files(&out) == want, "memory {memory}: the in-core bytes");
+            // Without the lift: the same bytes, in more passes.
+            let slow = dir.path().join(format!("slow{memory}"));
+            let more = std::sync::atomic::AtomicUsize::new(0);
+            tuned(&input, &slow, &opts, &o, &Tuning::default(), &|e| {
+                if let OutOfCoreEvent::Phase(name, _) = e
+                    && name.starts_with("points: choosing")
+                {
+                    more.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                }
+            })
+            .unwrap();
+            assert!(files(&slow) == want, "memory {memory}: the in-core bytes");
+            let (fused, plain) = (passes.into_inner(), more.into_inner());
+            assert!(
+                fused < plain,
+                "memory {memory}: {fused} passes, {plain} without"
+            );
+        }
+    }
 
     /// `octant` is the in-core routing (`cell_of`'s low bits), also for
     /// points on cell borders and outside the cube (clamped).

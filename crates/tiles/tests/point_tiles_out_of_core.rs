@@ -1,7 +1,8 @@
 //! The out-of-core point tiler forced on small clouds by tiny budgets:
 //! the in-core tileset's bytes (ties, duplicates, normals and colours
-//! included) whatever the budget, every tile read back, the same bytes on
-//! a rerun, nothing staged left, bad inputs refused with one line.
+//! included) whatever the budget and the thread count, every tile read
+//! back, the same bytes on a rerun, nothing staged left, bad inputs
+//! refused with one line.
 
 mod common;
 
@@ -140,6 +141,41 @@ fn every_budget_gives_the_in_core_bytes() {
     // tiles quantise them, so compared as a count and a multiset size).
     let out = dir.path().join("out256-16384");
     assert_eq!(points_of(&out).len(), c.positions.len());
+}
+
+/// The passes split the cloud into chunks over the threads, subtrees are
+/// tiled several at once and tiles written by several threads: one
+/// thread or many, the in-core bytes.
+#[test]
+fn one_thread_or_many_give_the_in_core_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("cloud.ply");
+    save(&input, &Model::Points(cloud(30_000)), WriteOptions::DEFAULT).unwrap();
+    let opts = PointTilesOptions {
+        leaf_points: 256,
+        ..PointTilesOptions::DEFAULT
+    };
+    let want = dir.path().join("in");
+    in_core(&input, &want, &opts);
+    let want = all_files(&want);
+    for threads in [1, 3, 8] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        // 16 KiB: chunks of the fewest points, streamed to depth 4 and
+        // more; 1 MiB: the root streamed, its subtrees tiled several at
+        // once.
+        for memory in [16 << 10, 1 << 20] {
+            let out = dir.path().join(format!("out{threads}-{memory}"));
+            pool.install(|| out_of_core(&input, &out, &opts, memory))
+                .unwrap();
+            assert!(
+                all_files(&out) == want,
+                "{threads} threads, memory {memory}: the in-core bytes"
+            );
+        }
+    }
 }
 
 #[test]

@@ -252,10 +252,10 @@ impl Spill {
         dir.join(format!("{slot}.pts"))
     }
 
-    pub(super) fn put(&mut self, slot: usize, layout: Layout, p: &Point) -> Result<()> {
-        let before = self.bufs[slot].len();
-        layout.put(p, &mut self.bufs[slot]);
-        self.held += self.bufs[slot].len() - before;
+    /// Appends `records` (whole staged records) to the file of `slot`.
+    pub(super) fn put_bytes(&mut self, slot: usize, records: &[u8]) -> Result<()> {
+        self.bufs[slot].extend_from_slice(records);
+        self.held += records.len();
         if self.held > self.cap {
             self.flush()?;
         }
