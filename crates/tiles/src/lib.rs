@@ -81,6 +81,7 @@ mod tile_content;
 mod tile_error;
 mod tile_split;
 mod tile_textures;
+mod tileset_folder;
 pub mod tileset_json;
 
 use std::path::{Path, PathBuf};
@@ -418,16 +419,22 @@ pub fn write_tileset(
     let nodes = &tileset.tree.nodes;
     let heights =
         tile_textures::heights(&nodes.iter().map(|n| n.children.clone()).collect::<Vec<_>>());
-    let bytes = write_folder(
+    let ids: Vec<usize> = (0..nodes.len())
+        .filter(|&i| tileset.tiles[i].is_some())
+        .collect();
+    let names: Vec<(String, u8)> = ids
+        .iter()
+        .map(|&i| (nodes[i].key.name(), nodes[i].key.depth))
+        .collect();
+    let bytes = tileset_folder::write_folder(
         out,
         input,
         (&tileset.tree, &tileset.info),
         (tileset_json::Refine::Replace, None),
-        (0..nodes.len())
-            .filter(|&i| tileset.tiles[i].is_some())
-            .map(|i| (nodes[i].key.name(), nodes[i].key.depth, i)),
-        tileset.report.tiles,
-        |name, i, grid| {
+        &names,
+        tileset_folder::MAX_WRITERS,
+        &|k, grid| {
+            let (i, name) = (ids[k], &names[k].0);
             let mesh = tileset.tiles[i].as_ref().expect("a tile with content");
             match &tileset.textures {
                 None => encode_tile(name, mesh, opts.compress, grid),
@@ -437,7 +444,7 @@ pub fn write_tileset(
                 }
             }
         },
-        progress,
+        &mut written(Phase::Write, ids.len(), progress),
     )?;
     let mut report = tileset.report.clone();
     report.bytes = bytes;
@@ -445,49 +452,18 @@ pub fn write_tileset(
     Ok(report)
 }
 
-/// Writes a tileset folder (see [`write_tileset`]'s layout) atomically
-/// under the output-folder rule: every tile's GLB, made by `encode` on its
-/// depth's grid ([`depth_grid`]), then the tileset files. `total` counts
-/// the tiles for progress. Returns the bytes written. The mesh and the
-/// point tilesets both write through it.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn write_folder<T>(
-    out: &Path,
-    input: Option<&Path>,
-    (tree, info): (&octree_partition::Octree, &[tileset_json::NodeInfo]),
-    (refine, origin): (tileset_json::Refine, Option<[f64; 3]>),
-    tiles: impl Iterator<Item = (String, u8, T)>,
+/// A `done` callback for [`tileset_folder::write_folder`] that reports
+/// `Event::Progress` of `phase` to `progress`.
+pub(crate) fn written<'a>(
+    phase: Phase,
     total: usize,
-    encode: impl Fn(&str, T, &lodkit_mesh::io::gltf::QuantGrid) -> Result<Vec<u8>>,
-    progress: &mut dyn FnMut(Event),
-) -> Result<u64> {
-    let staging = out_folder::Staging::new(out, input)?;
-    let dir = staging.dir().to_path_buf();
-    let tiles_dir = dir.join("tiles");
-    std::fs::create_dir(&tiles_dir).map_err(|source| Error::Io {
-        path: tiles_dir.clone(),
-        source,
-    })?;
-    let mut bytes = 0u64;
-    let bounds = info[0].bbox;
-    for (i, (name, depth, tile)) in tiles.enumerate() {
-        let glb = encode(&name, tile, &depth_grid(&bounds, depth))?;
-        lodkit_mesh::io::write_atomic(&tiles_dir.join(format!("{name}.glb")), &glb)?;
-        bytes += glb.len() as u64;
-        progress(Event::Progress {
-            phase: Phase::Write,
-            done: i + 1,
-            total,
-        });
+    progress: &'a mut dyn FnMut(Event),
+) -> impl FnMut() + 'a {
+    let mut done = 0;
+    move || {
+        done += 1;
+        progress(Event::Progress { phase, done, total });
     }
-    // The error of drawing nothing: at least the root cube's diagonal.
-    let top = (tree.grid.size * 3f64.sqrt()).max(info[0].error);
-    for (path, json) in tileset_json::tileset_files_with(tree, info, top, refine, origin) {
-        lodkit_mesh::io::write_atomic(&dir.join(&path), &json)?;
-        bytes += json.len() as u64;
-    }
-    staging.commit()?;
-    Ok(bytes)
 }
 
 /// `value` of the option `what` within `range`, else [`Error::Usage`].

@@ -94,7 +94,7 @@ use self::tile_pass::{IN_FLIGHT, TileCtx, tile_file};
 use crate::cell_spill::{Spill, StagedTile};
 use crate::octree_partition::{CellKey, Grid, MAX_DEPTH, Node, Octree};
 use crate::tileset_json::{NodeInfo, Refine};
-use crate::{Error, Event, Result, TilesOptions, TilesReport, check_option, skirts};
+use crate::{Error, Result, TilesOptions, TilesReport, check_option, skirts};
 
 /// Where and in how much memory an out-of-core tileset is built.
 #[derive(Clone, Debug)]
@@ -133,6 +133,10 @@ const RESTART: &str = "lodkit-tiles: staging spill incomplete, restart";
 /// measured against that input
 /// directly, as in core; one above it through its children's tiles.
 const MEASURE_BYTES_PER_FACE: u64 = 200;
+
+/// Bytes a tile being written holds per face (its staged mesh with
+/// normals, its skirts, the encoder's buffers and the GLB), with room.
+const WRITE_BYTES_PER_FACE: u64 = 200;
 
 /// A stream of faces handed to a sink (which may fail).
 type Faces<'a> = dyn FnMut(&mut dyn FnMut(&[Corner; 3]) -> Result<()>) -> Result<()> + 'a;
@@ -774,24 +778,29 @@ fn build(
         "writing tiles",
         with_content.len() as u64,
     ));
-    let bytes = crate::write_folder(
+    let names: Vec<(String, u8)> = with_content
+        .iter()
+        .map(|&i| (tree.nodes[i].key.name(), tree.nodes[i].key.depth))
+        .collect();
+    // A writer holds one staged tile, its skirts and its GLB.
+    let per_tile = (max_tile as u64).saturating_mul(WRITE_BYTES_PER_FACE);
+    let writers =
+        (o.memory / 4 / per_tile.max(1)).clamp(1, crate::tileset_folder::MAX_WRITERS as u64);
+    let bytes = crate::tileset_folder::write_folder(
         out,
         Some(input),
         (&tree, &info),
         (Refine::Replace, None),
-        with_content.iter().map(|&i| {
-            let node = &tree.nodes[i];
-            let tile = StagedTile::read(&tile_path(i)).map(|t| {
-                crate::skirts::with_skirts(&t.mesh, &t.cuts, skirt(i) as f32, &mut Vec::new())
-            });
-            (node.key.name(), node.key.depth, tile)
-        }),
-        with_content.len(),
-        |name, tile, grid| crate::encode_tile(name, &tile?, opts.compress, grid),
-        &mut |e| {
-            let Event::Progress { .. } = e;
-            progress(ScaleEvent::Advance(1));
+        &names,
+        writers as usize,
+        &|k, grid| {
+            let i = with_content[k];
+            let t = StagedTile::read(&tile_path(i))?;
+            let tile =
+                crate::skirts::with_skirts(&t.mesh, &t.cuts, skirt(i) as f32, &mut Vec::new());
+            crate::encode_tile(&names[k].0, &tile, opts.compress, grid)
         },
+        &mut || progress(ScaleEvent::Advance(1)),
     )?;
     Ok(Some(TilesReport {
         input_triangles: faces as usize,

@@ -402,20 +402,24 @@ pub fn write_point_tileset(
     progress: &mut dyn FnMut(Event),
 ) -> Result<PointTilesReport> {
     let t0 = std::time::Instant::now();
-    let bytes = crate::write_folder(
+    let tiles: Vec<(String, u8, &PointCloud)> = tileset
+        .tiles()
+        .filter(|(_, _, _, cloud)| !cloud.positions.is_empty())
+        .map(|(name, depth, _, cloud)| (name, depth, cloud))
+        .collect();
+    let names: Vec<(String, u8)> = tiles.iter().map(|(n, d, _)| (n.clone(), *d)).collect();
+    let bytes = crate::tileset_folder::write_folder(
         out,
         input,
         (&tileset.tree, &tileset.info),
         (Refine::Add, origin),
-        tileset
-            .tiles()
-            .filter(|(_, _, _, cloud)| !cloud.positions.is_empty())
-            .map(|(name, depth, _, cloud)| (name, depth, cloud)),
-        tileset.report.tiles,
-        |name, cloud, grid| {
+        &names,
+        crate::tileset_folder::MAX_WRITERS,
+        &|k, grid| {
+            let (name, _, cloud) = &tiles[k];
             crate::tile_content::encode_point_tile(name, cloud, opts.compress, grid)
         },
-        progress,
+        &mut crate::written(crate::Phase::Write, names.len(), progress),
     )?;
     let mut report = tileset.report.clone();
     report.bytes = bytes;

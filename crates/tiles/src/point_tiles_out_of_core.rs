@@ -41,8 +41,7 @@
 //! 5. **Write**: the nodes in the in-core breadth-first order, boxes and
 //!    errors through the in-core code, then every staged tile encoded on
 //!    its depth's grid into the output folder, atomically, by up to
-//!    eight threads at once (`tile_writer`: the in-core writer's files,
-//!    its syncs overlapped).
+//!    eight threads at once (`tileset_folder.rs`, as every tileset).
 //!
 //! Every pass runs on every thread (`parallel_pass`): the file is decoded
 //! in chunks on a thread of its own while the pool walks the chunks read
@@ -106,12 +105,10 @@ use rayon::prelude::*;
 
 mod cloud_stream;
 mod parallel_pass;
-mod tile_writer;
 mod winners;
 
 use self::cloud_stream::{Layout, Point, Source, Spill, io_err};
 use self::parallel_pass::parallel_pass;
-use self::tile_writer::write_folder_parallel;
 use self::winners::{Runners, Winner, Winners};
 use crate::octree_partition::{CellKey, Grid, MAX_DEPTH, Node, Octree};
 use crate::point_tiles::{
@@ -859,8 +856,9 @@ fn build(
         .collect();
     // A tile in flight holds its raw points, its cloud and its GLB.
     let per_tile = (report.max_tile_points as u64).saturating_mul(WRITE_BYTES_PER_POINT);
-    let writers = (o.memory / 4 / per_tile.max(1)).clamp(1, tile_writer::MAX_WRITERS as u64);
-    report.bytes = write_folder_parallel(
+    let writers =
+        (o.memory / 4 / per_tile.max(1)).clamp(1, crate::tileset_folder::MAX_WRITERS as u64);
+    report.bytes = crate::tileset_folder::write_folder(
         out,
         Some(input),
         (&tree, &info),
@@ -873,7 +871,7 @@ fn build(
             let cloud = layout.read(path, *at)?;
             crate::tile_content::encode_point_tile(&names[k].0, &cloud, opts.compress, grid)
         },
-        &|| progress(OutOfCoreEvent::Advance(1)),
+        &mut || progress(OutOfCoreEvent::Advance(1)),
     )?;
     report.seconds[1] = t1.elapsed().as_secs_f64();
     Ok(report)

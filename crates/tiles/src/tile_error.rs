@@ -121,15 +121,29 @@ pub fn gather(mesh: &TriMesh, faces: &[u32]) -> TriMesh {
 }
 
 /// `mesh` restricted to the faces whose centroid lies in `cell` grown by
-/// [`MARGIN`] (positions only).
+/// [`MARGIN`] (positions only, vertices in first-use order). Cost: one
+/// pass over `mesh`.
 pub fn crop_near(mesh: &TriMesh, grid: &Grid, cell: CellKey) -> TriMesh {
-    let faces: Vec<u32> = (0..mesh.faces.len() as u32)
-        .filter(|&f| {
-            let c = crate::octree_partition::centroid(mesh, f as usize);
-            cells_near(grid, c, cell.depth).any(|k| k == cell)
-        })
-        .collect();
-    gather(mesh, &faces)
+    let side = grid.size / (1u64 << cell.depth) as f64;
+    let lo = grid.origin + glam::DVec3::from_array(cell.xyz.map(f64::from)) * side;
+    let (lo, hi) = (lo - side * MARGIN, lo + side * (1.0 + MARGIN));
+    let mut local = vec![u32::MAX; mesh.positions.len()];
+    let mut out = TriMesh::default();
+    for f in 0..mesh.faces.len() {
+        let c = crate::octree_partition::centroid(mesh, f).as_dvec3();
+        if c.cmplt(lo).any() || c.cmpgt(hi).any() {
+            continue;
+        }
+        let tri = mesh.faces[f].map(|v| {
+            if local[v as usize] == u32::MAX {
+                local[v as usize] = out.positions.len() as u32;
+                out.positions.push(mesh.positions[v as usize]);
+            }
+            local[v as usize]
+        });
+        out.faces.push(tri);
+    }
+    out
 }
 
 /// The error of drawing `tile` (see the module docs): the larger of

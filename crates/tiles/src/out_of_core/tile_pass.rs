@@ -168,9 +168,12 @@ impl TileCtx<'_> {
             let within = key.depth >= cell.depth
                 && key.xyz.map(|v| v >> (key.depth - cell.depth)) == cell.xyz;
             if within {
+                // Its faces lie in `cell` (by centroid): all near it.
                 append(&mut inside, &mesh);
+                append(&mut near, &mesh);
+            } else {
+                append(&mut near, &tile_error::crop_near(&mesh, grid, cell));
             }
-            append(&mut near, &tile_error::crop_near(&mesh, grid, cell));
         }
         Ok((near, inside, error))
     }

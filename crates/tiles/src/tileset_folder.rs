@@ -1,11 +1,15 @@
-//! The output folder of an out-of-core point tileset, its tiles written
-//! by several threads at once: the folder `crate::write_folder` writes
-//! (the same files, the same bytes, the same staging and commit under the
-//! output-folder rule), but each tile's write ends in a sync, and a sync
-//! waits on the disk: one at a time they took half the run (about 5 ms
-//! a tile on the development machine, 3,300 tiles at 5·10⁷ points),
-//! while the disk serves several at once. Encoding runs on the same
-//! threads, so it is spread over the cores too.
+//! The last stage: a tileset's folder, written atomically under the
+//! output-folder rule (`lodkit_mesh::io::out_folder`), every tile's GLB
+//! on its depth's grid (`tile_content::depth_grid`), then the tileset
+//! files. Mesh and point tilesets, in core and out of core, all write
+//! through it.
+//!
+//! Tiles are written by several threads at once: each tile's write ends
+//! in a sync, and a sync waits on the disk: one at a time they took half
+//! of an out-of-core point run (about 5 ms a tile on the development
+//! machine, 3,300 tiles at 5·10⁷ points), while the disk serves several
+//! at once. Encoding runs on the same threads, so it is spread over the
+//! cores too. The bytes do not depend on the thread count.
 
 use std::path::Path;
 use std::sync::Mutex;
@@ -22,18 +26,20 @@ use crate::{Error, Result};
 /// Tiles in flight at most: enough syncs at once to keep the disk busy
 /// (more than 8 gained nothing measurable), each holding one tile's
 /// points and its GLB.
-pub(super) const MAX_WRITERS: usize = 8;
+pub(crate) const MAX_WRITERS: usize = 8;
 
-/// Writes the folder `out` (see [`crate::write_tileset`]'s layout): each
-/// tile `(name, depth)` of `tiles` encoded by `encode` on its depth's
-/// grid and written atomically, on `writers` threads (at least one),
-/// then the tileset files; `done` hears each tile written (from any of
-/// those threads). Returns the bytes written. Errors: the first tile's
-/// error in `tiles` order among those that failed (the others stop at
-/// their next tile), else the folder's; on any error the staged folder
-/// is removed and `out` is untouched.
+/// Writes the folder `out` (see [`crate::write_tileset`]'s layout; `out`
+/// absent, empty or lodkit's, and not holding `input`): each tile `(name,
+/// depth)` of `tiles` encoded by `encode` (its index in `tiles`, its
+/// depth's grid) and written atomically, on `writers` threads (at least
+/// one, at most [`MAX_WRITERS`]: each holds one tile and its GLB), then
+/// the tileset files; `done` hears each tile written (on the calling
+/// thread). Returns the bytes written. Errors: the first tile's error in
+/// `tiles` order among those that failed (the others stop at their next
+/// tile), else the folder's; on any error the staged folder is removed
+/// and `out` is untouched.
 #[allow(clippy::too_many_arguments)]
-pub(super) fn write_folder_parallel(
+pub(crate) fn write_folder(
     out: &Path,
     input: Option<&Path>,
     (tree, info): (&Octree, &[NodeInfo]),
@@ -41,7 +47,7 @@ pub(super) fn write_folder_parallel(
     tiles: &[(String, u8)],
     writers: usize,
     encode: &(dyn Fn(usize, &QuantGrid) -> Result<Vec<u8>> + Sync),
-    done: &(dyn Fn() + Sync),
+    done: &mut dyn FnMut(),
 ) -> Result<u64> {
     let staging = out_folder::Staging::new(out, input)?;
     let dir = staging.dir().to_path_buf();
@@ -55,9 +61,13 @@ pub(super) fn write_folder_parallel(
     let stop = AtomicBool::new(false);
     let bytes = AtomicUsize::new(0);
     let failed: Mutex<Option<(usize, Error)>> = Mutex::new(None);
+    let (tx, rx) = std::sync::mpsc::channel::<()>();
     std::thread::scope(|s| {
         for _ in 0..writers.clamp(1, MAX_WRITERS) {
-            s.spawn(|| {
+            let tx = tx.clone();
+            let (next, stop, bytes, failed, tiles_dir) =
+                (&next, &stop, &bytes, &failed, &tiles_dir);
+            s.spawn(move || {
                 while !stop.load(Ordering::Relaxed) {
                     let i = next.fetch_add(1, Ordering::Relaxed);
                     let Some((name, depth)) = tiles.get(i) else {
@@ -71,7 +81,7 @@ pub(super) fn write_folder_parallel(
                     match written {
                         Ok(n) => {
                             bytes.fetch_add(n, Ordering::Relaxed);
-                            done();
+                            let _ = tx.send(());
                         }
                         Err(e) => {
                             let mut f = failed.lock().unwrap_or_else(|p| p.into_inner());
@@ -83,6 +93,10 @@ pub(super) fn write_folder_parallel(
                     }
                 }
             });
+        }
+        drop(tx);
+        for () in rx {
+            done();
         }
     });
     if let Some((_, e)) = failed.into_inner().unwrap_or_else(|p| p.into_inner()) {
