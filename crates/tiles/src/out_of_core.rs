@@ -151,9 +151,9 @@ const ADVANCE_EVERY: u64 = 1 << 16;
 /// (absent, empty or lodkit's; written whole or not at all).
 ///
 /// Guarantees: leaves are the input at full resolution; every tile's
-/// `geometricError` is at least its distance to the input of its cell as
-/// measured (an upper bound through its children's, see the module
-/// docs); the same input, options and budget give the same bytes, also
+/// `geometricError` is at least its measured distances, both ways (see
+/// `tile_error.rs`; an upper bound through the tiles below, see the
+/// module docs); the same input, options and budget give the same bytes, also
 /// after an interrupted run is resumed; nothing is left in the staging
 /// folder after success. Errors: an input the stream reader refuses (not
 /// a binary PLY, a bad face), no faces, a leaf option out of range

@@ -60,7 +60,7 @@ fn cut_error(input: &TriMesh, dir: &Path, depth: u8) -> f64 {
 }
 
 /// Every tile read back; every tile's geometricError at least its
-/// measured distance from the input of its cell; each depth's cut within
+/// measured distances (`common::assert_honest`); each depth's cut within
 /// 1.25× of the in-core tileset's mean error at that depth.
 fn check_against_input_and_in_core(input: &TriMesh, dir: &Path, report: &TilesReport) {
     let ts = read_tileset(dir);
