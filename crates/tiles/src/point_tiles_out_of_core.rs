@@ -35,19 +35,20 @@
 //! 3. **Spill** (one pass): each point walks down again and is appended,
 //!    in input order, to the file of the streamed node that keeps it or
 //!    of the subtree root it reaches.
-//! 4. **Subtrees** (as many at once as the threads and half the budget
-//!    allow): read back and tiled in core by the in-core code, each tile
-//!    staged as raw points; a streamed node's file is its tile already.
+//! 4. **Subtrees** (`subtree.rs`; as many at once as the threads and
+//!    half the budget allow): read back and tiled in core by the in-core
+//!    code, each tile staged as raw points; a streamed node's file is its
+//!    tile already.
 //! 5. **Write**: the nodes in the in-core breadth-first order, boxes and
 //!    errors through the in-core code, then every staged tile encoded on
 //!    its depth's grid into the output folder, atomically, by up to
 //!    eight threads at once (`tileset_folder.rs`, as every tileset).
 //!
-//! Every pass runs on every thread (`parallel_pass`): the file is decoded
+//! Every pass runs on every thread (`parallel_pass.rs`): the file is decoded
 //! in chunks on a thread of its own while the pool walks the chunks read
 //! before, and each chunk's result is merged in input order. The winner
 //! of a cell is its least `(distance, index)`, so winners offered from
-//! any thread in any order (`winners`: sharded maps) are those of one
+//! any thread in any order (`winners.rs`: sharded maps) are those of one
 //! pass in input order, and the bytes do not depend on the thread count.
 //!
 //! Rejected: spilling by a fixed depth's cells first (a dense part of a
@@ -105,10 +106,12 @@ use rayon::prelude::*;
 
 mod cloud_stream;
 mod parallel_pass;
+mod subtree;
 mod winners;
 
-use self::cloud_stream::{Layout, Point, Source, Spill, io_err};
-use self::parallel_pass::parallel_pass;
+use self::cloud_stream::{Layout, Source, Spill, io_err};
+use self::parallel_pass::Passes;
+use self::subtree::{TiledNode, TiledSubtree, tile_subtree};
 use self::winners::{Runners, Winner, Winners};
 use crate::octree_partition::{CellKey, Grid, MAX_DEPTH, Node, Octree};
 use crate::point_tiles::{
@@ -886,240 +889,5 @@ fn bbox_of(points: impl IntoIterator<Item = Vec3>) -> Aabb {
     b
 }
 
-/// A subtree tiled in core ([`tile_subtree`]): its nodes breadth-first,
-/// its root first.
-struct TiledSubtree {
-    staged: PathBuf,
-    nodes: Vec<TiledNode>,
-}
-
-/// A node of a [`TiledSubtree`].
-struct TiledNode {
-    node: Node,
-    /// Its tile's byte range in the subtree's staged file (none when it
-    /// keeps no point).
-    range: Option<(u64, u64)>,
-    bbox: Aabb,
-    error: f64,
-    points: usize,
-}
-
-/// The subtree of the node `key` from the spill file of `slot` (which
-/// must hold `count` points; removed after it is read), its tiles staged
-/// into one file of `tiles` named for the slot (one file per subtree,
-/// not per tile: creating files is what costs).
-fn tile_subtree(
-    (spill_dir, tiles_dir): (&Path, &Path),
-    layout: Layout,
-    grid: &Grid,
-    leaf_points: usize,
-    (slot, count, key): (usize, u64, CellKey),
-) -> Result<TiledSubtree> {
-    let path = Spill::file(spill_dir, slot);
-    let cloud = layout.read(&path, None)?;
-    if cloud.positions.len() as u64 != count {
-        return Err(Error::Input("the input changed while it was read".into()));
-    }
-    let Subtree {
-        nodes,
-        tiles,
-        errors,
-        ..
-    } = subdivide(&cloud, grid, key, leaf_points, &mut |_| {});
-    drop(cloud);
-    let _ = std::fs::remove_file(&path);
-    let staged = tiles_dir.join(format!("{slot}.pts"));
-    let file = std::fs::File::create(&staged).map_err(io_err(&staged))?;
-    let mut file = std::io::BufWriter::new(file);
-    let mut bytes = Vec::new();
-    let mut at = 0u64;
-    let mut out = Vec::with_capacity(nodes.len());
-    for ((node, tile), error) in nodes.into_iter().zip(tiles).zip(errors) {
-        bytes.clear();
-        layout.append(&tile, &mut bytes);
-        std::io::Write::write_all(&mut file, &bytes).map_err(io_err(&staged))?;
-        let range = (!tile.positions.is_empty()).then_some((at, bytes.len() as u64));
-        at += bytes.len() as u64;
-        let bbox = bbox_of(tile.positions.iter().copied());
-        out.push(TiledNode {
-            node,
-            range,
-            bbox,
-            error,
-            points: tile.positions.len(),
-        });
-    }
-    std::io::Write::flush(&mut file).map_err(io_err(&staged))?;
-    Ok(TiledSubtree { staged, nodes: out })
-}
-
-/// The passes of one build: each over the whole cloud, on every thread
-/// ([`parallel_pass`]), with its progress.
-struct Passes<'a> {
-    source: &'a Source,
-    total: u64,
-    chunking: (usize, usize),
-    named: &'a dyn Fn(Error) -> Error,
-    progress: &'a (dyn Fn(OutOfCoreEvent) + Sync),
-}
-
-impl Passes<'_> {
-    /// [`parallel_pass`] under the phase `name`; only the spill reads
-    /// more than positions.
-    fn run<R: Send>(
-        &self,
-        name: &str,
-        work: &(dyn Fn(u32, &[Point]) -> Result<R> + Sync),
-        merge: &mut dyn FnMut(&[Point], R) -> Result<()>,
-    ) -> Result<()> {
-        (self.progress)(OutOfCoreEvent::Phase(name, self.total));
-        let attributes = name == SPILL_PASS;
-        parallel_pass(
-            self.source,
-            attributes,
-            self.chunking,
-            work,
-            &mut |points, r| {
-                merge(points, r)?;
-                (self.progress)(OutOfCoreEvent::Advance(points.len() as u64));
-                Ok(())
-            },
-        )
-        .map_err(self.named)
-    }
-}
-
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Every file of a folder and its bytes, by path.
-    fn files(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
-        let mut all = Vec::new();
-        let mut stack = vec![dir.to_path_buf()];
-        while let Some(d) = stack.pop() {
-            for e in std::fs::read_dir(&d).unwrap() {
-                let p = e.unwrap().path();
-                if p.is_dir() {
-                    stack.push(p);
-                } else {
-                    all.push((
-                        p.strip_prefix(dir).unwrap().to_path_buf(),
-                        std::fs::read(&p).unwrap(),
-                    ));
-                }
-            }
-        }
-        all.sort();
-        all
-    }
-
-    /// Children decided in their parents' pass (the claims' limit lifted,
-    /// so small budgets take that path at every streamed depth), on a
-    /// cloud of many duplicates (ties by input order), clusters and a
-    /// spread: the in-core bytes, in fewer passes.
-    #[test]
-    fn children_decided_with_their_parents_give_the_in_core_bytes() {
-        use lodkit_mesh::{Model, PointCloud};
-        let mut c = PointCloud {
-            positions: Vec::new(),
-            normals: None,
-            colors: Some(Vec::new()),
-        };
-        let mut x = 99u64;
-        for i in 0..30_000u32 {
-            x = x
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            let f = |s: u64| ((x >> s) & 0xffff) as f32 / 65535.0;
-            let p = match i % 3 {
-                // A coarse lattice: many points on the same spot.
-                0 => Vec3::new(f(0), f(16), f(32)).map(|v| (v * 6.0).floor() / 6.0),
-                1 => Vec3::new(f(0), f(16), f(32)) * 0.01 + Vec3::splat(0.3),
-                _ => Vec3::new(f(0), f(16), f(32)),
-            };
-            c.positions.push(p);
-            c.colors
-                .as_mut()
-                .unwrap()
-                .push([(i % 251) as u8, 0, 0, 255]);
-        }
-        let dir = tempfile::tempdir().unwrap();
-        let input = dir.path().join("c.ply");
-        lodkit_mesh::io::save(&input, &Model::Points(c.clone()), Default::default()).unwrap();
-        let opts = PointTilesOptions {
-            leaf_points: 256,
-            ..PointTilesOptions::DEFAULT
-        };
-        let want = dir.path().join("in");
-        let t = crate::tileset_from_points(&c, &opts, &mut |_| {}).unwrap();
-        crate::write_point_tileset(&t, &want, Some(&input), &opts, None, &mut |_| {}).unwrap();
-        let want = files(&want);
-        for memory in [16 << 10, 256 << 10] {
-            let out = dir.path().join(format!("out{memory}"));
-            let o = PointsOutOfCoreOptions {
-                memory,
-                staging: dir.path().join("staging"),
-            };
-            let passes = std::sync::atomic::AtomicUsize::new(0);
-            let tuning = Tuning {
-                runners: Some(u64::MAX),
-            };
-            tuned(&input, &out, &opts, &o, &tuning, &|e| {
-                if let OutOfCoreEvent::Phase(name, _) = e
-                    && name.starts_with("points: choosing")
-                {
-                    passes.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                }
-            })
-            .unwrap();
-            assert!(files(&out) == want, "memory {memory}: the in-core bytes");
-            // Without the lift: the same bytes, in more passes.
-            let slow = dir.path().join(format!("slow{memory}"));
-            let more = std::sync::atomic::AtomicUsize::new(0);
-            tuned(&input, &slow, &opts, &o, &Tuning::default(), &|e| {
-                if let OutOfCoreEvent::Phase(name, _) = e
-                    && name.starts_with("points: choosing")
-                {
-                    more.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                }
-            })
-            .unwrap();
-            assert!(files(&slow) == want, "memory {memory}: the in-core bytes");
-            let (fused, plain) = (passes.into_inner(), more.into_inner());
-            assert!(
-                fused < plain,
-                "memory {memory}: {fused} passes, {plain} without"
-            );
-        }
-    }
-
-    /// `octant` is the in-core routing (`cell_of`'s low bits), also for
-    /// points on cell borders and outside the cube (clamped).
-    #[test]
-    fn octant_routes_as_cell_of() {
-        let grid = Grid::around(&Aabb {
-            min: Vec3::new(-1.0, -2.0, 0.5),
-            max: Vec3::new(3.0, 1.0, 0.75),
-        });
-        let mut x = 12345u64;
-        for k in 0..100_000 {
-            x = x
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            let f = |s: u64| ((x >> s) & 0xffff) as f32 / 65535.0 * 6.0 - 2.5;
-            let mut p = Vec3::new(f(0), f(16), f(32));
-            if k % 3 == 0 {
-                // On a cell border of some depth.
-                let d = (x >> 48) as u8 % 8;
-                let c = grid.size / f64::from(1u32 << d);
-                p.x = (grid.origin.x + c * ((x >> 52) % 4) as f64) as f32;
-            }
-            for depth in [0u8, 1, 3, 7, 12] {
-                let c = grid.cell_of(p, depth + 1);
-                let want = (c.xyz[0] & 1) | ((c.xyz[1] & 1) << 1) | ((c.xyz[2] & 1) << 2);
-                assert_eq!(u32::from(octant(&grid, p, depth)), want, "{p} at {depth}");
-            }
-        }
-    }
-}
+mod tests;

@@ -7,8 +7,9 @@ use std::sync::mpsc::sync_channel;
 
 use rayon::prelude::*;
 
+use super::SPILL_PASS;
 use super::cloud_stream::{Point, Source};
-use crate::{Error, Result};
+use crate::{Error, OutOfCoreEvent, Result};
 
 /// What the reader returns when the pass stopped it (the pass's own
 /// error is the one reported).
@@ -86,4 +87,40 @@ pub(super) fn parallel_pass<R: Send>(
         // its own error comes first in input order.
         ours.and(theirs)
     })
+}
+
+/// The passes of one build: each over the whole cloud, on every thread
+/// ([`parallel_pass`]), with its progress.
+pub(super) struct Passes<'a> {
+    pub(super) source: &'a Source,
+    pub(super) total: u64,
+    pub(super) chunking: (usize, usize),
+    pub(super) named: &'a dyn Fn(Error) -> Error,
+    pub(super) progress: &'a (dyn Fn(OutOfCoreEvent) + Sync),
+}
+
+impl Passes<'_> {
+    /// [`parallel_pass`] under the phase `name`; only the spill reads
+    /// more than positions.
+    pub(super) fn run<R: Send>(
+        &self,
+        name: &str,
+        work: &(dyn Fn(u32, &[Point]) -> Result<R> + Sync),
+        merge: &mut dyn FnMut(&[Point], R) -> Result<()>,
+    ) -> Result<()> {
+        (self.progress)(OutOfCoreEvent::Phase(name, self.total));
+        let attributes = name == SPILL_PASS;
+        parallel_pass(
+            self.source,
+            attributes,
+            self.chunking,
+            work,
+            &mut |points, r| {
+                merge(points, r)?;
+                (self.progress)(OutOfCoreEvent::Advance(points.len() as u64));
+                Ok(())
+            },
+        )
+        .map_err(self.named)
+    }
 }
