@@ -184,30 +184,19 @@ pub fn build_levels(
             tile_error::faces_near(input, &tree.grid, depth, internal.len(), slot_of);
         let (_, drawn_near) =
             tile_error::faces_near(&drawn, &tree.grid, depth, internal.len(), slot_of);
-        drop(in_leaves);
-        let errors: Vec<f64> = (0..internal.len())
-            .map(|s| {
-                if parts[s].mesh.faces.is_empty() {
-                    return Ok(0.0);
-                }
+        for (s, &node) in internal.iter().enumerate() {
+            if !parts[s].mesh.faces.is_empty() {
                 let near = tile_error::gather(input, &input_near[s]);
                 // A cell with nothing near it (the root) measures its own
                 // input against its level: one copy of it, not two.
                 let region = (own[s].len() < input_near[s].len())
                     .then(|| tile_error::gather(input, &own[s]));
-                tile_error::measure(
+                measured[node] = tile_error::measure(
                     &parts[s].mesh,
                     region.as_ref().unwrap_or(&near),
                     &near,
                     &tile_error::gather(&drawn, &drawn_near[s]),
-                )
-            })
-            .collect::<Result<_>>()?;
-        for (s, part) in parts.into_iter().enumerate() {
-            let node = internal[s];
-            measured[node] = errors[s];
-            if !part.mesh.faces.is_empty() {
-                tiles[node] = Some(part);
+                )?;
             }
             done += 1;
             progress(Event::Progress {
@@ -215,6 +204,11 @@ pub fn build_levels(
                 done,
                 total: total_internal,
             });
+        }
+        for (s, part) in parts.into_iter().enumerate() {
+            if !part.mesh.faces.is_empty() {
+                tiles[internal[s]] = Some(part);
+            }
         }
         t_measure += t1.elapsed().as_secs_f64();
         finer = Some((level, level_groups));

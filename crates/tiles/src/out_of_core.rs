@@ -637,9 +637,10 @@ fn build(
             }
             at.iter().for_each(|&i| staged[i] = None);
         }
+        // Each tile advances twice: made, then measured.
         progress(ScaleEvent::Phase(
             &format!("tiles at depth {k}: weld, refit, measure"),
-            at.len() as u64,
+            2 * at.len() as u64,
         ));
         // Tiles of one depth are independent (their children are staged):
         // made `IN_FLIGHT` at a time, then measured `IN_FLIGHT` at a time
@@ -659,7 +660,11 @@ fn build(
         for batch in at.chunks(IN_FLIGHT) {
             let part: Vec<Result<Option<(Staged, bool)>>> = batch
                 .par_iter()
-                .map_init(Simplifier::new, |simplifier, &i| ctx.make(i, simplifier))
+                .map_init(Simplifier::new, |simplifier, &i| {
+                    let m = ctx.make(i, simplifier);
+                    progress(ScaleEvent::Advance(1));
+                    m
+                })
                 .collect();
             for (&i, m) in batch.iter().zip(part) {
                 made.push((i, m?));
