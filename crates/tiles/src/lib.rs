@@ -348,7 +348,7 @@ pub(crate) fn build_tileset(
             } else {
                 skirts::skirt_depth(
                     [error[i], error[parent[i]], reach[i], reach[parent[i]]],
-                    tree.grid.size / (1u64 << tree.nodes[i].key.depth) as f64,
+                    tree.grid.side(tree.nodes[i].key.depth),
                 )
             };
             let m = skirts::with_skirts(&t.mesh, &t.cuts, depth as f32, &mut t.groups);

@@ -81,6 +81,16 @@ impl Grid {
         }
     }
 
+    /// The edge length of a cell of depth `depth`.
+    pub fn side(&self, depth: u8) -> f64 {
+        self.size / (1u64 << depth) as f64
+    }
+
+    /// Cell `key`'s lowest corner.
+    pub fn corner(&self, key: CellKey) -> DVec3 {
+        self.origin + DVec3::from_array(key.xyz.map(f64::from)) * self.side(key.depth)
+    }
+
     /// The cell of depth `depth` that holds `p` (clamped into the grid).
     pub fn cell_of(&self, p: Vec3, depth: u8) -> CellKey {
         let n = 1u64 << depth;

@@ -656,7 +656,6 @@ fn build(
             leaf,
             direct_faces: o.memory / 4 / IN_FLIGHT as u64 / MEASURE_BYTES_PER_FACE,
         };
-        let mut made = Vec::with_capacity(at.len());
         for batch in at.chunks(IN_FLIGHT) {
             let part: Vec<Result<Option<(Staged, bool)>>> = batch
                 .par_iter()
@@ -667,19 +666,17 @@ fn build(
                 })
                 .collect();
             for (&i, m) in batch.iter().zip(part) {
-                made.push((i, m?));
+                let m = m?;
+                refitted += usize::from(m.is_some_and(|(_, r)| r));
+                staged[i] = m.map(|(s, _)| s);
             }
         }
-        for &(i, m) in &made {
-            staged[i] = m.map(|(s, _)| s);
-        }
         // Then each internal tile's error, its neighbours staged.
-        let mut errors = vec![0.0; made.len()];
-        for (b, batch) in made.chunks(IN_FLIGHT).enumerate() {
+        for batch in at.chunks(IN_FLIGHT) {
             let part: Vec<Result<f64>> = batch
                 .par_iter()
-                .map(|&(i, m)| {
-                    let e = match m {
+                .map(|&i| {
+                    let e = match staged[i] {
                         Some(_) if !is_leaf(i) => ctx.measure(i, &staged),
                         _ => Ok(0.0),
                     };
@@ -687,22 +684,18 @@ fn build(
                     e
                 })
                 .collect();
-            for (j, e) in part.into_iter().enumerate() {
-                errors[b * IN_FLIGHT + j] = e?;
+            for (&i, e) in batch.iter().zip(part) {
+                let e = e?;
+                if let Some(s) = staged[i].as_mut() {
+                    s.error = e;
+                }
             }
         }
-        let made: Vec<_> = made
-            .into_iter()
-            .zip(errors)
-            .map(|((i, m), error)| (i, m.map(|(s, r)| (Staged { error, ..s }, r))))
-            .collect();
         let mut record = String::new();
-        for (i, m) in made {
-            if let Some((s, refit)) = m {
-                refitted += usize::from(refit);
+        for &i in &at {
+            if let Some(s) = staged[i] {
                 record += &s.line(i);
                 record.push('\n');
-                staged[i] = Some(s);
             }
         }
         record += "end\n";
@@ -740,7 +733,7 @@ fn build(
             let reach = |i: usize| staged[i].map_or(0.0, |s| s.reach);
             skirts::skirt_depth(
                 [error(i), error(parent[i]), reach(i), reach(parent[i])],
-                tree.grid.size / (1u64 << tree.nodes[i].key.depth) as f64,
+                tree.grid.side(tree.nodes[i].key.depth),
             )
         }
     };

@@ -124,8 +124,8 @@ pub fn gather(mesh: &TriMesh, faces: &[u32]) -> TriMesh {
 /// [`MARGIN`] (positions only, vertices in first-use order). Cost: one
 /// pass over `mesh`.
 pub fn crop_near(mesh: &TriMesh, grid: &Grid, cell: CellKey) -> TriMesh {
-    let side = grid.size / (1u64 << cell.depth) as f64;
-    let lo = grid.origin + glam::DVec3::from_array(cell.xyz.map(f64::from)) * side;
+    let side = grid.side(cell.depth);
+    let lo = grid.corner(cell);
     let (lo, hi) = (lo - side * MARGIN, lo + side * (1.0 + MARGIN));
     let mut local = vec![u32::MAX; mesh.positions.len()];
     let mut out = TriMesh::default();

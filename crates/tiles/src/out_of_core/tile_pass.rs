@@ -133,17 +133,16 @@ impl TileCtx<'_> {
     ) -> Result<(TriMesh, TriMesh, f64)> {
         let tree = self.tree;
         let grid = &tree.grid;
-        let side = |d: u8| grid.size / (1u64 << d) as f64;
-        let corner = |k: CellKey| {
-            grid.origin + glam::DVec3::from_array(k.xyz.map(f64::from)) * side(k.depth)
-        };
-        let m = side(cell.depth) * tile_error::MARGIN;
-        let (lo, hi) = (corner(cell) - m, corner(cell) + side(cell.depth) + m);
+        let m = grid.side(cell.depth) * tile_error::MARGIN;
+        let (lo, hi) = (
+            grid.corner(cell) - m,
+            grid.corner(cell) + grid.side(cell.depth) + m,
+        );
         let (mut near, mut inside, mut error) = (TriMesh::default(), TriMesh::default(), 0.0f64);
         let mut stack = vec![0usize];
         while let Some(n) = stack.pop() {
             let key = tree.nodes[n].key;
-            let (a, b) = (corner(key), corner(key) + side(key.depth));
+            let (a, b) = (grid.corner(key), grid.corner(key) + grid.side(key.depth));
             if (0..3).any(|x| a[x] > hi[x] || b[x] < lo[x]) {
                 continue;
             }
@@ -203,9 +202,8 @@ fn refit(simplifier: &mut Simplifier, mesh: &TriMesh, budget: usize) -> Result<T
 /// boundary of `cell`: the cuts (see the module docs).
 fn cut_edges(mesh: &TriMesh, grid: &Grid, cell: CellKey) -> Vec<[u32; 2]> {
     let (remap, counts) = welded_edges(mesh);
-    let side = grid.size / (1u64 << cell.depth) as f64;
-    let lo = grid.origin + glam::DVec3::from_array(cell.xyz.map(f64::from)) * side;
-    let hi = lo + glam::DVec3::splat(side);
+    let lo = grid.corner(cell);
+    let hi = lo + grid.side(cell.depth);
     let to_boundary = |p: Vec3| {
         let p = p.as_dvec3();
         let inside = (p - lo).min(hi - p);
